@@ -1,0 +1,79 @@
+"""Batched one-step rollouts of the Atalante FROST gait: our engine vs raw ``mujoco.rollout``.
+
+For K start states on the switching surface (the orbit's state after 10 steps, base angular velocity
+perturbed uniformly in a ball of 0.3 rad/s) it times ``StepEngine.step`` (each sample to its touchdown or
+fall) and raw ``mujoco.rollout`` on the same model, the same start states, the same thread count and the
+same number of physics steps per sample, with zero control. Prints simulated physics steps per second for
+both and their ratio (goal ≥ 0.8).
+
+    python benchmarks/bench_rollout.py [--k 64 200] [--repeat 5] [--threads 0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from robustgait import SimConfig, StepEngine, load_gait, load_robot, walk
+
+REPO = Path(__file__).resolve().parents[1]
+ATALANTE = REPO.parent / "shared" / "atalante"
+
+
+def start_states(engine: StepEngine, qpos: np.ndarray, qvel: np.ndarray, k: int, seed: int = 0
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    d = rng.normal(size=(k, 3))
+    d *= (0.3 * rng.uniform(size=(k, 1)) ** (1 / 3)) / np.linalg.norm(d, axis=1, keepdims=True)
+    qv = np.tile(qvel, (k, 1))
+    qv[:, 3:6] += d
+    return np.tile(qpos, (k, 1)), qv
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--k", type=int, nargs="+", default=[64, 200])
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--threads", type=int, default=0, help="0 = one per core")
+    args = ap.parse_args()
+    robot = load_robot(REPO / "examples" / "atalante.toml")
+    gait = load_gait(ATALANTE / "jt_bez_2023-09-10.yaml", robot)
+    config = SimConfig(n_threads=args.threads)
+    threads = config.threads
+    warm = walk(robot, gait, steps=10, config=config)
+    ev = warm.events[-1]
+    stance = "left" if ev.stance == "right" else "right"
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; mujoco "
+          f"{mujoco.__version__}; threads {threads}; model timestep {robot.dt} s; chunk {config.chunk_steps}")
+    with StepEngine(robot, gait, config) as eng, rollout.Rollout(nthread=threads) as pool:
+        datas = [robot.new_data() for _ in range(threads)]
+        for k in args.k:
+            qpos, qvel = start_states(eng, np.array(ev.qpos), np.array(ev.qvel), k)
+            ours, raw = [], []
+            for _ in range(args.repeat):
+                t0 = time.perf_counter()
+                batch = eng.step(qpos, qvel, stance)
+                t_ours = time.perf_counter() - t0
+                ours.append(batch.physics_steps / t_ours)
+                nstep = int(np.ceil(batch.physics_steps / k))
+                init = eng.full_states(qpos, qvel)
+                ctrl = np.zeros((k, nstep, robot.model.nu))
+                t0 = time.perf_counter()
+                pool.rollout(robot.model, datas, init, ctrl)
+                t_raw = time.perf_counter() - t0
+                raw.append(k * nstep / t_raw)
+            o, r = float(np.median(ours)), float(np.median(raw))
+            print(f"K={k:4d}: ours {o:10.0f} steps/s  raw mujoco.rollout {r:10.0f} steps/s  ratio {o / r:.2f}  "
+                  f"({batch.physics_steps / k:.0f} steps/sample, {int(batch.fell.sum())} fell, wall "
+                  f"{batch.physics_steps / o:.3f} s)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,329 @@
+"""Robot specs (DESIGN §2): an MJCF file plus a TOML spec naming what the pipeline needs.
+
+A spec names the floating-base body, the actuated joints in output order, each leg's sole geom, the
+left/right relabeling, PD gains and torque limits, fall criteria and simulation options. Loading a spec
+compiles the MJCF with MuJoCo and replaces its actuators and sensors by ours:
+
+* one ``general`` actuator per actuated joint, in output order, acting as a PD servo
+  ``u = kp (ctrl − q) − kd q̇`` clamped to the torque limit. Velocity tracking and feedforward torque
+  are folded into ``ctrl`` by the controller (see :mod:`robustgait.sim.controller`), so a step's controls
+  are one time series shared by every sample — what lets :func:`mujoco.rollout` run batches.
+* three contact sensors (count of contacts found): left sole–floor, right sole–floor, floor–anything.
+  ``anything − left − right > 0`` is a non-foot ground contact, i.e. a fall.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from robustgait.errors import RobustGaitError, input_error
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on 3.10 only
+    import tomli as tomllib
+
+SHIPPED_DIR = Path(__file__).resolve().parent
+SIDES = ("left", "right")
+INTEGRATORS = {
+    "euler": mujoco.mjtIntegrator.mjINT_EULER,
+    "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+    "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+    "rk4": mujoco.mjtIntegrator.mjINT_RK4,
+}
+# Sensor names we add to every model; the order is the layout of ``MjData.sensordata``.
+CONTACT_SENSORS = ("robustgait_contact_left", "robustgait_contact_right", "robustgait_contact_floor")
+
+
+@dataclass(frozen=True)
+class LegSpec:
+    """One leg: the collision geom of its sole (a box whose bottom face is the sole)."""
+
+    sole_geom: str
+
+
+@dataclass(frozen=True)
+class FallCriteria:
+    """A state is a fall when the base is lower than ``min_base_height`` [m] or its z axis is tilted
+    more than ``max_tilt`` [rad] from vertical (plus non-foot ground contact and numerical blow-up)."""
+
+    min_base_height: float = 0.5
+    max_tilt: float = 0.8
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    """Everything the pipeline needs to know about a robot beyond its MJCF."""
+
+    name: str
+    mjcf: Path
+    base_body: str
+    floor_geom: str
+    joints: tuple[str, ...]
+    kp: tuple[float, ...]
+    kd: tuple[float, ...]
+    torque_limit: tuple[float, ...]
+    legs: dict[str, LegSpec]
+    mirror_perm: tuple[int, ...]
+    mirror_sign: tuple[float, ...]
+    base_mirror_sign: tuple[float, ...] = (1.0, -1.0, 1.0, -1.0, 1.0, -1.0)
+    fall: FallCriteria = field(default_factory=FallCriteria)
+    timestep: float | None = None
+    integrator: str | None = None
+    description: str = ""
+    source: Path | None = None
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.joints)
+
+
+def _get(table: dict[str, Any], key: str, kind: type | tuple[type, ...], src: Path, where: str = "") -> Any:
+    if key not in table:
+        raise input_error(src, f"missing key '{where}{key}'")
+    value = table[key]
+    if not isinstance(value, kind) or isinstance(value, bool):
+        raise input_error(src, f"key '{where}{key}' has the wrong type ({type(value).__name__})")
+    return value
+
+
+def _floats(table: dict[str, Any], key: str, n: int, src: Path, where: str,
+            positive: bool = False) -> tuple[float, ...]:
+    values = _get(table, key, list, src, where)
+    if len(values) != n or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        raise input_error(src, f"'{where}{key}' must be a list of {n} numbers (got {len(values)} items)")
+    out = tuple(float(v) for v in values)
+    if not all(np.isfinite(out)) or (positive and min(out) <= 0):
+        raise input_error(src, f"'{where}{key}' must be finite{' and positive' if positive else ''}")
+    return out
+
+
+def parse_spec(path: Path) -> RobotSpec:
+    """Read and validate a spec TOML (structure only; names are checked against the MJCF on load)."""
+    path = Path(path)
+    if not path.is_file():
+        raise input_error(path, "robot spec file not found")
+    try:
+        raw = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise input_error(path, f"malformed TOML: {exc}") from None
+    name = _get(raw, "name", str, path)
+    mjcf = (path.parent / _get(raw, "mjcf", str, path)).resolve()
+    joints_t = _get(raw, "joints", dict, path)
+    names = _get(joints_t, "names", list, path, "joints.")
+    if not names or not all(isinstance(n, str) for n in names) or len(set(names)) != len(names):
+        raise input_error(path, "'joints.names' must be a non-empty list of distinct joint names")
+    n = len(names)
+    legs_t = _get(raw, "legs", dict, path)
+    legs = {}
+    for side in SIDES:
+        leg = _get(legs_t, side, dict, path, "legs.")
+        legs[side] = LegSpec(sole_geom=_get(leg, "sole_geom", str, path, f"legs.{side}."))
+    mirror_t = _get(raw, "mirror", dict, path)
+    perm_raw = _get(mirror_t, "joint_perm", list, path, "mirror.")
+    if sorted(perm_raw) != list(range(n)):
+        raise input_error(path, f"'mirror.joint_perm' must be a permutation of 0..{n - 1}")
+    sign = _floats(mirror_t, "joint_sign", n, path, "mirror.")
+    base_sign = _floats(mirror_t, "base_sign", 6, path, "mirror.") if "base_sign" in mirror_t else (
+        1.0, -1.0, 1.0, -1.0, 1.0, -1.0)
+    if any(abs(abs(s) - 1.0) > 0 for s in sign + base_sign):
+        raise input_error(path, "mirror signs must be +1 or -1")
+    det = base_sign[0] * base_sign[1] * base_sign[2]
+    if det > 0 or tuple(det * s for s in base_sign[:3]) != base_sign[3:]:
+        raise input_error(path, "'mirror.base_sign' must be a reflection: (x, y, z) signs with one or three "
+                          "-1s, and (roll, pitch, yaw) signs = det · (x, y, z) signs, e.g. [1,-1,1,-1,1,-1]")
+    fall_t = raw.get("fall", {})
+    fall = FallCriteria(
+        min_base_height=float(fall_t.get("min_base_height", FallCriteria.min_base_height)),
+        max_tilt=float(fall_t.get("max_tilt", FallCriteria.max_tilt)),
+    )
+    sim_t = raw.get("sim", {})
+    integrator = sim_t.get("integrator")
+    if integrator is not None and integrator not in INTEGRATORS:
+        raise input_error(path, f"unknown integrator '{integrator}' (choose from {', '.join(INTEGRATORS)})")
+    timestep = sim_t.get("timestep")
+    if timestep is not None and not (isinstance(timestep, (int, float)) and 0 < timestep < 0.1):
+        raise input_error(path, "'sim.timestep' must be a number in (0, 0.1) seconds")
+    return RobotSpec(
+        name=name,
+        mjcf=mjcf,
+        base_body=_get(raw, "base_body", str, path),
+        floor_geom=_get(raw, "floor_geom", str, path),
+        joints=tuple(names),
+        kp=_floats(joints_t, "kp", n, path, "joints.", positive=True),
+        kd=_floats(joints_t, "kd", n, path, "joints.", positive=True),
+        torque_limit=_floats(joints_t, "torque_limit", n, path, "joints.", positive=True),
+        legs=legs,
+        mirror_perm=tuple(int(p) for p in perm_raw),
+        mirror_sign=sign,
+        base_mirror_sign=base_sign,
+        fall=fall,
+        timestep=float(timestep) if timestep is not None else None,
+        integrator=integrator,
+        description=str(raw.get("description", "")),
+        source=path.resolve(),
+    )
+
+
+def _add_contact_sensor(spec: mujoco.MjSpec, name: str, geom: str, ref: str | None) -> None:
+    sensor = spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_CONTACT,
+                             objtype=mujoco.mjtObj.mjOBJ_GEOM, objname=geom)
+    if ref is not None:
+        sensor.reftype = mujoco.mjtObj.mjOBJ_GEOM
+        sensor.refname = ref
+    # intprm = (data fields bitmask: "found" only, reduce: none, number of slots)
+    sensor.intprm = [1 << int(mujoco.mjtConDataField.mjCONDATA_FOUND), 0, 1]
+
+
+def build_mjspec(spec: RobotSpec) -> mujoco.MjSpec:
+    """The robot's MJCF as an editable :class:`mujoco.MjSpec`, with our actuators and sensors."""
+    src = spec.source or spec.mjcf
+    if not spec.mjcf.is_file():
+        raise input_error(src, f"MJCF file not found: {spec.mjcf}")
+    try:
+        mjs = mujoco.MjSpec.from_file(str(spec.mjcf))
+    except ValueError as exc:
+        raise input_error(spec.mjcf, f"MuJoCo could not parse the MJCF: {exc}") from None
+    joint_names = {j.name for j in mjs.joints}
+    geom_names = {g.name for g in mjs.geoms}
+    for j in spec.joints:
+        if j not in joint_names:
+            raise input_error(src, f"unknown joint name '{j}' (not in {spec.mjcf.name})")
+    for side, leg in spec.legs.items():
+        if leg.sole_geom not in geom_names:
+            raise input_error(src, f"unknown geom name '{leg.sole_geom}' for the {side} sole")
+    if spec.floor_geom not in geom_names:
+        raise input_error(src, f"unknown geom name '{spec.floor_geom}' for the floor")
+    if spec.base_body not in {b.name for b in mjs.bodies}:
+        raise input_error(src, f"unknown body name '{spec.base_body}' for the floating base")
+    for act in list(mjs.actuators):
+        mjs.delete(act)
+    for sensor in list(mjs.sensors):
+        mjs.delete(sensor)
+    for key in list(mjs.keys):
+        mjs.delete(key)
+    for j, kp, kd, tmax in zip(spec.joints, spec.kp, spec.kd, spec.torque_limit, strict=True):
+        act = mjs.add_actuator(name=f"robustgait_{j}", target=j, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+        act.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+        act.gainprm[:3] = [kp, 0.0, 0.0]
+        act.biasprm[:3] = [0.0, -kp, -kd]
+        act.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
+        act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        act.forcerange = [-tmax, tmax]
+    _add_contact_sensor(mjs, CONTACT_SENSORS[0], spec.legs["left"].sole_geom, spec.floor_geom)
+    _add_contact_sensor(mjs, CONTACT_SENSORS[1], spec.legs["right"].sole_geom, spec.floor_geom)
+    _add_contact_sensor(mjs, CONTACT_SENSORS[2], spec.floor_geom, None)
+    if spec.timestep is not None:
+        mjs.option.timestep = spec.timestep
+    if spec.integrator is not None:
+        mjs.option.integrator = INTEGRATORS[spec.integrator]
+    return mjs
+
+
+class Robot:
+    """A loaded robot: its spec, the compiled MuJoCo model and the index maps the pipeline uses."""
+
+    def __init__(self, spec: RobotSpec):
+        self.spec = spec
+        mjs = build_mjspec(spec)
+        try:
+            self.model: mujoco.MjModel = mjs.compile()
+        except ValueError as exc:
+            raise input_error(spec.mjcf, f"MuJoCo could not compile the model: {exc}") from None
+        m = self.model
+        base = m.body(spec.base_body)
+        jnt = int(base.jntadr[0]) if base.jntnum[0] > 0 else -1
+        if jnt < 0 or int(m.jnt_type[jnt]) != int(mujoco.mjtJoint.mjJNT_FREE):
+            raise input_error(spec.source, f"base body '{spec.base_body}' has no free joint")
+        if jnt != 0:
+            raise input_error(spec.source, "the free joint of the base must be the model's first joint")
+        ids = [m.joint(j).id for j in spec.joints]
+        for j, i in zip(spec.joints, ids, strict=True):
+            if int(m.jnt_type[i]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
+                raise input_error(spec.source, f"joint '{j}' is not a hinge or slide joint")
+        if m.nq != 7 + len(ids) or m.nv != 6 + len(ids):
+            raise input_error(spec.source, f"the model has {m.nv - 6} joints besides the base but the spec "
+                              f"actuates {len(ids)}: every non-base joint must be actuated")
+        self.qpos_idx: NDArray[np.int64] = np.array([m.jnt_qposadr[i] for i in ids], dtype=np.int64)
+        self.dof_idx: NDArray[np.int64] = np.array([m.jnt_dofadr[i] for i in ids], dtype=np.int64)
+        self.base_body_id = int(base.id)
+        self.sole_geom_id = {s: m.geom(leg.sole_geom).id for s, leg in spec.legs.items()}
+        self.floor_geom_id = m.geom(spec.floor_geom).id
+        self.sensor_adr = {name: int(m.sensor(name).adr[0]) for name in CONTACT_SENSORS}
+        self.kp = np.asarray(spec.kp)
+        self.kd = np.asarray(spec.kd)
+        self.torque_limit = np.asarray(spec.torque_limit)
+        self.joint_range = np.array([m.jnt_range[i] if m.jnt_limited[i] else (-np.inf, np.inf) for i in ids])
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def n_joints(self) -> int:
+        return self.spec.n_joints
+
+    @property
+    def dt(self) -> float:
+        return float(self.model.opt.timestep)
+
+    @cached_property
+    def mass(self) -> float:
+        return float(self.model.body_subtreemass[self.base_body_id])
+
+    def new_data(self) -> mujoco.MjData:
+        return mujoco.MjData(self.model)
+
+    def mirror_joints(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Relabel joint-space arrays (..., n_joints) for the other stance: permute, then sign."""
+        return np.asarray(values)[..., list(self.spec.mirror_perm)] * np.asarray(self.spec.mirror_sign)
+
+    def mirror_state(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64]
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The state relabeled for the other stance: a reflection S of the base about the sagittal plane.
+
+        Base position p → S p, orientation R → S R S, linear velocity v → S v, angular velocity (world or
+        body frame alike) ω → det(S) S ω; joints permuted and signed. qpos (..., nq), qvel (..., nv).
+        """
+        s = np.asarray(self.spec.base_mirror_sign[:3])
+        qp = np.array(qpos, dtype=float)
+        qv = np.array(qvel, dtype=float)
+        qp[..., 0:3] *= s
+        # A reflected rotation S R(a, θ) S is R(det(S) S a, θ): the quaternion's vector part maps like ω.
+        qp[..., 4:7] *= np.prod(s) * s
+        qv[..., 0:3] *= s
+        qv[..., 3:6] *= np.prod(s) * s
+        qp[..., self.qpos_idx] = self.mirror_joints(np.asarray(qpos)[..., self.qpos_idx])
+        qv[..., self.dof_idx] = self.mirror_joints(np.asarray(qvel)[..., self.dof_idx])
+        return qp, qv
+
+    def __repr__(self) -> str:
+        return f"Robot({self.name!r}, joints={self.n_joints}, mass={self.mass:.1f} kg)"
+
+
+def shipped_robots() -> list[str]:
+    """Names of the robots that ship with the package."""
+    return sorted(p.parent.name for p in SHIPPED_DIR.glob("*/spec.toml"))
+
+
+def load_robot(robot: str | Path | Robot) -> Robot:
+    """Load a shipped robot by name (``"exo"``) or a user robot from a spec ``.toml`` path."""
+    if isinstance(robot, Robot):
+        return robot
+    text = str(robot)
+    if text in shipped_robots():
+        return Robot(parse_spec(SHIPPED_DIR / text / "spec.toml"))
+    path = Path(text)
+    if path.suffix == ".toml" or path.exists():
+        return Robot(parse_spec(path))
+    raise RobustGaitError(
+        f"{text}: unknown robot (shipped: {', '.join(shipped_robots()) or 'none'}; or give a spec .toml path)")

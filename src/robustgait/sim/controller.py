@@ -1,0 +1,57 @@
+"""Tracking controller (DESIGN §5): joint PD on the Bézier outputs, optionally + feedforward torque.
+
+The robot's actuators are affine servos u = kp (c − q) − kd q̇ (see :mod:`robustgait.robots.spec`). With
+the control c chosen as
+
+    c(t) = y_d(τ) + (kd ẏ_d(τ) + u_ff(τ)) / kp,   τ = (t − t₀) / T,
+
+the applied torque is exactly u = kp (y_d − q) + kd (ẏ_d − q̇) + u_ff, clamped to the torque limits. The
+control depends on time alone (time-based phase), so one step's controls are one (H, m) time series shared
+by every sample until its switching event.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from robustgait.bezier import bezier, bezier_derivative
+from robustgait.errors import RobustGaitError
+from robustgait.gait import Gait
+from robustgait.robots import Robot
+
+
+def desired_outputs(gait: Gait, tau: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """y_d and dy_d/dt of a one-domain gait at phases τ (K,): (K, m) each; τ clipped to [0, 1] and the
+    desired velocity zero past τ = 1 (the pose of τ = 1 is held until the switching event)."""
+    dom = gait.domains[0]
+    t = np.clip(tau, 0.0, 1.0)
+    y = bezier(dom.beta, t)
+    dy = bezier_derivative(dom.beta, t) / dom.duration
+    dy[np.asarray(tau) >= 1.0] = 0.0
+    return y, dy
+
+
+def feedforward_torque(gait: Gait, tau: NDArray[np.float64]) -> NDArray[np.float64]:
+    """u_ff(τ) (K, m): the gait's feedforward torques, linearly interpolated in τ (zero if it has none)."""
+    dom = gait.domains[0]
+    t = np.clip(tau, 0.0, 1.0)
+    if dom.ff_tau is None or dom.ff_torque is None:
+        return np.zeros((t.size, dom.beta.shape[0]))
+    return np.stack([np.interp(t, dom.ff_tau, dom.ff_torque[:, j]) for j in range(dom.ff_torque.shape[1])],
+                    axis=-1)
+
+
+def step_controls(robot: Robot, gait: Gait, n_steps: int, *, feedforward: bool = True) -> NDArray[np.float64]:
+    """Servo controls c_k (n_steps, m) for physics steps k = 0..n_steps−1 of a step that starts at τ = 0.
+
+    c_k = y_d(τ_k) + (kd ẏ_d(τ_k) + u_ff(τ_k)) / kp with τ_k = k Δt / T (module docstring). ``gait`` must be
+    written for the stance of this step (use :meth:`Gait.mirrored` for the other leg).
+    """
+    if len(gait.domains) != 1:
+        raise RobustGaitError(f"gait has {len(gait.domains)} domains: the simulator drives one-domain "
+                              "(flat-foot) gaits only, multi-contact gaits are not simulated yet")
+    tau = np.arange(n_steps, dtype=np.float64) * (robot.dt / gait.domains[0].duration)
+    y, dy = desired_outputs(gait, tau)
+    u = feedforward_torque(gait, tau) if feedforward else 0.0
+    return np.asarray(y + (robot.kd * dy + u) / robot.kp)

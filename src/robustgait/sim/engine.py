@@ -1,0 +1,222 @@
+"""Batched one-step engine (DESIGN §5): K states at a step start → each one's state at its next switching
+event, or a fall, on :func:`mujoco.rollout` (multi-threaded C) — no Python call per physics step.
+
+A step's controls depend on time only (:mod:`robustgait.sim.controller`), so all K samples share one
+control series. The step is rolled out in chunks of ``chunk_steps`` physics steps; after each chunk the
+recorded states and contact sensors are scanned (vectorized) for each sample's first event — a switching
+event or a fall — and only the samples still going are rolled on from their last state. Walking one robot
+(:mod:`robustgait.sim.walk`) uses the same engine with K = 1, so a walk and a batch agree exactly.
+
+Chunk boundaries restart MuJoCo's constraint-solver warm start from zero; they are fixed relative to the
+step start, so results are deterministic and identical for K = 1 and K > 1.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Literal
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+from numpy.typing import NDArray
+
+from robustgait.errors import RobustGaitError
+from robustgait.gait import Gait
+from robustgait.robots import Robot
+from robustgait.robots.spec import CONTACT_SENSORS
+from robustgait.sim.controller import step_controls
+
+FALL_REASONS = ("base_low", "tilt", "non_foot_contact", "numerical", "no_touchdown")
+_FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Simulation options (DESIGN §5).
+
+    switching: ``impact`` — switch stance when the swing sole touches the floor once τ ≥ ``min_switch_tau``
+    (a step without touchdown by τ = ``max_step_tau`` is a fall, ``no_touchdown``); ``time`` — switch at τ = 1.
+    feedforward: add the gait's feedforward torques to the PD (when the gait has them).
+    chunk_steps: physics steps rolled out per :func:`mujoco.rollout` call between event scans.
+    n_threads: rollout threads (0 = one per core).
+    max_speed: a joint or base speed above this [rad/s or m/s] counts as a numerical blow-up.
+    """
+
+    switching: Literal["impact", "time"] = "impact"
+    min_switch_tau: float = 0.8
+    max_step_tau: float = 1.5
+    feedforward: bool = True
+    chunk_steps: int = 100
+    n_threads: int = 0
+    max_speed: float = 100.0
+
+    def __post_init__(self) -> None:
+        if self.switching not in ("impact", "time"):
+            raise RobustGaitError(f"switching must be 'impact' or 'time', got {self.switching!r}")
+        if not 0.0 <= self.min_switch_tau <= 1.0 < self.max_step_tau:
+            raise RobustGaitError("need 0 ≤ min_switch_tau ≤ 1 < max_step_tau")
+        if self.chunk_steps < 1 or self.n_threads < 0:
+            raise RobustGaitError("chunk_steps must be ≥ 1 and n_threads ≥ 0")
+
+    @property
+    def threads(self) -> int:
+        return self.n_threads or os.cpu_count() or 1
+
+
+@dataclass
+class StepBatch:
+    """Outcome of one step for K samples.
+
+    qpos (K, nq), qvel (K, nv): state at the switching event (NaN rows for falls); fell (K,);
+    fall_reason: one of :data:`FALL_REASONS` or None per sample; duration (K,): seconds from the step start
+    to the event; tau (K,): the phase at the event; physics_steps: steps simulated over all samples;
+    trajectory: with ``record=True``, per sample the (n_k, nstate) full-physics states of the step.
+    """
+
+    qpos: NDArray[np.float64]
+    qvel: NDArray[np.float64]
+    fell: NDArray[np.bool_]
+    fall_reason: list[str | None]
+    duration: NDArray[np.float64]
+    tau: NDArray[np.float64]
+    physics_steps: int
+    trajectory: list[NDArray[np.float64]] = field(default_factory=list)
+
+
+class StepEngine:
+    """One gait on one robot, both stances; call :meth:`step` with batches of states."""
+
+    def __init__(self, robot: Robot, gait: Gait, config: SimConfig | None = None):
+        gait.check_robot(robot)
+        self.robot = robot
+        self.config = config or SimConfig()
+        self.gaits = {gait.stance: gait, ("left" if gait.stance == "right" else "right"): gait.mirrored(robot)}
+        m = robot.model
+        self.period = gait.step_duration
+        self.steps_per_period = self.period / robot.dt
+        tau_end = 1.0 if self.config.switching == "time" else self.config.max_step_tau
+        self.horizon = round(tau_end * self.steps_per_period)
+        self.controls = {s: step_controls(robot, g, self.horizon, feedforward=self.config.feedforward)
+                         for s, g in self.gaits.items()}
+        self.nq, self.nv = m.nq, m.nv
+        self.nstate = mujoco.mj_stateSize(m, _FULL)
+        data = robot.new_data()
+        self._template = np.empty(self.nstate)
+        mujoco.mj_getState(m, data, self._template, _FULL)
+        self._datas = [robot.new_data() for _ in range(self.config.threads)]
+        self._pool: rollout.Rollout | None = rollout.Rollout(nthread=self.config.threads)
+        adr = robot.sensor_adr
+        self._sens = {s: adr[CONTACT_SENSORS[i]] for i, s in enumerate(("left", "right"))}
+        self._sens_floor = adr[CONTACT_SENSORS[2]]
+        self._cos_max_tilt = math.cos(robot.spec.fall.max_tilt)
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.close()
+            self._pool = None
+
+    def __enter__(self) -> StepEngine:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def full_states(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64]) -> NDArray[np.float64]:
+        """(K, nstate) MuJoCo full-physics states at time 0 from qpos (K, nq), qvel (K, nv)."""
+        k = qpos.shape[0]
+        out = np.tile(self._template, (k, 1))
+        out[:, 0] = 0.0
+        out[:, 1:1 + self.nq] = qpos
+        out[:, 1 + self.nq:1 + self.nq + self.nv] = qvel
+        return out
+
+    def _scan(self, st: NDArray[np.float64], sens: NDArray[np.float64], k0: int, swing: str
+              ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """First event per sample in a chunk: (index or −1, code: 0 = switch, 1.. = FALL_REASONS[code−1])."""
+        fall = self.robot.spec.fall
+        nq = self.nq
+        z = st[..., 3]
+        qw, qx, qy = st[..., 4], st[..., 5], st[..., 6]
+        cos_tilt = (1.0 - 2.0 * (qx * qx + qy * qy)) / np.maximum(qw * qw + qx * qx + qy * qy
+                                                                   + st[..., 7] ** 2, 1e-12)
+        n = st.shape[1]
+        k = k0 + 1 + np.arange(n)
+        with np.errstate(invalid="ignore"):
+            numerical = (~np.isfinite(st).all(axis=-1)
+                         | (np.abs(st[..., 0] - k * self.robot.dt) > 0.5 * self.robot.dt)
+                         | (np.abs(st[..., 1 + nq:1 + nq + self.nv]).max(axis=-1) > self.config.max_speed))
+            codes = [
+                z < fall.min_base_height,
+                cos_tilt < self._cos_max_tilt,
+                sens[..., self._sens_floor] - sens[..., self._sens["left"]] - sens[..., self._sens["right"]] > 0,
+                numerical,
+            ]
+        tau = k / self.steps_per_period
+        if self.config.switching == "impact":
+            switch = (sens[..., self._sens[swing]] > 0) & (tau >= self.config.min_switch_tau)
+        else:
+            switch = np.broadcast_to(k == self.horizon, z.shape)
+        events: NDArray[np.bool_] = np.stack([switch, *codes], axis=-1)  # (K, n, 5)
+        # a fall at the same instant as a touchdown counts as a fall
+        code = np.where(events[..., 1:].any(axis=-1), 1 + np.argmax(events[..., 1:], axis=-1), 0)
+        any_event = np.any(events, axis=-1)
+        first = np.where(any_event.any(axis=1), np.argmax(any_event, axis=1), -1)
+        first_code = np.where(first >= 0, code[np.arange(len(first)), np.maximum(first, 0)], -1)
+        return first, first_code
+
+    def step(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64], stance: str, *,
+             record: bool = False) -> StepBatch:
+        """Simulate one step of the given ``stance`` from K start states (τ = 0) to each one's next event."""
+        if stance not in self.gaits:
+            raise RobustGaitError(f"stance must be 'left' or 'right', got {stance!r}")
+        qpos = np.atleast_2d(np.asarray(qpos, dtype=float))
+        qvel = np.atleast_2d(np.asarray(qvel, dtype=float))
+        if qpos.shape[1:] != (self.nq,) or qvel.shape != (qpos.shape[0], self.nv):
+            raise RobustGaitError(f"states must be (K, {self.nq}) and (K, {self.nv}), got {qpos.shape} and "
+                                  f"{qvel.shape}")
+        if self._pool is None:
+            raise RobustGaitError("this StepEngine is closed")
+        kk = qpos.shape[0]
+        bad = ~(np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1))
+        swing = "left" if stance == "right" else "right"
+        ctrl = self.controls[stance]
+        current = self.full_states(np.nan_to_num(qpos), np.nan_to_num(qvel))
+        out_state = np.full((kk, self.nstate), np.nan)
+        code = np.full(kk, -1, dtype=np.int64)
+        at = np.zeros(kk, dtype=np.int64)
+        code[bad] = 1 + FALL_REASONS.index("numerical")
+        active = np.flatnonzero(~bad)
+        traj: list[list[NDArray[np.float64]]] = [[] for _ in range(kk)]
+        physics = 0
+        k0 = 0
+        while active.size and k0 < self.horizon:
+            n = min(self.config.chunk_steps, self.horizon - k0)
+            st, sens = self._pool.rollout(self.robot.model, self._datas, current[active],
+                                          ctrl[None, k0:k0 + n], nstep=n)
+            physics += active.size * n
+            first, first_code = self._scan(st, sens, k0, swing)
+            done = first >= 0
+            if record:
+                for j, i in enumerate(active):
+                    traj[i].append(st[j, :first[j] + 1] if done[j] else st[j])
+            idx = active[done]
+            out_state[idx] = st[done, first[done]]
+            code[idx] = first_code[done]
+            at[idx] = k0 + 1 + first[done]
+            current[active[~done]] = st[~done, -1]
+            active = active[~done]
+            k0 += n
+        if active.size:  # ran out of horizon without an event: no touchdown
+            code[active] = 1 + FALL_REASONS.index("no_touchdown")
+            at[active] = self.horizon
+        fell = code != 0
+        out_state[fell] = np.nan
+        return StepBatch(
+            qpos=out_state[:, 1:1 + self.nq], qvel=out_state[:, 1 + self.nq:1 + self.nq + self.nv],
+            fell=fell, fall_reason=[FALL_REASONS[c - 1] if c > 0 else None for c in code],
+            duration=np.asarray(at * self.robot.dt, dtype=np.float64), tau=at / self.steps_per_period, physics_steps=physics,
+            trajectory=[np.concatenate(t) if t else np.empty((0, self.nstate)) for t in traj] if record else [],
+        )

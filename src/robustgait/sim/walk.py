@@ -1,0 +1,164 @@
+"""Walking a gait in MuJoCo (DESIGN §5): steps taken before a fall, speed, and the switching states.
+
+Stability in the sense of the paper is the number of steps completed before a fall, up to a cap.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from robustgait.errors import RobustGaitError, input_error
+from robustgait.gait import Gait
+from robustgait.robots import Robot
+from robustgait.sim.engine import SimConfig, StepEngine
+
+
+@dataclass(frozen=True)
+class SwitchEvent:
+    """State at the end of step ``step`` (1-based), i.e. at its switching event; ``stance`` is the stance
+    leg of the step that ended. qpos/qvel in MuJoCo's convention."""
+
+    step: int
+    time: float
+    stance: str
+    tau: float
+    qpos: list[float]
+    qvel: list[float]
+
+
+@dataclass
+class WalkResult:
+    """Outcome of a walk: ``steps_taken`` completed steps (≤ cap); ``fell`` and ``fall_reason`` (one of
+    :data:`robustgait.sim.engine.FALL_REASONS`, None if the cap was reached); ``time`` [s] walked until the
+    fall or the last switching event; ``mean_speed`` [m/s] = base displacement along the initial heading /
+    time; ``min_base_height`` [m] over the whole walk; one :class:`SwitchEvent` per completed step."""
+
+    steps_taken: int
+    fell: bool
+    fall_reason: str | None
+    time: float
+    mean_speed: float
+    min_base_height: float
+    max_steps: int
+    switching: str
+    events: list[SwitchEvent] = field(default_factory=list)
+    trajectory: NDArray[np.float64] | None = field(default=None, repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        out = asdict(self)
+        out.pop("trajectory")
+        return out
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), allow_nan=False)
+
+
+def _heading(qpos: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Unit horizontal direction of the base's x axis (from the quaternion w, x, y, z)."""
+    w, x, y, z = qpos[3:7]
+    fwd = np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z)])
+    return fwd / max(float(np.linalg.norm(fwd)), 1e-12)
+
+
+def walk(robot: Robot, gait: Gait, *, steps: int = 50, config: SimConfig | None = None,
+         keep_trajectory: bool = False, engine: StepEngine | None = None) -> WalkResult:
+    """Walk ``gait`` from its initial state for up to ``steps`` steps, switching stance at each event.
+
+    The trajectory (every physics step's full state, (n, nstate), MuJoCo's ``mjSTATE_FULLPHYSICS`` layout,
+    time continuing across steps) is kept when ``keep_trajectory`` — for video and logs.
+    """
+    if steps < 1:
+        raise RobustGaitError(f"steps must be ≥ 1, got {steps}")
+    if gait.initial_state is None:
+        raise RobustGaitError("the gait has no initial state to start walking from")
+    own = engine is None
+    eng = engine or StepEngine(robot, gait, config)
+    try:
+        qpos = gait.initial_state.qpos[None].copy()
+        qvel = gait.initial_state.qvel[None].copy()
+        start = qpos[0].copy()
+        heading = _heading(start)
+        stance = gait.stance
+        t = 0.0
+        min_z = float(start[2])
+        events: list[SwitchEvent] = []
+        chunks: list[NDArray[np.float64]] = []
+        fell, reason, last = False, None, start
+        for i in range(steps):
+            batch = eng.step(qpos, qvel, stance, record=True)
+            tr = batch.trajectory[0]
+            if tr.size:
+                min_z = min(min_z, float(np.nanmin(tr[:, 3])))
+                if keep_trajectory:
+                    tr = tr.copy()
+                    tr[:, 0] += t
+                    chunks.append(tr)
+            if batch.fell[0]:
+                fell, reason = True, batch.fall_reason[0]
+                t += float(batch.duration[0])
+                finite = tr[np.isfinite(tr).all(axis=1)]
+                last = finite[-1, 1:1 + eng.nq] if finite.size else last
+                break
+            t += float(batch.duration[0])
+            qpos, qvel = batch.qpos, batch.qvel
+            last = qpos[0]
+            events.append(SwitchEvent(i + 1, t, stance, float(batch.tau[0]), qpos[0].tolist(), qvel[0].tolist()))
+            stance = "left" if stance == "right" else "right"
+        disp = float(np.dot(last[:2] - start[:2], heading))
+        return WalkResult(
+            steps_taken=len(events), fell=fell, fall_reason=reason, time=t,
+            mean_speed=disp / t if t > 0 else 0.0, min_base_height=min_z, max_steps=steps,
+            switching=eng.config.switching, events=events,
+            trajectory=np.concatenate(chunks) if keep_trajectory and chunks else None)
+    finally:
+        if own:
+            eng.close()
+
+
+def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path, *, fps: int = 30,
+                 width: int = 640, height: int = 480) -> int:
+    """Render a trajectory (full-physics states, as kept by :func:`walk`) to a video file with MuJoCo's
+    offscreen renderer (EGL or OSMesa, chosen by ``MUJOCO_GL``); returns the number of frames written."""
+    import imageio.v2 as imageio
+
+    path = Path(path)
+    if not path.parent.is_dir():
+        raise input_error(path, "output directory does not exist")
+    try:
+        renderer = mujoco.Renderer(robot.model, height, width)
+    except Exception as exc:  # the GL backends raise a variety of errors when no context can be made
+        raise RobustGaitError(
+            f"offscreen rendering unavailable ({type(exc).__name__}: {exc}); MuJoCo needs EGL or OSMesa: set "
+            "MUJOCO_GL=egl or MUJOCO_GL=osmesa and install libegl1 or libosmesa6") from None
+    m = robot.model
+    data = mujoco.MjData(m)
+    cam = mujoco.MjvCamera()
+    cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+    cam.trackbodyid = robot.base_body_id
+    cam.distance, cam.elevation, cam.azimuth = 3.0, -15.0, 120.0
+    every = max(1, round(1.0 / (fps * robot.dt)))
+    frames = 0
+    tmp = path.with_name(path.stem + ".tmp" + path.suffix)
+    try:
+        with imageio.get_writer(tmp, fps=fps, macro_block_size=1) as writer:
+            for state in trajectory[::every]:
+                if not np.isfinite(state).all():
+                    break
+                mujoco.mj_setState(m, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS.value)
+                mujoco.mj_forward(m, data)
+                renderer.update_scene(data, cam)
+                writer.append_data(renderer.render())  # type: ignore[attr-defined]
+                frames += 1
+        tmp.replace(path)
+    finally:
+        renderer.close()
+        tmp.unlink(missing_ok=True)
+    return frames
+

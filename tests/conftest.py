@@ -1,0 +1,35 @@
+"""Shared fixtures: the Atalante model and FROST gait from ../shared/atalante (read, never copied)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+# MuJoCo picks its GL backend once, at import: make offscreen rendering headless before any test imports it.
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+ATALANTE_DIR = REPO.parent / "shared" / "atalante"
+ATALANTE_SPEC = REPO / "examples" / "atalante.toml"
+ATALANTE_GAIT = ATALANTE_DIR / "jt_bez_2023-09-10.yaml"
+
+needs_atalante = pytest.mark.skipif(not (ATALANTE_DIR / "loadedExo.xml").is_file(),
+                                    reason="../shared/atalante (AMBER lab model) is not beside the repository")
+
+
+@pytest.fixture(scope="session")
+def atalante():  # type: ignore[no-untyped-def]
+    if not (ATALANTE_DIR / "loadedExo.xml").is_file():
+        pytest.skip("../shared/atalante is not beside the repository")
+    from robustgait import load_robot
+
+    return load_robot(ATALANTE_SPEC)
+
+
+@pytest.fixture(scope="session")
+def atalante_gait(atalante):  # type: ignore[no-untyped-def]
+    from robustgait import load_gait
+
+    return load_gait(ATALANTE_GAIT, atalante)

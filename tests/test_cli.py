@@ -1,0 +1,96 @@
+import json
+import subprocess
+
+import pytest
+
+from robustgait.cli import main
+from tests.conftest import ATALANTE_GAIT, ATALANTE_SPEC, needs_atalante
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_robots_lists_shipped(capsys):
+    code, out, _ = run(capsys, "robots", "--json")
+    rows = json.loads(out)
+    exo = next(r for r in rows if r["name"] == "exo")
+    assert code == 0 and exo["joints"] == 12 and 100 <= exo["mass_kg"] <= 135
+
+
+@needs_atalante
+def test_walk_json(capsys):
+    code, out, _ = run(capsys, "walk", str(ATALANTE_GAIT), "--robot", str(ATALANTE_SPEC), "--steps", "5", "--json")
+    res = json.loads(out)
+    assert code == 0
+    assert res["steps_taken"] == 5 and res["fell"] is False and res["fall_reason"] is None
+    assert 0.08 < res["mean_speed"] < 0.2 and len(res["events"]) == 5
+
+
+@needs_atalante
+def test_gait_convert_round_trip(tmp_path, capsys):
+    out = tmp_path / "g.json"
+    assert run(capsys, "gait", "convert", str(ATALANTE_GAIT), "--robot", str(ATALANTE_SPEC), "-o", str(out))[0] == 0
+    code, stdout, _ = run(capsys, "walk", str(out), "--robot", str(ATALANTE_SPEC), "--steps", "3", "--json")
+    assert code == 0 and json.loads(stdout)["steps_taken"] == 3
+
+
+@pytest.fixture(scope="module")
+def bad_files(tmp_path_factory, atalante_gait):
+    """{name: (argv, file name)} of bad inputs, each a file in a temporary directory."""
+    tmp_path = tmp_path_factory.mktemp("bad")
+    good = atalante_gait.to_dict()  # a JSON gait to corrupt
+    cases = {}
+
+    def gait_case(name, mutate):
+        d = json.loads(json.dumps(good))
+        mutate(d)
+        p = tmp_path / f"{name}.json"
+        p.write_text(json.dumps(d))
+        cases[name] = (["walk", str(p), "--robot", str(ATALANTE_SPEC)], p.name)
+
+    gait_case("wrong_count", lambda d: d["domains"][0]["beta"][0].pop())
+    gait_case("nan_coefficient", lambda d: d["domains"][0]["beta"][0].__setitem__(0, float("nan")))
+    gait_case("unknown_joint", lambda d: d["joints"].__setitem__(3, "Elbow"))
+    p = tmp_path / "malformed.json"
+    p.write_text('{"schema_version": 1, "robot": ')
+    cases["malformed_json"] = (["walk", str(p), "--robot", str(ATALANTE_SPEC)], p.name)
+    p = tmp_path / "malformed.yaml"
+    p.write_text("coeff_jt: [0.1, 0.2\nstep_dur: [")
+    cases["malformed_yaml"] = (["walk", str(p), "--robot", str(ATALANTE_SPEC)], p.name)
+    spec = ATALANTE_SPEC.read_text().replace("../../shared/atalante/", str(ATALANTE_GAIT.parent) + "/")
+    for name, old, new in [("malformed_toml", "[legs.left]", "[legs.left"),
+                           ("unknown_geom", '"right_sole"', '"right_shoe"'),
+                           ("unknown_spec_joint", '"RightSagittalKneeJoint"', '"RightKnee"')]:
+        p = tmp_path / f"{name}.toml"
+        p.write_text(spec.replace(old, new))
+        cases[name] = (["walk", str(ATALANTE_GAIT), "--robot", str(p)], p.name)
+    cases["missing_gait"] = (["walk", str(tmp_path / "nope.json"), "--robot", str(ATALANTE_SPEC)], "nope.json")
+    cases["missing_robot"] = (["walk", str(ATALANTE_GAIT), "--robot", str(tmp_path / "nope.toml")], "nope.toml")
+    return cases
+
+
+BAD = ["wrong_count", "nan_coefficient", "unknown_joint", "malformed_json", "malformed_yaml", "malformed_toml",
+       "unknown_geom", "unknown_spec_joint", "missing_gait", "missing_robot"]
+
+
+@needs_atalante
+@pytest.mark.parametrize("case", BAD)
+def test_bad_input_one_line_exit_2(bad_files, capsys, case):
+    argv, filename = bad_files[case]
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("robustgait: error: ") and filename in lines[0]
+
+
+@needs_atalante
+def test_console_script_no_traceback(tmp_path):
+    p = tmp_path / "bad.json"
+    p.write_text("[")
+    proc = subprocess.run(["robustgait", "walk", str(p), "--robot", str(ATALANTE_SPEC)],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.count("\n") == 1 and "bad.json" in proc.stderr

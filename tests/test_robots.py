@@ -1,0 +1,75 @@
+import numpy as np
+import pytest
+
+from robustgait import RobustGaitError, load_robot
+from robustgait.robots import shipped_robots
+from tests.conftest import ATALANTE_SPEC, needs_atalante
+
+
+@needs_atalante
+def test_atalante_spec_loads_with_pd_servos(atalante):
+    assert atalante.n_joints == 12 and abs(atalante.mass - 133.49) < 0.01
+    m = atalante.model
+    assert m.nu == 12 and m.opt.timestep == 0.001
+    np.testing.assert_array_equal(m.actuator_gainprm[:, 0], atalante.kp)
+    np.testing.assert_array_equal(-m.actuator_biasprm[:, 1], atalante.kp)
+    np.testing.assert_array_equal(-m.actuator_biasprm[:, 2], atalante.kd)
+    np.testing.assert_array_equal(m.actuator_forcerange[:, 1], atalante.torque_limit)
+    # actuator i drives joint i of the spec's output order
+    np.testing.assert_array_equal(m.actuator_trnid[:, 0], [m.joint(j).id for j in atalante.spec.joints])
+
+
+@needs_atalante
+def test_pd_servo_torque_law(atalante):
+    """u = kp (c − q) − kd q̇, clamped at the torque limit."""
+    import mujoco
+
+    d = mujoco.MjData(atalante.model)
+    d.qpos[2] = 2.0
+    d.qvel[atalante.dof_idx] = 0.3
+    d.ctrl[:] = 0.001
+    mujoco.mj_forward(atalante.model, d)
+    q = d.qpos[atalante.qpos_idx]
+    expect = np.clip(atalante.kp * (0.001 - q) - atalante.kd * 0.3, -atalante.torque_limit, atalante.torque_limit)
+    np.testing.assert_allclose(d.actuator_force, expect, rtol=1e-12)
+
+
+def _spec_text() -> str:
+    return ATALANTE_SPEC.read_text()
+
+
+@needs_atalante
+@pytest.mark.parametrize("old, new, message", [
+    ('"LeftSagittalKneeJoint", "LeftSagittalAnkleJoint"', '"LeftKnee", "LeftSagittalAnkleJoint"',
+     "unknown joint name 'LeftKnee'"),
+    ('sole_geom = "left_sole"', 'sole_geom = "left_foot"', "unknown geom name 'left_foot'"),
+    ('floor_geom = "terrain_mesh"', 'floor_geom = "ground"', "unknown geom name 'ground'"),
+    ('base_body = "torso"', 'base_body = "LeftFrontalHipLink"', "has no free joint"),
+    ("joint_perm = [6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]", "joint_perm = [6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 4]",
+     "permutation"),
+    ("kd = [500, 140,", "kd = [500,", "'joints.kd' must be a list of 12 numbers"),
+    ('name = "atalante"\n', 'name = "atalante\n', "malformed TOML"),
+    ('mjcf = "../../shared/atalante/loadedExo.xml"', 'mjcf = "nowhere.xml"', "MJCF file not found"),
+])
+def test_bad_specs(tmp_path, old, new, message):
+    text = _spec_text()
+    assert old in text
+    text = text.replace(old, new).replace("../../shared/atalante/", str(ATALANTE_SPEC.parent.parent.parent
+                                                                        / "shared" / "atalante") + "/")
+    p = tmp_path / "bad.toml"
+    p.write_text(text)
+    with pytest.raises(RobustGaitError, match=message) as err:
+        load_robot(p)
+    msg = str(err.value)
+    assert "\n" not in msg and ("bad.toml" in msg or "nowhere.xml" in msg)
+
+
+def test_unknown_robot_and_missing_spec(tmp_path):
+    with pytest.raises(RobustGaitError, match="unknown robot"):
+        load_robot("no-such-robot")
+    with pytest.raises(RobustGaitError, match="robot spec file not found"):
+        load_robot(tmp_path / "missing.toml")
+
+
+def test_shipped_robots_listed():
+    assert "exo" in shipped_robots()
