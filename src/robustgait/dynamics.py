@@ -1,0 +1,250 @@
+"""Symbolic rigid-body model of a robot (adam-robotics + CasADi), consistent with its MuJoCo model.
+
+:class:`Dynamics` builds an adam ``KinDynComputations`` (CasADi backend) from the robot's MuJoCo model
+(``KinDynComputations.from_mujoco_model``) with the joints in the robot spec's output order and the
+model's own gravity (9.81 for our robots; adam's default is 9.80665).
+
+Coordinates. MuJoCo: ``qpos = [p (3), quat (w, x, y, z), joints]``, ``qvel = [ṗ (world), ω_B (base
+frame), joint rates]``, joints in model order. adam (mixed representation): base pose as the 4×4
+transform ``H = [[R, p], [0, 1]]``, velocity ``ν = [ṗ (world), ω (world), ṡ]``, joints ``s`` in spec
+order. With the (n+6)×(n+6) map ``T(q) = blockdiag(I₃, R(q), P)`` (``P`` the spec-order permutation of
+the joint dofs) ``ν = T q̇`` and ``q̇ = Tᵀ ν`` (``T`` is orthogonal). The dynamics transform as
+
+    M_mj = Tᵀ M_adam T + diag(armature),    h_mj = Tᵀ h_adam(q, T q̇)
+
+(power balance; ``Ṫ q̇ = 0`` because ``d/dt(R) ω_B = R (ω_B × ω_B) = 0``), so ``M_mj q̈ + h_mj = τ``
+is MuJoCo's ``mj_fullM`` / ``qfrc_bias`` form. Passive forces (joint damping, springs, friction loss)
+are not in ``qfrc_bias`` and are not modelled here; the shipped robots have none.
+
+Pitfalls of adam 0.5 ``from_mujoco_model`` (found with MuJoCo 4.0; handled here on a private copy of
+the model, compiled from the robot's spec, that only adam sees):
+
+* Joint ``pos``: adam puts the child link's frame at the joint, keeping the body's inertial offset
+  and children's positions — a wrong model (3.9 % mass-matrix error on a test model). We move each
+  such body's frame to its joint (``body_pos += R_body p``, ``body_ipos`` and children's ``body_pos``
+  ``-= p``), which leaves MuJoCo's dynamics unchanged. Link frames in adam are then at the joints.
+* Frames: adam makes frames only from massless, childless, jointless bodies (sites are ignored). The
+  foot frames ``{side}_{sole,toe,heel}_frame`` (centre of the sole's bottom face; midpoints of its
+  bottom toe and heel edges; axes: x to the toe, z out of the sole) are taken from the MJCF when
+  present (``exo``), else added from the spec's sole box geom in the model's zero posture (Atalante).
+* Every other body below the world body becomes a second tree root (adam raises): the masses of
+  static bodies outside the robot are zeroed (they do not move, so the dynamics are unchanged).
+* A body with several joints is not supported by adam's factory: we raise a clear error.
+* ``use_mujoco_actuators=True`` takes joint names from actuator *names* (ours are
+  ``robustgait_<joint>``): we always pass ``joints_name_list`` (spec order) instead.
+* Body quaternions with a ±90° pitch make scipy warn about gimbal lock while adam converts them to
+  roll-pitch-yaw; the conversion stays exact to ~1e-16, so the warning is silenced.
+* MuJoCo 4.0 itself: ``MjData.qM`` is gone and ``mj_fullM(m, d, dst)`` takes ``d`` (used in tests).
+"""
+
+from __future__ import annotations
+
+import warnings
+from functools import cached_property
+from pathlib import Path
+from typing import Any, overload
+
+import casadi as cs
+import mujoco
+import numpy as np
+from adam.casadi import KinDynComputations
+from numpy.typing import ArrayLike, NDArray
+
+from robustgait.errors import input_error
+from robustgait.robots.spec import SIDES, Robot, build_mjspec, load_robot
+
+FOOT_FRAME_KINDS = ("sole", "toe", "heel")
+Array = NDArray[np.float64]
+
+
+def foot_frame(side: str, kind: str) -> str:
+    """Name of a foot frame body, e.g. ``foot_frame("left", "toe") == "left_toe_frame"``."""
+    return f"{side}_{kind}_frame"
+
+
+def _rotation_rows(w: Any, x: Any, y: Any, z: Any) -> list[list[Any]]:
+    return [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ]
+
+
+@overload
+def quat_to_rotation(quat: cs.SX) -> cs.SX: ...
+@overload
+def quat_to_rotation(quat: ArrayLike) -> Array: ...
+def quat_to_rotation(quat: ArrayLike | cs.SX) -> Array | cs.SX:
+    """Rotation matrix (3, 3) of a quaternion ``(w, x, y, z)`` (MuJoCo's order), normalized first as MuJoCo
+    does. Numeric (NumPy array in and out) or symbolic (CasADi SX in and out)."""
+    if isinstance(quat, cs.SX):
+        qs = quat / cs.norm_2(quat)
+        return cs.vertcat(*(cs.horzcat(*row) for row in _rotation_rows(qs[0], qs[1], qs[2], qs[3])))
+    q = np.asarray(quat, dtype=float)
+    return np.array(_rotation_rows(*(q / np.linalg.norm(q))))
+
+
+@overload
+def base_transform(qpos: cs.SX) -> cs.SX: ...
+@overload
+def base_transform(qpos: ArrayLike) -> Array: ...
+def base_transform(qpos: ArrayLike | cs.SX) -> Array | cs.SX:
+    """Base pose ``H`` (4, 4) = ``[[R, p], [0, 1]]`` from ``qpos[:7] = [p, quat (w, x, y, z)]`` (the rest
+    of ``qpos`` is ignored): adam's ``base_transform`` argument. Numeric or symbolic like
+    :func:`quat_to_rotation`."""
+    if isinstance(qpos, cs.SX):
+        return cs.vertcat(cs.horzcat(quat_to_rotation(qpos[3:7]), qpos[:3]), cs.horzcat(0, 0, 0, 1))
+    q = np.asarray(qpos, dtype=float)
+    H = np.eye(4)
+    H[:3, :3] = quat_to_rotation(q[3:7])
+    H[:3, 3] = q[:3]
+    return H
+
+
+def _sole_frames(m: mujoco.MjModel, geom: int) -> dict[str, tuple[Array, Array]]:
+    """Foot frames of a box sole, as (pos, quat) in the geom's body frame, from the zero posture."""
+    if int(m.geom_type[geom]) != int(mujoco.mjtGeom.mjGEOM_BOX):
+        raise input_error(m.geom(geom).name, "a sole geom must be a box to place the foot frames")
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    Rw = d.geom_xmat[geom].reshape(3, 3)  # geom axes in the world, zero posture
+    size = m.geom_size[geom]
+    n = int(np.argmax(np.abs(Rw[2])))  # geom axis closest to vertical: the sole normal
+    up = 1.0 if Rw[2, n] > 0 else -1.0
+    ln = max((k for k in range(3) if k != n), key=lambda k: size[k])  # long axis: heel to toe
+    fwd = 1.0 if Rw[0, ln] >= 0 else -1.0
+    e = np.eye(3)
+    bottom = -up * size[n] * e[n]
+    x_axis, z_axis = fwd * e[ln], up * e[n]
+    R_frame = np.column_stack([x_axis, np.cross(z_axis, x_axis), z_axis])
+    R_gb = quat_to_rotation(m.geom_quat[geom])
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, (R_gb @ R_frame).ravel())
+    points = {"sole": bottom, "toe": bottom + fwd * size[ln] * e[ln], "heel": bottom - fwd * size[ln] * e[ln]}
+    return {k: (m.geom_pos[geom] + R_gb @ p, quat) for k, p in points.items()}
+
+
+def _adam_model(robot: Robot) -> mujoco.MjModel:
+    """The robot's model prepared for adam: foot frames added, joint frames moved, statics massless."""
+    mjs = build_mjspec(robot.spec)
+    m = robot.model
+    for side in SIDES:
+        geom = robot.sole_geom_id[side]
+        parent = mjs.body(m.body(int(m.geom_bodyid[geom])).name)
+        if parent is None:
+            raise input_error(robot.spec.mjcf, f"the body of the {side} sole geom needs a name")
+        for kind, (pos, quat) in _sole_frames(m, geom).items():
+            if mjs.body(foot_frame(side, kind)) is None:
+                parent.add_body(name=foot_frame(side, kind), pos=pos, quat=quat)
+    m = mjs.compile()
+    base = m.body(robot.spec.base_body).id
+    for b in range(1, m.nbody):
+        root = b
+        while int(m.body_parentid[root]) != 0:
+            root = int(m.body_parentid[root])
+        if root != base:
+            m.body_mass[b] = 0.0
+            m.body_inertia[b] = 0.0
+            continue
+        if int(m.body_jntnum[b]) > 1:
+            raise input_error(robot.spec.mjcf, f"body '{m.body(b).name}' has several joints (adam needs one)")
+        if int(m.body_jntnum[b]) == 1 and b != base:
+            j = int(m.body_jntadr[b])
+            p = m.jnt_pos[j].copy()
+            if np.any(p != 0.0):
+                m.body_pos[b] += quat_to_rotation(m.body_quat[b]) @ p
+                m.body_ipos[b] -= p
+                m.jnt_pos[j] = 0.0
+                m.body_pos[np.flatnonzero(m.body_parentid == b)] -= p
+    return m
+
+
+class Dynamics:
+    """Rigid-body dynamics and foot kinematics of a robot, symbolic (CasADi SX) and numeric.
+
+    Symbolic functions are in adam's coordinates (``H`` (4, 4), ``s`` (n,), ``ν_base`` (6,), ``ṡ`` (n,),
+    mixed representation, joints in spec order); numeric methods take MuJoCo's ``qpos`` (nq,) and
+    ``qvel`` (nv,) and return arrays in MuJoCo's coordinates (see the module docstring).
+    """
+
+    def __init__(self, robot: Robot | str | Path):
+        self.robot = load_robot(robot)
+        m = self.robot.model
+        self.nv: int = int(m.nv)
+        self.armature: Array = m.dof_armature.copy()
+        self.gravity: Array = m.opt.gravity.copy()
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="Gimbal lock")
+            try:
+                self.kindyn = KinDynComputations.from_mujoco_model(
+                    _adam_model(self.robot), joints_name_list=list(self.robot.spec.joints),
+                    gravity=np.concatenate([self.gravity, np.zeros(3)]))
+            except ValueError as exc:
+                raise input_error(self.robot.spec.mjcf, f"adam-robotics cannot build the model: {exc}") from None
+        self.frames: tuple[str, ...] = tuple(self.kindyn.rbdalgos.model.frames)
+        self._perm = np.zeros((self.robot.n_joints, self.nv - 6))
+        self._perm[np.arange(self.robot.n_joints), self.robot.dof_idx - 6] = 1.0
+        self._fk: dict[str, cs.Function] = {}
+
+    @property
+    def total_mass(self) -> float:
+        """Total mass [kg] of adam's model (equals MuJoCo's ``body_subtreemass`` of the base)."""
+        return float(cs.DM(self.kindyn.get_total_mass()))
+
+    @cached_property
+    def mass_matrix_fun(self) -> cs.Function:
+        """CasADi function ``(H, s) -> M`` (n+6, n+6), adam's mixed coordinates, without armature."""
+        return self.kindyn.mass_matrix_fun()
+
+    @cached_property
+    def bias_force_fun(self) -> cs.Function:
+        """CasADi function ``(H, s, ν_base, ṡ) -> h`` (n+6,): Coriolis, centrifugal and gravity, mixed."""
+        return self.kindyn.bias_force_fun()
+
+    def frame_fun(self, frame: str) -> cs.Function:
+        """CasADi function ``(H, s) -> H_frame`` (4, 4): world pose of an adam frame or link."""
+        if frame not in self._fk:
+            self._fk[frame] = self.kindyn.forward_kinematics_fun(frame)
+        return self._fk[frame]
+
+    def joint_positions(self, qpos: ArrayLike) -> Array:
+        """Joint angles ``s`` (n,) in spec order from MuJoCo's ``qpos``."""
+        return np.asarray(qpos, dtype=float)[self.robot.qpos_idx]
+
+    def velocity_map(self, qpos: ArrayLike) -> Array:
+        """``T`` (nv, nv) with ``ν_mixed = T qvel``; orthogonal, so ``qvel = Tᵀ ν_mixed``."""
+        T = np.zeros((self.nv, self.nv))
+        T[:3, :3] = np.eye(3)
+        T[3:6, 3:6] = quat_to_rotation(np.asarray(qpos, dtype=float)[3:7])
+        T[6:, 6:] = self._perm
+        return T
+
+    def to_mixed(self, qpos: ArrayLike, qvel: ArrayLike) -> Array:
+        """adam's ``ν = [ṗ, ω_world, ṡ (spec order)]`` (nv,) from MuJoCo's ``qvel``."""
+        return self.velocity_map(qpos) @ np.asarray(qvel, dtype=float)
+
+    def to_mujoco(self, qpos: ArrayLike, nu: ArrayLike) -> Array:
+        """MuJoCo's ``qvel`` (nv,) from adam's mixed velocity ``ν``."""
+        return self.velocity_map(qpos).T @ np.asarray(nu, dtype=float)
+
+    def mass_matrix(self, qpos: ArrayLike) -> Array:
+        """Joint-space inertia (nv, nv) in MuJoCo's coordinates (``mj_fullM``): ``Tᵀ M T + diag(armature)``."""
+        T = self.velocity_map(qpos)
+        M = np.asarray(self.mass_matrix_fun(base_transform(qpos), self.joint_positions(qpos)), dtype=float)
+        return T.T @ M @ T + np.diag(self.armature)
+
+    def bias_forces(self, qpos: ArrayLike, qvel: ArrayLike) -> Array:
+        """Bias forces (nv,) in MuJoCo's coordinates (``qfrc_bias``): ``Tᵀ h(q, T qvel)``."""
+        T = self.velocity_map(qpos)
+        nu = T @ np.asarray(qvel, dtype=float)
+        h = self.bias_force_fun(base_transform(qpos), self.joint_positions(qpos), nu[:6], nu[6:])
+        return T.T @ np.asarray(h, dtype=float).ravel()
+
+    def frame_pose(self, frame: str, qpos: ArrayLike) -> tuple[Array, Array]:
+        """World position (3,) and rotation (3, 3) of a frame (e.g. ``foot_frame("left", "sole")``)."""
+        H = np.asarray(self.frame_fun(frame)(base_transform(qpos), self.joint_positions(qpos)), dtype=float)
+        return H[:3, 3], H[:3, :3]
+
+    def foot_frames(self, qpos: ArrayLike) -> dict[str, tuple[Array, Array]]:
+        """Poses of every foot frame, keyed by name (``left_sole_frame``, ..., ``right_heel_frame``)."""
+        return {foot_frame(s, k): self.frame_pose(foot_frame(s, k), qpos) for s in SIDES for k in FOOT_FRAME_KINDS}
