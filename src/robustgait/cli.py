@@ -39,11 +39,17 @@ def _cmd_walk(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     gait = load_gait(args.gait, robot)
     config = SimConfig(switching=args.switching, feedforward=not args.no_feedforward)
-    if args.video is not None and not Path(args.video).parent.resolve().is_dir():
-        raise RobustGaitError(f"{args.video}: output directory does not exist")
+    for out in (args.video, args.log):
+        if out is not None and not Path(out).parent.resolve().is_dir():
+            raise RobustGaitError(f"{out}: output directory does not exist")
     result = walk(robot, gait, steps=args.steps, config=config, keep_trajectory=args.video is not None)
     if args.video is not None and result.trajectory is not None:
         render_video(robot, result.trajectory, args.video)
+    if args.log is not None:
+        from robustgait.poincare import canonical_reduced_events
+
+        xs = canonical_reduced_events(robot, gait, result.events, args.frame)
+        _write_csv(Path(args.log), ["wx", "wy", "wz"], xs.tolist())
     if args.json:
         print(result.to_json())
     else:
@@ -51,9 +57,91 @@ def _cmd_walk(args: argparse.Namespace) -> int:
         print(f"{gait.robot} gait on {robot.name}: {result.steps_taken}/{result.max_steps} steps, {end}; "
               f"mean forward speed {result.mean_speed:.3f} m/s; lowest base height "
               f"{result.min_base_height:.3f} m; {result.switching} switching")
-        if args.video is not None:
-            print(f"video: {args.video}")
+        for what, out in (("video", args.video), ("reduced-state log", args.log)):
+            if out is not None:
+                print(f"{what}: {out}")
     return 0
+
+
+def _write_csv(path: Path, header: list[str], rows: list[list[float]]) -> None:
+    """Write a CSV atomically (nothing half-written on failure)."""
+    import csv
+
+    tmp = path.with_name(path.name + ".tmp")
+    with tmp.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        w.writerows([[repr(float(v)) for v in row] for row in rows])
+    tmp.replace(path)
+
+
+def _floats_arg(text: str) -> list[float]:
+    try:
+        return [float(v) for v in text.replace(",", " ").split()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+
+
+def _cmd_certify(args: argparse.Namespace) -> int:
+    from robustgait.certify import CertifyConfig, certify_gait
+    from robustgait.gait import load_gait
+    from robustgait.robots import load_robot
+    from robustgait.sim import SimConfig
+
+    cfg = CertifyConfig(n_samples=args.samples, r_max=args.r_max, alpha=args.alpha, seed=args.seed,
+                        map=args.map, reconstruction=args.reconstruction, frame=args.frame,
+                        fp_tol=args.fp_tol, fp_max_steps=args.fp_max_steps,
+                        fp_min_steps=min(10, max(args.fp_max_steps, 1)), sim=SimConfig(switching=args.switching))
+    for out in (args.plot, args.output):
+        if out is not None and not Path(out).parent.resolve().is_dir():
+            raise RobustGaitError(f"{out}: output directory does not exist")
+    robot = load_robot(args.robot)
+    gait = load_gait(args.gait, robot)
+    gc = certify_gait(robot, gait, cfg, progress=not args.json and sys.stderr.isatty())
+    if args.plot is not None:
+        from robustgait.report import plot_certificate
+
+        plot_certificate(gc.certificate, args.plot, title=f"{robot.name}: r* = {gc.r_star:.4f} rad/s "
+                         f"({cfg.map} map, {cfg.reconstruction}, N = {cfg.n_samples}, α = {cfg.alpha:g})")
+    if args.output is not None:
+        tmp = Path(args.output).with_name(Path(args.output).name + ".tmp")
+        tmp.write_text(json.dumps(gc.to_dict(), indent=1, allow_nan=False))
+        tmp.replace(args.output)
+    if args.json:
+        print(json.dumps(gc.to_dict(samples=False), allow_nan=False))
+    else:
+        c, fp = gc.certificate, gc.fixed_point
+        print(f"r* = {c.r_star:.4f} rad/s  ({cfg.map} map, {cfg.reconstruction} reconstruction, {cfg.frame} frame, "
+              f"α = {cfg.alpha:g}, N = {c.n_samples}, seed {cfg.seed})")
+        print(f"x* = [{', '.join(f'{v:.4f}' for v in fp.x_star)}] rad/s after {fp.steps} steps; residual "
+              f"{fp.residual:.2e} (map at x*: {gc.map_residual:.2e})")
+        print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside B(r*)")
+        print(c.statement())
+        print(f"time: fixed point {gc.seconds['fixed_point']:.2f} s, sampling {gc.seconds['sampling']:.2f} s "
+              f"({gc.seconds['sim_steps_per_s']:.0f} simulated steps/s)")
+    return 0
+
+
+def _cmd_barrier_eval(args: argparse.Namespace) -> int:
+    from robustgait.barrier import barrier_along, load_reduced_log
+
+    xs = load_reduced_log(args.log, args.columns.split(",") if args.columns else None)
+    if xs.shape[1] != len(args.x_star):
+        raise RobustGaitError(f"{args.log}: the log has {xs.shape[1]} columns but --x-star has "
+                              f"{len(args.x_star)} values")
+    trace = barrier_along(xs, args.x_star, args.r, args.alpha)
+    if args.plot is not None:
+        from robustgait.report import plot_barrier_trace
+
+        plot_barrier_trace(trace, args.plot)
+    if args.json:
+        print(json.dumps({"ok": trace.ok, "first_violation": trace.first_violation, "r": trace.r,
+                          "alpha": trace.alpha, "h": trace.h.tolist(), "margins": trace.margins.tolist()}))
+    else:
+        verdict = "holds at every step" if trace.ok else f"is violated first at step {trace.first_violation}"
+        print(f"DTBF condition (r = {trace.r:g}, α = {trace.alpha:g}) {verdict} over {trace.h.size} states; "
+              f"min H = {trace.h.min():.4g}, min margin = {trace.margins.min():.4g}")
+    return 0 if trace.ok or not args.check else 1
 
 
 def _cmd_gait_convert(args: argparse.Namespace) -> int:
@@ -86,16 +174,52 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--no-feedforward", action="store_true", help="joint PD only, ignore feedforward torques")
     w.add_argument("--json", action="store_true", help="print one JSON object")
     w.add_argument("--video", metavar="OUT.mp4", help="render the walk with MuJoCo's offscreen renderer")
+    w.add_argument("--log", metavar="OUT.csv", help="write the reduced state (base angular velocity, canonical "
+                   "stance) at every switching event, one row per step, for barrier-eval")
+    w.add_argument("--frame", choices=("heading", "world", "body"), default="heading",
+                   help="frame of the logged angular velocity (default heading)")
     w.set_defaults(func=_cmd_walk)
+
+    c = sub.add_parser("certify", help="robustness certificate r* of a gait (DTBF on the Poincaré map)")
+    c.add_argument("gait", help="gait file: .json (robustgait) or .yaml (FROST/ambersim)")
+    c.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
+    c.add_argument("--samples", type=int, default=200, help="number of sampled perturbations N (default 200)")
+    c.add_argument("--r-max", type=float, default=2.0, help="radius of the sampled ball [rad/s] (default 2)")
+    c.add_argument("--alpha", type=float, default=0.05, help="DTBF decay rate α in (0, 1) (default 0.05)")
+    c.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    c.add_argument("--map", choices=("step", "stride"), default="step", help="step (mirrored) or stride map")
+    c.add_argument("--reconstruction", choices=("holonomic", "angular-only"), default="holonomic",
+                   help="how a full state is rebuilt from a reduced one (default holonomic)")
+    c.add_argument("--frame", choices=("heading", "world", "body"), default="heading",
+                   help="frame of the base angular velocity (default heading: world frame without yaw)")
+    c.add_argument("--switching", choices=("impact", "time"), default="impact")
+    c.add_argument("--fp-tol", type=float, default=5e-3,
+                   help="fixed point: stop when successive reduced states differ by less (default 5e-3 rad/s)")
+    c.add_argument("--fp-max-steps", type=int, default=100, help="fixed point: give up after this many steps")
+    c.add_argument("--plot", metavar="CERT.png", help="draw the invariant set (samples, r* sphere, projections)")
+    c.add_argument("-o", "--output", metavar="CERT.json", help="write the full certificate with samples")
+    c.add_argument("--json", action="store_true", help="print one JSON object (without the samples)")
+    c.set_defaults(func=_cmd_certify)
+
+    b = sub.add_parser("barrier-eval", help="evaluate the DTBF condition along a logged sequence of reduced states")
+    b.add_argument("log", help="CSV with a header row, or NPZ (array 'x')")
+    b.add_argument("--x-star", type=_floats_arg, required=True, help="fixed point, e.g. 0.42,0.21,0.30")
+    b.add_argument("--r", type=float, required=True, help="ball radius r")
+    b.add_argument("--alpha", type=float, default=0.05)
+    b.add_argument("--columns", help="comma-separated CSV columns to use (default: all numeric columns)")
+    b.add_argument("--plot", metavar="OUT.png", help="plot H and the DTBF margin along the sequence")
+    b.add_argument("--json", action="store_true")
+    b.add_argument("--check", action="store_true", help="exit 1 if the condition is violated anywhere")
+    b.set_defaults(func=_cmd_barrier_eval)
 
     g = sub.add_parser("gait", help="gait files")
     gsub = g.add_subparsers(dest="gait_command", required=True)
-    c = gsub.add_parser("convert", help="read a gait (either format) and write robustgait JSON")
-    c.add_argument("gait")
-    c.add_argument("--robot", required=True)
-    c.add_argument("-o", "--output", required=True)
-    c.add_argument("--mirror", action="store_true", help="relabel for the other stance leg")
-    c.set_defaults(func=_cmd_gait_convert)
+    gc = gsub.add_parser("convert", help="read a gait (either format) and write robustgait JSON")
+    gc.add_argument("gait")
+    gc.add_argument("--robot", required=True)
+    gc.add_argument("-o", "--output", required=True)
+    gc.add_argument("--mirror", action="store_true", help="relabel for the other stance leg")
+    gc.set_defaults(func=_cmd_gait_convert)
     return p
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -168,8 +169,11 @@ class StepEngine:
         return first, first_code
 
     def step(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64], stance: str, *,
-             record: bool = False) -> StepBatch:
-        """Simulate one step of the given ``stance`` from K start states (τ = 0) to each one's next event."""
+             record: bool = False, progress: Callable[[int], None] | None = None) -> StepBatch:
+        """Simulate one step of the given ``stance`` from K start states (τ = 0) to each one's next event.
+
+        ``progress`` is called after each chunk with the number of samples that reached their event in it.
+        """
         if stance not in self.gaits:
             raise RobustGaitError(f"stance must be 'left' or 'right', got {stance!r}")
         qpos = np.atleast_2d(np.asarray(qpos, dtype=float))
@@ -192,6 +196,8 @@ class StepEngine:
         traj: list[list[NDArray[np.float64]]] = [[] for _ in range(kk)]
         physics = 0
         k0 = 0
+        if progress is not None and bad.any():
+            progress(int(bad.sum()))
         while active.size and k0 < self.horizon:
             n = min(self.config.chunk_steps, self.horizon - k0)
             st, sens = self._pool.rollout(self.robot.model, self._datas, current[active],
@@ -208,6 +214,8 @@ class StepEngine:
             at[idx] = k0 + 1 + first[done]
             current[active[~done]] = st[~done, -1]
             active = active[~done]
+            if progress is not None:
+                progress(int(done.sum()) + (active.size if k0 + n >= self.horizon else 0))
             k0 += n
         if active.size:  # ran out of horizon without an event: no touchdown
             code[active] = 1 + FALL_REASONS.index("no_touchdown")
@@ -217,6 +225,7 @@ class StepEngine:
         return StepBatch(
             qpos=out_state[:, 1:1 + self.nq], qvel=out_state[:, 1 + self.nq:1 + self.nq + self.nv],
             fell=fell, fall_reason=[FALL_REASONS[c - 1] if c > 0 else None for c in code],
-            duration=np.asarray(at * self.robot.dt, dtype=np.float64), tau=at / self.steps_per_period, physics_steps=physics,
+            duration=np.asarray(at * self.robot.dt, dtype=np.float64), tau=at / self.steps_per_period,
+            physics_steps=physics,
             trajectory=[np.concatenate(t) if t else np.empty((0, self.nstate)) for t in traj] if record else [],
         )
