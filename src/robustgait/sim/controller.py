@@ -22,13 +22,19 @@ from robustgait.robots import Robot
 
 
 def desired_outputs(gait: Gait, tau: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """y_d and dy_d/dt of a one-domain gait at phases τ (K,): (K, m) each; τ clipped to [0, 1] and the
-    desired velocity zero past τ = 1 (the pose of τ = 1 is held until the switching event)."""
+    """y_d and dy_d/dt of a one-domain gait at phases τ (K,): (K, m) each.
+
+    Past τ = 1 the outputs continue along their tangent at τ = 1, y_d(τ) = y_d(1) + ẏ_d(1) (τ − 1) T, so a
+    swing foot that has not touched down yet keeps descending at its landing velocity (DESIGN §4:
+    touchdown margin) instead of hovering.
+    """
     dom = gait.domains[0]
+    tau = np.asarray(tau, dtype=float)
     t = np.clip(tau, 0.0, 1.0)
     y = bezier(dom.beta, t)
     dy = bezier_derivative(dom.beta, t) / dom.duration
-    dy[np.asarray(tau) >= 1.0] = 0.0
+    late = tau > 1.0
+    y[late] += dy[late] * ((tau[late] - 1.0) * dom.duration)[:, None]
     return y, dy
 
 
