@@ -157,6 +157,51 @@ def _cmd_gait_convert(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_gait_generate(args: argparse.Namespace) -> int:
+    from robustgait.gait import GaitParams, load_gait
+    from robustgait.gaitgen import GaitGenConfig, GaitGenerator, generate_gait
+    from robustgait.robots import load_robot
+
+    try:  # out-of-bounds parameters fail before the (seconds-long) problem build
+        GaitParams(args.step_length, args.step_duration, args.step_width, args.step_height)
+    except RobustGaitError as exc:
+        raise RobustGaitError(f"gait generation failed (Infeasible_Parameters): {exc}") from None
+    if args.nodes < 5 or args.nodes % 2 == 0:
+        raise RobustGaitError(f"--nodes must be odd and ≥ 5, got {args.nodes}")
+    robot = load_robot(args.robot)
+    if not Path(args.output).parent.resolve().is_dir():
+        raise RobustGaitError(f"{args.output}: output directory does not exist")
+    warm = load_gait(args.warm_start, robot) if args.warm_start else None
+    config = GaitGenConfig(nodes=args.nodes, stance=args.stance)
+    live = not args.json
+    if live:
+        print(f"building the flat-foot HZD problem for {robot.name} ({args.nodes} nodes) ...", flush=True)
+    gen = GaitGenerator(robot, config, verbose=live)
+    if live:
+        print(f"built in {gen.build_seconds:.1f} s: {gen.n_variables} variables, {gen.n_constraints} constraints; "
+              "IPOPT iterations:", flush=True)
+    res = generate_gait(robot, args.step_length, args.step_duration, args.step_width, args.step_height,
+                        warm_start=warm, generator=gen)
+    summary = {**res.summary(), "build_seconds": gen.build_seconds, "output": args.output if res.gait else None}
+    if res.gait is None:
+        if args.json:
+            print(json.dumps(summary, allow_nan=False))
+        raise RobustGaitError(f"gait generation failed ({res.status}): {res.reason}")
+    res.gait.save(args.output)
+    if args.json:
+        print(json.dumps(summary, allow_nan=False))
+    else:
+        c = res.check
+        assert c is not None
+        print(f"{res.status}: {res.iterations} iterations in {res.solve_seconds:.2f} s "
+              f"({res.solve_seconds / max(res.iterations, 1) * 1e3:.0f} ms/iteration), ∫‖u‖²dt = {res.objective:.4g}")
+        print(f"physics check passed: dynamics residual {c.dynamics_residual:.1e} (MuJoCo), periodicity "
+              f"{c.periodicity:.1e}, min normal force {c.min_normal_force:.0f} N, friction |f_t|/f_z ≤ "
+              f"{c.friction_ratio:.2f}, CoP margin {c.cop_margin * 1e3:.1f} mm")
+        print(f"wrote {args.output}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="robustgait", description="Synthesize and certify robust walking gaits.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -220,6 +265,18 @@ def build_parser() -> argparse.ArgumentParser:
     gc.add_argument("-o", "--output", required=True)
     gc.add_argument("--mirror", action="store_true", help="relabel for the other stance leg")
     gc.set_defaults(func=_cmd_gait_convert)
+    gg = gsub.add_parser("generate", help="HZD trajectory optimization of a flat-foot gait (CasADi + IPOPT)")
+    gg.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
+    gg.add_argument("--step-length", type=float, default=0.15, help="[m] (default 0.15)")
+    gg.add_argument("--step-duration", type=float, default=0.7, help="[s] (default 0.7)")
+    gg.add_argument("--step-width", type=float, default=0.25, help="[m] (default 0.25)")
+    gg.add_argument("--step-height", type=float, default=0.07, help="swing-foot height at mid-step [m] (default 0.07)")
+    gg.add_argument("--warm-start", metavar="GAIT", help="start from a neighbouring gait (.json or .yaml)")
+    gg.add_argument("--nodes", type=int, default=17, help="collocation nodes, odd (default 17)")
+    gg.add_argument("--stance", choices=("left", "right"), default="right", help="stance leg of the written gait")
+    gg.add_argument("-o", "--output", required=True, help="output gait .json")
+    gg.add_argument("--json", action="store_true", help="print one JSON summary instead of the live log")
+    gg.set_defaults(func=_cmd_gait_generate)
     return p
 
 

@@ -124,16 +124,40 @@ def _sole_frames(m: mujoco.MjModel, geom: int) -> dict[str, tuple[Array, Array]]
     return {k: (m.geom_pos[geom] + R_gb @ p, quat) for k, p in points.items()}
 
 
+def _symmetrize(m: mujoco.MjModel, robot: Robot, frames: dict[str, dict[str, tuple[Array, Array]]]) -> None:
+    """Place the added foot frames as exact mirror images of each other (in place).
+
+    Each frame's world position in the zero posture is replaced by the mean of itself and the mirror image
+    (y → −y about the base's sagittal plane) of its twin on the other foot. The mirror relabeling then maps
+    one stance foot's frame onto the other's, as periodicity after relabeling assumes; a model whose soles
+    are not placed symmetrically (Atalante: both sole boxes sit 33 µm to the right of their feet) has its
+    frames moved by half the asymmetry.
+    """
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    flip = np.array([1.0, -1.0, 1.0])
+    body = {side: int(m.geom_bodyid[robot.sole_geom_id[side]]) for side in SIDES}
+    world = {side: {k: d.xpos[body[side]] + d.xmat[body[side]].reshape(3, 3) @ pos
+                    for k, (pos, _) in frames[side].items()} for side in SIDES}
+    for kind in frames["left"]:
+        mean_left = 0.5 * (world["left"][kind] + flip * world["right"][kind])
+        for side, target in (("left", mean_left), ("right", flip * mean_left)):
+            R = d.xmat[body[side]].reshape(3, 3)
+            frames[side][kind] = (R.T @ (target - d.xpos[body[side]]), frames[side][kind][1])
+
+
 def _adam_model(robot: Robot) -> mujoco.MjModel:
     """The robot's model prepared for adam: foot frames added, joint frames moved, statics massless."""
     mjs = build_mjspec(robot.spec)
     m = robot.model
+    frames = {side: _sole_frames(m, robot.sole_geom_id[side]) for side in SIDES}
+    _symmetrize(m, robot, frames)
     for side in SIDES:
         geom = robot.sole_geom_id[side]
         parent = mjs.body(m.body(int(m.geom_bodyid[geom])).name)
         if parent is None:
             raise input_error(robot.spec.mjcf, f"the body of the {side} sole geom needs a name")
-        for kind, (pos, quat) in _sole_frames(m, geom).items():
+        for kind, (pos, quat) in frames[side].items():
             if mjs.body(foot_frame(side, kind)) is None:
                 parent.add_body(name=foot_frame(side, kind), pos=pos, quat=quat)
     m = mjs.compile()

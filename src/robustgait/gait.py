@@ -37,7 +37,8 @@ STANCES = ("left", "right")
 class GaitParams:
     """The four essential constraints of a gait (DESIGN §4): step length [m] (forward displacement of the
     base per step), step duration [s], step width [m] (lateral distance between the feet centres) and
-    swing-foot height [m] (maximum sole clearance)."""
+    swing-foot height [m] (sole clearance at mid-step, the maximum). The bounds are generic sanity bounds;
+    whether a robot can walk them is decided by the gait generator (reach, foot collision, IPOPT)."""
 
     step_length: float = 0.15
     step_duration: float = 0.7
@@ -45,10 +46,10 @@ class GaitParams:
     step_height: float = 0.07
 
     BOUNDS = {  # noqa: RUF012 - class-level constant, not a dataclass field
-        "step_length": (0.0, 0.5),
-        "step_duration": (0.2, 3.0),
-        "step_width": (0.05, 0.6),
-        "step_height": (0.005, 0.3),
+        "step_length": (0.0, 1.5),
+        "step_duration": (0.1, 5.0),
+        "step_width": (0.0, 1.0),
+        "step_height": (0.005, 0.5),
     }
 
     def __post_init__(self) -> None:
