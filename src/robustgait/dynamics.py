@@ -52,6 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from robustgait.errors import input_error
 from robustgait.robots.spec import SIDES, Robot, build_mjspec, load_robot
+from robustgait.rotations import quat_to_mat
 
 FOOT_FRAME_KINDS = ("sole", "toe", "heel")
 Array = NDArray[np.float64]
@@ -80,8 +81,7 @@ def quat_to_rotation(quat: ArrayLike | cs.SX) -> Array | cs.SX:
     if isinstance(quat, cs.SX):
         qs = quat / cs.norm_2(quat)
         return cs.vertcat(*(cs.horzcat(*row) for row in _rotation_rows(qs[0], qs[1], qs[2], qs[3])))
-    q = np.asarray(quat, dtype=float)
-    return np.array(_rotation_rows(*(q / np.linalg.norm(q))))
+    return quat_to_mat(quat)
 
 
 @overload

@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
+from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import SimConfig, StepEngine
 from robustgait.sim.walk import SwitchEvent
 
@@ -47,16 +48,6 @@ FRAMES = ("heading", "world", "body")
 RECONSTRUCTIONS = ("holonomic", "angular-only")
 MAPS = ("step", "stride")
 FloatArray = NDArray[np.float64]
-
-
-def quat_to_mat(quat: FloatArray) -> FloatArray:
-    """Rotation matrices (..., 3, 3) from unit quaternions (..., 4) in MuJoCo's (w, x, y, z) order."""
-    w, x, y, z = np.moveaxis(np.asarray(quat, dtype=float), -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-    ], -2)
 
 
 def frame_rotation(qpos: FloatArray, frame: Frame) -> FloatArray:
