@@ -224,3 +224,45 @@ def test_armature_is_added_to_the_mass_matrix(tmp_path: Path) -> None:
     M = np.zeros((m.nv, m.nv))
     mujoco.mj_fullM(m, d, M)
     assert rel_err(dyn.mass_matrix(qpos), M) < REL_TOL
+
+
+def test_frame_jacobians_match_mujoco(dyn: Dynamics) -> None:
+    """adam's sole-frame Jacobian in MuJoCo coordinates equals mj_jac at the frame's point."""
+    robot = dyn.robot
+    m = robot.model
+    for qpos, qvel in random_states(robot, seed=7):
+        d = mujoco_at(robot, qpos, qvel)
+        for side in SIDES:
+            frame = foot_frame(side, "sole")
+            pos, _ = dyn.frame_pose(frame, qpos)
+            jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+            mujoco.mj_jac(m, d, jp, jr, pos, int(m.geom_bodyid[robot.sole_geom_id[side]]))
+            assert rel_err(dyn.frame_jacobian(frame, qpos), np.vstack([jp, jr])) < 1e-10
+
+
+def test_jacobian_dot_qvel_matches_finite_differences(dyn: Dynamics) -> None:
+    """J̇ q̇ = d/dt (J(q) q̇) at constant q̇, by central differences along MuJoCo's own position integration."""
+    robot = dyn.robot
+    m = robot.model
+    h = 1e-6
+    for qpos, qvel in random_states(robot, n=3, seed=8):
+        frame = foot_frame("left", "toe")
+        ahead, behind = qpos.copy(), qpos.copy()
+        mujoco.mj_integratePos(m, ahead, qvel, h)
+        mujoco.mj_integratePos(m, behind, qvel, -h)
+        fd = (dyn.frame_jacobian(frame, ahead) @ qvel - dyn.frame_jacobian(frame, behind) @ qvel) / (2 * h)
+        exact = dyn.frame_jacobian_dot_qvel(frame, qpos, qvel)
+        assert np.linalg.norm(exact - fd) <= 1e-6 * max(np.linalg.norm(exact), 1.0)
+
+
+def test_impact_map_is_plastic(dyn: Dynamics) -> None:
+    """After the impact the sole is still (J q̇⁺ = 0), the momentum jump is a sole wrench (M Δq̇ = Jᵀ Λ) and
+    the kinetic energy does not increase."""
+    robot = dyn.robot
+    for qpos, qvel in random_states(robot, n=3, seed=9):
+        plus, impulse = dyn.impact_map(qpos, qvel, "right")
+        J = dyn.frame_jacobian(foot_frame("right", "sole"), qpos)
+        M = dyn.mass_matrix(qpos)
+        assert np.linalg.norm(J @ plus) < 1e-10 * max(np.linalg.norm(J @ qvel), 1.0)
+        assert rel_err(M @ (plus - qvel), J.T @ impulse) < 1e-10
+        assert plus @ M @ plus <= qvel @ M @ qvel + 1e-9

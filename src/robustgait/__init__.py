@@ -6,6 +6,8 @@ Public API (everything else is reachable from the submodules)::
     robot = robustgait.load_robot("exo")                 # or a spec .toml path
     gait = robustgait.load_gait("gait.json", robot)      # or a FROST/ambersim .yaml
     result = robustgait.walk(robot, gait, steps=50)
+    cert = robustgait.certify_gait(robot, gait)          # cert.r_star
+    gen = robustgait.GaitGenerator(robot)                # build the HZD problem once, then gen.solve(params)
 """
 
 import os
@@ -13,15 +15,36 @@ import os
 # Offscreen rendering needs a headless GL backend, and MuJoCo reads the choice once, at import.
 os.environ.setdefault("MUJOCO_GL", "egl")
 
+from typing import TYPE_CHECKING, Any
+
+from robustgait.barrier import Certificate, certify_map, invariant_radius
+from robustgait.certify import CertifyConfig, GaitCertificate, certify_gait
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait, GaitParams, load_gait
 from robustgait.robots import Robot, load_robot
 from robustgait.sim import SimConfig, StepEngine, WalkResult, walk
 
+if TYPE_CHECKING:
+    from robustgait.gaitgen import GaitGenerator, generate_gait
+
 __version__ = "0.1.0"
 
+
+def __getattr__(name: str) -> Any:
+    # gait generation imports CasADi and adam (about a second): load it only when asked for
+    if name in ("GaitGenerator", "generate_gait"):
+        from robustgait import gaitgen
+
+        return getattr(gaitgen, name)
+    raise AttributeError(f"module 'robustgait' has no attribute {name!r}")
+
+
 __all__ = [
+    "Certificate",
+    "CertifyConfig",
     "Gait",
+    "GaitCertificate",
+    "GaitGenerator",
     "GaitParams",
     "Robot",
     "RobustGaitError",
@@ -29,6 +52,10 @@ __all__ = [
     "StepEngine",
     "WalkResult",
     "__version__",
+    "certify_gait",
+    "certify_map",
+    "generate_gait",
+    "invariant_radius",
     "load_gait",
     "load_robot",
     "walk",

@@ -272,3 +272,27 @@ class Dynamics:
     def foot_frames(self, qpos: ArrayLike) -> dict[str, tuple[Array, Array]]:
         """Poses of every foot frame, keyed by name (``left_sole_frame``, ..., ``right_heel_frame``)."""
         return {foot_frame(s, k): self.frame_pose(foot_frame(s, k), qpos) for s in SIDES for k in FOOT_FRAME_KINDS}
+
+    def frame_jacobian(self, frame: str, qpos: ArrayLike) -> Array:
+        """Jacobian (6, nv) of a frame's (linear; angular) world velocity w.r.t. MuJoCo's ``qvel``:
+        J_mj = J_adam T (adam's mixed Jacobian times the velocity map), comparable to ``mj_jac``."""
+        H, s = base_transform(qpos), self.joint_positions(qpos)
+        return np.asarray(self.kindyn.jacobian_fun(frame)(H, s), dtype=float) @ self.velocity_map(qpos)
+
+    def frame_jacobian_dot_qvel(self, frame: str, qpos: ArrayLike, qvel: ArrayLike) -> Array:
+        """J̇ q̇ (6,) of a frame, the velocity-product term of its acceleration: J̇_mj q̇ = J̇_adam ν, because
+        Ṫ q̇ = (0, Ṙ ω_B, 0) = (0, R (ω_B × ω_B), 0) = 0."""
+        nu = self.to_mixed(qpos, qvel)
+        jd = self.kindyn.jacobian_dot_fun(frame)(base_transform(qpos), self.joint_positions(qpos), nu[:6], nu[6:])
+        return np.asarray(jd, dtype=float) @ nu
+
+    def impact_map(self, qpos: ArrayLike, qvel: ArrayLike, side: str) -> tuple[Array, Array]:
+        """Rigid (plastic) impact of a flat sole: q̇⁺ = q̇⁻ + M⁻¹ Jᵀ Λ with Λ = −(J M⁻¹ Jᵀ)⁻¹ J q̇⁻, J the
+        sole frame's 6 × nv Jacobian, so that J q̇⁺ = 0 (MuJoCo coordinates). Returns (q̇⁺ (nv,), Λ (6,)
+        the impulsive wrench [N·s, N·m·s] at the sole frame, world axes)."""
+        M = self.mass_matrix(qpos)
+        J = self.frame_jacobian(foot_frame(side, "sole"), qpos)
+        v = np.asarray(qvel, dtype=float)
+        minv_jt = np.linalg.solve(M, J.T)
+        impulse = -np.linalg.solve(J @ minv_jt, J @ v)
+        return v + minv_jt @ impulse, impulse
