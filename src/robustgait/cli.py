@@ -14,6 +14,13 @@ from pathlib import Path
 from robustgait.errors import RobustGaitError
 
 
+def _check_outputs(*paths: str | None) -> None:
+    """Fail before any work when an output file could not be written (its directory is missing)."""
+    for out in paths:
+        if out is not None and not Path(out).parent.resolve().is_dir():
+            raise RobustGaitError(f"{out}: output directory does not exist")
+
+
 def _cmd_robots(args: argparse.Namespace) -> int:
     from robustgait.robots import load_robot, shipped_robots
 
@@ -39,9 +46,7 @@ def _cmd_walk(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     gait = load_gait(args.gait, robot)
     config = SimConfig(switching=args.switching, feedforward=not args.no_feedforward)
-    for out in (args.video, args.log):
-        if out is not None and not Path(out).parent.resolve().is_dir():
-            raise RobustGaitError(f"{out}: output directory does not exist")
+    _check_outputs(args.video, args.log)
     result = walk(robot, gait, steps=args.steps, config=config, keep_trajectory=args.video is not None)
     if args.video is not None and result.trajectory is not None:
         render_video(robot, result.trajectory, args.video)
@@ -92,9 +97,7 @@ def _cmd_certify(args: argparse.Namespace) -> int:
                         map=args.map, reconstruction=args.reconstruction, frame=args.frame,
                         fp_tol=args.fp_tol, fp_max_steps=args.fp_max_steps,
                         fp_min_steps=min(10, max(args.fp_max_steps, 1)), sim=SimConfig(switching=args.switching))
-    for out in (args.plot, args.output):
-        if out is not None and not Path(out).parent.resolve().is_dir():
-            raise RobustGaitError(f"{out}: output directory does not exist")
+    _check_outputs(args.plot, args.output)
     robot = load_robot(args.robot)
     gait = load_gait(args.gait, robot)
     gc = certify_gait(robot, gait, cfg, progress=not args.json and sys.stderr.isatty())
@@ -169,8 +172,7 @@ def _cmd_gait_generate(args: argparse.Namespace) -> int:
     if args.nodes < 5 or args.nodes % 2 == 0:
         raise RobustGaitError(f"--nodes must be odd and ≥ 5, got {args.nodes}")
     robot = load_robot(args.robot)
-    if not Path(args.output).parent.resolve().is_dir():
-        raise RobustGaitError(f"{args.output}: output directory does not exist")
+    _check_outputs(args.output)
     warm = load_gait(args.warm_start, robot) if args.warm_start else None
     config = GaitGenConfig(nodes=args.nodes, stance=args.stance)
     live = not args.json

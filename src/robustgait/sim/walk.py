@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import Gait
 from robustgait.robots import Robot
+from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import SimConfig, StepEngine
 
 
@@ -62,8 +63,7 @@ class WalkResult:
 
 def _heading(qpos: NDArray[np.float64]) -> NDArray[np.float64]:
     """Unit horizontal direction of the base's x axis (from the quaternion w, x, y, z)."""
-    w, x, y, z = qpos[3:7]
-    fwd = np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z)])
+    fwd = quat_to_mat(qpos[3:7])[:2, 0]
     return fwd / max(float(np.linalg.norm(fwd)), 1e-12)
 
 
