@@ -30,8 +30,13 @@ def _save(fig: Figure, path: str | Path) -> Path:
     path = Path(path)
     if not path.parent.resolve().is_dir():
         raise input_error(path, "output directory does not exist")
-    fig.savefig(path, dpi=120, bbox_inches="tight")
-    plt.close(fig)
+    tmp = path.with_name(path.name + ".tmp")
+    try:  # written beside and renamed: an interrupted save leaves no half-written figure
+        fig.savefig(tmp, dpi=120, bbox_inches="tight", format=path.suffix.lstrip(".").lower() or "png")
+        tmp.replace(path)
+    finally:
+        plt.close(fig)
+        tmp.unlink(missing_ok=True)
     return path
 
 
