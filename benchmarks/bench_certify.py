@@ -103,7 +103,7 @@ def main() -> None:
     print(f"step map, holonomic, median of {args.repeat}: sampler {ours:.0f} simulated steps/s, raw mujoco.rollout "
           f"{r:.0f} steps/s ({n} states x {nstep} steps, zero control)  ratio {ours / r:.2f} "
           f"({'met' if ours / r >= 0.8 else 'NOT met'}: goal >= 0.8); per repeat "
-          f"{' '.join(f'{q:.2f}' for q in ratios)}")
+          f"{' '.join(f'{q:.2f}' for q in ratios)} (median {float(np.median(ratios)):.2f})")
     print(f"  sampling wall time {wall:.2f} s for N = {n} ({'met' if wall <= 10 else 'NOT met'}: goal <= 10 s); "
           f"certify total {total:.2f} s; {runs[0].physics_steps} physics steps "
           f"({runs[0].physics_steps / n:.0f}/sample)")

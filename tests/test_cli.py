@@ -94,3 +94,18 @@ def test_console_script_no_traceback(tmp_path):
                           capture_output=True, text=True)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert proc.stderr.count("\n") == 1 and "bad.json" in proc.stderr
+
+
+def test_argparse_errors_are_one_line(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["walk"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and len(err.strip().splitlines()) == 1 and "required" in err
+
+
+def test_barrier_eval_accepts_negative_x_star(tmp_path, capsys):
+    log = tmp_path / "x.csv"
+    log.write_text("a,b\n-0.1,0.2\n-0.11,0.21\n-0.1,0.2\n")
+    for argv in (["--x-star", "-0.1", "0.2"], ["--x-star=-0.1,0.2"]):
+        code, out, _ = run(capsys, "barrier-eval", str(log), *argv, "--r", "0.5", "--json")
+        assert code == 0 and json.loads(out)["ok"] is True

@@ -37,7 +37,7 @@ class CertifyConfig:
     sim: SimConfig = field(default_factory=SimConfig)
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.n_samples, int) and self.n_samples >= 1):
+        if isinstance(self.n_samples, bool) or not (isinstance(self.n_samples, int) and self.n_samples >= 1):
             raise RobustGaitError(f"the number of samples must be ≥ 1, got {self.n_samples}")
         if not (np.isfinite(self.r_max) and self.r_max > 0):
             raise RobustGaitError(f"r_max must be positive and finite, got {self.r_max}")
@@ -109,6 +109,8 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
                                        progress=on_step)
         t1 = time.perf_counter()
         map_residual = float(np.linalg.norm(pmap(fp.x_star[None])[0] - fp.x_star))
+        if not np.isfinite(map_residual):
+            raise RobustGaitError("the return map fell from its own fixed point (reconstruction left the orbit)")
         pmap.physics_steps = 0
         t2 = time.perf_counter()
         with tqdm(total=cfg.n_samples, desc=f"{cfg.map} map", unit="sample", disable=not progress,
@@ -117,8 +119,6 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
                                alpha=cfg.alpha, n_samples=cfg.n_samples, seed=cfg.seed, beta=cfg.beta)
         t3 = time.perf_counter()
         steps = pmap.physics_steps
-    if not np.isfinite(map_residual):
-        raise RobustGaitError("the return map fell from its own fixed point (reconstruction left the orbit)")
     return GaitCertificate(certificate=cert, fixed_point=fp, map_residual=map_residual, config=cfg,
                            robot=robot.name, physics_steps=steps,
                            seconds={"fixed_point": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,

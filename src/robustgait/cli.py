@@ -10,6 +10,7 @@ import json
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import NoReturn
 
 from robustgait.errors import RobustGaitError
 
@@ -80,11 +81,20 @@ def _write_csv(path: Path, header: list[str], rows: list[list[float]]) -> None:
     tmp.replace(path)
 
 
-def _floats_arg(text: str) -> list[float]:
+def _floats_arg(parts: list[str]) -> list[float]:
+    """Numbers given as one comma-separated word or several words ("0.1,0.2" or 0.1 0.2 or -0.1 0.2)."""
+    text = " ".join(parts).replace(",", " ")
     try:
-        return [float(v) for v in text.replace(",", " ").split()]
+        return [float(v) for v in text.split()]
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+        raise RobustGaitError(f"expected numbers, got {' '.join(parts)!r}") from None
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with the project's error format: one line on stderr, exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
 def _cmd_certify(args: argparse.Namespace) -> int:
@@ -129,10 +139,11 @@ def _cmd_barrier_eval(args: argparse.Namespace) -> int:
     from robustgait.barrier import barrier_along, load_reduced_log
 
     xs = load_reduced_log(args.log, args.columns.split(",") if args.columns else None)
-    if xs.shape[1] != len(args.x_star):
+    x_star = _floats_arg(args.x_star)
+    if xs.shape[1] != len(x_star):
         raise RobustGaitError(f"{args.log}: the log has {xs.shape[1]} columns but --x-star has "
-                              f"{len(args.x_star)} values")
-    trace = barrier_along(xs, args.x_star, args.r, args.alpha)
+                              f"{len(x_star)} values")
+    trace = barrier_along(xs, x_star, args.r, args.alpha)
     if args.plot is not None:
         from robustgait.report import plot_barrier_trace
 
@@ -205,7 +216,7 @@ def _cmd_gait_generate(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="robustgait", description="Synthesize and certify robust walking gaits.")
+    p = _Parser(prog="robustgait", description="Synthesize and certify robust walking gaits.")
     sub = p.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("robots", help="list the shipped robots")
@@ -250,7 +261,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("barrier-eval", help="evaluate the DTBF condition along a logged sequence of reduced states")
     b.add_argument("log", help="CSV with a header row, or NPZ (array 'x')")
-    b.add_argument("--x-star", type=_floats_arg, required=True, help="fixed point, e.g. 0.42,0.21,0.30")
+    b.add_argument("--x-star", nargs="+", required=True,
+                   help="fixed point: 0.42,0.21,0.30 or 0.42 0.21 0.30 (negative values: -0.4 0.2 0.3)")
     b.add_argument("--r", type=float, required=True, help="ball radius r")
     b.add_argument("--alpha", type=float, default=0.05)
     b.add_argument("--columns", help="comma-separated CSV columns to use (default: all numeric columns)")
