@@ -65,9 +65,9 @@ def joint_trajectories(beta: FloatArray, taus: FloatArray, duration: float
 def kinematic_states(dyn: Dynamics, prob: FlatFootProblem, beta: FloatArray, duration: float) -> NodeStates:
     """Every node variable implied by β and T: the base from the stance-foot constraint (pose, velocity,
     acceleration), u and λ from the 6 + m equations of motion (a square system for a flat foot), and the
-    rigid impact map at τ = 1. Used as the initial guess (any β is consistent) and to re-evaluate solutions."""
+    rigid impact map at τ = 1 (:meth:`Dynamics.impact_map`). The initial guess: any β gives a consistent x₀."""
     kd = dyn.kindyn
-    st, sw = foot_frame(prob.stance, "sole"), foot_frame(prob.swing, "sole")
+    st = foot_frame(prob.stance, "sole")
     fk, jac, jdot = dyn.frame_fun(st), kd.jacobian_fun(st), kd.jacobian_dot_fun(st)
     m = prob.m
     arm = np.zeros(6 + m)
@@ -76,7 +76,6 @@ def kinematic_states(dyn: Dynamics, prob: FlatFootProblem, beta: FloatArray, dur
     n = len(prob.taus)
     out = {k: np.zeros((n, d)) for k, d in (("vb", 6), ("ab", 6), ("u", m), ("lam", 6))}
     Hs = np.zeros((n, 4, 4))
-    M = np.zeros(0)
     for i in range(n):
         H = np.linalg.inv(np.asarray(fk(np.eye(4), s[i])))  # stance sole at the origin, identity orientation
         Hs[i] = H
@@ -88,11 +87,9 @@ def kinematic_states(dyn: Dynamics, prob: FlatFootProblem, beta: FloatArray, dur
         rhs = M @ np.concatenate([ab, sdd[i]]) + np.asarray(dyn.bias_force_fun(H, s[i], vb, sd[i])).ravel()
         lam = np.linalg.solve(J[:, :6].T, rhs[:6])
         out["vb"][i], out["ab"][i], out["lam"][i], out["u"][i] = vb, ab, lam, rhs[6:] - J[:, 6:].T @ lam
-    Jsw = np.asarray(kd.jacobian_fun(sw)(Hs[-1], s[-1]))
-    nu_minus = np.concatenate([out["vb"][-1], sd[-1]])
-    Minv_jt = np.linalg.solve(M, Jsw.T)
-    impulse = -np.linalg.solve(Jsw @ Minv_jt, Jsw @ nu_minus)
-    return NodeStates(Hs, s, sd, sdd, out["vb"], out["ab"], out["u"], out["lam"], nu_minus + Minv_jt @ impulse,
+    qpos, qvel = to_mujoco_state(dyn.robot, Hs[-1], s[-1], out["vb"][-1], sd[-1])
+    qvel_plus, impulse = dyn.impact_map(qpos, qvel, prob.swing)
+    return NodeStates(Hs, s, sd, sdd, out["vb"], out["ab"], out["u"], out["lam"], dyn.to_mixed(qpos, qvel_plus),
                       impulse)
 
 
@@ -128,7 +125,8 @@ def unpack(prob: FlatFootProblem, x: FloatArray, duration: float) -> tuple[Float
 
 
 class GaitGenerator:
-    """Builds the flat-foot NLP once for a robot (≈ 10–30 s) and solves it for any :class:`GaitParams`."""
+    """Builds the flat-foot NLP once for a robot (≈ 6 s for exo, 10 s for Atalante) and solves it for any
+    :class:`GaitParams`."""
 
     def __init__(self, robot: Robot, config: GaitGenConfig | None = None, *, verbose: bool = False):
         self.robot = robot
