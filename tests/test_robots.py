@@ -40,8 +40,7 @@ def _spec_text() -> str:
 
 @needs_atalante
 @pytest.mark.parametrize("old, new, message", [
-    ('"LeftSagittalKneeJoint", "LeftSagittalAnkleJoint"', '"LeftKnee", "LeftSagittalAnkleJoint"',
-     "unknown joint name 'LeftKnee'"),
+    ("LeftSagittalKneeJoint", "LeftKnee", "unknown joint name 'LeftKnee'"),
     ('sole_geom = "left_sole"', 'sole_geom = "left_foot"', "unknown geom name 'left_foot'"),
     ('floor_geom = "terrain_mesh"', 'floor_geom = "ground"', "unknown geom name 'ground'"),
     ('base_body = "torso"', 'base_body = "LeftFrontalHipLink"', "has no free joint"),
@@ -73,3 +72,36 @@ def test_unknown_robot_and_missing_spec(tmp_path):
 
 def test_shipped_robots_listed():
     assert "exo" in shipped_robots()
+
+
+def test_exo_spec_has_gait_quality_action_space_and_posture():
+    spec = load_robot("exo").spec
+    q = spec.gait_quality
+    assert 0 < q.pelvis_roll < 0.2 and q.pelvis_pitch[0] < q.pelvis_pitch[1] and len(q.joint_velocity) == 12
+    assert set(spec.action_space) == {"step_length", "step_duration", "step_width", "step_height"}
+    assert spec.action_space["step_length"].grid() == (0.1, 0.12, 0.14, 0.16, 0.18, 0.2, 0.22)
+    assert spec.posture[spec.joints.index("left_knee")] == 0.3 and len(spec.posture) == 12
+
+
+@pytest.mark.parametrize("extra, message", [
+    ("[gait_quality]\npelvis_roll = -0.1\n", "'gait_quality.pelvis_roll' must be finite and positive"),
+    ("[gait_quality]\npelvis_pitch = [0.2, 0.1]\n", "low < high"),
+    ("[gait_quality]\nroll = 0.1\n", "unknown key 'gait_quality.roll'"),
+    ("[gait_quality]\njoint_velocity = [1, 2]\n", "must be a list of 12 numbers"),
+    ("[action_space]\nstep_length = [0.1, 0.2, 0.05]\n", "missing key 'action_space.step_duration'"),
+    ("[posture]\nleft_elbow = 0.2\n", "'posture.left_elbow' is not an actuated joint"),
+])
+def test_bad_gait_quality_action_space_posture(tmp_path, extra, message):
+    import re
+
+    from robustgait.robots.spec import SHIPPED_DIR
+
+    text = (SHIPPED_DIR / "exo" / "spec.toml").read_text()
+    section = extra.split("]")[0] + "]"
+    text = re.sub(re.escape(section) + r"\n(?:[^\[].*\n|\n)*", "", text)  # drop the shipped section
+    assert section not in text
+    text = text.replace('mjcf = "exo.xml"', f'mjcf = "{SHIPPED_DIR / "exo" / "exo.xml"}"')
+    p = tmp_path / "bad.toml"
+    p.write_text(text + "\n" + extra)
+    with pytest.raises(RobustGaitError, match=message):
+        load_robot(p)

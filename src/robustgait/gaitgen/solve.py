@@ -153,18 +153,8 @@ class GaitGenerator:
         return pack(prob, beta, kinematic_states(self.dyn, prob, beta, params.step_duration))
 
     def standing_posture(self) -> FloatArray:
-        """A mirror-symmetric, slightly crouched posture (spec order): the middle of the pitch-joint ranges
-        clipped to a gentle knee bend, zeros elsewhere; used as the cold-start guess."""
-        names = self.robot.spec.joints
-        q = np.zeros(self.robot.n_joints)
-        for i, name in enumerate(names):
-            low = name.lower()
-            if "knee" in low:
-                q[i] = 0.3
-            elif "hip" in low and ("pitch" in low or "sagittal" in low):
-                q[i] = -0.15
-            elif "ankle" in low and ("pitch" in low or "sagittal" in low):
-                q[i] = -0.15
+        """The cold-start posture (spec order): the spec's ``[posture]`` clipped to the joint ranges."""
+        q = np.asarray(self.robot.spec.posture or np.zeros(self.robot.n_joints), dtype=float)
         lo, hi = self.robot.joint_range[:, 0], self.robot.joint_range[:, 1]
         return np.clip(q, np.where(np.isfinite(lo), lo, -1e9), np.where(np.isfinite(hi), hi, 1e9))
 

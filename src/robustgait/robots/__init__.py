@@ -2,11 +2,13 @@
 
 from robustgait.robots.spec import (
     FallCriteria,
+    GaitQuality,
     LegSpec,
+    ParamRange,
     Robot,
     RobotSpec,
     load_robot,
     shipped_robots,
 )
 
-__all__ = ["FallCriteria", "LegSpec", "Robot", "RobotSpec", "load_robot", "shipped_robots"]
+__all__ = ["FallCriteria", "GaitQuality", "LegSpec", "ParamRange", "Robot", "RobotSpec", "load_robot", "shipped_robots"]

@@ -14,6 +14,7 @@ compiles the MJCF with MuJoCo and replaces its actuators and sensors by ours:
 
 from __future__ import annotations
 
+import math
 import sys
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -60,6 +61,42 @@ class FallCriteria:
 
 
 @dataclass(frozen=True)
+class GaitQuality:
+    """Bounds that a generated gait must satisfy at every node (DESIGN §2, §4): what an exoskeleton's
+    passenger needs besides the essential constraints. Angles of the pelvis are roll-pitch-yaw (ZYX)
+    relative to the stance sole's frame; heights are above the stance sole.
+
+    pelvis_roll, pelvis_yaw [rad]: |φ|, |ψ| ≤ bound. pelvis_pitch [rad]: (low, high) band.
+    pelvis_height [m]: (low, high) band of the base origin above the stance sole.
+    pelvis_angular_velocity [rad/s]: each component of the base's angular velocity (world axes) ≤ bound.
+    swing_tilt [rad]: swing sole roll and pitch ≤ bound (kept nearly parallel to the ground).
+    joint_velocity [rad/s]: |q̇_i| ≤ bound per actuated joint (output order).
+    """
+
+    pelvis_roll: float = 0.1
+    pelvis_yaw: float = 0.1
+    pelvis_pitch: tuple[float, float] = (-0.1, 0.2)
+    pelvis_height: tuple[float, float] = (0.0, math.inf)
+    pelvis_angular_velocity: float = 1.5
+    swing_tilt: float = 0.15
+    joint_velocity: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
+class ParamRange:
+    """One axis of a robot's action space for studies: ``low ≤ value ≤ high`` on a grid of ``step``."""
+
+    low: float
+    high: float
+    step: float
+
+    def grid(self) -> tuple[float, ...]:
+        """The grid values low, low + step, ..., ≤ high (rounded to 1e-9 so that 0.1 + 0.02 k is exact)."""
+        n = math.floor((self.high - self.low) / self.step + 1e-9)
+        return tuple(round(self.low + k * self.step, 9) for k in range(n + 1))
+
+
+@dataclass(frozen=True)
 class RobotSpec:
     """Everything the pipeline needs to know about a robot beyond its MJCF."""
 
@@ -80,6 +117,9 @@ class RobotSpec:
     integrator: str | None = None
     description: str = ""
     source: Path | None = None
+    gait_quality: GaitQuality = field(default_factory=GaitQuality)
+    action_space: dict[str, ParamRange] | None = None
+    posture: tuple[float, ...] = ()
 
     @property
     def n_joints(self) -> int:
@@ -152,6 +192,7 @@ def parse_spec(path: Path) -> RobotSpec:
     timestep = sim_t.get("timestep")
     if timestep is not None and not (isinstance(timestep, (int, float)) and 0 < timestep < 0.1):
         raise input_error(path, "'sim.timestep' must be a number in (0, 0.1) seconds")
+    names_t = tuple(names)
     return RobotSpec(
         name=name,
         mjcf=mjcf,
@@ -170,7 +211,79 @@ def parse_spec(path: Path) -> RobotSpec:
         integrator=integrator,
         description=str(raw.get("description", "")),
         source=path.resolve(),
+        gait_quality=_gait_quality(raw.get("gait_quality", {}), n, path),
+        action_space=_action_space(raw["action_space"], path) if "action_space" in raw else None,
+        posture=_posture(raw.get("posture", {}), names_t, path),
     )
+
+
+def _band(table: dict[str, Any], key: str, default: tuple[float, float], src: Path) -> tuple[float, float]:
+    if key not in table:
+        return default
+    lo, hi = _floats(table, key, 2, src, "gait_quality.")
+    if not lo < hi:
+        raise input_error(src, f"'gait_quality.{key}' must be [low, high] with low < high")
+    return lo, hi
+
+
+def _bound(table: dict[str, Any], key: str, default: float, src: Path) -> float:
+    if key not in table:
+        return default
+    return _floats({key: [table[key]]}, key, 1, src, "gait_quality.", positive=True)[0]
+
+
+def _gait_quality(table: Any, n: int, src: Path) -> GaitQuality:
+    if not isinstance(table, dict):
+        raise input_error(src, "'gait_quality' must be a table")
+    known = {f for f in GaitQuality.__dataclass_fields__}
+    for key in table:
+        if key not in known:
+            raise input_error(src, f"unknown key 'gait_quality.{key}' (known: {', '.join(sorted(known))})")
+    d = GaitQuality()
+    jv = table.get("joint_velocity", 10.0)
+    joint_velocity = (_floats({"v": jv}, "v", n, src, "gait_quality.joint_velocity", positive=True)
+                      if isinstance(jv, list) else (_bound(table, "joint_velocity", 10.0, src),) * n)
+    return GaitQuality(
+        pelvis_roll=_bound(table, "pelvis_roll", d.pelvis_roll, src),
+        pelvis_yaw=_bound(table, "pelvis_yaw", d.pelvis_yaw, src),
+        pelvis_pitch=_band(table, "pelvis_pitch", d.pelvis_pitch, src),
+        pelvis_height=_band(table, "pelvis_height", d.pelvis_height, src),
+        pelvis_angular_velocity=_bound(table, "pelvis_angular_velocity", d.pelvis_angular_velocity, src),
+        swing_tilt=_bound(table, "swing_tilt", d.swing_tilt, src),
+        joint_velocity=joint_velocity,
+    )
+
+
+ACTION_FIELDS = ("step_length", "step_duration", "step_width", "step_height")
+
+
+def _action_space(table: Any, src: Path) -> dict[str, ParamRange]:
+    if not isinstance(table, dict):
+        raise input_error(src, "'action_space' must be a table")
+    out = {}
+    for key in table:
+        if key not in ACTION_FIELDS:
+            raise input_error(src, f"unknown key 'action_space.{key}' (known: {', '.join(ACTION_FIELDS)})")
+    for key in ACTION_FIELDS:
+        if key not in table:
+            raise input_error(src, f"missing key 'action_space.{key}' ([low, high, step])")
+        lo, hi, step = _floats(table, key, 3, src, "action_space.")
+        if not (lo <= hi and step > 0):
+            raise input_error(src, f"'action_space.{key}' must be [low, high, step] with low ≤ high and step > 0")
+        out[key] = ParamRange(lo, hi, step)
+    return out
+
+
+def _posture(table: Any, names: tuple[str, ...], src: Path) -> tuple[float, ...]:
+    """Cold-start posture in output order from a table joint name → angle (missing joints: 0)."""
+    if not isinstance(table, dict):
+        raise input_error(src, "'posture' must be a table of joint name = angle [rad]")
+    for key, value in table.items():
+        if key not in names:
+            raise input_error(src, f"'posture.{key}' is not an actuated joint")
+        if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+            raise input_error(src, f"'posture.{key}' must be a finite number [rad]")
+    return tuple(float(table.get(j, 0.0)) for j in names)
 
 
 def _add_contact_sensor(spec: mujoco.MjSpec, name: str, geom: str, ref: str | None) -> None:
