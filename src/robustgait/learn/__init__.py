@@ -1,0 +1,64 @@
+"""Preference learning over a robot's action space (DESIGN §7): the grid (``space``), the oracles
+(``oracle``), the preference GP (``model``), the learners (``learners``: POLAR-style Thompson sampling,
+qEUBO, random) and the loop against known scores (``offline``).
+
+Submodules load lazily (the learners import torch and BoTorch; the oracles and the grid do not)."""
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from robustgait.learn.config import LEARNERS, LearnerConfig, PreferenceModelConfig
+    from robustgait.learn.learners import (
+        EuboLearner,
+        History,
+        Learner,
+        PolarLearner,
+        RandomLearner,
+        iteration_seed,
+        make_learner,
+    )
+    from robustgait.learn.model import thompson_draws
+    from robustgait.learn.offline import ReplayResult, replay
+    from robustgait.learn.oracle import METRICS, Outcome, batch_comparisons, prefer, score
+    from robustgait.learn.space import ActionSpace
+
+_EXPORTS = {
+    **dict.fromkeys(("EuboLearner", "History", "Learner", "PolarLearner",
+                     "RandomLearner", "iteration_seed", "make_learner"), "learners"),
+    **dict.fromkeys(("LEARNERS", "LearnerConfig", "PreferenceModelConfig"), "config"),
+    "thompson_draws": "model",
+    **dict.fromkeys(("METRICS", "Outcome", "batch_comparisons", "prefer", "score"), "oracle"),
+    **dict.fromkeys(("ReplayResult", "replay"), "offline"),
+    "ActionSpace": "space",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        import importlib
+
+        return getattr(importlib.import_module(f"robustgait.learn.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module 'robustgait.learn' has no attribute {name!r}")
+
+
+__all__ = [
+    "LEARNERS",
+    "METRICS",
+    "ActionSpace",
+    "EuboLearner",
+    "History",
+    "Learner",
+    "LearnerConfig",
+    "Outcome",
+    "PolarLearner",
+    "PreferenceModelConfig",
+    "RandomLearner",
+    "ReplayResult",
+    "batch_comparisons",
+    "iteration_seed",
+    "make_learner",
+    "prefer",
+    "replay",
+    "score",
+    "thompson_draws",
+]

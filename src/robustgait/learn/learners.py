@@ -1,0 +1,213 @@
+"""Learners (DESIGN §7): which gaits to evaluate next, from the comparisons so far.
+
+A learner is a pure function of (action space, its config, the study seed, the history of earlier
+iterations, the iteration number): the proposals of iteration k are reproduced exactly from the stored
+comparisons, which is what lets a killed study resume. Randomness comes from a torch generator seeded
+from (seed, iteration) (:func:`iteration_seed`).
+
+* ``polar`` — POLAR/CoSpar regret minimization (maegant/POLAR, ``@Sampling/ThompsonSampling.m``): the
+  first iteration is a uniformly random batch (POLAR draws random actions while the posterior is empty);
+  then each new gait of the batch is the argmax of one joint posterior draw of the utility over the grid
+  (over a random subset plus the visited gaits and the neighbourhood of the current best when the grid
+  has more than ``max_candidates`` points, as LineCoSpar restricts to a subspace through the best);
+  a draw whose argmax is already in the batch is redrawn.
+* ``eubo`` — qEUBO (Astudillo et al. 2023, BoTorch ``qExpectedUtilityOfBestOption``) over the grid,
+  the batch chosen greedily by ``optimize_acqf_discrete(q = batch)``; first iteration random.
+* ``random`` — uniformly random distinct gaits every iteration: the baseline.
+
+Every learner recommends the same way: the visited gait with the highest posterior mean of the
+preference model (:mod:`robustgait.learn.model`) — POLAR's ``updateBestAction`` — so learners differ
+only in what they choose to evaluate.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import torch
+from numpy.typing import NDArray
+
+from robustgait.errors import RobustGaitError
+from robustgait.learn.config import LEARNERS, LearnerConfig
+from robustgait.learn.model import (
+    cholesky_root,
+    posterior_mean,
+    posterior_mean_cov,
+    preference_model,
+    thompson_draws,
+    torch_threads,
+)
+from robustgait.learn.oracle import batch_comparisons
+from robustgait.learn.space import ActionSpace
+
+IntArray = NDArray[np.int64]
+
+
+@dataclass(frozen=True)
+class History:
+    """What a learner knows: the grid index of every evaluated gait in (iteration, slot) order, its
+    iteration, and the comparisons (winner, loser) as positions in ``actions``."""
+
+    actions: tuple[int, ...] = ()
+    iterations: tuple[int, ...] = ()
+    comparisons: tuple[tuple[int, int], ...] = ()
+
+    @classmethod
+    def from_batches(cls, batches: Sequence[Sequence[tuple[int, float]]]) -> History:
+        """From the ranked batches of iterations 0, 1, …: per batch, (grid index, oracle score) per slot;
+        every batch gives all its pairwise comparisons (:func:`batch_comparisons`)."""
+        actions: list[int] = []
+        iters: list[int] = []
+        comps: list[tuple[int, int]] = []
+        for k, batch in enumerate(batches):
+            base = len(actions)
+            comps += [(base + w, base + lo) for w, lo in batch_comparisons([s for _, s in batch])]
+            actions += [int(i) for i, _ in batch]
+            iters += [k] * len(batch)
+        return cls(tuple(actions), tuple(iters), tuple(comps))
+
+    def unique(self) -> tuple[IntArray, list[tuple[int, int]]]:
+        """Visited grid indices in order of first visit, and the comparisons as positions in that list
+        (a repeated gait is one datapoint of the preference model)."""
+        order: dict[int, int] = {}
+        for a in self.actions:
+            order.setdefault(a, len(order))
+        comps = [(order[self.actions[w]], order[self.actions[lo]]) for w, lo in self.comparisons
+                 if self.actions[w] != self.actions[lo]]
+        return np.array(list(order), dtype=np.int64), comps
+
+
+def iteration_seed(seed: int, iteration: int, stream: int = 0) -> int:
+    """A 63-bit seed for (study seed, iteration, stream), independent across its arguments."""
+    return int(np.random.SeedSequence([seed, iteration, stream]).generate_state(2, np.uint64)[0] >> np.uint64(1))
+
+
+class Learner:
+    """Base: proposals and the recommendation from a :class:`History` (see module docstring)."""
+
+    name: str = ""
+
+    def __init__(self, space: ActionSpace, config: LearnerConfig | None = None, seed: int = 0):
+        self.space = space
+        self.config = config or LearnerConfig()
+        self.seed = seed
+        self._x = space.normalized()
+
+    def generator(self, iteration: int, stream: int = 0) -> torch.Generator:
+        return torch.Generator().manual_seed(iteration_seed(self.seed, iteration, stream))
+
+    def random_batch(self, iteration: int, batch: int) -> list[int]:
+        """``batch`` distinct grid indices, uniformly at random (the first iteration of every learner, so
+        that learners with one seed start from the same gaits)."""
+        if batch > self.space.size:
+            raise RobustGaitError(f"a batch of {batch} gaits does not fit in an action space of {self.space.size}")
+        return [int(i) for i in torch.randperm(self.space.size, generator=self.generator(iteration))[:batch]]
+
+    def model(self, history: History, iteration: int = 0) -> Any:
+        """The preference model fitted to ``history`` (the prior if it holds no comparison)."""
+        visited, comps = history.unique()
+        x = self._x[visited] if visited.size else np.zeros((0, self.space.dim))
+        return preference_model(x, comps, self.config.model, seed=iteration_seed(self.seed, iteration, 7))
+
+    def recommend(self, history: History, iteration: int = 0, model: Any = None) -> int | None:
+        """The visited gait with the highest posterior mean (first visited among equals); None before any."""
+        visited, _ = history.unique()
+        if visited.size == 0:
+            return None
+        with torch_threads(1):
+            m = model if model is not None else self.model(history, iteration)
+            mu = posterior_mean(m, self._x[visited])
+        return int(visited[int(np.argmax(mu))])
+
+    def propose(self, history: History, iteration: int, batch: int) -> list[int]:
+        """The ``batch`` distinct grid indices to evaluate in iteration ``iteration`` given ``history`` (the
+        iterations before it)."""
+        with torch_threads(1):
+            return self._propose(history, iteration, batch)
+
+    def _propose(self, history: History, iteration: int, batch: int) -> list[int]:
+        raise NotImplementedError
+
+
+class RandomLearner(Learner):
+    name = "random"
+
+    def _propose(self, history: History, iteration: int, batch: int) -> list[int]:
+        return self.random_batch(iteration, batch)
+
+
+class PolarLearner(Learner):
+    name = "polar"
+
+    def candidates(self, history: History, best: int | None, generator: torch.Generator) -> IntArray:
+        """Grid indices the posterior is drawn over: all of them on a small grid; else the visited gaits,
+        the box of ``neighbourhood`` steps around the best, and uniformly random others up to
+        ``max_candidates``."""
+        cap = self.config.max_candidates
+        if self.space.size <= cap:
+            return np.arange(self.space.size, dtype=np.int64)
+        keep = list(dict.fromkeys(list(history.unique()[0]) + (
+            list(self.space.neighbours(best, self.config.neighbourhood)) if best is not None else [])))[:cap]
+        taken = set(keep)
+        perm = torch.randperm(self.space.size, generator=generator).numpy()
+        keep += [int(i) for i in perm if int(i) not in taken][:cap - len(keep)]
+        return np.array(sorted(keep), dtype=np.int64)
+
+    def _propose(self, history: History, iteration: int, batch: int) -> list[int]:
+        if iteration == 0 or not history.actions:
+            return self.random_batch(iteration, batch)
+        gen = self.generator(iteration)
+        model = self.model(history, iteration)
+        best = self.recommend(history, iteration, model)
+        cand = self.candidates(history, best, gen)
+        if batch > cand.size:
+            raise RobustGaitError(f"a batch of {batch} gaits does not fit in {cand.size} candidate gaits")
+        mean, cov = posterior_mean_cov(model, self._x[cand])
+        root = cholesky_root(cov, self.config.model.jitter)
+        chosen: list[int] = []
+        for _ in range(batch):
+            for _ in range(self.config.max_redraws):
+                draw = thompson_draws(mean, root, 1, gen)[0]
+                pick = int(torch.argmax(draw))
+                if pick not in chosen:
+                    break
+            else:  # every draw repeated a gait of the batch: the best new point of the last draw
+                draw[chosen] = -torch.inf
+                pick = int(torch.argmax(draw))
+            chosen.append(pick)
+        return [int(cand[i]) for i in chosen]
+
+
+class EuboLearner(Learner):
+    name = "eubo"
+
+    def _propose(self, history: History, iteration: int, batch: int) -> list[int]:
+        if iteration == 0 or not history.actions:
+            return self.random_batch(iteration, batch)
+        from botorch.acquisition.preference import qExpectedUtilityOfBestOption
+        from botorch.optim import optimize_acqf_discrete
+        from botorch.sampling import SobolQMCNormalSampler
+
+        if batch > self.space.size:
+            raise RobustGaitError(f"a batch of {batch} gaits does not fit in an action space of {self.space.size}")
+        model = self.model(history, iteration)
+        sampler = SobolQMCNormalSampler(torch.Size([self.config.eubo_samples]),
+                                        seed=iteration_seed(self.seed, iteration, 1) % 2**31)
+        acq = qExpectedUtilityOfBestOption(pref_model=model, sampler=sampler)
+        choices = torch.as_tensor(self._x, dtype=torch.float64)
+        with torch.no_grad(), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            x, _ = optimize_acqf_discrete(acq, q=batch, choices=choices, unique=True)
+        rows = torch.cdist(x.reshape(batch, -1), choices).argmin(dim=1)
+        return [int(i) for i in rows]
+
+
+def make_learner(name: str, space: ActionSpace, config: LearnerConfig | None = None, seed: int = 0) -> Learner:
+    classes: dict[str, type[Learner]] = {"polar": PolarLearner, "eubo": EuboLearner, "random": RandomLearner}
+    if name not in classes:
+        raise RobustGaitError(f"unknown learner {name!r} (choose from {', '.join(LEARNERS)})")
+    return classes[name](space, config, seed)
