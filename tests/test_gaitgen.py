@@ -110,6 +110,15 @@ def test_cli_generate_errors_exit_2_and_write_nothing(tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.slow
+def test_cli_generate_prints_ipopt_log_only_with_verbose(tmp_path, capfd):
+    out = tmp_path / "g.json"
+    for verbose in (False, True):
+        assert main(["gait", "generate", "--robot", "exo", "-o", str(out), *(["--verbose"] if verbose else [])]) == 0
+        printed = capfd.readouterr().out  # IPOPT writes to the C-level stdout
+        assert ("iter    objective" in printed) is verbose and "physics check passed" in printed
+
+
 @needs_atalante
 def test_atalante_generated_gait_walks(tmp_path, capsys):
     out = tmp_path / "atalante.json"

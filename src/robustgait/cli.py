@@ -189,10 +189,10 @@ def _cmd_gait_generate(args: argparse.Namespace) -> int:
     live = not args.json
     if live:
         print(f"building the flat-foot HZD problem for {robot.name} ({args.nodes} nodes) ...", flush=True)
-    gen = GaitGenerator(robot, config, verbose=live)
+    gen = GaitGenerator(robot, config, verbose=live and args.verbose)
     if live:
         print(f"built in {gen.build_seconds:.1f} s: {gen.n_variables} variables, {gen.n_constraints} constraints; "
-              "IPOPT iterations:", flush=True)
+              + ("IPOPT iterations:" if args.verbose else "solving ..."), flush=True)
     res = generate_gait(robot, args.step_length, args.step_duration, args.step_width, args.step_height,
                         warm_start=warm, generator=gen)
     summary = {**res.summary(), "build_seconds": gen.build_seconds, "output": args.output if res.gait else None}
@@ -290,6 +290,7 @@ def build_parser() -> argparse.ArgumentParser:
     gg.add_argument("--stance", choices=("left", "right"), default="right", help="stance leg of the written gait")
     gg.add_argument("-o", "--output", required=True, help="output gait .json")
     gg.add_argument("--json", action="store_true", help="print one JSON summary instead of the live log")
+    gg.add_argument("--verbose", action="store_true", help="print IPOPT's iteration log")
     gg.set_defaults(func=_cmd_gait_generate)
     return p
 
