@@ -8,6 +8,8 @@ Public API (everything else is reachable from the submodules)::
     result = robustgait.walk(robot, gait, steps=50)
     cert = robustgait.certify_gait(robot, gait)          # cert.r_star
     gen = robustgait.GaitGenerator(robot)                # build the HZD problem once, then gen.solve(params)
+    robustgait.create_study("runs/rob", robustgait.StudyConfig(robot="exo"))   # the learning loop
+    robustgait.run_study("runs/rob"); robustgait.study_status("runs/rob")["best"]
 """
 
 import os
@@ -26,37 +28,60 @@ from robustgait.sim import SimConfig, StepEngine, WalkResult, walk
 
 if TYPE_CHECKING:
     from robustgait.gaitgen import GaitGenerator, generate_gait
+    from robustgait.study import (
+        EvaluationConfig,
+        RunOptions,
+        StudyConfig,
+        create_study,
+        evaluate,
+        run_study,
+        study_status,
+    )
 
 __version__ = "0.1.0"
 
 
+_STUDY = ("EvaluationConfig", "RunOptions", "StudyConfig", "create_study", "evaluate", "run_study", "study_status")
+
+
 def __getattr__(name: str) -> Any:
-    # gait generation imports CasADi and adam (about a second): load it only when asked for
+    # gait generation imports CasADi and adam (about a second), studies torch and Optuna: load them when asked
     if name in ("GaitGenerator", "generate_gait"):
         from robustgait import gaitgen
 
         return getattr(gaitgen, name)
+    if name in _STUDY:
+        from robustgait import study
+
+        return getattr(study, name)
     raise AttributeError(f"module 'robustgait' has no attribute {name!r}")
 
 
 __all__ = [
     "Certificate",
     "CertifyConfig",
+    "EvaluationConfig",
     "Gait",
     "GaitCertificate",
     "GaitGenerator",
     "GaitParams",
     "Robot",
     "RobustGaitError",
+    "RunOptions",
     "SimConfig",
     "StepEngine",
+    "StudyConfig",
     "WalkResult",
     "__version__",
     "certify_gait",
     "certify_map",
+    "create_study",
+    "evaluate",
     "generate_gait",
     "invariant_radius",
     "load_gait",
     "load_robot",
+    "run_study",
+    "study_status",
     "walk",
 ]

@@ -1,0 +1,293 @@
+"""The report of a study (``robustgait study report DIR``): one self-contained HTML page (figures and video
+embedded) plus the PNG files, in ``DIR/report/``.
+
+Figures: the best r* and steps per iteration (the learner's recommendation after each iteration, and every
+evaluated gait), the explored parameters coloured by outcome, the posterior mean of the preference model
+over two parameters (the others at the best gait's values), the best gait's invariant set
+(:func:`plot_certificate`), and a short video of the best gait walking (:func:`render_video`).
+"""
+
+from __future__ import annotations
+
+import base64
+import dataclasses
+import html
+import json
+from itertools import combinations
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.ticker import MaxNLocator
+
+from robustgait.barrier import Certificate
+from robustgait.errors import RobustGaitError, input_error
+from robustgait.report.figures import _save, plot_certificate
+
+OUTCOME_COLORS = {"certified": "tab:green", "not_certified": "tab:olive", "fell": "tab:red",
+                  "generation_failed": "0.3"}
+OUTCOME_MARKERS = {"certified": "o", "not_certified": "s", "fell": "x", "generation_failed": "+"}
+REPORT_DIR = "report"
+
+
+def certificate_from_json(d: dict[str, Any]) -> Certificate:
+    """A :class:`Certificate` from its JSON (:meth:`GaitCertificate.to_dict` with samples): null image rows
+    back to NaN, null margins back to −inf."""
+    fell = np.asarray(d["fell"], dtype=bool)
+    n = len(d["x_star"])
+    images = np.array([[np.nan] * n if row is None else row for row in d["images"]], dtype=float)
+    margins = np.array([-np.inf if m is None else m for m in d["margins"]], dtype=float)
+    arrays = {"x_star": np.asarray(d["x_star"], dtype=float), "samples": np.asarray(d["samples"], dtype=float),
+              "images": images, "fell": fell, "margins": margins}
+    kwargs = {f.name: arrays.get(f.name, d.get(f.name)) for f in dataclasses.fields(Certificate)}
+    return Certificate(**kwargs)  # type: ignore[arg-type]
+
+
+def plot_history(status: dict[str, Any], path: Path) -> Path:
+    """Per iteration: r* and steps of every evaluated gait (dots, by outcome) and of the learner's best
+    after the iteration (line)."""
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    for t in status["trials"]:
+        if t["state"] != "COMPLETE":
+            continue
+        st = t["status"]
+        kw = {"c": OUTCOME_COLORS.get(st, "k"), "marker": OUTCOME_MARKERS.get(st, "o"), "s": 18, "alpha": 0.7}
+        a1.scatter(t["iteration"] + 1, t["r_star"], **kw)
+        a2.scatter(t["iteration"] + 1, t["steps_taken"], **kw)
+    its = [it for it in status["iterations"] if it["best"] is not None]
+    x = [it["iteration"] + 1 for it in its]
+    a1.plot(x, [it["best"]["r_star"] for it in its], "-", color="tab:blue", lw=2,
+            label="learner's best (posterior mean)")
+    a2.plot(x, [it["best"]["steps_taken"] for it in its], "-", color="tab:blue", lw=2)
+    observed, best_so_far = [], None  # the highest oracle score evaluated up to each iteration
+    for it in status["iterations"]:
+        b = it["batch_best"]
+        if b is not None and (best_so_far is None or (b["score"] or 0) > (best_so_far["score"] or 0)):
+            best_so_far = b
+        if best_so_far is not None and it["best"] is not None:
+            observed.append((it["iteration"] + 1, best_so_far))
+    a1.plot([i for i, _ in observed], [b["r_star"] for _, b in observed], "--", color="0.4", lw=1.2,
+            label="best evaluated so far")
+    a2.plot([i for i, _ in observed], [b["steps_taken"] for _, b in observed], "--", color="0.4", lw=1.2)
+    for name, c in OUTCOME_COLORS.items():
+        a1.scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=name.replace("_", " "))
+    a1.set_ylabel("r* [rad/s]")
+    a1.legend(fontsize=8, loc="best")
+    cap = status["config"]["evaluation"]["step_cap"]
+    a2.axhline(cap, color="0.6", ls="--", lw=0.8)
+    a2.set_ylabel(f"steps (cap {cap})")
+    a2.set_xlabel("iteration")
+    a2.xaxis.set_major_locator(MaxNLocator(integer=True))
+    fig.suptitle(f"{status['learner']} on {status['metric']}: best gait per iteration")
+    return _save(fig, path)
+
+
+def plot_explored(status: dict[str, Any], path: Path) -> Path:
+    """Every pair of parameters: the evaluated gaits coloured by outcome (marker size ∝ r*)."""
+    trials = [t for t in status["trials"] if t["state"] == "COMPLETE" and t["reused_from"] is None]
+    names = list(trials[0]["params"]) if trials else []
+    pairs = list(combinations(range(len(names)), 2))
+    cols = min(3, max(1, len(pairs)))
+    rows = max(1, -(-len(pairs) // cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.4 * rows), squeeze=False)
+    best = status["best"]
+    for ax, (i, j) in zip(axes.ravel(), pairs, strict=False):
+        for t in trials:
+            st = t["status"]
+            ax.scatter(t["params"][names[i]], t["params"][names[j]], c=OUTCOME_COLORS.get(st, "k"),
+                       marker=OUTCOME_MARKERS.get(st, "o"), s=20 + 120 * float(t["r_star"] or 0), alpha=0.6)
+        if best is not None:
+            ax.scatter(best["params"][names[i]], best["params"][names[j]], s=260, facecolors="none",
+                       edgecolors="tab:blue", linewidths=2)
+        ax.set_xlabel(names[i])
+        ax.set_ylabel(names[j])
+    for ax in axes.ravel()[len(pairs):]:
+        ax.axis("off")
+    for name, c in OUTCOME_COLORS.items():
+        axes.ravel()[0].scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=name.replace("_", " "))
+    axes.ravel()[0].scatter([], [], s=120, facecolors="none", edgecolors="tab:blue", label="best")
+    axes.ravel()[0].legend(fontsize=7)
+    fig.suptitle("Explored gait parameters (marker size ∝ r*)")
+    return _save(fig, path)
+
+
+def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[str, str], path: Path) -> Path:
+    """Posterior mean of the learner's preference model over two parameters; the others at the best gait's
+    grid values; evaluated gaits on that slice marked."""
+    from robustgait.learn.learners import make_learner
+    from robustgait.learn.model import posterior_mean
+    from robustgait.learn.space import ActionSpace
+    from robustgait.robots import load_robot
+    from robustgait.study.config import load_config
+    from robustgait.study.run import completed_batches, history_before, open_store
+
+    cfg = load_config(directory)
+    space = ActionSpace.from_robot(load_robot(cfg.robot))
+    for name in axes_names:
+        if name not in space.names:
+            raise RobustGaitError(f"--axes: {name!r} is not a parameter of the action space ({', '.join(space.names)})")
+    store = open_store(directory, cfg, space)
+    try:
+        batches = completed_batches(store.records())
+    finally:
+        store.close()
+    k = max((i for i in range(cfg.iterations) if len(batches.get(i, [])) == cfg.batch), default=-1)
+    history = history_before(k + 1, batches, cfg)
+    learner = make_learner(cfg.learner, space, cfg.learning, cfg.seed)
+    model = learner.model(history, max(k, 0))
+    a, b = (space.names.index(n) for n in axes_names)
+    base = space.coords(status["best"]["grid_index"]) if status["best"] else np.zeros(space.dim, dtype=np.int64)
+    na, nb = space.shape[a], space.shape[b]
+    idx = np.empty((nb, na), dtype=np.int64)
+    for ia in range(na):
+        for ib in range(nb):
+            c = base.copy()
+            c[a], c[b] = ia, ib
+            idx[ib, ia] = space.index_of_coords(c)
+    mu = posterior_mean(model, space.normalized(idx.ravel())).reshape(nb, na)
+    fig, ax = plt.subplots(figsize=(6.5, 5))
+    im = ax.imshow(mu, origin="lower", aspect="auto", cmap="viridis",
+                   extent=(-0.5, na - 0.5, -0.5, nb - 0.5))
+    fig.colorbar(im, ax=ax, label="posterior mean utility")
+    ax.set_xticks(range(na), [f"{v:g}" for v in space.values[a]])
+    ax.set_yticks(range(nb), [f"{v:g}" for v in space.values[b]])
+    on_slice = set(idx.ravel().tolist())
+    visited = {i for i in history.actions if i in on_slice}
+    for i in visited:
+        c = space.coords(i)
+        ax.plot(c[a], c[b], "wo", mfc="none", ms=10)
+    if status["best"]:
+        ax.plot(base[a], base[b], "r*", ms=14, label="best")
+        ax.legend(fontsize=8)
+    fixed = ", ".join(f"{n} = {space.values[j][base[j]]:g}" for j, n in enumerate(space.names) if j not in (a, b))
+    ax.set_xlabel(axes_names[0])
+    ax.set_ylabel(axes_names[1])
+    ax.set_title(f"Posterior mean after {k + 1} iterations ({fixed}); ○ evaluated", fontsize=9)
+    return _save(fig, path)
+
+
+def render_best_video(directory: Path, status: dict[str, Any], path: Path, steps: int = 8) -> Path:
+    """Walk the best gait ``steps`` steps and render it (MuJoCo offscreen)."""
+    from robustgait.gait import load_gait
+    from robustgait.robots import load_robot
+    from robustgait.sim import render_video, walk
+
+    robot = load_robot(status["config"]["robot"])
+    gait = load_gait(directory / status["best"]["gait_file"], robot)
+    res = walk(robot, gait, steps=steps, keep_trajectory=True)
+    if res.trajectory is None:
+        raise RobustGaitError("the best gait produced no trajectory to render")
+    render_video(robot, res.trajectory, path, width=480, height=360)
+    return path
+
+
+def _img(path: Path) -> str:
+    return f'<img src="data:image/png;base64,{base64.b64encode(path.read_bytes()).decode()}" alt="{path.name}">'
+
+
+def _table(rows: list[list[Any]], header: list[str] | None = None) -> str:
+    th = "<tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr>" if header else ""
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table>{th}{body}</table>"
+
+
+def _fmt(v: Any, nd: int = 3) -> str:
+    if v is None:
+        return "—"
+    if isinstance(v, float):
+        return f"{v:.{nd}f}"
+    return str(v)
+
+
+def write_study_report(directory: str | Path, *, axes: tuple[str, str] = ("step_length", "step_duration"),
+                       video: bool = True, video_steps: int = 8) -> Path:
+    """Write ``DIR/report/index.html`` and its PNGs (and ``best.mp4``); returns the HTML path. Parts that
+    cannot be made (no certified gait, no offscreen GL for the video) are replaced by a note."""
+    from robustgait.study.status import study_status
+
+    d = Path(directory)
+    status = study_status(d)
+    if status["trials_done"] == 0:
+        raise input_error(d, "the study has no evaluated gait yet")
+    out = d / REPORT_DIR
+    out.mkdir(exist_ok=True)
+    parts: list[str] = []
+    notes: list[str] = []
+    best = status["best"]
+    figs = [("Best gait per iteration", lambda p: plot_history(status, p), "history.png"),
+            ("Explored parameters", lambda p: plot_explored(status, p), "explored.png")]
+    if best is not None:
+        figs.append((f"Posterior mean over {axes[0]} × {axes[1]}",
+                     lambda p: plot_posterior(d, status, axes, p), "posterior.png"))
+    for title, make, name in figs:
+        parts.append(f"<h2>{html.escape(title)}</h2>{_img(make(out / name))}")
+    cert_file = best.get("certificate_file") if best else None
+    if cert_file:
+        cert = certificate_from_json(json.loads((d / cert_file).read_text()))
+        p = plot_certificate(cert, out / "certificate.png", title=f"best gait: r* = {cert.r_star:.4f} rad/s")
+        parts.append(f"<h2>Invariant set of the best gait</h2>{_img(p)}<p>{html.escape(cert.statement())}</p>")
+    else:
+        notes.append("The best gait has no certificate (no gait walked the step cap and was certified).")
+    if video and best is not None and best.get("gait_file"):
+        try:
+            v = render_best_video(d, status, out / "best.mp4", video_steps)
+            b64 = base64.b64encode(v.read_bytes()).decode()
+            parts.append(f"<h2>The best gait walking ({video_steps} steps)</h2><video controls loop muted "
+                         f'width="480" src="data:video/mp4;base64,{b64}"></video>')
+        except RobustGaitError as exc:
+            notes.append(f"No video: {exc}")
+    page = _page(status, parts, notes)
+    tmp = out / ".index.html.tmp"
+    tmp.write_text(page)
+    tmp.replace(out / "index.html")
+    return out / "index.html"
+
+
+def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
+    best = status["best"]
+    cfg = status["config"]
+    summary = [["study", status["directory"]], ["robot", status["robot"]], ["metric", status["metric"]],
+               ["learner", status["learner"]], ["seed", status["seed"]],
+               ["budget", f"{cfg['iterations']} iterations × {cfg['batch']} gaits"],
+               ["trials done", f"{status['trials_done']} / {status['trials_planned']} ({status['unique_gaits']} unique "
+                               f"gaits)"], ["state", status["state"]],
+               ["certificate", f"N = {cfg['evaluation']['certify']['n_samples']}, seed "
+                               f"{cfg['evaluation']['certify']['seed']}, step cap {cfg['evaluation']['step_cap']}"]]
+    if best is not None:
+        summary += [["best gait (learner)", ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())],
+                    ["best r* / steps", f"{_fmt(best['r_star'], 4)} rad/s / {best['steps_taken']}"],
+                    ["best gait file", best["gait_file"] or "—"]]
+    obs = status["best_observed"]
+    if obs is not None and (best is None or obs["trial"] != best["trial"]):
+        summary += [["best evaluated gait", ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
+                     + f": r* {_fmt(obs['r_star'], 4)} rad/s, {obs['steps_taken']} steps (trial {obs['trial']}; the "
+                     "learner's best is the highest posterior mean, from comparisons only)"]]
+    it_rows = [[it["iteration"] + 1, _fmt(it["best"]["r_star"], 4) if it["best"] else "—",
+                it["best"]["steps_taken"] if it["best"] else "—",
+                ", ".join(f"{v:g}" for v in it["best"]["params"].values()) if it["best"] else "—",
+                len(it["comparisons"] or [])] for it in status["iterations"]]
+    tr_rows = [[t["number"], t["iteration"] + 1, t["state"], ", ".join(f"{v:g}" for v in t["params"].values()),
+                t["status"] or "—", t["steps_taken"] if t["steps_taken"] is not None else "—", _fmt(t["r_star"], 4),
+                (t["reason"] or "")[:90] + (f" (same gait as trial {t['reused_from']})" if t["reused_from"] is not None
+                                            else "")] for t in status["trials"]]
+    note_html = "".join(f"<p class=note>{html.escape(n)}</p>" for n in notes)
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>robustgait study report</title>
+<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}}img{{max-width:100%}}
+table{{border-collapse:collapse;font-size:13px;margin:1em 0}}
+td,th{{border:1px solid #ccc;padding:3px 7px;text-align:left}}
+th{{background:#eee}}.note{{color:#a60}}</style></head><body>
+<h1>robustgait study: {html.escape(status['learner'])} on {html.escape(status['metric'])},
+{html.escape(status['robot'])}</h1>
+{_table(summary)}{note_html}
+{''.join(parts)}
+<h2>Iterations</h2>{_table(it_rows, ["iteration", "best r*", "best steps", "best gait params", "comparisons"])}
+<h2>Trials</h2>{_table(tr_rows, ["trial", "iteration", "state", "params", "outcome", "steps", "r*", "reason"])}
+<p>Parameters in order: {html.escape(", ".join(best["params"]) if best else "")}. Generated by robustgait.</p>
+</body></html>
+"""

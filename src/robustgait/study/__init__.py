@@ -1,0 +1,40 @@
+"""Studies (DESIGN §7): the simulation-in-the-loop preference-learning loop — ``evaluate`` (generate, walk,
+certify), the study configuration, its Optuna storage, the executors (local processes, Ray), status,
+comparison of studies.
+
+Submodules load lazily: a worker process that only evaluates gaits does not import torch or Optuna."""
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from robustgait.study.config import StudyConfig
+    from robustgait.study.evaluate import Evaluation, EvaluationConfig, evaluate
+    from robustgait.study.run import RunOptions, create_study, run_study
+    from robustgait.study.status import study_status
+
+_EXPORTS = {
+    "StudyConfig": "config", "Evaluation": "evaluate", "EvaluationConfig": "evaluate", "evaluate": "evaluate",
+    "RunOptions": "run", "create_study": "run", "run_study": "run", "study_status": "status",
+    "compare_studies": "compare",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        import importlib
+
+        return getattr(importlib.import_module(f"robustgait.study.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module 'robustgait.study' has no attribute {name!r}")
+
+
+__all__ = [
+    "Evaluation",
+    "EvaluationConfig",
+    "RunOptions",
+    "StudyConfig",
+    "compare_studies",
+    "create_study",
+    "evaluate",
+    "run_study",
+    "study_status",
+]

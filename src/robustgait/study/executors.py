@@ -1,0 +1,264 @@
+"""Where evaluations run (DESIGN §7): local worker processes (default) or Ray actors.
+
+Every worker loads the robot and builds the gait generator once (≈ 6.5 s on exo), then evaluates gait
+after gait with it. The study's driver process keeps the database: workers receive parameters and return
+:meth:`Evaluation.to_dict`, so they need no access to the study directory (Ray workers may run on other
+machines). MuJoCo's rollout threads are divided among the workers; results do not depend on the thread
+count (the certificate is identical for any count).
+
+Both executors retry the task of a worker that died (a local process killed or crashed, a Ray actor
+lost): local ones up to ``retries`` times by restarting the pool, Ray ones by restarting the actor and
+re-running its task (``max_restarts`` / ``max_task_retries`` = unlimited).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import os
+from collections import deque
+from collections.abc import Iterator
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, replace
+from typing import Any
+
+from robustgait.errors import RobustGaitError
+
+# Filled once per worker process by _init_worker: (robot, generator, evaluation config).
+_WORKER: dict[str, Any] = {}
+_BLAS_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+@dataclass(frozen=True)
+class WorkerSpec:
+    """What a worker needs: the robot (shipped name or spec path), the evaluation config as a dict (see
+    :class:`~robustgait.study.evaluate.EvaluationConfig`), MuJoCo threads, and IPOPT's log on/off."""
+
+    robot: str
+    evaluation: dict[str, Any]
+    threads: int = 1
+    verbose: bool = False
+
+
+class EvaluationWorker:
+    """A robot and its gait generator, built once; :meth:`evaluate` many times."""
+
+    def __init__(self, spec: WorkerSpec):
+        from robustgait.gaitgen import GaitGenerator
+        from robustgait.robots import load_robot
+        from robustgait.study.config import build_dataclass
+        from robustgait.study.evaluate import EvaluationConfig
+
+        cfg: EvaluationConfig = build_dataclass(EvaluationConfig, spec.evaluation)
+        sim = replace(cfg.certify.sim, n_threads=spec.threads)
+        self.config = replace(cfg, certify=replace(cfg.certify, sim=sim))
+        self.robot = load_robot(spec.robot)
+        self.generator = GaitGenerator(self.robot, self.config.gaitgen, verbose=spec.verbose)
+
+    def evaluate(self, params: dict[str, float]) -> dict[str, Any]:
+        from robustgait.gait import GaitParams
+        from robustgait.study.evaluate import evaluate
+
+        ev = evaluate(self.robot, GaitParams(**params), self.config, generator=self.generator)
+        out = ev.to_dict()
+        out["worker"] = {"pid": os.getpid(), "host": os.uname().nodename}
+        return out
+
+    def pid(self) -> int:
+        return os.getpid()
+
+
+def _init_worker(spec: WorkerSpec) -> None:
+    _WORKER["worker"] = EvaluationWorker(spec)
+
+
+def _run_task(params: dict[str, float]) -> dict[str, Any]:
+    return _WORKER["worker"].evaluate(params)
+
+
+@contextlib.contextmanager
+def blas_threads(n: int) -> Iterator[None]:
+    """Set the BLAS/OpenMP thread variables that spawned workers inherit (restored afterwards): IPOPT's
+    linear algebra in every worker must not spread over all cores."""
+    old = {k: os.environ.get(k) for k in _BLAS_VARS}
+    os.environ.update({k: str(n) for k in _BLAS_VARS})
+    try:
+        yield
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+class Executor:
+    """Runs evaluations: :meth:`submit` (key, params), :meth:`next_result` → (key, result dict)."""
+
+    workers: int = 1
+
+    def submit(self, key: int, params: dict[str, float]) -> None:
+        raise NotImplementedError
+
+    def next_result(self) -> tuple[int, dict[str, Any]]:
+        raise NotImplementedError
+
+    @property
+    def pending(self) -> int:
+        raise NotImplementedError
+
+    def close(self, wait: bool = True) -> None:
+        """Stop the workers; ``wait=False`` abandons running evaluations (after an error or Ctrl-C)."""
+
+    def __enter__(self) -> Executor:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class LocalExecutor(Executor):
+    """``workers`` processes (spawn context: no fork of a process holding threads and a database
+    connection), started on the first submit; MuJoCo threads = cores // workers (at least 1)."""
+
+    def __init__(self, spec: WorkerSpec, workers: int = 1, retries: int = 2):
+        if workers < 1:
+            raise RobustGaitError(f"--workers must be ≥ 1, got {workers}")
+        self.workers = workers
+        self.spec = replace(spec, threads=max(1, (os.cpu_count() or 1) // workers))
+        self.retries = retries
+        self._pool: ProcessPoolExecutor | None = None
+        self._futures: dict[Future[dict[str, Any]], tuple[int, dict[str, float]]] = {}
+        self._attempts: dict[int, int] = {}
+        self._env: contextlib.ExitStack | None = None
+
+    def _ensure_pool(self) -> ProcessPoolExecutor:
+        if self._env is None:  # workers inherit the environment when they are spawned
+            self._env = contextlib.ExitStack()
+            self._env.enter_context(blas_threads(1))
+        if self._pool is None:
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
+                                             initializer=_init_worker, initargs=(self.spec,))
+        return self._pool
+
+    def submit(self, key: int, params: dict[str, float]) -> None:
+        self._futures[self._ensure_pool().submit(_run_task, params)] = (key, params)
+
+    @property
+    def pending(self) -> int:
+        return len(self._futures)
+
+    def next_result(self) -> tuple[int, dict[str, Any]]:
+        while True:
+            if not self._futures:
+                raise RobustGaitError("no evaluation is pending")
+            done, _ = wait(list(self._futures), return_when=FIRST_COMPLETED)
+            fut = next(iter(done))
+            key, params = self._futures.pop(fut)
+            try:
+                return key, fut.result()
+            except BrokenProcessPool:
+                self._restart([(key, params)])
+
+    def _restart(self, lost: list[tuple[int, dict[str, float]]]) -> None:
+        """A worker died: every task of the broken pool is lost; start a new pool and resubmit them."""
+        lost += list(self._futures.values())
+        self._futures.clear()
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+        for key, params in lost:
+            self._attempts[key] = self._attempts.get(key, 0) + 1
+            if self._attempts[key] > self.retries:
+                raise RobustGaitError(f"a worker process died {self._attempts[key]} times evaluating {params}")
+            self.submit(key, params)
+
+    def close(self, wait: bool = True) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=wait, cancel_futures=True)
+            self._pool = None
+        if self._env is not None:
+            self._env.close()
+            self._env = None
+
+
+class RayExecutor(Executor):
+    """One Ray actor per worker, each with ``cpus_per_worker`` CPUs (and as many MuJoCo threads). Connects
+    to ``address`` (e.g. ``auto``: a running cluster) or starts a local Ray. A dead actor is restarted and
+    its task re-run by Ray (unlimited restarts and task retries)."""
+
+    def __init__(self, spec: WorkerSpec, workers: int = 1, address: str | None = None, cpus_per_worker: int = 1):
+        try:
+            import ray
+        except ImportError:
+            raise RobustGaitError('the Ray executor needs Ray: pip install "robustgait[ray]"') from None
+        if workers < 1:
+            raise RobustGaitError(f"--workers must be ≥ 1, got {workers}")
+        self.ray = ray
+        self.workers = workers
+        self._own = not ray.is_initialized()
+        if self._own:
+            kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": spec.verbose,
+                                      "configure_logging": False}
+            if address is None:
+                kwargs["num_cpus"] = max(workers * cpus_per_worker, os.cpu_count() or 1)
+            try:
+                with blas_threads(1):
+                    ray.init(address=address, **kwargs)
+            except ConnectionError as exc:
+                raise RobustGaitError(f"--address {address}: cannot connect to a Ray cluster ({exc})") from None
+        actor: Any = ray.remote(num_cpus=cpus_per_worker, max_restarts=-1, max_task_retries=-1)(EvaluationWorker)
+        self.spec = replace(spec, threads=cpus_per_worker)
+        self.actors: list[Any] = [actor.remote(self.spec) for _ in range(workers)]
+        self._idle: deque[Any] = deque(self.actors)
+        self._queue: deque[tuple[int, dict[str, float]]] = deque()
+        self._running: dict[Any, tuple[Any, int]] = {}
+
+    def _dispatch(self) -> None:
+        while self._idle and self._queue:
+            actor = self._idle.popleft()
+            key, params = self._queue.popleft()
+            self._running[actor.evaluate.remote(params)] = (actor, key)
+
+    def submit(self, key: int, params: dict[str, float]) -> None:
+        self._queue.append((key, params))
+        self._dispatch()
+
+    @property
+    def pending(self) -> int:
+        return len(self._queue) + len(self._running)
+
+    def next_result(self) -> tuple[int, dict[str, Any]]:
+        if not self._running:
+            raise RobustGaitError("no evaluation is pending")
+        ready, _ = self.ray.wait(list(self._running), num_returns=1)
+        actor, key = self._running.pop(ready[0])
+        try:
+            result = self.ray.get(ready[0])
+        except self.ray.exceptions.RayError as exc:
+            raise RobustGaitError(f"a Ray worker failed evaluating trial {key}: {exc}") from None
+        self._idle.append(actor)
+        self._dispatch()
+        return key, result
+
+    def pids(self) -> list[int]:
+        """Process ids of the actors (blocks until they are built)."""
+        return [int(pid) for pid in self.ray.get([a.pid.remote() for a in self.actors])]
+
+    def close(self, wait: bool = True) -> None:
+        for a in self.actors:
+            self.ray.kill(a)
+        self.actors = []
+        if self._own:
+            self.ray.shutdown()
+
+
+def make_executor(kind: str, spec: WorkerSpec, workers: int = 1, address: str | None = None) -> Executor:
+    if kind == "local":
+        if address is not None:
+            raise RobustGaitError("--address is for the Ray executor (--executor ray)")
+        return LocalExecutor(spec, workers)
+    if kind == "ray":
+        return RayExecutor(spec, workers, address)
+    raise RobustGaitError(f"unknown executor {kind!r} (choose from local, ray)")

@@ -1,0 +1,301 @@
+"""The simulation-in-the-loop learning loop (DESIGN §7): propose a batch → evaluate it (generate, walk,
+certify) → rank it with the oracle → all pairwise comparisons → next batch, for ``iterations`` batches.
+
+A study lives in a directory::
+
+    DIR/study.json            StudyConfig (format_version 1)
+    DIR/study.db              the Optuna database (unless config.storage names another)
+    DIR/gaits/<label>/        gait.json and certificate.json of every evaluated gait
+    DIR/report/               written by ``robustgait study report``
+    DIR/.lock                 held by the process running the study
+
+Iteration k is proposed from the comparisons of iterations < k only (reproduced from the database on
+resume); it is recorded (all its trials WAITING) before any is dispatched; the next iteration starts when
+every trial of this one is COMPLETE. A gait proposed again later is not simulated again: its trial is
+completed with the stored result (``reused_from``), since an evaluation depends only on the parameters
+and the config (:mod:`robustgait.study.evaluate`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import sys
+import time
+import uuid
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from robustgait.errors import RobustGaitError, input_error
+from robustgait.learn.learners import History, Learner, iteration_seed, make_learner
+from robustgait.learn.oracle import Outcome, batch_comparisons, score
+from robustgait.learn.space import ActionSpace
+from robustgait.robots import load_robot
+from robustgait.robots.spec import SHIPPED_DIR
+from robustgait.study.config import StudyConfig, load_config, save_config, write_json_atomic
+from robustgait.study.evaluate import Evaluation
+from robustgait.study.executors import Executor, WorkerSpec, make_executor
+from robustgait.study.storage import StudyStore, TrialRecord, default_url
+
+LOCK_FILE = ".lock"
+GAITS_DIR = "gaits"
+_ABBREV = {"step_length": "L", "step_duration": "T", "step_width": "W", "step_height": "H"}
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How to run (not saved: a study may be resumed with other options). executor: ``local`` | ``ray``;
+    workers: processes or actors; address: Ray cluster address; progress: bars on stderr; verbose: IPOPT's
+    iteration log in the workers."""
+
+    executor: str = "local"
+    workers: int = 1
+    address: str | None = None
+    progress: bool = True
+    verbose: bool = False
+
+
+def robot_reference(robot: str) -> str:
+    """A shipped robot name as is; a spec path made absolute (the study may be resumed from elsewhere)."""
+    if (SHIPPED_DIR / robot / "spec.toml").is_file() and not Path(robot).suffix:
+        return robot
+    p = Path(robot)
+    if not p.is_file():
+        raise input_error(robot, "not a shipped robot name nor a robot spec file")
+    return str(p.resolve())
+
+
+def gait_label(space: ActionSpace, index: int) -> str:
+    """Directory name of a gait's files, e.g. ``L0.12_T0.8_W0.24_H0.06``."""
+    return "_".join(f"{_ABBREV.get(n, n)}{v:g}" for n, v in space.value(index).items())
+
+
+@contextlib.contextmanager
+def study_lock(directory: Path) -> Iterator[None]:
+    """Exclusive lock of a study directory for as long as a process runs it (released by the OS when the
+    process dies, so a killed study can be resumed at once)."""
+    fh = (directory / LOCK_FILE).open("a+")
+    try:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise input_error(directory, "the study is being run by another process") from None
+        fh.seek(0)
+        fh.truncate()
+        fh.write(str(os.getpid()))
+        fh.flush()
+        yield
+    finally:
+        fh.close()
+
+
+def is_running(directory: Path) -> bool:
+    path = directory / LOCK_FILE
+    if not path.exists():
+        return False
+    with path.open("a+") as fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return True
+        return False
+
+
+def storage_url(directory: Path, config: StudyConfig) -> str:
+    return config.storage or default_url(directory)
+
+
+def create_study(directory: str | Path, config: StudyConfig) -> Path:
+    """Make a new study directory (it may exist, empty) with its config and database; nothing runs yet."""
+    d = Path(directory)
+    if d.exists() and not d.is_dir():
+        raise input_error(d, "exists and is not a directory")
+    if (d / "study.json").exists():
+        raise input_error(d, "already holds a study: use `robustgait study resume`")
+    if d.exists() and any(p.name != LOCK_FILE for p in d.iterdir()):
+        raise input_error(d, "exists and is not empty: a new study needs a new or empty directory")
+    config = replace(config, robot=robot_reference(config.robot))
+    if config.storage is not None and config.study_name == StudyConfig.study_name:
+        # a shared database holds many studies: a name of its own (saved in study.json)
+        config = replace(config, study_name=f"{d.resolve().name}-{uuid.uuid4().hex[:8]}")
+    space = ActionSpace.from_robot(load_robot(config.robot))
+    if config.batch > space.size:
+        raise RobustGaitError(f"a batch of {config.batch} gaits does not fit in an action space of {space.size}")
+    d.mkdir(parents=True, exist_ok=True)
+    with study_lock(d):
+        store = StudyStore(storage_url(d, config), config.study_name, space, create=True,
+                           user_attrs={"robustgait_config": config.to_dict(), "directory": str(d.resolve())})
+        store.close()
+        save_config(d, config)  # last: a directory with study.json has a database
+    return d
+
+
+def open_store(directory: Path, config: StudyConfig, space: ActionSpace) -> StudyStore:
+    return StudyStore(storage_url(directory, config), config.study_name, space)
+
+
+def outcome_of(result: dict[str, Any]) -> Outcome:
+    return Outcome(int(result["steps_taken"]), int(result["step_cap"]), float(result["r_star"]))
+
+
+def completed_batches(records: list[TrialRecord]) -> dict[int, list[TrialRecord]]:
+    """COMPLETE trials per iteration, ordered by slot; an (iteration, slot) completed twice is an error."""
+    out: dict[int, dict[int, TrialRecord]] = {}
+    for r in records:
+        if r.state == "COMPLETE":
+            slots = out.setdefault(r.iteration, {})
+            if r.slot in slots:
+                raise RobustGaitError(f"iteration {r.iteration} slot {r.slot} was completed twice "
+                                      f"(trials {slots[r.slot].number} and {r.number})")
+            slots[r.slot] = r
+    return {k: [v[s] for s in sorted(v)] for k, v in out.items()}
+
+
+def history_before(k: int, batches: dict[int, list[TrialRecord]], config: StudyConfig) -> History:
+    """The learner's history: iterations 0..k−1 (each must be complete), ranked by the study's oracle."""
+    ranked = []
+    for i in range(k):
+        batch = batches.get(i, [])
+        if len(batch) != config.batch:
+            raise RobustGaitError(f"iteration {i} has {len(batch)} of {config.batch} trials complete")
+        ranked.append([(r.index, score(config.metric, outcome_of(r.result or {}))) for r in batch])
+    return History.from_batches(ranked)
+
+
+class StudyRunner:
+    """Runs (or resumes) the study in ``directory`` to its total budget."""
+
+    def __init__(self, directory: str | Path, options: RunOptions | None = None, *,
+                 executor: Executor | None = None):
+        self.directory = Path(directory)
+        self.config = load_config(self.directory)
+        self.options = options or RunOptions()
+        self.robot = load_robot(self.config.robot)
+        self.space = ActionSpace.from_robot(self.robot)
+        self.learner: Learner = make_learner(self.config.learner, self.space, self.config.learning, self.config.seed)
+        self._executor = executor
+        self._own_executor = executor is None
+
+    def executor(self) -> Executor:
+        if self._executor is None:
+            spec = WorkerSpec(self.config.robot, self.config.to_dict()["evaluation"], verbose=self.options.verbose)
+            self._executor = make_executor(self.options.executor, spec, self.options.workers, self.options.address)
+        return self._executor
+
+    def run(self) -> None:
+        with study_lock(self.directory):
+            store = open_store(self.directory, self.config, self.space)
+            ok = False
+            try:
+                store.retry_interrupted()
+                self._run(store)
+                ok = True
+            finally:
+                store.close()
+                if self._own_executor and self._executor is not None:
+                    self._executor.close(wait=ok)
+
+    def _run(self, store: StudyStore) -> None:
+        cfg = self.config
+        done = sum(len(b) for b in completed_batches(store.records()).values())
+        with tqdm(total=cfg.trials_planned, initial=done, desc="study", unit="gait", file=sys.stderr,
+                  disable=not self.options.progress, dynamic_ncols=True) as bar:
+            for k in range(cfg.iterations):
+                batches = completed_batches(store.records())
+                if len(batches.get(k, [])) == cfg.batch and "recommendation" in store.iterations().get(k, {}):
+                    continue
+                self._propose(store, k, history_before(k, batches, cfg))
+                self._evaluate(store, k, bar)
+                self._close_iteration(store, k, bar)
+
+    def _propose(self, store: StudyStore, k: int, history: History) -> None:
+        """Reproduce the proposals of iteration k and enqueue the slots not recorded yet; a stored slot that
+        differs from the reproduction is an error (another version or config wrote this study)."""
+        cfg = self.config
+        t0 = time.perf_counter()
+        proposal = self.learner.propose(history, k, cfg.batch)
+        seconds = time.perf_counter() - t0
+        stored = {r.slot: r.index for r in store.records() if r.iteration == k}
+        for slot, index in stored.items():
+            if slot >= cfg.batch or proposal[slot] != index:
+                raise RobustGaitError(f"{self.directory}: iteration {k} slot {slot} holds grid index {index} but "
+                                      f"the learner reproduces {proposal[slot] if slot < cfg.batch else 'nothing'}")
+        if k not in store.iterations():
+            store.set_iteration(k, {"proposals": proposal, "learner_seed": iteration_seed(cfg.seed, k),
+                                    "propose_seconds": seconds})
+        seeds = {"learner": cfg.seed, "certify": cfg.evaluation.certify.seed}
+        for slot, index in enumerate(proposal):
+            if slot not in stored:
+                store.enqueue(k, slot, index, {"seeds": seeds})
+
+    def _evaluate(self, store: StudyStore, k: int, bar: tqdm) -> None:
+        cache = {r.index: r for r in store.records() if r.state == "COMPLETE" and r.reused_from is None}
+        started: dict[int, TrialRecord] = {}
+        while (trial := store.start()) is not None:
+            if trial.iteration != k:
+                raise RobustGaitError(f"trial {trial.number} of iteration {trial.iteration} is waiting while "
+                                      f"iteration {k} runs")
+            earlier = cache.get(trial.index)
+            if earlier is not None and earlier.result is not None:
+                self._complete(store, trial, earlier.result, bar, reused_from=earlier.number)
+                continue
+            started[trial.number] = trial
+            self.executor().submit(trial.number, trial.params)
+        while started:
+            number, result = self.executor().next_result()
+            trial = started.pop(number)
+            self._complete(store, trial, self._write_files(trial, result), bar)
+
+    def _write_files(self, trial: TrialRecord, result: dict[str, Any]) -> dict[str, Any]:
+        """gait.json and certificate.json (atomic writes) → the result without them, with their paths."""
+        rel = Path(GAITS_DIR) / gait_label(self.space, trial.index)
+        (self.directory / rel).mkdir(parents=True, exist_ok=True)
+        out = {k: v for k, v in result.items() if k not in ("gait", "certificate")}
+        out["gait_file"] = out["certificate_file"] = None
+        if result.get("gait") is not None:
+            write_json_atomic(self.directory / rel / "gait.json", result["gait"])
+            out["gait_file"] = str(rel / "gait.json")
+        if result.get("certificate") is not None:
+            write_json_atomic(self.directory / rel / "certificate.json", result["certificate"])
+            out["certificate_file"] = str(rel / "certificate.json")
+            out["certificate"] = Evaluation.from_dict({**result, "gait": None}).certificate_summary()
+        else:
+            out["certificate"] = None
+        return out
+
+    def _complete(self, store: StudyStore, trial: TrialRecord, result: dict[str, Any], bar: tqdm,
+                  reused_from: int | None = None) -> None:
+        value = score(self.config.metric, outcome_of(result))
+        extra: dict[str, Any] = {"reused_from": reused_from} if reused_from is not None else {}
+        store.complete(trial.number, result, value, extra)
+        bar.update(1)
+        bar.set_postfix_str(f"iteration {trial.iteration + 1}/{self.config.iterations}, last r* "
+                            f"{result['r_star']:.3f}, steps {result['steps_taken']}")
+
+    def _close_iteration(self, store: StudyStore, k: int, bar: tqdm) -> None:
+        """Comparisons of the ranked batch and the learner's recommendation after it."""
+        batches = completed_batches(store.records())
+        batch = batches[k]
+        scores = [score(self.config.metric, outcome_of(r.result or {})) for r in batch]
+        t0 = time.perf_counter()
+        rec = self.learner.recommend(history_before(k + 1, batches, self.config), k)
+        rec_trial = next((r for i in sorted(batches) for r in batches[i] if r.index == rec), None)
+        record = dict(store.iterations().get(k, {}))
+        record.update({"trials": [r.number for r in batch], "scores": scores,
+                       "comparisons": [[batch[w].number, batch[lo].number] for w, lo in batch_comparisons(scores)],
+                       "recommendation": rec, "recommended_trial": rec_trial.number if rec_trial else None,
+                       "recommend_seconds": time.perf_counter() - t0})
+        store.set_iteration(k, record)
+        if rec_trial is not None and rec_trial.result is not None:
+            bar.set_postfix_str(f"iteration {k + 1}/{self.config.iterations} done, best r* "
+                                f"{rec_trial.result['r_star']:.3f}, steps {rec_trial.result['steps_taken']}")
+
+
+def run_study(directory: str | Path, options: RunOptions | None = None, *, executor: Executor | None = None) -> None:
+    """Run or resume the study in ``directory`` to its total budget (see :class:`StudyRunner`)."""
+    StudyRunner(directory, options, executor=executor).run()

@@ -1,0 +1,86 @@
+"""What a study holds: trials, per-iteration records, its best gait (``robustgait study status``).
+
+Reads the database only (it never runs anything, and works while the study runs)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from robustgait.learn.space import ActionSpace
+from robustgait.robots import load_robot
+from robustgait.study.config import load_config
+from robustgait.study.run import completed_batches, is_running, open_store
+from robustgait.study.storage import TrialRecord
+
+_TRIAL_KEYS = ("status", "reason", "steps_taken", "step_cap", "fell", "fall_reason", "mean_speed", "r_star",
+               "gait_file", "certificate_file", "seconds")
+
+
+def trial_summary(r: TrialRecord) -> dict[str, Any]:
+    out: dict[str, Any] = {"number": r.number, "state": r.state, "iteration": r.iteration, "slot": r.slot,
+                           "grid_index": r.index, "params": r.params, "score": r.value,
+                           "reused_from": r.reused_from, "retry_of": r.retry_of}
+    res = r.result or {}
+    out.update({k: res.get(k) for k in _TRIAL_KEYS})
+    cert = res.get("certificate") or {}
+    out["x_star"] = cert.get("x_star")
+    out["n_inside"] = cert.get("n_inside")
+    return out
+
+
+def _best_entry(r: TrialRecord | None, records: dict[int, TrialRecord]) -> dict[str, Any] | None:
+    if r is None:
+        return None
+    src = records.get(r.reused_from, r) if r.reused_from is not None else r
+    s = trial_summary(r)
+    return {"trial": r.number, "iteration": r.iteration, "params": r.params, "grid_index": r.index,
+            "r_star": s["r_star"], "steps_taken": s["steps_taken"], "status": s["status"], "score": r.value,
+            "gait_file": (src.result or {}).get("gait_file"),
+            "certificate_file": (src.result or {}).get("certificate_file")}
+
+
+def study_status(directory: str | Path) -> dict[str, Any]:
+    """JSON-ready: ``trials_done``, ``trials_planned``, ``state`` (complete | running | stopped),
+    ``best`` (the learner's recommendation after the last finished iteration: trial, params, r_star,
+    steps_taken, gait file), ``best_observed`` (the evaluated gait with the highest oracle score), one
+    record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs)."""
+    d = Path(directory)
+    cfg = load_config(d)
+    space = ActionSpace.from_robot(load_robot(cfg.robot))
+    store = open_store(d, cfg, space)
+    try:
+        records = store.records()
+        iterations = store.iterations()
+    finally:
+        store.close()
+    by_number = {r.number: r for r in records}
+    batches = completed_batches(records)
+    done = sum(len(b) for b in batches.values())
+    finished = [k for k in sorted(iterations) if "recommendation" in iterations[k]]
+    best = None
+    if finished:
+        n = iterations[finished[-1]].get("recommended_trial")
+        best = by_number.get(n) if n is not None else None
+    complete = [r for r in records if r.state == "COMPLETE"]
+    observed = max(complete, key=lambda r: (r.value or 0.0, -r.number), default=None)
+    per_iteration = []
+    for k in range(cfg.iterations):
+        rec = iterations.get(k, {})
+        batch = batches.get(k, [])
+        n = rec.get("recommended_trial")
+        per_iteration.append({
+            "iteration": k, "trials": [r.number for r in batch], "proposals": rec.get("proposals"),
+            "comparisons": rec.get("comparisons"), "done": "recommendation" in rec,
+            "best": _best_entry(by_number.get(n) if n is not None else None, by_number),
+            "batch_best": _best_entry(max(batch, key=lambda r: (r.value or 0.0, -r.number), default=None),
+                                      by_number)})
+    state = ("complete" if len(finished) == cfg.iterations else
+             "running" if is_running(d) else "stopped")
+    return {"directory": str(d.resolve()), "state": state, "robot": cfg.robot, "metric": cfg.metric,
+            "learner": cfg.learner, "seed": cfg.seed, "trials_done": done, "trials_planned": cfg.trials_planned,
+            "iterations_done": len(finished), "iterations_planned": cfg.iterations,
+            "unique_gaits": len({r.index for r in complete}),
+            "best": _best_entry(best, by_number), "best_observed": _best_entry(observed, by_number),
+            "iterations": per_iteration, "trials": [trial_summary(r) for r in sorted(records, key=lambda r: r.number)],
+            "config": cfg.to_dict()}

@@ -1,0 +1,156 @@
+"""A study's database: an Optuna study in an RDB storage (DESIGN §7) — a SQLite file in the study
+directory by default, any SQLAlchemy URL otherwise — so Optuna's tools (``optuna-dashboard``, plots) open
+our studies.
+
+One Optuna trial per proposed gait. Its lifecycle is the storage contract (docs/studies.md):
+
+1. ``enqueue`` — WAITING, with its parameters and user attributes (iteration, slot, grid index, seeds):
+   recorded, in one transaction, before it is dispatched.
+2. ``start`` — ``Study.ask`` moves the oldest WAITING trial to RUNNING (atomic in the database).
+3. ``complete`` — the evaluation's attributes are written, then ``Study.tell(COMPLETE, value)``. The
+   COMPLETE state is the single commit point: a trial that is not COMPLETE counts as not evaluated, and
+   whatever attributes it holds are ignored.
+4. After a crash, ``retry_interrupted`` marks the RUNNING trials FAIL and enqueues each again with the same
+   parameters and attributes (``retry_of`` = the failed trial's number).
+
+Per-iteration records (proposals, learner seed, comparisons, recommendation) are study user attributes
+``iteration_NNN``: comparisons exist only once a whole batch is in, after its trials are complete.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from robustgait.errors import RobustGaitError
+from robustgait.learn.space import ActionSpace
+
+DB_FILE = "study.db"
+
+
+def default_url(directory: Path) -> str:
+    return f"sqlite:///{(directory / DB_FILE).resolve()}"
+
+
+@dataclass(frozen=True)
+class TrialRecord:
+    """One trial as stored: Optuna's number and state, our attributes, and the evaluation summary
+    (``result``, None unless COMPLETE)."""
+
+    number: int
+    state: str
+    iteration: int
+    slot: int
+    index: int
+    params: dict[str, float]
+    value: float | None
+    result: dict[str, Any] | None
+    reused_from: int | None
+    retry_of: int | None
+    attrs: dict[str, Any]
+
+
+class StudyStore:
+    """Our view of the Optuna study (see the module docstring)."""
+
+    def __init__(self, url: str, name: str, space: ActionSpace, *, create: bool = False,
+                 user_attrs: dict[str, Any] | None = None):
+        import optuna
+        from optuna.distributions import BaseDistribution, FloatDistribution
+
+        optuna.logging.set_verbosity(logging.WARNING)
+        self.url, self.name, self.space = url, name, space
+        kwargs = {"connect_args": {"timeout": 60}} if url.startswith("sqlite") else {}
+        try:
+            self.storage = optuna.storages.RDBStorage(url, engine_kwargs=kwargs)
+            if create:
+                self.study = optuna.create_study(storage=self.storage, study_name=name, direction="maximize")
+                for key, value in (user_attrs or {}).items():
+                    self.study.set_user_attr(key, value)
+            else:
+                self.study = optuna.load_study(study_name=name, storage=self.storage)
+        except optuna.exceptions.DuplicatedStudyError:
+            raise RobustGaitError(f"{url}: a study named '{name}' already exists in this database") from None
+        except KeyError:
+            raise RobustGaitError(f"{url}: no study named '{name}' in this database") from None
+        except Exception as exc:  # SQLAlchemy's errors (bad URL, unreachable server) have many types
+            if isinstance(exc, RobustGaitError):
+                raise
+            raise RobustGaitError(f"{url}: cannot open the study database ({type(exc).__name__}: "
+                                  f"{' '.join(str(exc).split())[:200]})") from None
+        self._running: dict[int, Any] = {}  # trial number → optuna Trial, between start and complete
+        self.distributions: dict[str, BaseDistribution] = {
+            n: FloatDistribution(v[0], v[-1]) for n, v in zip(space.names, space.values, strict=True)}
+
+    # ---- trials -----------------------------------------------------------------------------------------
+    def enqueue(self, iteration: int, slot: int, index: int, attrs: dict[str, Any] | None = None) -> None:
+        """Record a proposal (WAITING) in one transaction."""
+        self.study.enqueue_trial(self.space.value(index), user_attrs={
+            "iteration": iteration, "slot": slot, "grid_index": index, **(attrs or {})})
+
+    def start(self) -> TrialRecord | None:
+        """Move the oldest WAITING trial to RUNNING and return it (None if none is waiting)."""
+        from optuna.trial import TrialState
+
+        if not self.study.get_trials(deepcopy=False, states=(TrialState.WAITING,)):
+            return None
+        trial = self.study.ask(fixed_distributions=self.distributions)
+        self._running[trial.number] = trial
+        attrs = trial.user_attrs
+        return TrialRecord(trial.number, "RUNNING", attrs["iteration"], attrs["slot"], attrs["grid_index"],
+                           dict(trial.params), None, None, None, attrs.get("retry_of"), attrs)
+
+    def complete(self, number: int, result: dict[str, Any], value: float, extra: dict[str, Any]) -> None:
+        """Write the result's attributes, then COMPLETE with ``value`` (the commit point)."""
+        from optuna.trial import TrialState
+
+        trial = self._running.pop(number)
+        for key in ("status", "steps_taken", "r_star"):
+            trial.set_user_attr(key, result[key])
+        for key, v in extra.items():
+            trial.set_user_attr(key, v)
+        trial.set_user_attr("result", result)
+        self.study.tell(trial, values=[value], state=TrialState.COMPLETE)
+
+    def retry_interrupted(self) -> list[int]:
+        """RUNNING trials (their process died): FAIL each and enqueue it again with the same parameters and
+        attributes. Returns the failed trial numbers. Call only while holding the study lock."""
+        from optuna.trial import TrialState
+
+        failed = []
+        for t in self.study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
+            self.study.tell(t.number, state=TrialState.FAIL)
+            keep = {k: v for k, v in t.user_attrs.items() if k in ("iteration", "slot", "grid_index", "seeds")}
+            self.enqueue(keep.pop("iteration"), keep.pop("slot"), keep.pop("grid_index"),
+                         {**keep, "retry_of": t.number})
+            failed.append(t.number)
+        return failed
+
+    def records(self) -> list[TrialRecord]:
+        out = []
+        for t in self.study.get_trials(deepcopy=False):
+            a = t.user_attrs
+            if "iteration" not in a:
+                continue  # not one of ours
+            params = dict(t.params) or dict(t.system_attrs.get("fixed_params", {}))
+            out.append(TrialRecord(t.number, t.state.name, a["iteration"], a["slot"], a["grid_index"], params,
+                                   t.value if t.state.name == "COMPLETE" else None,
+                                   a.get("result") if t.state.name == "COMPLETE" else None,
+                                   a.get("reused_from"), a.get("retry_of"), dict(a)))
+        return out
+
+    # ---- study-level records -----------------------------------------------------------------------------
+    def set_iteration(self, k: int, record: dict[str, Any]) -> None:
+        self.study.set_user_attr(f"iteration_{k:03d}", record)
+
+    def iterations(self) -> dict[int, dict[str, Any]]:
+        return {int(key.split("_")[1]): v for key, v in self.study.user_attrs.items() if key.startswith("iteration_")}
+
+    def user_attrs(self) -> dict[str, Any]:
+        return dict(self.study.user_attrs)
+
+    def close(self) -> None:
+        self.storage.remove_session()
+        self.storage.engine.dispose()

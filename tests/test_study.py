@@ -1,0 +1,309 @@
+"""Studies (DESIGN §7): evaluation, config, Optuna storage contract, resume after kill -9, determinism
+across worker counts, Ray retries, status/report/compare. Real components at small sizes: exo, a step cap
+of 5, 10 certificate samples, 2 iterations × 3 gaits."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from robustgait import GaitParams, RobustGaitError, load_robot
+from robustgait.certify import CertifyConfig
+from robustgait.learn import ActionSpace
+from robustgait.learn.config import LearnerConfig, PreferenceModelConfig
+from robustgait.study.config import StudyConfig, load_config, save_config
+from robustgait.study.evaluate import EvaluationConfig, evaluate
+from robustgait.study.run import RunOptions, create_study, run_study
+from robustgait.study.status import study_status
+from robustgait.study.storage import StudyStore, default_url
+
+REPO = Path(__file__).resolve().parents[1]
+CHEAP = EvaluationConfig(step_cap=5, certify=CertifyConfig(n_samples=10))
+TINY = StudyConfig(robot="exo", iterations=2, batch=3, seed=0, evaluation=CHEAP)
+CLI_TINY = ["--robot", "exo", "--iterations", "2", "--batch", "3", "--samples", "10", "--steps", "5", "--seed", "0"]
+
+
+def cli(*args: str, **kw) -> subprocess.CompletedProcess:  # type: ignore[no-untyped-def, type-arg]
+    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+    return subprocess.run([sys.executable, "-m", "robustgait.cli", *args], env=env, capture_output=True, text=True,
+                          **kw)
+
+
+# ---- config and storage (fast) ---------------------------------------------------------------------------
+def test_study_config_round_trip(tmp_path):
+    cfg = replace(TINY, learner="eubo", learning=LearnerConfig(model=PreferenceModelConfig(lengthscale=(0.3, 0.2, 0.4,
+                                                                                                       0.5))))
+    save_config(tmp_path, cfg)
+    back = load_config(tmp_path)
+    assert back == cfg and isinstance(back.learning.model.lengthscale, tuple)
+    assert back.evaluation.certify.sim == cfg.evaluation.certify.sim
+    raw = json.loads((tmp_path / "study.json").read_text())
+    del raw["config"]["evaluation"]["certify"]["alpha"]  # a field this file predates keeps its default
+    raw["config"]["evaluation"]["step_cap"] = 7
+    (tmp_path / "study.json").write_text(json.dumps(raw))
+    assert load_config(tmp_path).evaluation == replace(CHEAP, step_cap=7)
+    raw["config"]["evaluation"]["certify"]["bogus"] = 1
+    (tmp_path / "study.json").write_text(json.dumps(raw))
+    with pytest.raises(RobustGaitError, match=r"unknown field.*bogus"):
+        load_config(tmp_path)
+
+
+def test_study_config_rejects_bad_values():
+    with pytest.raises(RobustGaitError, match="unknown metric"):
+        StudyConfig(metric="speed")
+    with pytest.raises(RobustGaitError, match="at least 2"):
+        StudyConfig(batch=1)
+    with pytest.raises(RobustGaitError, match="step cap"):
+        EvaluationConfig(step_cap=0)
+
+
+def test_storage_contract_round_trip(tmp_path):
+    """enqueue (WAITING, recorded) → start (RUNNING) → complete (attributes, then COMPLETE); a RUNNING trial
+    left by a dead process is failed and enqueued again with the same parameters and attributes."""
+    space = ActionSpace.from_robot(load_robot("exo"))
+    url = default_url(tmp_path)
+    store = StudyStore(url, "s", space, create=True, user_attrs={"robustgait_config": {"x": 1}})
+    store.enqueue(0, 0, 17, {"seeds": {"learner": 0, "certify": 0}})
+    store.enqueue(0, 1, 839, {"seeds": {"learner": 0, "certify": 0}})
+    a = store.start()
+    assert a is not None and (a.iteration, a.slot, a.index) == (0, 0, 17) and a.params == space.value(17)
+    result = {"status": "certified", "steps_taken": 5, "r_star": 0.25, "step_cap": 5, "reason": ""}
+    store.complete(a.number, result, 5.25, {})
+    b = store.start()
+    assert b is not None and b.index == 839
+    store.close()  # the process "dies" with trial b RUNNING
+
+    store = StudyStore(url, "s", space)
+    assert [r.state for r in store.records()] == ["COMPLETE", "RUNNING"]
+    assert store.retry_interrupted() == [b.number]
+    recs = store.records()
+    assert [r.state for r in recs] == ["COMPLETE", "FAIL", "WAITING"]
+    retry = recs[2]
+    assert (retry.iteration, retry.slot, retry.index, retry.retry_of) == (0, 1, 839, b.number)
+    assert retry.params == space.value(839) and retry.attrs["seeds"] == {"learner": 0, "certify": 0}
+    assert recs[0].result == result and recs[0].value == 5.25 and recs[1].result is None
+    store.set_iteration(0, {"proposals": [17, 839]})
+    assert store.iterations() == {0: {"proposals": [17, 839]}}
+    assert store.user_attrs()["robustgait_config"] == {"x": 1}
+    store.close()
+    # Optuna's own API reads it (what optuna-dashboard uses)
+    import optuna
+
+    s = optuna.load_study(study_name="s", storage=url)
+    assert s.best_trial.params == space.value(17) and s.best_value == 5.25
+
+
+def test_create_study_refuses_existing_and_bad_robot(tmp_path, capsys):
+    (tmp_path / "full").mkdir()
+    (tmp_path / "full" / "x.txt").write_text("x")
+    with pytest.raises(RobustGaitError, match="not empty"):
+        create_study(tmp_path / "full", TINY)
+    with pytest.raises(RobustGaitError, match="not a shipped robot"):
+        create_study(tmp_path / "new", replace(TINY, robot="nope"))
+    from robustgait.cli import main
+
+    assert main(["study", "status", str(tmp_path / "full")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("robustgait: error:") and "not a study directory" in err
+
+
+def without_times(d):  # type: ignore[no-untyped-def]
+    """A result without its wall-clock fields."""
+    if isinstance(d, dict):
+        return {k: without_times(v) for k, v in d.items()
+                if k not in ("seconds", "solve_seconds", "build_seconds", "sim_steps_per_s", "worker")}
+    if isinstance(d, list):
+        return [without_times(v) for v in d]
+    return d
+
+
+def test_study_run_bad_options_leave_nothing_behind(tmp_path, capsys):
+    from robustgait.cli import main
+
+    for extra in (["--workers", "0"], ["--iterations", "0"], ["--batch", "1"], ["--samples", "0"],
+                  ["--steps", "0"]):
+        d = tmp_path / "s"
+        assert main(["study", "run", str(d), "--robot", "exo", *extra]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("robustgait: error:") and len(err.strip().splitlines()) == 1, err
+        assert not d.exists()
+
+
+# ---- evaluation -------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def exo_generator():
+    from robustgait.gaitgen import GaitGenerator
+
+    robot = load_robot("exo")
+    return robot, GaitGenerator(robot, CHEAP.gaitgen)
+
+
+@pytest.mark.slow
+def test_evaluate_never_raises_and_records_stages(exo_generator):
+    robot, gen = exo_generator
+    good = evaluate(robot, GaitParams(), CHEAP, generator=gen)
+    assert good.status == "certified" and good.steps_taken == 5 and not good.fell and good.r_star > 0
+    assert good.certificate is not None and good.certificate["r_star"] == good.r_star
+    assert set(good.seconds) >= {"generate", "walk", "certify", "total"} and good.gait is not None
+    bad = evaluate(robot, GaitParams(step_width=0.1), CHEAP, generator=gen)  # the feet would collide
+    assert bad.status == "generation_failed" and "Infeasible_Parameters" in bad.reason and bad.gait is None
+    assert bad.steps_taken == 0 and bad.r_star == 0.0 and bad.outcome().steps_taken == 0
+    falls = evaluate(robot, GaitParams(0.1, 1.0, 0.26, 0.04), replace(CHEAP, step_cap=10), generator=gen)
+    assert falls.status == "fell" and falls.fell and falls.steps_taken < 10 and falls.r_star == 0.0
+    assert falls.reason.startswith(f"fell in step {falls.steps_taken + 1}") and "certify" not in falls.seconds
+    # an evaluation is a function of the parameters and the config alone (what resume and reuse rely on)
+    again = evaluate(robot, GaitParams(), CHEAP, generator=gen)
+    assert without_times(again.to_dict()) == without_times(good.to_dict())
+
+
+# ---- whole studies (slow) --------------------------------------------------------------------------------
+def comparable(directory: Path) -> dict:  # type: ignore[type-arg]
+    """What must not depend on crashes or worker counts: per (iteration, slot) the gait and its outcome,
+    per iteration the proposals, comparisons (as slots) and recommendation, and the best gait."""
+    st = study_status(directory)
+    done = [t for t in st["trials"] if t["state"] == "COMPLETE"]
+    by_number = {t["number"]: t for t in done}
+    slot = {t["number"]: (t["iteration"], t["slot"]) for t in done}
+    keys = ("params", "status", "reason", "steps_taken", "fell", "r_star", "score", "x_star")
+    return {
+        "trials": sorted(((t["iteration"], t["slot"]), {k: t[k] for k in keys}) for t in done),
+        "iterations": [(it["proposals"], sorted((slot[w], slot[lo]) for w, lo in it["comparisons"]),
+                        it["best"]["grid_index"]) for it in st["iterations"]],
+        "reused": sorted((slot[t["number"]], slot[t["reused_from"]]) for t in done if t["reused_from"] is not None
+                         and t["reused_from"] in by_number),
+        "best": (st["best"]["params"], st["best"]["r_star"], st["best"]["steps_taken"]),
+    }
+
+
+@pytest.fixture(scope="module")
+def reference_study(tmp_path_factory):
+    """An uninterrupted run of the tiny study with 2 local workers."""
+    d = tmp_path_factory.mktemp("ref") / "study"
+    res = cli("study", "run", str(d), *CLI_TINY, "--workers", "2", "--quiet")
+    assert res.returncode == 0, res.stderr
+    return d
+
+
+def _completed(db: Path) -> int:
+    try:
+        with sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=5) as con:
+            return int(con.execute("select count(*) from trials where state = 'COMPLETE'").fetchone()[0])
+    except sqlite3.Error:
+        return 0
+
+
+@pytest.mark.slow
+def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path, reference_study):
+    """kill -9 of `study run` (1 worker) after its first completed trial; `study resume` finishes it: every
+    trial exactly once, and the same gaits, outcomes, comparisons and best as the 2-worker reference."""
+    d = tmp_path / "study"
+    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+    proc = subprocess.Popen([sys.executable, "-m", "robustgait.cli", "study", "run", str(d), *CLI_TINY,
+                             "--workers", "1", "--quiet"], env=env, start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        t0 = time.monotonic()
+        while _completed(d / "study.db") < 1:
+            assert proc.poll() is None, "the study ended before it could be killed"
+            assert time.monotonic() - t0 < 600
+            time.sleep(0.2)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)  # the driver and its worker process
+        proc.wait()
+    st = study_status(d)
+    assert st["state"] == "stopped" and 1 <= st["trials_done"] < st["trials_planned"]
+    res = cli("study", "resume", str(d), "--workers", "1", "--quiet")
+    assert res.returncode == 0, res.stderr
+    st = study_status(d)
+    assert st["state"] == "complete" and st["trials_done"] == 6
+    done = [(t["iteration"], t["slot"]) for t in st["trials"] if t["state"] == "COMPLETE"]
+    assert sorted(done) == [(k, s) for k in range(2) for s in range(3)]  # each exactly once
+    failed = [t for t in st["trials"] if t["state"] == "FAIL"]
+    retried = {t["retry_of"] for t in st["trials"] if t["retry_of"] is not None}
+    assert {t["number"] for t in failed} == retried  # every interrupted trial was re-run
+    assert comparable(d) == comparable(reference_study)
+    again = cli("study", "resume", str(d), "--quiet")  # a finished study: nothing to do, nothing changes
+    assert again.returncode == 0 and comparable(d) == comparable(reference_study)
+
+
+@pytest.mark.slow
+def test_status_report_and_compare(tmp_path, reference_study):
+    res = cli("study", "status", str(reference_study), "--json")
+    st = json.loads(res.stdout)
+    assert st["trials_done"] == st["trials_planned"] == 6 and st["state"] == "complete"
+    assert set(st["best"]) >= {"params", "r_star", "steps_taken", "gait_file"}
+    assert len(st["trials"]) == 6 and all({"params", "r_star", "steps_taken", "status"} <= set(t) for t in st["trials"])
+    best = st["best"]
+    assert best["steps_taken"] == 5 and (reference_study / best["gait_file"]).is_file()
+    observed = max(t["score"] for t in st["trials"])
+    assert best["score"] <= observed
+    text = cli("study", "status", str(reference_study))
+    assert text.returncode == 0 and "best gait" in text.stdout
+    again = cli("study", "run", str(reference_study), *CLI_TINY)
+    assert again.returncode == 2 and "study resume" in again.stderr
+
+    rep = cli("study", "report", str(reference_study), "--no-video")
+    html = Path(rep.stdout.strip())
+    assert rep.returncode == 0, rep.stderr
+    page = html.read_text()
+    assert page.count("data:image/png;base64,") >= 3 and "<img src=\"report/" not in page
+    for png in ("history.png", "explored.png", "posterior.png"):
+        assert (html.parent / png).stat().st_size > 10_000
+
+    cmp = cli("study", "compare", str(reference_study), str(reference_study), "--seeds", "2", "--samples", "10",
+              "--json")
+    out = json.loads(cmp.stdout)
+    a, b = out["studies"]
+    assert out["seeds"] == [1000, 1001] and a["r_star"] == b["r_star"] and out["winner"] is None
+    assert a["steps_taken"] == 5 and len(a["certificates"]) == 2
+
+
+@pytest.mark.slow
+def test_ray_worker_killed_mid_task_is_retried(tmp_path, reference_study):
+    """A Ray actor killed while it evaluates a gait: Ray restarts it and re-runs the task; the study
+    completes with the reference results."""
+    ray = pytest.importorskip("ray")
+    from robustgait.study.executors import RayExecutor, WorkerSpec
+
+    d = tmp_path / "study"
+    create_study(d, TINY)
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
+    try:
+        ex = RayExecutor(WorkerSpec("exo", TINY.to_dict()["evaluation"]), workers=2)
+        pids = ex.pids()
+        killed: list[int] = []
+
+        def killer() -> None:  # once a trial is RUNNING, kill the actor that holds it
+            t0 = time.monotonic()
+            while time.monotonic() - t0 < 300:
+                with sqlite3.connect(f"file:{d / 'study.db'}?mode=ro", uri=True, timeout=5) as con:
+                    running = con.execute("select count(*) from trials where state = 'RUNNING'").fetchone()[0]
+                if running:
+                    time.sleep(1.0)  # mid-task: generation takes ≈ 1–2 s
+                    os.kill(pids[0], signal.SIGKILL)
+                    killed.append(pids[0])
+                    return
+                time.sleep(0.1)
+
+        th = threading.Thread(target=killer)
+        th.start()
+        run_study(d, RunOptions(progress=False), executor=ex)
+        th.join()
+        assert killed, "no actor was killed"
+        assert pids[0] not in ex.pids()  # the actor was restarted
+        ex.close()
+    finally:
+        ray.shutdown()
+    st = study_status(d)
+    assert st["state"] == "complete" and st["trials_done"] == 6
+    assert comparable(d) == comparable(reference_study)
