@@ -51,7 +51,8 @@ class Evaluation:
     ``not_certified`` (walked the cap but the certificate could not be computed: no fixed point, …);
     reason: why, in one line ('' when certified). generation: :meth:`GaitGenResult.summary`. r_star: 0
     unless certified. certificate: :meth:`GaitCertificate.to_dict` with the samples (None unless
-    certified). seconds: per stage (generate, walk, certify, total).
+    certified). seconds: per stage (generate, walk, certify; build when :func:`evaluate` built the generator
+    itself; total).
     """
 
     params: GaitParams
@@ -113,7 +114,7 @@ def evaluate(robot: Robot, params: GaitParams, config: EvaluationConfig | None =
     t_build = time.perf_counter()
     res = gen.solve(params)
     t_gen = time.perf_counter()
-    seconds = {"build": t_build - t0, "generate": t_gen - t_build}
+    seconds = {"generate": t_gen - t_build} | ({} if generator is not None else {"build": t_build - t0})
     ev = Evaluation(params=params, status="generation_failed", reason=f"{res.status}: {res.reason}",
                     step_cap=cfg.step_cap, generation=res.summary(), seconds=seconds)
     if res.gait is None:

@@ -1,0 +1,109 @@
+"""Paper-size studies on exo: ``--iterations`` × ``--batch`` (10 × 5) gaits, for the robustness and the
+stability metric, then ``study compare`` of the two best gaits.
+
+Per study it prints: wall time (goal ≤ 10 min on 2 cores), unique gaits, the learner's best after every
+iteration (r*, steps), the best gait's r* and steps, and the default gait's (``GaitParams()``) r* with
+the same estimator and seed (the study's), then both re-certified with ``--compare-seeds`` fresh seeds.
+Studies live in ``--out`` (default benchmarks/data/bench_study/<metric>); an existing one is resumed
+(the wall time is then that of the resumed part only, and is flagged), so a killed benchmark continues.
+
+    python benchmarks/bench_study.py [--iterations 10] [--batch 5] [--workers 2] [--samples 200]
+        [--learner polar] [--metrics robustness,stability] [--compare-seeds 5] [--out DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from robustgait import GaitParams, load_gait, load_robot
+from robustgait.certify import CertifyConfig
+from robustgait.study.compare import compare_studies, recertify
+from robustgait.study.config import StudyConfig, load_config
+from robustgait.study.evaluate import EvaluationConfig, evaluate
+from robustgait.study.run import RunOptions, create_study, run_study
+from robustgait.study.status import study_status
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def run_one(d: Path, metric: str, args: argparse.Namespace) -> dict:
+    resumed = (d / "study.json").exists()
+    if not resumed:
+        cfg = StudyConfig(robot="exo", metric=metric, learner=args.learner, iterations=args.iterations,
+                          batch=args.batch, seed=args.seed,
+                          evaluation=EvaluationConfig(certify=replace(CertifyConfig(), n_samples=args.samples,
+                                                                      seed=args.seed)))
+        create_study(d, cfg)
+    load0 = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    run_study(d, RunOptions(workers=args.workers, progress=True))
+    wall = time.perf_counter() - t0
+    st = study_status(d)
+    return {"metric": metric, "directory": str(d), "wall_s": wall, "resumed": resumed, "load_before": load0,
+            "load_after": os.getloadavg()[0], "status": st}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--iterations", type=int, default=10)
+    ap.add_argument("--batch", type=int, default=5)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--samples", type=int, default=200)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--learner", default="polar")
+    ap.add_argument("--metrics", default="robustness,stability")
+    ap.add_argument("--compare-seeds", type=int, default=5)
+    ap.add_argument("--out", type=Path, default=REPO / "benchmarks" / "data" / "bench_study")
+    args = ap.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+    print(f"machine: {os.cpu_count()} cores; load {os.getloadavg()}", flush=True)
+    runs = [run_one(args.out / m, m, args) for m in args.metrics.split(",")]
+    robot = load_robot("exo")
+    cfg0 = load_config(runs[0]["directory"])
+    default = evaluate(robot, GaitParams(), cfg0.evaluation)  # the study's estimator and seed
+    fresh = [args.seed + 1000 + i for i in range(args.compare_seeds)]
+    default_fresh = (recertify(robot, default.gait, cfg0.evaluation.certify, fresh) if default.gait is not None
+                     and default.status == "certified" else [])
+    for run in runs:
+        st = run["status"]
+        best = st["best"]
+        flag = " (resumed: wall time of the resumed part)" if run["resumed"] else ""
+        print(f"\n== {run['metric']}: {st['trials_done']} gaits in {run['wall_s']:.0f} s{flag} "
+              f"(load {run['load_before']:.1f} → {run['load_after']:.1f}); {st['unique_gaits']} unique")
+        for it in st["iterations"]:
+            b = it["best"]
+            if b:
+                print(f"  iteration {it['iteration'] + 1:2d}: best r* {b['r_star']:.4f}, {b['steps_taken']} steps, "
+                      f"{', '.join(f'{v:g}' for v in b['params'].values())}")
+        if best:
+            gait = load_gait(Path(run["directory"]) / best["gait_file"], robot)
+            r = np.array([c["r_star"] for c in recertify(robot, gait, cfg0.evaluation.certify, fresh)])
+            print(f"  best gait: r* {best['r_star']:.4f} (study seed), {best['steps_taken']} steps; fresh seeds "
+                  f"{fresh[0]}–{fresh[-1]}: {r.mean():.4f} ± {r.std(ddof=1) if r.size > 1 else 0:.4f}")
+    rd = np.array([c["r_star"] for c in default_fresh]) if default_fresh else np.zeros(1)
+    sd = rd.std(ddof=1) if rd.size > 1 else 0.0
+    print(f"\ndefault gait {GaitParams().to_dict()}: {default.status}, {default.steps_taken} steps, r* "
+          f"{default.r_star:.4f} (study seed); fresh seeds: {rd.mean():.4f} ± {sd:.4f}")
+    if len(runs) == 2:
+        cmp = compare_studies(runs[0]["directory"], runs[1]["directory"], seeds=args.compare_seeds,
+                              seed_base=args.seed + 1000)
+        print("\nstudy compare (A = " + runs[0]["metric"] + ", B = " + runs[1]["metric"] + "):")
+        for name, s in zip("AB", cmp["studies"], strict=True):
+            print(f"  {name}: {', '.join(f'{v:g}' for v in s['params'].values())}: r* {s['r_star_mean']:.4f} ± "
+                  f"{s['r_star_sd']:.4f} [{', '.join(f'{v:.3f}' for v in s['r_star'])}], {s['steps_taken']} steps")
+        w = cmp["winner"]
+        print("  higher mean r*: " + ("tie" if w is None else runs[w]["metric"]) +
+              f" (per seed: {cmp['wins_per_seed'][0]} vs {cmp['wins_per_seed'][1]})")
+        (args.out / "compare.json").write_text(json.dumps(cmp, indent=1))
+    print(f"\nload average after: {os.getloadavg()}")
+
+
+if __name__ == "__main__":
+    main()
