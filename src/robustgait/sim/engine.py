@@ -205,13 +205,19 @@ class StepEngine:
             physics += active.size * n
             first, first_code = self._scan(st, sens, k0, swing)
             done = first >= 0
+            # A touchdown is seen in the sensors of the step whose start state first penetrates the floor, so
+            # that state is the pre-impact state x⁻ (its velocity is still contact-free) and an impact event ends
+            # the step there; the recorded state of the sensing step already carries a millisecond of impact,
+            # which made the section state jump by ~0.14 rad/s when touchdown crossed a millisecond boundary.
+            end = np.where((first_code == 0) & (self.config.switching == "impact"), first - 1, first)
             if record:
                 for j, i in enumerate(active):
-                    traj[i].append(st[j, :first[j] + 1] if done[j] else st[j])
+                    traj[i].append(st[j, :end[j] + 1] if done[j] else st[j])
             idx = active[done]
-            out_state[idx] = st[done, first[done]]
+            ends = end[done]
+            out_state[idx] = np.where((ends >= 0)[:, None], st[done, np.maximum(ends, 0)], current[idx])
             code[idx] = first_code[done]
-            at[idx] = k0 + 1 + first[done]
+            at[idx] = k0 + 1 + ends
             current[active[~done]] = st[~done, -1]
             active = active[~done]
             if progress is not None:
