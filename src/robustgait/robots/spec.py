@@ -70,6 +70,7 @@ class GaitQuality:
     pelvis_height [m]: (low, high) band of the base origin above the stance sole.
     pelvis_angular_velocity [rad/s]: each component of the base's angular velocity (world axes) ≤ bound.
     swing_tilt [rad]: swing sole roll and pitch ≤ bound (kept nearly parallel to the ground).
+    swing_yaw [rad]: |yaw| of the swing sole ≤ bound (relative to the stance sole: no twisting foot).
     joint_velocity [rad/s]: |q̇_i| ≤ bound per actuated joint (output order).
     """
 
@@ -79,6 +80,7 @@ class GaitQuality:
     pelvis_height: tuple[float, float] = (0.0, math.inf)
     pelvis_angular_velocity: float = 1.5
     swing_tilt: float = 0.15
+    swing_yaw: float = 0.15
     joint_velocity: tuple[float, ...] = ()
 
 
@@ -250,6 +252,7 @@ def _gait_quality(table: Any, n: int, src: Path) -> GaitQuality:
         pelvis_height=_band(table, "pelvis_height", d.pelvis_height, src),
         pelvis_angular_velocity=_bound(table, "pelvis_angular_velocity", d.pelvis_angular_velocity, src),
         swing_tilt=_bound(table, "swing_tilt", d.swing_tilt, src),
+        swing_yaw=_bound(table, "swing_yaw", d.swing_yaw, src),
         joint_velocity=joint_velocity,
     )
 
