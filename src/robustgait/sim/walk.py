@@ -14,8 +14,9 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.errors import RobustGaitError, input_error
+from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
+from robustgait.io.output import atomic_output, check_output
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import SimConfig, StepEngine
@@ -124,13 +125,12 @@ def walk(robot: Robot, gait: Gait, *, steps: int = 50, config: SimConfig | None 
 
 def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path, *, fps: int = 30,
                  width: int = 640, height: int = 480) -> int:
-    """Render a trajectory (full-physics states, as kept by :func:`walk`) to a video file with MuJoCo's
-    offscreen renderer (EGL or OSMesa, chosen by ``MUJOCO_GL``); returns the number of frames written."""
+    """Render a trajectory (full-physics states, as kept by :func:`walk`) to an ``.mp4`` (H.264 via ffmpeg) or
+    ``.gif`` with MuJoCo's offscreen renderer (EGL or OSMesa, chosen by ``MUJOCO_GL``); returns the number of
+    frames written. Written through :func:`robustgait.io.output.atomic_output` (checked target, atomic)."""
     import imageio.v2 as imageio
 
-    path = Path(path)
-    if not path.parent.is_dir():
-        raise input_error(path, "output directory does not exist")
+    path = check_output(path, "video")
     try:
         renderer = mujoco.Renderer(robot.model, height, width)
     except Exception as exc:  # the GL backends raise a variety of errors when no context can be made
@@ -145,9 +145,10 @@ def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path
     cam.distance, cam.elevation, cam.azimuth = 3.0, -15.0, 120.0
     every = max(1, round(1.0 / (fps * robot.dt)))
     frames = 0
-    tmp = path.with_name(path.stem + ".tmp" + path.suffix)
+    options: dict[str, Any] = ({"duration": 1000.0 / fps, "loop": 0} if path.suffix.lower() == ".gif"
+                               else {"fps": fps, "macro_block_size": 1})
     try:
-        with imageio.get_writer(tmp, fps=fps, macro_block_size=1) as writer:
+        with atomic_output(path, "video") as tmp, imageio.get_writer(tmp, **options) as writer:
             for state in trajectory[::every]:
                 if not np.isfinite(state).all():
                     break
@@ -156,9 +157,6 @@ def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path
                 renderer.update_scene(data, cam)
                 writer.append_data(renderer.render())  # type: ignore[attr-defined]
                 frames += 1
-        tmp.replace(path)
     finally:
         renderer.close()
-        tmp.unlink(missing_ok=True)
     return frames
-
