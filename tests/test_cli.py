@@ -109,3 +109,20 @@ def test_barrier_eval_accepts_negative_x_star(tmp_path, capsys):
     for argv in (["--x-star", "-0.1", "0.2"], ["--x-star=-0.1,0.2"]):
         code, out, _ = run(capsys, "barrier-eval", str(log), *argv, "--r", "0.5", "--json")
         assert code == 0 and json.loads(out)["ok"] is True
+
+
+def test_interrupt_and_closed_stdout_are_one_line_or_silent(monkeypatch, capsys):
+    import robustgait.cli as cli
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    def closed(args):
+        raise BrokenPipeError
+
+    monkeypatch.setattr(cli, "_cmd_robots", interrupted)
+    assert main(["robots"]) == 130
+    assert capsys.readouterr().err == "robustgait: interrupted\n"
+    monkeypatch.setattr(cli, "_cmd_robots", closed)
+    assert main(["robots"]) == 1
+    assert capsys.readouterr().err == ""

@@ -223,9 +223,9 @@ def frost_tree(exo) -> dict[str, Any]:
 
 @pytest.fixture(scope="module")
 def spec_tree() -> dict[str, Any]:
-    import tomllib
+    from robustgait.io.schema import read_toml
 
-    tree = tomllib.loads(EXO_SPEC_PATH.read_text())
+    tree = read_toml(EXO_SPEC_PATH)
     tree["mjcf"] = str(SHIPPED_DIR / "exo" / "exo.xml")
     return tree
 
