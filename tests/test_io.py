@@ -281,6 +281,9 @@ def test_total_work_is_bounded_before_simulating(tmp_path, gait_file):
     code, _, err = cli("certify", gait_file(), "--robot", "exo", "--samples", "10000", "--map", "stride")
     assert code == 2
     one_error_line(err, "--fp-max-steps 100 + --samples 10000", "over the limit of 2e+07")
+    code, _, err = cli("walk", gait_file(), "--robot", "exo", "--steps", "100", "--video", tmp_path / "v.gif")
+    assert code == 2
+    one_error_line(err, "v.gif: this walk could last 105 s, 3150 frames at 30 fps: a .gif holds at most 1800")
     assert time.perf_counter() - t0 < 5 and not (tmp_path / "v.mp4").exists()
 
 
@@ -346,6 +349,17 @@ def test_cli_outputs_are_complete_files(tmp_path, gait_file):
     assert code == 0, err
     assert log.read_text().splitlines()[0] == "wx,wy,wz" and load_reduced_log(log).shape == (3, 3)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["g.json", "w.csv"]
+
+
+def test_gif_video(tmp_path, exo):
+    from robustgait import walk
+    from robustgait.sim import render_video
+
+    res = walk(exo, standing_gait(exo), steps=1, keep_trajectory=True)
+    gif = tmp_path / "v.gif"
+    frames = render_video(exo, res.trajectory[:300], gif, fps=10, width=96, height=64)
+    assert frames == 3 and gif.read_bytes()[:4] == b"GIF8"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["v.gif"]
 
 
 def test_check_output_kinds():

@@ -68,6 +68,8 @@ def _cmd_walk(args: argparse.Namespace) -> int:
     L.check_work(args.steps, gait.step_duration * config.max_step_tau, robot.dt,
                  f"{args.gait}: --steps {args.steps}",
                  L.MAX_VIDEO_PHYSICS_STEPS if args.video is not None else L.MAX_PHYSICS_STEPS)
+    if args.video is not None and args.video.lower().endswith(".gif"):
+        L.check_gif(args.steps * gait.step_duration * config.max_step_tau, args.video)
     with _about(args.gait):
         result = walk(robot, gait, steps=args.steps, config=config, keep_trajectory=args.video is not None)
     if args.video is not None and result.trajectory is not None:

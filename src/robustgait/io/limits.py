@@ -120,6 +120,19 @@ MAX_PHYSICS_STEPS = 20_000_000
 # A walk with --video keeps every physics step's state (~40 floats for exo) for the renderer: 2e6 steps are
 # ~0.6 GB and ~30 min of motion at 1 ms (the defaults: 50 steps, 3.5e4 physics steps).
 MAX_VIDEO_PHYSICS_STEPS = 2_000_000
+# An animated .gif keeps every frame in memory until written (320×240, ~77 kB each): 1800 frames are 60 s at
+# 30 fps, ~140 MB; the default walk (50 steps of a 0.7 s gait) is ~1100 frames. Longer videos: .mp4.
+MAX_GIF_FRAMES = 1800
+
+
+def check_gif(seconds: float, path: str, fps: int = 30) -> None:
+    """Raise a one-line error if a .gif of up to ``seconds`` of motion could exceed :data:`MAX_GIF_FRAMES`."""
+    from robustgait.errors import input_error
+
+    frames = math.ceil(seconds * fps)
+    if frames > MAX_GIF_FRAMES:
+        raise input_error(path, f"this walk could last {seconds:g} s, {frames} frames at {fps} fps: a .gif holds at "
+                          f"most {MAX_GIF_FRAMES} (use .mp4, or fewer --steps)")
 
 
 def check_work(gait_steps: int, longest_step: float, timestep: float, what: str,
