@@ -81,8 +81,8 @@ def test_cli_certify_json(capsys, tmp_path):
 
 @needs_atalante
 @pytest.mark.parametrize("extra, message", [
-    (["--r-max", "0"], "r_max"), (["--r-max", "-2"], "r_max"), (["--alpha", "1.5"], "alpha"),
-    (["--alpha", "0"], "alpha"), (["--samples", "0"], "samples"),
+    (["--r-max", "0"], "--r-max"), (["--r-max", "-2"], "--r-max"), (["--alpha", "1.5"], "--alpha"),
+    (["--alpha", "0"], "--alpha"), (["--samples", "0"], "--samples"),
     (["--switching", "time"], "before a fixed point was reached"),
     (["--fp-tol", "1e-9", "--fp-max-steps", "12"], "no fixed point within 12 steps"),
 ])

@@ -4,7 +4,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from robustgait import RobustGaitError, SimConfig, StepEngine, walk
+from robustgait import RobustGaitError, SimConfig, StepEngine, load_robot, walk
 from robustgait.sim import render_video
 
 
@@ -63,12 +63,12 @@ def test_batch_matches_single_and_detects_falls(robot_gait):
     qpos = np.tile(s.qpos, (4, 1))
     qvel = np.tile(s.qvel, (4, 1))
     qvel[2, 3] += 4.0  # a violent roll-rate kick: must fall, not crash
-    qvel[3, 5] = np.nan  # a NaN state is a numerical fall
+    qvel[3, 5] = np.nan  # a NaN state has diverged: a fall
     with StepEngine(robot, gait) as eng:
         batch = eng.step(qpos, qvel, "right")
         single = eng.step(qpos[:1], qvel[:1], "right")
     assert list(batch.fell) == [False, False, True, True]
-    assert batch.fall_reason[3] == "numerical" and batch.fall_reason[2] in ("tilt", "base_low", "non_foot_contact",
+    assert batch.fall_reason[3] == "diverged" and batch.fall_reason[2] in ("tilt", "base_low", "non_foot_contact",
                                                                            "no_touchdown")
     np.testing.assert_array_equal(batch.qpos[0], single.qpos[0])
     np.testing.assert_array_equal(batch.qvel[0], batch.qvel[1])
@@ -102,3 +102,24 @@ def test_video(tmp_path, exo, exo_gait):
         assert "MUJOCO_GL" in str(exc)
         return
     assert frames == pytest.approx(res.time * 10, abs=1) and out.stat().st_size > 1000
+
+
+def test_a_diverging_sample_is_a_silent_fall(tmp_path, monkeypatch, capfd):
+    """MuJoCo warns (QACC) from its rollout threads when a sample blows up: the engine counts it as a fall
+    'diverged' and nothing reaches the terminal or a MUJOCO_LOG.TXT."""
+    from tests.conftest import standing_gait
+
+    robot = load_robot("exo")
+    gait = standing_gait(robot)
+    monkeypatch.chdir(tmp_path)
+    s = gait.initial_state
+    qpos, qvel = np.tile(s.qpos, (3, 1)), np.tile(s.qvel, (3, 1))
+    qvel[1, 3] += 1e6  # MuJoCo's bad-acceleration warning, and its automatic reset
+    qvel[2, 4] += 1e3  # faster than SimConfig.max_speed
+    with StepEngine(robot, gait) as eng:
+        batch = eng.step(qpos, qvel, gait.stance)
+    assert batch.fall_reason == [None, "diverged", "diverged"] and list(batch.fell) == [False, True, True]
+    out, err = capfd.readouterr()
+    assert "WARNING" not in out + err and not (tmp_path / "MUJOCO_LOG.TXT").exists()
+    config = mujoco.MjLogConfig.get()  # restored after the rollout
+    assert config.logto_console and config.logto_file
