@@ -52,9 +52,13 @@ def test_study_config_round_trip(tmp_path):
     raw["config"]["evaluation"]["step_cap"] = 7
     (tmp_path / "study.json").write_text(json.dumps(raw))
     assert load_config(tmp_path).evaluation == replace(CHEAP, step_cap=7)
-    raw["config"]["evaluation"]["certify"]["bogus"] = 1
+    raw["config"]["evaluation"]["step_cap"] = "many"
     (tmp_path / "study.json").write_text(json.dumps(raw))
-    with pytest.raises(RobustGaitError, match=r"unknown field.*bogus"):
+    with pytest.raises(RobustGaitError, match=r"study.json: evaluation.step_cap"):
+        load_config(tmp_path)
+    raw["config"]["evaluation"]["step_cap"] = 0  # the config's own checks run too
+    (tmp_path / "study.json").write_text(json.dumps(raw))
+    with pytest.raises(RobustGaitError, match=r"study.json: .*step cap"):
         load_config(tmp_path)
 
 
@@ -63,6 +67,8 @@ def test_study_config_rejects_bad_values():
         StudyConfig(metric="speed")
     with pytest.raises(RobustGaitError, match="at least 2"):
         StudyConfig(batch=1)
+    with pytest.raises(RobustGaitError, match="iterations"):
+        StudyConfig(iterations=1001)
     with pytest.raises(RobustGaitError, match="step cap"):
         EvaluationConfig(step_cap=0)
 
@@ -131,11 +137,11 @@ def test_study_run_bad_options_leave_nothing_behind(tmp_path, capsys):
     from robustgait.cli import main
 
     for extra in (["--workers", "0"], ["--iterations", "0"], ["--batch", "1"], ["--samples", "0"],
-                  ["--steps", "0"]):
+                  ["--steps", "0"], ["--seed", "-1"], ["--robot", "nope"], ["--metric", "speed"]):
         d = tmp_path / "s"
         assert main(["study", "run", str(d), "--robot", "exo", *extra]) == 2
         err = capsys.readouterr().err
-        assert err.startswith("robustgait: error:") and len(err.strip().splitlines()) == 1, err
+        assert "error:" in err and len(err.strip().splitlines()) == 1, err
         assert not d.exists()
 
 

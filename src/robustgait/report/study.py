@@ -27,6 +27,7 @@ from matplotlib.ticker import MaxNLocator
 
 from robustgait.barrier import Certificate
 from robustgait.errors import RobustGaitError, input_error
+from robustgait.io.output import write_text
 from robustgait.report.figures import _save, plot_certificate
 
 OUTCOME_COLORS = {"certified": "tab:green", "not_certified": "tab:olive", "fell": "tab:red",
@@ -241,11 +242,7 @@ def write_study_report(directory: str | Path, *, axes: tuple[str, str] = ("step_
                          f'width="480" src="data:video/mp4;base64,{b64}"></video>')
         except RobustGaitError as exc:
             notes.append(f"No video: {exc}")
-    page = _page(status, parts, notes)
-    tmp = out / ".index.html.tmp"
-    tmp.write_text(page)
-    tmp.replace(out / "index.html")
-    return out / "index.html"
+    return write_text(out / "index.html", _page(status, parts, notes), "html")
 
 
 def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:

@@ -5,15 +5,13 @@ are saved whole, so a field added to any of them is saved and restored without c
 from __future__ import annotations
 
 import dataclasses
-import json
-import os
-import types
-import typing
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Union
+from typing import Any
 
 from robustgait.errors import RobustGaitError, input_error
+from robustgait.io.output import write_json
+from robustgait.io.schema import read_json
 from robustgait.learn.config import LEARNERS, LearnerConfig
 from robustgait.learn.oracle import METRICS
 from robustgait.study.evaluate import EvaluationConfig
@@ -42,16 +40,18 @@ class StudyConfig:
     study_name: str = "robustgait"
 
     def __post_init__(self) -> None:
+        from robustgait.io import limits as L
+
         if self.metric not in METRICS:
             raise RobustGaitError(f"unknown metric {self.metric!r} (choose from {', '.join(METRICS)})")
         if self.learner not in LEARNERS:
             raise RobustGaitError(f"unknown learner {self.learner!r} (choose from {', '.join(LEARNERS)})")
-        for name in ("iterations", "batch"):
+        for name, lim in (("iterations", L.ITERATIONS), ("batch", L.BATCH), ("seed", L.SEED)):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise RobustGaitError(f"{name} must be an integer ≥ 1, got {v!r}")
-        if self.batch < 2:
-            raise RobustGaitError(f"a batch needs at least 2 gaits to be compared, got {self.batch}")
+            if isinstance(v, bool) or not isinstance(v, int) or not lim.contains(v):
+                raise RobustGaitError(f"{name} must be an integer with {lim.text()}, got {v!r} (a batch is "
+                                      "ranked: it needs at least 2 gaits)" if name == "batch" else
+                                      f"{name} must be an integer with {lim.text()}, got {v!r}")
 
     @property
     def trials_planned(self) -> int:
@@ -61,70 +61,24 @@ class StudyConfig:
         return dataclasses.asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any], source: str | Path = "<config>") -> StudyConfig:
-        try:
-            return build_dataclass(cls, data)
-        except (TypeError, ValueError, KeyError) as exc:
-            raise input_error(source, f"bad study configuration: {exc}") from None
+    def from_dict(cls, data: Any, source: str | Path = "<config>") -> StudyConfig:
+        """Validate through the input layer (:func:`robustgait.io.schema.validate`): nested configs are
+        rebuilt, lists become tuples, each config's own checks run; a field missing from ``data`` keeps
+        its default (a study written before the field existed); unknown fields are ignored."""
+        from robustgait.io.schema import validate
 
-
-def _hint_types(hint: Any) -> tuple[Any, ...]:
-    origin = typing.get_origin(hint)
-    if origin in (Union, types.UnionType):
-        return tuple(a for a in typing.get_args(hint) if a is not type(None))
-    return (hint,)
-
-
-def _convert(hint: Any, value: Any) -> Any:
-    if value is None:
-        return None
-    for t in _hint_types(hint):
-        if dataclasses.is_dataclass(t) and isinstance(value, dict):
-            return build_dataclass(t, value)  # type: ignore[arg-type]
-        if typing.get_origin(t) is tuple and isinstance(value, list):
-            args = typing.get_args(t)
-            inner = args[0] if args else Any
-            return tuple(_convert(inner, v) for v in value)
-    return value
-
-
-def build_dataclass(cls: type, data: dict[str, Any]) -> Any:
-    """Rebuild a (nested) dataclass from :func:`dataclasses.asdict` output: lists back to tuples, dicts to
-    nested dataclasses; fields missing from ``data`` keep their defaults; unknown fields are an error."""
-    if not isinstance(data, dict):
-        raise TypeError(f"{cls.__name__} must be a JSON object")
-    hints = typing.get_type_hints(cls)
-    names = {f.name for f in dataclasses.fields(cls)}
-    unknown = set(data) - names
-    if unknown:
-        raise TypeError(f"unknown field(s) {', '.join(sorted(unknown))} of {cls.__name__}")
-    return cls(**{k: _convert(hints[k], v) for k, v in data.items()})
-
-
-def write_json_atomic(path: Path, payload: Any) -> None:
-    """Write JSON beside ``path`` and rename it into place (nothing half-written after a crash)."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_text(json.dumps(payload, indent=1, allow_nan=False))
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
+        return validate(data, cls, source)
 
 
 def save_config(directory: Path, config: StudyConfig) -> Path:
-    path = directory / CONFIG_FILE
-    write_json_atomic(path, {"format_version": FORMAT_VERSION, "config": config.to_dict()})
-    return path
+    return write_json(directory / CONFIG_FILE, {"format_version": FORMAT_VERSION, "config": config.to_dict()})
 
 
 def load_config(directory: str | Path) -> StudyConfig:
     path = Path(directory) / CONFIG_FILE
     if not path.is_file():
         raise input_error(directory, f"not a study directory (no {CONFIG_FILE})")
-    try:
-        raw = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise input_error(path, f"malformed JSON: {exc}") from None
+    raw = read_json(path, "study config")
     if not isinstance(raw, dict) or raw.get("format_version") != FORMAT_VERSION or "config" not in raw:
         raise input_error(path, f"unsupported study file (format_version {FORMAT_VERSION} expected)")
     return StudyConfig.from_dict(raw["config"], path)

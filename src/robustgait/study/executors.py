@@ -46,11 +46,11 @@ class EvaluationWorker:
 
     def __init__(self, spec: WorkerSpec):
         from robustgait.gaitgen import GaitGenerator
+        from robustgait.io.schema import validate
         from robustgait.robots import load_robot
-        from robustgait.study.config import build_dataclass
         from robustgait.study.evaluate import EvaluationConfig
 
-        cfg: EvaluationConfig = build_dataclass(EvaluationConfig, spec.evaluation)
+        cfg = validate(spec.evaluation, EvaluationConfig, "<evaluation config>")
         sim = replace(cfg.certify.sim, n_threads=spec.threads)
         self.config = replace(cfg, certify=replace(cfg.certify, sim=sim))
         self.robot = load_robot(spec.robot)

@@ -32,12 +32,13 @@ from typing import Any
 from tqdm import tqdm
 
 from robustgait.errors import RobustGaitError, input_error
+from robustgait.io.output import write_json
 from robustgait.learn.learners import History, Learner, iteration_seed, make_learner
 from robustgait.learn.oracle import Outcome, batch_comparisons, score
 from robustgait.learn.space import ActionSpace
 from robustgait.robots import load_robot
 from robustgait.robots.spec import SHIPPED_DIR
-from robustgait.study.config import StudyConfig, load_config, save_config, write_json_atomic
+from robustgait.study.config import StudyConfig, load_config, save_config
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.executors import Executor, WorkerSpec, make_executor
 from robustgait.study.storage import StudyStore, TrialRecord, default_url
@@ -123,9 +124,11 @@ def create_study(directory: str | Path, config: StudyConfig) -> Path:
     if config.storage is not None and config.study_name == StudyConfig.study_name:
         # a shared database holds many studies: a name of its own (saved in study.json)
         config = replace(config, study_name=f"{d.resolve().name}-{uuid.uuid4().hex[:8]}")
-    space = ActionSpace.from_robot(load_robot(config.robot))
+    robot = load_robot(config.robot)
+    space = ActionSpace.from_robot(robot)
     if config.batch > space.size:
         raise RobustGaitError(f"a batch of {config.batch} gaits does not fit in an action space of {space.size}")
+    check_evaluation_work(config, space, robot.dt)
     d.mkdir(parents=True, exist_ok=True)
     with study_lock(d):
         store = StudyStore(storage_url(d, config), config.study_name, space, create=True,
@@ -133,6 +136,18 @@ def create_study(directory: str | Path, config: StudyConfig) -> Path:
         store.close()
         save_config(d, config)  # last: a directory with study.json has a database
     return d
+
+
+def check_evaluation_work(config: StudyConfig, space: ActionSpace, timestep: float) -> None:
+    """Bound one evaluation's simulation like ``walk``/``certify`` bound theirs (``io.limits.check_work``):
+    the walk to the step cap plus the certificate (fixed-point steps + samples + 1, twice for the stride
+    map), each step up to the longest step duration of the action space × ``max_step_tau``."""
+    from robustgait.io import limits as L
+
+    cert = config.evaluation.certify
+    steps = config.evaluation.step_cap + (cert.fp_max_steps + cert.n_samples + 1) * (2 if cert.map == "stride" else 1)
+    longest = max(space.values[space.names.index("step_duration")]) if "step_duration" in space.names else 0.0
+    L.check_work(steps, longest * cert.sim.max_step_tau, timestep, "study: one evaluation (--steps, --samples)")
 
 
 def open_store(directory: Path, config: StudyConfig, space: ActionSpace) -> StudyStore:
@@ -258,10 +273,10 @@ class StudyRunner:
         out = {k: v for k, v in result.items() if k not in ("gait", "certificate")}
         out["gait_file"] = out["certificate_file"] = None
         if result.get("gait") is not None:
-            write_json_atomic(self.directory / rel / "gait.json", result["gait"])
+            write_json(self.directory / rel / "gait.json", result["gait"])
             out["gait_file"] = str(rel / "gait.json")
         if result.get("certificate") is not None:
-            write_json_atomic(self.directory / rel / "certificate.json", result["certificate"])
+            write_json(self.directory / rel / "certificate.json", result["certificate"])
             out["certificate_file"] = str(rel / "certificate.json")
             out["certificate"] = Evaluation.from_dict({**result, "gait": None}).certificate_summary()
         else:
