@@ -17,10 +17,11 @@ from pathlib import Path
 
 import pytest
 
-from robustgait import GaitParams, RobustGaitError, load_robot
+from robustgait import GaitParams, Robot, RobustGaitError, load_robot
 from robustgait.certify import CertifyConfig
 from robustgait.learn import ActionSpace
 from robustgait.learn.config import LearnerConfig, PreferenceModelConfig
+from robustgait.robots import FallCriteria
 from robustgait.study.config import StudyConfig, load_config, save_config
 from robustgait.study.evaluate import EvaluationConfig, evaluate
 from robustgait.study.run import RunOptions, create_study, run_study
@@ -161,12 +162,20 @@ def test_evaluate_never_raises_and_records_stages(exo_generator):
     assert good.status == "certified" and good.steps_taken == 5 and not good.fell and good.r_star > 0
     assert good.certificate is not None and good.certificate["r_star"] == good.r_star
     assert set(good.seconds) >= {"generate", "walk", "certify", "total"} and good.gait is not None
+    assert "build" not in good.seconds  # the generator was given
     bad = evaluate(robot, GaitParams(step_width=0.1), CHEAP, generator=gen)  # the feet would collide
     assert bad.status == "generation_failed" and "Infeasible_Parameters" in bad.reason and bad.gait is None
     assert bad.steps_taken == 0 and bad.r_star == 0.0 and bad.outcome().steps_taken == 0
-    falls = evaluate(robot, GaitParams(0.1, 1.0, 0.26, 0.04), replace(CHEAP, step_cap=10), generator=gen)
-    assert falls.status == "fell" and falls.fell and falls.steps_taken < 10 and falls.r_star == 0.0
-    assert falls.reason.startswith(f"fell in step {falls.steps_taken + 1}") and "certify" not in falls.seconds
+    # a fall: the same robot with a fall criterion its pelvis cannot meet (base above 0.99 m)
+    strict = Robot(replace(robot.spec, fall=FallCriteria(min_base_height=0.99, max_tilt=0.8)))
+    falls = evaluate(strict, GaitParams(), CHEAP, generator=gen)
+    assert falls.status == "fell" and falls.fell and falls.fall_reason == "base_low" and falls.r_star == 0.0
+    assert falls.reason == f"fell in step {falls.steps_taken + 1} (base_low)" and "certify" not in falls.seconds
+    # walks the cap but has no certificate: a fixed-point search that cannot converge
+    no_fp = replace(CHEAP, certify=replace(CHEAP.certify, fp_tol=1e-12, fp_min_steps=1, fp_max_steps=2))
+    nc = evaluate(robot, GaitParams(), no_fp, generator=gen)
+    assert nc.status == "not_certified" and nc.steps_taken == 5 and nc.r_star == 0.0 and "fixed point" in nc.reason
+    assert nc.outcome().walked_cap
     # an evaluation is a function of the parameters and the config alone (what resume and reuse rely on)
     again = evaluate(robot, GaitParams(), CHEAP, generator=gen)
     assert without_times(again.to_dict()) == without_times(good.to_dict())
