@@ -48,10 +48,16 @@ def coarse_space(full: ActionSpace, counts: list[int]) -> ActionSpace:
 
 
 def config_hash(cfg: EvaluationConfig) -> str:
-    """Rows evaluated with another config (or after the evaluation changed its fields) are not reused."""
+    """Rows evaluated with another evaluation config or another exo model (spec or MJCF) are not reused.
+    (A change of the generator's or the certificate's code is not seen: delete the table then.)"""
     import hashlib
 
-    return hashlib.sha256(json.dumps(_asdict(cfg), sort_keys=True).encode()).hexdigest()[:12]
+    robot = load_robot("exo")
+    h = hashlib.sha256(json.dumps(_asdict(cfg), sort_keys=True).encode())
+    for f in (robot.spec.source, robot.spec.mjcf):
+        if f is not None:
+            h.update(Path(f).read_bytes())
+    return h.hexdigest()[:12]
 
 
 def load_table(path: Path, config: str) -> dict[str, dict]:
