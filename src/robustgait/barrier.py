@@ -375,9 +375,9 @@ class Certificate:
             return (f"No sample lies in {where}: the certificate is vacuous (no confidence statement; "
                     f"{self.n_samples} samples, method {self.method}).")
         if self.budget_exhausted:
-            return (f"The sample budget ({self.n_samples} samples) was spent before a verification batch passed: "
-                    f"r* = {self.r_star:.6g} is the exact supremum of the feasible radii for these samples, but "
-                    f"there is no confidence statement on {cond[4:]}.")
+            return (f"The sample budget was spent ({self.n_samples} samples) before a verification batch passed: "
+                    f"r* = {self.r_star:.6g} is the exact supremum of the feasible radii for these samples under "
+                    f"{cond}, but there is no confidence statement.")
         basis = self.basis or (
             f"{self.n_inside} of {self.n_samples} uniform samples in B(x*, r_max = {self.r_max:g}) lie in it and "
             f"all satisfy it (union bound over the {self.n_samples + 1} possible choices of r*)")
