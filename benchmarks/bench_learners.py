@@ -2,15 +2,16 @@
 certify: the study's own evaluation), then polar, eubo and random replayed against that table.
 
 Phase 1 (resumable): the grid takes ``--grid`` evenly spaced values of each action-space axis (default
-4 × 4 × 3 × 3 = 144 gaits); every gait is evaluated with the study defaults (step cap 50, N = 200,
-seed 0) by the local executor and appended to ``--table`` (JSON lines) as soon as it is done, so a killed
-run continues where it stopped. Phase 2: each learner runs ``--seeds`` times at the paper's budget
+4 × 4 × 3 × 3 = 144 gaits); every gait is evaluated with the study defaults (step cap 50, the
+sequential estimator, seed 0; ``--method uniform --samples N``: the paper's) by the local executor and
+appended to ``--table`` (JSON lines) as soon as it is done, so a killed run continues where it stopped.
+Phase 2: each learner runs ``--seeds`` times at the paper's budget
 (``--iterations`` × ``--batch``) with the robustness oracle on the table's scores; it prints, per learner,
 mean ± sd of the true r* (and steps) of the gait it returns (its recommendation after the last iteration)
 and of that gait's rank in the table (1 = the best score), and the table's best for reference.
 
     python benchmarks/bench_learners.py [--grid 4,4,3,3] [--seeds 20] [--iterations 10] [--batch 5]
-        [--workers 2] [--samples 200] [--table benchmarks/data/learner_table_exo.jsonl]
+        [--workers 2] [--method sequential] [--samples 200] [--table benchmarks/data/learner_table_exo.jsonl]
 
 ``--synthetic 7,7,5`` replaces the table by smooth synthetic utilities on a normalized grid of that shape
 (two Gaussian bumps of heights 1 and 0.6 and width 0.3 at random places, one utility per seed) and prints
@@ -30,7 +31,6 @@ from pathlib import Path
 import numpy as np
 
 from robustgait import load_robot
-from robustgait.certify import CertifyConfig
 from robustgait.learn import ActionSpace, LearnerConfig, Outcome, PreferenceModelConfig, make_learner, replay, score
 from robustgait.study.evaluate import EvaluationConfig
 from robustgait.study.executors import LocalExecutor, WorkerSpec
@@ -75,8 +75,10 @@ def key(params: dict[str, float]) -> str:
     return ",".join(f"{params[k]:.6g}" for k in sorted(params))
 
 
-def evaluate_table(space: ActionSpace, path: Path, workers: int, samples: int, step_cap: int) -> dict[str, dict]:
-    cfg = EvaluationConfig(step_cap=step_cap, certify=replace(CertifyConfig(), n_samples=samples))
+def evaluate_table(space: ActionSpace, path: Path, workers: int, method: str, samples: int,
+                   step_cap: int) -> dict[str, dict]:
+    cfg = EvaluationConfig(step_cap=step_cap, certify=replace(EvaluationConfig().certify, method=method,
+                                                              n_samples=samples))
     h = config_hash(cfg)
     rows = load_table(path, h)
     todo = [i for i in range(space.size) if key(space.value(i)) not in rows]
@@ -145,7 +147,8 @@ def main() -> None:
     ap.add_argument("--iterations", type=int, default=10)
     ap.add_argument("--batch", type=int, default=5)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--samples", type=int, default=200)
+    ap.add_argument("--method", choices=("sequential", "uniform"), default="sequential")
+    ap.add_argument("--samples", type=int, default=200, help="uniform only")
     ap.add_argument("--steps", type=int, default=50, help="step cap")
     ap.add_argument("--table", type=Path, default=REPO / "benchmarks" / "data" / "learner_table_exo.jsonl")
     ap.add_argument("--learners", default="polar,eubo,random")
@@ -158,7 +161,7 @@ def main() -> None:
     full = ActionSpace.from_robot(load_robot("exo"))
     space = coarse_space(full, [int(v) for v in args.grid.split(",")])
     print(f"coarse grid: {space.describe()} = {space.size} gaits; load {os.getloadavg()}", flush=True)
-    rows = evaluate_table(space, args.table, args.workers, args.samples, args.steps)
+    rows = evaluate_table(space, args.table, args.workers, args.method, args.samples, args.steps)
     table = [rows[key(space.value(i))] for i in range(space.size)]
     scores = np.array([score("robustness", Outcome(r["steps_taken"], r["step_cap"], r["r_star"])) for r in table])
     r_true = np.array([r["r_star"] for r in table])

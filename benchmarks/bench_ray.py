@@ -9,7 +9,7 @@ measures what 2 processes can get at all: the ratio of 1 vs 2 processes on a fix
 (``machine``), and the executor alone on the study's gaits without the per-iteration barrier
 (``executor``).
 
-    python benchmarks/bench_ray.py [--iterations 2] [--batch 6] [--samples 200]
+    python benchmarks/bench_ray.py [--iterations 2] [--batch 6] [--method sequential] [--samples 200]
 """
 
 from __future__ import annotations
@@ -21,7 +21,6 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from robustgait.certify import CertifyConfig
 from robustgait.study.config import StudyConfig
 from robustgait.study.evaluate import EvaluationConfig
 from robustgait.study.executors import RayExecutor, WorkerSpec
@@ -62,13 +61,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--iterations", type=int, default=2)
     ap.add_argument("--batch", type=int, default=6)
-    ap.add_argument("--samples", type=int, default=200)
+    ap.add_argument("--method", choices=("sequential", "uniform"), default="sequential")
+    ap.add_argument("--samples", type=int, default=200, help="uniform only")
     ap.add_argument("--out", type=Path, default=Path("/tmp/robustgait_bench_ray"))
     args = ap.parse_args()
     import ray
 
     cfg = StudyConfig(robot="exo", iterations=args.iterations, batch=args.batch,
-                      evaluation=EvaluationConfig(certify=replace(CertifyConfig(), n_samples=args.samples)))
+                      evaluation=EvaluationConfig(certify=replace(EvaluationConfig().certify, method=args.method,
+                                                                  n_samples=args.samples)))
     machine = machine_ratio()
     print(f"machine: 1 vs 2 processes on pure CPU work: ratio {machine:.2f} (load {os.getloadavg()[0]:.1f})",
           flush=True)

@@ -7,7 +7,7 @@ the same estimator and seed (the study's), then both re-certified with ``--compa
 Studies live in ``--out`` (default benchmarks/data/bench_study/<metric>); an existing one is resumed
 (the wall time is then that of the resumed part only, and is flagged), so a killed benchmark continues.
 
-    python benchmarks/bench_study.py [--iterations 10] [--batch 5] [--workers 2] [--samples 200]
+    python benchmarks/bench_study.py [--iterations 10] [--batch 5] [--workers 2] [--method sequential] [--samples 200]
         [--learner polar] [--metrics robustness,stability] [--compare-seeds 5] [--out DIR]
 """
 
@@ -33,13 +33,17 @@ from robustgait.study.status import study_status
 REPO = Path(__file__).resolve().parents[1]
 
 
+def certify_config(method: str, samples: int, seed: int = 0) -> CertifyConfig:
+    """The study default (sequential estimator) or the paper's uniform one with ``samples``."""
+    return replace(EvaluationConfig().certify, method=method, n_samples=samples, seed=seed)
+
+
 def run_one(d: Path, metric: str, args: argparse.Namespace) -> dict:
     resumed = (d / "study.json").exists()
     if not resumed:
         cfg = StudyConfig(robot="exo", metric=metric, learner=args.learner, iterations=args.iterations,
                           batch=args.batch, seed=args.seed,
-                          evaluation=EvaluationConfig(certify=replace(CertifyConfig(), n_samples=args.samples,
-                                                                      seed=args.seed)))
+                          evaluation=EvaluationConfig(certify=certify_config(args.method, args.samples, args.seed)))
         create_study(d, cfg)
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
@@ -55,7 +59,8 @@ def main() -> None:
     ap.add_argument("--iterations", type=int, default=10)
     ap.add_argument("--batch", type=int, default=5)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--samples", type=int, default=200)
+    ap.add_argument("--method", choices=("sequential", "uniform"), default="sequential")
+    ap.add_argument("--samples", type=int, default=200, help="uniform only")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--learner", default="polar")
     ap.add_argument("--metrics", default="robustness,stability")

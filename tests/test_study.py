@@ -31,7 +31,8 @@ from robustgait.study.storage import StudyStore, default_url
 REPO = Path(__file__).resolve().parents[1]
 CHEAP = EvaluationConfig(step_cap=5, certify=CertifyConfig(n_samples=10))
 TINY = StudyConfig(robot="exo", iterations=2, batch=3, seed=0, evaluation=CHEAP)
-CLI_TINY = ["--robot", "exo", "--iterations", "2", "--batch", "3", "--samples", "10", "--steps", "5", "--seed", "0"]
+CLI_TINY = ["--robot", "exo", "--iterations", "2", "--batch", "3", "--method", "uniform", "--samples", "10", "--steps",
+            "5", "--seed", "0"]
 
 
 def cli(*args: str, **kw) -> subprocess.CompletedProcess:  # type: ignore[no-untyped-def, type-arg]
@@ -61,6 +62,11 @@ def test_study_config_round_trip(tmp_path):
     (tmp_path / "study.json").write_text(json.dumps(raw))
     with pytest.raises(RobustGaitError, match=r"study.json: .*step cap"):
         load_config(tmp_path)
+
+
+def test_studies_use_the_sequential_estimator_by_default():
+    assert StudyConfig().evaluation.certify.method == "sequential"
+    assert EvaluationConfig().certify.sequential.budget == 3000
 
 
 def test_study_config_rejects_bad_values():

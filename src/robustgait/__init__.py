@@ -6,7 +6,8 @@ Public API (everything else is reachable from the submodules)::
     robot = robustgait.load_robot("exo")                 # or a spec .toml path
     gait = robustgait.load_gait("gait.json", robot)      # or a FROST/ambersim .yaml
     result = robustgait.walk(robot, gait, steps=50)
-    cert = robustgait.certify_gait(robot, gait)          # cert.r_star
+    cert = robustgait.certify_gait(robot, gait)          # cert.status, cert.r_star (paper's estimator)
+    cert = robustgait.certify_gait(robot, gait, robustgait.CertifyConfig(method="sequential"))
     gen = robustgait.GaitGenerator(robot)                # build the HZD problem once, then gen.solve(params)
     robustgait.create_study("runs/rob", robustgait.StudyConfig(robot="exo"))   # the learning loop
     robustgait.run_study("runs/rob"); robustgait.study_status("runs/rob")["best"]
@@ -22,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from robustgait.barrier import Certificate, certify_map, invariant_radius
 from robustgait.certify import CertifyConfig, GaitCertificate, certify_gait
 from robustgait.errors import RobustGaitError
+from robustgait.estimators import SequentialConfig, certify_map_sequential
 from robustgait.gait import Gait, GaitParams, load_gait
 from robustgait.robots import Robot, load_robot
 from robustgait.sim import SimConfig, StepEngine, WalkResult, walk
@@ -68,6 +70,7 @@ __all__ = [
     "Robot",
     "RobustGaitError",
     "RunOptions",
+    "SequentialConfig",
     "SimConfig",
     "StepEngine",
     "StudyConfig",
@@ -75,6 +78,7 @@ __all__ = [
     "__version__",
     "certify_gait",
     "certify_map",
+    "certify_map_sequential",
     "create_study",
     "evaluate",
     "generate_gait",

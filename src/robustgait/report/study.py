@@ -25,7 +25,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from robustgait.barrier import Certificate
+from robustgait.barrier import Certificate, Round
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_text
 from robustgait.report.figures import _save, plot_certificate
@@ -43,10 +43,14 @@ def certificate_from_json(d: dict[str, Any]) -> Certificate:
     n = len(d["x_star"])
     images = np.array([[np.nan] * n if row is None else row for row in d["images"]], dtype=float)
     margins = np.array([-np.inf if m is None else m for m in d["margins"]], dtype=float)
-    arrays = {"x_star": np.asarray(d["x_star"], dtype=float), "samples": np.asarray(d["samples"], dtype=float),
-              "images": images, "fell": fell, "margins": margins}
-    kwargs = {f.name: arrays.get(f.name, d.get(f.name)) for f in dataclasses.fields(Certificate)}
-    return Certificate(**kwargs)  # type: ignore[arg-type]
+    arrays: dict[str, Any] = {
+        "x_star": np.asarray(d["x_star"], dtype=float), "samples": np.asarray(d["samples"], dtype=float),
+        "images": images, "fell": fell, "margins": margins,
+        "rounds": tuple(Round(**r) for r in d.get("rounds") or ()),
+        "sample_round": None if d.get("sample_round") is None else np.asarray(d["sample_round"], dtype=np.int64)}
+    kwargs = {f.name: arrays[f.name] if f.name in arrays else d[f.name] for f in dataclasses.fields(Certificate)
+              if f.name in arrays or f.name in d}
+    return Certificate(**kwargs)
 
 
 def plot_history(status: dict[str, Any], path: Path) -> Path:

@@ -145,9 +145,11 @@ def check_evaluation_work(config: StudyConfig, space: ActionSpace, timestep: flo
     from robustgait.io import limits as L
 
     cert = config.evaluation.certify
-    steps = config.evaluation.step_cap + (cert.fp_max_steps + cert.n_samples + 1) * (2 if cert.map == "stride" else 1)
+    n = cert.n_samples if cert.method == "uniform" else cert.sequential.budget
+    steps = config.evaluation.step_cap + (cert.fp_max_steps + n + 1) * (2 if cert.map == "stride" else 1)
     longest = max(space.values[space.names.index("step_duration")]) if "step_duration" in space.names else 0.0
-    L.check_work(steps, longest * cert.sim.max_step_tau, timestep, "study: one evaluation (--steps, --samples)")
+    L.check_work(steps, longest * cert.sim.max_step_tau, timestep,
+                 "study: one evaluation (--steps, --samples or --budget)")
 
 
 def open_store(directory: Path, config: StudyConfig, space: ActionSpace) -> StudyStore:
