@@ -378,13 +378,13 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from robustgait.report.study import write_study_report
-    from robustgait.study.config import StudyConfig
+    from robustgait.study.config import demo_config
     from robustgait.study.run import RunOptions, create_study
 
     d = Path(args.dir)
     t0 = time.perf_counter()
     if not (d / "study.json").exists():
-        create_study(d, StudyConfig(robot="exo", metric="robustness", learner="polar", iterations=3, batch=4))
+        create_study(d, demo_config())
         print(f"demo: a robustness study on the shipped exoskeleton (3 iterations × 4 gaits) in {d}", flush=True)
     else:
         print(f"demo: resuming the study in {d}", flush=True)
