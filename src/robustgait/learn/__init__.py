@@ -4,7 +4,9 @@ qEUBO, random) and the loop against known scores (``offline``).
 
 Submodules load lazily (the learners import torch and BoTorch; the oracles and the grid do not)."""
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from robustgait._lazy import lazy_exports
 
 if TYPE_CHECKING:
     from robustgait.learn.config import LEARNERS, LearnerConfig, PreferenceModelConfig
@@ -33,13 +35,7 @@ _EXPORTS = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    if name in _EXPORTS:
-        import importlib
-
-        return getattr(importlib.import_module(f"robustgait.learn.{_EXPORTS[name]}"), name)
-    raise AttributeError(f"module 'robustgait.learn' has no attribute {name!r}")
-
+__getattr__ = lazy_exports(__name__, _EXPORTS)
 
 __all__ = [
     "LEARNERS",

@@ -4,7 +4,9 @@ comparison of studies.
 
 Submodules load lazily: a worker process that only evaluates gaits does not import torch or Optuna."""
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from robustgait._lazy import lazy_exports
 
 if TYPE_CHECKING:
     from robustgait.study.config import StudyConfig
@@ -19,13 +21,7 @@ _EXPORTS = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    if name in _EXPORTS:
-        import importlib
-
-        return getattr(importlib.import_module(f"robustgait.study.{_EXPORTS[name]}"), name)
-    raise AttributeError(f"module 'robustgait.study' has no attribute {name!r}")
-
+__getattr__ = lazy_exports(__name__, _EXPORTS)
 
 __all__ = [
     "Evaluation",
