@@ -249,6 +249,13 @@ def write_study_report(directory: str | Path, *, axes: tuple[str, str] = ("step_
     return write_text(out / "index.html", _page(status, parts, notes), "html")
 
 
+def _certify_text(ev: dict[str, Any]) -> str:
+    c = ev["certify"]
+    how = (f"sequential (ε = {c['sequential']['epsilon']:g}, budget {c['sequential']['budget']})"
+           if c.get("method") == "sequential" else f"uniform, N = {c['n_samples']}")
+    return f"{how}, seed {c['seed']}, step cap {ev['step_cap']}"
+
+
 def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
     best = status["best"]
     cfg = status["config"]
@@ -257,8 +264,7 @@ def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
                ["budget", f"{cfg['iterations']} iterations × {cfg['batch']} gaits"],
                ["trials done", f"{status['trials_done']} / {status['trials_planned']} ({status['unique_gaits']} unique "
                                f"gaits)"], ["state", status["state"]],
-               ["certificate", f"N = {cfg['evaluation']['certify']['n_samples']}, seed "
-                               f"{cfg['evaluation']['certify']['seed']}, step cap {cfg['evaluation']['step_cap']}"]]
+               ["certificate", _certify_text(cfg["evaluation"])]]
     if best is not None:
         summary += [["best gait (learner)", ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())],
                     ["best r* / steps", f"{_fmt(best['r_star'], 4)} rad/s / {best['steps_taken']}"],
