@@ -30,7 +30,7 @@ def test_default_gait_passes_the_physics_check(exo, gen, default):
     c = default.check
     assert c.passed and c.dynamics_residual <= 1e-6 and c.periodicity <= 1e-6 and c.stance_drift <= 1e-6
     assert max(c.step_length_error, c.step_width_error, c.step_height_error) <= 1e-3 and c.duration_error <= 1e-3
-    ns = default.nodes
+    ns = default.nodes[0]
     f = ns.lam[:, :3]
     assert np.all(f[:, 2] >= gen.config.min_normal_force - 1e-6)
     assert np.all(np.abs(f[:, :2]) <= gen.config.friction * f[:, 2:3] + 1e-6)
@@ -52,8 +52,8 @@ def test_default_gait_passes_the_physics_check(exo, gen, default):
 
 
 def test_physics_check_catches_a_wrong_solution(gen, default):
-    ns = dataclasses.replace(default.nodes, u=default.nodes.u * 1.01)
-    bad = check_solution(gen.dyn, gen.problem, default.params, ns, default.params.step_duration)
+    ns = dataclasses.replace(default.nodes[0], u=default.nodes[0].u * 1.01)
+    bad = check_solution(gen.dyn, gen.problem, default.params, [ns], [default.params.step_duration])
     assert not bad.passed and bad.dynamics_residual > 1e-4 and "dynamics residual" in bad.failures[0]
 
 
@@ -62,7 +62,7 @@ def test_default_gait_meets_the_gait_quality_bounds(exo, gen, default):
     from robustgait.dynamics import foot_frame
     from robustgait.gaitgen.problem import matrix_to_rpy
 
-    q, ns, tol = gen.problem.quality, default.nodes, 1e-6
+    q, ns, tol = gen.problem.quality, default.nodes[0], 1e-6
     rpy = np.array([matrix_to_rpy(h[:3, :3]) for h in ns.H])
     assert np.all(np.abs(rpy[:, 0]) <= q.pelvis_roll + tol) and np.all(np.abs(rpy[:, 2]) <= q.pelvis_yaw + tol)
     assert np.all((rpy[:, 1] >= q.pelvis_pitch[0] - tol) & (rpy[:, 1] <= q.pelvis_pitch[1] + tol))
