@@ -226,14 +226,14 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     gait = load_gait(args.gait, robot)
     res = validate_gait(robot, gait, cfg, kinds=[args.disturbance], certificate=args.certificate,
                         progress=not args.json and sys.stderr.isatty())
+    if args.output is not None:  # the results first: they took minutes, the figure is redrawn from them
+        tmp = Path(args.output).with_name(Path(args.output).name + ".tmp")
+        tmp.write_text(res.to_json())
+        tmp.replace(args.output)
     if args.plot is not None:
         from robustgait.report import plot_validation
 
         plot_validation(res, args.plot)
-    if args.output is not None:
-        tmp = Path(args.output).with_name(Path(args.output).name + ".tmp")
-        tmp.write_text(res.to_json())
-        tmp.replace(args.output)
     if args.json:
         print(res.to_json(trials=False))
         return 0

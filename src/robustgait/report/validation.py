@@ -29,7 +29,8 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
         rate = np.array([np.nan if b["rate"] is None else b["rate"] for b in bins])
         lo = np.array([b["low"] for b in bins])
         hi = np.array([b["high"] for b in bins])
-        a1.errorbar(mid, rate, yerr=[np.nan_to_num(rate - lo), np.nan_to_num(hi - rate)], fmt="o", capsize=3,
+        yerr = np.maximum(0.0, np.nan_to_num([rate - lo, hi - rate]))  # rounding: lo may exceed a rate of 0
+        a1.errorbar(mid, rate, yerr=yerr, fmt="o", capsize=3,
                     label="binned (95 % Wilson)")
         fit = kr.critical()
         if np.isfinite(fit.a) and np.isfinite(fit.b):
