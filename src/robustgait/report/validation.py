@@ -61,5 +61,5 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
         a2.legend(fontsize=7)
     fig.suptitle(title or f"{result.robot}: validation ({result.config.trials} trials per kind, seed "
                  f"{result.config.seed}, {result.config.steps_after} steps after)")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.35 / fig.get_figheight()))  # room for the title
     return _save(fig, path)
