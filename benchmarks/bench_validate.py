@@ -65,7 +65,8 @@ def main() -> None:
             raws.append(args.trials * nstep / raw)
             sr = res.success_rate()
             print(f"{args.kind}: {args.trials} trials in {wall:.2f} s ({res.physics_steps} physics steps, "
-                  f"{ours[-1]:.0f} steps/s); raw mujoco.rollout {raws[-1]:.0f} steps/s; ratio {ours[-1] / raws[-1]:.2f}; "
+                  f"{ours[-1]:.0f} steps/s); raw mujoco.rollout {raws[-1]:.0f} steps/s; "
+                  f"ratio {ours[-1] / raws[-1]:.2f}; "
                   f"success {sr.k}/{sr.n}")
     v.close()
     ratios = np.array(ours) / np.array(raws)

@@ -49,7 +49,8 @@ def test_logistic_fit_finds_the_half_failure_size():
     assert fit.b == pytest.approx(-0.2, rel=0.2)
     assert logistic_fit(s, np.ones(s.size, bool)).s50 is None  # nothing fell
     separated = logistic_fit(s, s < 30)
-    assert separated.s50 is None and "separate" in separated.note
+    assert not separated.converged and "separate" in separated.note and separated.s50 is not None
+    assert separated.s50 == pytest.approx(30.0, abs=0.5) and separated.s50_se is not None and separated.s50_se < 0.5
 
 
 def test_draws_depend_on_seed_and_robot_only():

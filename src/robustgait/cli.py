@@ -247,7 +247,8 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         sr, fit, chk = kr.success_rate(), kr.critical(), kr.certificate_check()
         _name, unit = kr.size_label
         if fit.s50 is not None:
-            crit = f"{fit.s50:.4g} ± {fit.s50_se or 0:.2g} {unit}" + ("" if fit.in_range else " (extrapolated)")
+            crit = f"{fit.s50:.4g} ± {fit.s50_se or 0:.2g} {unit}" + ("" if fit.in_range else " (extrapolated)") + (
+                "" if fit.converged else " (gap)")
         else:
             crit = f"— ({fit.note})"
         inside, outside = chk["inside"], chk["outside"]

@@ -58,9 +58,11 @@ class LogisticFit:
     """P(success | s) = 1 / (1 + exp(−(a + b s))) by maximum likelihood, and the size s₅₀ = −a/b at which
     half the trials fail with its standard error (delta method on the inverse Fisher information).
 
-    ``s50`` is None when it is not identified: no fall or no success in the trials, the fit did not converge
-    (e.g. sizes perfectly separate successes from falls), or b ≈ 0 (success does not depend on the size).
-    ``in_range``: s₅₀ lies within the sizes drawn; ``note`` says why s50 is None.
+    ``s50`` is None when it is not identified: no fall or no success in the trials, the fit did not converge,
+    or b ≈ 0 (success does not depend on the size). When the sizes separate successes from falls perfectly
+    the maximum-likelihood estimate does not exist (``converged`` False): s₅₀ is then the middle of the gap
+    between the largest size that walked and the smallest that fell (or the reverse) and ``s50_se`` half
+    the gap. ``in_range``: s₅₀ lies within the sizes drawn; ``note`` explains the last two cases.
     """
 
     a: float
@@ -116,8 +118,15 @@ def logistic_fit(size: NDArray[np.float64], success: NDArray[np.bool_], *, max_i
     b = b_s / scale
     a = a_s - b * lo
     if not converged:
-        return LogisticFit(a, b, None, None, False, False, "the fit did not converge (sizes separate successes "
-                           "from falls)")
+        ok, bad = s[y > 0], s[y == 0]
+        gap = ((ok.max(), bad.min()) if ok.max() < bad.min() else (bad.max(), ok.min()) if bad.max() < ok.min()
+               else None)
+        if gap is None:
+            return LogisticFit(a, b, None, None, False, False, "the fit did not converge")
+        # perfect separation: the MLE does not exist; the crossing lies in the gap, report its middle
+        return LogisticFit(a, b, float(gap[0] + gap[1]) / 2, float(gap[1] - gap[0]) / 2, True, False,
+                           f"sizes separate successes from falls: half fail between {gap[0]:.4g} and {gap[1]:.4g} "
+                           "(middle reported, ± half the gap)")
     if abs(b_s) < 1e-9:
         return LogisticFit(a, b, None, None, False, True, "success does not depend on the size")
     s50_scaled = -a_s / b_s
