@@ -1,4 +1,6 @@
-"""Shared fixtures: the Atalante model and FROST gait from ../shared/atalante (read, never copied)."""
+"""Shared fixtures: the shipped ``exo`` robot with a gait made by the package (tests/data/exo_gait.json, the
+default ``robustgait gait generate --robot exo`` gait), and the Atalante model and FROST gait from
+../shared/atalante (read, never copied; tests that need it are skipped with the reason when it is absent)."""
 
 from __future__ import annotations
 
@@ -14,6 +16,7 @@ REPO = Path(__file__).resolve().parents[1]
 ATALANTE_DIR = REPO.parent / "shared" / "atalante"
 ATALANTE_SPEC = REPO / "examples" / "atalante.toml"
 ATALANTE_GAIT = ATALANTE_DIR / "jt_bez_2023-09-10.yaml"
+EXO_GAIT = REPO / "tests" / "data" / "exo_gait.json"
 
 needs_atalante = pytest.mark.skipif(not (ATALANTE_DIR / "loadedExo.xml").is_file(),
                                     reason="../shared/atalante (AMBER lab model) is not beside the repository")
@@ -33,3 +36,53 @@ def atalante_gait(atalante):  # type: ignore[no-untyped-def]
     from robustgait import load_gait
 
     return load_gait(ATALANTE_GAIT, atalante)
+
+
+@pytest.fixture(scope="session")
+def exo():  # type: ignore[no-untyped-def]
+    from robustgait import load_robot
+
+    return load_robot("exo")
+
+
+@pytest.fixture(scope="session")
+def exo_gait(exo):  # type: ignore[no-untyped-def]
+    from robustgait import load_gait
+
+    return load_gait(EXO_GAIT, exo)
+
+
+@pytest.fixture(scope="session", params=["exo", "atalante"])
+def robot_gait(request):  # type: ignore[no-untyped-def]
+    """(robot, gait) for the shipped exo with its stored gait, and for Atalante with its FROST gait."""
+    if request.param == "exo":
+        return request.getfixturevalue("exo"), request.getfixturevalue("exo_gait")
+    return request.getfixturevalue("atalante"), request.getfixturevalue("atalante_gait")
+
+
+def standing_gait(robot, *, extras: bool = False):  # type: ignore[no-untyped-def]
+    """A valid one-domain gait for ``robot`` without a solve: hold the spec's cold-start posture for 0.7 s,
+    starting at rest with both soles on the floor (a gait that stands; the file layer is what it tests).
+    ``extras``: also feedforward torques (zero), params, a solver report and meta, so every field is filled."""
+    import mujoco
+    import numpy as np
+
+    from robustgait.gait import Domain, Gait, State
+
+    m = robot.model
+    d = mujoco.MjData(m)
+    d.qpos[:] = m.qpos0
+    d.qpos[robot.qpos_idx] = robot.spec.posture
+    mujoco.mj_kinematics(m, d)
+    lowest = min(d.geom_xpos[g][2] - np.min(m.geom_size[g]) for g in robot.sole_geom_id.values())
+    d.qpos[2] -= lowest
+    from robustgait.gait import GaitParams
+
+    beta = np.repeat(np.asarray(robot.spec.posture, dtype=float)[:, None], 8, axis=1)
+    ff = (np.linspace(0.0, 1.0, 5), np.zeros((5, robot.n_joints))) if extras else (None, None)
+    state = State(d.qpos.copy(), np.zeros(m.nv))
+    return Gait(robot=robot.name, domain_graph="flat", stance="right", joints=robot.spec.joints,
+                domains=(Domain("single_support", 0.7, beta, *ff),), initial_state=state,
+                pre_impact_state=state if extras else None, params=GaitParams() if extras else None,
+                solver={"status": "none", "iterations": 0} if extras else None,
+                meta={"source": "test", "tags": ["standing", 1.5, None, True]} if extras else {})

@@ -7,12 +7,12 @@ from robustgait import RobustGaitError
 from robustgait.certify import CertifyConfig, certify_gait
 from robustgait.cli import main
 from robustgait.report import outcome_masks, plot_barrier_trace, plot_certificate
-from tests.conftest import ATALANTE_GAIT, ATALANTE_SPEC, needs_atalante
+from tests.conftest import ATALANTE_GAIT, ATALANTE_SPEC, EXO_GAIT, needs_atalante
 
 
 @pytest.fixture(scope="module")
-def small_cert(atalante, atalante_gait):
-    return certify_gait(atalante, atalante_gait, CertifyConfig(n_samples=24, r_max=1.0, seed=3))
+def small_cert(robot_gait):
+    return certify_gait(*robot_gait, CertifyConfig(n_samples=24, r_max=1.0, seed=3))
 
 
 def test_certificate_is_consistent(small_cert):
@@ -27,13 +27,13 @@ def test_certificate_is_consistent(small_cert):
     assert small_cert.physics_steps > 24 * 500
 
 
-def test_same_seed_same_json(atalante, atalante_gait, small_cert):
-    again = certify_gait(atalante, atalante_gait, CertifyConfig(n_samples=24, r_max=1.0, seed=3))
+def test_same_seed_same_json(robot_gait, small_cert):
+    again = certify_gait(*robot_gait, CertifyConfig(n_samples=24, r_max=1.0, seed=3))
     a, b = small_cert.to_dict(), again.to_dict()
     a.pop("seconds")
     b.pop("seconds")
     assert json.dumps(a) == json.dumps(b)
-    other = certify_gait(atalante, atalante_gait, CertifyConfig(n_samples=24, r_max=1.0, seed=4))
+    other = certify_gait(*robot_gait, CertifyConfig(n_samples=24, r_max=1.0, seed=4))
     assert other.to_dict()["samples"] != a["samples"]
 
 
@@ -66,9 +66,8 @@ def _cli(capsys, *argv):
     return code, out, err
 
 
-@needs_atalante
 def test_cli_certify_json(capsys, tmp_path):
-    code, out, _ = _cli(capsys, "certify", str(ATALANTE_GAIT), "--robot", str(ATALANTE_SPEC), "--samples", "12",
+    code, out, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--samples", "12",
                         "--json", "--plot", str(tmp_path / "c.png"), "-o", str(tmp_path / "c.json"))
     res = json.loads(out)
     assert code == 0
@@ -82,8 +81,8 @@ def test_cli_certify_json(capsys, tmp_path):
 
 @needs_atalante
 @pytest.mark.parametrize("extra, message", [
-    (["--r-max", "0"], "r_max"), (["--r-max", "-2"], "r_max"), (["--alpha", "1.5"], "alpha"),
-    (["--alpha", "0"], "alpha"), (["--samples", "0"], "samples"),
+    (["--r-max", "0"], "--r-max"), (["--r-max", "-2"], "--r-max"), (["--alpha", "1.5"], "--alpha"),
+    (["--alpha", "0"], "--alpha"), (["--samples", "0"], "--samples"),
     (["--switching", "time"], "before a fixed point was reached"),
     (["--fp-tol", "1e-9", "--fp-max-steps", "12"], "no fixed point within 12 steps"),
 ])
@@ -95,10 +94,9 @@ def test_cli_certify_bad_input(capsys, tmp_path, extra, message):
     assert not out_json.exists()
 
 
-@needs_atalante
 def test_cli_walk_log_then_barrier_eval(capsys, tmp_path):
     log = tmp_path / "w.csv"
-    assert _cli(capsys, "walk", str(ATALANTE_GAIT), "--robot", str(ATALANTE_SPEC), "--steps", "20", "--log",
+    assert _cli(capsys, "walk", str(EXO_GAIT), "--robot", "exo", "--steps", "20", "--log",
                 str(log))[0] == 0
     rows = log.read_text().splitlines()
     assert rows[0] == "wx,wy,wz" and len(rows) == 21
@@ -108,8 +106,10 @@ def test_cli_walk_log_then_barrier_eval(capsys, tmp_path):
                         "--plot", str(tmp_path / "t.png"))
     res = json.loads(out)
     assert code == 0 and len(res["h"]) == 20 and len(res["margins"]) == 19
-    # the walk's first steps settle onto the orbit from far away: a small ball is violated there
-    code, out, _ = _cli(capsys, "barrier-eval", str(log), "--x-star", x_star, "--r", "0.05", "--check")
-    assert code == 1 and "violated first at step" in out
+    # a wrong x* (0.3 rad/s off the orbit) puts every logged state outside B(0.05), where H < 0 stays H < 0:
+    # H(x_k+1) − (1 − α) H(x_k) = α H < 0, a violation at the first step
+    wrong = ",".join(str(v) for v in xs[-1] + [0.3, 0.0, 0.0])
+    code, out, _ = _cli(capsys, "barrier-eval", str(log), "--x-star", wrong, "--r", "0.05", "--check")
+    assert code == 1 and "violated first at step 0" in out
     code, _, err = _cli(capsys, "barrier-eval", str(log), "--x-star", "0.1,0.2", "--r", "0.5")
     assert code == 2 and "3 columns" in err

@@ -97,10 +97,10 @@ def test_console_script_no_traceback(tmp_path):
 
 
 def test_argparse_errors_are_one_line(capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(["walk"])
+    assert main(["walk"]) == 2
     err = capsys.readouterr().err
-    assert exc.value.code == 2 and len(err.strip().splitlines()) == 1 and "required" in err
+    assert len(err.strip().splitlines()) == 1 and "required" in err
+    assert main(["--help"]) == 0 and "certify" in capsys.readouterr().out
 
 
 def test_barrier_eval_accepts_negative_x_star(tmp_path, capsys):
@@ -109,3 +109,20 @@ def test_barrier_eval_accepts_negative_x_star(tmp_path, capsys):
     for argv in (["--x-star", "-0.1", "0.2"], ["--x-star=-0.1,0.2"]):
         code, out, _ = run(capsys, "barrier-eval", str(log), *argv, "--r", "0.5", "--json")
         assert code == 0 and json.loads(out)["ok"] is True
+
+
+def test_interrupt_and_closed_stdout_are_one_line_or_silent(monkeypatch, capsys):
+    import robustgait.cli as cli
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    def closed(args):
+        raise BrokenPipeError
+
+    monkeypatch.setattr(cli, "_cmd_robots", interrupted)
+    assert main(["robots"]) == 130
+    assert capsys.readouterr().err == "robustgait: interrupted\n"
+    monkeypatch.setattr(cli, "_cmd_robots", closed)
+    assert main(["robots"]) == 1
+    assert capsys.readouterr().err == ""

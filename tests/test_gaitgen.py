@@ -10,12 +10,7 @@ from robustgait.certify import CertifyConfig, certify_gait
 from robustgait.cli import main
 from robustgait.gaitgen import GaitGenerator, generate_gait
 from robustgait.gaitgen.check import check_solution
-from tests.conftest import ATALANTE_SPEC, needs_atalante
-
-
-@pytest.fixture(scope="module")
-def exo():
-    return load_robot("exo")
+from tests.conftest import ATALANTE_SPEC, EXO_GAIT, needs_atalante
 
 
 @pytest.fixture(scope="module")
@@ -61,13 +56,57 @@ def test_physics_check_catches_a_wrong_solution(gen, default):
     assert not bad.passed and bad.dynamics_residual > 1e-4 and "dynamics residual" in bad.failures[0]
 
 
+def test_default_gait_meets_the_gait_quality_bounds(exo, gen, default):
+    """Pelvis bands, angular velocity, joint speeds and the swing sole's attitude hold at every node."""
+    from robustgait.dynamics import foot_frame
+    from robustgait.gaitgen.problem import matrix_to_rpy
+
+    q, ns, tol = gen.problem.quality, default.nodes, 1e-6
+    rpy = np.array([matrix_to_rpy(h[:3, :3]) for h in ns.H])
+    assert np.all(np.abs(rpy[:, 0]) <= q.pelvis_roll + tol) and np.all(np.abs(rpy[:, 2]) <= q.pelvis_yaw + tol)
+    assert np.all((rpy[:, 1] >= q.pelvis_pitch[0] - tol) & (rpy[:, 1] <= q.pelvis_pitch[1] + tol))
+    assert np.all((ns.H[:, 2, 3] >= q.pelvis_height[0] - tol) & (ns.H[:, 2, 3] <= q.pelvis_height[1] + tol))
+    assert np.all(np.abs(ns.vb[:, 3:]) <= q.pelvis_angular_velocity + tol)
+    assert np.all(np.abs(ns.sd) <= np.asarray(q.joint_velocity) + tol)
+    for i in range(1, len(ns.s) - 1):
+        h = np.asarray(gen.dyn.frame_fun(foot_frame(gen.problem.swing, "sole"))(ns.H[i], ns.s[i]))
+        assert max(abs(h[2, 0]), abs(h[2, 1])) <= np.sin(q.swing_tilt) + tol
+        assert abs(h[1, 0]) <= np.sin(q.swing_yaw) + tol
+        # flat approach: every sole corner at least half as high as the sole centre
+        a, b = gen.problem.half_length, gen.problem.half_width
+        corners = [h[2, 3] + sx * a * h[2, 0] + sy * b * h[2, 1] for sx in (-1, 1) for sy in (-1, 1)]
+        assert min(corners) >= gen.config.flat_approach * h[2, 3] - tol
+
+
+def test_stored_test_gait_is_what_the_generator_makes(exo, default):
+    """tests/data/exo_gait.json (used by the simulator, return-map and certificate tests) is today's default."""
+    stored = load_gait(EXO_GAIT, exo)
+    assert stored.params == default.params
+    assert stored.solver["objective"] == pytest.approx(default.objective, rel=1e-6)
+    np.testing.assert_allclose(stored.domains[0].beta, default.gait.domains[0].beta, atol=1e-3)
+
+
+def _pelvis_roll_deg(trajectory):
+    from robustgait.rotations import quat_to_mat
+
+    r = quat_to_mat(trajectory[:, 4:8])
+    return np.degrees(np.arctan2(r[:, 2, 1], r[:, 2, 2]))
+
+
+def _walks_like_an_exoskeleton(robot, gait, max_speed_error=0.03):
+    """50 steps, pelvis roll within ±6°, speed within ±3 % of L/T, ‖x̄*‖ ≤ 1 rad/s (issue: exoskeleton-grade)."""
+    res = walk(robot, gait, steps=50, keep_trajectory=True)
+    assert res.steps_taken == 50 and not res.fell, (gait.params, res.fall_reason)
+    assert np.abs(_pelvis_roll_deg(res.trajectory)).max() < 6.0, gait.params
+    p = gait.params
+    assert res.mean_speed == pytest.approx(p.step_length / p.step_duration, rel=max_speed_error), gait.params
+    return res
+
+
 def test_default_gait_walks_and_gets_a_certificate(exo, default):
-    res = walk(exo, default.gait, steps=50)
-    assert res.steps_taken == 50 and not res.fell
-    nominal = 0.15 / 0.7
-    assert abs(res.mean_speed - nominal) <= 0.2 * nominal
+    _walks_like_an_exoskeleton(exo, default.gait)
     cert = certify_gait(exo, default.gait, CertifyConfig(n_samples=50))
-    assert cert.r_star > 0
+    assert np.linalg.norm(cert.fixed_point.x_star) <= 1.0 and cert.r_star > 0
 
 
 def test_warm_start_converges_faster(gen, default):
@@ -75,19 +114,29 @@ def test_warm_start_converges_faster(gen, default):
     cold, warm = gen.solve(params), gen.solve(params, warm_start=default.gait)
     assert cold.success and warm.success
     assert warm.iterations < cold.iterations
-    np.testing.assert_allclose(warm.gait.domains[0].beta, cold.gait.domains[0].beta, atol=1e-4)
+    # the same optimum: equal cost; β equal up to a nearly flat direction of the cost (the swing ankle roll
+    # moves by ~4e-4 rad between the two solutions at 5e-8 relative cost)
+    assert warm.objective == pytest.approx(cold.objective, rel=1e-6)
+    np.testing.assert_allclose(warm.gait.domains[0].beta, cold.gait.domains[0].beta, atol=1e-3)
     # a warm start from the other stance is relabeled first
     mirrored = gen.solve(params, warm_start=default.gait.mirrored(load_robot("exo")))
     assert mirrored.success and mirrored.iterations == warm.iterations
 
 
-def test_grid_of_step_lengths_and_durations(gen):
-    ok = 0
-    for length in (0.10, 0.15, 0.20):
-        for duration in (0.6, 0.8, 1.0):
-            res = gen.solve(GaitParams(step_length=length, step_duration=duration))
-            ok += bool(res.success and res.check.passed)
-    assert ok >= 8
+@pytest.mark.slow
+def test_grid_over_the_action_space_walks(exo, gen):
+    """4 × 4 grid of step length × duration (default width, height) and the 4 width × height corners: every
+    gait solves, passes the physics check and walks like an exoskeleton (issue acceptance: ≥ 90 %; all do)."""
+    a = exo.spec.action_space
+    grid = [GaitParams(step_length=float(L), step_duration=float(T))
+            for L in np.linspace(a["step_length"].low, a["step_length"].high, 4)
+            for T in np.linspace(a["step_duration"].low, a["step_duration"].high, 4)]
+    grid += [GaitParams(step_width=W, step_height=h) for W in (a["step_width"].low, a["step_width"].high)
+             for h in (a["step_height"].low, a["step_height"].high)]
+    for params in grid:
+        res = gen.solve(params)
+        assert res.success and res.check.passed, (params, res.reason)
+        _walks_like_an_exoskeleton(exo, res.gait)
 
 
 @pytest.mark.parametrize("kwargs, reason", [
@@ -110,6 +159,7 @@ def test_cli_generate_errors_exit_2_and_write_nothing(tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.slow
 @needs_atalante
 def test_atalante_generated_gait_walks(tmp_path, capsys):
     out = tmp_path / "atalante.json"
@@ -117,5 +167,7 @@ def test_atalante_generated_gait_walks(tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out)
     assert summary["check"]["passed"] and summary["check"]["dynamics_residual"] <= 1e-6
     robot = load_robot(ATALANTE_SPEC)
-    res = walk(robot, load_gait(out, robot), steps=30)
-    assert res.steps_taken >= 30
+    gait = load_gait(out, robot)
+    _walks_like_an_exoskeleton(robot, gait)
+    cert = certify_gait(robot, gait, CertifyConfig(n_samples=20))
+    assert np.linalg.norm(cert.fixed_point.x_star) <= 1.0

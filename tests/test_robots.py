@@ -46,7 +46,7 @@ def _spec_text() -> str:
     ('base_body = "torso"', 'base_body = "LeftFrontalHipLink"', "has no free joint"),
     ("joint_perm = [6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]", "joint_perm = [6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 4]",
      "permutation"),
-    ("kd = [500, 140,", "kd = [500,", "'joints.kd' must be a list of 12 numbers"),
+    ("kd = [500, 140,", "kd = [500,", "joints.kd: must be a list of 12 numbers"),
     ('name = "atalante"\n', 'name = "atalante\n', "malformed TOML"),
     ('mjcf = "../../shared/atalante/loadedExo.xml"', 'mjcf = "nowhere.xml"', "MJCF file not found"),
 ])
@@ -84,12 +84,12 @@ def test_exo_spec_has_gait_quality_action_space_and_posture():
 
 
 @pytest.mark.parametrize("extra, message", [
-    ("[gait_quality]\npelvis_roll = -0.1\n", "'gait_quality.pelvis_roll' must be finite and positive"),
-    ("[gait_quality]\npelvis_pitch = [0.2, 0.1]\n", "low < high"),
-    ("[gait_quality]\nroll = 0.1\n", "unknown key 'gait_quality.roll'"),
-    ("[gait_quality]\njoint_velocity = [1, 2]\n", "must be a list of 12 numbers"),
-    ("[action_space]\nstep_length = [0.1, 0.2, 0.05]\n", "missing key 'action_space.step_duration'"),
-    ("[posture]\nleft_elbow = 0.2\n", "'posture.left_elbow' is not an actuated joint"),
+    ("[gait_quality]\npelvis_roll = -0.1\n", r"gait_quality.pelvis_roll: must satisfy 0 < x ≤ π rad \(got -0.1\)"),
+    ("[gait_quality]\npelvis_pitch = [0.2, 0.1]\n", "gait_quality.pelvis_pitch: must be .low, high. with low < high"),
+    ("[gait_quality]\nroll = 0.1\n", r"gait_quality.roll: unknown key \(known: pelvis_roll, "),
+    ("[gait_quality]\njoint_velocity = [1, 2]\n", "gait_quality.joint_velocity: must be one number or a list of 12"),
+    ("[action_space]\nstep_length = [0.1, 0.2, 0.05]\n", "action_space.step_duration: required, but missing"),
+    ("[posture]\nleft_elbow = 0.2\n", "posture.left_elbow: not an actuated joint"),
 ])
 def test_bad_gait_quality_action_space_posture(tmp_path, extra, message):
     import re

@@ -90,20 +90,6 @@ def test_latency_offsets_shift_the_command():
 
 
 @pytest.fixture(scope="module")
-def exo():
-    return load_robot("exo")
-
-
-@pytest.fixture(scope="module")
-def exo_gait(exo):
-    from robustgait.gaitgen import generate_gait
-
-    res = generate_gait(exo, 0.15, 0.7, 0.25, 0.07)
-    assert res.gait is not None
-    return res.gait
-
-
-@pytest.fixture(scope="module")
 def small_cert(exo, exo_gait):
     return certify_gait(exo, exo_gait, CertifyConfig(n_samples=20))
 
@@ -114,7 +100,6 @@ def validator(exo, exo_gait, small_cert):
         yield v
 
 
-@pytest.mark.slow
 def test_engine_inputs_keep_undisturbed_samples_bit_identical(exo, exo_gait, small_cert):
     fp = small_cert.fixed_point
     qpos, qvel = np.tile(fp.qpos, (2, 1)), np.tile(fp.qvel, (2, 1))
@@ -132,7 +117,6 @@ def test_engine_inputs_keep_undisturbed_samples_bit_identical(exo, exo_gait, sma
         eng.step(qpos, qvel, exo_gait.stance, inputs=StepInputs(base_wrench=np.zeros((3, 10, 6))))
 
 
-@pytest.mark.slow
 def test_zero_push_reproduces_the_undisturbed_walk_exactly(validator):
     n = 3
     zero = Draws("push", np.zeros(n), {"direction": np.linspace(0, 3, n), "phase": np.full(n, 0.3)})
@@ -151,7 +135,6 @@ def test_zero_push_reproduces_the_undisturbed_walk_exactly(validator):
     assert res.distance[0] < 0.02 and res.inside.all()
 
 
-@pytest.mark.slow
 def test_huge_push_always_falls(validator, exo):
     n = 6
     huge = Draws("push", np.full(n, exo.mass * 5.0), {"direction": np.linspace(0, 2 * math.pi, n, endpoint=False),
@@ -163,7 +146,6 @@ def test_huge_push_always_falls(validator, exo):
     assert chk["inside"].n == 0  # type: ignore[union-attr]
 
 
-@pytest.mark.slow
 def test_every_kind_runs_and_summarizes(validator):
     for kind in ("mass", "friction", "latency", "noise"):
         res = validator.run(kind)
@@ -173,7 +155,6 @@ def test_every_kind_runs_and_summarizes(validator):
         json.dumps(res.to_dict(), allow_nan=False)
 
 
-@pytest.mark.slow
 def test_flat_terrain_walks_and_non_foot_contact_with_terrain_is_a_fall(validator, exo, exo_gait):
     flat = Draws("terrain", np.zeros(2), {"terrain_seed": np.array([1.0, 2.0])})
     res = validator.run("terrain", draws=flat)
@@ -206,7 +187,6 @@ def test_flat_terrain_walks_and_non_foot_contact_with_terrain_is_a_fall(validato
     assert d.sensordata[exo.sensor_adr["robustgait_contact_left"]] == 0
 
 
-@pytest.mark.slow
 def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_cert):
     p = tmp_path / "cert.json"
     p.write_text(json.dumps(small_cert.to_dict()))
@@ -228,7 +208,6 @@ def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_ce
     assert main(["validate", str(gait_path), "--robot", "exo", "--certificate", str(bad)]) == 2
 
 
-@pytest.mark.slow
 def test_gait_tiles_are_a_real_image(tmp_path, exo, exo_gait):
     import imageio.v2 as imageio
 

@@ -16,18 +16,16 @@ non-finite entry) is a fall. Problems caused by input raise :class:`RobustGaitEr
 
 from __future__ import annotations
 
-import csv
 import math
-import zipfile
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from robustgait.errors import RobustGaitError, input_error
+from robustgait.errors import RobustGaitError
+from robustgait.io.logs import load_reduced_log  # re-exported: the log readers live in robustgait.io
 
 __all__ = [
     "BarrierTrace",
@@ -442,95 +440,3 @@ def barrier_along(xs: ArrayLike, x_star: ArrayLike, r: float, alpha: float) -> B
         r=rr,
         alpha=al,
     )
-
-
-def _read_csv(path: Path, columns: Sequence[str] | None) -> FloatArray:
-    try:
-        with path.open(newline="", encoding="utf-8") as fh:
-            rows = [row for row in csv.reader(fh) if row and any(cell.strip() for cell in row)]
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise input_error(path, f"cannot read CSV: {exc}") from exc
-    if len(rows) < 2:
-        raise input_error(path, "expected a header row and at least one data row")
-    header = [h.strip() for h in rows[0]]
-    body = rows[1:]
-    for i, row in enumerate(body, start=2):
-        if len(row) != len(header):
-            raise input_error(path, f"row {i} has {len(row)} fields, the header has {len(header)}")
-
-    def parse(j: int) -> list[float] | None:
-        """The column's values; None if it holds text. A numeric column with an empty cell is an error."""
-        cells = [row[j].strip() for row in body]
-        try:
-            vals = [float(c) for c in cells if c]
-        except ValueError:
-            return None
-        if len(vals) < len(cells):
-            empty = 2 + next(i for i, c in enumerate(cells) if not c)
-            raise input_error(path, f"column {header[j]!r} has an empty value in row {empty}")
-        return vals
-
-    if columns is None:
-        parsed = [parse(j) for j in range(len(header))]
-        cols = [c for c in parsed if c is not None]
-        if not cols:
-            raise input_error(path, "no numeric columns")
-    else:
-        if len(columns) == 0:
-            raise input_error(path, "empty column selection")
-        cols = []
-        for name in columns:
-            if name not in header:
-                raise input_error(path, f"no column named {name!r} (have {', '.join(header)})")
-            col = parse(header.index(name))
-            if col is None:
-                raise input_error(path, f"column {name!r} is not numeric")
-            cols.append(col)
-    return np.asarray(cols, dtype=np.float64).T
-
-
-def _read_npz(path: Path) -> FloatArray:
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            if isinstance(data, np.ndarray):
-                return np.asarray(data, dtype=np.float64)
-            keys = list(data.keys())
-            if "x" in keys:
-                key = "x"
-            elif len(keys) == 1:
-                key = keys[0]
-            else:
-                raise input_error(path, f"expected key 'x' or a single array, found {keys}")
-            return np.asarray(data[key], dtype=np.float64)
-    except RobustGaitError:
-        raise
-    except (OSError, ValueError, TypeError, zipfile.BadZipFile, EOFError) as exc:
-        raise input_error(path, f"cannot read array file: {exc}") from exc
-
-
-def load_reduced_log(path: str | Path, columns: Sequence[str] | None = None) -> FloatArray:
-    """Read a recorded sequence of reduced states (T, n) from CSV or NPZ (or NPY).
-
-    CSV: a header row of names; default: every numeric column (in file order), or the named ``columns``.
-    NPZ: key ``x`` or the single array inside; NPY: the array. Missing/malformed files, NaN or inf
-    values and shapes other than (T, n) with T, n ≥ 1 raise :class:`RobustGaitError` naming the file.
-    """
-    p = Path(path)
-    if isinstance(columns, str):
-        columns = [columns]
-    if not p.is_file():
-        raise input_error(p, "no such file")
-    suffix = p.suffix.lower()
-    if suffix == ".csv":
-        x = _read_csv(p, columns)
-    elif suffix in (".npz", ".npy"):
-        if columns is not None:
-            raise input_error(p, "column names can only be selected in a CSV log")
-        x = _read_npz(p)
-    else:
-        raise input_error(p, f"unknown log format {suffix!r} (expected .csv, .npz or .npy)")
-    if x.ndim != 2 or x.shape[0] < 1 or x.shape[1] < 1:
-        raise input_error(p, f"expected an array of shape (T, n), got {x.shape}")
-    if not np.all(np.isfinite(x)):
-        raise input_error(p, "contains NaN or inf values")
-    return x

@@ -8,18 +8,34 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Callable, Sequence
-from pathlib import Path
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import NoReturn
 
 from robustgait.errors import RobustGaitError
+from robustgait.io import limits as L
+from robustgait.io.args import finite_float, float_in, floats_in, int_in, output_path
+from robustgait.io.output import check_output, kind_of
 
 
 def _check_outputs(*paths: str | None) -> None:
-    """Fail before any work when an output file could not be written (its directory is missing)."""
+    """Fail before any work when an output file could not be written (:func:`robustgait.io.output.check_output`,
+    the kind of output from the extension). Output arguments declared with ``type=output_path(kind)`` are
+    checked while parsing already; this is for paths that are not."""
     for out in paths:
-        if out is not None and not Path(out).parent.resolve().is_dir():
-            raise RobustGaitError(f"{out}: output directory does not exist")
+        if out is not None:
+            check_output(out, kind_of(out))
+
+
+@contextmanager
+def _about(path: str) -> Iterator[None]:
+    """Report a problem found while running an input (a gait that cannot start, has no fixed point, ...)
+    against its file: every bad-input message names the file."""
+    try:
+        yield
+    except RobustGaitError as exc:
+        msg = str(exc)
+        raise RobustGaitError(msg if msg.startswith(f"{path}: ") else f"{path}: {msg}") from None
 
 
 def _cmd_robots(args: argparse.Namespace) -> int:
@@ -41,6 +57,7 @@ def _cmd_robots(args: argparse.Namespace) -> int:
 
 def _cmd_walk(args: argparse.Namespace) -> int:
     from robustgait.gait import load_gait
+    from robustgait.io.output import write_csv
     from robustgait.robots import load_robot
     from robustgait.sim import SimConfig, render_video, walk
 
@@ -48,14 +65,20 @@ def _cmd_walk(args: argparse.Namespace) -> int:
     gait = load_gait(args.gait, robot)
     config = SimConfig(switching=args.switching, feedforward=not args.no_feedforward)
     _check_outputs(args.video, args.log)
-    result = walk(robot, gait, steps=args.steps, config=config, keep_trajectory=args.video is not None)
+    L.check_work(args.steps, gait.step_duration * config.max_step_tau, robot.dt,
+                 f"{args.gait}: --steps {args.steps}",
+                 L.MAX_VIDEO_PHYSICS_STEPS if args.video is not None else L.MAX_PHYSICS_STEPS)
+    if args.video is not None and args.video.lower().endswith(".gif"):
+        L.check_gif(args.steps * gait.step_duration * config.max_step_tau, args.video)
+    with _about(args.gait):
+        result = walk(robot, gait, steps=args.steps, config=config, keep_trajectory=args.video is not None)
     if args.video is not None and result.trajectory is not None:
         render_video(robot, result.trajectory, args.video)
     if args.log is not None:
         from robustgait.poincare import canonical_reduced_events
 
         xs = canonical_reduced_events(robot, gait, result.events, args.frame)
-        _write_csv(Path(args.log), ["wx", "wy", "wz"], xs.tolist())
+        write_csv(args.log, ["wx", "wy", "wz"], xs.tolist())
     if args.json:
         print(result.to_json())
     else:
@@ -69,32 +92,11 @@ def _cmd_walk(args: argparse.Namespace) -> int:
     return 0
 
 
-def _write_csv(path: Path, header: list[str], rows: list[list[float]]) -> None:
-    """Write a CSV atomically (nothing half-written on failure)."""
-    import csv
-
-    tmp = path.with_name(path.name + ".tmp")
-    with tmp.open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(header)
-        w.writerows([[repr(float(v)) for v in row] for row in rows])
-    tmp.replace(path)
-
-
-def _floats_arg(parts: list[str]) -> list[float]:
-    """Numbers given as one comma-separated word or several words ("0.1,0.2" or 0.1 0.2 or -0.1 0.2)."""
-    text = " ".join(parts).replace(",", " ")
-    try:
-        return [float(v) for v in text.split()]
-    except ValueError:
-        raise RobustGaitError(f"expected numbers, got {' '.join(parts)!r}") from None
-
-
 class _Parser(argparse.ArgumentParser):
     """argparse with the project's error format: one line on stderr, exit status 2."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+        self.exit(2, f"robustgait: error: {message} (see {self.prog} --help)\n")
 
 
 def _cmd_certify(args: argparse.Namespace) -> int:
@@ -110,16 +112,20 @@ def _cmd_certify(args: argparse.Namespace) -> int:
     _check_outputs(args.plot, args.output)
     robot = load_robot(args.robot)
     gait = load_gait(args.gait, robot)
-    gc = certify_gait(robot, gait, cfg, progress=not args.json and sys.stderr.isatty())
+    per_map = 2 if cfg.map == "stride" else 1
+    L.check_work(per_map * (cfg.fp_max_steps + cfg.n_samples + 1), gait.step_duration * cfg.sim.max_step_tau,
+                 robot.dt, f"{args.gait}: --fp-max-steps {cfg.fp_max_steps} + --samples {cfg.n_samples}")
+    with _about(args.gait):
+        gc = certify_gait(robot, gait, cfg, progress=not args.json and sys.stderr.isatty())
     if args.plot is not None:
         from robustgait.report import plot_certificate
 
         plot_certificate(gc.certificate, args.plot, title=f"{robot.name}: r* = {gc.r_star:.4f} rad/s "
                          f"({cfg.map} map, {cfg.reconstruction}, N = {cfg.n_samples}, α = {cfg.alpha:g})")
     if args.output is not None:
-        tmp = Path(args.output).with_name(Path(args.output).name + ".tmp")
-        tmp.write_text(json.dumps(gc.to_dict(), indent=1, allow_nan=False))
-        tmp.replace(args.output)
+        from robustgait.io.output import write_json
+
+        write_json(args.output, gc.to_dict())
     if args.json:
         print(json.dumps(gc.to_dict(samples=False), allow_nan=False))
     else:
@@ -138,11 +144,14 @@ def _cmd_certify(args: argparse.Namespace) -> int:
 def _cmd_barrier_eval(args: argparse.Namespace) -> int:
     from robustgait.barrier import barrier_along, load_reduced_log
 
+    x_star = floats_in(L.X_STAR, args.x_star, "argument --x-star")
     xs = load_reduced_log(args.log, args.columns.split(",") if args.columns else None)
-    x_star = _floats_arg(args.x_star)
     if xs.shape[1] != len(x_star):
         raise RobustGaitError(f"{args.log}: the log has {xs.shape[1]} columns but --x-star has "
                               f"{len(x_star)} values")
+    if xs.shape[0] < 2:
+        raise RobustGaitError(f"{args.log}: the DTBF condition needs at least 2 consecutive states (rows), got "
+                              f"{xs.shape[0]}")
     trace = barrier_along(xs, x_star, args.r, args.alpha)
     if args.plot is not None:
         from robustgait.report import plot_barrier_trace
@@ -180,7 +189,7 @@ def _cmd_gait_generate(args: argparse.Namespace) -> int:
         GaitParams(args.step_length, args.step_duration, args.step_width, args.step_height)
     except RobustGaitError as exc:
         raise RobustGaitError(f"gait generation failed (Infeasible_Parameters): {exc}") from None
-    if args.nodes < 5 or args.nodes % 2 == 0:
+    if args.nodes % 2 == 0:
         raise RobustGaitError(f"--nodes must be odd and ≥ 5, got {args.nodes}")
     robot = load_robot(args.robot)
     _check_outputs(args.output)
@@ -218,18 +227,22 @@ def _cmd_gait_generate(args: argparse.Namespace) -> int:
 def _cmd_validate(args: argparse.Namespace) -> int:
     from robustgait.gait import load_gait
     from robustgait.robots import load_robot
-    from robustgait.validate import ValidateConfig, validate_gait
+    from robustgait.validate import KINDS, ValidateConfig, validate_gait
 
     cfg = ValidateConfig(trials=args.trials, seed=args.seed, steps_after=args.steps_after)
-    _check_outputs(args.plot, args.output)
     robot = load_robot(args.robot)
     gait = load_gait(args.gait, robot)
-    res = validate_gait(robot, gait, cfg, kinds=[args.disturbance], certificate=args.certificate,
-                        progress=not args.json and sys.stderr.isatty())
+    # one kind is one batch of trials, each 1 (or 2, stride map) + --steps-after steps
+    L.check_work(args.trials * (2 + args.steps_after), gait.step_duration * cfg.sim.max_step_tau, robot.dt,
+                 f"{args.gait}: --trials {args.trials} × (--steps-after {args.steps_after} + 1) per kind")
+    kinds = list(KINDS) if args.disturbance == "all" else [args.disturbance]
+    with _about(args.gait):
+        res = validate_gait(robot, gait, cfg, kinds=kinds, certificate=args.certificate,
+                            progress=not args.json and sys.stderr.isatty())
     if args.output is not None:  # the results first: they took minutes, the figure is redrawn from them
-        tmp = Path(args.output).with_name(Path(args.output).name + ".tmp")
-        tmp.write_text(res.to_json())
-        tmp.replace(args.output)
+        from robustgait.io.output import write_text
+
+        write_text(args.output, res.to_json(), "json")
     if args.plot is not None:
         from robustgait.report import plot_validation
 
@@ -245,15 +258,13 @@ def _cmd_validate(args: argparse.Namespace) -> int:
           f"{'falls outside':<24} {'fell before event':>17}")
     for kind, kr in res.kinds.items():
         sr, fit, chk = kr.success_rate(), kr.critical(), kr.certificate_check()
-        _name, unit = kr.size_label
+        _, unit = kr.size_label
         if fit.s50 is not None:
             crit = f"{fit.s50:.4g} ± {fit.s50_se or 0:.2g} {unit}" + ("" if fit.in_range else " (extrapolated)") + (
                 "" if fit.converged else " (gap)")
         else:
             crit = f"— ({fit.note})"
-        inside, outside = chk["inside"], chk["outside"]
-        assert not isinstance(inside, int) and not isinstance(outside, int)
-        print(f"{kind:<9} {_rate(sr):<24} {crit:<30} {_rate(inside):<26} {_rate(outside):<24} "
+        print(f"{kind:<9} {_rate(sr):<24} {crit:<30} {_rate(chk['inside']):<26} {_rate(chk['outside']):<24} "
               f"{chk['fell_before_event']:>17}")
     print(f"time: setup {res.seconds['setup']:.1f} s, " + ", ".join(
         f"{k} {v.seconds:.1f} s" for k, v in res.kinds.items()))
@@ -277,12 +288,10 @@ def _cmd_gait_tiles(args: argparse.Namespace) -> int:
     from robustgait.report.tiles import render_tiles
     from robustgait.robots import load_robot
 
-    if args.frames < 2:
-        raise RobustGaitError(f"--frames must be ≥ 2, got {args.frames}")
-    _check_outputs(args.output)
     robot = load_robot(args.robot)
     gait = load_gait(args.gait, robot)
-    shape = render_tiles(robot, gait, args.output, frames=args.frames, warmup_steps=args.warmup_steps)
+    with _about(args.gait):
+        shape = render_tiles(robot, gait, args.output, frames=args.frames, warmup_steps=args.warmup_steps)
     print(f"wrote {args.output} ({shape[1]} x {shape[0]} px: {args.frames} frames of one step, side and front)")
     return 0
 
@@ -298,14 +307,16 @@ def build_parser() -> argparse.ArgumentParser:
     w = sub.add_parser("walk", help="walk a gait in MuJoCo and report steps taken, falls and speed")
     w.add_argument("gait", help="gait file: .json (robustgait) or .yaml (FROST/ambersim)")
     w.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
-    w.add_argument("--steps", type=int, default=50, help="step cap (default 50)")
+    w.add_argument("--steps", type=int_in(L.STEPS), default=50, help=f"step cap (default 50; {L.STEPS.text()})")
     w.add_argument("--switching", choices=("impact", "time"), default="impact",
                    help="switch stance at swing-foot touchdown once τ ≥ 0.8 (impact) or at τ = 1 (time)")
     w.add_argument("--no-feedforward", action="store_true", help="joint PD only, ignore feedforward torques")
     w.add_argument("--json", action="store_true", help="print one JSON object")
-    w.add_argument("--video", metavar="OUT.mp4", help="render the walk with MuJoCo's offscreen renderer")
-    w.add_argument("--log", metavar="OUT.csv", help="write the reduced state (base angular velocity, canonical "
-                   "stance) at every switching event, one row per step, for barrier-eval")
+    w.add_argument("--video", metavar="OUT.mp4", type=output_path("video"),
+                   help="render the walk with MuJoCo's offscreen renderer (.mp4 or .gif)")
+    w.add_argument("--log", metavar="OUT.csv", type=output_path("csv"),
+                   help="write the reduced state (base angular velocity, canonical stance) at every switching "
+                   "event, one row per step, for barrier-eval")
     w.add_argument("--frame", choices=("heading", "world", "body"), default="heading",
                    help="frame of the logged angular velocity (default heading)")
     w.set_defaults(func=_cmd_walk)
@@ -313,32 +324,38 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("certify", help="robustness certificate r* of a gait (DTBF on the Poincaré map)")
     c.add_argument("gait", help="gait file: .json (robustgait) or .yaml (FROST/ambersim)")
     c.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
-    c.add_argument("--samples", type=int, default=200, help="number of sampled perturbations N (default 200)")
-    c.add_argument("--r-max", type=float, default=2.0, help="radius of the sampled ball [rad/s] (default 2)")
-    c.add_argument("--alpha", type=float, default=0.05, help="DTBF decay rate α in (0, 1) (default 0.05)")
-    c.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    c.add_argument("--samples", type=int_in(L.SAMPLES), default=200,
+                   help=f"number of sampled perturbations N (default 200; {L.SAMPLES.text()})")
+    c.add_argument("--r-max", type=float_in(L.R_MAX), default=2.0,
+                   help=f"radius of the sampled ball [rad/s] (default 2; {L.R_MAX.text()})")
+    c.add_argument("--alpha", type=float_in(L.ALPHA), default=0.05, help="DTBF decay rate α in (0, 1) (default 0.05)")
+    c.add_argument("--seed", type=int_in(L.SEED), default=0, help="sampling seed (default 0; ≥ 0)")
     c.add_argument("--map", choices=("step", "stride"), default="step", help="step (mirrored) or stride map")
     c.add_argument("--reconstruction", choices=("holonomic", "angular-only"), default="holonomic",
                    help="how a full state is rebuilt from a reduced one (default holonomic)")
     c.add_argument("--frame", choices=("heading", "world", "body"), default="heading",
                    help="frame of the base angular velocity (default heading: world frame without yaw)")
     c.add_argument("--switching", choices=("impact", "time"), default="impact")
-    c.add_argument("--fp-tol", type=float, default=5e-3,
+    c.add_argument("--fp-tol", type=float_in(L.FP_TOL), default=5e-3,
                    help="fixed point: stop when successive reduced states differ by less (default 5e-3 rad/s)")
-    c.add_argument("--fp-max-steps", type=int, default=100, help="fixed point: give up after this many steps")
-    c.add_argument("--plot", metavar="CERT.png", help="draw the invariant set (samples, r* sphere, projections)")
-    c.add_argument("-o", "--output", metavar="CERT.json", help="write the full certificate with samples")
+    c.add_argument("--fp-max-steps", type=int_in(L.FP_MAX_STEPS), default=100,
+                   help=f"fixed point: give up after this many steps (default 100; {L.FP_MAX_STEPS.text()})")
+    c.add_argument("--plot", metavar="CERT.png", type=output_path("plot"),
+                   help="draw the invariant set (samples, r* sphere, projections): .png, .pdf or .svg")
+    c.add_argument("-o", "--output", metavar="CERT.json", type=output_path("json"),
+                   help="write the full certificate with samples")
     c.add_argument("--json", action="store_true", help="print one JSON object (without the samples)")
     c.set_defaults(func=_cmd_certify)
 
     b = sub.add_parser("barrier-eval", help="evaluate the DTBF condition along a logged sequence of reduced states")
-    b.add_argument("log", help="CSV with a header row, or NPZ (array 'x')")
+    b.add_argument("log", help="CSV with a header row, NPY (one 2-D array) or NPZ (array 'x')")
     b.add_argument("--x-star", nargs="+", required=True,
                    help="fixed point: 0.42,0.21,0.30 or 0.42 0.21 0.30 (negative values: -0.4 0.2 0.3)")
-    b.add_argument("--r", type=float, required=True, help="ball radius r")
-    b.add_argument("--alpha", type=float, default=0.05)
+    b.add_argument("--r", type=float_in(L.BARRIER_R), required=True, help="ball radius r")
+    b.add_argument("--alpha", type=float_in(L.ALPHA), default=0.05)
     b.add_argument("--columns", help="comma-separated CSV columns to use (default: all numeric columns)")
-    b.add_argument("--plot", metavar="OUT.png", help="plot H and the DTBF margin along the sequence")
+    b.add_argument("--plot", metavar="OUT.png", type=output_path("plot"),
+                   help="plot H and the DTBF margin along the sequence (.png, .pdf or .svg)")
     b.add_argument("--json", action="store_true")
     b.add_argument("--check", action="store_true", help="exit 1 if the condition is violated anywhere")
     b.set_defaults(func=_cmd_barrier_eval)
@@ -348,27 +365,30 @@ def build_parser() -> argparse.ArgumentParser:
     gc = gsub.add_parser("convert", help="read a gait (either format) and write robustgait JSON")
     gc.add_argument("gait")
     gc.add_argument("--robot", required=True)
-    gc.add_argument("-o", "--output", required=True)
+    gc.add_argument("-o", "--output", required=True, type=output_path("json"), help="output gait .json")
     gc.add_argument("--mirror", action="store_true", help="relabel for the other stance leg")
     gc.set_defaults(func=_cmd_gait_convert)
     gg = gsub.add_parser("generate", help="HZD trajectory optimization of a flat-foot gait (CasADi + IPOPT)")
     gg.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
-    gg.add_argument("--step-length", type=float, default=0.15, help="[m] (default 0.15)")
-    gg.add_argument("--step-duration", type=float, default=0.7, help="[s] (default 0.7)")
-    gg.add_argument("--step-width", type=float, default=0.25, help="[m] (default 0.25)")
-    gg.add_argument("--step-height", type=float, default=0.07, help="swing-foot height at mid-step [m] (default 0.07)")
+    gg.add_argument("--step-length", type=finite_float, default=0.15, help="[m] (default 0.15)")
+    gg.add_argument("--step-duration", type=finite_float, default=0.7, help="[s] (default 0.7)")
+    gg.add_argument("--step-width", type=finite_float, default=0.25, help="[m] (default 0.25)")
+    gg.add_argument("--step-height", type=finite_float, default=0.07,
+                    help="swing-foot height at mid-step [m] (default 0.07)")
     gg.add_argument("--warm-start", metavar="GAIT", help="start from a neighbouring gait (.json or .yaml)")
-    gg.add_argument("--nodes", type=int, default=17, help="collocation nodes, odd (default 17)")
+    gg.add_argument("--nodes", type=int_in(L.NODES), default=17,
+                    help=f"collocation nodes, odd (default 17; {L.NODES.text()})")
     gg.add_argument("--stance", choices=("left", "right"), default="right", help="stance leg of the written gait")
-    gg.add_argument("-o", "--output", required=True, help="output gait .json")
+    gg.add_argument("-o", "--output", required=True, type=output_path("json"),
+                    help="output gait .json (checked before the solve)")
     gg.add_argument("--json", action="store_true", help="print one JSON summary instead of the live log")
     gg.set_defaults(func=_cmd_gait_generate)
     gt = gsub.add_parser("tiles", help="frames of one step side by side, seen from the side and the front (PNG)")
     gt.add_argument("gait", help="gait file: .json (robustgait) or .yaml (FROST/ambersim)")
     gt.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
-    gt.add_argument("-o", "--output", required=True, metavar="TILES.png")
-    gt.add_argument("--frames", type=int, default=6, help="frames of the step (default 6)")
-    gt.add_argument("--warmup-steps", type=int, default=4,
+    gt.add_argument("-o", "--output", required=True, metavar="TILES.png", type=output_path("plot"))
+    gt.add_argument("--frames", type=int_in(L.FRAMES), default=6, help="frames of the step (default 6)")
+    gt.add_argument("--warmup-steps", type=int_in(L.WARMUP_STEPS), default=4,
                     help="steps walked before the step shown, to be on the periodic orbit (default 4)")
     gt.set_defaults(func=_cmd_gait_tiles)
 
@@ -376,30 +396,54 @@ def build_parser() -> argparse.ArgumentParser:
                        "certificate's promise tested")
     v.add_argument("gait", help="gait file: .json (robustgait) or .yaml (FROST/ambersim)")
     v.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
-    v.add_argument("--trials", type=int, default=200, help="trials per disturbance kind (default 200)")
-    v.add_argument("--seed", type=int, default=0, help="seed of the disturbances (default 0)")
+    v.add_argument("--trials", type=int_in(L.TRIALS), default=200, help="trials per disturbance kind (default 200)")
+    v.add_argument("--seed", type=int_in(L.SEED), default=0, help="seed of the disturbances (default 0)")
     v.add_argument("--disturbance", choices=("push", "mass", "friction", "latency", "noise", "terrain", "all"),
                    default="push", help="disturbance kind (default push; all = every kind in turn)")
-    v.add_argument("--steps-after", type=int, default=20,
+    v.add_argument("--steps-after", type=int_in(L.STEPS_AFTER), default=20,
                    help="steps to walk after the first switching event after the disturbance (default 20)")
     v.add_argument("--certificate", metavar="CERT.json",
                    help="check against this certificate (robustgait certify -o); default: certify first")
-    v.add_argument("--plot", metavar="OUT.png", help="success against disturbance size, and the certificate check")
-    v.add_argument("-o", "--output", metavar="OUT.json", help="write the results with every trial")
+    v.add_argument("--plot", metavar="OUT.png", type=output_path("plot"),
+                   help="success against disturbance size, and the certificate check")
+    v.add_argument("-o", "--output", metavar="OUT.json", type=output_path("json"),
+                   help="write the results with every trial")
     v.add_argument("--json", action="store_true", help="print one JSON object (without the trials)")
     v.set_defaults(func=_cmd_validate)
     return p
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status (0 ok, 1 ``--check`` violated or stdout closed, 2 bad
+    input with one line on stderr, 130 interrupted)."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:  # a bad argument: argparse printed one line; return its status so that in-process callers get it
+        args = parser.parse_args(argv)
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else 2
     func: Callable[[argparse.Namespace], int] = args.func
     try:
         return func(args)
     except RobustGaitError as exc:
         print(f"robustgait: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # outputs are written atomically: nothing half-written is left
+        print("robustgait: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # stdout closed early (``robustgait ... | head``): not an error of ours
+        _silence_stdout()
+        return 1
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that the interpreter's final flush does not fail again."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout has no file descriptor (captured in-process)
+        pass
 
 
 if __name__ == "__main__":

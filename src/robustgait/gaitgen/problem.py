@@ -28,7 +28,8 @@ The essential constraints (L, T, W, h) are NLP *parameters*: the problem is buil
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any
 
 import casadi as cs
 import numpy as np
@@ -36,7 +37,9 @@ from numpy.typing import NDArray
 
 from robustgait.bezier import bernstein_basis, bezier_derivative_coeffs
 from robustgait.dynamics import Dynamics, foot_frame
+from robustgait.errors import RobustGaitError
 from robustgait.gait import BEZIER_DEGREE
+from robustgait.robots.spec import GaitQuality, Robot
 
 FloatArray = NDArray[np.float64]
 U_SCALE = 100.0
@@ -51,9 +54,17 @@ class GaitGenConfig:
     nodes: collocation nodes (odd, so that τ = ½ is a node); stance: the leg the gait is written for;
     friction: μ of the friction pyramid (below the simulator's 1.0 for margin); torsional_friction: μ_t;
     min_normal_force [N]; cop_margin [m] inside the sole edges; impact_velocity: bounds on the swing sole's
-    vertical velocity at the guard [m/s]; max_impact_tangential [m/s]; swing_tilt [rad]: max swing sole
-    roll/pitch; foot_gap [m]: lateral clearance between the soles' edges; max_base_tilt [rad]: base
-    roll/pitch bound; max_iter, tol: IPOPT.
+    vertical velocity at the guard [m/s]; max_impact_tangential [m/s]; max_impact_angular [rad/s]: bound on
+    each component of the swing sole's angular velocity at the guard; flat_approach: every corner of the
+    swing sole stays at least this fraction of the sole centre's height above the ground (a foot near the
+    ground is nearly flat, so touchdown is not a corner grazing early); foot_gap [m]: lateral clearance
+    between the soles' edges; max_iter, tol: IPOPT.
+
+    Gait quality (``None`` = the robot spec's ``[gait_quality]``, see
+    :class:`~robustgait.robots.spec.GaitQuality`): pelvis_roll, pelvis_yaw [rad] (|·| ≤), pelvis_pitch
+    [rad] (band), pelvis_height [m] (band above the stance sole), pelvis_angular_velocity [rad/s] (each
+    component), swing_tilt [rad] (swing sole roll/pitch), swing_yaw [rad], joint_velocity [rad/s] (one value
+    for every joint or one per joint).
     """
 
     nodes: int = 17
@@ -64,11 +75,37 @@ class GaitGenConfig:
     cop_margin: float = 0.02
     impact_velocity: tuple[float, float] = (-0.4, -0.05)
     max_impact_tangential: float = 0.15
-    swing_tilt: float = 0.15
+    max_impact_angular: float = 0.5
+    flat_approach: float = 0.5
     foot_gap: float = 0.02
-    max_base_tilt: float = 0.6
     max_iter: int = 300
     tol: float = 1e-8
+    pelvis_roll: float | None = None
+    pelvis_yaw: float | None = None
+    pelvis_pitch: tuple[float, float] | None = None
+    pelvis_height: tuple[float, float] | None = None
+    pelvis_angular_velocity: float | None = None
+    swing_tilt: float | None = None
+    swing_yaw: float | None = None
+    joint_velocity: float | tuple[float, ...] | None = None
+
+    def quality(self, robot: Robot) -> GaitQuality:
+        """The gait-quality bounds in force: the spec's, with this config's non-None fields on top."""
+        base = robot.spec.gait_quality
+        jv = self.joint_velocity
+        if jv is not None:
+            jv = (float(jv),) * robot.n_joints if isinstance(jv, (int, float)) else tuple(map(float, jv))
+            if len(jv) != robot.n_joints:
+                raise RobustGaitError(f"joint_velocity needs 1 or {robot.n_joints} values, got {len(jv)}")
+        over: dict[str, Any] = {k: v for k, v in (("pelvis_roll", self.pelvis_roll), ("pelvis_yaw", self.pelvis_yaw),
+                                  ("pelvis_pitch", self.pelvis_pitch), ("pelvis_height", self.pelvis_height),
+                                  ("pelvis_angular_velocity", self.pelvis_angular_velocity),
+                                  ("swing_tilt", self.swing_tilt), ("swing_yaw", self.swing_yaw),
+                                  ("joint_velocity", jv)) if v is not None}
+        q = replace(base, **over)
+        if not q.joint_velocity:
+            q = replace(q, joint_velocity=(10.0,) * robot.n_joints)
+        return q
 
 
 def rpy_to_matrix(rpy: cs.SX | cs.DM) -> cs.SX | cs.DM:
@@ -132,6 +169,7 @@ class FlatFootProblem:
     def __init__(self, dyn: Dynamics, config: GaitGenConfig):
         self.dyn, self.config = dyn, config
         robot = dyn.robot
+        self.quality = quality = config.quality(robot)
         if config.nodes < 5 or config.nodes % 2 == 0:
             raise ValueError("nodes must be odd and ≥ 5")
         self.m = m = robot.n_joints
@@ -145,7 +183,7 @@ class FlatFootProblem:
         self.mirror[np.arange(m), list(robot.spec.mirror_perm)] = robot.spec.mirror_sign
         kd = dyn.kindyn
         fk_st = dyn.frame_fun(foot_frame(st, "sole"))
-        fk_sw = {k: dyn.frame_fun(foot_frame(sw, k)) for k in ("sole", "toe", "heel")}
+        fk_sw = {"sole": dyn.frame_fun(foot_frame(sw, "sole"))}
         j_st, j_sw = kd.jacobian_fun(foot_frame(st, "sole")), kd.jacobian_fun(foot_frame(sw, "sole"))
         jd_st = kd.jacobian_dot_fun(foot_frame(st, "sole"))
         mass, bias = dyn.mass_matrix_fun, dyn.bias_force_fun
@@ -211,9 +249,12 @@ class FlatFootProblem:
             psw = Hsw[:3, 3]
             if 0 < i < n - 1:
                 add("swing_height", cs.vertcat(psw[2], psw[2] - h), [0.0, -cs.inf], [cs.inf, 0.0])
-                add("swing_toe_heel", cs.vertcat(fk_sw["toe"](H, s)[2, 3], fk_sw["heel"](H, s)[2, 3]), 0.0, cs.inf)
-                add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), -math.sin(config.swing_tilt),
-                    math.sin(config.swing_tilt))
+                corners = cs.vertcat(*(psw[2] + sx * self.half_length * Hsw[2, 0] + sy * self.half_width * Hsw[2, 1]
+                                       for sx in (-1, 1) for sy in (-1, 1)))
+                add("swing_flat_approach", corners - config.flat_approach * psw[2], 0.0, cs.inf)
+                add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), -math.sin(quality.swing_tilt),
+                    math.sin(quality.swing_tilt))
+                add("swing_yaw", Hsw[1, 0], -math.sin(quality.swing_yaw), math.sin(quality.swing_yaw))
                 add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.foot_gap), 0.0, cs.inf)
             if i == (n - 1) // 2:
                 add("step_height", psw[2] - h, 0.0, 0.0)
@@ -224,6 +265,7 @@ class FlatFootProblem:
                 vsw = Jsw[:3, :] @ nu
                 add("impact_velocity", vsw[2], *config.impact_velocity)
                 add("impact_tangential", vsw[:2], -config.max_impact_tangential, config.max_impact_tangential)
+                add("impact_angular", Jsw[3:, :] @ nu, -config.max_impact_angular, config.max_impact_angular)
                 nup = x[lay.nu_plus]
                 imp = U_SCALE * x[lay.impulse]
                 add("impact_map", (M @ (nup - nu) - Jsw.T @ imp) / ROW_SCALE, 0.0, 0.0)
@@ -242,14 +284,22 @@ class FlatFootProblem:
         self.lbx, self.ubx = self._bounds()
 
     def _bounds(self) -> tuple[FloatArray, FloatArray]:
-        lay, robot, cfg = self.layout, self.dyn.robot, self.config
+        """Variable bounds: joint range on β, torque limits, and the gait-quality bands on the node variables
+        (pelvis roll-pitch-yaw and height relative to the stance sole, its angular velocity, joint speeds)."""
+        lay, robot, q = self.layout, self.dyn.robot, self.quality
         lo, hi = np.full(lay.size, -np.inf), np.full(lay.size, np.inf)
         rng = robot.joint_range
         lo[lay.beta] = np.repeat(rng[:, :1], BEZIER_DEGREE + 1, axis=1).ravel(order="F")
         hi[lay.beta] = np.repeat(rng[:, 1:], BEZIER_DEGREE + 1, axis=1).ravel(order="F")
+        rpy_lo = np.array([-q.pelvis_roll, q.pelvis_pitch[0], -q.pelvis_yaw])
+        rpy_hi = np.array([q.pelvis_roll, q.pelvis_pitch[1], q.pelvis_yaw])
+        jv = np.asarray(q.joint_velocity)
         for node in lay.nodes:
             lo[node["u"]], hi[node["u"]] = -robot.torque_limit / U_SCALE, robot.torque_limit / U_SCALE
-            r = node["rpy"]
-            lo[r.start:r.start + 2], hi[r.start:r.start + 2] = -cfg.max_base_tilt, cfg.max_base_tilt
-            lo[r.start + 2], hi[r.start + 2] = -math.pi / 2, math.pi / 2
+            lo[node["rpy"]], hi[node["rpy"]] = rpy_lo, rpy_hi
+            z = node["p"].start + 2
+            lo[z], hi[z] = q.pelvis_height
+            w = slice(node["vb"].start + 3, node["vb"].stop)
+            lo[w], hi[w] = -q.pelvis_angular_velocity, q.pelvis_angular_velocity
+            lo[node["sd"]], hi[node["sd"]] = -jv, jv
         return lo, hi

@@ -13,7 +13,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from robustgait.barrier import BarrierTrace, Certificate
-from robustgait.errors import input_error
+from robustgait.io.output import atomic_output, check_output
 
 LABELS = ("ω_x [rad/s]", "ω_y [rad/s]", "ω_z [rad/s]")
 COLORS = {"satisfies": "tab:green", "violates": "tab:orange", "fell": "tab:red"}
@@ -27,22 +27,21 @@ def outcome_masks(cert: Certificate) -> dict[str, np.ndarray]:
 
 
 def _save(fig: Figure, path: str | Path) -> Path:
-    path = Path(path)
-    if not path.parent.resolve().is_dir():
-        raise input_error(path, "output directory does not exist")
-    tmp = path.with_name(path.name + ".tmp")
-    try:  # written beside and renamed: an interrupted save leaves no half-written figure
-        fig.savefig(tmp, dpi=120, bbox_inches="tight", format=path.suffix.lstrip(".").lower() or "png")
-        tmp.replace(path)
+    """Save through the output writer (:mod:`robustgait.io.output`): the target is checked first (a .png,
+    .pdf or .svg path in a writable directory, not a link or device), the figure is written beside it and
+    renamed into place, and nothing half-written or temporary is left behind."""
+    try:
+        with atomic_output(path, "plot") as tmp:
+            fig.savefig(tmp, dpi=120, bbox_inches="tight", format=tmp.suffix.lstrip(".").lower())
     finally:
         plt.close(fig)
-        tmp.unlink(missing_ok=True)
-    return path
+    return Path(path)
 
 
 def plot_certificate(cert: Certificate, path: str | Path, *, title: str = "") -> Path:
     """Samples in the 3-D reduced space coloured by outcome at r*, the r* sphere, and the three 2-D
     projections (circles of radius r* around x*). Writes ``path`` (PNG/PDF/SVG by extension)."""
+    check_output(path, "plot")
     x = np.asarray(cert.samples)
     xs = np.asarray(cert.x_star)
     if x.shape[1] != 3:
@@ -81,6 +80,7 @@ def plot_certificate(cert: Certificate, path: str | Path, *, title: str = "") ->
 
 def plot_barrier_trace(trace: BarrierTrace, path: str | Path, *, title: str = "") -> Path:
     """H(x_k) along a sequence and the DTBF margin H(x_{k+1}) − (1 − α) H(x_k) of each step."""
+    check_output(path, "plot")
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     k = np.arange(trace.h.size)
     a1.plot(k, trace.h, "o-", ms=3)

@@ -9,8 +9,9 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.errors import RobustGaitError, input_error
+from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
+from robustgait.io.output import atomic_output, check_output
 from robustgait.robots import Robot
 from robustgait.sim.engine import SimConfig
 from robustgait.sim.walk import offscreen_renderer, walk
@@ -42,9 +43,7 @@ def render_tiles(robot: Robot, gait: Gait, path: str | Path, *, frames: int = 6,
     each tile is width × height pixels, the camera follows the base. Returns the image's (height, width)."""
     import imageio.v2 as imageio
 
-    path = Path(path)
-    if not path.parent.resolve().is_dir():
-        raise input_error(path, "output directory does not exist")
+    check_output(path, "plot")
     if frames < 2 or width < 16 or height < 16:
         raise RobustGaitError("need frames ≥ 2 and tiles of at least 16 × 16 pixels")
     states = step_frames(robot, gait, frames, warmup_steps=warmup_steps, config=config)
@@ -69,10 +68,6 @@ def render_tiles(robot: Robot, gait: Gait, path: str | Path, *, frames: int = 6,
     finally:
         renderer.close()
     image = np.concatenate(rows, axis=0)
-    tmp = path.with_name(path.stem + ".tmp.png")
-    try:
-        imageio.imwrite(tmp, image)
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    with atomic_output(path, "plot") as tmp:
+        imageio.imwrite(tmp, image, format="png")
     return int(image.shape[0]), int(image.shape[1])

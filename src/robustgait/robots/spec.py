@@ -15,22 +15,15 @@ compiles the MJCF with MuJoCo and replaces its actuators and sensors by ours:
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.errors import RobustGaitError, input_error
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised on 3.10 only
-    import tomli as tomllib
 
 SHIPPED_DIR = Path(__file__).resolve().parent
 SIDES = ("left", "right")
@@ -54,7 +47,7 @@ class LegSpec:
 @dataclass(frozen=True)
 class FallCriteria:
     """A state is a fall when the base is lower than ``min_base_height`` [m] or its z axis is tilted
-    more than ``max_tilt`` [rad] from vertical (plus non-foot ground contact and numerical blow-up)."""
+    more than ``max_tilt`` [rad] from vertical (plus non-foot ground contact and a diverging simulation)."""
 
     min_base_height: float = 0.5
     max_tilt: float = 0.8
@@ -70,6 +63,7 @@ class GaitQuality:
     pelvis_height [m]: (low, high) band of the base origin above the stance sole.
     pelvis_angular_velocity [rad/s]: each component of the base's angular velocity (world axes) ≤ bound.
     swing_tilt [rad]: swing sole roll and pitch ≤ bound (kept nearly parallel to the ground).
+    swing_yaw [rad]: |yaw| of the swing sole ≤ bound (relative to the stance sole: no twisting foot).
     joint_velocity [rad/s]: |q̇_i| ≤ bound per actuated joint (output order).
     """
 
@@ -79,6 +73,7 @@ class GaitQuality:
     pelvis_height: tuple[float, float] = (0.0, math.inf)
     pelvis_angular_velocity: float = 1.5
     swing_tilt: float = 0.15
+    swing_yaw: float = 0.15
     joint_velocity: tuple[float, ...] = ()
 
 
@@ -126,164 +121,15 @@ class RobotSpec:
         return len(self.joints)
 
 
-def _get(table: dict[str, Any], key: str, kind: type | tuple[type, ...], src: Path, where: str = "") -> Any:
-    if key not in table:
-        raise input_error(src, f"missing key '{where}{key}'")
-    value = table[key]
-    if not isinstance(value, kind) or isinstance(value, bool):
-        raise input_error(src, f"key '{where}{key}' has the wrong type ({type(value).__name__})")
-    return value
-
-
-def _floats(table: dict[str, Any], key: str, n: int, src: Path, where: str,
-            positive: bool = False) -> tuple[float, ...]:
-    values = _get(table, key, list, src, where)
-    if len(values) != n or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
-        raise input_error(src, f"'{where}{key}' must be a list of {n} numbers (got {len(values)} items)")
-    out = tuple(float(v) for v in values)
-    if not all(np.isfinite(out)) or (positive and min(out) <= 0):
-        raise input_error(src, f"'{where}{key}' must be finite{' and positive' if positive else ''}")
-    return out
-
-
-def parse_spec(path: Path) -> RobotSpec:
-    """Read and validate a spec TOML (structure only; names are checked against the MJCF on load)."""
-    path = Path(path)
-    if not path.is_file():
-        raise input_error(path, "robot spec file not found")
-    try:
-        raw = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise input_error(path, f"malformed TOML: {exc}") from None
-    name = _get(raw, "name", str, path)
-    mjcf = (path.parent / _get(raw, "mjcf", str, path)).resolve()
-    joints_t = _get(raw, "joints", dict, path)
-    names = _get(joints_t, "names", list, path, "joints.")
-    if not names or not all(isinstance(n, str) for n in names) or len(set(names)) != len(names):
-        raise input_error(path, "'joints.names' must be a non-empty list of distinct joint names")
-    n = len(names)
-    legs_t = _get(raw, "legs", dict, path)
-    legs = {}
-    for side in SIDES:
-        leg = _get(legs_t, side, dict, path, "legs.")
-        legs[side] = LegSpec(sole_geom=_get(leg, "sole_geom", str, path, f"legs.{side}."))
-    mirror_t = _get(raw, "mirror", dict, path)
-    perm_raw = _get(mirror_t, "joint_perm", list, path, "mirror.")
-    if sorted(perm_raw) != list(range(n)):
-        raise input_error(path, f"'mirror.joint_perm' must be a permutation of 0..{n - 1}")
-    sign = _floats(mirror_t, "joint_sign", n, path, "mirror.")
-    base_sign = _floats(mirror_t, "base_sign", 6, path, "mirror.") if "base_sign" in mirror_t else (
-        1.0, -1.0, 1.0, -1.0, 1.0, -1.0)
-    if any(abs(abs(s) - 1.0) > 0 for s in sign + base_sign):
-        raise input_error(path, "mirror signs must be +1 or -1")
-    det = base_sign[0] * base_sign[1] * base_sign[2]
-    if det > 0 or tuple(det * s for s in base_sign[:3]) != base_sign[3:]:
-        raise input_error(path, "'mirror.base_sign' must be a reflection: (x, y, z) signs with one or three "
-                          "-1s, and (roll, pitch, yaw) signs = det · (x, y, z) signs, e.g. [1,-1,1,-1,1,-1]")
-    fall_t = raw.get("fall", {})
-    fall = FallCriteria(
-        min_base_height=float(fall_t.get("min_base_height", FallCriteria.min_base_height)),
-        max_tilt=float(fall_t.get("max_tilt", FallCriteria.max_tilt)),
-    )
-    sim_t = raw.get("sim", {})
-    integrator = sim_t.get("integrator")
-    if integrator is not None and integrator not in INTEGRATORS:
-        raise input_error(path, f"unknown integrator '{integrator}' (choose from {', '.join(INTEGRATORS)})")
-    timestep = sim_t.get("timestep")
-    if timestep is not None and not (isinstance(timestep, (int, float)) and 0 < timestep < 0.1):
-        raise input_error(path, "'sim.timestep' must be a number in (0, 0.1) seconds")
-    names_t = tuple(names)
-    return RobotSpec(
-        name=name,
-        mjcf=mjcf,
-        base_body=_get(raw, "base_body", str, path),
-        floor_geom=_get(raw, "floor_geom", str, path),
-        joints=tuple(names),
-        kp=_floats(joints_t, "kp", n, path, "joints.", positive=True),
-        kd=_floats(joints_t, "kd", n, path, "joints.", positive=True),
-        torque_limit=_floats(joints_t, "torque_limit", n, path, "joints.", positive=True),
-        legs=legs,
-        mirror_perm=tuple(int(p) for p in perm_raw),
-        mirror_sign=sign,
-        base_mirror_sign=base_sign,
-        fall=fall,
-        timestep=float(timestep) if timestep is not None else None,
-        integrator=integrator,
-        description=str(raw.get("description", "")),
-        source=path.resolve(),
-        gait_quality=_gait_quality(raw.get("gait_quality", {}), n, path),
-        action_space=_action_space(raw["action_space"], path) if "action_space" in raw else None,
-        posture=_posture(raw.get("posture", {}), names_t, path),
-    )
-
-
-def _band(table: dict[str, Any], key: str, default: tuple[float, float], src: Path) -> tuple[float, float]:
-    if key not in table:
-        return default
-    lo, hi = _floats(table, key, 2, src, "gait_quality.")
-    if not lo < hi:
-        raise input_error(src, f"'gait_quality.{key}' must be [low, high] with low < high")
-    return lo, hi
-
-
-def _bound(table: dict[str, Any], key: str, default: float, src: Path) -> float:
-    if key not in table:
-        return default
-    return _floats({key: [table[key]]}, key, 1, src, "gait_quality.", positive=True)[0]
-
-
-def _gait_quality(table: Any, n: int, src: Path) -> GaitQuality:
-    if not isinstance(table, dict):
-        raise input_error(src, "'gait_quality' must be a table")
-    known = {f for f in GaitQuality.__dataclass_fields__}
-    for key in table:
-        if key not in known:
-            raise input_error(src, f"unknown key 'gait_quality.{key}' (known: {', '.join(sorted(known))})")
-    d = GaitQuality()
-    jv = table.get("joint_velocity", 10.0)
-    joint_velocity = (_floats({"v": jv}, "v", n, src, "gait_quality.joint_velocity", positive=True)
-                      if isinstance(jv, list) else (_bound(table, "joint_velocity", 10.0, src),) * n)
-    return GaitQuality(
-        pelvis_roll=_bound(table, "pelvis_roll", d.pelvis_roll, src),
-        pelvis_yaw=_bound(table, "pelvis_yaw", d.pelvis_yaw, src),
-        pelvis_pitch=_band(table, "pelvis_pitch", d.pelvis_pitch, src),
-        pelvis_height=_band(table, "pelvis_height", d.pelvis_height, src),
-        pelvis_angular_velocity=_bound(table, "pelvis_angular_velocity", d.pelvis_angular_velocity, src),
-        swing_tilt=_bound(table, "swing_tilt", d.swing_tilt, src),
-        joint_velocity=joint_velocity,
-    )
-
-
 ACTION_FIELDS = ("step_length", "step_duration", "step_width", "step_height")
 
 
-def _action_space(table: Any, src: Path) -> dict[str, ParamRange]:
-    if not isinstance(table, dict):
-        raise input_error(src, "'action_space' must be a table")
-    out = {}
-    for key in table:
-        if key not in ACTION_FIELDS:
-            raise input_error(src, f"unknown key 'action_space.{key}' (known: {', '.join(ACTION_FIELDS)})")
-    for key in ACTION_FIELDS:
-        if key not in table:
-            raise input_error(src, f"missing key 'action_space.{key}' ([low, high, step])")
-        lo, hi, step = _floats(table, key, 3, src, "action_space.")
-        if not (lo <= hi and step > 0):
-            raise input_error(src, f"'action_space.{key}' must be [low, high, step] with low ≤ high and step > 0")
-        out[key] = ParamRange(lo, hi, step)
-    return out
+def parse_spec(path: Path) -> RobotSpec:
+    """Read and validate a spec TOML (structure and limits; names are checked against the MJCF on load).
+    The schema is :class:`robustgait.io.specfile.SpecFile`; errors read ``FILE: field: problem``."""
+    from robustgait.io.specfile import read_spec
 
-
-def _posture(table: Any, names: tuple[str, ...], src: Path) -> tuple[float, ...]:
-    """Cold-start posture in output order from a table joint name → angle (missing joints: 0)."""
-    if not isinstance(table, dict):
-        raise input_error(src, "'posture' must be a table of joint name = angle [rad]")
-    for key, value in table.items():
-        if key not in names:
-            raise input_error(src, f"'posture.{key}' is not an actuated joint")
-        if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
-            raise input_error(src, f"'posture.{key}' must be a finite number [rad]")
-    return tuple(float(table.get(j, 0.0)) for j in names)
+    return read_spec(path)
 
 
 def _add_contact_sensor(spec: mujoco.MjSpec, name: str, geom: str, ref: str | None) -> None:

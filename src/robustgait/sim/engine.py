@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -35,10 +36,35 @@ from robustgait.robots import Robot
 from robustgait.robots.spec import CONTACT_SENSORS
 from robustgait.sim.controller import step_controls
 
-FALL_REASONS = ("base_low", "tilt", "non_foot_contact", "numerical", "no_touchdown")
+FALL_REASONS = ("base_low", "tilt", "non_foot_contact", "diverged", "no_touchdown")
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
 _CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
 _CTRL_XFRC = _CTRL | int(mujoco.mjtState.mjSTATE_XFRC_APPLIED)
+
+
+@contextmanager
+def quiet_mujoco() -> Iterator[None]:
+    """Silence MuJoCo's default log handler (console and MUJOCO_LOG.TXT) for the duration of a rollout.
+
+    A diverging sample makes MuJoCo warn ("Nan, Inf or huge value in QACC ...") from the rollout threads,
+    through the global log handler, once per sample, and append the warning to MUJOCO_LOG.TXT in the current
+    directory. The engine detects such a sample from its state (MuJoCo resets it) and counts it as a fall
+    ``diverged``, so the message adds nothing. MuJoCo ≥ 3.10 exposes the handler's configuration
+    (``MjLogConfig``); older releases keep printing.
+    """
+    config_type = getattr(mujoco, "MjLogConfig", None)
+    if config_type is None:  # pragma: no cover - MuJoCo < 3.10
+        yield
+        return
+    saved = config_type.get()
+    quiet = config_type.get()
+    quiet.logto_console = False
+    quiet.logto_file = False
+    quiet.set()
+    try:
+        yield
+    finally:
+        saved.set()
 
 
 @dataclass(frozen=True)
@@ -50,7 +76,7 @@ class SimConfig:
     feedforward: add the gait's feedforward torques to the PD (when the gait has them).
     chunk_steps: physics steps rolled out per :func:`mujoco.rollout` call between event scans.
     n_threads: rollout threads (0 = one per core).
-    max_speed: a joint or base speed above this [rad/s or m/s] counts as a numerical blow-up.
+    max_speed: a joint or base speed above this [rad/s or m/s] counts as diverged (a numerical blow-up).
     """
 
     switching: Literal["impact", "time"] = "impact"
@@ -169,14 +195,16 @@ class StepEngine:
         n = st.shape[1]
         k = k0 + 1 + np.arange(n)
         with np.errstate(invalid="ignore"):
-            numerical = (~np.isfinite(st).all(axis=-1)
+            # diverged: NaN/inf, a runaway speed, or time not advancing by one step per record — MuJoCo, on a
+            # bad acceleration (its warning mjWARN_BADQACC), resets the simulation, and time restarts
+            diverged = (~np.isfinite(st).all(axis=-1)
                          | (np.abs(st[..., 0] - k * self.robot.dt) > 0.5 * self.robot.dt)
                          | (np.abs(st[..., 1 + nq:1 + nq + self.nv]).max(axis=-1) > self.config.max_speed))
             codes = [
                 z < fall.min_base_height,
                 cos_tilt < self._cos_max_tilt,
                 sens[..., self._sens_floor] - sens[..., self._sens["left"]] - sens[..., self._sens["right"]] > 0,
-                numerical,
+                diverged,
             ]
         tau = k / self.steps_per_period
         if self.config.switching == "impact":
@@ -184,8 +212,10 @@ class StepEngine:
         else:
             switch = np.broadcast_to(k == self.horizon, z.shape)
         events: NDArray[np.bool_] = np.stack([switch, *codes], axis=-1)  # (K, n, 5)
-        # a fall at the same instant as a touchdown counts as a fall
+        # a fall at the same instant as a touchdown counts as a fall; a diverged state makes the other fall
+        # criteria meaningless, so it is reported as such
         code = np.where(events[..., 1:].any(axis=-1), 1 + np.argmax(events[..., 1:], axis=-1), 0)
+        code = np.where(diverged, 1 + FALL_REASONS.index("diverged"), code)
         any_event = np.any(events, axis=-1)
         first = np.where(any_event.any(axis=1), np.argmax(any_event, axis=1), -1)
         first_code = np.where(first >= 0, code[np.arange(len(first)), np.maximum(first, 0)], -1)
@@ -266,7 +296,7 @@ class StepEngine:
         out_state = np.full((kk, self.nstate), np.nan)
         code = np.full(kk, -1, dtype=np.int64)
         at = np.zeros(kk, dtype=np.int64)
-        code[bad] = 1 + FALL_REASONS.index("numerical")
+        code[bad] = 1 + FALL_REASONS.index("diverged")
         active = np.flatnonzero(~bad)
         traj: list[list[NDArray[np.float64]]] = [[] for _ in range(kk)]
         physics = 0
@@ -275,17 +305,24 @@ class StepEngine:
             progress(int(bad.sum()))
         while active.size and k0 < self.horizon:
             n = min(self.config.chunk_steps, self.horizon - k0)
-            st, sens = self._rollout(active, current, ctrl, k0, n, inputs)
+            with quiet_mujoco():
+                st, sens = self._rollout(active, current, ctrl, k0, n, inputs)
             physics += active.size * n
             first, first_code = self._scan(st, sens, k0, swing)
             done = first >= 0
+            # A touchdown is seen in the sensors of the step whose start state first penetrates the floor, so
+            # that state is the pre-impact state x⁻ (its velocity is still contact-free) and an impact event ends
+            # the step there; the recorded state of the sensing step already carries a millisecond of impact,
+            # which made the section state jump by ~0.14 rad/s when touchdown crossed a millisecond boundary.
+            end = np.where((first_code == 0) & (self.config.switching == "impact"), first - 1, first)
             if record:
                 for j, i in enumerate(active):
-                    traj[i].append(st[j, :first[j] + 1] if done[j] else st[j])
+                    traj[i].append(st[j, :end[j] + 1] if done[j] else st[j])
             idx = active[done]
-            out_state[idx] = st[done, first[done]]
+            ends = end[done]
+            out_state[idx] = np.where((ends >= 0)[:, None], st[done, np.maximum(ends, 0)], current[idx])
             code[idx] = first_code[done]
-            at[idx] = k0 + 1 + first[done]
+            at[idx] = k0 + 1 + ends
             current[active[~done]] = st[~done, -1]
             active = active[~done]
             if progress is not None:

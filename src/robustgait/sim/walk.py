@@ -6,6 +6,7 @@ Stability in the sense of the paper is the number of steps completed before a fa
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -16,6 +17,7 @@ from numpy.typing import NDArray
 
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import Gait
+from robustgait.io.output import atomic_output, check_output
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import SimConfig, StepEngine
@@ -134,13 +136,23 @@ def offscreen_renderer(robot: Robot, width: int, height: int) -> mujoco.Renderer
 
 def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path, *, fps: int = 30,
                  width: int = 640, height: int = 480) -> int:
-    """Render a trajectory (full-physics states, as kept by :func:`walk`) to a video file with MuJoCo's
-    offscreen renderer (EGL or OSMesa, chosen by ``MUJOCO_GL``); returns the number of frames written."""
+    """Render a trajectory (full-physics states, as kept by :func:`walk`) to an ``.mp4`` (H.264 via ffmpeg) or
+    an animated ``.gif`` (half the size, at most :data:`~robustgait.io.limits.MAX_GIF_FRAMES` frames: GIFs are
+    big) with MuJoCo's offscreen renderer (EGL or OSMesa, chosen by ``MUJOCO_GL``); returns the number of frames
+    written. Written through :func:`robustgait.io.output.atomic_output` (checked target, atomic)."""
     import imageio.v2 as imageio
+    from PIL import Image
 
-    path = Path(path)
-    if not path.parent.is_dir():
-        raise input_error(path, "output directory does not exist")
+    from robustgait.io.limits import MAX_GIF_FRAMES
+
+    path = check_output(path, "video")
+    gif = path.suffix.lower() == ".gif"
+    every = max(1, round(1.0 / (fps * robot.dt)))
+    n_frames = -(-len(trajectory) // every)
+    if gif:
+        width, height = width // 2, height // 2
+        if n_frames > MAX_GIF_FRAMES:
+            raise input_error(path, f"{n_frames} frames, over the {MAX_GIF_FRAMES} a .gif may hold (use .mp4)")
     renderer = offscreen_renderer(robot, width, height)
     m = robot.model
     data = mujoco.MjData(m)
@@ -148,22 +160,30 @@ def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path
     cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
     cam.trackbodyid = robot.base_body_id
     cam.distance, cam.elevation, cam.azimuth = 3.0, -15.0, 120.0
-    every = max(1, round(1.0 / (fps * robot.dt)))
-    frames = 0
-    tmp = path.with_name(path.stem + ".tmp" + path.suffix)
+
+    def frames() -> Iterator[NDArray[np.uint8]]:
+        for state in trajectory[::every]:
+            if not np.isfinite(state).all():
+                break
+            mujoco.mj_setState(m, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS.value)
+            mujoco.mj_forward(m, data)
+            renderer.update_scene(data, cam)
+            yield renderer.render()
+
+    count = 0
     try:
-        with imageio.get_writer(tmp, fps=fps, macro_block_size=1) as writer:
-            for state in trajectory[::every]:
-                if not np.isfinite(state).all():
-                    break
-                mujoco.mj_setState(m, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS.value)
-                mujoco.mj_forward(m, data)
-                renderer.update_scene(data, cam)
-                writer.append_data(renderer.render())  # type: ignore[attr-defined]
-                frames += 1
-        tmp.replace(path)
+        with atomic_output(path, "video") as tmp:
+            if gif:  # Pillow's fast octree quantizer: imageio's default GIF path takes ~1 s per 640×480 frame
+                images = [Image.fromarray(f).quantize(colors=256, method=Image.Quantize.FASTOCTREE) for f in frames()]
+                count = len(images)
+                if images:
+                    images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
+                                   duration=round(1000 / fps), loop=0)
+            else:
+                with imageio.get_writer(tmp, fps=fps, macro_block_size=1) as writer:
+                    for frame in frames():
+                        writer.append_data(frame)  # type: ignore[attr-defined]
+                        count += 1
     finally:
         renderer.close()
-        tmp.unlink(missing_ok=True)
-    return frames
-
+    return count

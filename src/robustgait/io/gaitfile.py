@@ -1,0 +1,207 @@
+"""Gait files: the schema of robustgait's JSON and of FROST/ambersim YAML, and the builders of
+:class:`~robustgait.gait.Gait` (``docs/gaits.md``, limits in ``docs/inputs.md``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any, Literal
+
+import msgspec
+import numpy as np
+from msgspec import Meta
+from numpy.typing import NDArray
+
+from robustgait.gait import BEZIER_DEGREE, SCHEMA_VERSION, Domain, Gait, GaitParams, State
+from robustgait.io import limits as L
+from robustgait.io.schema import Table, check_free_form, field_error, read_json, read_yaml, validate
+
+if TYPE_CHECKING:
+    from robustgait.robots import Robot
+
+N_COEF = BEZIER_DEGREE + 1
+Name = Annotated[str, Meta(min_length=1, max_length=200, pattern=r"^[^\x00]+$")]
+Coef = Annotated[float, L.BEZIER_COEFFICIENT.meta()]
+BetaRow = Annotated[list[Coef], Meta(min_length=N_COEF, max_length=N_COEF)]
+Qpos = Annotated[float, L.QPOS.meta()]
+Qvel = Annotated[float, L.QVEL.meta()]
+Duration = Annotated[float, L.DOMAIN_DURATION.meta()]
+Torque = Annotated[float, L.FEEDFORWARD_TORQUE.meta()]
+Phase = Annotated[float, L.FEEDFORWARD_PHASE.meta()]
+
+
+_B = GaitParams.BOUNDS
+StepLength = Annotated[float, Meta(ge=_B["step_length"][0], le=_B["step_length"][1], extra={"unit": "m"})]
+StepDuration = Annotated[float, Meta(ge=_B["step_duration"][0], le=_B["step_duration"][1], extra={"unit": "s"})]
+StepWidth = Annotated[float, Meta(ge=_B["step_width"][0], le=_B["step_width"][1], extra={"unit": "m"})]
+StepHeight = Annotated[float, Meta(ge=_B["step_height"][0], le=_B["step_height"][1], extra={"unit": "m"})]
+
+
+class FeedforwardFile(Table):
+    tau: Annotated[list[Phase], Meta(min_length=2, max_length=L.MAX_FEEDFORWARD_SAMPLES)]
+    torque: Annotated[list[Annotated[list[Torque], Meta(min_length=1, max_length=L.MAX_JOINTS)]],
+                      Meta(min_length=2, max_length=L.MAX_FEEDFORWARD_SAMPLES)]
+
+
+class DomainFile(Table):
+    duration: Duration
+    beta: Annotated[list[BetaRow], Meta(min_length=1, max_length=L.MAX_JOINTS)]
+    name: Annotated[str, Meta(max_length=200)] = ""
+    feedforward: FeedforwardFile | None = None
+
+
+class StateFile(Table):
+    qpos: Annotated[list[Qpos], Meta(min_length=8, max_length=7 + L.MAX_JOINTS)]
+    qvel: Annotated[list[Qvel], Meta(min_length=7, max_length=6 + L.MAX_JOINTS)]
+
+
+class ParamsFile(Table):
+    step_length: StepLength
+    step_duration: StepDuration
+    step_width: StepWidth
+    step_height: StepHeight
+
+
+class GaitFile(Table):
+    """robustgait's gait JSON, ``schema_version`` 1 (:meth:`Gait.to_dict` writes exactly these keys)."""
+
+    schema_version: Literal[1]
+    robot: Name
+    domain_graph: Literal["flat", "multicontact"]
+    stance: Literal["left", "right"]
+    domains: Annotated[list[DomainFile], Meta(min_length=1, max_length=L.MAX_DOMAINS)]
+    joints: Annotated[list[Name], Meta(max_length=L.MAX_JOINTS)] = msgspec.field(default_factory=list)
+    initial_state: StateFile | None = None
+    pre_impact_state: StateFile | None = None
+    params: ParamsFile | None = None
+    solver: dict[str, Any] | None = None
+    meta: dict[str, Any] = msgspec.field(default_factory=dict)
+
+
+class FrostFile(msgspec.Struct, frozen=True, kw_only=True):
+    """A FROST/ambersim gait YAML (other keys, which ambersim writes too, are ignored)."""
+
+    coeff_jt: Annotated[list[Coef], Meta(min_length=N_COEF, max_length=N_COEF * L.MAX_JOINTS)]
+    step_dur: Duration
+    ffPos: Annotated[list[Qpos], Meta(min_length=7, max_length=7)] | None = None  # FROST's key names
+    startingPos: Annotated[list[Qpos], Meta(min_length=1, max_length=L.MAX_JOINTS)] | None = None
+    ffVel: Annotated[list[Qvel], Meta(min_length=6, max_length=6)] | None = None
+    startingVel: Annotated[list[Qvel], Meta(min_length=1, max_length=L.MAX_JOINTS)] | None = None
+    coeff_b: Annotated[list[Coef], Meta(max_length=N_COEF * L.MAX_JOINTS)] | None = None
+    inputparams: dict[str, Any] | None = None
+
+
+def _unit_quaternion(qpos: NDArray[np.float64], src: str | Path, field: str) -> NDArray[np.float64]:
+    """qpos with its base quaternion (entries 3:7) normalized; a quaternion that cannot be is refused."""
+    norm = float(np.linalg.norm(qpos[3:7]))
+    if norm < L.MIN_QUATERNION_NORM:
+        raise field_error(src, f"{field}[3:7]", f"base quaternion has norm {norm:.3g}: it cannot be normalized "
+                          f"(a rotation needs a norm ≥ {L.MIN_QUATERNION_NORM:g}, e.g. [1, 0, 0, 0])")
+    if abs(norm - 1.0) > 1e-12:
+        qpos = qpos.copy()
+        qpos[3:7] /= norm
+    return qpos
+
+
+def _state(s: StateFile | None, m: int, src: str | Path, field: str) -> State | None:
+    if s is None:
+        return None
+    if len(s.qpos) != 7 + m:
+        raise field_error(src, f"{field}.qpos", f"has {len(s.qpos)} values, expected {7 + m} "
+                          f"(base position 3 + quaternion 4 + {m} joints)")
+    if len(s.qvel) != 6 + m:
+        raise field_error(src, f"{field}.qvel", f"has {len(s.qvel)} values, expected {6 + m} "
+                          f"(base linear 3 + angular 3 + {m} joints)")
+    qpos = _unit_quaternion(np.array(s.qpos, dtype=np.float64), src, f"{field}.qpos")
+    return State(qpos, np.array(s.qvel, dtype=np.float64))
+
+
+def _step_duration(total: float, src: str | Path, field: str) -> None:
+    if not L.STEP_DURATION.contains(total):
+        raise field_error(src, field, f"the step lasts {total:g} s; it must satisfy {L.STEP_DURATION.text()}")
+
+
+def gait_from_raw(raw: Any, src: str | Path = "<gait>") -> Gait:
+    """Validate the JSON structure of :meth:`Gait.to_dict` and build the :class:`Gait`."""
+    g = validate(raw, GaitFile, src, "json")
+    assert g.schema_version == SCHEMA_VERSION
+    if len(set(g.joints)) != len(g.joints):
+        dup = next(j for j in g.joints if g.joints.count(j) > 1)
+        raise field_error(src, "joints", f"joint {dup!r} is listed twice")
+    m = len(g.joints) or len(g.domains[0].beta)
+    domains = []
+    for i, d in enumerate(g.domains):
+        if len(d.beta) != m:
+            what = f"'joints' names {m} joints" if g.joints else f"domain 0 has {m} rows"
+            raise field_error(src, f"domains[{i}].beta", f"has {len(d.beta)} rows (one per joint), but {what}")
+        ff_tau = ff_torque = None
+        if d.feedforward is not None:
+            ff = d.feedforward
+            tau = np.array(ff.tau, dtype=np.float64)
+            if np.any(np.diff(tau) <= 0):
+                raise field_error(src, f"domains[{i}].feedforward.tau", "phases must increase strictly")
+            if len(ff.torque) != tau.size or any(len(row) != m for row in ff.torque):
+                bad = next((k for k, row in enumerate(ff.torque) if len(row) != m), None)
+                raise field_error(src, f"domains[{i}].feedforward.torque" + (f"[{bad}]" if bad is not None else ""),
+                                  f"must be {tau.size} rows (one per phase) of {m} torques (one per joint)")
+            ff_tau, ff_torque = tau, np.array(ff.torque, dtype=np.float64)
+        domains.append(Domain(d.name or f"domain{i}", float(d.duration), np.array(d.beta, dtype=np.float64),
+                              ff_tau, ff_torque))
+    _step_duration(sum(d.duration for d in g.domains), src, "domains[].duration")
+    if g.solver is not None:
+        check_free_form(g.solver, src, "solver")
+    check_free_form(g.meta, src, "meta")
+    params = None
+    if g.params is not None:
+        params = GaitParams(g.params.step_length, g.params.step_duration, g.params.step_width, g.params.step_height)
+    return Gait(robot=g.robot, domain_graph=g.domain_graph, stance=g.stance, joints=tuple(g.joints),
+                domains=tuple(domains), initial_state=_state(g.initial_state, m, src, "initial_state"),
+                pre_impact_state=_state(g.pre_impact_state, m, src, "pre_impact_state"), params=params,
+                solver=dict(g.solver) if g.solver is not None else None, meta=dict(g.meta))
+
+
+def read_gait_json(path: str | Path) -> Gait:
+    return gait_from_raw(read_json(path, "gait file"), path)
+
+
+FROST_STATE_KEYS = ("ffPos", "startingPos", "ffVel", "startingVel")
+
+
+def read_frost_yaml(path: str | Path, robot: Robot | None = None, stance: str = "right") -> Gait:
+    """A FROST/ambersim gait YAML → :class:`Gait` (see :func:`robustgait.gait.import_frost_yaml`)."""
+    raw = read_yaml(path, "gait file")
+    if not isinstance(raw, dict):
+        raise field_error(path, "", f"a FROST gait YAML must be a mapping, got {type(raw).__name__}")
+    f = validate(raw, FrostFile, path, "yaml")
+    n = len(f.coeff_jt)
+    if robot is not None:
+        m = robot.n_joints
+        if n != m * N_COEF:
+            raise field_error(path, "coeff_jt", f"has {n} coefficients, expected {m * N_COEF} ({m} joints × {N_COEF})")
+    elif n % N_COEF:
+        raise field_error(path, "coeff_jt", f"has {n} coefficients, not a multiple of {N_COEF} (joints × {N_COEF})")
+    else:
+        m = n // N_COEF
+    beta = np.array(f.coeff_jt, dtype=np.float64).reshape(m, N_COEF, order="F")
+    _step_duration(f.step_dur, path, "step_dur")
+    given = [k for k in FROST_STATE_KEYS if getattr(f, k) is not None]
+    state = None
+    if given and len(given) < len(FROST_STATE_KEYS):
+        missing = next(k for k in FROST_STATE_KEYS if k not in given)
+        raise field_error(path, missing, f"missing: the initial state needs all of {', '.join(FROST_STATE_KEYS)} "
+                          "or none of them")
+    if given:
+        assert f.ffPos is not None and f.startingPos is not None and f.ffVel is not None and f.startingVel is not None
+        for key, values in (("startingPos", f.startingPos), ("startingVel", f.startingVel)):
+            if len(values) != m:
+                raise field_error(path, key, f"has {len(values)} values, expected {m} (one per joint)")
+        qpos = _unit_quaternion(np.array(f.ffPos + f.startingPos, dtype=np.float64), path, "ffPos")
+        state = State(qpos, np.array(f.ffVel + f.startingVel, dtype=np.float64))
+    meta: dict[str, Any] = {"source": f"frost-yaml:{Path(path).name}"}
+    if f.inputparams is not None:
+        check_free_form(f.inputparams, path, "inputparams")
+        meta["frost_inputparams"] = f.inputparams
+    if f.coeff_b is not None:
+        meta["frost_coeff_b"] = [float(v) for v in f.coeff_b]
+    return Gait(robot=robot.name if robot is not None else "unknown", domain_graph="flat", stance=stance,
+                joints=robot.spec.joints if robot is not None else (),
+                domains=(Domain("single_support", float(f.step_dur), beta),), initial_state=state, meta=meta)
