@@ -7,6 +7,7 @@ Public API (everything else is reachable from the submodules)::
     gait = robustgait.load_gait("gait.json", robot)      # or a FROST/ambersim .yaml
     result = robustgait.walk(robot, gait, steps=50)
     cert = robustgait.certify_gait(robot, gait)          # cert.r_star
+    res = robustgait.validate_gait(robot, gait, kinds=["push"])  # disturbed walks, certificate check
     gen = robustgait.GaitGenerator(robot)                # build the HZD problem once, then gen.solve(params)
 """
 
@@ -23,6 +24,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait, GaitParams, load_gait
 from robustgait.robots import Robot, load_robot
 from robustgait.sim import SimConfig, StepEngine, WalkResult, walk
+from robustgait.validate import ValidateConfig, ValidationResult, validate_gait
 
 if TYPE_CHECKING:
     from robustgait.gaitgen import GaitGenerator, generate_gait
@@ -50,6 +52,8 @@ __all__ = [
     "RobustGaitError",
     "SimConfig",
     "StepEngine",
+    "ValidateConfig",
+    "ValidationResult",
     "WalkResult",
     "__version__",
     "certify_gait",
@@ -58,5 +62,6 @@ __all__ = [
     "invariant_radius",
     "load_gait",
     "load_robot",
+    "validate_gait",
     "walk",
 ]
