@@ -1,24 +1,32 @@
-"""Certificates of the Atalante FROST gait: r* for both maps × both reconstructions, sampler speed vs raw rollout.
+"""Certificates r*: precision and cost of the estimators on real gaits, coverage of the confidence statement on
+maps with known answers, both barriers, and the sampler's speed against raw ``mujoco.rollout``.
 
-For map ∈ {step, stride} × reconstruction ∈ {holonomic, angular-only} it runs ``certify_gait`` (N = 200,
-r_max = 2, α = 0.05, seed 0, heading frame) and prints r*, x*, the fixed point's residual and steps, the map's
-residual at x*, the samples that fell or lie inside B(r*), and the wall times. For the step map with the
-holonomic reconstruction (the acceptance case) it repeats the certificate ``--repeat`` times and, after
-each, times raw ``mujoco.rollout`` on the same model, the same thread count, the same batch (the N
-reconstructed sample states), the same number of physics steps per sample (the sampler's total / N) and
-zero control; it prints the medians of both speeds, their ratio (goal ≥ 0.8), the sampling wall time
-(goal ≤ 10 s), and checks that every repeat gave the same JSON (without ``seconds``).
+    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed] [options]
 
-    python benchmarks/bench_certify.py [--repeat 5] [--threads 0] [--samples 200]
+* ``seeds`` (issue 7 acceptance): the default ``exo`` gait (regenerated here with the API from the default
+  ``GaitParams``, or ``--exo-gait FILE``; ``--step-length`` etc. change the parameters) and the Atalante FROST
+  gait, ``--seeds`` seeds each, methods ``uniform`` (N = 200) and ``sequential`` (defaults): mean, sd, CV and
+  range of r*, the statement's bound, samples, physics steps, wall time. After every certificate raw
+  ``mujoco.rollout`` (same model and threads, 100 states near x*, zero control) measures the machine's speed
+  under the same load; the sampler/raw ratio carries over to another machine, and the wall time is also given
+  for a machine whose raw rollout runs at ``--quiet-speed`` steps/s.
+* ``coverage``: ``--runs`` sequential certificates of each synthetic map (:mod:`robustgait.synthetic`):
+  fraction of runs whose true violating fraction in B(r*) exceeds ε (must be ≤ β) — and the same for a naive
+  rule that ignores the data-dependent choice of r*, to show the check can fail.
+* ``barrier``: r* with H = r² − ‖x − x*‖² (``ball``) and the paper's H = r − ‖x − x*‖² on the Atalante gait.
+* ``speed``: the Atalante gait's four (map × reconstruction) uniform certificates, then the sampler against raw
+  ``mujoco.rollout`` on the same batch (ratio), and determinism of the JSON over ``--repeat`` runs.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import platform
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import mujoco
@@ -26,12 +34,184 @@ import numpy as np
 from mujoco import rollout
 
 from robustgait import SimConfig, load_gait, load_robot
+from robustgait.barrier import distances, sample_ball, solve_radius
 from robustgait.certify import CertifyConfig, GaitCertificate, certify_gait
+from robustgait.estimators import SequentialConfig, certify_map_sequential
+from robustgait.gait import Gait, GaitParams
 from robustgait.poincare import ReturnMap
+from robustgait.robots import Robot
+from robustgait.synthetic import BandMap, ConeMap
 
 REPO = Path(__file__).resolve().parents[1]
 ATALANTE = REPO.parent / "shared" / "atalante"
 COMBOS = (("step", "holonomic"), ("step", "angular-only"), ("stride", "holonomic"), ("stride", "angular-only"))
+
+
+def load() -> str:
+    return "load average " + " ".join(f"{v:.2f}" for v in os.getloadavg())
+
+
+def gaits(args: argparse.Namespace) -> dict[str, tuple[Robot, Gait]]:
+    """The default exo gait (regenerated, or --exo-gait) and the Atalante FROST gait (if ../shared is there)."""
+    out = {}
+    exo = load_robot("exo")
+    if args.exo_gait:
+        out["exo"] = (exo, load_gait(args.exo_gait, exo))
+    else:
+        from robustgait.gaitgen import generate_gait
+
+        p = GaitParams(args.step_length, args.step_duration, args.step_width, args.step_height)
+        res = generate_gait(exo, p.step_length, p.step_duration, p.step_width, p.step_height)
+        if res.gait is None:
+            raise SystemExit(f"exo gait generation failed: {res.status} {res.reason}")
+        print(f"exo gait regenerated: {p} ({res.status}, {res.iterations} iterations)")
+        out["exo"] = (exo, res.gait)
+    if (ATALANTE / "loadedExo.xml").is_file():
+        robot = load_robot(REPO / "examples" / "atalante.toml")
+        out["atalante"] = (robot, load_gait(ATALANTE / "jt_bez_2023-09-10.yaml", robot))
+    else:
+        print("../shared/atalante is missing: the Atalante gait is skipped")
+    return out
+
+
+class RawRollout:
+    """Raw mujoco.rollout (zero control) on n states near a gait's fixed point: the machine's speed now."""
+
+    def __init__(self, robot: Robot, gait: Gait, sim: SimConfig, n: int = 100, nstep: int = 500):
+        self.robot, self.n, self.nstep = robot, n, nstep
+        self.pool = rollout.Rollout(nthread=sim.threads)
+        with ReturnMap(robot, gait, sim=sim) as pmap:
+            fp = pmap.find_fixed_point()
+            qpos, qvel = pmap.reconstruct(sample_ball(n, 3, 0.05, fp.x_star, np.random.default_rng(0)))
+            self.init = pmap.engine.full_states(qpos, qvel)
+        self.ctrl = np.zeros((n, nstep, robot.model.nu))
+        self.datas = [robot.new_data() for _ in range(sim.threads)]
+        self.pool.rollout(robot.model, self.datas, self.init[:2], self.ctrl[:2, :10])  # start the threads
+
+    def speed(self) -> float:
+        t0 = time.perf_counter()
+        self.pool.rollout(self.robot.model, self.datas, self.init, self.ctrl)
+        return self.n * self.nstep / (time.perf_counter() - t0)
+
+    def close(self) -> None:
+        self.pool.close()
+
+
+def summary(name: str, gcs: list[GaitCertificate], raw: list[float], quiet: float) -> str:
+    r = np.array([g.r_star for g in gcs])
+    c = [g.certificate for g in gcs]
+    bound = np.array([x.violation_bound for x in c if x is not None])
+    n = np.array([x.n_samples for x in c if x is not None])
+    wall = np.array([g.seconds["total"] for g in gcs])
+    steps = np.array([g.physics_steps for g in gcs])
+    ratio = np.array([g.seconds["sim_steps_per_s"] for g in gcs]) / np.array(raw)
+    est = wall * np.array(raw) / quiet  # the same work on a machine whose raw rollout runs at `quiet` steps/s
+    sd = r.std(ddof=1) if r.size > 1 else 0.0
+    return (f"| {name} | {r.mean():.4f} | {sd:.4f} | {100 * sd / r.mean():.1f} % | {r.min():.4f}–{r.max():.4f} | "
+            f"{100 * np.median(bound):.3g} % ({100 * bound.max():.3g} %) | {n.mean():.0f} ({n.min()}–{n.max()}) | "
+            f"{steps.mean() / 1e3:.0f} k | {wall.mean():.1f} s ({wall.max():.1f}) | {np.median(ratio):.2f} | "
+            f"{est.mean():.1f} s ({est.max():.1f}) |")
+
+
+def cmd_seeds(args: argparse.Namespace) -> None:
+    sim = SimConfig(n_threads=args.threads)
+    print(f"## seeds: {args.seeds} seeds per gait and method; {load()}")
+    print(f"| gait, method | mean r* | sd | CV | range | bound: median (max) | samples: mean (range) | physics steps | "
+          f"wall now: mean (max) | sampler/raw | wall at raw {args.quiet_speed / 1e3:.0f} k steps/s: mean (max) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for gname, (robot, gait) in gaits(args).items():
+        raw = RawRollout(robot, gait, sim)
+        for method in args.methods.split(","):
+            cfg = CertifyConfig(method=method, sim=sim, sequential=SequentialConfig(epsilon=args.epsilon,  # type: ignore[arg-type]
+                                                                                   budget=args.budget))
+            gcs, speeds = [], []
+            for seed in range(args.seeds):
+                gc = certify_gait(robot, gait, replace(cfg, seed=seed))
+                speeds.append(raw.speed())  # right after: the same load
+                if not gc.ok:
+                    raise SystemExit(f"{gname}: {gc.status}: {gc.reason}")
+                gcs.append(gc)
+                if args.verbose:
+                    c = gc.certificate
+                    assert c is not None
+                    tr = " ".join(f"{rd.kind[0]}{rd.samples_used}:{rd.r_hat:.4f}" for rd in c.rounds)
+                    print(f"  {gname} {method} seed {seed}: r* {gc.r_star:.4f} bound {c.violation_bound:.4f} "
+                          f"N {c.n_samples} {gc.seconds['total']:.1f} s (raw {speeds[-1]:.0f} steps/s)  {tr}",
+                          flush=True)
+            print(summary(f"{gname}, {method}", gcs, speeds, args.quiet_speed), flush=True)
+        raw.close()
+        print(f"  ({gname} done; {load()})")
+
+
+def _naive(P: ConeMap | BandMap, seed: int, eps: float, beta: float, budget: int) -> float | None:
+    """A rule with no correction for the data-dependent r*: rounds of 50 uniform in B(r̂), stop as soon as
+    ⌈ln β / ln(1 − ε)⌉ samples lie in B(r̂) (they all satisfy, r̂ being feasible). Returns r̂, None if never."""
+    need = math.ceil(math.log(beta) / math.log1p(-eps))
+    rng = np.random.default_rng(seed)
+    x0 = sample_ball(200, 3, 2.0, P.x_star, rng)
+    x1 = P(x0)
+    while True:
+        d, p = distances(x0, x1, P.x_star)
+        r = solve_radius(d, p, alpha=0.05, r_max=2.0).r_star
+        if np.count_nonzero(d < r) >= need:
+            return r
+        if x0.shape[0] + 50 > budget or r == 0.0:
+            return None
+        new = sample_ball(50, 3, r, P.x_star, rng)
+        x0, x1 = np.vstack([x0, new]), np.vstack([x1, P(new)])
+
+
+def cmd_coverage(args: argparse.Namespace) -> None:
+    eps, beta = args.epsilon, 0.05
+    cfg = SequentialConfig(epsilon=eps, budget=args.budget)
+    xs = np.array([0.4, 0.2, 0.3])
+    maps = {
+        f"bands, fraction {1.05 * eps:g} in every ball (true r* = 0)": BandMap(xs, a=1.05 * eps),
+        f"bands, fraction {0.5 * eps:g} + 0.75·{4 * eps:g}·r (true r* = 0)": BandMap(xs, a=0.5 * eps, c=4 * eps),
+        "cone of 1 % of directions beyond r0 = 0.3 (true r* = 0.3)": ConeMap(xs, r0=0.3, half_angle=0.2003),
+    }
+    print(f"## coverage: {args.runs} runs per map, epsilon = {eps:g}, beta = {beta:g}, budget {args.budget}; {load()}")
+    print("| map | certified | true fraction > ε: sequential | naive rule | r*: median (range) | samples: median |")
+    print("|---|---|---|---|---|---|")
+    for name, P in maps.items():
+        t0 = time.perf_counter()
+        fails = certified = 0
+        rs, ns = [], []
+        for seed in range(args.runs):
+            c = certify_map_sequential(P, xs, seed=seed, beta=beta, config=cfg)
+            if c.violation_bound < 1.0:
+                certified += 1
+                fails += P.violating_fraction(c.r_star) > eps
+            rs.append(c.r_star)
+            ns.append(c.n_samples)
+        naive = [_naive(P, seed, eps, beta, args.budget) for seed in range(args.runs)]
+        naive_fails = sum(r is not None and P.violating_fraction(r) > eps for r in naive)
+        lo, hi = _wilson(fails, args.runs)
+        print(f"| {name} | {certified} | {fails / args.runs:.4f} (95 % CI {lo:.4f}–{hi:.4f}) | "
+              f"{naive_fails / args.runs:.3f} | {np.median(rs):.4g} ({min(rs):.3g}–{max(rs):.3g}) | "
+              f"{np.median(ns):.0f} |  ({time.perf_counter() - t0:.0f} s)", flush=True)
+
+
+def _wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def cmd_barrier(args: argparse.Namespace) -> None:
+    sim = SimConfig(n_threads=args.threads)
+    print(f"## barrier: ball H = r² − ‖x − x*‖² vs paper H = r − ‖x − x*‖² (step map, holonomic); {load()}")
+    print("| gait | method | seeds | r* ball: mean (range) | r* paper: mean (range) |")
+    print("|---|---|---|---|---|")
+    for gname, (robot, gait) in gaits(args).items():
+        for method, seeds in (("uniform", [0]), ("sequential", list(range(args.barrier_seeds)))):
+            res = {}
+            for barrier in ("ball", "paper"):
+                cfg = CertifyConfig(method=method, barrier=barrier, sim=sim)  # type: ignore[arg-type]
+                res[barrier] = np.array([certify_gait(robot, gait, replace(cfg, seed=s)).r_star for s in seeds])
+            cells = " | ".join(f"{v.mean():.4f} ({v.min():.4f}–{v.max():.4f})" for v in res.values())
+            print(f"| {gname} | {method} | {len(seeds)} | {cells} |", flush=True)
 
 
 def deterministic_json(gc: GaitCertificate) -> str:
@@ -42,6 +222,7 @@ def deterministic_json(gc: GaitCertificate) -> str:
 
 def row(gc: GaitCertificate) -> str:
     c, fp, s = gc.certificate, gc.fixed_point, gc.seconds
+    assert c is not None and fp is not None and gc.map_residual is not None
     x = ", ".join(f"{v:.4f}" for v in fp.x_star)
     return (f"{gc.config.map:6s} {gc.config.reconstruction:12s} r* {c.r_star:.4f}{'' if c.attained else ' (sup)'}  "
             f"x* [{x}]  fp residual {fp.residual:.2e} after {fp.steps:3d} steps  map residual {gc.map_residual:.2e}  "
@@ -49,41 +230,34 @@ def row(gc: GaitCertificate) -> str:
             f"sampling {s['sampling']:.2f} s  ({s['sim_steps_per_s']:.0f} steps/s)")
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=5, help="repeats of the acceptance case's timing (median)")
-    ap.add_argument("--threads", type=int, default=0, help="0 = one per core")
-    ap.add_argument("--samples", type=int, default=200)
-    args = ap.parse_args()
-    if args.repeat < 2:
-        ap.error("--repeat must be >= 2 (the determinism check compares repeats)")
+def cmd_speed(args: argparse.Namespace) -> None:
+    if not (ATALANTE / "loadedExo.xml").is_file():
+        print("speed: ../shared/atalante is missing, skipped")
+        return
     robot = load_robot(REPO / "examples" / "atalante.toml")
     gait = load_gait(ATALANTE / "jt_bez_2023-09-10.yaml", robot)
     sim = SimConfig(n_threads=args.threads)
     threads = sim.threads
     n = args.samples
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; mujoco "
-          f"{mujoco.__version__}; threads {threads}; model timestep {robot.dt} s; N = {n}, r_max = 2, "
-          f"alpha = 0.05, seed 0, heading frame")
+    print(f"## speed: N = {n}, r_max = 2, alpha = 0.05, seed 0, heading frame, uniform; threads {threads}; {load()}")
 
     def config(kind: str, rec: str) -> CertifyConfig:
         return CertifyConfig(n_samples=n, r_max=2.0, alpha=0.05, seed=0, map=kind,  # type: ignore[arg-type]
                              reconstruction=rec, sim=sim)  # type: ignore[arg-type]
 
-    # the four certificates (the acceptance case first; it is also the first timing repeat)
     certs = {combo: certify_gait(robot, gait, config(*combo)) for combo in COMBOS}
     for combo in COMBOS:
         print(row(certs[combo]))
-
-    # acceptance case: step map, holonomic reconstruction — sampler vs raw mujoco.rollout, and determinism
     cfg = config("step", "holonomic")
     runs = [certs[("step", "holonomic")]]
     raw = []
+    first = runs[0].certificate
+    assert first is not None and runs[0].fixed_point is not None
     with ReturnMap(robot, gait, kind="step", reconstruction="holonomic", sim=sim) as pmap, \
             rollout.Rollout(nthread=threads) as pool:
         fp = pmap.find_fixed_point(tol=cfg.fp_tol, min_steps=cfg.fp_min_steps, max_steps=cfg.fp_max_steps)
         assert np.array_equal(fp.x_star, runs[0].fixed_point.x_star)
-        qpos, qvel = pmap.reconstruct(np.asarray(runs[0].certificate.samples))
+        qpos, qvel = pmap.reconstruct(np.asarray(first.samples))
         init = pmap.engine.full_states(qpos, qvel)
         nstep = int(np.ceil(runs[0].physics_steps / n))
         ctrl = np.zeros((n, nstep, robot.model.nu))
@@ -97,20 +271,46 @@ def main() -> None:
             raw.append(n * nstep / (time.perf_counter() - t0))
     ours = float(np.median([g.seconds["sim_steps_per_s"] for g in runs]))
     wall = float(np.median([g.seconds["sampling"] for g in runs]))
-    total = float(np.median([g.seconds["total"] for g in runs]))
     r = float(np.median(raw))
     ratios = [g.seconds["sim_steps_per_s"] / x for g, x in zip(runs, raw, strict=True)]
     print(f"step map, holonomic, median of {args.repeat}: sampler {ours:.0f} simulated steps/s, raw mujoco.rollout "
           f"{r:.0f} steps/s ({n} states x {nstep} steps, zero control)  ratio {ours / r:.2f} "
           f"({'met' if ours / r >= 0.8 else 'NOT met'}: goal >= 0.8); per repeat "
-          f"{' '.join(f'{q:.2f}' for q in ratios)} (median {float(np.median(ratios)):.2f})")
-    print(f"  sampling wall time {wall:.2f} s for N = {n} ({'met' if wall <= 10 else 'NOT met'}: goal <= 10 s); "
-          f"certify total {total:.2f} s; {runs[0].physics_steps} physics steps "
-          f"({runs[0].physics_steps / n:.0f}/sample)")
+          f"{' '.join(f'{q:.2f}' for q in ratios)}; sampling wall time {wall:.2f} s")
     ref = deterministic_json(runs[0])
     assert all(deterministic_json(g) == ref for g in runs[1:]), "same seed, different certificate JSON"
-    print(f"determinism: {len(runs)} runs with seed 0 gave identical JSON (without 'seconds'), "
-          f"{len(ref)} characters")
+    print(f"determinism: {len(runs)} runs with seed 0 gave identical JSON (without 'seconds')")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("part", nargs="?", default="all", choices=("all", "seeds", "coverage", "barrier", "speed"))
+    ap.add_argument("--seeds", type=int, default=10, help="seeds: seeds per gait and method (default 10)")
+    ap.add_argument("--methods", default="uniform,sequential")
+    ap.add_argument("--epsilon", type=float, default=0.02)
+    ap.add_argument("--budget", type=int, default=3000)
+    ap.add_argument("--exo-gait", help="use this exo gait file instead of regenerating the default one")
+    defaults = GaitParams()
+    for name in ("step_length", "step_duration", "step_width", "step_height"):
+        ap.add_argument(f"--{name.replace('_', '-')}", type=float, default=getattr(defaults, name),
+                        help=f"exo gait parameter (default {getattr(defaults, name)})")
+    ap.add_argument("--runs", type=int, default=1000, help="coverage: runs per synthetic map (default 1000)")
+    ap.add_argument("--barrier-seeds", type=int, default=3, help="barrier: sequential seeds (default 3)")
+    ap.add_argument("--repeat", type=int, default=5, help="speed: repeats (median; >= 2)")
+    ap.add_argument("--samples", type=int, default=200, help="speed: N")
+    ap.add_argument("--threads", type=int, default=0, help="0 = one per core")
+    ap.add_argument("--quiet-speed", type=float, default=150e3,
+                    help="seeds: raw mujoco.rollout steps/s of a quiet machine, for the wall-time estimate (default "
+                    "150e3, benchmarks/README.md)")
+    ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")
+    args = ap.parse_args()
+    if args.repeat < 2:
+        ap.error("--repeat must be >= 2 (the determinism check compares repeats)")
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; mujoco "
+          f"{mujoco.__version__}; numpy {np.__version__}; {load()}")
+    for part, fn in (("seeds", cmd_seeds), ("coverage", cmd_coverage), ("barrier", cmd_barrier), ("speed", cmd_speed)):
+        if args.part in ("all", part):
+            fn(args)
 
 
 if __name__ == "__main__":

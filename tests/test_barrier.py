@@ -24,30 +24,34 @@ from robustgait.barrier import (
     sample_ball,
     solve_radius,
     violation_bound,
+    violation_end,
 )
 from robustgait.errors import RobustGaitError
 
 # ------------------------------------------------------------------------------ brute-force reference
 
 
-def _feasible(r: float, d: np.ndarray, p: np.ndarray, alpha: float, slack: float) -> bool:
-    """Definition of DESIGN §6, checked directly: every sample with d_i ≤ r has α r² ≥ p_i² − (1−α) d_i²."""
+def _feasible(r: float, d: np.ndarray, p: np.ndarray, alpha: float, slack: float, barrier: str = "ball") -> bool:
+    """Definition of DESIGN §6, checked directly: every sample with d_i ≤ r has α r² ≥ p_i² − (1−α) d_i²
+    (α r ≥ … for the paper's barrier)."""
     act = d <= r
     with np.errstate(over="ignore", invalid="ignore"):
         rhs = p[act] ** 2 - (1.0 - alpha) * d[act] ** 2
-    return bool(np.all(alpha * r * r >= rhs + slack))
+    level = r * r if barrier == "ball" else r
+    return bool(np.all(alpha * level >= rhs + slack))
 
 
-def _reference(d: np.ndarray, p: np.ndarray, alpha: float, r_max: float, slack: float) -> float:
+def _reference(d: np.ndarray, p: np.ndarray, alpha: float, r_max: float, slack: float, barrier: str = "ball") -> float:
     """Largest feasible radius on a dense set: a grid, every candidate and points just below/above."""
     with np.errstate(over="ignore", invalid="ignore"):
         c = (p**2 - (1.0 - alpha) * d**2) / alpha
-    cands = np.concatenate([[r_max], d, np.sqrt(c[np.isfinite(c) & (c > 0)])])
+    ends = c[np.isfinite(c) & (c > 0)]
+    cands = np.concatenate([[r_max], d, np.sqrt(ends) if barrier == "ball" else ends])
     radii = np.concatenate([np.linspace(0.0, r_max, 401), cands, cands * (1 - 1e-9), cands * (1 + 1e-9), cands - 1e-12])
     radii = np.unique(radii[(radii >= 0) & (radii <= r_max)])
     best = 0.0
     for r in radii[::-1]:
-        if _feasible(float(r), d, p, alpha, slack):
+        if _feasible(float(r), d, p, alpha, slack, barrier):
             best = float(r)
             break
     return best
@@ -91,20 +95,21 @@ def sample_sets(draw: st.DrawFn) -> tuple[np.ndarray, np.ndarray, np.ndarray, fl
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.one_of(sample_sets(), random_sample_sets()))
-def test_invariant_radius_matches_brute_force(case: tuple[np.ndarray, np.ndarray, np.ndarray, float, float]) -> None:
+@given(st.one_of(sample_sets(), random_sample_sets()), st.sampled_from(["ball", "paper"]))
+def test_invariant_radius_matches_brute_force(case: tuple[np.ndarray, np.ndarray, np.ndarray, float, float],
+                                              barrier: str) -> None:
     x0, x1, x_star, alpha, r_max = case
-    r_star = invariant_radius(x0, x1, x_star, alpha=alpha, r_max=r_max)
+    r_star = invariant_radius(x0, x1, x_star, alpha=alpha, r_max=r_max, barrier=barrier)  # type: ignore[arg-type]
     assert 0.0 <= r_star <= r_max
     d = np.linalg.norm(x0 - x_star, axis=1)
     p = np.linalg.norm(x1 - x_star, axis=1)
     p[np.isnan(p)] = np.inf
     # strict (slack > 0) / lenient (slack < 0) versions absorb rounding exactly at a candidate radius
-    ref_strict = _reference(d, p, alpha, r_max, slack=1e-12)
-    ref_lenient = _reference(d, p, alpha, r_max, slack=-1e-12)
+    ref_strict = _reference(d, p, alpha, r_max, slack=1e-12, barrier=barrier)
+    ref_lenient = _reference(d, p, alpha, r_max, slack=-1e-12, barrier=barrier)
     assert ref_strict - 1e-7 <= r_star <= ref_lenient + 1e-7
 
-    cert = certificate_from_samples(x0, x1, x_star, alpha=alpha, r_max=r_max)
+    cert = certificate_from_samples(x0, x1, x_star, alpha=alpha, r_max=r_max, barrier=barrier)  # type: ignore[arg-type]
     assert cert.r_star == r_star
     inside = d <= r_star if cert.attained else d < r_star
     assert cert.n_inside == int(inside.sum())
@@ -132,6 +137,27 @@ def test_feasible_set_need_not_be_an_interval() -> None:
     # a fall at 0.8 after the gap [0.7, 0.8): radii just below 0.8 are feasible, so r* = 0.8 (not 0.5)
     sol = solve_radius(np.array([0.5, 0.8]), np.array([p, np.inf]), alpha=alpha, r_max=1.0)
     assert sol.r_star == 0.8 and not sol.attained
+
+
+def test_paper_barrier_condition_and_interval() -> None:
+    # the paper's H = r − ‖x − x*‖²: sample i must satisfy α r ≥ p² − (1 − α) d², violated for r ∈ [d, c)
+    # (c = (p² − (1 − α) d²)/α, not √c). α = 1/2, d = 1/8, p = 5/8: c = 2p² − d² = 49/64.
+    d, p = np.array([0.125]), np.array([0.625])
+    assert violation_end(d, p, 0.5, "paper")[0] == 49 / 64 and violation_end(d, p, 0.5)[0] == 7 / 8
+    assert solve_radius(d, p, alpha=0.5, r_max=49 / 64, barrier="paper") == (49 / 64, True)
+    assert solve_radius(d, p, alpha=0.5, r_max=0.7, barrier="paper") == (0.125, False)
+    assert solve_radius(d, p, alpha=0.5, r_max=0.8) == (0.125, False)  # ball: bad up to 7/8
+    # values and margins: H = r − ‖x − x*‖² and m = α r − p² + (1 − α) d²
+    assert barrier_value(np.array([[0.5, 0.0]]), [0, 0], 0.5, "paper")[0] == 0.25
+    m = barrier_margin(np.array([[0.125]]), np.array([[0.625]]), [0.0], 0.7, 0.5, "paper")[0]
+    assert m == pytest.approx(0.5 * 0.7 - 0.625**2 + 0.5 * 0.125**2)
+    with pytest.raises(RobustGaitError, match="barrier must be one of ball, paper"):
+        solve_radius(d, p, alpha=0.5, r_max=1.0, barrier="hat")  # type: ignore[arg-type]
+    # for r < 1 the paper's condition is weaker: its r* is at least the ball's on the same samples
+    x_star = np.zeros(3)
+    cb = certify_map(lambda x: 1.02 * x + 0.02 * x**2, x_star, r_max=0.9, seed=3)
+    cp = certify_map(lambda x: 1.02 * x + 0.02 * x**2, x_star, r_max=0.9, seed=3, barrier="paper")
+    assert cp.r_star > cb.r_star and cp.barrier == "paper" and "paper barrier" in cp.statement()
 
 
 def test_touching_intervals_and_boundary_at_r_max() -> None:

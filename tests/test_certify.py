@@ -1,3 +1,5 @@
+import dataclasses
+import itertools
 import json
 
 import numpy as np
@@ -6,8 +8,10 @@ import pytest
 from robustgait import RobustGaitError
 from robustgait.certify import CertifyConfig, certify_gait
 from robustgait.cli import main
+from robustgait.estimators import SequentialConfig
+from robustgait.poincare import ReturnMap
 from robustgait.report import outcome_masks, plot_barrier_trace, plot_certificate
-from tests.conftest import ATALANTE_GAIT, ATALANTE_SPEC, EXO_GAIT, needs_atalante
+from tests.conftest import ATALANTE_GAIT, ATALANTE_SPEC, EXO_GAIT, needs_atalante, standing_gait
 
 
 @pytest.fixture(scope="module")
@@ -15,8 +19,20 @@ def small_cert(robot_gait):
     return certify_gait(*robot_gait, CertifyConfig(n_samples=24, r_max=1.0, seed=3))
 
 
+# a sequential certificate small enough for a test: ε = 0.2 needs 17 verification samples
+SMALL_SEQ = SequentialConfig(epsilon=0.2, first_round=16, round_size=16, explore=32, explore_after_failure=16,
+                             budget=120)
+
+
+@pytest.fixture(scope="module")
+def seq_cert(robot_gait):
+    return certify_gait(*robot_gait, CertifyConfig(method="sequential", r_max=1.0, seed=3, sequential=SMALL_SEQ))
+
+
 def test_certificate_is_consistent(small_cert):
     c = small_cert.certificate
+    assert small_cert.status == "ok" and small_cert.ok and small_cert.steps_walked == small_cert.fixed_point.steps
+    assert c.method == "uniform" and len(c.rounds) == 1 and c.rounds[0].r_hat == c.r_star
     assert 0 <= c.r_star <= 1.0 and c.n_samples == 24
     np.testing.assert_array_equal(c.fell, np.isnan(c.images).any(axis=1))
     d = np.linalg.norm(c.samples - c.x_star, axis=1)
@@ -37,13 +53,79 @@ def test_same_seed_same_json(robot_gait, small_cert):
     assert other.to_dict()["samples"] != a["samples"]
 
 
-def test_figures(tmp_path, small_cert):
+def test_sequential_certificate(robot_gait, seq_cert):
+    c = seq_cert.certificate
+    assert seq_cert.ok and c.method == "sequential" and c.rounds[-1].kind == "verify"
+    assert [r.kind for r in c.rounds][:3] == ["uniform", "explore", "explore"]
+    assert c.n_samples == c.rounds[-1].samples_used <= 120
+    assert c.budget_exhausted or (c.rounds[-1].passed and c.violation_bound <= 0.2)
+    assert all(b.r_hat <= a.r_hat for a, b in itertools.pairwise(c.rounds))
+    d = np.linalg.norm(c.samples - c.x_star, axis=1)
+    assert np.all(c.margins[d < c.r_star] >= 0)
+    # round 1 is the uniform estimator's draw (16 samples, seed 3): relative to x*, it depends on the seed only
+    u = certify_gait(*robot_gait, CertifyConfig(n_samples=16, r_max=1.0, seed=3))
+    np.testing.assert_array_equal(c.samples[:16], u.certificate.samples)
+    assert c.rounds[0].r_hat == u.r_star
+    res = json.loads(json.dumps(seq_cert.to_dict(), allow_nan=False))
+    assert res["method"] == "sequential" and res["status"] == "ok" and len(res["rounds"]) == len(c.rounds)
+    assert res["config"]["sequential"]["epsilon"] == 0.2 and len(res["sample_round"]) == c.n_samples
+
+
+def test_paired_samples_across_gaits(robot_gait, seq_cert):
+    # the same gait for the other stance has another fixed point (mirrored) and other images: with one seed the
+    # perturbations x − x* of round 1 and the verification's directions and radius fractions are the same
+    robot, gait = robot_gait
+    no_exploration = SequentialConfig(epsilon=0.2, first_round=16, explore=0, explore_after_failure=0, budget=60)
+    other = certify_gait(robot, gait.mirrored(robot), CertifyConfig(method="sequential", r_max=1.0, seed=3,
+                                                                     sequential=no_exploration))
+    a, b = seq_cert.certificate, other.certificate
+    assert not np.allclose(a.x_star, b.x_star)
+    np.testing.assert_allclose(a.samples[:16] - a.x_star, b.samples[:16] - b.x_star, atol=1e-12)
+
+    def verification(c):
+        k = [r.kind for r in c.rounds].index("verify")
+        return (c.samples[c.round_of_sample == k] - c.x_star) / c.rounds[k].radius
+
+    np.testing.assert_allclose(verification(a), verification(b), atol=1e-12)
+
+
+def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
+    stand = standing_gait(exo)  # a gait that holds its posture; rolled at 6 rad/s it falls in its first step
+    qvel = stand.initial_state.qvel.copy()
+    qvel[3] = 6.0
+    tipped = dataclasses.replace(stand, initial_state=dataclasses.replace(stand.initial_state, qvel=qvel))
+    fell = certify_gait(exo, tipped, CertifyConfig())
+    assert fell.status == "fell_before_fixed_point" and fell.r_star == 0 and fell.vacuous
+    assert fell.certificate is None and fell.fixed_point is None and "fell within step 1" in fell.reason
+    assert fell.steps_walked == 0
+    none = certify_gait(exo, exo_gait, CertifyConfig(fp_tol=1e-9, fp_max_steps=12, fp_min_steps=10))
+    assert none.status == "no_fixed_point" and none.r_star == 0 and none.steps_walked == 12
+    res = json.loads(json.dumps(none.to_dict(), allow_nan=False))
+    assert res["status"] == "no_fixed_point" and res["r_star"] == 0 and res["vacuous"] and res["x_star"] is None
+    # the reduced map falling from x̄* itself: its image of x̄* is replaced by a fall
+    real_call = ReturnMap.__call__
+
+    def falls_at_x_star(self, xbar, progress=None):
+        out = real_call(self, xbar, progress)
+        if self.fixed_point is not None and np.allclose(xbar, self.fixed_point.x_star):
+            out[:] = np.nan
+        return out
+
+    monkeypatch.setattr(ReturnMap, "__call__", falls_at_x_star)
+    unstable = certify_gait(exo, exo_gait, CertifyConfig(n_samples=4))
+    assert unstable.status == "unstable_fixed_point" and unstable.r_star == 0
+    assert unstable.fixed_point is not None and unstable.steps_walked == unstable.fixed_point.steps
+    assert "falls from its own fixed point" in unstable.statement()
+
+
+def test_figures(tmp_path, small_cert, seq_cert):
     from robustgait.barrier import barrier_along
 
     masks = outcome_masks(small_cert.certificate)
     assert sum(int(m.sum()) for m in masks.values()) == 24
     out = plot_certificate(small_cert.certificate, tmp_path / "cert.png")
     assert out.stat().st_size > 10_000
+    assert plot_certificate(seq_cert.certificate, tmp_path / "seq.png").stat().st_size > 10_000
     xs = small_cert.fixed_point.x_star + np.outer(0.5 ** np.arange(6), [0.1, 0.0, 0.0])
     trace = barrier_along(xs, small_cert.fixed_point.x_star, 0.2, 0.05)
     assert plot_barrier_trace(trace, tmp_path / "trace.png").stat().st_size > 5_000
@@ -53,7 +135,9 @@ def test_figures(tmp_path, small_cert):
 
 @pytest.mark.parametrize("kwargs, message", [
     ({"r_max": 0.0}, "r_max"), ({"r_max": -1.0}, "r_max"), ({"alpha": 0.0}, "alpha"), ({"alpha": 1.0}, "alpha"),
-    ({"n_samples": 0}, "samples"),
+    ({"n_samples": 0}, "samples"), ({"seed": -1}, "seed"), ({"method": "grid"}, "method"),
+    ({"barrier": "hat"}, "barrier"), ({"method": "sequential", "sequential": SequentialConfig(budget=300)},
+                                      "budget 300 cannot hold"),
 ])
 def test_bad_config(kwargs, message):
     with pytest.raises(RobustGaitError, match=message):
@@ -79,12 +163,38 @@ def test_cli_certify_json(capsys, tmp_path):
     assert (tmp_path / "c.png").stat().st_size > 10_000
 
 
+def test_cli_certify_sequential(capsys, tmp_path):
+    code, out, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--method", "sequential", "--epsilon",
+                        "0.5", "--budget", "210", "--barrier", "paper", "--json", "-o", str(tmp_path / "c.json"))
+    res = json.loads(out)
+    assert code == 0 and res["method"] == "sequential" and res["barrier"] == "paper"
+    assert res["n_samples"] <= 210 and res["rounds"][0]["kind"] == "uniform" and res["rounds"][0]["n_samples"] == 200
+    assert res["config"]["sequential"]["budget"] == 210 and res["rounds"][-1]["kind"] == "verify"
+    full = json.loads((tmp_path / "c.json").read_text())
+    assert len(full["samples"]) == len(full["sample_round"]) == res["n_samples"]
+
+
+@needs_atalante
+@pytest.mark.parametrize("extra, status, message", [
+    (["--switching", "time"], "fell_before_fixed_point", "before a fixed point was reached"),
+    (["--fp-tol", "1e-9", "--fp-max-steps", "12"], "no_fixed_point", "no fixed point within 12 steps"),
+])
+def test_cli_certify_gait_failure_is_a_result(capsys, tmp_path, extra, status, message):
+    out_json = tmp_path / "c.json"
+    code, out, err = _cli(capsys, "certify", str(ATALANTE_GAIT), "--robot", str(ATALANTE_SPEC), "--samples", "4",
+                          "-o", str(out_json), *extra)
+    assert code == 1 and err == "" and out.startswith(f"{status}: r* = 0") and message in out
+    assert json.loads(out_json.read_text())["status"] == status
+    code, out, _ = _cli(capsys, "certify", str(ATALANTE_GAIT), "--robot", str(ATALANTE_SPEC), "--json", *extra)
+    assert code == 1 and json.loads(out)["status"] == status
+
+
 @needs_atalante
 @pytest.mark.parametrize("extra, message", [
     (["--r-max", "0"], "--r-max"), (["--r-max", "-2"], "--r-max"), (["--alpha", "1.5"], "--alpha"),
-    (["--alpha", "0"], "--alpha"), (["--samples", "0"], "--samples"),
-    (["--switching", "time"], "before a fixed point was reached"),
-    (["--fp-tol", "1e-9", "--fp-max-steps", "12"], "no fixed point within 12 steps"),
+    (["--alpha", "0"], "--alpha"), (["--samples", "0"], "--samples"), (["--epsilon", "0"], "--epsilon"),
+    (["--beta", "1"], "--beta"), (["--budget", "0"], "--budget"),
+    (["--method", "sequential", "--budget", "100"], "budget 100 cannot hold"),
 ])
 def test_cli_certify_bad_input(capsys, tmp_path, extra, message):
     out_json = tmp_path / "c.json"

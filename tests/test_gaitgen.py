@@ -8,6 +8,7 @@ import pytest
 from robustgait import GaitParams, load_gait, load_robot, walk
 from robustgait.certify import CertifyConfig, certify_gait
 from robustgait.cli import main
+from robustgait.estimators import SequentialConfig
 from robustgait.gaitgen import GaitGenerator, generate_gait
 from robustgait.gaitgen.check import check_solution
 from tests.conftest import ATALANTE_SPEC, EXO_GAIT, needs_atalante
@@ -106,7 +107,14 @@ def _walks_like_an_exoskeleton(robot, gait, max_speed_error=0.03):
 def test_default_gait_walks_and_gets_a_certificate(exo, default):
     _walks_like_an_exoskeleton(exo, default.gait)
     cert = certify_gait(exo, default.gait, CertifyConfig(n_samples=50))
-    assert np.linalg.norm(cert.fixed_point.x_star) <= 1.0 and cert.r_star > 0
+    assert cert.ok and np.linalg.norm(cert.fixed_point.x_star) <= 1.0 and cert.r_star > 0
+    # the sequential estimator, small: ε = 0.2 (17 verification samples), 40 exploration samples
+    seq = certify_gait(exo, default.gait, CertifyConfig(method="sequential", sequential=SequentialConfig(
+        epsilon=0.2, first_round=50, round_size=20, explore=40, budget=300)))
+    c = seq.certificate
+    assert seq.ok and c is not None and 0 < c.r_star <= cert.r_star  # round 1 is the uniform draw above
+    assert c.rounds[0].r_hat == cert.r_star and c.n_inside >= 17
+    assert c.violation_bound <= 0.2 or c.budget_exhausted
 
 
 def test_warm_start_converges_faster(gen, default):

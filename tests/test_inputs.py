@@ -367,7 +367,8 @@ def test_mutated_logs_evaluate_or_fail_cleanly(data):
 NUMBER_TEXT = st.one_of(st.sampled_from(["0", "-1", "1", "1e9", "1000000000", "nan", "inf", "-inf", "0.5", "",
                                          "abc", "2", "10", "10.0001", "1e-300", "9223372036854775808", " 3"]),
                         st.integers(-(2**70), 2**70).map(str), st.floats().map(repr))
-OPTIONS = {"walk": ["--steps"], "certify": ["--samples", "--r-max", "--alpha", "--seed", "--fp-tol", "--fp-max-steps"],
+OPTIONS = {"walk": ["--steps"], "certify": ["--samples", "--r-max", "--alpha", "--seed", "--fp-tol", "--fp-max-steps",
+                                            "--epsilon", "--beta", "--budget"],
            "barrier-eval": ["--r", "--alpha"]}
 
 
@@ -393,7 +394,8 @@ def test_numeric_arguments_are_bounded(command, data):
         return
     value = getattr(args, option.lstrip("-").replace("-", "_"))
     limit = {"--steps": L.STEPS, "--samples": L.SAMPLES, "--r-max": L.R_MAX, "--alpha": L.ALPHA, "--seed": L.SEED,
-             "--fp-tol": L.FP_TOL, "--fp-max-steps": L.FP_MAX_STEPS, "--r": L.BARRIER_R}[option]
+             "--fp-tol": L.FP_TOL, "--fp-max-steps": L.FP_MAX_STEPS, "--r": L.BARRIER_R, "--epsilon": L.EPSILON,
+             "--beta": L.BETA, "--budget": L.BUDGET}[option]
     assert math.isfinite(value) and limit.contains(value), (option, text, value)
 
 

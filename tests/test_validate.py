@@ -197,6 +197,10 @@ def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_ce
     bad.write_text('{"r_star": 1}')
     with pytest.raises(RobustGaitError, match=r"bad\.json: not a certificate"):
         CertificateRef.load(bad)
+    failed = tmp_path / "failed.json"
+    failed.write_text('{"status": "no_fixed_point", "reason": "no iterate converged", "r_star": 0.0}')
+    with pytest.raises(RobustGaitError, match="status 'no_fixed_point'"):
+        CertificateRef.load(failed)
     gait_path = tmp_path / "gait.json"
     exo_gait.save(gait_path)
     code = main(["validate", str(gait_path), "--robot", "exo", "--certificate", str(p), "--trials", "4",

@@ -6,7 +6,8 @@ Public API (everything else is reachable from the submodules)::
     robot = robustgait.load_robot("exo")                 # or a spec .toml path
     gait = robustgait.load_gait("gait.json", robot)      # or a FROST/ambersim .yaml
     result = robustgait.walk(robot, gait, steps=50)
-    cert = robustgait.certify_gait(robot, gait)          # cert.r_star
+    cert = robustgait.certify_gait(robot, gait)          # cert.status, cert.r_star (paper's estimator)
+    cert = robustgait.certify_gait(robot, gait, robustgait.CertifyConfig(method="sequential"))
     res = robustgait.validate_gait(robot, gait, kinds=["push"])  # disturbed walks, certificate check
     gen = robustgait.GaitGenerator(robot)                # build the HZD problem once, then gen.solve(params)
 """
@@ -21,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 from robustgait.barrier import Certificate, certify_map, invariant_radius
 from robustgait.certify import CertifyConfig, GaitCertificate, certify_gait
 from robustgait.errors import RobustGaitError
+from robustgait.estimators import SequentialConfig, certify_map_sequential
 from robustgait.gait import Gait, GaitParams, load_gait
 from robustgait.robots import Robot, load_robot
 from robustgait.sim import SimConfig, StepEngine, WalkResult, walk
@@ -50,6 +52,7 @@ __all__ = [
     "GaitParams",
     "Robot",
     "RobustGaitError",
+    "SequentialConfig",
     "SimConfig",
     "StepEngine",
     "ValidateConfig",
@@ -58,6 +61,7 @@ __all__ = [
     "__version__",
     "certify_gait",
     "certify_map",
+    "certify_map_sequential",
     "generate_gait",
     "invariant_radius",
     "load_gait",

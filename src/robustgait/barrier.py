@@ -4,11 +4,14 @@ Reference: N. Tucker, K. Li, A. D. Ames, "Synthesizing Robust Walking Gaits via 
 Functions with Application to Multi-Contact Exoskeleton Locomotion", arXiv:2310.06169 (the paper).
 See DESIGN §6.
 
-Barrier. H(x) = r² − ‖x − x*‖² on the reduced state x ∈ R^n. The paper writes H = r − ‖x − x*‖² while
-defining the safe set as the ball B_r; we use r² so that {H ≥ 0} = B_r exactly (the closed ball).
+Barrier. ``ball`` (default): H(x) = r² − ‖x − x*‖² on the reduced state x ∈ R^n. The paper writes
+H = r − ‖x − x*‖² while defining the safe set as the ball B_r; we use r² so that {H ≥ 0} = B_r exactly (the
+closed ball). ``paper``: the paper's literal H = r − ‖x − x*‖², still required on the ball B_r.
 
 DTBF condition for the return map P: H(P(x)) − H(x) ≥ −α H(x), 0 < α < 1. For one sample with
-d = ‖x − x*‖ and p = ‖P(x) − x*‖ it reads α r² ≥ p² − (1 − α) d²; a fall is p = ∞ (never satisfied).
+d = ‖x − x*‖ and p = ‖P(x) − x*‖ it reads α r² ≥ p² − (1 − α) d² (``ball``) or α r ≥ p² − (1 − α) d²
+(``paper``); a fall is p = ∞ (never satisfied). The estimators built on this (the paper's uniform one and a
+sequential one) are in :mod:`robustgait.estimators`.
 
 Conventions: arrays of states have the state in the last axis; a row of images with a NaN (or any
 non-finite entry) is a fall. Problems caused by input raise :class:`RobustGaitError` (one line).
@@ -18,8 +21,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any, NamedTuple
+from dataclasses import asdict, dataclass
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,24 +31,32 @@ from robustgait.errors import RobustGaitError
 from robustgait.io.logs import load_reduced_log  # re-exported: the log readers live in robustgait.io
 
 __all__ = [
+    "BARRIERS",
     "BarrierTrace",
     "Certificate",
     "RadiusSolution",
+    "Round",
     "barrier_along",
     "barrier_margin",
     "barrier_value",
     "certificate_from_samples",
     "certify_map",
+    "check_barrier",
+    "distances",
+    "evaluate_map",
     "invariant_radius",
     "load_reduced_log",
     "radius_threshold_sq",
     "sample_ball",
     "solve_radius",
     "violation_bound",
+    "violation_end",
 ]
 
 FloatArray = NDArray[np.float64]
 BatchedMap = Callable[[FloatArray], ArrayLike]
+Barrier = Literal["ball", "paper"]
+BARRIERS: tuple[Barrier, ...] = ("ball", "paper")
 
 
 # --------------------------------------------------------------------------------------- validation
@@ -62,6 +73,12 @@ def _check_alpha(alpha: float) -> float:
 
 def _check_beta(beta: float) -> float:
     return _check_unit("beta", beta)
+
+
+def check_barrier(barrier: str) -> Barrier:
+    if barrier not in BARRIERS:
+        raise RobustGaitError(f"barrier must be one of {', '.join(BARRIERS)}, got {barrier!r}")
+    return barrier
 
 
 def _check_positive(name: str, value: float) -> float:
@@ -99,37 +116,40 @@ def _fell_rows(x1: FloatArray) -> NDArray[np.bool_]:
 
 
 # ---------------------------------------------------------------------------------------- equations
-def barrier_value(x: ArrayLike, x_star: ArrayLike, r: float) -> FloatArray:
-    """Barrier H(x) = r² − ‖x − x*‖²  (the paper's barrier on the reduced state; DESIGN §6).
+def barrier_value(x: ArrayLike, x_star: ArrayLike, r: float, barrier: Barrier = "ball") -> FloatArray:
+    """Barrier H(x) = r² − ‖x − x*‖² (``ball``) or r − ‖x − x*‖² (``paper``)  (DESIGN §6).
 
     Shapes: x (..., n), x_star (n,) → (...). The paper writes H = r − ‖x − x*‖² while defining the
-    safe set as the ball B_r; we use r² so that {H ≥ 0} = B_r = {‖x − x*‖ ≤ r} exactly.
+    safe set as the ball B_r; ``ball`` uses r² so that {H ≥ 0} = B_r = {‖x − x*‖ ≤ r} exactly.
     """
     xa = np.asarray(x, dtype=np.float64)
     diff = xa - np.asarray(x_star, dtype=np.float64)
-    return np.asarray(float(r) ** 2 - np.sum(diff * diff, axis=-1), dtype=np.float64)
+    level = float(r) ** 2 if check_barrier(barrier) == "ball" else float(r)
+    return np.asarray(level - np.sum(diff * diff, axis=-1), dtype=np.float64)
 
 
-def barrier_margin(x0: ArrayLike, x1: ArrayLike, x_star: ArrayLike, r: float, alpha: float) -> FloatArray:
+def barrier_margin(x0: ArrayLike, x1: ArrayLike, x_star: ArrayLike, r: float, alpha: float,
+                   barrier: Barrier = "ball") -> FloatArray:
     """DTBF margin m(x) = H(P(x)) − H(x) + α H(x)  (paper: the DTBF condition, ΔH ≥ −α H).
 
     Shapes: x0 (..., n) states, x1 (..., n) their images P(x0), x_star (n,) → (...). m ≥ 0 means the
-    condition holds; equivalently m = α r² − p² + (1 − α) d² with d = ‖x0 − x*‖, p = ‖x1 − x*‖.
-    An image row with NaN (or inf) — the sample fell — gives m = −inf.
+    condition holds; equivalently m = α r² − p² + (1 − α) d² (``ball``; α r − … for ``paper``) with
+    d = ‖x0 − x*‖, p = ‖x1 − x*‖. An image row with NaN (or inf) — the sample fell — gives m = −inf.
     """
     a = _check_alpha(alpha)
-    h0 = barrier_value(x0, x_star, r)
-    h1 = barrier_value(x1, x_star, r)
+    h0 = barrier_value(x0, x_star, r, barrier)
+    h1 = barrier_value(x1, x_star, r, barrier)
     m = np.asarray(h1 - h0 + a * h0, dtype=np.float64)
     fell = _fell_rows(np.asarray(x1, dtype=np.float64))
     return np.where(fell, -np.inf, m)
 
 
 def radius_threshold_sq(d: ArrayLike, p: ArrayLike, alpha: float) -> FloatArray:
-    """Squared radius from which a sample satisfies the condition: c = (p² − (1 − α) d²) / α.
+    """Threshold c = (p² − (1 − α) d²) / α of the condition's left side (r² for ``ball``, r for ``paper``).
 
     Shapes: d (N,) distances ‖x_i − x*‖, p (N,) distances ‖P(x_i) − x*‖ (inf or NaN = fell) → (N,).
-    Sample i satisfies α r² ≥ p² − (1 − α) d² iff r² ≥ c_i (c_i = inf for a fall; c_i ≤ 0: always).
+    Sample i satisfies α r² ≥ p² − (1 − α) d² iff r² ≥ c_i, and α r ≥ p² − (1 − α) d² iff r ≥ c_i
+    (c_i = inf for a fall; c_i ≤ 0: always).
     """
     a = _check_alpha(alpha)
     da = np.asarray(d, dtype=np.float64)
@@ -139,6 +159,16 @@ def radius_threshold_sq(d: ArrayLike, p: ArrayLike, alpha: float) -> FloatArray:
     return np.where(np.isnan(pa) | np.isinf(pa), np.inf, c)
 
 
+def violation_end(d: ArrayLike, p: ArrayLike, alpha: float, barrier: Barrier = "ball") -> FloatArray:
+    """s_i: sample i (distance d_i, image distance p_i) is violated exactly for r ∈ [d_i, s_i).
+
+    s = √max(c, 0) (``ball``) or max(c, 0) (``paper``), c = :func:`radius_threshold_sq`; s = inf for a fall.
+    Shapes: d (N,), p (N,) → (N,). The interval is empty (never violated) when s ≤ d.
+    """
+    c = np.maximum(radius_threshold_sq(d, p, alpha), 0.0)
+    return np.sqrt(c) if check_barrier(barrier) == "ball" else c
+
+
 class RadiusSolution(NamedTuple):
     """r* (the supremum of the feasible radii in [0, r_max]) and whether r* itself is feasible."""
 
@@ -146,12 +176,13 @@ class RadiusSolution(NamedTuple):
     attained: bool
 
 
-def solve_radius(d: ArrayLike, p: ArrayLike, *, alpha: float, r_max: float) -> RadiusSolution:
-    """Exact r* = sup{r ∈ [0, r_max] : every i with d_i ≤ r has α r² ≥ p_i² − (1 − α) d_i²}.
+def solve_radius(d: ArrayLike, p: ArrayLike, *, alpha: float, r_max: float,
+                 barrier: Barrier = "ball") -> RadiusSolution:
+    """Exact r* = sup{r ∈ [0, r_max] : every i with d_i ≤ r has α r² ≥ p_i² − (1 − α) d_i²}  (α r for ``paper``).
 
     Shapes: d (N,), p (N,) (inf = fell). DESIGN §6; the paper's r* search, made exact for the sample.
-    Sample i is violated exactly for r ∈ [d_i, s_i) with s_i = √max(c_i, 0) (see
-    :func:`radius_threshold_sq`): it is inactive below d_i and satisfied from s_i on, so the feasible
+    Sample i is violated exactly for r ∈ [d_i, s_i) with s_i = √max(c_i, 0) (``ball``) or max(c_i, 0)
+    (``paper``) (see :func:`violation_end`): it is inactive below d_i and satisfied from s_i on, so the feasible
     set is [0, r_max] minus a union of half-open intervals — not an interval in general. Hence:
 
     * r_max feasible (in no bad interval) → r* = r_max, attained.
@@ -171,7 +202,7 @@ def solve_radius(d: ArrayLike, p: ArrayLike, *, alpha: float, r_max: float) -> R
         raise RobustGaitError(f"d and p must both have shape (N,) with N >= 1, got {da.shape}, {pa.shape}")
     if not np.all(np.isfinite(da) & (da >= 0.0)):
         raise RobustGaitError("distances d must be finite and >= 0")
-    s = np.sqrt(np.maximum(radius_threshold_sq(da, pa, alpha), 0.0))
+    s = violation_end(da, pa, alpha, barrier)
     bad = (s > da) & (da <= r_max_f)  # nonempty bad intervals that can reach [0, r_max]
     starts, ends = da[bad], s[bad]
     if starts.size == 0:
@@ -236,7 +267,8 @@ def sample_ball(n_samples: int, dim: int, radius: float, center: ArrayLike, rng:
     return np.asarray(c + g / norm * rho[:, None], dtype=np.float64)
 
 
-def invariant_radius(x0: ArrayLike, x1: ArrayLike, x_star: ArrayLike, *, alpha: float, r_max: float) -> float:
+def invariant_radius(x0: ArrayLike, x1: ArrayLike, x_star: ArrayLike, *, alpha: float, r_max: float,
+                     barrier: Barrier = "ball") -> float:
     """r* for a sample set: the supremum of the feasible radii in [0, r_max] (DESIGN §6).
 
     Shapes: x0 (N, n) samples, x1 (N, n) their images (a NaN row = fell), x_star (n,). With
@@ -247,11 +279,12 @@ def invariant_radius(x0: ArrayLike, x1: ArrayLike, x_star: ArrayLike, *, alpha: 
     """
     a0, a1, xs = _check_samples(x0, x1, x_star)
     _check_alpha(alpha)
-    d, p = _distances(a0, a1, xs)
-    return solve_radius(d, p, alpha=alpha, r_max=r_max).r_star
+    d, p = distances(a0, a1, xs)
+    return solve_radius(d, p, alpha=alpha, r_max=r_max, barrier=barrier).r_star
 
 
-def _distances(x0: FloatArray, x1: FloatArray, x_star: FloatArray) -> tuple[FloatArray, FloatArray]:
+def distances(x0: FloatArray, x1: FloatArray, x_star: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """d_i = ‖x0_i − x*‖ and p_i = ‖x1_i − x*‖ (inf where the image row is not finite: fell)."""
     d = np.linalg.norm(x0 - x_star, axis=1)
     with np.errstate(invalid="ignore", over="ignore"):
         p = np.linalg.norm(x1 - x_star, axis=1)
@@ -260,6 +293,24 @@ def _distances(x0: FloatArray, x1: FloatArray, x_star: FloatArray) -> tuple[Floa
 
 
 # -------------------------------------------------------------------------------------- certificate
+@dataclass(frozen=True)
+class Round:
+    """One round of samples of an estimator (:mod:`robustgait.estimators`).
+
+    kind: ``uniform`` (i.i.d. uniform in B(x*, radius): the paper's draw), ``explore`` (proposals of the
+    sequential estimator inside B(radius), any distribution), ``verify`` (fresh i.i.d. uniform in B(radius),
+    drawn after radius = r̂ was fixed); n_samples in it; samples_used: in all rounds so far; r_hat: the exact
+    r* of all samples so far (:func:`solve_radius`); passed: for ``verify``, whether r̂ survived the batch.
+    """
+
+    kind: str
+    radius: float
+    n_samples: int
+    samples_used: int
+    r_hat: float
+    passed: bool | None = None
+
+
 @dataclass(frozen=True, eq=False)
 class Certificate:
     """A DTBF certificate of the ball B_{r*}(x*) from sampled images of the return map.
@@ -269,7 +320,11 @@ class Certificate:
     images (N, n) (NaN rows where fell), fell (N,), margins (N,) = :func:`barrier_margin` at r*
     (−inf where fell), n_inside (samples in the certified ball: d_i ≤ r* if attained else d_i < r*;
     all have margin ≥ 0), seed (None if the samples were supplied), confidence = 1 − β and
-    violation_bound = ε of :func:`violation_bound`.
+    violation_bound = ε (1 when there is no statement). barrier: ``ball`` or ``paper``; method: the
+    estimator (``uniform``, ``sequential``); rounds: its rounds; sample_round (N,): the round of each sample
+    (index into rounds); basis: why the bound holds (empty: the uniform union bound of
+    :func:`violation_bound`); budget_exhausted: the sequential estimator ran out of samples before a
+    verification batch passed (then there is no statement).
     """
 
     r_star: float
@@ -285,21 +340,47 @@ class Certificate:
     seed: int | None
     confidence: float
     violation_bound: float
+    barrier: Barrier = "ball"
+    method: str = "uniform"
+    rounds: tuple[Round, ...] = ()
+    sample_round: NDArray[np.int64] | None = None
+    basis: str = ""
+    budget_exhausted: bool = False
 
     @property
     def n_samples(self) -> int:
         return int(self.samples.shape[0])
 
+    @property
+    def vacuous(self) -> bool:
+        """No sample lies in the certified ball: nothing is certified (r* = 0 included)."""
+        return self.n_inside == 0
+
+    @property
+    def round_of_sample(self) -> NDArray[np.int64]:
+        """(N,) index into ``rounds`` of each sample's round (all 0 for a single draw)."""
+        if self.sample_round is None:
+            return np.zeros(self.n_samples, dtype=np.int64)
+        return self.sample_round
+
     def statement(self) -> str:
-        """One readable sentence with the confidence statement."""
+        """One readable sentence with the confidence statement (or why there is none)."""
         ball = "closed" if self.attained else "open"
-        pct = 100.0 * self.violation_bound
-        return (
-            f"With confidence {100.0 * self.confidence:g}%, at most {pct:.3g}% of the volume of the {ball} "
-            f"ball of radius r* = {self.r_star:.6g} around x* violates the DTBF condition (alpha = "
-            f"{self.alpha:g}): {self.n_inside} of {self.n_samples} uniform samples in B(x*, r_max = {self.r_max:g}) "
-            f"lie in it and all satisfy it (union bound over the {self.n_samples + 1} possible choices of r*)."
-        )
+        where = f"the {ball} ball of radius r* = {self.r_star:.6g} around x*"
+        cond = f"the DTBF condition (alpha = {self.alpha:g}" + (", paper barrier H = r − ‖x − x*‖²)"
+                                                                if self.barrier == "paper" else ")")
+        if self.vacuous:
+            return (f"No sample lies in {where}: the certificate is vacuous (no confidence statement; "
+                    f"{self.n_samples} samples, method {self.method}).")
+        if self.budget_exhausted:
+            return (f"The sample budget was spent ({self.n_samples} samples) before a verification batch passed: "
+                    f"r* = {self.r_star:.6g} is the exact supremum of the feasible radii for these samples under "
+                    f"{cond}, but there is no confidence statement.")
+        basis = self.basis or (
+            f"{self.n_inside} of {self.n_samples} uniform samples in B(x*, r_max = {self.r_max:g}) lie in it and "
+            f"all satisfy it (union bound over the {self.n_samples + 1} possible choices of r*)")
+        return (f"With confidence {100.0 * self.confidence:g}%, at most {100.0 * self.violation_bound:.3g}% of the "
+                f"volume of {where} violates {cond}: {basis}.")
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (lists and floats; fell images and their −inf margins are None)."""
@@ -309,17 +390,23 @@ class Certificate:
             "x_star": [float(v) for v in self.x_star],
             "alpha": float(self.alpha),
             "r_max": float(self.r_max),
+            "barrier": self.barrier,
+            "method": self.method,
             "n_samples": self.n_samples,
             "n_inside": int(self.n_inside),
             "n_fell": int(np.count_nonzero(self.fell)),
             "seed": self.seed,
             "confidence": float(self.confidence),
             "violation_bound": float(self.violation_bound),
+            "vacuous": self.vacuous,
+            "budget_exhausted": bool(self.budget_exhausted),
             "statement": self.statement(),
+            "rounds": [asdict(r) for r in self.rounds],
             "samples": [[float(v) for v in row] for row in self.samples],
             "images": [None if f else [float(v) for v in row] for row, f in zip(self.images, self.fell, strict=True)],
             "fell": [bool(f) for f in self.fell],
             "margins": [None if f else float(m) for m, f in zip(self.margins, self.fell, strict=True)],
+            "sample_round": [int(k) for k in self.round_of_sample],
         }
 
 
@@ -338,20 +425,23 @@ def certificate_from_samples(
     r_max: float = 2.0,
     beta: float = 0.05,
     seed: int | None = None,
+    barrier: Barrier = "ball",
 ) -> Certificate:
     """Certificate from given samples x0 (N, n) and images x1 (N, n) (NaN row = fell), x_star (n,).
 
-    The confidence statement assumes x0 i.i.d. uniform on B_{r_max}(x*) (see :func:`violation_bound`).
+    The confidence statement assumes x0 i.i.d. uniform on B_{r_max}(x*) (see :func:`violation_bound`);
+    the sequential estimator replaces it with its own (:mod:`robustgait.estimators`).
     """
     a0, a1, xs = _check_samples(x0, x1, x_star)
     a = _check_alpha(alpha)
     b = _check_beta(beta)
-    d, p = _distances(a0, a1, xs)
-    sol = solve_radius(d, p, alpha=a, r_max=r_max)
+    d, p = distances(a0, a1, xs)
+    sol = solve_radius(d, p, alpha=a, r_max=r_max, barrier=barrier)
     fell = _fell_rows(a1)
     images = np.where(fell[:, None], np.nan, a1)
     inside = d <= sol.r_star if sol.attained else d < sol.r_star
     n_inside = int(np.count_nonzero(inside))
+    n = a0.shape[0]
     return Certificate(
         r_star=sol.r_star,
         attained=sol.attained,
@@ -361,12 +451,27 @@ def certificate_from_samples(
         samples=_frozen(a0),
         images=_frozen(images),
         fell=_frozen(fell),
-        margins=_frozen(barrier_margin(a0, images, xs, sol.r_star, a)),
+        margins=_frozen(barrier_margin(a0, images, xs, sol.r_star, a, barrier)),
         n_inside=n_inside,
         seed=seed,
         confidence=1.0 - b,
-        violation_bound=violation_bound(n_inside, a0.shape[0], b),
+        violation_bound=violation_bound(n_inside, n, b),
+        barrier=barrier,
+        rounds=(Round("uniform", float(r_max), n, n, sol.r_star),),
+        sample_round=_frozen(np.zeros(n, dtype=np.int64)),
     )
+
+
+def evaluate_map(P: BatchedMap, x0: FloatArray) -> FloatArray:
+    """P applied to a batch x0 (N, n) (on a copy), checked to return a numeric (N, n) array (NaN rows = fell)."""
+    out = P(x0.copy())
+    try:
+        x1 = np.asarray(out, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise RobustGaitError(f"the map's output is not a numeric array: {exc}") from exc
+    if x1.shape != x0.shape:
+        raise RobustGaitError(f"the map returned shape {x1.shape}, expected {x0.shape}")
+    return x1
 
 
 def certify_map(
@@ -378,25 +483,23 @@ def certify_map(
     n_samples: int = 200,
     seed: int = 0,
     beta: float = 0.05,
+    barrier: Barrier = "ball",
 ) -> Certificate:
-    """Certify a batched map P: (N, n) → (N, n) (NaN rows = fell) around its fixed point x_star (n,).
+    """The paper's estimator (``uniform``): certify a batched map P: (N, n) → (N, n) (NaN rows = fell)
+    around its fixed point x_star (n,).
 
     Draws n_samples points uniform in B_{r_max}(x*) with ``np.random.default_rng(seed)``
     (:func:`sample_ball`), evaluates P once on the batch and returns :func:`certificate_from_samples`.
+    The sequential estimator is :func:`robustgait.estimators.certify_map_sequential`.
     """
     xs = _check_point("x_star", x_star)
     r = _check_positive("r_max", r_max)
     _check_alpha(alpha)
     _check_beta(beta)
+    check_barrier(barrier)
     x0 = sample_ball(n_samples, xs.shape[0], r, xs, np.random.default_rng(seed))
-    out = P(x0.copy())
-    try:
-        x1 = np.asarray(out, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise RobustGaitError(f"the map's output is not a numeric array: {exc}") from exc
-    if x1.shape != x0.shape:
-        raise RobustGaitError(f"the map returned shape {x1.shape}, expected {x0.shape}")
-    return certificate_from_samples(x0, x1, xs, alpha=alpha, r_max=r, beta=beta, seed=seed)
+    x1 = evaluate_map(P, x0)
+    return certificate_from_samples(x0, x1, xs, alpha=alpha, r_max=r, beta=beta, seed=seed, barrier=barrier)
 
 
 # ------------------------------------------------------------------------------ logged trajectories

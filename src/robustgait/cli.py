@@ -101,11 +101,14 @@ class _Parser(argparse.ArgumentParser):
 
 def _cmd_certify(args: argparse.Namespace) -> int:
     from robustgait.certify import CertifyConfig, certify_gait
+    from robustgait.estimators import SequentialConfig
     from robustgait.gait import load_gait
     from robustgait.robots import load_robot
     from robustgait.sim import SimConfig
 
-    cfg = CertifyConfig(n_samples=args.samples, r_max=args.r_max, alpha=args.alpha, seed=args.seed,
+    seq = SequentialConfig(epsilon=args.epsilon, budget=args.budget)
+    cfg = CertifyConfig(n_samples=args.samples, r_max=args.r_max, alpha=args.alpha, seed=args.seed, beta=args.beta,
+                        method=args.method, barrier=args.barrier, sequential=seq,
                         map=args.map, reconstruction=args.reconstruction, frame=args.frame,
                         fp_tol=args.fp_tol, fp_max_steps=args.fp_max_steps,
                         fp_min_steps=min(10, max(args.fp_max_steps, 1)), sim=SimConfig(switching=args.switching))
@@ -113,32 +116,40 @@ def _cmd_certify(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     gait = load_gait(args.gait, robot)
     per_map = 2 if cfg.map == "stride" else 1
-    L.check_work(per_map * (cfg.fp_max_steps + cfg.n_samples + 1), gait.step_duration * cfg.sim.max_step_tau,
-                 robot.dt, f"{args.gait}: --fp-max-steps {cfg.fp_max_steps} + --samples {cfg.n_samples}")
+    n, what = (cfg.n_samples, "--samples") if cfg.method == "uniform" else (seq.budget, "--budget")
+    L.check_work(per_map * (cfg.fp_max_steps + n + 1), gait.step_duration * cfg.sim.max_step_tau,
+                 robot.dt, f"{args.gait}: --fp-max-steps {cfg.fp_max_steps} + {what} {n}")
     with _about(args.gait):
         gc = certify_gait(robot, gait, cfg, progress=not args.json and sys.stderr.isatty())
-    if args.plot is not None:
+    c, fp = gc.certificate, gc.fixed_point
+    if args.plot is not None and c is not None:
         from robustgait.report import plot_certificate
 
-        plot_certificate(gc.certificate, args.plot, title=f"{robot.name}: r* = {gc.r_star:.4f} rad/s "
-                         f"({cfg.map} map, {cfg.reconstruction}, N = {cfg.n_samples}, α = {cfg.alpha:g})")
+        label = f"N = {c.n_samples}" + (f" in {len(c.rounds)} rounds" if cfg.method == "sequential" else "")
+        plot_certificate(c, args.plot, title=f"{robot.name}: r* = {gc.r_star:.4f} rad/s ({cfg.map} map, "
+                         f"{cfg.reconstruction}, {cfg.method}, {label}, α = {cfg.alpha:g})")
     if args.output is not None:
         from robustgait.io.output import write_json
 
         write_json(args.output, gc.to_dict())
     if args.json:
         print(json.dumps(gc.to_dict(samples=False), allow_nan=False))
+    elif c is None:
+        print(f"{gc.status}: r* = 0 ({gc.reason}; {gc.steps_walked} steps walked)")
     else:
-        c, fp = gc.certificate, gc.fixed_point
+        assert fp is not None and gc.map_residual is not None
         print(f"r* = {c.r_star:.4f} rad/s  ({cfg.map} map, {cfg.reconstruction} reconstruction, {cfg.frame} frame, "
-              f"α = {cfg.alpha:g}, N = {c.n_samples}, seed {cfg.seed})")
+              f"{cfg.barrier} barrier, α = {cfg.alpha:g}, {cfg.method}: N = {c.n_samples}, seed {cfg.seed})")
         print(f"x* = [{', '.join(f'{v:.4f}' for v in fp.x_star)}] rad/s after {fp.steps} steps; residual "
               f"{fp.residual:.2e} (map at x*: {gc.map_residual:.2e})")
+        if cfg.method == "sequential":
+            print("r̂ after each round: " + " ".join(f"{r.kind[0]}{r.samples_used}:{r.r_hat:.4g}" for r in c.rounds)
+                  + "  (u = uniform, e = explore, v = verify; samples used: r̂)")
         print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside B(r*)")
         print(c.statement())
         print(f"time: fixed point {gc.seconds['fixed_point']:.2f} s, sampling {gc.seconds['sampling']:.2f} s "
               f"({gc.seconds['sim_steps_per_s']:.0f} simulated steps/s)")
-    return 0
+    return 0 if gc.ok else 1
 
 
 def _cmd_barrier_eval(args: argparse.Namespace) -> int:
@@ -321,11 +332,22 @@ def build_parser() -> argparse.ArgumentParser:
                    help="frame of the logged angular velocity (default heading)")
     w.set_defaults(func=_cmd_walk)
 
-    c = sub.add_parser("certify", help="robustness certificate r* of a gait (DTBF on the Poincaré map)")
+    c = sub.add_parser("certify", help="robustness certificate r* of a gait (DTBF on the Poincaré map); exit 1 "
+                       "if the gait falls or has no fixed point (r* = 0)")
     c.add_argument("gait", help="gait file: .json (robustgait) or .yaml (FROST/ambersim)")
     c.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
+    c.add_argument("--method", choices=("uniform", "sequential"), default="uniform",
+                   help="uniform: the paper's N samples in B(r_max) (default); sequential: rounds inside B(r̂) "
+                   "until a fresh batch certifies the violating fraction ≤ epsilon (studies use it)")
     c.add_argument("--samples", type=int_in(L.SAMPLES), default=200,
-                   help=f"number of sampled perturbations N (default 200; {L.SAMPLES.text()})")
+                   help=f"uniform: number of sampled perturbations N (default 200; {L.SAMPLES.text()})")
+    c.add_argument("--epsilon", type=float_in(L.EPSILON), default=0.02,
+                   help="sequential: bound on the violating volume fraction to certify (default 0.02)")
+    c.add_argument("--budget", type=int_in(L.BUDGET), default=3000,
+                   help=f"sequential: most samples in all rounds (default 3000; {L.BUDGET.text()})")
+    c.add_argument("--beta", type=float_in(L.BETA), default=0.05, help="1 − confidence of the statement (default 0.05)")
+    c.add_argument("--barrier", choices=("ball", "paper"), default="ball",
+                   help="ball: H = r² − ‖x − x*‖² (default); paper: the paper's literal H = r − ‖x − x*‖²")
     c.add_argument("--r-max", type=float_in(L.R_MAX), default=2.0,
                    help=f"radius of the sampled ball [rad/s] (default 2; {L.R_MAX.text()})")
     c.add_argument("--alpha", type=float_in(L.ALPHA), default=0.05, help="DTBF decay rate α in (0, 1) (default 0.05)")

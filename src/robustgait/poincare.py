@@ -87,6 +87,16 @@ def canonical_reduced_events(robot: Robot, gait: Gait, events: list[SwitchEvent]
     return np.array(rows).reshape(-1, 3)
 
 
+class FixedPointFailure(RobustGaitError):
+    """The fixed-point search failed — a property of the gait, not bad input: ``status`` is
+    ``fell_before_fixed_point`` or ``no_fixed_point``; ``steps`` the steps walked (completed) before it ended."""
+
+    def __init__(self, status: str, steps: int, message: str):
+        super().__init__(message)
+        self.status = status
+        self.steps = steps
+
+
 @dataclass(frozen=True)
 class FixedPoint:
     """x* of the chosen map: its full canonical state (qpos, qvel), reduced x̄* (3,), the residual
@@ -141,8 +151,9 @@ class ReturnMap:
 
         Iterating the map itself (canonical stance, then mirror) rather than walking on alternating legs
         makes x̄* a fixed point of exactly the map that is certified, also for a robot whose MJCF is not
-        perfectly left/right symmetric. Raises RobustGaitError if the gait falls first or no iterate within
-        ``max_steps`` steps converges (with the residuals seen). ``progress(step, residual)`` after each.
+        perfectly left/right symmetric. Raises :class:`FixedPointFailure` (a RobustGaitError) if the gait falls
+        first or no iterate within ``max_steps`` steps converges (with the residuals seen).
+        ``progress(step, residual)`` after each.
         """
         init = self.gait.initial_state
         assert init is not None
@@ -152,8 +163,9 @@ class ReturnMap:
         for k in range(self.period, max_steps + 1, self.period):
             qpos, qvel, reason = self._advance(qpos, qvel)
             if reason[0] is not None:
-                raise RobustGaitError(f"the gait fell within step {k} ({reason[0]}) before a fixed point was "
-                                      "reached")
+                raise FixedPointFailure("fell_before_fixed_point", k - self.period,
+                                        f"the gait fell within step {k} ({reason[0]}) before a fixed point was "
+                                        "reached")
             x = reduce_state(qpos, qvel, self.frame)[0]
             residuals.append(float(np.linalg.norm(x - prev)))
             prev = x
@@ -163,9 +175,10 @@ class ReturnMap:
                 self.fixed_point = FixedPoint(qpos[0].copy(), qvel[0].copy(), x.copy(), residuals[-1], k,
                                               tuple(residuals))
                 return self.fixed_point
-        raise RobustGaitError(f"no fixed point within {max_steps} steps: the {self.kind}-map residual "
-                              f"‖x̄_k+1 − x̄_k‖ stayed above tol = {tol:g} (smallest {min(residuals):.3g}, last "
-                              f"{residuals[-1]:.3g})")
+        raise FixedPointFailure("no_fixed_point", len(residuals) * self.period,
+                                f"no fixed point within {max_steps} steps: the {self.kind}-map residual "
+                                f"‖x̄_k+1 − x̄_k‖ stayed above tol = {tol:g} (smallest {min(residuals):.3g}, last "
+                                f"{residuals[-1]:.3g})")
 
     def _advance(self, qpos: FloatArray, qvel: FloatArray,
                  progress: Callable[[int], None] | None = None) -> tuple[FloatArray, FloatArray, list[str | None]]:

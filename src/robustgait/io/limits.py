@@ -107,6 +107,9 @@ FP_MAX_STEPS = Limit("--fp-max-steps", 1, 1000)
 SEED = Limit("--seed", 0, 2**63 - 1)  # fits a signed 64-bit integer (study storage)
 R_MAX = Limit("--r-max", 0.0, 10.0, "rad/s", low_open=True)  # a base angular velocity perturbation
 ALPHA = Limit("--alpha", 0.0, 1.0, low_open=True, high_open=True)
+EPSILON = Limit("--epsilon", 0.0, 1.0, low_open=True, high_open=True)  # a volume fraction
+BETA = Limit("--beta", 0.0, 1.0, low_open=True, high_open=True)  # 1 − confidence
+BUDGET = Limit("--budget", 1, 10_000)  # samples of a sequential certificate, as --samples
 FP_TOL = Limit("--fp-tol", 0.0, 1.0, "rad/s", low_open=True)
 BARRIER_R = Limit("--r", 0.0, 1e6, low_open=True)
 X_STAR = symmetric("--x-star value", 1e6)

@@ -59,6 +59,8 @@ class CertificateRef:
     @staticmethod
     def of(gc: GaitCertificate) -> CertificateRef:
         c, cfg = gc.certificate, gc.config
+        if c is None or gc.fixed_point is None:
+            raise RobustGaitError(f"the gait has no certificate to validate against ({gc.status}: {gc.reason})")
         return CertificateRef(float(c.r_star), bool(c.attained), tuple(float(v) for v in c.x_star), cfg.map,
                               cfg.frame, cfg.reconstruction, cfg.fp_tol, cfg.fp_min_steps, cfg.fp_max_steps,
                               "computed")
@@ -69,13 +71,19 @@ class CertificateRef:
         path = Path(path)
         try:
             raw = json.loads(path.read_text())
+        except FileNotFoundError:
+            raise input_error(path, "certificate file not found") from None
+        except (OSError, ValueError) as exc:
+            raise input_error(path, f"not a certificate JSON ({type(exc).__name__}: {exc})") from None
+        if isinstance(raw, dict) and raw.get("status", "ok") != "ok":
+            raise input_error(path, f"the certificate has status {raw['status']!r} ({raw.get('reason', '')}): "
+                              "nothing to validate against")
+        try:
             cfg = raw.get("config", {})
             ref = CertificateRef(float(raw["r_star"]), bool(raw["attained"]), tuple(float(v) for v in raw["x_star"]),
                                  raw["map"], raw["frame"], raw["reconstruction"], float(cfg.get("fp_tol", 5e-3)),
                                  int(cfg.get("fp_min_steps", 10)), int(cfg.get("fp_max_steps", 100)), str(path))
-        except FileNotFoundError:
-            raise input_error(path, "certificate file not found") from None
-        except (OSError, ValueError, KeyError, TypeError) as exc:
+        except (AttributeError, ValueError, KeyError, TypeError) as exc:
             raise input_error(path, f"not a certificate JSON ({type(exc).__name__}: {exc})") from None
         if ref.map not in MAPS or ref.frame not in FRAMES or len(ref.x_star) != 3 or not (
                 math.isfinite(ref.r_star) and ref.r_star >= 0):

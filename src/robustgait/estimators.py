@@ -1,0 +1,282 @@
+"""Estimators of r* from samples of a batched return map, and the confidence statement each one supports.
+
+DESIGN §6 and ``docs/certificate.md`` (derivations). Two estimators, both exact for their samples
+(:func:`robustgait.barrier.solve_radius`):
+
+* ``uniform`` — the paper's: N i.i.d. samples uniform in B(x*, r_max); the statement is a union bound over
+  the N + 1 values r* can take (:func:`robustgait.barrier.certify_map`, :func:`~robustgait.barrier.violation_bound`).
+* ``sequential`` (:func:`certify_map_sequential`) — beyond the paper. Exploration proposes r̂, verification
+  certifies it:
+
+  1. round 1: the uniform draw with N = ``first_round`` (the same samples as ``uniform`` with that N and seed);
+  2. exploration rounds of ``round_size`` proposals inside B(r̂): a fraction uniform in B(r̂), the rest
+     *local* — around the directions of the violating samples closest to x* ("elites"), just inside r̂
+     (relative depth log-uniform in [``min_depth``, 1]). After each round r̂ = the exact r* of all samples so
+     far; it only shrinks. Exploration may use any distribution: it only proposes;
+  3. verification attempt a = 1, 2, …: a fresh batch of n_a samples i.i.d. uniform in B(r̂_a), drawn after r̂_a
+     is fixed, with n_a the least n such that (1 − ε)^n ≤ β_a = β / 2^a. If no sample of the batch violates
+     the condition at r̂_a (r̂ is unchanged by the batch) the certificate is r* = r̂_a; otherwise r̂ shrinks,
+     ``explore_after_failure`` more exploration samples follow and attempt a + 1 is drawn. When the next
+     batch would exceed ``budget`` samples the estimator stops and says there is no statement.
+
+Guarantee of ``sequential``: P(a certificate is issued and the fraction of the volume of B(r*) where the
+condition at radius r* fails exceeds ε) ≤ Σ_a β_a ≤ β, whatever the map and the exploration. Proof: let
+V(r) be that violating fraction and F_{a−1} everything drawn before batch a. r̂_a is F_{a−1}-measurable and
+batch a is i.i.d. uniform in B(r̂_a) independently of F_{a−1}, so on {V(r̂_a) > ε}, P(all n_a samples
+satisfy | F_{a−1}) ≤ (1 − ε)^{n_a} ≤ β_a. A certificate at attempt a needs that event; a union over a gives
+Σ β_a. Assumptions: the map is deterministic; the condition is evaluated exactly at the samples; the
+pseudo-random streams stand in for independent uniforms. It says nothing about violating sets of volume
+fraction ≤ ε, and it is not a proof of invariance.
+
+Common random numbers: every perturbation is x* + ρ·u with the direction u and the fraction ρ taken from
+streams that depend on the seed only (round 1: ``default_rng(seed)``; exploration: ``default_rng([seed, 1])``;
+verification: ``default_rng([seed, 2])``), in a fixed order per sample, whatever the map. Two maps certified
+with one seed see the same round-1 perturbations, the same exploration draws (scaled by their own r̂ and,
+for local proposals, around their own elites) and the same verification directions and radius fractions.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from robustgait.barrier import (
+    Barrier,
+    BatchedMap,
+    Certificate,
+    Round,
+    _check_alpha,
+    _check_beta,
+    _check_point,
+    _check_positive,
+    certificate_from_samples,
+    check_barrier,
+    distances,
+    evaluate_map,
+    sample_ball,
+    solve_radius,
+    violation_end,
+)
+from robustgait.errors import RobustGaitError
+
+__all__ = [
+    "METHODS",
+    "Method",
+    "SequentialConfig",
+    "certify_map_sequential",
+    "propose_round",
+    "verification_beta",
+    "verification_bound",
+    "verification_size",
+]
+
+Method = Literal["uniform", "sequential"]
+METHODS: tuple[Method, ...] = ("uniform", "sequential")
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class SequentialConfig:
+    """Options of the sequential estimator (module docstring; defaults measured in ``docs/certificate.md``).
+
+    epsilon: the bound on the violating volume fraction to certify (with confidence 1 − β, β given apart);
+    budget: most map evaluations in all rounds; first_round: round 1, uniform in B(r_max); round_size:
+    proposals per exploration round; explore: exploration samples before the first verification;
+    explore_after_failure: before each further verification; local_fraction: share of local proposals;
+    spread: σ of the local directions, u = (u_elite + σ g)/‖·‖, g ~ N(0, I); elites: how many of the
+    violating samples closest to x* local proposals start from; min_depth: smallest relative depth
+    1 − d/r̂ of a local proposal (depths are log-uniform in [min_depth, 1]).
+    """
+
+    epsilon: float = 0.02
+    budget: int = 3000
+    first_round: int = 200
+    round_size: int = 50
+    explore: int = 600
+    explore_after_failure: int = 200
+    local_fraction: float = 0.5
+    spread: float = 0.15
+    elites: int = 8
+    min_depth: float = 1e-3
+
+    def __post_init__(self) -> None:
+        for name in ("budget", "first_round", "round_size", "elites"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise RobustGaitError(f"sequential {name} must be an integer ≥ 1, got {v!r}")
+        for name in ("explore", "explore_after_failure"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                raise RobustGaitError(f"sequential {name} must be an integer ≥ 0, got {v!r}")
+        if not 0.0 < self.epsilon < 1.0:
+            raise RobustGaitError(f"epsilon must be in (0, 1), got {self.epsilon!r}")
+        if not 0.0 <= self.local_fraction <= 1.0:
+            raise RobustGaitError(f"local_fraction must be in [0, 1], got {self.local_fraction!r}")
+        if not (math.isfinite(self.spread) and self.spread > 0.0):
+            raise RobustGaitError(f"spread must be a finite number > 0, got {self.spread!r}")
+        if not 0.0 < self.min_depth < 1.0:
+            raise RobustGaitError(f"min_depth must be in (0, 1), got {self.min_depth!r}")
+
+
+# ------------------------------------------------------------------------------------ verification
+def verification_beta(beta: float, attempt: int) -> float:
+    """β_a = β / 2^a: the share of β spent on verification attempt a ≥ 1 (Σ_a β_a = β)."""
+    if attempt < 1:
+        raise RobustGaitError(f"verification attempts count from 1, got {attempt}")
+    return float(_check_beta(beta)) * 0.5**attempt
+
+
+def verification_size(epsilon: float, beta: float, attempt: int) -> int:
+    """n_a = ⌈ln β_a / ln(1 − ε)⌉: the least batch with (1 − ε)^{n_a} ≤ β_a (:func:`verification_beta`)."""
+    if not 0.0 < epsilon < 1.0:
+        raise RobustGaitError(f"epsilon must be in (0, 1), got {epsilon!r}")
+    n = math.log(verification_beta(beta, attempt)) / math.log1p(-epsilon)
+    return max(1, math.ceil(n - 1e-9))  # the slack absorbs rounding when n is an integer
+
+
+def verification_bound(n: int, beta: float, attempt: int) -> float:
+    """ε_a = 1 − β_a^{1/n}: the bound certified by n fresh uniform samples that all satisfy (attempt a)."""
+    if n < 1:
+        raise RobustGaitError(f"a verification batch has at least one sample, got {n}")
+    return float(-math.expm1(math.log(verification_beta(beta, attempt)) / n))
+
+
+# ------------------------------------------------------------------------------------- exploration
+def _unit(v: FloatArray) -> FloatArray:
+    norm = np.linalg.norm(v, axis=1, keepdims=True)
+    return np.asarray(v / np.where(norm > 0.0, norm, 1.0), dtype=np.float64)
+
+
+def propose_round(rng: np.random.Generator, m: int, x_star: FloatArray, r_hat: float, elites: FloatArray,
+                  config: SequentialConfig) -> FloatArray:
+    """m exploration proposals (m, n) inside B(x*, r̂).
+
+    Draws, in this order and whatever the data (common random numbers): g (m, n) ~ N(0, I) and w (m, 3) ~
+    U(0, 1). Proposal i is *local* if w_i0 < local_fraction and there are elites (unit directions (k, n) of
+    the violating samples closest to x*): direction (e_j + σ g_i)/‖·‖ with j = ⌊w_i2 k⌋, distance
+    r̂ (1 − min_depth^{w_i1}) (relative depth log-uniform in [min_depth, 1]); otherwise *global*: direction
+    g_i/‖g_i‖, distance r̂ w_i1^{1/n} (uniform in the ball).
+    """
+    n = x_star.shape[0]
+    g = rng.standard_normal((m, n))
+    w = rng.random((m, 3))
+    u = _unit(g)
+    rho = w[:, 1] ** (1.0 / n)
+    if elites.shape[0] > 0:
+        local = w[:, 0] < config.local_fraction
+        j = np.minimum((w[:, 2] * elites.shape[0]).astype(np.int64), elites.shape[0] - 1)
+        u[local] = _unit(elites[j[local]] + config.spread * g[local])
+        rho[local] = 1.0 - config.min_depth ** w[local, 1]
+    return np.asarray(x_star + r_hat * rho[:, None] * u, dtype=np.float64)
+
+
+class _Pool:
+    """All samples so far with their distances, violation ends and rounds; r̂ of all of them."""
+
+    def __init__(self, P: BatchedMap, x_star: FloatArray, alpha: float, r_max: float, barrier: Barrier):
+        self.P, self.x_star, self.alpha, self.r_max, self.barrier = P, x_star, alpha, r_max, barrier
+        self.x0: list[FloatArray] = []
+        self.x1: list[FloatArray] = []
+        self.d = np.empty(0)
+        self.p = np.empty(0)
+        self.s = np.empty(0)
+        self.round_of: list[NDArray[np.int64]] = []
+        self.rounds: list[Round] = []
+        self.r_hat = r_max
+
+    @property
+    def used(self) -> int:
+        return int(self.d.size)
+
+    def add(self, kind: str, radius: float, x0: FloatArray) -> None:
+        """Evaluate the map on x0, add the samples as a round and recompute r̂. A ``verify`` round passes when
+        r̂ is unchanged: no sample of it violates the condition at r̂ (nor chains a violation down to it)."""
+        x1 = evaluate_map(self.P, x0)
+        d, p = distances(x0, x1, self.x_star)
+        self.x0.append(x0)
+        self.x1.append(x1)
+        self.d = np.concatenate([self.d, d])
+        self.p = np.concatenate([self.p, p])
+        self.s = np.concatenate([self.s, violation_end(d, p, self.alpha, self.barrier)])
+        self.round_of.append(np.full(d.size, len(self.rounds), dtype=np.int64))
+        before = self.r_hat
+        self.r_hat = solve_radius(self.d, self.p, alpha=self.alpha, r_max=self.r_max, barrier=self.barrier).r_star
+        passed = self.r_hat == before if kind == "verify" else None
+        self.rounds.append(Round(kind, float(radius), int(d.size), self.used, float(self.r_hat), passed))
+
+    def elites(self, k: int) -> FloatArray:
+        """Unit directions (≤ k, n) of the samples violated somewhere (s > d, falls included) with d ≥ r̂,
+        closest to x* first: the frontier of the violating set that r̂ rests on."""
+        idx = np.flatnonzero((self.s > self.d) & (self.d >= self.r_hat) & (self.d > 0.0))
+        idx = idx[np.argsort(self.d[idx], kind="stable")[:k]]
+        x0 = np.concatenate(self.x0)
+        return _unit(x0[idx] - self.x_star)
+
+
+def certify_map_sequential(
+    P: BatchedMap,
+    x_star: ArrayLike,
+    *,
+    r_max: float = 2.0,
+    alpha: float = 0.05,
+    beta: float = 0.05,
+    seed: int = 0,
+    barrier: Barrier = "ball",
+    config: SequentialConfig | None = None,
+) -> Certificate:
+    """The sequential estimator (module docstring): certify a batched map P: (N, n) → (N, n) (NaN rows =
+    fell) around its fixed point x_star (n,). Returns a :class:`~robustgait.barrier.Certificate` with
+    ``method="sequential"``, every round (``rounds``: kind, radius, samples, samples used, r̂ after it) and,
+    if a verification batch passed, ``violation_bound`` = ε_a ≤ ε (:func:`verification_bound`) at
+    confidence 1 − β; otherwise ``budget_exhausted`` (bound 1) or, if r̂ reached 0, a vacuous certificate.
+    """
+    cfg = config or SequentialConfig()
+    xs = _check_point("x_star", x_star)
+    r = _check_positive("r_max", r_max)
+    a = _check_alpha(alpha)
+    b = _check_beta(beta)
+    check_barrier(barrier)
+    if cfg.budget < cfg.first_round + verification_size(cfg.epsilon, b, 1):
+        raise RobustGaitError(f"the sample budget {cfg.budget} cannot hold the first round ({cfg.first_round}) and "
+                              f"one verification batch ({verification_size(cfg.epsilon, b, 1)} for epsilon = "
+                              f"{cfg.epsilon:g}, beta = {b:g})")
+    n = xs.shape[0]
+    explore_rng = np.random.default_rng([seed, 1])
+    verify_rng = np.random.default_rng([seed, 2])
+    pool = _Pool(P, xs, a, r, barrier)
+    pool.add("uniform", r, sample_ball(cfg.first_round, n, r, xs, np.random.default_rng(seed)))
+    explore_left, attempt, passed = cfg.explore, 0, False
+    while pool.r_hat > 0.0:
+        room = cfg.budget - pool.used - verification_size(cfg.epsilon, b, attempt + 1)
+        while explore_left > 0 and room > 0 and pool.r_hat > 0.0:
+            m = min(cfg.round_size, explore_left, room)
+            pool.add("explore", pool.r_hat, propose_round(explore_rng, m, xs, pool.r_hat, pool.elites(cfg.elites), cfg))
+            explore_left -= m
+            room -= m
+        if pool.r_hat == 0.0:
+            break
+        attempt += 1
+        n_a = verification_size(cfg.epsilon, b, attempt)
+        if pool.used + n_a > cfg.budget:
+            break
+        pool.add("verify", pool.r_hat, sample_ball(n_a, n, pool.r_hat, xs, verify_rng))
+        if pool.rounds[-1].passed:
+            passed = True
+            break
+        explore_left = cfg.explore_after_failure
+
+    cert = certificate_from_samples(np.concatenate(pool.x0), np.concatenate(pool.x1), xs, alpha=a, r_max=r,
+                                    beta=b, seed=seed, barrier=barrier)
+    assert cert.r_star == pool.r_hat
+    cert = replace(cert, method="sequential", rounds=tuple(pool.rounds), sample_round=np.concatenate(pool.round_of))
+    if passed:
+        n_a = pool.rounds[-1].n_samples
+        basis = (f"a batch of {n_a} fresh samples drawn uniformly in this ball after r* was fixed all satisfy it "
+                 f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}; r* is exact for all "
+                 f"{cert.n_samples} samples of {len(pool.rounds)} rounds)")
+        return replace(cert, violation_bound=verification_bound(n_a, b, attempt), basis=basis)
+    return replace(cert, violation_bound=1.0, budget_exhausted=pool.r_hat > 0.0)

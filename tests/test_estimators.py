@@ -1,0 +1,206 @@
+"""Tests for robustgait.estimators: the sequential estimator on maps with known answers (convergence, coverage of
+its confidence statement, common random numbers), against the paper's uniform estimator."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+
+import numpy as np
+import pytest
+
+from robustgait.barrier import certify_map, distances, sample_ball, solve_radius
+from robustgait.errors import RobustGaitError
+from robustgait.estimators import (
+    SequentialConfig,
+    certify_map_sequential,
+    propose_round,
+    verification_beta,
+    verification_bound,
+    verification_size,
+)
+from robustgait.synthetic import BandMap, ConeMap
+
+X_STAR = np.array([0.4, 0.2, 0.3])
+
+
+def test_verification_sizes_spend_beta() -> None:
+    assert sum(verification_beta(0.05, a) for a in range(1, 60)) == pytest.approx(0.05)
+    for eps, beta in ((0.02, 0.05), (0.1, 0.05), (0.05, 0.01)):
+        for a in (1, 2, 5):
+            n = verification_size(eps, beta, a)
+            assert (1 - eps) ** n <= verification_beta(beta, a) < (1 - eps) ** (n - 1)
+            assert verification_bound(n, beta, a) <= eps
+            assert (1 - verification_bound(n, beta, a)) ** n == pytest.approx(verification_beta(beta, a))
+    assert verification_size(0.02, 0.05, 1) == 183  # ln(0.025) / ln(0.98) = 182.6
+    with pytest.raises(RobustGaitError):
+        verification_size(0.02, 0.05, 0)
+
+
+@pytest.mark.parametrize("kwargs", [{"epsilon": 0.0}, {"epsilon": 1.0}, {"budget": 0}, {"round_size": 0},
+                                    {"explore": -1}, {"local_fraction": 1.5}, {"spread": 0.0}, {"min_depth": 1.0},
+                                    {"elites": 0}, {"first_round": True}])
+def test_bad_sequential_config(kwargs: dict) -> None:
+    with pytest.raises(RobustGaitError):
+        SequentialConfig(**kwargs)
+
+
+def test_budget_must_hold_a_verification() -> None:
+    with pytest.raises(RobustGaitError, match="budget 300 cannot hold"):
+        certify_map_sequential(lambda x: x, X_STAR, config=SequentialConfig(budget=300))
+
+
+# ----------------------------------------------------------------------------------- known answers
+
+
+def test_sequential_converges_to_the_true_radius_and_uniform_overestimates() -> None:
+    # contraction by 0.5 except a cone of 1 % of the directions beyond r0 = 0.3, where samples fall: r* = 0.3
+    P = ConeMap(X_STAR, r0=0.3, half_angle=0.2003)
+    assert P.cone_fraction == pytest.approx(0.01, rel=1e-3)
+    seeds = range(6)
+    errors = []
+    for explore in (50, 200, 800):
+        cfg = SequentialConfig(explore=explore, budget=5000)
+        r = np.array([certify_map_sequential(P, X_STAR, seed=s, config=cfg).r_star for s in seeds])
+        assert np.all(r >= P.r_star)  # an estimate from samples can only be too large
+        errors.append(float(np.mean(r / P.r_star - 1)))
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[2] < 0.002
+    # the paper's estimator, N = 200 uniform in B(2): ~1.6 samples in the cone, far beyond r0
+    uniform = np.array([certify_map(P, X_STAR, n_samples=200, seed=s).r_star for s in range(10)])
+    assert np.all(uniform >= P.r_star) and np.median(uniform) > 2 * P.r_star
+
+
+def test_certificate_rounds_and_statement() -> None:
+    P = ConeMap(X_STAR, r0=0.3, half_angle=0.2003)
+    c = certify_map_sequential(P, X_STAR, seed=3)
+    cfg = SequentialConfig()
+    kinds = [r.kind for r in c.rounds]
+    assert kinds[0] == "uniform" and kinds[-1] == "verify" and set(kinds[1:-1]) == {"explore"}
+    assert c.rounds[-1].passed and c.rounds[-1].n_samples == verification_size(0.02, 0.05, 1) == 183
+    assert sum(r.n_samples for r in c.rounds) == c.n_samples == c.rounds[-1].samples_used
+    assert c.n_samples == cfg.first_round + cfg.explore + 183
+    r_hat = [r.r_hat for r in c.rounds]
+    assert all(b <= a for a, b in itertools.pairwise(r_hat)) and r_hat[-1] == c.r_star
+    # each round sampled inside the ball of the r̂ it started from
+    d = np.linalg.norm(c.samples - X_STAR, axis=1)
+    for k, rd in enumerate(c.rounds):
+        assert rd.radius == (2.0 if k == 0 else c.rounds[k - 1].r_hat)
+        assert np.all(d[c.round_of_sample == k] <= rd.radius * (1 + 1e-12))
+    assert c.method == "sequential" and not c.budget_exhausted and not c.vacuous
+    assert c.violation_bound == verification_bound(183, 0.05, 1) <= 0.02
+    assert c.n_inside >= 183 and np.all(c.margins[d < c.r_star] >= 0)
+    text = c.statement()
+    assert "95%" in text and "183 fresh samples" in text and "\n" not in text
+    js = json.loads(json.dumps(c.to_dict(), allow_nan=False))
+    assert [r["r_hat"] for r in js["rounds"]] == r_hat and len(js["sample_round"]) == c.n_samples
+    again = certify_map_sequential(P, X_STAR, seed=3)
+    assert again.to_dict() == c.to_dict()
+
+
+def test_budget_spent_and_vacuous_statements() -> None:
+    # every ball has 30 % violating volume: no verification batch can pass
+    P = BandMap(X_STAR, a=0.3)
+    c = certify_map_sequential(P, X_STAR, config=SequentialConfig(budget=1500))
+    assert c.budget_exhausted and c.violation_bound == 1.0 and c.n_samples <= 1500
+    assert [r.kind for r in c.rounds].count("verify") >= 2 and not any(r.passed for r in c.rounds)
+    assert "budget" in c.statement() and "no confidence statement" in c.statement()
+    # a map that moves every point away (a translation by 5): r* is the nearest sample, nothing inside
+    shift = np.array([5.0, 0.0, 0.0])
+    for c in (certify_map(lambda x: x + shift, X_STAR, seed=1),
+              certify_map_sequential(lambda x: x + shift, X_STAR, seed=1, config=SequentialConfig(budget=800))):
+        assert c.vacuous and c.n_inside == 0 and c.violation_bound == 1.0
+        assert "vacuous" in c.statement()
+        assert c.r_star == np.min(np.linalg.norm(c.samples - X_STAR, axis=1))
+
+
+# ------------------------------------------------------------------------------------------ coverage
+
+
+def _naive_rule(P: BandMap, seed: int, eps: float, beta: float, budget: int) -> float | None:
+    """What the confidence statement must not be: (1 − ε)^n ≤ β for the n samples inside a data-chosen r̂."""
+    need = math.ceil(math.log(beta) / math.log1p(-eps))
+    rng = np.random.default_rng(seed)
+    x0 = sample_ball(50, 3, 2.0, X_STAR, rng)
+    x1 = P(x0)
+    while x0.shape[0] + 25 <= budget:
+        d, p = distances(x0, x1, X_STAR)
+        r = solve_radius(d, p, alpha=0.05, r_max=2.0).r_star
+        if np.count_nonzero(d < r) >= need:
+            return r
+        new = sample_ball(25, 3, r, X_STAR, rng)
+        x0, x1 = np.vstack([x0, new]), np.vstack([x1, P(new)])
+    return None
+
+
+@pytest.mark.parametrize(("a", "c"), [(0.105, 0.0), (0.05, 0.2)])
+def test_coverage_of_the_sequential_statement(a: float, c: float) -> None:
+    # ε = 0.1 keeps the runs cheap. Map 1: every ball has violating fraction 0.105 > ε, so every certificate
+    # is wrong and P(wrong) = P(some verification batch passes) ≤ Σ β_a ≈ 0.04 here. Map 2: the fraction
+    # 0.05 + 0.15 r grows with r, exceeding ε beyond r = 1/3.
+    eps, beta, runs = 0.1, 0.05, 200
+    P = BandMap(X_STAR, a=a, c=c)
+    cfg = SequentialConfig(epsilon=eps, budget=600, first_round=50, round_size=50, explore=100,
+                           explore_after_failure=50)
+    wrong = 0
+    for seed in range(runs):
+        cert = certify_map_sequential(P, X_STAR, seed=seed, beta=beta, config=cfg)
+        wrong += cert.violation_bound < 1.0 and P.violating_fraction(cert.r_star) > eps
+    # one-sided binomial test at level 0.001: 200 runs with a failure rate ≤ β give > 20 failures w.p. 0.0012
+    assert wrong <= 20
+    if c == 0.0:  # the check has power: a bound that ignores the data-dependent choice of r̂ fails it
+        naive = [_naive_rule(P, seed, eps, beta, 600) for seed in range(100)]
+        assert sum(r is not None and P.violating_fraction(r) > eps for r in naive) > 50
+
+
+# ------------------------------------------------------------------------------ common random numbers
+
+
+def test_common_random_numbers_across_maps() -> None:
+    # two different maps and fixed points, one seed: the same relative perturbations wherever the radii agree
+    xa, xb = np.array([0.4, 0.2, 0.3]), np.array([-1.0, 2.0, 0.5])
+    ca = certify_map_sequential(lambda x: xa + 0.5 * (x - xa), xa, seed=7)
+    cb = certify_map_sequential(lambda x: xb + 0.8 * (x - xb), xb, seed=7)
+    assert ca.r_star == cb.r_star == 2.0 and ca.n_samples == cb.n_samples
+    np.testing.assert_allclose(ca.samples - xa, cb.samples - xb, atol=1e-12)
+    # with data-dependent radii: the first round is identical; exploration draws the same directions and
+    # radius fractions (global proposals) and verification the same directions and fractions, scaled by r̂
+    P1, P2 = ConeMap(xa, r0=0.3, half_angle=0.2003), ConeMap(xb, r0=0.6, half_angle=0.3)
+    c1 = certify_map_sequential(P1, xa, seed=7)
+    c2 = certify_map_sequential(P2, xb, seed=7)
+    first = c1.round_of_sample == 0
+    np.testing.assert_allclose(c1.samples[first] - xa, c2.samples[c2.round_of_sample == 0] - xb, atol=1e-12)
+
+    def verify_rel(c: object, x_star: np.ndarray) -> np.ndarray:
+        rounds = c.rounds  # type: ignore[attr-defined]
+        k = next(i for i, r in enumerate(rounds) if r.kind == "verify")
+        return (c.samples[c.round_of_sample == k] - x_star) / rounds[k].radius  # type: ignore[attr-defined]
+
+    np.testing.assert_allclose(verify_rel(c1, xa), verify_rel(c2, xb), atol=1e-12)
+    # exploration: the same stream gives the same global proposals relative to r̂ (no elites)
+    cfg = SequentialConfig()
+    g1 = propose_round(np.random.default_rng([7, 1]), 50, xa, 0.3, np.empty((0, 3)), cfg)
+    g2 = propose_round(np.random.default_rng([7, 1]), 50, xb, 1.2, np.empty((0, 3)), cfg)
+    np.testing.assert_allclose((g1 - xa) / 0.3, (g2 - xb) / 1.2, atol=1e-12)
+    assert np.all(np.linalg.norm(g1 - xa, axis=1) <= 0.3)
+
+
+def test_first_round_is_the_uniform_estimator() -> None:
+    P = ConeMap(X_STAR, r0=0.3, half_angle=0.2003)
+    u = certify_map(P, X_STAR, n_samples=200, seed=5)
+    s = certify_map_sequential(P, X_STAR, seed=5)
+    np.testing.assert_array_equal(s.samples[:200], u.samples)
+    assert s.rounds[0].r_hat == u.r_star and u.rounds[0].r_hat == u.r_star
+
+
+def test_local_proposals_follow_the_elites() -> None:
+    cfg = SequentialConfig(local_fraction=1.0, spread=0.05, min_depth=1e-3)
+    elite = np.array([[0.0, 0.0, 1.0]])
+    x = propose_round(np.random.default_rng(0), 400, X_STAR, 0.5, elite, cfg)
+    dx = x - X_STAR
+    d = np.linalg.norm(dx, axis=1)
+    assert np.all(d < 0.5) and np.all(d >= 0.0)
+    assert np.median(dx[:, 2] / d) > 0.99  # directions within a few degrees of the elite's
+    depth = 1 - d / 0.5  # log-uniform in [1e-3, 1]: a third of them below 1 %
+    assert 0.25 < np.mean(depth < 0.01) < 0.42
