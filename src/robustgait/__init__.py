@@ -8,6 +8,7 @@ Public API (everything else is reachable from the submodules)::
     result = robustgait.walk(robot, gait, steps=50)
     cert = robustgait.certify_gait(robot, gait)          # cert.status, cert.r_star (paper's estimator)
     cert = robustgait.certify_gait(robot, gait, robustgait.CertifyConfig(method="sequential"))
+    res = robustgait.validate_gait(robot, gait, kinds=["push"])  # disturbed walks, certificate check
     gen = robustgait.GaitGenerator(robot)                # build the HZD problem once, then gen.solve(params)
 """
 
@@ -25,6 +26,7 @@ from robustgait.estimators import SequentialConfig, certify_map_sequential
 from robustgait.gait import Gait, GaitParams, load_gait
 from robustgait.robots import Robot, load_robot
 from robustgait.sim import SimConfig, StepEngine, WalkResult, walk
+from robustgait.validate import ValidateConfig, ValidationResult, validate_gait
 
 if TYPE_CHECKING:
     from robustgait.gaitgen import GaitGenerator, generate_gait
@@ -53,6 +55,8 @@ __all__ = [
     "SequentialConfig",
     "SimConfig",
     "StepEngine",
+    "ValidateConfig",
+    "ValidationResult",
     "WalkResult",
     "__version__",
     "certify_gait",
@@ -62,5 +66,6 @@ __all__ = [
     "invariant_radius",
     "load_gait",
     "load_robot",
+    "validate_gait",
     "walk",
 ]

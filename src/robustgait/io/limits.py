@@ -114,6 +114,10 @@ FP_TOL = Limit("--fp-tol", 0.0, 1.0, "rad/s", low_open=True)
 BARRIER_R = Limit("--r", 0.0, 1e6, low_open=True)
 X_STAR = symmetric("--x-star value", 1e6)
 NODES = Limit("--nodes", 5, 101)  # odd; the problem build time grows with the node count
+TRIALS = Limit("--trials", 1, 10_000)  # validation trials per disturbance kind (one batch)
+STEPS_AFTER = Limit("--steps-after", 1, 1000)
+FRAMES = Limit("--frames", 2, 60)  # gait tiles: each frame is a 320 × 480 tile in one PNG row
+WARMUP_STEPS = Limit("--warmup-steps", 0, 1000)
 
 # The work of one command: every simulated gait step counted to its latest end (τ = 1.5 without touchdown).
 # A walk or certificate within every limit above can still combine a 10 s gait, a 1e-4 s timestep and 1000

@@ -9,13 +9,18 @@ event or a fall — and only the samples still going are rolled on from their la
 
 Chunk boundaries restart MuJoCo's constraint-solver warm start from zero; they are fixed relative to the
 step start, so results are deterministic and identical for K = 1 and K > 1.
+
+Disturbances (:mod:`robustgait.validate`) enter through :class:`StepInputs`: per-sample control offsets and
+base wrenches go through the rollout's control vector (``mjSTATE_CTRL | mjSTATE_XFRC_APPLIED``), and
+per-sample models through the list of models that :func:`mujoco.rollout` accepts. Without inputs the
+rollout calls are exactly those of the undisturbed engine.
 """
 
 from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Literal
@@ -34,6 +39,8 @@ from robustgait.sim.controller import step_controls
 
 FALL_REASONS = ("base_low", "tilt", "non_foot_contact", "diverged", "no_touchdown", "no_foot_flat")
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
+_CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
+_CTRL_XFRC = _CTRL | int(mujoco.mjtState.mjSTATE_XFRC_APPLIED)
 
 
 @contextmanager
@@ -114,6 +121,21 @@ class StepBatch:
     trajectory: list[NDArray[np.float64]] = field(default_factory=list)
 
 
+@dataclass(frozen=True)
+class StepInputs:
+    """Per-sample inputs of one step for K samples (each optional; shapes checked by :meth:`StepEngine.step`).
+
+    models: K compiled models with the robot model's size signature (e.g. copies with other masses,
+    friction or terrain); ctrl_offset (K, n, nu): added to the gait's servo controls at physics steps
+    0..n−1 of the step (none after n); base_wrench (K, n, 6): world-frame force [N] and torque [N m] on the
+    floating base at its centre of mass (MuJoCo's ``xfrc_applied``) at physics steps 0..n−1.
+    """
+
+    models: Sequence[mujoco.MjModel] | None = None
+    ctrl_offset: NDArray[np.float64] | None = None
+    base_wrench: NDArray[np.float64] | None = None
+
+
 class StepEngine:
     """One gait on one robot, both stances; call :meth:`step` with batches of states."""
 
@@ -146,6 +168,7 @@ class StepEngine:
         self._template = np.empty(self.nstate)
         mujoco.mj_getState(m, data, self._template, _FULL)
         self._datas = [robot.new_data() for _ in range(self.config.threads)]
+        self._other_datas: dict[int, list[mujoco.MjData]] = {}
         self._pool: rollout.Rollout | None = rollout.Rollout(nthread=self.config.threads)
         adr = robot.sensor_adr
         self._sens = {s: adr[CONTACT_SENSORS[i]] for i, s in enumerate(("left", "right"))}
@@ -220,12 +243,62 @@ class StepEngine:
         first_code = np.where(first >= 0, code[np.arange(len(first)), np.maximum(first, 0)], -1)
         return first, first_code
 
+    def _check_inputs(self, inputs: StepInputs, kk: int) -> None:
+        m = self.robot.model
+        if inputs.models is not None:
+            if len(inputs.models) != kk:
+                raise RobustGaitError(f"need one model per sample ({kk}), got {len(inputs.models)}")
+            sig = inputs.models[0].signature
+            if any(mi.signature != sig for mi in inputs.models) or any(
+                    getattr(inputs.models[0], f) != getattr(m, f) for f in ("nq", "nv", "nu", "nbody", "nsensordata")):
+                raise RobustGaitError("per-sample models must share one size signature and the robot's "
+                                      "joints, actuators, bodies and sensors")
+        for name, arr, width in (("ctrl_offset", inputs.ctrl_offset, m.nu), ("base_wrench", inputs.base_wrench, 6)):
+            if arr is not None and (arr.ndim != 3 or arr.shape[0] != kk or arr.shape[2] != width):
+                raise RobustGaitError(f"{name} must be (K={kk}, n, {width}), got {arr.shape}")
+
+    def _rollout(self, active: NDArray[np.int64], current: NDArray[np.float64], ctrl: NDArray[np.float64],
+                 k0: int, n: int, inputs: StepInputs | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """One chunk of n physics steps from step k0 for the samples ``active`` (see :class:`StepInputs`)."""
+        assert self._pool is not None
+        if inputs is None:
+            return self._pool.rollout(self.robot.model, self._datas, current[active], ctrl[None, k0:k0 + n],
+                                      nstep=n)
+        m = self.robot.model
+        c = ctrl[None, k0:k0 + n]
+        off = inputs.ctrl_offset
+        if off is not None and k0 < off.shape[1]:
+            c = np.repeat(c, active.size, axis=0)
+            w = min(n, off.shape[1] - k0)
+            c[:, :w] += off[active, k0:k0 + w]
+        spec = _CTRL
+        wr = inputs.base_wrench
+        if wr is not None and k0 < wr.shape[1] and np.any(wr[active, k0:k0 + n]):
+            w = min(n, wr.shape[1] - k0)
+            full = np.zeros((active.size, n, m.nu + 6 * m.nbody))
+            full[:, :, :m.nu] = c
+            col = m.nu + 6 * self.robot.base_body_id
+            full[:, :w, col:col + 6] = wr[active, k0:k0 + w]
+            c, spec = full, _CTRL_XFRC
+        models: mujoco.MjModel | list[mujoco.MjModel] = m
+        datas = self._datas
+        if inputs.models is not None:
+            models = [inputs.models[i] for i in active]
+            sig = models[0].signature
+            if sig != m.signature:  # e.g. a terrain model: data must be allocated for it
+                if sig not in self._other_datas:
+                    self._other_datas[sig] = [mujoco.MjData(models[0]) for _ in range(self.config.threads)]
+                datas = self._other_datas[sig]
+        return self._pool.rollout(models, datas, current[active], c, control_spec=spec, nstep=n)
+
     def step(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64], stance: str, *, domain: int = 0,
-             record: bool = False, progress: Callable[[int], None] | None = None) -> StepBatch:
+             record: bool = False, progress: Callable[[int], None] | None = None,
+             inputs: StepInputs | None = None) -> StepBatch:
         """Simulate domain ``domain`` of a step of the given ``stance`` from K start states (τ = 0) to each
         one's next event (for a one-domain gait: the whole step).
 
         ``progress`` is called after each chunk with the number of samples that reached their event in it.
+        ``inputs``: per-sample disturbances (:class:`StepInputs`); None = the gait's controls for all.
         """
         if stance not in self.gaits:
             raise RobustGaitError(f"stance must be 'left' or 'right', got {stance!r}")
@@ -237,6 +310,8 @@ class StepEngine:
         if self._pool is None:
             raise RobustGaitError("this StepEngine is closed")
         kk = qpos.shape[0]
+        if inputs is not None:
+            self._check_inputs(inputs, kk)
         bad = ~(np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1))
         if not 0 <= domain < len(self.graph):
             raise RobustGaitError(f"the gait has {len(self.graph)} domains, no domain {domain}")
@@ -256,8 +331,7 @@ class StepEngine:
         while active.size and k0 < horizon:
             n = min(self.config.chunk_steps, horizon - k0)
             with quiet_mujoco():
-                st, sens = self._pool.rollout(self.robot.model, self._datas, current[active],
-                                              ctrl[None, k0:k0 + n], nstep=n)
+                st, sens = self._rollout(active, current, ctrl, k0, n, inputs)
             physics += active.size * n
             first, first_code = self._scan(st, sens, k0, stance, domain)
             done = first >= 0

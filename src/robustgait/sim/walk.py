@@ -137,6 +137,16 @@ def walk(robot: Robot, gait: Gait, *, steps: int = 50, config: SimConfig | None 
             eng.close()
 
 
+def offscreen_renderer(robot: Robot, width: int, height: int) -> mujoco.Renderer:
+    """MuJoCo's offscreen renderer for the robot's model, or a one-line RobustGaitError naming the fix."""
+    try:
+        return mujoco.Renderer(robot.model, height, width)
+    except Exception as exc:  # the GL backends raise a variety of errors when no context can be made
+        raise RobustGaitError(
+            f"offscreen rendering unavailable ({type(exc).__name__}: {exc}); MuJoCo needs EGL or OSMesa: set "
+            "MUJOCO_GL=egl or MUJOCO_GL=osmesa and install libegl1 or libosmesa6") from None
+
+
 def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path, *, fps: int = 30,
                  width: int = 640, height: int = 480) -> int:
     """Render a trajectory (full-physics states, as kept by :func:`walk`) to an ``.mp4`` (H.264 via ffmpeg) or
@@ -156,12 +166,7 @@ def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path
         width, height = width // 2, height // 2
         if n_frames > MAX_GIF_FRAMES:
             raise input_error(path, f"{n_frames} frames, over the {MAX_GIF_FRAMES} a .gif may hold (use .mp4)")
-    try:
-        renderer = mujoco.Renderer(robot.model, height, width)
-    except Exception as exc:  # the GL backends raise a variety of errors when no context can be made
-        raise RobustGaitError(
-            f"offscreen rendering unavailable ({type(exc).__name__}: {exc}); MuJoCo needs EGL or OSMesa: set "
-            "MUJOCO_GL=egl or MUJOCO_GL=osmesa and install libegl1 or libosmesa6") from None
+    renderer = offscreen_renderer(robot, width, height)
     m = robot.model
     data = mujoco.MjData(m)
     cam = mujoco.MjvCamera()
