@@ -225,3 +225,10 @@ def test_gait_tiles_are_a_real_image(tmp_path, exo, exo_gait):
     tiles = [img[:240, i * 160:(i + 1) * 160].astype(float) for i in range(4)]
     assert np.abs(tiles[0] - tiles[2]).mean() > 1.0  # the legs move between frames
     assert np.abs(img[:240].astype(float) - img[240:].astype(float)).mean() > 5  # side and front differ
+
+
+def test_validate_refuses_a_multicontact_gait(exo, exo_mc_gait):
+    from robustgait.validate import validate_gait
+
+    with pytest.raises(RobustGaitError, match="one-domain"):
+        validate_gait(exo, exo_mc_gait)

@@ -193,11 +193,13 @@ def _cmd_gait_convert(args: argparse.Namespace) -> int:
 
 def _cmd_gait_generate(args: argparse.Namespace) -> int:
     from robustgait.gait import GaitParams, load_gait
-    from robustgait.gaitgen import GaitGenConfig, GaitGenerator, generate_gait
+    from robustgait.gaitgen import DEFAULT_STEP_DURATION, GaitGenConfig, GaitGenerator, generate_gait
     from robustgait.robots import load_robot
 
+    if args.step_duration is None:
+        args.step_duration = DEFAULT_STEP_DURATION[args.domains]
     try:  # out-of-bounds parameters fail before the (seconds-long) problem build
-        GaitParams(args.step_length, args.step_duration, args.step_width, args.step_height)
+        GaitParams(args.step_length, args.step_duration, args.step_width, args.step_height, args.rolling_fraction)
     except RobustGaitError as exc:
         raise RobustGaitError(f"gait generation failed (Infeasible_Parameters): {exc}") from None
     if args.nodes % 2 == 0:
@@ -205,16 +207,17 @@ def _cmd_gait_generate(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     _check_outputs(args.output)
     warm = load_gait(args.warm_start, robot) if args.warm_start else None
-    config = GaitGenConfig(nodes=args.nodes, stance=args.stance)
+    config = GaitGenConfig(domains=args.domains, nodes=args.nodes, stance=args.stance)
     live = not args.json
     if live:
-        print(f"building the flat-foot HZD problem for {robot.name} ({args.nodes} nodes) ...", flush=True)
+        what = "flat-foot" if args.domains == "flat" else "multi-contact (heel/toe rolling)"
+        print(f"building the {what} HZD problem for {robot.name} ({args.nodes} nodes) ...", flush=True)
     gen = GaitGenerator(robot, config, verbose=live)
     if live:
         print(f"built in {gen.build_seconds:.1f} s: {gen.n_variables} variables, {gen.n_constraints} constraints; "
               "IPOPT iterations:", flush=True)
     res = generate_gait(robot, args.step_length, args.step_duration, args.step_width, args.step_height,
-                        warm_start=warm, generator=gen)
+                        args.rolling_fraction, warm_start=warm, generator=gen)
     summary = {**res.summary(), "build_seconds": gen.build_seconds, "output": args.output if res.gait else None}
     if res.gait is None:
         if args.json:
@@ -390,10 +393,17 @@ def build_parser() -> argparse.ArgumentParser:
     gc.add_argument("-o", "--output", required=True, type=output_path("json"), help="output gait .json")
     gc.add_argument("--mirror", action="store_true", help="relabel for the other stance leg")
     gc.set_defaults(func=_cmd_gait_convert)
-    gg = gsub.add_parser("generate", help="HZD trajectory optimization of a flat-foot gait (CasADi + IPOPT)")
+    gg = gsub.add_parser("generate", help="HZD trajectory optimization of a gait (CasADi + IPOPT): flat-foot or "
+                         "multi-contact heel/toe rolling")
     gg.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
+    gg.add_argument("--domains", choices=("flat", "multicontact"), default="flat",
+                    help="domain graph: flat (one domain, flat foot) or multicontact (single support, heel strike, "
+                    "rolling double support, toe-off); default flat")
     gg.add_argument("--step-length", type=finite_float, default=0.15, help="[m] (default 0.15)")
-    gg.add_argument("--step-duration", type=finite_float, default=0.7, help="[s] (default 0.7)")
+    gg.add_argument("--step-duration", type=finite_float, default=None,
+                    help="[s] (default 0.7 flat, 0.9 multicontact)")
+    gg.add_argument("--rolling-fraction", type=finite_float, default=0.2,
+                    help="multicontact: the fraction of the step in rolling double support (default 0.2)")
     gg.add_argument("--step-width", type=finite_float, default=0.25, help="[m] (default 0.25)")
     gg.add_argument("--step-height", type=finite_float, default=0.07,
                     help="swing-foot height at mid-step [m] (default 0.07)")

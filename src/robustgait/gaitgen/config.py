@@ -7,7 +7,19 @@ from typing import Any
 
 from robustgait.domains import GRAPH_NAMES
 from robustgait.errors import RobustGaitError
+from robustgait.gait import GaitParams
 from robustgait.robots.spec import GaitQuality, Robot
+
+# Default step duration of each domain graph [s]: multi-contact gaits of 0.7 s solve but do not walk on exo (the
+# 0.14 s of rolling is too fast for the simulator's soft contacts; measured, docs/gaitgen.md), 0.8–1.1 s do.
+DEFAULT_STEP_DURATION = {"flat": 0.7, "multicontact": 0.9}
+
+
+def default_params(domains: str = "flat") -> GaitParams:
+    """The default essential constraints of a domain graph (GaitParams' defaults, the graph's duration)."""
+    if domains not in DEFAULT_STEP_DURATION:
+        raise RobustGaitError(f"domains must be one of {GRAPH_NAMES}, got {domains!r}")
+    return GaitParams(step_duration=DEFAULT_STEP_DURATION[domains])
 
 
 @dataclass(frozen=True)
@@ -41,7 +53,7 @@ class GaitGenConfig:
 
     domains: str = "flat"
     nodes: int = 17
-    ds_nodes: int = 9
+    ds_nodes: int = 17
     stance: str = "right"
     friction: float = 0.6
     torsional_friction: float = 0.02
@@ -55,7 +67,7 @@ class GaitGenConfig:
     heel_strike_pitch: tuple[float, float] = (0.2, 0.35)
     toe_off_pitch: tuple[float, float] = (0.2, 0.6)
     foot_flat_rate: float = 1.0
-    min_line_force: float = 20.0
+    min_line_force: float = 150.0
     ds_free_joints: tuple[str, ...] | None = None
     max_iter: int = 300
     tol: float = 1e-8

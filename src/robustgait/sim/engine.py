@@ -37,7 +37,7 @@ from robustgait.robots import Robot
 from robustgait.robots.spec import CONTACT_SENSORS
 from robustgait.sim.controller import step_controls
 
-FALL_REASONS = ("base_low", "tilt", "non_foot_contact", "diverged", "no_touchdown", "no_foot_flat")
+FALL_REASONS = ("base_low", "tilt", "non_foot_contact", "diverged", "no_touchdown")
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
 _CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
 _CTRL_XFRC = _CTRL | int(mujoco.mjtState.mjSTATE_XFRC_APPLIED)
@@ -353,9 +353,8 @@ class StepEngine:
             if progress is not None:
                 progress(int(done.sum()) + (active.size if k0 + n >= horizon else 0))
             k0 += n
-        if active.size:  # ran out of horizon without its guard: no touchdown (or foot-flat)
-            missing = "no_touchdown" if self.graph.domains[domain].guard == "touchdown" else "no_foot_flat"
-            code[active] = 1 + FALL_REASONS.index(missing)
+        if active.size:  # ran out of horizon without a touchdown (a double support always ends by τ = 1)
+            code[active] = 1 + FALL_REASONS.index("no_touchdown")
             at[active] = horizon
         fell = code != 0
         out_state[fell] = np.nan
