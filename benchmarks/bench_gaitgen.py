@@ -9,7 +9,10 @@ against L/T, pelvis roll range over the walk, ‖x̄*‖ of the step map's fixed
 samples). Markdown rows are printed for benchmarks/README.md. Gait generation runs on one core (BLAS/OpenMP
 pinned to 1); the simulator uses its default threads.
 
-    python benchmarks/bench_gaitgen.py [--robot exo] [--samples 200] [--no-walk]
+    python benchmarks/bench_gaitgen.py [--robot exo] [--domains flat|multicontact] [--samples 200] [--no-walk]
+
+With ``--domains multicontact`` the default gait (step duration 0.9 s) is also certified with the sequential
+estimator, and its walk reports how far each sole pitches during double support (the rolling).
 """
 
 from __future__ import annotations
@@ -27,11 +30,33 @@ import numpy as np
 
 from robustgait import GaitParams, load_robot, walk
 from robustgait.certify import CertifyConfig, certify_gait
-from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.gaitgen import GaitGenerator, GaitGenResult
+from robustgait.gaitgen import GaitGenConfig, GaitGenerator, GaitGenResult, default_params
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
+
+
+def rolling(robot: Robot, gait: Gait, trajectory: np.ndarray, events: list) -> tuple[float, float]:  # type: ignore[type-arg]
+    """Smallest sweep [deg] of the back and of the front sole's pitch over the double supports of steps 10–20."""
+    import mujoco
+
+    m, d = robot.model, mujoco.MjData(robot.model)
+    t_ds = gait.domains[1].duration
+
+    def pitch(k: int, side: str) -> float:
+        mujoco.mj_setState(m, d, trajectory[k], mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        mujoco.mj_kinematics(m, d)
+        return float(np.degrees(-np.arcsin(d.geom_xmat[robot.sole_geom_id[side]].reshape(3, 3)[2, 0])))
+
+    back, front = [], []
+    for e in events[10:20]:
+        k0 = int(np.argmin(np.abs(trajectory[:, 0] - e.time)))
+        ks = range(k0, min(len(trajectory), k0 + round(t_ds / robot.dt)), 5)
+        other = "left" if e.stance == "right" else "right"
+        b, f = [pitch(k, e.stance) for k in ks], [pitch(k, other) for k in ks]
+        back.append(max(b) - min(b))
+        front.append(max(f) - min(f))
+    return (min(back), min(front)) if back else (float("nan"), float("nan"))
 
 
 def walk_figures(robot: Robot, gait: Gait, samples: int) -> dict[str, object]:
@@ -44,12 +69,16 @@ def walk_figures(robot: Robot, gait: Gait, samples: int) -> dict[str, object]:
     out: dict[str, object] = {"steps": w.steps_taken, "fall": w.fall_reason,
                               "speed_error": w.mean_speed / (p.step_length / p.step_duration) - 1,
                               "roll": (float(roll.min()), float(roll.max())), "x_star": None, "r_star": None}
+    if len(gait.domains) > 1 and w.steps_taken >= 20:
+        out["rolling"] = rolling(robot, gait, w.trajectory, w.events)
     if w.steps_taken == 50:
-        try:
-            c = certify_gait(robot, gait, CertifyConfig(n_samples=samples))
-            out["x_star"], out["r_star"] = float(np.linalg.norm(c.fixed_point.x_star)), c.r_star
-        except RobustGaitError as exc:
-            out["fall"] = f"certificate: {exc}"
+        c = certify_gait(robot, gait, CertifyConfig(n_samples=samples, method="uniform"))
+        if c.fixed_point is not None:
+            out["x_star"] = float(np.linalg.norm(c.fixed_point.x_star))
+        if c.ok:
+            out["r_star"] = c.r_star
+        else:
+            out["fall"] = f"certificate: {c.status}"
     return out
 
 
@@ -59,13 +88,16 @@ def fmt_walk(f: dict[str, object]) -> str:
     lo, hi = f["roll"]  # type: ignore[misc]
     xs = "—" if f["x_star"] is None else f"{f['x_star']:.2f}"
     rs = "—" if f["r_star"] is None else f"{f['r_star']:.3f}"
+    roll_s = "" if "rolling" not in f else (f", double support: back sole sweeps ≥ {f['rolling'][0]:.1f}°, "  # type: ignore[index]
+                                           f"front ≥ {f['rolling'][1]:.1f}°")  # type: ignore[index]
     return (f"walks 50/50, speed {f['speed_error'] * 100:+.1f} %, roll {lo:+.1f}…{hi:+.1f}°, ‖x̄*‖ {xs}, "
-            f"r* {rs}")
+            f"r* {rs}{roll_s}")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--robot", default="exo")
+    ap.add_argument("--domains", choices=("flat", "multicontact"), default="flat")
     ap.add_argument("--samples", type=int, default=200, help="certificate samples (uniform) per gait")
     ap.add_argument("--no-walk", action="store_true")
     args = ap.parse_args()
@@ -73,18 +105,23 @@ def main() -> None:
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}; gait generation "
           f"on 1 thread; robot {robot.name}")
     t0 = time.perf_counter()
-    gen = GaitGenerator(robot)
-    print(f"build: {time.perf_counter() - t0:.1f} s ({gen.n_variables} variables, {gen.n_constraints} constraints, "
-          f"{gen.config.nodes} nodes)")
-    base = gen.solve(GaitParams())
-    print(f"default cold: {base.status}, {base.iterations} iterations, {base.solve_seconds:.2f} s "
+    gen = GaitGenerator(robot, GaitGenConfig(domains=args.domains))
+    print(f"domain graph {args.domains}; build: {time.perf_counter() - t0:.1f} s ({gen.n_variables} variables, "
+          f"{gen.n_constraints} constraints, {gen.config.nodes} nodes)")
+    dflt = default_params(args.domains)
+    base = gen.solve(dflt)
+    print(f"default {dflt} cold: {base.status}, {base.iterations} iterations, {base.solve_seconds:.2f} s "
           f"({base.solve_seconds / max(base.iterations, 1) * 1e3:.0f} ms/iteration)")
     if base.gait is not None:
-        warm = gen.solve(GaitParams(step_length=0.17), warm_start=base.gait)
+        warm = gen.solve(GaitParams(step_length=0.17, step_duration=dflt.step_duration), warm_start=base.gait)
         print(f"L = 0.17 warm from the default: {warm.status}, {warm.iterations} iterations, "
               f"{warm.solve_seconds:.2f} s")
         if not args.no_walk:
             print("default walk:", fmt_walk(walk_figures(robot, base.gait, args.samples)))
+            if args.domains == "multicontact":
+                seq = certify_gait(robot, base.gait, CertifyConfig(method="sequential"))
+                print(f"default gait, sequential certificate: {seq.status}, r* = {seq.r_star:.4f} rad/s, "
+                      f"{seq.to_dict().get('n_samples')} samples")
     a = robot.spec.action_space
     if a is None:
         raise SystemExit(f"{robot.name}: the spec has no [action_space] to take the grid from")

@@ -17,6 +17,7 @@ ATALANTE_DIR = REPO.parent / "shared" / "atalante"
 ATALANTE_SPEC = REPO / "examples" / "atalante.toml"
 ATALANTE_GAIT = ATALANTE_DIR / "jt_bez_2023-09-10.yaml"
 EXO_GAIT = REPO / "tests" / "data" / "exo_gait.json"
+EXO_MC_GAIT = REPO / "tests" / "data" / "exo_multicontact_gait.json"
 
 needs_atalante = pytest.mark.skipif(not (ATALANTE_DIR / "loadedExo.xml").is_file(),
                                     reason="../shared/atalante (AMBER lab model) is not beside the repository")
@@ -52,11 +53,22 @@ def exo_gait(exo):  # type: ignore[no-untyped-def]
     return load_gait(EXO_GAIT, exo)
 
 
-@pytest.fixture(scope="session", params=["exo", "atalante"])
+@pytest.fixture(scope="session")
+def exo_mc_gait(exo):  # type: ignore[no-untyped-def]
+    """A multi-contact exo gait made by ``robustgait gait generate --robot exo --domains multicontact``."""
+    from robustgait import load_gait
+
+    return load_gait(EXO_MC_GAIT, exo)
+
+
+@pytest.fixture(scope="session", params=["exo", "exo-multicontact", "atalante"])
 def robot_gait(request):  # type: ignore[no-untyped-def]
-    """(robot, gait) for the shipped exo with its stored gait, and for Atalante with its FROST gait."""
+    """(robot, gait) for the shipped exo with its stored flat-foot and multi-contact gaits, and for Atalante with
+    its FROST gait."""
     if request.param == "exo":
         return request.getfixturevalue("exo"), request.getfixturevalue("exo_gait")
+    if request.param == "exo-multicontact":
+        return request.getfixturevalue("exo"), request.getfixturevalue("exo_mc_gait")
     return request.getfixturevalue("atalante"), request.getfixturevalue("atalante_gait")
 
 

@@ -11,7 +11,7 @@ from robustgait.cli import main
 from robustgait.estimators import SequentialConfig
 from robustgait.gaitgen import GaitGenerator, generate_gait
 from robustgait.gaitgen.check import check_solution
-from tests.conftest import ATALANTE_SPEC, EXO_GAIT, needs_atalante
+from tests.conftest import ATALANTE_SPEC, EXO_GAIT, EXO_MC_GAIT, needs_atalante
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +30,7 @@ def test_default_gait_passes_the_physics_check(exo, gen, default):
     c = default.check
     assert c.passed and c.dynamics_residual <= 1e-6 and c.periodicity <= 1e-6 and c.stance_drift <= 1e-6
     assert max(c.step_length_error, c.step_width_error, c.step_height_error) <= 1e-3 and c.duration_error <= 1e-3
-    ns = default.nodes
+    ns = default.nodes[0]
     f = ns.lam[:, :3]
     assert np.all(f[:, 2] >= gen.config.min_normal_force - 1e-6)
     assert np.all(np.abs(f[:, :2]) <= gen.config.friction * f[:, 2:3] + 1e-6)
@@ -52,8 +52,8 @@ def test_default_gait_passes_the_physics_check(exo, gen, default):
 
 
 def test_physics_check_catches_a_wrong_solution(gen, default):
-    ns = dataclasses.replace(default.nodes, u=default.nodes.u * 1.01)
-    bad = check_solution(gen.dyn, gen.problem, default.params, ns, default.params.step_duration)
+    ns = dataclasses.replace(default.nodes[0], u=default.nodes[0].u * 1.01)
+    bad = check_solution(gen.dyn, gen.problem, default.params, [ns], [default.params.step_duration])
     assert not bad.passed and bad.dynamics_residual > 1e-4 and "dynamics residual" in bad.failures[0]
 
 
@@ -62,7 +62,7 @@ def test_default_gait_meets_the_gait_quality_bounds(exo, gen, default):
     from robustgait.dynamics import foot_frame
     from robustgait.gaitgen.problem import matrix_to_rpy
 
-    q, ns, tol = gen.problem.quality, default.nodes, 1e-6
+    q, ns, tol = gen.problem.quality, default.nodes[0], 1e-6
     rpy = np.array([matrix_to_rpy(h[:3, :3]) for h in ns.H])
     assert np.all(np.abs(rpy[:, 0]) <= q.pelvis_roll + tol) and np.all(np.abs(rpy[:, 2]) <= q.pelvis_yaw + tol)
     assert np.all((rpy[:, 1] >= q.pelvis_pitch[0] - tol) & (rpy[:, 1] <= q.pelvis_pitch[1] + tol))
@@ -188,3 +188,39 @@ def test_atalante_generated_gait_walks(tmp_path, capsys):
     _walks_like_an_exoskeleton(robot, gait)
     cert = certify_gait(robot, gait, CertifyConfig(n_samples=20))
     assert np.linalg.norm(cert.fixed_point.x_star) <= 1.0
+
+
+@pytest.mark.slow
+def test_multicontact_generation(exo):
+    """The 2-domain problem: solves from a cold start, passes the physics check in both domains and through both
+    impacts, reproduces the stored multi-contact test gait, and warm-starts faster."""
+    from robustgait.bezier import bezier
+    from robustgait.gaitgen import GaitGenConfig, default_params
+
+    gen = GaitGenerator(exo, GaitGenConfig(domains="multicontact"))
+    params = default_params("multicontact")
+    res = gen.solve(params)
+    assert res.success, res.reason
+    c = res.check
+    assert c.dynamics_residual <= 1e-6 and c.periodicity <= 1e-6 and c.impact_residual <= 1e-6
+    assert c.stance_drift <= 1e-6 and c.min_normal_force >= gen.config.min_line_force - 1e-6
+    g = res.gait
+    assert g.domain_graph == "multicontact" and [d.name for d in g.domains] == ["single_support", "double_support"]
+    assert g.domains[1].duration == pytest.approx(params.rolling_fraction * params.step_duration)
+    assert g.step_duration == pytest.approx(params.step_duration)
+    # the free joints of double support are fitted Béziers; the outputs are exact
+    ns, taus = res.nodes[1], gen.problem.domain_taus[1]
+    err = np.abs(bezier(g.domains[1].beta, taus) - ns.s)
+    assert err[:, gen.problem.outputs[1]].max() < 1e-9 and err.max() < 2e-3
+    stored = load_gait(EXO_MC_GAIT, exo)
+    assert stored.solver["objective"] == pytest.approx(res.objective, rel=1e-6)
+    warm = gen.solve(params, warm_start=stored)
+    assert warm.success and warm.iterations < res.iterations
+
+
+def test_cli_multicontact_bad_rolling_fraction(tmp_path, capsys):
+    out = tmp_path / "g.json"
+    assert main(["gait", "generate", "--robot", "exo", "--domains", "multicontact", "--rolling-fraction", "0.9",
+                 "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "rolling_fraction" in err and len(err.strip().splitlines()) == 1 and not out.exists()

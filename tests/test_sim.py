@@ -123,3 +123,40 @@ def test_a_diverging_sample_is_a_silent_fall(tmp_path, monkeypatch, capfd):
     assert "WARNING" not in out + err and not (tmp_path / "MUJOCO_LOG.TXT").exists()
     config = mujoco.MjLogConfig.get()  # restored after the rollout
     assert config.logto_console and config.logto_file
+
+
+def test_multicontact_gait_rolls_both_feet(exo, exo_mc_gait):
+    """Heel strike → rolling double support → foot-flat: in every double support of a 50-step walk the back sole
+    pitches toe-down and the front sole from toe-up to flat, each by ≥ 10° (issue acceptance), and double
+    support ends at foot-flat by τ = 1."""
+    res = walk(exo, exo_mc_gait, steps=50, keep_trajectory=True)
+    assert res.steps_taken == 50 and not res.fell
+    p = exo_mc_gait.params
+    assert res.mean_speed == pytest.approx(p.step_length / p.step_duration, rel=0.03)
+    m, d = exo.model, mujoco.MjData(exo.model)
+    tr = res.trajectory
+    t_ds = exo_mc_gait.domains[1].duration
+
+    def pitch(k, side):
+        mujoco.mj_setState(m, d, tr[k], mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        mujoco.mj_kinematics(m, d)
+        return np.degrees(-np.arcsin(d.geom_xmat[exo.sole_geom_id[side]].reshape(3, 3)[2, 0]))
+
+    for e in res.events[10:20]:
+        k0 = int(np.argmin(np.abs(tr[:, 0] - e.time)))
+        ks = range(k0, k0 + round(t_ds / exo.dt), 5)
+        back, front = e.stance, "left" if e.stance == "right" else "right"
+        b, f = [pitch(k, back) for k in ks], [pitch(k, front) for k in ks]
+        assert max(b) - min(b) >= 10.0 and max(f) - min(f) >= 10.0
+        assert min(f) < -10.0 and abs(f[-1]) < 2.0  # toe up at heel strike, flat at the end
+
+
+def test_multicontact_domains_in_the_engine(exo, exo_mc_gait):
+    with StepEngine(exo, exo_mc_gait) as eng:
+        assert len(eng.graph) == 2 and eng.horizons[1] == round(exo_mc_gait.domains[1].duration / exo.dt)
+        s = exo_mc_gait.initial_state
+        ss = eng.step(s.qpos, s.qvel, "right", domain=0)
+        ds = eng.step(ss.qpos, ss.qvel, "right", domain=1)
+        assert not ss.fell[0] and not ds.fell[0] and 0.8 <= ds.tau[0] <= 1.0
+        with pytest.raises(RobustGaitError, match="no domain 2"):
+            eng.step(s.qpos, s.qvel, "right", domain=2)

@@ -8,6 +8,7 @@ Public API (everything else is reachable from the submodules)::
     result = robustgait.walk(robot, gait, steps=50)
     cert = robustgait.certify_gait(robot, gait)          # cert.status, cert.r_star (paper's estimator)
     cert = robustgait.certify_gait(robot, gait, robustgait.CertifyConfig(method="sequential"))
+    res = robustgait.validate_gait(robot, gait, kinds=["push"])  # disturbed walks, certificate check
     gen = robustgait.GaitGenerator(robot)                # build the HZD problem once, then gen.solve(params)
     robustgait.create_study("runs/rob", robustgait.StudyConfig(robot="exo"))   # the learning loop
     robustgait.run_study("runs/rob"); robustgait.study_status("runs/rob")["best"]
@@ -27,6 +28,7 @@ from robustgait.estimators import SequentialConfig, certify_map_sequential
 from robustgait.gait import Gait, GaitParams, load_gait
 from robustgait.robots import Robot, load_robot
 from robustgait.sim import SimConfig, StepEngine, WalkResult, walk
+from robustgait.validate import ValidateConfig, ValidationResult, validate_gait
 
 if TYPE_CHECKING:
     from robustgait.gaitgen import GaitGenerator, generate_gait
@@ -74,6 +76,8 @@ __all__ = [
     "SimConfig",
     "StepEngine",
     "StudyConfig",
+    "ValidateConfig",
+    "ValidationResult",
     "WalkResult",
     "__version__",
     "certify_gait",
@@ -87,5 +91,6 @@ __all__ = [
     "load_robot",
     "run_study",
     "study_status",
+    "validate_gait",
     "walk",
 ]

@@ -196,11 +196,13 @@ def _cmd_gait_convert(args: argparse.Namespace) -> int:
 
 def _cmd_gait_generate(args: argparse.Namespace) -> int:
     from robustgait.gait import GaitParams, load_gait
-    from robustgait.gaitgen import GaitGenConfig, GaitGenerator, generate_gait
+    from robustgait.gaitgen import DEFAULT_STEP_DURATION, GaitGenConfig, GaitGenerator, generate_gait
     from robustgait.robots import load_robot
 
+    if args.step_duration is None:
+        args.step_duration = DEFAULT_STEP_DURATION[args.domains]
     try:  # out-of-bounds parameters fail before the (seconds-long) problem build
-        GaitParams(args.step_length, args.step_duration, args.step_width, args.step_height)
+        GaitParams(args.step_length, args.step_duration, args.step_width, args.step_height, args.rolling_fraction)
     except RobustGaitError as exc:
         raise RobustGaitError(f"gait generation failed (Infeasible_Parameters): {exc}") from None
     if args.nodes % 2 == 0:
@@ -208,16 +210,17 @@ def _cmd_gait_generate(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     _check_outputs(args.output)
     warm = load_gait(args.warm_start, robot) if args.warm_start else None
-    config = GaitGenConfig(nodes=args.nodes, stance=args.stance)
+    config = GaitGenConfig(domains=args.domains, nodes=args.nodes, stance=args.stance)
     live = not args.json
     if live:
-        print(f"building the flat-foot HZD problem for {robot.name} ({args.nodes} nodes) ...", flush=True)
+        what = "flat-foot" if args.domains == "flat" else "multi-contact (heel/toe rolling)"
+        print(f"building the {what} HZD problem for {robot.name} ({args.nodes} nodes) ...", flush=True)
     gen = GaitGenerator(robot, config, verbose=live and args.verbose)
     if live:
         print(f"built in {gen.build_seconds:.1f} s: {gen.n_variables} variables, {gen.n_constraints} constraints; "
               + ("IPOPT iterations:" if args.verbose else "solving ..."), flush=True)
     res = generate_gait(robot, args.step_length, args.step_duration, args.step_width, args.step_height,
-                        warm_start=warm, generator=gen)
+                        args.rolling_fraction, warm_start=warm, generator=gen)
     summary = {**res.summary(), "build_seconds": gen.build_seconds, "output": args.output if res.gait else None}
     if res.gait is None:
         if args.json:
@@ -457,6 +460,78 @@ def _add_study_parsers(sub: Any) -> None:
     dm.set_defaults(func=_cmd_demo)
 
 
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from robustgait.gait import load_gait
+    from robustgait.robots import load_robot
+    from robustgait.validate import KINDS, ValidateConfig, validate_gait
+
+    cfg = ValidateConfig(trials=args.trials, seed=args.seed, steps_after=args.steps_after)
+    robot = load_robot(args.robot)
+    gait = load_gait(args.gait, robot)
+    # one kind is one batch of trials, each 1 (or 2, stride map) + --steps-after steps
+    L.check_work(args.trials * (2 + args.steps_after), gait.step_duration * cfg.sim.max_step_tau, robot.dt,
+                 f"{args.gait}: --trials {args.trials} × (--steps-after {args.steps_after} + 1) per kind")
+    kinds = list(KINDS) if args.disturbance == "all" else [args.disturbance]
+    with _about(args.gait):
+        res = validate_gait(robot, gait, cfg, kinds=kinds, certificate=args.certificate,
+                            progress=not args.json and sys.stderr.isatty())
+    if args.output is not None:  # the results first: they took minutes, the figure is redrawn from them
+        from robustgait.io.output import write_text
+
+        write_text(args.output, res.to_json(), "json")
+    if args.plot is not None:
+        from robustgait.report import plot_validation
+
+        plot_validation(res, args.plot)
+    if args.json:
+        print(res.to_json(trials=False))
+        return 0
+    c = res.certificate
+    print(f"{robot.name}: r* = {c.r_star:.4f} rad/s ({'closed' if c.attained else 'open'} ball, {c.map} map, "
+          f"certificate {c.source}); {cfg.trials} trials per kind, seed {cfg.seed}, success = no fall in "
+          f"{cfg.steps_after} steps after the first switching event")
+    print(f"{'kind':<9} {'success [95% CI]':<24} {'half fail at (± s.e.)':<30} {'falls inside B(r*)':<26} "
+          f"{'falls outside':<24} {'fell before event':>17}")
+    for kind, kr in res.kinds.items():
+        sr, fit, chk = kr.success_rate(), kr.critical(), kr.certificate_check()
+        _, unit = kr.size_label
+        if fit.s50 is not None:
+            crit = f"{fit.s50:.4g} ± {fit.s50_se or 0:.2g} {unit}" + ("" if fit.in_range else " (extrapolated)") + (
+                "" if fit.converged else " (gap)")
+        else:
+            crit = f"— ({fit.note})"
+        print(f"{kind:<9} {_rate(sr):<24} {crit:<30} {_rate(chk['inside']):<26} {_rate(chk['outside']):<24} "
+              f"{chk['fell_before_event']:>17}")
+    print(f"time: setup {res.seconds['setup']:.1f} s, " + ", ".join(
+        f"{k} {v.seconds:.1f} s" for k, v in res.kinds.items()))
+    for what, out in (("plot", args.plot), ("results", args.output)):
+        if out is not None:
+            print(f"{what}: {out}")
+    return 0
+
+
+def _rate(r: object) -> str:
+    from robustgait.validate import Rate
+
+    assert isinstance(r, Rate)
+    if r.n == 0:
+        return "0/0"
+    return f"{r.k}/{r.n} = {r.rate:.2f} [{r.low:.2f}, {r.high:.2f}]"
+
+
+def _cmd_gait_tiles(args: argparse.Namespace) -> int:
+    from robustgait.gait import load_gait
+    from robustgait.report.tiles import render_tiles
+    from robustgait.robots import load_robot
+
+    robot = load_robot(args.robot)
+    gait = load_gait(args.gait, robot)
+    with _about(args.gait):
+        shape = render_tiles(robot, gait, args.output, frames=args.frames, warmup_steps=args.warmup_steps)
+    print(f"wrote {args.output} ({shape[1]} x {shape[0]} px: {args.frames} frames of one step, side and front)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="robustgait", description="Synthesize and certify robust walking gaits.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -540,10 +615,17 @@ def build_parser() -> argparse.ArgumentParser:
     gc.add_argument("-o", "--output", required=True, type=output_path("json"), help="output gait .json")
     gc.add_argument("--mirror", action="store_true", help="relabel for the other stance leg")
     gc.set_defaults(func=_cmd_gait_convert)
-    gg = gsub.add_parser("generate", help="HZD trajectory optimization of a flat-foot gait (CasADi + IPOPT)")
+    gg = gsub.add_parser("generate", help="HZD trajectory optimization of a gait (CasADi + IPOPT): flat-foot or "
+                         "multi-contact heel/toe rolling")
     gg.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
+    gg.add_argument("--domains", choices=("flat", "multicontact"), default="flat",
+                    help="domain graph: flat (one domain, flat foot) or multicontact (single support, heel strike, "
+                    "rolling double support, toe-off); default flat")
     gg.add_argument("--step-length", type=finite_float, default=0.15, help="[m] (default 0.15)")
-    gg.add_argument("--step-duration", type=finite_float, default=0.7, help="[s] (default 0.7)")
+    gg.add_argument("--step-duration", type=finite_float, default=None,
+                    help="[s] (default 0.7 flat, 0.9 multicontact)")
+    gg.add_argument("--rolling-fraction", type=finite_float, default=0.2,
+                    help="multicontact: the fraction of the step in rolling double support (default 0.2)")
     gg.add_argument("--step-width", type=finite_float, default=0.25, help="[m] (default 0.25)")
     gg.add_argument("--step-height", type=finite_float, default=0.07,
                     help="swing-foot height at mid-step [m] (default 0.07)")
@@ -556,6 +638,33 @@ def build_parser() -> argparse.ArgumentParser:
     gg.add_argument("--json", action="store_true", help="print one JSON summary instead of the live log")
     gg.add_argument("--verbose", action="store_true", help="print IPOPT's iteration log")
     gg.set_defaults(func=_cmd_gait_generate)
+    gt = gsub.add_parser("tiles", help="frames of one step side by side, seen from the side and the front (PNG)")
+    gt.add_argument("gait", help="gait file: .json (robustgait) or .yaml (FROST/ambersim)")
+    gt.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
+    gt.add_argument("-o", "--output", required=True, metavar="TILES.png", type=output_path("plot"))
+    gt.add_argument("--frames", type=int_in(L.FRAMES), default=6, help="frames of the step (default 6)")
+    gt.add_argument("--warmup-steps", type=int_in(L.WARMUP_STEPS), default=4,
+                    help="steps walked before the step shown, to be on the periodic orbit (default 4)")
+    gt.set_defaults(func=_cmd_gait_tiles)
+
+    v = sub.add_parser("validate", help="disturbed walks (pushes, model mismatch, rough ground) and the "
+                       "certificate's promise tested")
+    v.add_argument("gait", help="gait file: .json (robustgait) or .yaml (FROST/ambersim)")
+    v.add_argument("--robot", required=True, help="shipped robot name or path to a spec .toml")
+    v.add_argument("--trials", type=int_in(L.TRIALS), default=200, help="trials per disturbance kind (default 200)")
+    v.add_argument("--seed", type=int_in(L.SEED), default=0, help="seed of the disturbances (default 0)")
+    v.add_argument("--disturbance", choices=("push", "mass", "friction", "latency", "noise", "terrain", "all"),
+                   default="push", help="disturbance kind (default push; all = every kind in turn)")
+    v.add_argument("--steps-after", type=int_in(L.STEPS_AFTER), default=20,
+                   help="steps to walk after the first switching event after the disturbance (default 20)")
+    v.add_argument("--certificate", metavar="CERT.json",
+                   help="check against this certificate (robustgait certify -o); default: certify first")
+    v.add_argument("--plot", metavar="OUT.png", type=output_path("plot"),
+                   help="success against disturbance size, and the certificate check")
+    v.add_argument("-o", "--output", metavar="OUT.json", type=output_path("json"),
+                   help="write the results with every trial")
+    v.add_argument("--json", action="store_true", help="print one JSON object (without the trials)")
+    v.set_defaults(func=_cmd_validate)
     _add_study_parsers(sub)
     return p
 

@@ -40,6 +40,7 @@ the model, compiled from the robot's spec, that only adam sees):
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from functools import cached_property
 from pathlib import Path
 from typing import Any, overload
@@ -50,6 +51,7 @@ import numpy as np
 from adam.casadi import KinDynComputations
 from numpy.typing import ArrayLike, NDArray
 
+from robustgait.domains import Contact
 from robustgait.errors import input_error
 from robustgait.robots.spec import SIDES, Robot, build_mjspec, load_robot
 from robustgait.rotations import quat_to_mat
@@ -286,13 +288,46 @@ class Dynamics:
         jd = self.kindyn.jacobian_dot_fun(frame)(base_transform(qpos), self.joint_positions(qpos), nu[:6], nu[6:])
         return np.asarray(jd, dtype=float) @ nu
 
-    def impact_map(self, qpos: ArrayLike, qvel: ArrayLike, side: str) -> tuple[Array, Array]:
-        """Rigid (plastic) impact of a flat sole: q̇⁺ = q̇⁻ + M⁻¹ Jᵀ Λ with Λ = −(J M⁻¹ Jᵀ)⁻¹ J q̇⁻, J the
-        sole frame's 6 × nv Jacobian, so that J q̇⁺ = 0 (MuJoCo coordinates). Returns (q̇⁺ (nv,), Λ (6,)
-        the impulsive wrench [N·s, N·m·s] at the sole frame, world axes)."""
-        M = self.mass_matrix(qpos)
-        J = self.frame_jacobian(foot_frame(side, "sole"), qpos)
-        v = np.asarray(qvel, dtype=float)
-        minv_jt = np.linalg.solve(M, J.T)
-        impulse = -np.linalg.solve(J @ minv_jt, J @ v)
-        return v + minv_jt @ impulse, impulse
+    def contact_jacobian(self, qpos: ArrayLike, contacts: Sequence[Contact], stance: str) -> Array:
+        """Stacked Jacobian (Σ rows, nv) of a contact set in MuJoCo's velocity coordinates: each contact's
+        fixed rows (:data:`robustgait.domains.CONTACT_ROWS`) of its foot frame's Jacobian."""
+        return np.vstack([self.frame_jacobian(foot_frame(c.side(stance), c.frame_kind()), qpos)[list(c.rows)]
+                          for c in contacts])
+
+    def impact_map(self, qpos: ArrayLike, qvel: ArrayLike, target: str | Sequence[Contact],
+                   stance: str | None = None) -> tuple[Array, Array]:
+        """Rigid impact onto a contact set (:func:`impact_map`) with this model's M and J, MuJoCo coordinates.
+
+        ``target``: a side (``"left"``) for its sole landing flat, or contacts in the labels of a step whose
+        stance leg is ``stance``. Returns (q̇⁺ (nv,), Λ (rows,) the impulses, world axes, at the frames)."""
+        if isinstance(target, str):
+            contacts: Sequence[Contact] = (Contact("stance", "flat"),)
+            stance = target
+        else:
+            contacts = target
+            if stance is None:
+                raise ValueError("a contact set needs the step's stance side")
+        return impact_map(self.mass_matrix(qpos), self.contact_jacobian(qpos, contacts, stance),
+                          np.asarray(qvel, dtype=float))
+
+
+def impact_residual(M: Any, J: Any, v_minus: Any, v_plus: Any, impulse: Any) -> tuple[Any, Any]:
+    """The rigid (plastic) impact map as residuals, for NumPy arrays or CasADi expressions alike:
+
+        [M  −Jᵀ] [q̇⁺]   [M q̇⁻]
+        [J   0 ] [Λ ] = [ 0   ]   →   (M (q̇⁺ − q̇⁻) − Jᵀ Λ,  J q̇⁺)
+
+    M (nv, nv) the mass matrix at the impact configuration, J (k, nv) the Jacobian of the contact set that
+    holds after the impact (the target domain's contacts), q̇⁻, q̇⁺ (nv,), Λ (k,) the impulses. The velocity
+    coordinates of M, J and q̇ must agree (MuJoCo's or adam's mixed ones). Westervelt et al., *Feedback
+    Control of Dynamic Bipedal Robot Locomotion* (2007), §3.4; DESIGN §4.
+    """
+    return M @ (v_plus - v_minus) - J.T @ impulse, J @ v_plus
+
+
+def impact_map(M: Array, J: Array, v_minus: Array) -> tuple[Array, Array]:
+    """Solve the impact map of :func:`impact_residual` for q̇⁺ (nv,) and Λ (k,): by the Schur complement
+    of the KKT system, Λ = −(J M⁻¹ Jᵀ)⁻¹ J q̇⁻ and q̇⁺ = q̇⁻ + M⁻¹ Jᵀ Λ (so J q̇⁺ = 0)."""
+    minv_jt = np.linalg.solve(M, J.T)
+    impulse = -np.linalg.solve(J @ minv_jt, J @ v_minus)
+    return np.asarray(v_minus + minv_jt @ impulse, dtype=np.float64), np.asarray(impulse, dtype=np.float64)

@@ -36,19 +36,23 @@ STANCES = ("left", "right")
 class GaitParams:
     """The four essential constraints of a gait (DESIGN §4): step length [m] (forward displacement of the
     base per step), step duration [s], step width [m] (lateral distance between the feet centres) and
-    swing-foot height [m] (sole clearance at mid-step, the maximum). The bounds are generic sanity bounds;
-    whether a robot can walk them is decided by the gait generator (reach, foot collision, IPOPT)."""
+    swing-foot height [m] (sole clearance at mid-step, the maximum); and, for multi-contact gaits only, the
+    fraction of the step spent rolling in double support (heel strike to toe-off). The bounds are generic
+    sanity bounds; whether a robot can walk them is decided by the gait generator (reach, foot collision,
+    IPOPT)."""
 
     step_length: float = 0.15
     step_duration: float = 0.7
     step_width: float = 0.25
     step_height: float = 0.07
+    rolling_fraction: float = 0.2
 
     BOUNDS = {  # noqa: RUF012 - class-level constant, not a dataclass field
         "step_length": (0.0, 1.5),
         "step_duration": (0.1, 5.0),
         "step_width": (0.0, 1.0),
         "step_height": (0.005, 0.5),
+        "rolling_fraction": (0.05, 0.6),
     }
 
     def __post_init__(self) -> None:

@@ -158,6 +158,13 @@ class ReturnMap:
         init = self.gait.initial_state
         assert init is not None
         qpos, qvel = init.qpos[None].copy(), init.qvel[None].copy()
+        if len(self.engine.graph) > 1:
+            # a multi-contact gait starts at the beginning of single support: walk to its section first
+            qpos, qvel, reason = self._run(qpos, qvel, [(self.stance, 0)])
+            if reason[0] is not None:
+                raise FixedPointFailure("fell_before_fixed_point", 0,
+                                        f"the gait fell within step 1 ({reason[0]}) before a fixed point was reached")
+            qpos, qvel = self.robot.mirror_state(qpos, qvel)
         prev = reduce_state(qpos, qvel, self.frame)[0]
         residuals: list[float] = []
         for k in range(self.period, max_steps + 1, self.period):
@@ -180,23 +187,41 @@ class ReturnMap:
                                 f"‖x̄_k+1 − x̄_k‖ stayed above tol = {tol:g} (smallest {min(residuals):.3g}, last "
                                 f"{residuals[-1]:.3g})")
 
-    def _advance(self, qpos: FloatArray, qvel: FloatArray,
-                 progress: Callable[[int], None] | None = None) -> tuple[FloatArray, FloatArray, list[str | None]]:
-        """The map on full canonical states (K, nq), (K, nv): one step and a mirror, or a stride. Returns the
-        images (NaN rows for falls) and each sample's fall reason (None if it did not fall)."""
-        b = self.engine.step(qpos, qvel, self.stance, progress=progress if self.kind == "step" else None)
-        self.physics_steps += b.physics_steps
-        if self.kind == "step":
-            mq, mv = self.robot.mirror_state(b.qpos, b.qvel)
-            return mq, mv, b.fall_reason
-        b2 = self.engine.step(b.qpos, b.qvel, self.other, progress=progress)  # fell rows: NaN, skipped
-        self.physics_steps += b2.physics_steps
-        reasons = [r1 if r1 is not None else r2 for r1, r2 in zip(b.fall_reason, b2.fall_reason, strict=True)]
+    def _phases(self, first: str) -> list[tuple[str, int]]:
+        """(stance, domain) of one step's worth of simulation from a section state that ends the single
+        support of the leg other than ``first``: that step's remaining domains, then ``first``'s single
+        support up to its section (flat gaits: just ``first``'s step)."""
+        other = "left" if first == "right" else "right"
+        return [(other, d) for d in range(1, len(self.engine.graph))] + [(first, 0)]
+
+    def _run(self, qpos: FloatArray, qvel: FloatArray, phases: list[tuple[str, int]],
+             progress: Callable[[int], None] | None = None) -> tuple[FloatArray, FloatArray, list[str | None]]:
+        """Simulate phases in order (``progress`` on the last); a sample that falls in one is NaN afterwards."""
+        reasons: list[str | None] = [None] * qpos.shape[0]
+        for j, (stance, d) in enumerate(phases):
+            b = self.engine.step(qpos, qvel, stance, domain=d, progress=progress if j == len(phases) - 1 else None)
+            self.physics_steps += b.physics_steps
+            reasons = [r0 if r0 is not None else r1 for r0, r1 in zip(reasons, b.fall_reason, strict=True)]
+            qpos, qvel = b.qpos, b.qvel
         fell = np.array([r is not None for r in reasons])
-        qpos, qvel = b2.qpos.copy(), b2.qvel.copy()
+        qpos, qvel = qpos.copy(), qvel.copy()
         qpos[fell] = np.nan
         qvel[fell] = np.nan
         return qpos, qvel, reasons
+
+    def _advance(self, qpos: FloatArray, qvel: FloatArray,
+                 progress: Callable[[int], None] | None = None) -> tuple[FloatArray, FloatArray, list[str | None]]:
+        """The map on full canonical states (K, nq), (K, nv): one step and a mirror, or a stride. Returns the
+        images (NaN rows for falls) and each sample's fall reason (None if it did not fall).
+
+        A canonical state lies on the section at the end of a single support of the other leg, so the step
+        map simulates the rest of that step (multi-contact: its double support) and the gait's own stance's
+        single support, then mirrors; the stride map goes on through the other leg's step instead."""
+        if self.kind == "step":
+            qpos, qvel, reasons = self._run(qpos, qvel, self._phases(self.stance), progress)
+            mq, mv = self.robot.mirror_state(qpos, qvel)
+            return mq, mv, reasons
+        return self._run(qpos, qvel, self._phases(self.stance) + self._phases(self.other), progress)
 
     def reconstruct(self, xbar: FloatArray) -> tuple[FloatArray, FloatArray]:
         """ι(x̄): full canonical states (N, nq), (N, nv) from reduced states (N, 3) (module docstring)."""

@@ -1,11 +1,15 @@
-"""Physics check of an optimized gait, re-evaluated with MuJoCo's own model (DESIGN §4, run on every solve).
+"""Physics check of an optimized gait, re-evaluated with MuJoCo's own model (DESIGN §4, run on every solve),
+in every domain of its graph and at every transition:
 
-* Dynamics residual at every node: r = M q̈ + c − B u − J_stᵀ λ in MuJoCo's coordinates, with M from
-  ``mj_fullM``, c = ``qfrc_bias``, J_st from ``mj_jac`` at the stance sole frame; relative to ‖M q̈‖ + ‖c‖.
-* Stance contact: sole frame pose and velocity (MuJoCo kinematics) — the foot must not move.
-* Impact map: q̇⁺ = q̇⁻ + M⁻¹ J_swᵀ Λ with J_sw q̇⁺ = 0 (MuJoCo's M and J), and periodicity: the post-impact
-  state, shifted so the new stance sole sits at the origin and mirrored, equals the initial state.
-* Contact wrench: normal force, friction pyramid, centre of pressure, yaw moment (the problem's bounds).
+* Dynamics residual at every node: r = M q̈ + c − B u − J_cᵀ λ in MuJoCo's coordinates, with M from
+  ``mj_fullM``, c = ``qfrc_bias``, J_c the domain's contact rows of ``mj_jac`` at each contact frame (flat
+  sole: 6 rows; toe or heel line: 5); relative to ‖M q̈‖ + ‖c‖.
+* Contacts: each contact frame's position and held orientation, and J_c q̇ — no contact may move.
+* Impacts: the rigid impact map onto the next domain's contacts (:func:`robustgait.dynamics.impact_map`
+  with MuJoCo's M and J) reproduces the solution's post-impact velocity; the next domain starts from it; and
+  periodicity: the last post-impact state, shifted so the new stance sole sits at the origin and mirrored,
+  equals the first state.
+* Contact wrenches: normal force, friction pyramid, centre of pressure, yaw moment (the problem's bounds).
 * Essential constraints: landing position (step length, width), swing height at τ = ½, duration.
 """
 
@@ -17,9 +21,10 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.dynamics import Dynamics, foot_frame
+from robustgait.domains import Contact
+from robustgait.dynamics import Dynamics, foot_frame, impact_map
 from robustgait.gait import GaitParams
-from robustgait.gaitgen.problem import FlatFootProblem
+from robustgait.gaitgen.problem import GaitProblem
 from robustgait.gaitgen.states import NodeStates, to_mujoco_state
 
 FloatArray = NDArray[np.float64]
@@ -60,79 +65,126 @@ def _sole_jacobian(m: mujoco.MjModel, d: mujoco.MjData, geom: int, point: FloatA
     return np.vstack([jp, jr])
 
 
-def check_solution(dyn: Dynamics, prob: FlatFootProblem, params: GaitParams, ns: NodeStates,
-                   duration: float) -> PhysicsCheck:
-    """Re-evaluate a solution's physics with MuJoCo (module docstring)."""
+def _contact_jacobian(dyn: Dynamics, m: mujoco.MjModel, d: mujoco.MjData, contacts: tuple[Contact, ...],
+                      stance: str, qpos: FloatArray) -> FloatArray:
+    """MuJoCo's stacked contact Jacobian (mj_jac at each contact frame's point; its fixed rows)."""
+    robot = dyn.robot
+    rows = []
+    for c in contacts:
+        side = c.side(stance)
+        point, _ = dyn.frame_pose(foot_frame(side, c.frame_kind()), qpos)
+        rows.append(_sole_jacobian(m, d, robot.sole_geom_id[side], point)[list(c.rows)])
+    return np.vstack(rows)
+
+
+def _wrench_figures(c: Contact, lam: FloatArray, prob: GaitProblem) -> tuple[float, float, float]:
+    """(f_z, |f_t|/f_z, CoP margin [m]) of one contact wrench (the problem's bounds, see problem.wrench_rows)."""
+    cfg = prob.config
+    fz = float(lam[2])
+    friction = float(np.max(np.abs(lam[:2])) / fz)
+    ax, ay = prob.half_length - cfg.cop_margin, prob.half_width - cfg.cop_margin
+    if c.kind == "flat":
+        margin = min(ax - abs(-lam[4] / fz), ay - abs(lam[3] / fz))
+    else:
+        margin = ay - abs(lam[3] / fz)
+    return fz, friction, float(margin)
+
+
+def check_solution(dyn: Dynamics, prob: GaitProblem, params: GaitParams, states: list[NodeStates],
+                   durations: list[float]) -> PhysicsCheck:
+    """Re-evaluate a solution's physics with MuJoCo (module docstring), every domain and transition."""
     robot = dyn.robot
     m, d = robot.model, mujoco.MjData(robot.model)
-    cfg = prob.config
-    st_geom, sw_geom = robot.sole_geom_id[prob.stance], robot.sole_geom_id[prob.swing]
-    st_frame, sw_frame = foot_frame(prob.stance, "sole"), foot_frame(prob.swing, "sole")
+    cfg, graph, stance = prob.config, prob.graph, prob.stance
+    sw_frame = foot_frame(prob.swing, "sole")
     dyn_res, drift = 0.0, 0.0
+    fz_min, friction, cop_margin, force_short = np.inf, 0.0, np.inf, 0.0
+    impact_res, continuity = 0.0, 0.0
     M = np.zeros((m.nv, m.nv))
-    for i in range(len(ns.s)):
-        qpos, qvel = to_mujoco_state(robot, ns.H[i], ns.s[i], ns.vb[i], ns.sd[i])
-        qacc = dyn.velocity_map(qpos).T @ np.concatenate([ns.ab[i], ns.sdd[i]])
+    side = 1.0 if prob.swing == "left" else -1.0
+    for k, (dom, ns) in enumerate(zip(graph.domains, states, strict=True)):
+        for i in range(len(ns.s)):
+            qpos, qvel = to_mujoco_state(robot, ns.H[i], ns.s[i], ns.vb[i], ns.sd[i])
+            qacc = dyn.velocity_map(qpos).T @ np.concatenate([ns.ab[i], ns.sdd[i]])
+            d.qpos[:], d.qvel[:] = qpos, qvel
+            mujoco.mj_forward(m, d)
+            mujoco.mj_fullM(m, d, M)
+            J = _contact_jacobian(dyn, m, d, dom.contacts, stance, qpos)
+            tau = np.zeros(m.nv)
+            tau[robot.dof_idx] = ns.u[i]
+            lhs = M @ qacc + d.qfrc_bias
+            r = lhs - tau - J.T @ ns.lam[i]
+            dyn_res = max(dyn_res, float(np.linalg.norm(r) / max(np.linalg.norm(M @ qacc)
+                                                                 + np.linalg.norm(d.qfrc_bias), 1.0)))
+            drift = max(drift, float(np.linalg.norm(J @ qvel)))
+            j = 0
+            for c in dom.contacts:
+                point, rot = dyn.frame_pose(foot_frame(c.side(stance), c.frame_kind()), qpos)
+                target = _target(c, prob, params)
+                orient = (rot[1, 0], rot[2, 0], rot[2, 1]) if c.kind == "flat" else (rot[0, 1], rot[2, 1])
+                drift = max(drift, float(np.linalg.norm(point - target)), float(np.max(np.abs(orient))))
+                fz, fr, cm = _wrench_figures(c, ns.lam[i][j:j + c.n_rows], prob)
+                floor = cfg.min_normal_force if c.kind == "flat" else cfg.min_line_force
+                fz_min, friction, cop_margin = min(fz_min, fz), max(friction, fr), min(cop_margin, cm)
+                force_short = max(force_short, floor - fz)
+                j += c.n_rows
+        # the impact at the end of the domain, with MuJoCo's M and Jacobian, against the solution's ν⁺
+        qpos, qvel = to_mujoco_state(robot, ns.H[-1], ns.s[-1], ns.vb[-1], ns.sd[-1])
         d.qpos[:], d.qvel[:] = qpos, qvel
         mujoco.mj_forward(m, d)
         mujoco.mj_fullM(m, d, M)
-        p_st, _ = dyn.frame_pose(st_frame, qpos)
-        J = _sole_jacobian(m, d, st_geom, p_st)
-        tau = np.zeros(m.nv)
-        tau[robot.dof_idx] = ns.u[i]
-        lhs = M @ qacc + d.qfrc_bias
-        r = lhs - tau - J.T @ ns.lam[i]
-        dyn_res = max(dyn_res, float(np.linalg.norm(r) / max(np.linalg.norm(M @ qacc) + np.linalg.norm(d.qfrc_bias),
-                                                           1.0)))
-        drift = max(drift, float(np.linalg.norm(p_st)), float(np.linalg.norm(J @ qvel)))
-    # impact and periodicity, at the last node (pre-impact)
-    qpos, qvel = to_mujoco_state(robot, ns.H[-1], ns.s[-1], ns.vb[-1], ns.sd[-1])
-    d.qpos[:], d.qvel[:] = qpos, qvel
-    mujoco.mj_forward(m, d)
-    mujoco.mj_fullM(m, d, M)
+        Jt = _contact_jacobian(dyn, m, d, graph.target_contacts(k), stance, qpos)
+        qvel_plus, _ = impact_map(M, Jt, qvel)
+        impact_res = max(impact_res, float(np.linalg.norm(Jt @ qvel_plus)),
+                         float(np.abs(dyn.to_mujoco(qpos, ns.nu_plus) - qvel_plus).max()))
+        if k + 1 < len(states):  # the next domain starts from the post-impact state, same labels
+            nxt = states[k + 1]
+            q1, v1 = to_mujoco_state(robot, nxt.H[0], nxt.s[0], nxt.vb[0], nxt.sd[0])
+            continuity = max(continuity, float(np.abs(q1 - qpos).max()), float(np.abs(v1 - qvel_plus).max()))
+    # periodicity: the last post-impact state, shifted so the new stance sole sits at the origin and mirrored,
+    # is the first state
     p_sw, _ = dyn.frame_pose(sw_frame, qpos)
-    Jsw = _sole_jacobian(m, d, sw_geom, p_sw)
-    minv_jt = np.linalg.solve(M, Jsw.T)
-    qvel_plus = qvel - minv_jt @ np.linalg.solve(Jsw @ minv_jt, Jsw @ qvel)
-    impact_res = float(np.linalg.norm(Jsw @ qvel_plus))
     shifted = qpos.copy()
     shifted[:3] -= p_sw
     mq, mv = robot.mirror_state(shifted, qvel_plus)
-    q0, v0 = to_mujoco_state(robot, ns.H[0], ns.s[0], ns.vb[0], ns.sd[0])
+    first = states[0]
+    q0, v0 = to_mujoco_state(robot, first.H[0], first.s[0], first.vb[0], first.sd[0])
     if np.dot(mq[3:7], q0[3:7]) < 0:  # q and −q are the same rotation
         mq[3:7] *= -1
-    periodicity = float(max(np.abs(mq - q0).max(), np.abs(mv - v0).max()))
-    f, n = ns.lam[:, :3], ns.lam[:, 3:]
-    fz = f[:, 2]
-    friction = float(np.max(np.abs(f[:, :2]) / fz[:, None]))
-    ax, ay = prob.half_length - cfg.cop_margin, prob.half_width - cfg.cop_margin
-    cop = np.column_stack([-n[:, 1] / fz, n[:, 0] / fz])
-    cop_margin = float(np.min(np.column_stack([ax - np.abs(cop[:, 0]), ay - np.abs(cop[:, 1])])))
-    side = 1.0 if prob.swing == "left" else -1.0
-    mid = (len(ns.s) - 1) // 2
-    q_mid, _ = to_mujoco_state(robot, ns.H[mid], ns.s[mid], ns.vb[mid], ns.sd[mid])
+    periodicity = float(max(np.abs(mq - q0).max(), np.abs(mv - v0).max(), continuity))
+    ss = states[0]
+    mid = (len(ss.s) - 1) // 2
+    q_mid, _ = to_mujoco_state(robot, ss.H[mid], ss.s[mid], ss.vb[mid], ss.sd[mid])
     h_mid = dyn.frame_pose(sw_frame, q_mid)[0][2]
     errs = {
         "step_length_error": abs(p_sw[0] - params.step_length),
         "step_width_error": abs(side * p_sw[1] - params.step_width),
         "step_height_error": abs(h_mid - params.step_height),
-        "duration_error": abs(duration - params.step_duration),
+        "duration_error": abs(sum(durations) - params.step_duration),
     }
     failures = []
     if dyn_res > DYNAMICS_TOL:
         failures.append(f"dynamics residual {dyn_res:.2e} > {DYNAMICS_TOL:g}")
     if drift > 1e-6:
-        failures.append(f"stance foot moves ({drift:.2e})")
+        failures.append(f"a contact moves ({drift:.2e})")
     if impact_res > 1e-6 or periodicity > PERIODICITY_TOL:
         failures.append(f"periodicity {periodicity:.2e} (impact {impact_res:.2e}) > {PERIODICITY_TOL:g}")
-    if fz.min() < cfg.min_normal_force - FORCE_TOL or friction > cfg.friction + 1e-6 or cop_margin < -1e-6:
-        failures.append(f"contact wrench outside the cone/sole (min f_z {fz.min():.1f} N, |f_t|/f_z {friction:.3f}, "
+    if force_short > FORCE_TOL or friction > cfg.friction + 1e-6 or cop_margin < -1e-6:
+        failures.append(f"contact wrench outside the cone/sole (min f_z {fz_min:.1f} N, |f_t|/f_z {friction:.3f}, "
                         f"CoP margin {cop_margin:.4f} m)")
     for key, err in errs.items():
         tol = TIME_TOL if key == "duration_error" else LENGTH_TOL
         if err > tol:
             failures.append(f"{key.replace('_', ' ')} {err:.2e} > {tol:g}")
     return PhysicsCheck(dynamics_residual=dyn_res, stance_drift=drift, impact_residual=impact_res,
-                        periodicity=periodicity, min_normal_force=float(fz.min()), friction_ratio=friction,
+                        periodicity=periodicity, min_normal_force=float(fz_min), friction_ratio=friction,
                         cop_margin=cop_margin, **{k: float(v) for k, v in errs.items()}, passed=not failures,
                         failures=tuple(failures))
+
+
+def _target(c: Contact, prob: GaitProblem, params: GaitParams) -> FloatArray:
+    """Where a contact's frame is held (stance sole frame coordinates; see the problem's contact rows)."""
+    a, side = prob.half_length, 1.0 if prob.swing == "left" else -1.0
+    if c.leg == "stance":
+        return np.array([a if c.kind == "toe" else -a if c.kind == "heel" else 0.0, 0.0, 0.0])
+    return np.array([params.step_length - (a if c.kind == "heel" else 0.0), side * params.step_width, 0.0])

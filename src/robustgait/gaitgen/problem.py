@@ -1,111 +1,64 @@
-"""Flat-foot HZD gait optimization (DESIGN §4): one domain, stance sole flat, rigid impact, mirrored period.
+"""HZD gait optimization (DESIGN §4) over a domain graph (:mod:`robustgait.domains`): ``flat`` — one domain,
+stance sole flat, rigid impact, mirrored period — or ``multicontact`` — single support, heel strike, rolling
+double support on the stance toe and swing heel lines, foot-flat and toe-off, mirrored period.
 
-Formulation (time-based phase τ = t/T on N nodes τ_i = i/(N−1); mixed velocity coordinates of adam):
+Formulation (per domain, time-based phase τ = t/T_d on N_d nodes τ_i = i/(N_d−1); mixed velocity
+coordinates of adam):
 
-* Outputs: the actuated joints *are* the Bézier polynomials (partial HZD, y ≡ 0):
-  s(τ) = β b(τ), ṡ = β b'(τ)/T, s̈ = β b''(τ)/T², β ∈ R^{m×8} the shared decision variable.
+* Outputs: the actuated joints *are* the domain's Bézier polynomials (partial HZD, y ≡ 0):
+  s(τ) = β_d b(τ), ṡ = β_d b'(τ)/T_d, s̈ = β_d b''(τ)/T_d², β_d ∈ R^{m×8}.
 * Per node: base pose (p, roll-pitch-yaw), base velocity ν_b = (ṗ, ω) and acceleration ν̇_b, torques u and
-  the stance contact wrench λ = (f, n) (world axes, at the stance sole frame). Constraints:
-  stance sole frame at the origin with identity orientation (position level), J_st ν = 0 (velocity level),
-  J_st ν̇ + J̇_st ν = 0 (acceleration level) — with a flat foot and Bézier joints the state is fixed by
-  kinematics, so nothing is integrated — and the equations of motion M(q) ν̇ + h(q, ν) = B u + J_stᵀ λ.
-* Contact: f_z ≥ f_min, friction pyramid |f_x|, |f_y| ≤ μ f_z, centre of pressure inside the sole with a
-  margin, |n_z| ≤ μ_t f_z. Limits: joint range (on β: the convex hull property bounds the whole curve),
-  torque limits, base roll/pitch.
-* Swing foot: flat landing at (L, ±W, 0) at τ = 1 (step length L, step width W), height h at τ = ½ and ≤ h
-  everywhere, toe and heel above the ground, sole tilt bounded, feet apart laterally, descent velocity at
-  the guard within bounds (touchdown margin for MuJoCo's soft contact).
-* Impact at τ = 1 (rigid, the landing sole becomes the stance): M (ν⁺ − ν⁻) = J_swᵀ Λ, J_sw ν⁺ = 0,
-  Λ_z ≥ 0 inside the friction pyramid, the old stance sole leaves the ground (its ż⁺ ≥ 0).
-* Periodicity after relabeling: β[:, 0] = R β[:, 7] (positions) and ṡ(0) = R ṡ⁺ (velocities), R the spec's
-  mirror (permutation and signs). Base pose and velocity at τ = 0 then follow from the stance constraint,
-  and the landing pose from periodicity — so they are not imposed again (redundant rows break LICQ).
-* Cost ∫‖u‖² dt (trapezoid on the nodes). Scaling: torques /100, wrenches /1000, dynamics rows /100.
+  the contact wrenches λ (world axes, at the contact frames). Each contact is held at position, velocity and
+  acceleration level — flat sole: its frame at a fixed point with fixed orientation; toe/heel line: the
+  edge's midpoint fixed and its direction along world y (pitch free) — and the equations of motion
+  M(q) ν̇ + h(q, ν) = B u + J_cᵀ λ hold. With flat single support and Bézier joints the state is fixed by
+  kinematics, so nothing is integrated; double support closes a kinematic loop through both legs.
+* Contact wrenches (:func:`wrench_rows`): normal force, friction pyramid, centre of pressure inside the sole
+  (or along the edge), yaw moment. Limits: joint range (on β: the convex hull property bounds the whole
+  curve), torque limits, joint speeds, and the gait-quality bands on the pelvis (roll, pitch, yaw, height,
+  angular velocity).
+* Swing foot in single support: height h at τ = ½ and ≤ h everywhere, corners above the ground, sole tilt
+  and yaw bounded, feet apart laterally; it lands flat at (L, ±W, 0) (flat graph) or strikes heel first,
+  toe up by the heel-strike pitch, with its heel edge at (L − a, ±W, 0) (multi-contact); its velocity at the
+  guard is bounded (touchdown margin for MuJoCo's soft contact). Double support ends with the front sole
+  flat (a gentle foot-flat: bounded pitch rate) and the back sole pitched toe-down by the toe-off pitch.
+* Impacts at the end of each domain (rigid, :func:`robustgait.dynamics.impact_residual`) onto the next
+  domain's contacts: M (ν⁺ − ν⁻) = Jᵀ Λ, J ν⁺ = 0, Λ pushing inside the friction pyramid; a leaving contact
+  lifts off (ż⁺ ≥ 0). The next domain starts from the post-impact state (continuity of joints through β,
+  base pose, velocity; its contact rows at that node are then implied and not imposed again).
+* Periodicity after relabeling: β_0[:, 0] = R β_last[:, 7] (positions) and ṡ_0(0) = R ṡ⁺ (velocities), R
+  the spec's mirror (permutation and signs). Base pose and velocity at τ = 0 then follow from the stance
+  constraint, and the landing pose from periodicity — so they are not imposed again (redundant rows break
+  LICQ).
+* Cost Σ_d ∫‖u‖² dt (trapezoid on the nodes). Scaling: torques /100, wrenches /1000, dynamics rows /100.
 
-The essential constraints (L, T, W, h) are NLP *parameters*: the problem is built once per robot and reused.
+The essential constraints (L, T, W, h) and the rolling fraction ρ (double support lasts ρ T) are NLP
+*parameters*: the problem is built once per robot and domain graph and reused.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import casadi as cs
+import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.bezier import bernstein_basis, bezier_derivative_coeffs
-from robustgait.dynamics import Dynamics, foot_frame
+from robustgait.domains import Contact, domain_graph, other_side
+from robustgait.dynamics import Dynamics, foot_frame, impact_residual
 from robustgait.errors import RobustGaitError
 from robustgait.gait import BEZIER_DEGREE
-from robustgait.robots.spec import GaitQuality, Robot
+from robustgait.gaitgen.config import GaitGenConfig
+from robustgait.robots.spec import Robot
 
 FloatArray = NDArray[np.float64]
 U_SCALE = 100.0
 F_SCALE = 1000.0
 ROW_SCALE = 100.0
-
-
-@dataclass(frozen=True)
-class GaitGenConfig:
-    """Options of the flat-foot problem (besides the :class:`~robustgait.gait.GaitParams`).
-
-    nodes: collocation nodes (odd, so that τ = ½ is a node); stance: the leg the gait is written for;
-    friction: μ of the friction pyramid (below the simulator's 1.0 for margin); torsional_friction: μ_t;
-    min_normal_force [N]; cop_margin [m] inside the sole edges; impact_velocity: bounds on the swing sole's
-    vertical velocity at the guard [m/s]; max_impact_tangential [m/s]; max_impact_angular [rad/s]: bound on
-    each component of the swing sole's angular velocity at the guard; flat_approach: every corner of the
-    swing sole stays at least this fraction of the sole centre's height above the ground (a foot near the
-    ground is nearly flat, so touchdown is not a corner grazing early); foot_gap [m]: lateral clearance
-    between the soles' edges; max_iter, tol: IPOPT.
-
-    Gait quality (``None`` = the robot spec's ``[gait_quality]``, see
-    :class:`~robustgait.robots.spec.GaitQuality`): pelvis_roll, pelvis_yaw [rad] (|·| ≤), pelvis_pitch
-    [rad] (band), pelvis_height [m] (band above the stance sole), pelvis_angular_velocity [rad/s] (each
-    component), swing_tilt [rad] (swing sole roll/pitch), swing_yaw [rad], joint_velocity [rad/s] (one value
-    for every joint or one per joint).
-    """
-
-    nodes: int = 17
-    stance: str = "right"
-    friction: float = 0.6
-    torsional_friction: float = 0.02
-    min_normal_force: float = 50.0
-    cop_margin: float = 0.02
-    impact_velocity: tuple[float, float] = (-0.4, -0.05)
-    max_impact_tangential: float = 0.15
-    max_impact_angular: float = 0.5
-    flat_approach: float = 0.5
-    foot_gap: float = 0.02
-    max_iter: int = 300
-    tol: float = 1e-8
-    pelvis_roll: float | None = None
-    pelvis_yaw: float | None = None
-    pelvis_pitch: tuple[float, float] | None = None
-    pelvis_height: tuple[float, float] | None = None
-    pelvis_angular_velocity: float | None = None
-    swing_tilt: float | None = None
-    swing_yaw: float | None = None
-    joint_velocity: float | tuple[float, ...] | None = None
-
-    def quality(self, robot: Robot) -> GaitQuality:
-        """The gait-quality bounds in force: the spec's, with this config's non-None fields on top."""
-        base = robot.spec.gait_quality
-        jv = self.joint_velocity
-        if jv is not None:
-            jv = (float(jv),) * robot.n_joints if isinstance(jv, (int, float)) else tuple(map(float, jv))
-            if len(jv) != robot.n_joints:
-                raise RobustGaitError(f"joint_velocity needs 1 or {robot.n_joints} values, got {len(jv)}")
-        over: dict[str, Any] = {k: v for k, v in (("pelvis_roll", self.pelvis_roll), ("pelvis_yaw", self.pelvis_yaw),
-                                  ("pelvis_pitch", self.pelvis_pitch), ("pelvis_height", self.pelvis_height),
-                                  ("pelvis_angular_velocity", self.pelvis_angular_velocity),
-                                  ("swing_tilt", self.swing_tilt), ("swing_yaw", self.swing_yaw),
-                                  ("joint_velocity", jv)) if v is not None}
-        q = replace(base, **over)
-        if not q.joint_velocity:
-            q = replace(q, joint_velocity=(10.0,) * robot.n_joints)
-        return q
 
 
 def rpy_to_matrix(rpy: cs.SX | cs.DM) -> cs.SX | cs.DM:
@@ -126,6 +79,41 @@ def matrix_to_rpy(r: FloatArray) -> FloatArray:
                      math.atan2(r[1, 0], r[0, 0])])
 
 
+def double_support_free_joints(robot: Robot, side: str, names: tuple[str, ...] | None = None) -> list[int]:
+    """Joints (spec order) of the ``side`` leg that are *not* Bézier outputs in double support.
+
+    With two line contacts (10 rows) the 18 coordinates keep 8 degrees of freedom, so only 8 joints can be
+    outputs; the base and 4 joints follow from the loop closure (a square 10 × 10 system at position,
+    velocity and acceleration level). The 4 must make that system regular: the front leg's hip roll (lateral
+    position), hip yaw (the heel edge's yaw), knee (distance) and ankle roll (the edge's roll) do — chosen by
+    the joint axes in the model's zero posture (x: roll, z: yaw, y: pitch; the knee is the second pitch joint
+    from the hip, the ankle roll the last roll joint), or given by ``names``."""
+    spec, m = robot.spec, robot.model
+    if names is not None:
+        missing = [n for n in names if n not in spec.joints]
+        if len(names) != 4 or missing:
+            raise RobustGaitError(f"ds_free_joints must name 4 actuated joints, got {list(names)}")
+        return [spec.joints.index(n) for n in names]
+    d = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d)
+    body = int(m.geom_bodyid[robot.sole_geom_id[side]])
+    chain: list[int] = []
+    while body != robot.base_body_id:
+        chain += [int(m.body_jntadr[body]) + k for k in range(int(m.body_jntnum[body]))]
+        body = int(m.body_parentid[body])
+    chain.reverse()  # hip to ankle
+    kinds = [("xyz")[int(np.argmax(np.abs(d.xaxis[j])))] for j in chain]
+    rolls = [j for j, k in zip(chain, kinds, strict=True) if k == "x"]
+    yaws = [j for j, k in zip(chain, kinds, strict=True) if k == "z"]
+    pitches = [j for j, k in zip(chain, kinds, strict=True) if k == "y"]
+    if len(rolls) < 2 or not yaws or len(pitches) < 2:
+        raise RobustGaitError(f"cannot pick the double-support free joints of the {side} leg from its joint axes "
+                              f"({', '.join(m.joint(j).name for j in chain)}): set GaitGenConfig.ds_free_joints")
+    picked = [rolls[0], yaws[0], pitches[1], rolls[-1]]
+    ids = [m.joint(n).id for n in spec.joints]
+    return [ids.index(j) for j in picked]
+
+
 def sole_half_extents(dyn: Dynamics, side: str) -> tuple[float, float]:
     """(half length, half width) [m] of a box sole: its largest and middle half sizes."""
     m = dyn.robot.model
@@ -134,19 +122,46 @@ def sole_half_extents(dyn: Dynamics, side: str) -> tuple[float, float]:
 
 
 @dataclass
-class Layout:
-    """Where each block of variables sits in the NLP vector x (scaled units)."""
+class DomainLayout:
+    """Where one domain's variables sit in the NLP vector: its Bézier β, per-node variables (joints s, ṡ, s̈,
+    base position p, roll-pitch-yaw, velocity ν_b, acceleration ν̇_b, torques u, contact wrenches λ), and the
+    post-impact velocity ν⁺ and impulses Λ of the transition that ends it."""
 
-    m: int
-    n: int
     beta: slice
     nodes: list[dict[str, slice]]
     nu_plus: slice
     impulse: slice
+
+
+@dataclass
+class Layout:
+    """The NLP vector x (scaled units): the domains' blocks in order. ``beta``, ``nodes``, ``nu_plus`` and
+    ``impulse`` are domain 0's."""
+
+    m: int
+    domains: list[DomainLayout]
     size: int
 
+    @property
+    def beta(self) -> slice:
+        return self.domains[0].beta
 
-def make_layout(m: int, n_nodes: int) -> Layout:
+    @property
+    def nodes(self) -> list[dict[str, slice]]:
+        return self.domains[0].nodes
+
+    @property
+    def nu_plus(self) -> slice:
+        return self.domains[0].nu_plus
+
+    @property
+    def impulse(self) -> slice:
+        return self.domains[0].impulse
+
+
+def make_layout(m: int, n_nodes: list[int], wrench_rows: list[int], impulse_rows: list[int]) -> Layout:
+    """Per domain d: β (m·8), n_nodes[d] nodes with a contact wrench of wrench_rows[d], ν⁺ (6 + m) and an
+    impulse of impulse_rows[d] (the target contact set's rows)."""
     k = 0
 
     def take(size: int) -> slice:
@@ -155,51 +170,98 @@ def make_layout(m: int, n_nodes: int) -> Layout:
         k += size
         return s
 
-    beta = take(m * (BEZIER_DEGREE + 1))
-    nodes = [{"s": take(m), "sd": take(m), "sdd": take(m), "p": take(3), "rpy": take(3), "vb": take(6),
-              "ab": take(6), "u": take(m), "lam": take(6)} for _ in range(n_nodes)]
-    nu_plus = take(6 + m)
-    impulse = take(6)
-    return Layout(m, n_nodes, beta, nodes, nu_plus, impulse, k)
+    doms = []
+    for n, wr, ir in zip(n_nodes, wrench_rows, impulse_rows, strict=True):
+        beta = take(m * (BEZIER_DEGREE + 1))
+        nodes = [{"s": take(m), "sd": take(m), "sdd": take(m), "p": take(3), "rpy": take(3), "vb": take(6),
+                  "ab": take(6), "u": take(m), "lam": take(wr)} for _ in range(n)]
+        doms.append(DomainLayout(beta, nodes, take(6 + m), take(ir)))
+    return Layout(m, doms, k)
 
 
-class FlatFootProblem:
-    """The NLP, built once for a robot (and stance), solved for any essential constraints."""
+def wrench_rows(c: Contact, lam: cs.SX, config: GaitGenConfig, half_length: float, half_width: float
+                ) -> list[tuple[str, cs.SX, float, float]]:
+    """Contact wrench conditions (expr ≤ 0 unless noted) of one contact, world axes at its frame:
+
+    flat (f, n) ∈ R⁶: f_z ≥ f_min, friction pyramid |f_x|, |f_y| ≤ μ f_z, centre of pressure inside the sole
+    less a margin (|n_y| ≤ a f_z, |n_x| ≤ b f_z), |n_z| ≤ μ_t f_z. Line (f_x, f_y, f_z, n_x, n_z): f_z ≥
+    f_line, the same pyramid, the centre of pressure along the edge inside the sole (|n_x| ≤ b f_z; the edge
+    runs along world y), |n_z| ≤ μ_t f_z. Returns (name, expr, lower, upper) rows.
+    """
+    mu, mut = config.friction, config.torsional_friction
+    ax, ay = half_length - config.cop_margin, half_width - config.cop_margin
+    f = lam[:3]
+    rows = [("normal_force", f[2], config.min_normal_force if c.kind == "flat" else config.min_line_force, cs.inf),
+            ("friction", cs.vertcat(f[0] - mu * f[2], -f[0] - mu * f[2], f[1] - mu * f[2], -f[1] - mu * f[2]),
+             -cs.inf, 0.0)]
+    if c.kind == "flat":
+        tq = lam[3:]
+        rows += [("cop", cs.vertcat(-tq[1] - ax * f[2], tq[1] - ax * f[2], tq[0] - ay * f[2], -tq[0] - ay * f[2]),
+                  -cs.inf, 0.0),
+                 ("yaw_moment", cs.vertcat(tq[2] - mut * f[2], -tq[2] - mut * f[2]), -cs.inf, 0.0)]
+    else:
+        nx, nz = lam[3], lam[4]
+        rows += [("cop", cs.vertcat(nx - ay * f[2], -nx - ay * f[2]), -cs.inf, 0.0),
+                 ("yaw_moment", cs.vertcat(nz - mut * f[2], -nz - mut * f[2]), -cs.inf, 0.0)]
+    return rows
+
+
+def impulse_rows(contacts: tuple[Contact, ...], imp: cs.SX, mu: float) -> cs.SX:
+    """Each contact's impulse pushes (Λ_z ≥ 0) inside the friction pyramid (rows ≥ 0)."""
+    out, k = [], 0
+    for c in contacts:
+        fx, fy, fz = imp[k], imp[k + 1], imp[k + 2]
+        out += [fz, mu * fz - fx, mu * fz + fx, mu * fz - fy, mu * fz + fy]
+        k += c.n_rows
+    return cs.vertcat(*out)
+
+
+class GaitProblem:
+    """The NLP of a domain graph (``config.domains``), built once for a robot and stance, solved for any
+    essential constraints. See the module docstring for the formulation."""
 
     def __init__(self, dyn: Dynamics, config: GaitGenConfig):
         self.dyn, self.config = dyn, config
         robot = dyn.robot
-        self.quality = quality = config.quality(robot)
-        if config.nodes < 5 or config.nodes % 2 == 0:
-            raise ValueError("nodes must be odd and ≥ 5")
+        self.graph = graph = domain_graph(config.domains)
+        self.quality = config.quality(robot)
         self.m = m = robot.n_joints
-        self.n = n = config.nodes
-        self.taus = np.linspace(0.0, 1.0, n)
-        self.layout = lay = make_layout(m, n)
-        st, sw = config.stance, "left" if config.stance == "right" else "right"
+        counts = [config.nodes] + [config.ds_nodes] * (len(graph) - 1)
+        self.domain_taus = [np.linspace(0.0, 1.0, n) for n in counts]
+        self.taus = self.domain_taus[0]
+        self.n = counts[0]
+        self.layout = lay = make_layout(
+            m, counts, [sum(c.n_rows for c in dom.contacts) for dom in graph.domains],
+            [sum(c.n_rows for c in graph.target_contacts(d)) for d in range(len(graph))])
+        st, sw = config.stance, other_side(config.stance)
         self.stance, self.swing = st, sw
+        self.free = (double_support_free_joints(robot, sw, config.ds_free_joints) if graph.name == "multicontact"
+                     else [])
+        # the Bézier outputs of each domain: every joint in single support, all but the free ones in double
+        self.outputs = [list(range(m)) if dom.guard == "touchdown" else [j for j in range(m) if j not in self.free]
+                        for dom in graph.domains]
         self.half_length, self.half_width = sole_half_extents(dyn, st)
         self.mirror = np.zeros((m, m))
         self.mirror[np.arange(m), list(robot.spec.mirror_perm)] = robot.spec.mirror_sign
         kd = dyn.kindyn
-        fk_st = dyn.frame_fun(foot_frame(st, "sole"))
-        fk_sw = {"sole": dyn.frame_fun(foot_frame(sw, "sole"))}
-        j_st, j_sw = kd.jacobian_fun(foot_frame(st, "sole")), kd.jacobian_fun(foot_frame(sw, "sole"))
-        jd_st = kd.jacobian_dot_fun(foot_frame(st, "sole"))
+        frames = {(side, kind): foot_frame(side, kind) for side in (st, sw) for kind in ("sole", "toe", "heel")}
+        fk = {key: dyn.frame_fun(f) for key, f in frames.items()}
+        jac = {key: kd.jacobian_fun(f) for key, f in frames.items()}
+        jdot = {key: kd.jacobian_dot_fun(f) for key, f in frames.items()}
         mass, bias = dyn.mass_matrix_fun, dyn.bias_force_fun
         arm = np.zeros(6 + m)
         arm[6:] = dyn.armature[robot.dof_idx]
 
         x = cs.SX.sym("x", lay.size)
-        p = cs.SX.sym("p", 4)  # step length, duration, width, height
-        L, T, W, h = p[0], p[1], p[2], p[3]
-        beta = cs.reshape(x[lay.beta], m, BEZIER_DEGREE + 1)
-        b0 = bernstein_basis(BEZIER_DEGREE, self.taus)  # (n, 8)
-        b1 = bernstein_basis(BEZIER_DEGREE - 1, self.taus)
-        b2 = bernstein_basis(BEZIER_DEGREE - 2, self.taus)
+        p = cs.SX.sym("p", 5)  # step length, duration, width, height, rolling fraction
+        L, T, W, h, rho = p[0], p[1], p[2], p[3], p[4]
+        durations = [T] if len(graph) == 1 else [T * (1 - rho), T * rho]
+        self.n_params = 5
         d1 = bezier_derivative_coeffs(np.eye(BEZIER_DEGREE + 1), 1)  # (8, 7): β d1 = first-derivative coeffs
         d2 = bezier_derivative_coeffs(np.eye(BEZIER_DEGREE + 1), 2)
         side_sign = 1.0 if sw == "left" else -1.0
+        multi = graph.name == "multicontact"
+        a_len, b_wid = self.half_length, self.half_width
         g: list[cs.SX] = []
         lbg: list[float] = []
         ubg: list[float] = []
@@ -213,75 +275,157 @@ class FlatFootProblem:
             lbg.extend(np.broadcast_to(lo, (int(e.numel()),)).tolist())
             ubg.extend(np.broadcast_to(hi, (int(e.numel()),)).tolist())
 
-        mu, mut = config.friction, config.torsional_friction
-        ax, ay = self.half_length - config.cop_margin, self.half_width - config.cop_margin
-        cost = 0.0
-        wts = np.full(n, 1.0 / (n - 1))
-        wts[[0, -1]] *= 0.5
-        for i, node in enumerate(lay.nodes):
-            # the joints are node variables tied to β by linear rows: the nonlinear dynamics then stay local
-            # to a node and the Lagrangian's Hessian block-diagonal (≈ 3× faster to build and evaluate)
-            s, sd, sdd = x[node["s"]], x[node["sd"]], x[node["sdd"]]
-            add("bezier", cs.vertcat(s - cs.mtimes(beta, cs.DM(b0[i])), sd * T - cs.mtimes(beta, cs.DM(d1 @ b1[i])),
-                                     sdd * T**2 - cs.mtimes(beta, cs.DM(d2 @ b2[i]))), 0.0, 0.0)
-            pb, rpy, vb, ab = x[node["p"]], x[node["rpy"]], x[node["vb"]], x[node["ab"]]
-            u, lam = U_SCALE * x[node["u"]], F_SCALE * x[node["lam"]]
-            H = cs.vertcat(cs.horzcat(rpy_to_matrix(rpy), pb), cs.horzcat(cs.SX.zeros(1, 3), cs.SX.ones(1, 1)))
-            nu = cs.vertcat(vb, sd)
-            Hst = fk_st(H, s)
-            add("stance_position", Hst[:3, 3], 0.0, 0.0)
-            add("stance_orientation", cs.vertcat(Hst[1, 0], Hst[2, 0], Hst[2, 1]), 0.0, 0.0)
-            J = j_st(H, s)
-            add("stance_velocity", J @ nu, 0.0, 0.0)
-            add("stance_acceleration", J @ cs.vertcat(ab, sdd) + jd_st(H, s, vb, sd) @ nu, 0.0, 0.0)
-            M = mass(H, s) + cs.diag(arm)
-            tau = cs.vertcat(cs.SX.zeros(6), u)
-            dyn_res = M @ cs.vertcat(ab, sdd) + bias(H, s, vb, sd) - tau - J.T @ lam
-            add("dynamics", dyn_res / ROW_SCALE, 0.0, 0.0)
-            f, tq = lam[:3], lam[3:]
-            add("normal_force", f[2], config.min_normal_force, cs.inf)
-            add("friction", cs.vertcat(f[0] - mu * f[2], -f[0] - mu * f[2], f[1] - mu * f[2], -f[1] - mu * f[2]),
-                -cs.inf, 0.0)
-            add("cop", cs.vertcat(-tq[1] - ax * f[2], tq[1] - ax * f[2], tq[0] - ay * f[2], -tq[0] - ay * f[2]),
-                -cs.inf, 0.0)
-            add("yaw_moment", cs.vertcat(tq[2] - mut * f[2], -tq[2] - mut * f[2]), -cs.inf, 0.0)
-            Hsw = fk_sw["sole"](H, s)
-            psw = Hsw[:3, 3]
-            if 0 < i < n - 1:
-                add("swing_height", cs.vertcat(psw[2], psw[2] - h), [0.0, -cs.inf], [cs.inf, 0.0])
-                corners = cs.vertcat(*(psw[2] + sx * self.half_length * Hsw[2, 0] + sy * self.half_width * Hsw[2, 1]
-                                       for sx in (-1, 1) for sy in (-1, 1)))
-                add("swing_flat_approach", corners - config.flat_approach * psw[2], 0.0, cs.inf)
-                add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), -math.sin(quality.swing_tilt),
-                    math.sin(quality.swing_tilt))
-                add("swing_yaw", Hsw[1, 0], -math.sin(quality.swing_yaw), math.sin(quality.swing_yaw))
-                add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.foot_gap), 0.0, cs.inf)
-            if i == (n - 1) // 2:
-                add("step_height", psw[2] - h, 0.0, 0.0)
-            if i == n - 1:
-                add("landing_position", psw - cs.vertcat(L, side_sign * W, 0.0), 0.0, 0.0)
-                add("landing_orientation", cs.vertcat(Hsw[1, 0], Hsw[2, 0], Hsw[2, 1]), 0.0, 0.0)
-                Jsw = j_sw(H, s)
-                vsw = Jsw[:3, :] @ nu
-                add("impact_velocity", vsw[2], *config.impact_velocity)
-                add("impact_tangential", vsw[:2], -config.max_impact_tangential, config.max_impact_tangential)
-                add("impact_angular", Jsw[3:, :] @ nu, -config.max_impact_angular, config.max_impact_angular)
-                nup = x[lay.nu_plus]
-                imp = U_SCALE * x[lay.impulse]
-                add("impact_map", (M @ (nup - nu) - Jsw.T @ imp) / ROW_SCALE, 0.0, 0.0)
-                add("impact_contact", Jsw @ nup, 0.0, 0.0)
-                add("impact_impulse", cs.vertcat(imp[2], mu * imp[2] - imp[0], mu * imp[2] + imp[0],
-                                                  mu * imp[2] - imp[1], mu * imp[2] + imp[1]), 0.0, cs.inf)
-                add("liftoff", (J @ nup)[2], 0.0, cs.inf)
-                sd0 = x[lay.nodes[0]["sd"]]
-                add("velocity_periodicity", sd0 - cs.mtimes(cs.DM(self.mirror), nup[6:]), 0.0, 0.0)
-            cost = cost + wts[i] * cs.sumsqr(x[node["u"]])
-        add("position_periodicity", beta[:, 0] - cs.mtimes(cs.DM(self.mirror), beta[:, BEZIER_DEGREE]), 0.0, 0.0)
+        def stacked_jacobian(contacts: tuple[Contact, ...], H: cs.SX, s: cs.SX) -> cs.SX:
+            return cs.vertcat(*(jac[(c.side(st), c.frame_kind())](H, s)[list(c.rows), :] for c in contacts))
+
+        # where each contact of a domain is held: its frame's target position in the stance sole's frame
+        def contact_target(c: Contact) -> cs.SX:
+            if c.leg == "stance":
+                return cs.SX([a_len if c.kind == "toe" else -a_len if c.kind == "heel" else 0.0, 0.0, 0.0])
+            return cs.vertcat(L - a_len if c.kind == "heel" else L, side_sign * W, 0.0)
+
+        cost: Any = 0.0
+        betas = [cs.reshape(x[dl.beta], m, BEZIER_DEGREE + 1) for dl in lay.domains]
+        for d, dom in enumerate(graph.domains):
+            dl, beta, Td, taus = lay.domains[d], betas[d], durations[d], self.domain_taus[d]
+            n = len(taus)
+            b0 = bernstein_basis(BEZIER_DEGREE, taus)  # (n, 8)
+            b1 = bernstein_basis(BEZIER_DEGREE - 1, taus)
+            b2 = bernstein_basis(BEZIER_DEGREE - 2, taus)
+            wts = np.full(n, 1.0 / (n - 1))
+            wts[[0, -1]] *= 0.5
+            last = d == len(graph) - 1
+            domain_cost: Any = 0.0
+            for i, node in enumerate(dl.nodes):
+                # the joints are node variables tied to β by linear rows: the nonlinear dynamics then stay local
+                # to a node and the Lagrangian's Hessian block-diagonal (≈ 3× faster to build and evaluate)
+                s, sd, sdd = x[node["s"]], x[node["sd"]], x[node["sdd"]]
+                out = self.outputs[d]
+                if len(out) == m:
+                    add("bezier", cs.vertcat(s - cs.mtimes(beta, cs.DM(b0[i])),
+                                             sd * Td - cs.mtimes(beta, cs.DM(d1 @ b1[i])),
+                                             sdd * Td**2 - cs.mtimes(beta, cs.DM(d2 @ b2[i]))), 0.0, 0.0)
+                else:
+                    bo = beta[out, :]
+                    add("bezier", cs.vertcat(s[out] - cs.mtimes(bo, cs.DM(b0[i])),
+                                             sd[out] * Td - cs.mtimes(bo, cs.DM(d1 @ b1[i])),
+                                             sdd[out] * Td**2 - cs.mtimes(bo, cs.DM(d2 @ b2[i]))), 0.0, 0.0)
+                pb, rpy, vb, ab = x[node["p"]], x[node["rpy"]], x[node["vb"]], x[node["ab"]]
+                u, lam = U_SCALE * x[node["u"]], F_SCALE * x[node["lam"]]
+                H = cs.vertcat(cs.horzcat(rpy_to_matrix(rpy), pb), cs.horzcat(cs.SX.zeros(1, 3), cs.SX.ones(1, 1)))
+                nu = cs.vertcat(vb, sd)
+                if d > 0 and i == 0:
+                    # continuity with the previous domain: joints through β, base pose, and the velocity
+                    # after the impact; the contacts' pose and velocity then hold already (not imposed again)
+                    prev = lay.domains[d - 1]
+                    add("continuity", cs.vertcat(s - x[prev.nodes[-1]["s"]],
+                                                 pb - x[prev.nodes[-1]["p"]], rpy - x[prev.nodes[-1]["rpy"]],
+                                                 vb - x[prev.nu_plus][:6], sd - x[prev.nu_plus][6:]), 0.0, 0.0)
+                Js = []
+                for c in dom.contacts:
+                    key = (c.side(st), c.frame_kind())
+                    Hc = fk[key](H, s)
+                    J = jac[key](H, s)[list(c.rows), :]
+                    name = "stance" if c.leg == "stance" and c.kind == "flat" else f"{c.leg}_{c.kind}"
+                    if not (d > 0 and i == 0):
+                        add(f"{name}_position", Hc[:3, 3] - contact_target(c), 0.0, 0.0)
+                        orient = (cs.vertcat(Hc[1, 0], Hc[2, 0], Hc[2, 1]) if c.kind == "flat"
+                                  else cs.vertcat(Hc[0, 1], Hc[2, 1]))
+                        add(f"{name}_orientation", orient, 0.0, 0.0)
+                        add(f"{name}_velocity", J @ nu, 0.0, 0.0)
+                    add(f"{name}_acceleration", J @ cs.vertcat(ab, sdd) + jdot[key](H, s, vb, sd)[list(c.rows), :] @ nu,
+                        0.0, 0.0)
+                    Js.append(J)
+                Jc = cs.vertcat(*Js)
+                M = mass(H, s) + cs.diag(arm)
+                tau = cs.vertcat(cs.SX.zeros(6), u)
+                dyn_res = M @ cs.vertcat(ab, sdd) + bias(H, s, vb, sd) - tau - Jc.T @ lam
+                add("dynamics", dyn_res / ROW_SCALE, 0.0, 0.0)
+                k = 0
+                for c in dom.contacts:
+                    for rname, expr, lo, hi in wrench_rows(c, lam[k:k + c.n_rows], config, a_len, b_wid):
+                        add(rname, expr, lo, hi)
+                    k += c.n_rows
+                if dom.guard == "touchdown":
+                    self._single_support_rows(add, H, s, nu, i, n, h, side_sign, fk, jac, multi, L, W)
+                if i == n - 1:
+                    if dom.guard == "foot_flat":
+                        Hf, Hb = fk[(sw, "sole")](H, s), fk[(st, "sole")](H, s)
+                        add("foot_flat", Hf[2, 0], 0.0, 0.0)
+                        add("toe_off_pitch", -Hb[2, 0], math.sin(config.toe_off_pitch[0]),
+                            math.sin(config.toe_off_pitch[1]))
+                        add("foot_flat_rate", (jac[(sw, "sole")](H, s) @ nu)[4], -config.foot_flat_rate,
+                            config.foot_flat_rate)
+                    # the impact onto the next domain's contacts (M and the pre-impact ν of this node)
+                    target = graph.target_contacts(d)
+                    Jt = stacked_jacobian(target, H, s)
+                    nup, imp = x[dl.nu_plus], U_SCALE * x[dl.impulse]
+                    momentum, contact = impact_residual(M, Jt, nu, nup, imp)
+                    add("impact_map", momentum / ROW_SCALE, 0.0, 0.0)
+                    add("impact_contact", contact, 0.0, 0.0)
+                    add("impact_impulse", impulse_rows(target, imp, config.friction), 0.0, cs.inf)
+                    if dom.guard == "touchdown" and not multi:
+                        add("liftoff", (jac[(st, "sole")](H, s) @ nup)[2], 0.0, cs.inf)
+                    elif dom.guard == "foot_flat":
+                        add("liftoff", (jac[(st, "toe")](H, s) @ nup)[2], 0.0, cs.inf)
+                    if last:
+                        sd0 = x[lay.domains[0].nodes[0]["sd"]]
+                        add("velocity_periodicity", sd0 - cs.mtimes(cs.DM(self.mirror), nup[6:]), 0.0, 0.0)
+                domain_cost = domain_cost + wts[i] * cs.sumsqr(x[node["u"]])
+            cost = domain_cost * Td if d == 0 else cost + domain_cost * Td
+        if len(graph) == 1:
+            add("position_periodicity", betas[0][:, 0] - cs.mtimes(cs.DM(self.mirror), betas[-1][:, BEZIER_DEGREE]),
+                0.0, 0.0)
+        else:  # through the node joints: the last domain's free joints are not Bézier outputs
+            add("position_periodicity", x[lay.domains[0].nodes[0]["s"]]
+                - cs.mtimes(cs.DM(self.mirror), x[lay.domains[-1].nodes[-1]["s"]]), 0.0, 0.0)
         self.g = cs.vertcat(*g)
         self.lbg, self.ubg = np.array(lbg), np.array(ubg)
         self.x, self.p = x, p
-        self.cost = cost * T
+        self.cost = cost
         self.lbx, self.ubx = self._bounds()
+
+    def _single_support_rows(self, add: Any, H: cs.SX, s: cs.SX, nu: cs.SX, i: int, n: int, h: cs.SX,
+                             side_sign: float, fk: dict[tuple[str, str], cs.Function],
+                             jac: dict[tuple[str, str], cs.Function], multi: bool, L: cs.SX, W: cs.SX) -> None:
+        """The swing foot in single support: clearance, attitude, the essential constraints, and its landing
+        at τ = 1 — flat at (L, ±W, 0) (flat graph) or heel first, toe up, heel edge at (L − a, ±W, 0)
+        (multi-contact) — with bounded velocities at the guard."""
+        config, quality, sw = self.config, self.quality, self.swing
+        Hsw = fk[(sw, "sole")](H, s)
+        psw = Hsw[:3, 3]
+        if 0 < i < n - 1:
+            add("swing_height", cs.vertcat(psw[2], psw[2] - h), [0.0, -cs.inf], [cs.inf, 0.0])
+            corners = cs.vertcat(*(psw[2] + sx * self.half_length * Hsw[2, 0] + sy * self.half_width * Hsw[2, 1]
+                                   for sx in (-1, 1) for sy in (-1, 1)))
+            # flat graph: the nearer the ground, the flatter the foot; multi-contact: heel first, any corner ≥ 0
+            add("swing_flat_approach", corners - (0.0 if multi else config.flat_approach) * psw[2], 0.0, cs.inf)
+            tilt = math.sin(quality.swing_tilt)
+            # R[2, 0] = −sin(pitch): multi-contact lets the toe come up to the heel-strike pitch
+            pitch_hi = math.sin(config.heel_strike_pitch[1]) if multi else tilt
+            add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [-tilt, -tilt], [pitch_hi, tilt])
+            add("swing_yaw", Hsw[1, 0], -math.sin(quality.swing_yaw), math.sin(quality.swing_yaw))
+            add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.foot_gap), 0.0, cs.inf)
+        if i == (n - 1) // 2:
+            add("step_height", psw[2] - h, 0.0, 0.0)
+        if i == n - 1:
+            if not multi:
+                add("landing_position", psw - cs.vertcat(L, side_sign * W, 0.0), 0.0, 0.0)
+                add("landing_orientation", cs.vertcat(Hsw[1, 0], Hsw[2, 0], Hsw[2, 1]), 0.0, 0.0)
+                Jsw = jac[(sw, "sole")](H, s)
+                ang = Jsw[3:, :] @ nu
+            else:
+                Hh = fk[(sw, "heel")](H, s)
+                add("landing_position", Hh[:3, 3] - cs.vertcat(L - self.half_length, side_sign * W, 0.0), 0.0, 0.0)
+                add("landing_orientation", cs.vertcat(Hsw[0, 1], Hsw[2, 1]), 0.0, 0.0)
+                add("heel_strike_pitch", Hsw[2, 0], math.sin(config.heel_strike_pitch[0]),
+                    math.sin(config.heel_strike_pitch[1]))
+                Jsw = jac[(sw, "heel")](H, s)
+                ang = (Jsw[3:, :] @ nu)[[0, 2]]
+            vsw = Jsw[:3, :] @ nu
+            add("impact_velocity", vsw[2], *config.impact_velocity)
+            add("impact_tangential", vsw[:2], -config.max_impact_tangential, config.max_impact_tangential)
+            add("impact_angular", ang, -config.max_impact_angular, config.max_impact_angular)
 
     def _bounds(self) -> tuple[FloatArray, FloatArray]:
         """Variable bounds: joint range on β, torque limits, and the gait-quality bands on the node variables
@@ -289,17 +433,28 @@ class FlatFootProblem:
         lay, robot, q = self.layout, self.dyn.robot, self.quality
         lo, hi = np.full(lay.size, -np.inf), np.full(lay.size, np.inf)
         rng = robot.joint_range
-        lo[lay.beta] = np.repeat(rng[:, :1], BEZIER_DEGREE + 1, axis=1).ravel(order="F")
-        hi[lay.beta] = np.repeat(rng[:, 1:], BEZIER_DEGREE + 1, axis=1).ravel(order="F")
         rpy_lo = np.array([-q.pelvis_roll, q.pelvis_pitch[0], -q.pelvis_yaw])
         rpy_hi = np.array([q.pelvis_roll, q.pelvis_pitch[1], q.pelvis_yaw])
         jv = np.asarray(q.joint_velocity)
-        for node in lay.nodes:
-            lo[node["u"]], hi[node["u"]] = -robot.torque_limit / U_SCALE, robot.torque_limit / U_SCALE
-            lo[node["rpy"]], hi[node["rpy"]] = rpy_lo, rpy_hi
-            z = node["p"].start + 2
-            lo[z], hi[z] = q.pelvis_height
-            w = slice(node["vb"].start + 3, node["vb"].stop)
-            lo[w], hi[w] = -q.pelvis_angular_velocity, q.pelvis_angular_velocity
-            lo[node["sd"]], hi[node["sd"]] = -jv, jv
+        for dl, out in zip(lay.domains, self.outputs, strict=True):
+            blo = np.repeat(rng[:, :1], BEZIER_DEGREE + 1, axis=1)
+            bhi = np.repeat(rng[:, 1:], BEZIER_DEGREE + 1, axis=1)
+            free = [j for j in range(robot.n_joints) if j not in out]
+            blo[free], bhi[free] = 0.0, 0.0  # not outputs in this domain: unused, fixed (the gait file fits them)
+            lo[dl.beta], hi[dl.beta] = blo.ravel(order="F"), bhi.ravel(order="F")
+            for node in dl.nodes:
+                js = np.arange(node["s"].start, node["s"].stop)[free]
+                lo[js], hi[js] = rng[free, 0], rng[free, 1]
+                lo[node["u"]], hi[node["u"]] = -robot.torque_limit / U_SCALE, robot.torque_limit / U_SCALE
+                lo[node["rpy"]], hi[node["rpy"]] = rpy_lo, rpy_hi
+                z = node["p"].start + 2
+                lo[z], hi[z] = q.pelvis_height
+                w = slice(node["vb"].start + 3, node["vb"].stop)
+                lo[w], hi[w] = -q.pelvis_angular_velocity, q.pelvis_angular_velocity
+                a = slice(node["ab"].start, node["ab"].start + 3)
+                lo[a], hi[a] = -q.pelvis_acceleration, q.pelvis_acceleration
+                lo[node["sd"]], hi[node["sd"]] = -jv, jv
         return lo, hi
+
+
+FlatFootProblem = GaitProblem  # the name of the one-domain problem before the domain graph was generalized

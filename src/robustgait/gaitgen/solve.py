@@ -1,4 +1,4 @@
-"""Solving the flat-foot problem: initial guess from kinematics, IPOPT, and the resulting :class:`Gait`."""
+"""Solving the gait problem of a domain graph: initial guess from kinematics, IPOPT, the resulting :class:`Gait`."""
 
 from __future__ import annotations
 
@@ -10,17 +10,19 @@ import casadi as cs
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
+from scipy.optimize import least_squares
 
-from robustgait.bezier import bezier, bezier_derivative
+from robustgait.bezier import bernstein_basis, bezier, bezier_derivative, bezier_derivative_coeffs
+from robustgait.domains import Contact
 from robustgait.dynamics import Dynamics, foot_frame
 from robustgait.errors import RobustGaitError
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait, GaitParams, State
 from robustgait.gaitgen.check import PhysicsCheck, check_solution
+from robustgait.gaitgen.config import GaitGenConfig
 from robustgait.gaitgen.problem import (
     F_SCALE,
     U_SCALE,
-    FlatFootProblem,
-    GaitGenConfig,
+    GaitProblem,
     matrix_to_rpy,
     rpy_to_matrix,
 )
@@ -43,7 +45,7 @@ class GaitGenResult:
     iterations: int = 0
     solve_seconds: float = 0.0
     objective: float = float("nan")
-    nodes: NodeStates | None = None
+    nodes: list[NodeStates] | None = None
     check: PhysicsCheck | None = None
 
     def summary(self) -> dict[str, Any]:
@@ -62,95 +64,205 @@ def joint_trajectories(beta: FloatArray, taus: FloatArray, duration: float
             bezier_derivative(beta, taus, 2) / duration**2)
 
 
-def kinematic_states(dyn: Dynamics, prob: FlatFootProblem, beta: FloatArray, duration: float) -> NodeStates:
-    """Every node variable implied by β and T: the base from the stance-foot constraint (pose, velocity,
-    acceleration), u and λ from the 6 + m equations of motion (a square system for a flat foot), and the
-    rigid impact map at τ = 1 (:meth:`Dynamics.impact_map`). The initial guess: any β gives a consistent x₀."""
+def domain_durations(prob: GaitProblem, params: GaitParams) -> list[float]:
+    """Duration of each domain: T (flat), or T (1 − ρ) single and T ρ double support (multi-contact)."""
+    if len(prob.graph) == 1:
+        return [params.step_duration]
+    return [params.step_duration * (1 - params.rolling_fraction), params.step_duration * params.rolling_fraction]
+
+
+def _contact_targets(prob: GaitProblem, params: GaitParams, d: int) -> list[tuple[Contact, FloatArray]]:
+    """Each contact of domain d with the position its frame is held at (stance sole frame coordinates)."""
+    a, side = prob.half_length, 1.0 if prob.swing == "left" else -1.0
+    out = []
+    for c in prob.graph.domains[d].contacts:
+        if c.leg == "stance":
+            t = np.array([a if c.kind == "toe" else -a if c.kind == "heel" else 0.0, 0.0, 0.0])
+        else:
+            t = np.array([params.step_length - (a if c.kind == "heel" else 0.0), side * params.step_width, 0.0])
+        out.append((c, t))
+    return out
+
+
+def _closure_pose(dyn: Dynamics, prob: GaitProblem, targets: list[tuple[Contact, FloatArray]], s: FloatArray,
+                  free: list[int], guess: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Base pose H (4, 4) and joints s (free joints changed) that hold a domain's contacts: least squares over
+    the base's position and roll-pitch-yaw and the free joints (exact when the contacts allow it; a
+    compromise for a cold start, whose joints may not close the loop)."""
+    fks = [(c, t, dyn.frame_fun(foot_frame(c.side(prob.stance), c.frame_kind()))) for c, t in targets]
+
+    def unpack_z(z: FloatArray) -> tuple[FloatArray, FloatArray]:
+        H = np.eye(4)
+        H[:3, :3] = np.asarray(cs.evalf(rpy_to_matrix(cs.DM(z[3:6]))))
+        H[:3, 3] = z[:3]
+        q = s.copy()
+        q[free] = z[6:]
+        return H, q
+
+    def residual(z: FloatArray) -> FloatArray:
+        H, q = unpack_z(z)
+        out: list[Any] = []
+        for c, t, f in fks:
+            Hc = np.asarray(f(H, q))
+            out.append(Hc[:3, 3] - t)
+            out.append(np.array([Hc[1, 0], Hc[2, 0], Hc[2, 1]] if c.kind == "flat" else [Hc[0, 1], Hc[2, 1]]))
+        return np.concatenate([np.ravel(o) for o in out])
+
+    z0 = np.concatenate([guess[:3, 3], matrix_to_rpy(guess[:3, :3]), s[free]])
+    return unpack_z(least_squares(residual, z0, xtol=1e-12, ftol=1e-12).x)
+
+
+def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duration: float, *, domain: int = 0,
+                     params: GaitParams | None = None, base: FloatArray | None = None) -> NodeStates:
+    """Every node variable of a domain implied by β and its duration: the base from the contacts (pose,
+    velocity, acceleration), u and λ from the 6 + m equations of motion, and the rigid impact map at τ = 1
+    onto the next domain's contacts (:meth:`Dynamics.impact_map`).
+
+    Single support (one flat sole) determines the base exactly and the equations of motion are square, so
+    any β gives a consistent x₀. Double support (two line contacts, 10 rows) determines the base and the 4
+    free joints (:func:`~robustgait.gaitgen.problem.double_support_free_joints`) from the 8 outputs: solved
+    by least squares from ``base`` (the previous domain's last pose; exact when the loop can close), then
+    square velocity and acceleration systems; λ is the least-norm wrench."""
     kd = dyn.kindyn
-    st = foot_frame(prob.stance, "sole")
-    fk, jac, jdot = dyn.frame_fun(st), kd.jacobian_fun(st), kd.jacobian_dot_fun(st)
     m = prob.m
+    taus = prob.domain_taus[domain]
+    dom = prob.graph.domains[domain]
     arm = np.zeros(6 + m)
     arm[6:] = dyn.armature[dyn.robot.dof_idx]
-    s, sd, sdd = joint_trajectories(beta, prob.taus, duration)
-    n = len(prob.taus)
-    out = {k: np.zeros((n, d)) for k, d in (("vb", 6), ("ab", 6), ("u", m), ("lam", 6))}
+    s, sd, sdd = joint_trajectories(beta, taus, duration)
+    n = len(taus)
+    keys = [foot_frame(c.side(prob.stance), c.frame_kind()) for c in dom.contacts]
+    rows = [list(c.rows) for c in dom.contacts]
+    nl = sum(len(r) for r in rows)
+    out = {k: np.zeros((n, d)) for k, d in (("vb", 6), ("ab", 6), ("u", m), ("lam", nl))}
     Hs = np.zeros((n, 4, 4))
+    single = len(dom.contacts) == 1 and dom.contacts[0].kind == "flat" and dom.contacts[0].leg == "stance"
+    free = [j for j in range(m) if j not in prob.outputs[domain]]
+    cols = list(range(6)) + [6 + j for j in free]  # the unknown velocities: base and free joints
+    known = [6 + j for j in prob.outputs[domain]]
+    targets = None if single else _contact_targets(prob, params or GaitParams(), domain)
+    prev = np.eye(4) if base is None else base
     for i in range(n):
-        H = np.linalg.inv(np.asarray(fk(np.eye(4), s[i])))  # stance sole at the origin, identity orientation
-        Hs[i] = H
-        J = np.asarray(jac(H, s[i]))
-        vb = -np.linalg.solve(J[:, :6], J[:, 6:] @ sd[i])
+        if single:  # stance sole at the origin, identity orientation
+            H = np.linalg.inv(np.asarray(dyn.frame_fun(keys[0])(np.eye(4), s[i])))
+        else:
+            assert targets is not None
+            H, s[i] = _closure_pose(dyn, prob, targets, s[i], free, prev)
+        Hs[i], prev = H, H
+        J = np.vstack([np.asarray(kd.jacobian_fun(k)(H, s[i]))[r] for k, r in zip(keys, rows, strict=True)])
+        if single:
+            vb = -np.linalg.solve(J[:, :6], J[:, 6:] @ sd[i])
+        else:
+            v = -np.linalg.lstsq(J[:, cols], J[:, known] @ sd[i][prob.outputs[domain]], rcond=None)[0]
+            vb, sd[i][free] = v[:6], v[6:]
         nu = np.concatenate([vb, sd[i]])
-        ab = -np.linalg.solve(J[:, :6], J[:, 6:] @ sdd[i] + np.asarray(jdot(H, s[i], vb, sd[i])) @ nu)
+        jd = np.vstack([np.asarray(kd.jacobian_dot_fun(k)(H, s[i], vb, sd[i]))[r]
+                        for k, r in zip(keys, rows, strict=True)])
+        if single:
+            ab = -np.linalg.solve(J[:, :6], J[:, 6:] @ sdd[i] + jd @ nu)
+        else:
+            a = -np.linalg.lstsq(J[:, cols], J[:, known] @ sdd[i][prob.outputs[domain]] + jd @ nu, rcond=None)[0]
+            ab, sdd[i][free] = a[:6], a[6:]
         M = np.asarray(dyn.mass_matrix_fun(H, s[i])) + np.diag(arm)
         rhs = M @ np.concatenate([ab, sdd[i]]) + np.asarray(dyn.bias_force_fun(H, s[i], vb, sd[i])).ravel()
-        lam = np.linalg.solve(J[:, :6].T, rhs[:6])
+        lam = np.linalg.solve(J[:, :6].T, rhs[:6]) if single else np.linalg.lstsq(J[:, :6].T, rhs[:6], rcond=None)[0]
         out["vb"][i], out["ab"][i], out["lam"][i], out["u"][i] = vb, ab, lam, rhs[6:] - J[:, 6:].T @ lam
     qpos, qvel = to_mujoco_state(dyn.robot, Hs[-1], s[-1], out["vb"][-1], sd[-1])
-    qvel_plus, impulse = dyn.impact_map(qpos, qvel, prob.swing)
+    target = prob.graph.target_contacts(domain)
+    if len(target) == 1 and target[0].kind == "flat":  # one sole lands flat (the flat graph, foot-flat)
+        qvel_plus, impulse = dyn.impact_map(qpos, qvel, target[0].side(prob.stance))
+    else:
+        qvel_plus, impulse = dyn.impact_map(qpos, qvel, target, prob.stance)
     return NodeStates(Hs, s, sd, sdd, out["vb"], out["ab"], out["u"], out["lam"], dyn.to_mixed(qpos, qvel_plus),
                       impulse)
 
 
-def pack(prob: FlatFootProblem, beta: FloatArray, ns: NodeStates) -> FloatArray:
-    """The NLP vector x (scaled units) of a trajectory."""
+def fit_bezier(taus: FloatArray, s: FloatArray, sd: FloatArray, sdd: FloatArray, duration: float) -> FloatArray:
+    """Least-squares Bézier coefficients (k, 8) of joints that are not outputs (their node values s, ṡ, s̈
+    (n, k)): the trajectory the simulator's PD tracks for them."""
+    b0 = bernstein_basis(BEZIER_DEGREE, taus)
+    b1 = bernstein_basis(BEZIER_DEGREE - 1, taus) @ bezier_derivative_coeffs(np.eye(BEZIER_DEGREE + 1), 1).T
+    b2 = bernstein_basis(BEZIER_DEGREE - 2, taus) @ bezier_derivative_coeffs(np.eye(BEZIER_DEGREE + 1), 2).T
+    a = np.vstack([b0, b1 / duration, b2 / duration**2])
+    return np.linalg.lstsq(a, np.vstack([s, sd, sdd]), rcond=None)[0].T
+
+
+def pack(prob: GaitProblem, betas: list[FloatArray], states: list[NodeStates]) -> FloatArray:
+    """The NLP vector x (scaled units) of a trajectory: per domain its β (m, 8) and node states."""
     lay = prob.layout
     x = np.zeros(lay.size)
-    x[lay.beta] = beta.ravel(order="F")
-    for i, node in enumerate(lay.nodes):
-        x[node["s"]], x[node["sd"]], x[node["sdd"]] = ns.s[i], ns.sd[i], ns.sdd[i]
-        x[node["p"]] = ns.H[i, :3, 3]
-        x[node["rpy"]] = matrix_to_rpy(ns.H[i, :3, :3])
-        x[node["vb"]], x[node["ab"]] = ns.vb[i], ns.ab[i]
-        x[node["u"]], x[node["lam"]] = ns.u[i] / U_SCALE, ns.lam[i] / F_SCALE
-    x[lay.nu_plus], x[lay.impulse] = ns.nu_plus, ns.impulse / U_SCALE
+    for dl, beta, ns, out in zip(lay.domains, betas, states, prob.outputs, strict=True):
+        b = np.zeros_like(beta)
+        b[out] = beta[out]  # a domain's non-output rows are unused and fixed at 0
+        x[dl.beta] = b.ravel(order="F")
+        for i, node in enumerate(dl.nodes):
+            x[node["s"]], x[node["sd"]], x[node["sdd"]] = ns.s[i], ns.sd[i], ns.sdd[i]
+            x[node["p"]] = ns.H[i, :3, 3]
+            x[node["rpy"]] = matrix_to_rpy(ns.H[i, :3, :3])
+            x[node["vb"]], x[node["ab"]] = ns.vb[i], ns.ab[i]
+            x[node["u"]], x[node["lam"]] = ns.u[i] / U_SCALE, ns.lam[i] / F_SCALE
+        x[dl.nu_plus], x[dl.impulse] = ns.nu_plus, ns.impulse / U_SCALE
     return x
 
 
-def unpack(prob: FlatFootProblem, x: FloatArray, duration: float) -> tuple[FloatArray, NodeStates]:
-    """β (m, 8) and the node states of an NLP vector (inverse of :func:`pack`)."""
-    lay = prob.layout
-    beta = x[lay.beta].reshape(prob.m, BEZIER_DEGREE + 1, order="F")
-    s, sd, sdd = joint_trajectories(beta, prob.taus, duration)
-    n = len(lay.nodes)
-    H = np.tile(np.eye(4), (n, 1, 1))
-    for i, node in enumerate(lay.nodes):
-        r = cs.DM(x[node["rpy"]])
-        H[i, :3, :3] = np.asarray(cs.evalf(rpy_to_matrix(r)))
-        H[i, :3, 3] = x[node["p"]]
-    get = lambda key, scale=1.0: np.array([x[nd[key]] * scale for nd in lay.nodes])  # noqa: E731
-    return beta, NodeStates(H, s, sd, sdd, get("vb"), get("ab"), get("u", U_SCALE), get("lam", F_SCALE),
-                            x[lay.nu_plus].copy(), x[lay.impulse] * U_SCALE)
+def unpack(prob: GaitProblem, x: FloatArray, durations: list[float]) -> tuple[list[FloatArray], list[NodeStates]]:
+    """Per domain: β (m, 8) and the node states of an NLP vector (inverse of :func:`pack`)."""
+    betas, states = [], []
+    for dl, taus, duration, out in zip(prob.layout.domains, prob.domain_taus, durations, prob.outputs, strict=True):
+        beta = x[dl.beta].reshape(prob.m, BEZIER_DEGREE + 1, order="F")
+        n = len(dl.nodes)
+        # the joints at the nodes: the Bézier outputs' values, and the free joints' node variables
+        s, sd, sdd = joint_trajectories(beta, taus, duration)
+        free = [j for j in range(prob.m) if j not in out]
+        for arr, key in ((s, "s"), (sd, "sd"), (sdd, "sdd")):
+            arr[:, free] = np.array([x[nd[key]] for nd in dl.nodes])[:, free]
+        H = np.tile(np.eye(4), (n, 1, 1))
+        for i, node in enumerate(dl.nodes):
+            r = cs.DM(x[node["rpy"]])
+            H[i, :3, :3] = np.asarray(cs.evalf(rpy_to_matrix(r)))
+            H[i, :3, 3] = x[node["p"]]
+        get = lambda key, scale=1.0, nodes=dl.nodes: np.array([x[nd[key]] * scale for nd in nodes])  # noqa: E731
+        betas.append(beta)
+        states.append(NodeStates(H, s, sd, sdd, get("vb"), get("ab"), get("u", U_SCALE), get("lam", F_SCALE),
+                                 x[dl.nu_plus].copy(), x[dl.impulse] * U_SCALE))
+    return betas, states
 
 
 class GaitGenerator:
-    """Builds the flat-foot NLP once for a robot (≈ 6 s for exo, 10 s for Atalante) and solves it for any
-    :class:`GaitParams`."""
+    """Builds the NLP of a domain graph once for a robot (flat: ≈ 6 s for exo, 10 s for Atalante) and solves
+    it for any :class:`GaitParams`."""
 
     def __init__(self, robot: Robot, config: GaitGenConfig | None = None, *, verbose: bool = False):
         self.robot = robot
         self.config = cfg = config or GaitGenConfig()
         t0 = time.perf_counter()
         self.dyn = Dynamics(robot)
-        self.problem = prob = FlatFootProblem(self.dyn, cfg)
+        self.problem = prob = GaitProblem(self.dyn, cfg)
         nlp = {"x": prob.x, "p": prob.p, "f": prob.cost, "g": prob.g}
         opts = {"ipopt.max_iter": cfg.max_iter, "ipopt.tol": cfg.tol, "ipopt.constr_viol_tol": 1e-9,
                 "ipopt.print_level": 5 if verbose else 0, "print_time": False, "ipopt.sb": "yes",
                 "ipopt.linear_solver": "mumps", "ipopt.mu_strategy": "adaptive"}
-        self.solver = cs.nlpsol("robustgait_flat", "ipopt", nlp, opts)
+        self.solver = cs.nlpsol(f"robustgait_{cfg.domains}", "ipopt", nlp, opts)
         self.build_seconds = time.perf_counter() - t0
         self.n_variables, self.n_constraints = int(prob.x.numel()), int(prob.g.numel())
 
     def initial_guess(self, params: GaitParams, warm_start: Gait | None = None) -> FloatArray:
-        """x₀ from a warm-start gait's β (relabeled to this stance if needed) or a standing-like posture."""
+        """x₀ from a warm-start gait's β (relabeled to this stance if needed; a flat gait seeds the single
+        support of a multi-contact problem) or a standing-like posture held in every domain."""
         prob, robot = self.problem, self.robot
+        n_dom = len(prob.graph)
         if warm_start is not None:
             g = warm_start if warm_start.stance == prob.stance else warm_start.mirrored(robot)
-            beta = g.domains[0].beta.copy()
+            betas = [d.beta.copy() for d in g.domains[:n_dom]]
         else:
-            beta = np.repeat(self.standing_posture()[:, None], BEZIER_DEGREE + 1, axis=1)
-        return pack(prob, beta, kinematic_states(self.dyn, prob, beta, params.step_duration))
+            betas = [np.repeat(self.standing_posture()[:, None], BEZIER_DEGREE + 1, axis=1)]
+        while len(betas) < n_dom:  # hold the last posture through the missing domains
+            betas.append(np.repeat(betas[-1][:, -1:], BEZIER_DEGREE + 1, axis=1))
+        states: list[NodeStates] = []
+        for d, (beta, duration) in enumerate(zip(betas, domain_durations(prob, params), strict=True)):
+            states.append(kinematic_states(self.dyn, prob, beta, duration, domain=d, params=params,
+                                           base=states[-1].H[-1] if states else None))
+        return pack(prob, betas, states)
 
     def standing_posture(self) -> FloatArray:
         """The cold-start posture (spec order): the spec's ``[posture]`` clipped to the joint ranges."""
@@ -193,7 +305,8 @@ class GaitGenerator:
         if reason is not None:
             return GaitGenResult(success=False, status="Infeasible_Parameters", reason=reason, params=params)
         x0 = self.initial_guess(params, warm_start)
-        p = np.array([params.step_length, params.step_duration, params.step_width, params.step_height])
+        p = np.array([params.step_length, params.step_duration, params.step_width, params.step_height,
+                      params.rolling_fraction])
         t0 = time.perf_counter()
         sol = self.solver(x0=x0, p=p, lbx=prob.lbx, ubx=prob.ubx, lbg=prob.lbg, ubg=prob.ubg)
         secs = time.perf_counter() - t0
@@ -202,40 +315,52 @@ class GaitGenerator:
         iters = int(stats.get("iter_count", 0))
         ok = bool(stats.get("success", False))
         x = np.asarray(sol["x"]).ravel()
-        beta, ns = unpack(prob, x, params.step_duration)
+        durations = domain_durations(prob, params)
+        betas, states = unpack(prob, x, durations)
         res = GaitGenResult(success=ok, status=status, reason="" if ok else f"IPOPT: {status}", params=params,
-                            iterations=iters, solve_seconds=secs, objective=float(sol["f"]), nodes=ns)
+                            iterations=iters, solve_seconds=secs, objective=float(sol["f"]), nodes=states)
         if ok:
-            res.check = check = check_solution(self.dyn, prob, params, ns, params.step_duration)
+            res.check = check = check_solution(self.dyn, prob, params, states, durations)
             if check.passed:
-                res.gait = self._gait(params, beta, ns, res)
+                res.gait = self._gait(params, betas, states, durations, res)
             else:
                 res.success, res.status = False, "Physics_Check_Failed"
                 res.reason = "physics check failed: " + "; ".join(check.failures)
         return res
 
-    def _gait(self, params: GaitParams, beta: FloatArray, ns: NodeStates, res: GaitGenResult) -> Gait:
-        robot = self.robot
-        q0, v0 = to_mujoco_state(robot, ns.H[0], ns.s[0], ns.vb[0], ns.sd[0])
-        q1, v1 = to_mujoco_state(robot, ns.H[-1], ns.s[-1], ns.vb[-1], ns.sd[-1])
+    def _gait(self, params: GaitParams, betas: list[FloatArray], states: list[NodeStates], durations: list[float],
+              res: GaitGenResult) -> Gait:
+        robot, prob = self.robot, self.problem
+        first, section = states[0], states[0]
+        q0, v0 = to_mujoco_state(robot, first.H[0], first.s[0], first.vb[0], first.sd[0])
+        q1, v1 = to_mujoco_state(robot, section.H[-1], section.s[-1], section.vb[-1], section.sd[-1])
         solver = {"status": res.status, "iterations": res.iterations, "solve_seconds": res.solve_seconds,
-                  "build_seconds": self.build_seconds, "objective": res.objective, "nodes": len(ns.s),
-                  "variables": self.n_variables, "constraints": self.n_constraints,
-                  "physics_check": res.check.to_dict() if res.check else None}
-        return Gait(robot=robot.name, domain_graph="flat", stance=self.problem.stance, joints=robot.spec.joints,
-                    domains=(Domain("single_support", params.step_duration, beta, self.problem.taus.copy(),
-                                    ns.u.copy()),),
-                    initial_state=State(q0, v0), pre_impact_state=State(q1, v1), params=params, solver=solver,
-                    meta={"source": "robustgait gaitgen (flat-foot HZD)"})
+                  "build_seconds": self.build_seconds, "objective": res.objective,
+                  "nodes": sum(len(ns.s) for ns in states), "variables": self.n_variables,
+                  "constraints": self.n_constraints, "physics_check": res.check.to_dict() if res.check else None}
+        fitted = []
+        for beta, out, taus, ns, duration in zip(betas, prob.outputs, prob.domain_taus, states, durations, strict=True):
+            b = beta.copy()
+            free = [j for j in range(prob.m) if j not in out]
+            if free:
+                b[free] = fit_bezier(taus, ns.s[:, free], ns.sd[:, free], ns.sdd[:, free], duration)
+            fitted.append(b)
+        domains = tuple(Domain(spec.name, duration, beta, taus.copy(), ns.u.copy())
+                        for spec, duration, beta, taus, ns in zip(prob.graph.domains, durations, fitted,
+                                                                  prob.domain_taus, states, strict=True))
+        return Gait(robot=robot.name, domain_graph=prob.graph.name, stance=prob.stance, joints=robot.spec.joints,
+                    domains=domains, initial_state=State(q0, v0), pre_impact_state=State(q1, v1), params=params,
+                    solver=solver, meta={"source": f"robustgait gaitgen ({prob.graph.name} HZD)"})
 
 
 def generate_gait(robot: Robot, step_length: float = 0.15, step_duration: float = 0.7, step_width: float = 0.25,
-                  step_height: float = 0.07, *, warm_start: Gait | None = None, generator: GaitGenerator | None = None,
-                  config: GaitGenConfig | None = None, verbose: bool = False) -> GaitGenResult:
+                  step_height: float = 0.07, rolling_fraction: float = 0.2, *, warm_start: Gait | None = None,
+                  generator: GaitGenerator | None = None, config: GaitGenConfig | None = None,
+                  verbose: bool = False) -> GaitGenResult:
     """One gait from raw essential constraints: parameters out of bounds give a failed result (never an
     exception). Pass a ``generator`` to reuse its built problem across calls."""
     try:
-        params = GaitParams(step_length, step_duration, step_width, step_height)
+        params = GaitParams(step_length, step_duration, step_width, step_height, rolling_fraction)
     except RobustGaitError as exc:
         return GaitGenResult(success=False, status="Infeasible_Parameters", reason=str(exc), params=None)
     gen = generator or GaitGenerator(robot, config, verbose=verbose)

@@ -34,6 +34,7 @@ StepLength = Annotated[float, Meta(ge=_B["step_length"][0], le=_B["step_length"]
 StepDuration = Annotated[float, Meta(ge=_B["step_duration"][0], le=_B["step_duration"][1], extra={"unit": "s"})]
 StepWidth = Annotated[float, Meta(ge=_B["step_width"][0], le=_B["step_width"][1], extra={"unit": "m"})]
 StepHeight = Annotated[float, Meta(ge=_B["step_height"][0], le=_B["step_height"][1], extra={"unit": "m"})]
+RollingFraction = Annotated[float, Meta(ge=_B["rolling_fraction"][0], le=_B["rolling_fraction"][1])]
 
 
 class FeedforwardFile(Table):
@@ -59,6 +60,7 @@ class ParamsFile(Table):
     step_duration: StepDuration
     step_width: StepWidth
     step_height: StepHeight
+    rolling_fraction: RollingFraction = GaitParams.rolling_fraction
 
 
 class GaitFile(Table):
@@ -152,7 +154,8 @@ def gait_from_raw(raw: Any, src: str | Path = "<gait>") -> Gait:
     check_free_form(g.meta, src, "meta")
     params = None
     if g.params is not None:
-        params = GaitParams(g.params.step_length, g.params.step_duration, g.params.step_width, g.params.step_height)
+        params = GaitParams(g.params.step_length, g.params.step_duration, g.params.step_width, g.params.step_height,
+                            g.params.rolling_fraction)
     return Gait(robot=g.robot, domain_graph=g.domain_graph, stance=g.stance, joints=tuple(g.joints),
                 domains=tuple(domains), initial_state=_state(g.initial_state, m, src, "initial_state"),
                 pre_impact_state=_state(g.pre_impact_state, m, src, "pre_impact_state"), params=params,

@@ -119,6 +119,10 @@ ITERATIONS = Limit("study iterations", 1, 1000)
 BATCH = Limit("study batch", 2, 100)  # a batch is ranked: at least two gaits to compare
 WORKERS = Limit("--workers", 1, 256)
 COMPARE_SEEDS = Limit("study compare --seeds", 1, 1000)
+TRIALS = Limit("--trials", 1, 10_000)  # validation trials per disturbance kind (one batch)
+STEPS_AFTER = Limit("--steps-after", 1, 1000)
+FRAMES = Limit("--frames", 2, 60)  # gait tiles: each frame is a 320 × 480 tile in one PNG row
+WARMUP_STEPS = Limit("--warmup-steps", 0, 1000)
 
 # The work of one command: every simulated gait step counted to its latest end (τ = 1.5 without touchdown).
 # A walk or certificate within every limit above can still combine a 10 s gait, a 1e-4 s timestep and 1000

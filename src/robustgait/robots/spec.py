@@ -62,6 +62,8 @@ class GaitQuality:
     pelvis_roll, pelvis_yaw [rad]: |φ|, |ψ| ≤ bound. pelvis_pitch [rad]: (low, high) band.
     pelvis_height [m]: (low, high) band of the base origin above the stance sole.
     pelvis_angular_velocity [rad/s]: each component of the base's angular velocity (world axes) ≤ bound.
+    pelvis_acceleration [m/s²]: each component of the pelvis origin's linear acceleration ≤ bound (what the
+    passenger feels; unbounded by default).
     swing_tilt [rad]: swing sole roll and pitch ≤ bound (kept nearly parallel to the ground).
     swing_yaw [rad]: |yaw| of the swing sole ≤ bound (relative to the stance sole: no twisting foot).
     joint_velocity [rad/s]: |q̇_i| ≤ bound per actuated joint (output order).
@@ -72,6 +74,7 @@ class GaitQuality:
     pelvis_pitch: tuple[float, float] = (-0.1, 0.2)
     pelvis_height: tuple[float, float] = (0.0, math.inf)
     pelvis_angular_velocity: float = 1.5
+    pelvis_acceleration: float = math.inf
     swing_tilt: float = 0.15
     swing_yaw: float = 0.15
     joint_velocity: tuple[float, ...] = ()

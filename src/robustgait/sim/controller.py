@@ -21,14 +21,15 @@ from robustgait.gait import Gait
 from robustgait.robots import Robot
 
 
-def desired_outputs(gait: Gait, tau: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """y_d and dy_d/dt of a one-domain gait at phases τ (K,): (K, m) each.
+def desired_outputs(gait: Gait, tau: NDArray[np.float64], domain: int = 0
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """y_d and dy_d/dt of domain ``domain`` of a gait at phases τ (K,) of that domain: (K, m) each.
 
     Past τ = 1 the outputs continue along their tangent at τ = 1, y_d(τ) = y_d(1) + ẏ_d(1) (τ − 1) T, so a
     swing foot that has not touched down yet keeps descending at its landing velocity (DESIGN §4:
     touchdown margin) instead of hovering.
     """
-    dom = gait.domains[0]
+    dom = gait.domains[domain]
     tau = np.asarray(tau, dtype=float)
     t = np.clip(tau, 0.0, 1.0)
     y = bezier(dom.beta, t)
@@ -38,9 +39,9 @@ def desired_outputs(gait: Gait, tau: NDArray[np.float64]) -> tuple[NDArray[np.fl
     return y, dy
 
 
-def feedforward_torque(gait: Gait, tau: NDArray[np.float64]) -> NDArray[np.float64]:
-    """u_ff(τ) (K, m): the gait's feedforward torques, linearly interpolated in τ (zero if it has none)."""
-    dom = gait.domains[0]
+def feedforward_torque(gait: Gait, tau: NDArray[np.float64], domain: int = 0) -> NDArray[np.float64]:
+    """u_ff(τ) (K, m): a domain's feedforward torques, linearly interpolated in τ (zero if it has none)."""
+    dom = gait.domains[domain]
     t = np.clip(tau, 0.0, 1.0)
     if dom.ff_tau is None or dom.ff_torque is None:
         return np.zeros((t.size, dom.beta.shape[0]))
@@ -48,16 +49,16 @@ def feedforward_torque(gait: Gait, tau: NDArray[np.float64]) -> NDArray[np.float
                     axis=-1)
 
 
-def step_controls(robot: Robot, gait: Gait, n_steps: int, *, feedforward: bool = True) -> NDArray[np.float64]:
-    """Servo controls c_k (n_steps, m) for physics steps k = 0..n_steps−1 of a step that starts at τ = 0.
+def step_controls(robot: Robot, gait: Gait, n_steps: int, *, feedforward: bool = True,
+                  domain: int = 0) -> NDArray[np.float64]:
+    """Servo controls c_k (n_steps, m) for physics steps k = 0..n_steps−1 of a domain that starts at τ = 0.
 
-    c_k = y_d(τ_k) + (kd ẏ_d(τ_k) + u_ff(τ_k)) / kp with τ_k = k Δt / T (module docstring). ``gait`` must be
+    c_k = y_d(τ_k) + (kd ẏ_d(τ_k) + u_ff(τ_k)) / kp with τ_k = k Δt / T_d (module docstring). ``gait`` must be
     written for the stance of this step (use :meth:`Gait.mirrored` for the other leg).
     """
-    if len(gait.domains) != 1:
-        raise RobustGaitError(f"gait has {len(gait.domains)} domains: the simulator drives one-domain "
-                              "(flat-foot) gaits only, multi-contact gaits are not simulated yet")
-    tau = np.arange(n_steps, dtype=np.float64) * (robot.dt / gait.domains[0].duration)
-    y, dy = desired_outputs(gait, tau)
-    u = feedforward_torque(gait, tau) if feedforward else 0.0
+    if not 0 <= domain < len(gait.domains):
+        raise RobustGaitError(f"the gait has {len(gait.domains)} domains, no domain {domain}")
+    tau = np.arange(n_steps, dtype=np.float64) * (robot.dt / gait.domains[domain].duration)
+    y, dy = desired_outputs(gait, tau, domain)
+    u = feedforward_torque(gait, tau, domain) if feedforward else 0.0
     return np.asarray(y + (robot.kd * dy + u) / robot.kp)

@@ -9,13 +9,18 @@ event or a fall — and only the samples still going are rolled on from their la
 
 Chunk boundaries restart MuJoCo's constraint-solver warm start from zero; they are fixed relative to the
 step start, so results are deterministic and identical for K = 1 and K > 1.
+
+Disturbances (:mod:`robustgait.validate`) enter through :class:`StepInputs`: per-sample control offsets and
+base wrenches go through the rollout's control vector (``mjSTATE_CTRL | mjSTATE_XFRC_APPLIED``), and
+per-sample models through the list of models that :func:`mujoco.rollout` accepts. Without inputs the
+rollout calls are exactly those of the undisturbed engine.
 """
 
 from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Literal
@@ -25,6 +30,7 @@ import numpy as np
 from mujoco import rollout
 from numpy.typing import NDArray
 
+from robustgait.domains import domain_graph
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
@@ -33,6 +39,8 @@ from robustgait.sim.controller import step_controls
 
 FALL_REASONS = ("base_low", "tilt", "non_foot_contact", "diverged", "no_touchdown")
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
+_CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
+_CTRL_XFRC = _CTRL | int(mujoco.mjtState.mjSTATE_XFRC_APPLIED)
 
 
 @contextmanager
@@ -113,6 +121,21 @@ class StepBatch:
     trajectory: list[NDArray[np.float64]] = field(default_factory=list)
 
 
+@dataclass(frozen=True)
+class StepInputs:
+    """Per-sample inputs of one step for K samples (each optional; shapes checked by :meth:`StepEngine.step`).
+
+    models: K compiled models with the robot model's size signature (e.g. copies with other masses,
+    friction or terrain); ctrl_offset (K, n, nu): added to the gait's servo controls at physics steps
+    0..n−1 of the step (none after n); base_wrench (K, n, 6): world-frame force [N] and torque [N m] on the
+    floating base at its centre of mass (MuJoCo's ``xfrc_applied``) at physics steps 0..n−1.
+    """
+
+    models: Sequence[mujoco.MjModel] | None = None
+    ctrl_offset: NDArray[np.float64] | None = None
+    base_wrench: NDArray[np.float64] | None = None
+
+
 class StepEngine:
     """One gait on one robot, both stances; call :meth:`step` with batches of states."""
 
@@ -120,20 +143,32 @@ class StepEngine:
         gait.check_robot(robot)
         self.robot = robot
         self.config = config or SimConfig()
+        self.graph = domain_graph(gait.domain_graph)
+        if len(gait.domains) != len(self.graph):
+            raise RobustGaitError(f"a {gait.domain_graph} gait has {len(self.graph)} domains, this one "
+                                  f"{len(gait.domains)}")
         self.gaits = {gait.stance: gait, ("left" if gait.stance == "right" else "right"): gait.mirrored(robot)}
         m = robot.model
-        self.period = gait.step_duration
-        self.steps_per_period = self.period / robot.dt
         tau_end = 1.0 if self.config.switching == "time" else self.config.max_step_tau
-        self.horizon = round(tau_end * self.steps_per_period)
-        self.controls = {s: step_controls(robot, g, self.horizon, feedforward=self.config.feedforward)
-                         for s, g in self.gaits.items()}
+        # per domain: physics steps per unit of phase, and the most a domain may last before it is a fall
+        self.domain_steps = [dom.duration / robot.dt for dom in gait.domains]
+        # a double support ends at foot-flat or at τ = 1 at the latest: past its end its references would keep
+        # rolling the feet (the tangent continuation that helps a late touchdown)
+        self.horizons = [round((tau_end if spec.guard == "touchdown" else 1.0) * n)
+                         for spec, n in zip(self.graph.domains, self.domain_steps, strict=True)]
+        self.period = gait.domains[0].duration
+        self.steps_per_period = self.domain_steps[0]
+        self.horizon = self.horizons[0]
+        self.controls = {(s, d): step_controls(robot, g, self.horizons[d], feedforward=self.config.feedforward,
+                                               domain=d)
+                         for s, g in self.gaits.items() for d in range(len(self.graph))}
         self.nq, self.nv = m.nq, m.nv
         self.nstate = mujoco.mj_stateSize(m, _FULL)
         data = robot.new_data()
         self._template = np.empty(self.nstate)
         mujoco.mj_getState(m, data, self._template, _FULL)
         self._datas = [robot.new_data() for _ in range(self.config.threads)]
+        self._other_datas: dict[int, list[mujoco.MjData]] = {}
         self._pool: rollout.Rollout | None = rollout.Rollout(nthread=self.config.threads)
         adr = robot.sensor_adr
         self._sens = {s: adr[CONTACT_SENSORS[i]] for i, s in enumerate(("left", "right"))}
@@ -160,9 +195,15 @@ class StepEngine:
         out[:, 1 + self.nq:1 + self.nq + self.nv] = qvel
         return out
 
-    def _scan(self, st: NDArray[np.float64], sens: NDArray[np.float64], k0: int, swing: str
+    def _scan(self, st: NDArray[np.float64], sens: NDArray[np.float64], k0: int, stance: str, domain: int
               ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-        """First event per sample in a chunk: (index or −1, code: 0 = switch, 1.. = FALL_REASONS[code−1])."""
+        """First event per sample in a chunk: (index or −1, code: 0 = switch, 1.. = FALL_REASONS[code−1]).
+
+        The switch is the domain's guard: ``touchdown`` — the swing sole touches the floor; ``foot_flat`` — the
+        front (swing) sole lies flat (≥ 3 contact points: a box sole on a plane has 4 when flat, 2 on an edge;
+        the back sole's toe-off is not waited for: the next single support lifts it) or τ = 1, whichever
+        first — each once τ ≥ ``min_switch_tau``; or τ = 1 (``time`` switching)."""
+        swing = "left" if stance == "right" else "right"
         fall = self.robot.spec.fall
         nq = self.nq
         z = st[..., 3]
@@ -183,11 +224,15 @@ class StepEngine:
                 sens[..., self._sens_floor] - sens[..., self._sens["left"]] - sens[..., self._sens["right"]] > 0,
                 diverged,
             ]
-        tau = k / self.steps_per_period
+        tau = k / self.domain_steps[domain]
         if self.config.switching == "impact":
-            switch = (sens[..., self._sens[swing]] > 0) & (tau >= self.config.min_switch_tau)
+            if self.graph.domains[domain].guard == "touchdown":
+                guard = sens[..., self._sens[swing]] > 0
+            else:
+                guard = (sens[..., self._sens[swing]] >= 3) | (k == self.horizons[domain])
+            switch = guard & (tau >= self.config.min_switch_tau)
         else:
-            switch = np.broadcast_to(k == self.horizon, z.shape)
+            switch = np.broadcast_to(k == self.horizons[domain], z.shape)
         events: NDArray[np.bool_] = np.stack([switch, *codes], axis=-1)  # (K, n, 5)
         # a fall at the same instant as a touchdown counts as a fall; a diverged state makes the other fall
         # criteria meaningless, so it is reported as such
@@ -198,11 +243,62 @@ class StepEngine:
         first_code = np.where(first >= 0, code[np.arange(len(first)), np.maximum(first, 0)], -1)
         return first, first_code
 
-    def step(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64], stance: str, *,
-             record: bool = False, progress: Callable[[int], None] | None = None) -> StepBatch:
-        """Simulate one step of the given ``stance`` from K start states (τ = 0) to each one's next event.
+    def _check_inputs(self, inputs: StepInputs, kk: int) -> None:
+        m = self.robot.model
+        if inputs.models is not None:
+            if len(inputs.models) != kk:
+                raise RobustGaitError(f"need one model per sample ({kk}), got {len(inputs.models)}")
+            sig = inputs.models[0].signature
+            if any(mi.signature != sig for mi in inputs.models) or any(
+                    getattr(inputs.models[0], f) != getattr(m, f) for f in ("nq", "nv", "nu", "nbody", "nsensordata")):
+                raise RobustGaitError("per-sample models must share one size signature and the robot's "
+                                      "joints, actuators, bodies and sensors")
+        for name, arr, width in (("ctrl_offset", inputs.ctrl_offset, m.nu), ("base_wrench", inputs.base_wrench, 6)):
+            if arr is not None and (arr.ndim != 3 or arr.shape[0] != kk or arr.shape[2] != width):
+                raise RobustGaitError(f"{name} must be (K={kk}, n, {width}), got {arr.shape}")
+
+    def _rollout(self, active: NDArray[np.int64], current: NDArray[np.float64], ctrl: NDArray[np.float64],
+                 k0: int, n: int, inputs: StepInputs | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """One chunk of n physics steps from step k0 for the samples ``active`` (see :class:`StepInputs`)."""
+        assert self._pool is not None
+        if inputs is None:
+            return self._pool.rollout(self.robot.model, self._datas, current[active], ctrl[None, k0:k0 + n],
+                                      nstep=n)
+        m = self.robot.model
+        c = ctrl[None, k0:k0 + n]
+        off = inputs.ctrl_offset
+        if off is not None and k0 < off.shape[1]:
+            c = np.repeat(c, active.size, axis=0)
+            w = min(n, off.shape[1] - k0)
+            c[:, :w] += off[active, k0:k0 + w]
+        spec = _CTRL
+        wr = inputs.base_wrench
+        if wr is not None and k0 < wr.shape[1] and np.any(wr[active, k0:k0 + n]):
+            w = min(n, wr.shape[1] - k0)
+            full = np.zeros((active.size, n, m.nu + 6 * m.nbody))
+            full[:, :, :m.nu] = c
+            col = m.nu + 6 * self.robot.base_body_id
+            full[:, :w, col:col + 6] = wr[active, k0:k0 + w]
+            c, spec = full, _CTRL_XFRC
+        models: mujoco.MjModel | list[mujoco.MjModel] = m
+        datas = self._datas
+        if inputs.models is not None:
+            models = [inputs.models[i] for i in active]
+            sig = models[0].signature
+            if sig != m.signature:  # e.g. a terrain model: data must be allocated for it
+                if sig not in self._other_datas:
+                    self._other_datas[sig] = [mujoco.MjData(models[0]) for _ in range(self.config.threads)]
+                datas = self._other_datas[sig]
+        return self._pool.rollout(models, datas, current[active], c, control_spec=spec, nstep=n)
+
+    def step(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64], stance: str, *, domain: int = 0,
+             record: bool = False, progress: Callable[[int], None] | None = None,
+             inputs: StepInputs | None = None) -> StepBatch:
+        """Simulate domain ``domain`` of a step of the given ``stance`` from K start states (τ = 0) to each
+        one's next event (for a one-domain gait: the whole step).
 
         ``progress`` is called after each chunk with the number of samples that reached their event in it.
+        ``inputs``: per-sample disturbances (:class:`StepInputs`); None = the gait's controls for all.
         """
         if stance not in self.gaits:
             raise RobustGaitError(f"stance must be 'left' or 'right', got {stance!r}")
@@ -214,9 +310,13 @@ class StepEngine:
         if self._pool is None:
             raise RobustGaitError("this StepEngine is closed")
         kk = qpos.shape[0]
+        if inputs is not None:
+            self._check_inputs(inputs, kk)
         bad = ~(np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1))
-        swing = "left" if stance == "right" else "right"
-        ctrl = self.controls[stance]
+        if not 0 <= domain < len(self.graph):
+            raise RobustGaitError(f"the gait has {len(self.graph)} domains, no domain {domain}")
+        ctrl = self.controls[(stance, domain)]
+        horizon = self.horizons[domain]
         current = self.full_states(np.nan_to_num(qpos), np.nan_to_num(qvel))
         out_state = np.full((kk, self.nstate), np.nan)
         code = np.full(kk, -1, dtype=np.int64)
@@ -228,13 +328,12 @@ class StepEngine:
         k0 = 0
         if progress is not None and bad.any():
             progress(int(bad.sum()))
-        while active.size and k0 < self.horizon:
-            n = min(self.config.chunk_steps, self.horizon - k0)
+        while active.size and k0 < horizon:
+            n = min(self.config.chunk_steps, horizon - k0)
             with quiet_mujoco():
-                st, sens = self._pool.rollout(self.robot.model, self._datas, current[active],
-                                              ctrl[None, k0:k0 + n], nstep=n)
+                st, sens = self._rollout(active, current, ctrl, k0, n, inputs)
             physics += active.size * n
-            first, first_code = self._scan(st, sens, k0, swing)
+            first, first_code = self._scan(st, sens, k0, stance, domain)
             done = first >= 0
             # A touchdown is seen in the sensors of the step whose start state first penetrates the floor, so
             # that state is the pre-impact state x⁻ (its velocity is still contact-free) and an impact event ends
@@ -252,17 +351,17 @@ class StepEngine:
             current[active[~done]] = st[~done, -1]
             active = active[~done]
             if progress is not None:
-                progress(int(done.sum()) + (active.size if k0 + n >= self.horizon else 0))
+                progress(int(done.sum()) + (active.size if k0 + n >= horizon else 0))
             k0 += n
-        if active.size:  # ran out of horizon without an event: no touchdown
+        if active.size:  # ran out of horizon without a touchdown (a double support always ends by τ = 1)
             code[active] = 1 + FALL_REASONS.index("no_touchdown")
-            at[active] = self.horizon
+            at[active] = horizon
         fell = code != 0
         out_state[fell] = np.nan
         return StepBatch(
             qpos=out_state[:, 1:1 + self.nq], qvel=out_state[:, 1 + self.nq:1 + self.nq + self.nv],
             fell=fell, fall_reason=[FALL_REASONS[c - 1] if c > 0 else None for c in code],
-            duration=np.asarray(at * self.robot.dt, dtype=np.float64), tau=at / self.steps_per_period,
+            duration=np.asarray(at * self.robot.dt, dtype=np.float64), tau=at / self.domain_steps[domain],
             physics_steps=physics,
             trajectory=[np.concatenate(t) if t else np.empty((0, self.nstate)) for t in traj] if record else [],
         )

@@ -25,8 +25,10 @@ from robustgait.sim.engine import SimConfig, StepEngine
 
 @dataclass(frozen=True)
 class SwitchEvent:
-    """State at the end of step ``step`` (1-based), i.e. at its switching event; ``stance`` is the stance
-    leg of the step that ended. qpos/qvel in MuJoCo's convention."""
+    """State of step ``step`` (1-based) at the end of its single support (touchdown or heel strike: the
+    pre-impact state on the Poincaré section; for a flat-foot gait the end of the step); ``stance`` is the
+    stance leg of that step, ``time`` and ``tau`` the time of the event and its phase in single support.
+    qpos/qvel in MuJoCo's convention."""
 
     step: int
     time: float
@@ -73,6 +75,10 @@ def walk(robot: Robot, gait: Gait, *, steps: int = 50, config: SimConfig | None 
          keep_trajectory: bool = False, engine: StepEngine | None = None) -> WalkResult:
     """Walk ``gait`` from its initial state for up to ``steps`` steps, switching stance at each event.
 
+    A step runs the gait's domains in order (flat: single support; multi-contact: single support, then rolling
+    double support); its :class:`SwitchEvent` is the state at the end of single support (touchdown or heel
+    strike: the Poincaré section), and it counts as taken once all its domains are done.
+
     The trajectory (every physics step's full state, (n, nstate), MuJoCo's ``mjSTATE_FULLPHYSICS`` layout,
     time continuing across steps) is kept when ``keep_trajectory`` — for video and logs.
     """
@@ -94,24 +100,31 @@ def walk(robot: Robot, gait: Gait, *, steps: int = 50, config: SimConfig | None 
         chunks: list[NDArray[np.float64]] = []
         fell, reason, last = False, None, start
         for i in range(steps):
-            batch = eng.step(qpos, qvel, stance, record=True)
-            tr = batch.trajectory[0]
-            if tr.size:
-                min_z = min(min_z, float(np.nanmin(tr[:, 3])))
-                if keep_trajectory:
-                    tr = tr.copy()
-                    tr[:, 0] += t
-                    chunks.append(tr)
-            if batch.fell[0]:
-                fell, reason = True, batch.fall_reason[0]
+            section: SwitchEvent | None = None
+            for d in range(len(eng.graph)):  # the step's domains in order; the section ends domain 0
+                batch = eng.step(qpos, qvel, stance, domain=d, record=True)
+                tr = batch.trajectory[0]
+                if tr.size:
+                    min_z = min(min_z, float(np.nanmin(tr[:, 3])))
+                    if keep_trajectory:
+                        tr = tr.copy()
+                        tr[:, 0] += t
+                        chunks.append(tr)
                 t += float(batch.duration[0])
-                finite = tr[np.isfinite(tr).all(axis=1)]
-                last = finite[-1, 1:1 + eng.nq] if finite.size else last
+                if batch.fell[0]:
+                    fell, reason = True, batch.fall_reason[0]
+                    finite = tr[np.isfinite(tr).all(axis=1)]
+                    last = finite[-1, 1:1 + eng.nq] if finite.size else last
+                    break
+                qpos, qvel = batch.qpos, batch.qvel
+                last = qpos[0]
+                if d == 0:
+                    section = SwitchEvent(i + 1, t, stance, float(batch.tau[0]), qpos[0].tolist(),
+                                          qvel[0].tolist())
+            if fell:
                 break
-            t += float(batch.duration[0])
-            qpos, qvel = batch.qpos, batch.qvel
-            last = qpos[0]
-            events.append(SwitchEvent(i + 1, t, stance, float(batch.tau[0]), qpos[0].tolist(), qvel[0].tolist()))
+            assert section is not None
+            events.append(section)
             stance = "left" if stance == "right" else "right"
         disp = float(np.dot(last[:2] - start[:2], heading))
         return WalkResult(
@@ -122,6 +135,16 @@ def walk(robot: Robot, gait: Gait, *, steps: int = 50, config: SimConfig | None 
     finally:
         if own:
             eng.close()
+
+
+def offscreen_renderer(robot: Robot, width: int, height: int) -> mujoco.Renderer:
+    """MuJoCo's offscreen renderer for the robot's model, or a one-line RobustGaitError naming the fix."""
+    try:
+        return mujoco.Renderer(robot.model, height, width)
+    except Exception as exc:  # the GL backends raise a variety of errors when no context can be made
+        raise RobustGaitError(
+            f"offscreen rendering unavailable ({type(exc).__name__}: {exc}); MuJoCo needs EGL or OSMesa: set "
+            "MUJOCO_GL=egl or MUJOCO_GL=osmesa and install libegl1 or libosmesa6") from None
 
 
 def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path, *, fps: int = 30,
@@ -143,12 +166,7 @@ def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path
         width, height = width // 2, height // 2
         if n_frames > MAX_GIF_FRAMES:
             raise input_error(path, f"{n_frames} frames, over the {MAX_GIF_FRAMES} a .gif may hold (use .mp4)")
-    try:
-        renderer = mujoco.Renderer(robot.model, height, width)
-    except Exception as exc:  # the GL backends raise a variety of errors when no context can be made
-        raise RobustGaitError(
-            f"offscreen rendering unavailable ({type(exc).__name__}: {exc}); MuJoCo needs EGL or OSMesa: set "
-            "MUJOCO_GL=egl or MUJOCO_GL=osmesa and install libegl1 or libosmesa6") from None
+    renderer = offscreen_renderer(robot, width, height)
     m = robot.model
     data = mujoco.MjData(m)
     cam = mujoco.MjvCamera()

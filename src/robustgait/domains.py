@@ -1,0 +1,111 @@
+"""Domain graphs (DESIGN §4): the contact set of each continuous domain of a step, its guard, the transitions.
+
+One definition serves gait generation (which constraints hold in each domain, which impact ends it), the
+simulator (which event ends each domain) and the return map (where the Poincaré section is).
+
+Labels are relative to the step: ``stance`` is the leg flat on the ground at the start of the step,
+``swing`` the other. A step is the domains in order; after the last one the legs are relabeled (the swing
+leg becomes the next step's stance). Contacts:
+
+* ``flat`` — the sole flat on the ground: the sole frame's position and orientation are fixed (6 rows);
+  wrench (f, n) ∈ R⁶ at the sole frame, world axes.
+* ``toe`` / ``heel`` — a line contact along the toe or heel edge of the sole (FROST's line contact): the
+  edge's midpoint is fixed and the edge keeps its direction (the foot's y axis stays the world's y axis),
+  so the foot can only pitch about the edge (5 rows: position, and the angular velocity about world x and
+  z); wrench (f_x, f_y, f_z, n_x, n_z) at the edge's midpoint, world axes.
+
+Graphs: ``flat`` — one domain, single support with the stance sole flat, ended by the swing sole landing
+flat (touchdown). ``multicontact`` (paper Fig. 2b) — single support with the stance sole flat, ended by
+the swing heel striking the ground while the stance foot goes onto its toe line; then rolling double
+support on the stance toe line and the swing heel line, ended when the swing sole is flat (foot-flat) and
+the stance toe leaves the ground (toe-off). The Poincaré section of both graphs is the end of single
+support (touchdown / heel strike), the paper's pre-impact surface.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from robustgait.errors import RobustGaitError
+
+Leg = Literal["stance", "swing"]
+ContactKind = Literal["flat", "toe", "heel"]
+Guard = Literal["touchdown", "foot_flat"]
+GRAPH_NAMES = ("flat", "multicontact")
+# rows of a frame's 6 × nv (linear; angular, world axes) Jacobian that a contact fixes
+CONTACT_ROWS: dict[str, tuple[int, ...]] = {"flat": (0, 1, 2, 3, 4, 5), "toe": (0, 1, 2, 3, 5),
+                                            "heel": (0, 1, 2, 3, 5)}
+
+
+@dataclass(frozen=True)
+class Contact:
+    """One foot's contact: which leg (in the step's labels) and how (flat sole, toe line, heel line)."""
+
+    leg: Leg
+    kind: ContactKind
+
+    @property
+    def rows(self) -> tuple[int, ...]:
+        return CONTACT_ROWS[self.kind]
+
+    @property
+    def n_rows(self) -> int:
+        return len(self.rows)
+
+    def side(self, stance: str) -> str:
+        """The robot side ('left'/'right') of this contact in a step whose stance leg is ``stance``."""
+        return stance if self.leg == "stance" else other_side(stance)
+
+    def frame_kind(self) -> str:
+        """The foot frame the contact acts at: the sole frame, or the toe / heel edge midpoint."""
+        return "sole" if self.kind == "flat" else self.kind
+
+    def relabeled(self) -> Contact:
+        return Contact("swing" if self.leg == "stance" else "stance", self.kind)
+
+
+@dataclass(frozen=True)
+class DomainSpec:
+    """A continuous domain: its name, the contacts that hold throughout it, and the event that ends it."""
+
+    name: str
+    contacts: tuple[Contact, ...]
+    guard: Guard
+
+
+@dataclass(frozen=True)
+class DomainGraph:
+    """The domains of one step, in order; after the last the legs are relabeled and domain 0 follows."""
+
+    name: str
+    domains: tuple[DomainSpec, ...]
+
+    def __len__(self) -> int:
+        return len(self.domains)
+
+    def target_contacts(self, d: int) -> tuple[Contact, ...]:
+        """The contact set that the impact at the end of domain ``d`` enforces, in the labels of the step
+        that domain ``d`` belongs to: the next domain's contacts (relabeled after the last domain)."""
+        if d + 1 < len(self.domains):
+            return self.domains[d + 1].contacts
+        return tuple(c.relabeled() for c in self.domains[0].contacts)
+
+
+FLAT = DomainGraph("flat", (DomainSpec("single_support", (Contact("stance", "flat"),), "touchdown"),))
+MULTICONTACT = DomainGraph("multicontact", (
+    DomainSpec("single_support", (Contact("stance", "flat"),), "touchdown"),
+    DomainSpec("double_support", (Contact("stance", "toe"), Contact("swing", "heel")), "foot_flat"),
+))
+GRAPHS = {"flat": FLAT, "multicontact": MULTICONTACT}
+
+
+def domain_graph(name: str) -> DomainGraph:
+    """The domain graph called ``name`` (``flat`` or ``multicontact``)."""
+    if name not in GRAPHS:
+        raise RobustGaitError(f"unknown domain graph {name!r} (choose from {', '.join(GRAPHS)})")
+    return GRAPHS[name]
+
+
+def other_side(side: str) -> str:
+    return "left" if side == "right" else "right"

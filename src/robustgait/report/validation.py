@@ -1,0 +1,65 @@
+"""Figure of a validation: success against disturbance size, and the certificate check, per kind."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from robustgait.report.figures import _save, plt
+from robustgait.validate.stats import binned_rates
+
+if TYPE_CHECKING:
+    from robustgait.validate import ValidationResult
+
+
+def plot_validation(result: ValidationResult, path: str | Path, *, title: str = "") -> Path:
+    """One row per disturbance kind. Left: success rate in size bins (Wilson 95 % intervals), the logistic
+    fit and the size at which half fail. Right: distance of the first post-disturbance reduced state to x̄*
+    against the size, by outcome, with r*. Writes ``path`` (PNG/PDF/SVG by extension)."""
+    kinds = list(result.kinds.values())
+    fig, axes = plt.subplots(len(kinds), 2, figsize=(11, 3.4 * len(kinds)), squeeze=False)
+    r_star = result.certificate.r_star
+    for row, kr in zip(axes, kinds, strict=True):
+        name, unit = kr.size_label
+        a1, a2 = row
+        bins = binned_rates(kr.size, kr.success)
+        mid = np.array([(b["size_low"] + b["size_high"]) / 2 for b in bins])
+        rate = np.array([np.nan if b["rate"] is None else b["rate"] for b in bins])
+        lo = np.array([b["low"] for b in bins])
+        hi = np.array([b["high"] for b in bins])
+        yerr = np.maximum(0.0, np.nan_to_num([rate - lo, hi - rate]))  # rounding: lo may exceed a rate of 0
+        a1.errorbar(mid, rate, yerr=yerr, fmt="o", capsize=3,
+                    label="binned (95 % Wilson)")
+        fit = kr.critical()
+        if np.isfinite(fit.a) and np.isfinite(fit.b):
+            s = np.linspace(kr.size.min(), kr.size.max(), 200)
+            a1.plot(s, 1 / (1 + np.exp(-(fit.a + fit.b * s))), color="tab:blue", lw=1, label="logistic fit")
+        if fit.s50 is not None and fit.in_range:
+            a1.axvline(fit.s50, color="tab:red", ls="--", lw=1, label=f"half fail: {fit.s50:.3g} {unit}")
+        sr = kr.success_rate()
+        a1.set_ylim(-0.05, 1.05)
+        a1.set_xlabel(f"{name} [{unit}]")
+        a1.set_ylabel("success")
+        a1.set_title(f"{kr.kind}: success {sr.k}/{sr.n} = {sr.rate:.2f} [{sr.low:.2f}, {sr.high:.2f}]", fontsize=10)
+        a1.legend(fontsize=7)
+        reached = np.isfinite(kr.distance)
+        for ok, color, label in ((True, "tab:green", "walked"), (False, "tab:red", "fell")):
+            m = reached & (kr.success == ok)
+            a2.scatter(kr.size[m], kr.distance[m], s=8, c=color, label=f"{label} ({int(m.sum())})")
+        a2.axhline(r_star, color="tab:blue", lw=1, label=f"r* = {r_star:.3f}")
+        chk = kr.certificate_check()
+        inside = chk["inside"]
+        n_in = getattr(inside, "n", 0)
+        k_in = getattr(inside, "k", 0)
+        a2.set_yscale("log")
+        a2.set_xlabel(f"{name} [{unit}]")
+        a2.set_ylabel("‖x̄₁ − x̄*‖ [rad/s]")
+        a2.set_title(f"inside B(r*): {k_in}/{n_in} fell; {chk['fell_before_event']} fell before the event",
+                     fontsize=10)
+        a2.legend(fontsize=7)
+    fig.suptitle(title or f"{result.robot}: validation ({result.config.trials} trials per kind, seed "
+                 f"{result.config.seed}, {result.config.steps_after} steps after)")
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.35 / fig.get_figheight()))  # room for the title
+    return _save(fig, path)

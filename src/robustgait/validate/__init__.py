@@ -1,0 +1,17 @@
+"""Does r* predict robustness? Disturbed walks of a gait — pushes, model mismatch, rough ground — and the
+certificate's promise tested (issue 12; ``robustgait validate``, ``docs/validation.md``)."""
+
+from robustgait.validate.disturbances import KINDS, SIZE_LABELS, Draws, ValidateConfig, draw
+from robustgait.validate.run import (
+    CertificateRef,
+    KindResult,
+    ValidationResult,
+    Validator,
+    simulate_trials,
+    validate_gait,
+)
+from robustgait.validate.stats import LogisticFit, Rate, binned_rates, logistic_fit, wilson_interval
+
+__all__ = ["KINDS", "SIZE_LABELS", "CertificateRef", "Draws", "KindResult", "LogisticFit", "Rate", "ValidateConfig",
+           "ValidationResult", "Validator", "binned_rates", "draw", "logistic_fit", "simulate_trials", "validate_gait",
+           "wilson_interval"]

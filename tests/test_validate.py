@@ -1,0 +1,234 @@
+"""Validation of a gait under disturbances (issue 12) on the shipped robot ``exo``, and its statistics."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from robustgait import RobustGaitError, load_robot
+from robustgait.certify import CertifyConfig, certify_gait
+from robustgait.cli import main
+from robustgait.sim import StepEngine, StepInputs
+from robustgait.validate import (
+    CertificateRef,
+    Draws,
+    ValidateConfig,
+    Validator,
+    draw,
+    logistic_fit,
+    wilson_interval,
+)
+from robustgait.validate import disturbances as dist
+
+
+def test_wilson_interval_known_values():
+    # reference values: Wilson (1927) score interval, z = 1.959964 (also scipy's binomtest(...).proportion_ci)
+    for (k, n), (lo, hi) in {(0, 10): (0.0, 0.27753), (5, 10): (0.23659, 0.76341), (10, 10): (0.72247, 1.0),
+                             (1, 20): (0.00888, 0.23613), (81, 263): (0.25529, 0.36621)}.items():
+        got = wilson_interval(k, n)
+        assert got == pytest.approx((lo, hi), abs=5e-5), (k, n)
+    assert wilson_interval(0, 0) == (0.0, 1.0)
+    scipy_stats = pytest.importorskip("scipy.stats")
+    ci = scipy_stats.binomtest(37, 200).proportion_ci(method="wilson")
+    assert wilson_interval(37, 200) == pytest.approx((ci.low, ci.high), abs=1e-12)
+    with pytest.raises(ValueError):
+        wilson_interval(3, 2)
+
+
+def test_logistic_fit_finds_the_half_failure_size():
+    rng = np.random.default_rng(0)
+    s = rng.uniform(0, 60, 2000)
+    p = 1 / (1 + np.exp(-(6.0 - 0.2 * s)))  # half fail at 30
+    fit = logistic_fit(s, rng.uniform(size=s.size) < p)
+    assert fit.converged and fit.in_range and fit.s50 is not None and fit.s50_se is not None
+    assert abs(fit.s50 - 30.0) < 3 * fit.s50_se and fit.s50_se < 1.5
+    assert fit.b == pytest.approx(-0.2, rel=0.2)
+    assert logistic_fit(s, np.ones(s.size, bool)).s50 is None  # nothing fell
+    separated = logistic_fit(s, s < 30)
+    assert not separated.converged and "separate" in separated.note and separated.s50 is not None
+    assert separated.s50 == pytest.approx(30.0, abs=0.5) and separated.s50_se is not None and separated.s50_se < 0.5
+
+
+def test_draws_depend_on_seed_and_robot_only():
+    robot = load_robot("exo")
+    cfg = ValidateConfig(trials=50)
+    a, b = draw("push", 50, cfg, robot), draw("push", 50, cfg, robot)
+    np.testing.assert_array_equal(a.size, b.size)
+    assert a.size.max() <= robot.mass * cfg.push_dv_max
+    c = draw("push", 50, ValidateConfig(seed=1), robot)
+    assert not np.array_equal(a.size, c.size)
+    with pytest.raises(RobustGaitError, match="unknown disturbance"):
+        draw("earthquake", 5, cfg, robot)
+    with pytest.raises(RobustGaitError, match="trials"):
+        ValidateConfig(trials=0)
+    with pytest.raises(RobustGaitError, match="friction_range"):
+        ValidateConfig(friction_range=(0.0, 1.0))
+
+
+def test_noise_is_a_control_offset():
+    robot = load_robot("exo")
+    off = dist.noise_offsets(robot, np.array([0.0, 0.01]), 50.0, 400, seed=0, kind_step=0)
+    assert off.shape == (2, 400, robot.n_joints)
+    assert np.all(off[0] == 0.0)
+    # −(n_q + kd/kp · 50 n_q-scale n_v): per joint variance σ² (1 + (50 kd/kp)²)
+    expect = 0.01 * np.sqrt(1 + (50 * robot.kd / robot.kp) ** 2)
+    np.testing.assert_allclose(off[1].std(axis=0), expect, rtol=0.15)
+
+
+def test_latency_offsets_shift_the_command():
+    ctrl = np.arange(20.0)[:, None] * np.ones((1, 2))
+    prev = 100 + np.arange(20.0)[:, None] * np.ones((1, 2))
+    off = dist.latency_offsets(ctrl, prev, np.array([0, 3]), np.array([15, 15]))
+    assert np.all(off[0] == 0)
+    delayed = ctrl + off[1]
+    np.testing.assert_array_equal(delayed[:3, 0], [112, 113, 114])  # previous step's tail before its event
+    np.testing.assert_array_equal(delayed[3:, 0], ctrl[:-3, 0])
+
+
+@pytest.fixture(scope="module")
+def small_cert(exo, exo_gait):
+    return certify_gait(exo, exo_gait, CertifyConfig(n_samples=20))
+
+
+@pytest.fixture(scope="module")
+def validator(exo, exo_gait, small_cert):
+    with Validator(exo, exo_gait, ValidateConfig(trials=6, steps_after=3), certificate=small_cert) as v:
+        yield v
+
+
+def test_engine_inputs_keep_undisturbed_samples_bit_identical(exo, exo_gait, small_cert):
+    fp = small_cert.fixed_point
+    qpos, qvel = np.tile(fp.qpos, (2, 1)), np.tile(fp.qvel, (2, 1))
+    with StepEngine(exo, exo_gait) as eng:
+        ref = eng.step(qpos, qvel, exo_gait.stance)
+        wrench = np.zeros((2, eng.horizon, 6))
+        wrench[1, 100:200, 0] = 300.0  # sample 1 pushed: the rollout carries xfrc_applied for both
+        pushed = eng.step(qpos, qvel, exo_gait.stance, inputs=StepInputs(
+            base_wrench=wrench, ctrl_offset=np.zeros((2, eng.horizon, exo.n_joints)), models=[exo.model] * 2))
+    np.testing.assert_array_equal(pushed.qpos[0], ref.qpos[0])
+    np.testing.assert_array_equal(pushed.qvel[0], ref.qvel[0])
+    assert pushed.duration[0] == ref.duration[0]
+    assert not np.array_equal(pushed.qvel[1], ref.qvel[1])
+    with StepEngine(exo, exo_gait) as eng, pytest.raises(RobustGaitError, match="base_wrench"):
+        eng.step(qpos, qvel, exo_gait.stance, inputs=StepInputs(base_wrench=np.zeros((3, 10, 6))))
+
+
+def test_zero_push_reproduces_the_undisturbed_walk_exactly(validator):
+    n = 3
+    zero = Draws("push", np.zeros(n), {"direction": np.linspace(0, 3, n), "phase": np.full(n, 0.3)})
+    res = validator.run("push", draws=zero)
+    fp = validator.fixed_point
+    # the undisturbed walk from the same state with the same engine, no inputs at all
+    from robustgait.validate import simulate_trials
+
+    ok, _, _, x1, steps = simulate_trials(validator.engine, fp.qpos[None], fp.qvel[None], 1 + 3, 1, "heading",
+                                          lambda *a: None, first_at=validator.nominal_at)
+    assert ok[0] and res.success.all()
+    for i in range(n):
+        np.testing.assert_array_equal(res.x_first[i], x1[0])
+    assert res.physics_steps == n * steps
+    # x̄₁ of the undisturbed walk is the map's image of x̄*: within the fixed point's residual
+    assert res.distance[0] < 0.02 and res.inside.all()
+
+
+def test_huge_push_always_falls(validator, exo):
+    n = 6
+    huge = Draws("push", np.full(n, exo.mass * 5.0), {"direction": np.linspace(0, 2 * math.pi, n, endpoint=False),
+                                                       "phase": np.linspace(0.0, 0.6, n)})
+    res = validator.run("push", draws=huge)
+    assert not res.success.any()
+    assert all(r is not None for r in res.fall_reason) and np.all(res.fall_step >= 1)
+    chk = res.certificate_check()
+    assert chk["inside"].n == 0  # type: ignore[union-attr]
+
+
+def test_every_kind_runs_and_summarizes(validator):
+    for kind in ("mass", "friction", "latency", "noise"):
+        res = validator.run(kind)
+        s = res.summary()
+        assert s["trials"] == 6 and 0 <= s["success"]["k"] <= 6
+        assert sum(b["n"] for b in s["binned"]) == 6
+        json.dumps(res.to_dict(), allow_nan=False)
+
+
+def test_flat_terrain_walks_and_non_foot_contact_with_terrain_is_a_fall(validator, exo, exo_gait):
+    flat = Draws("terrain", np.zeros(2), {"terrain_seed": np.array([1.0, 2.0])})
+    res = validator.run("terrain", draws=flat)
+    assert res.success.all()  # soles on the heightfield are footfalls, not falls
+    fp = validator.fixed_point
+    layout = dist.terrain_layout(exo, fp.qpos, exo_gait.stance, validator.config, validator.step_length)
+    m = dist.terrain_model(exo, layout)
+    level, slope = dist.terrain_tiles(layout, 0.03, seed=0)
+    assert np.all(np.abs(level) + (np.abs(slope) * layout.tile / 2).sum(axis=-1) <= 0.03 + 1e-12)
+    rough = dist.terrain_models(m, layout, Draws("terrain", np.array([0.03]), {"terrain_seed": np.array([0.0])}))[0]
+    dr = mujoco.MjData(rough)
+    mujoco.mj_forward(rough, dr)
+    x = layout.rough_from + 0.5 * layout.tile
+    y = layout.y0 + 0.5 * layout.tile
+    for dx, dy in ((0, 0), (0.1, 0), (0, -0.1)):  # the ray hits the tile's tilted top where its plane says
+        got = 5.0 - mujoco.mj_ray(rough, dr, np.array([x + dx, y + dy, 5.0]), np.array([0, 0, -1.0]), None, 1, -1,
+                                  np.zeros(1, np.int32))
+        assert got == pytest.approx(level[0, 0] + slope[0, 0, 0] * dx + slope[0, 0, 1] * dy, abs=1e-9)
+    d = mujoco.MjData(m)
+    d.qpos[:] = fp.qpos
+    mujoco.mj_forward(m, d)
+    sens = {s: d.sensordata[exo.sensor_adr[n]] for s, n in zip(
+        ("left", "right", "floor"), ("robustgait_contact_left", "robustgait_contact_right", "robustgait_contact_floor"),
+        strict=True)}
+    assert sens["floor"] - sens["left"] - sens["right"] == 0 and sens["left"] + sens["right"] > 0
+    d.qpos[0] = x + 0.3  # over the tiles: the pelvis box sinks into them
+    d.qpos[2] = 0.05
+    mujoco.mj_forward(m, d)
+    assert d.sensordata[exo.sensor_adr["robustgait_contact_floor"]] > 0
+    assert d.sensordata[exo.sensor_adr["robustgait_contact_left"]] == 0
+
+
+def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_cert):
+    p = tmp_path / "cert.json"
+    p.write_text(json.dumps(small_cert.to_dict()))
+    ref = CertificateRef.load(p)
+    assert ref.r_star == small_cert.r_star and ref.map == "step"
+    np.testing.assert_allclose(ref.x_star, small_cert.fixed_point.x_star)
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"r_star": 1}')
+    with pytest.raises(RobustGaitError, match=r"bad\.json: not a certificate"):
+        CertificateRef.load(bad)
+    failed = tmp_path / "failed.json"
+    failed.write_text('{"status": "no_fixed_point", "reason": "no iterate converged", "r_star": 0.0}')
+    with pytest.raises(RobustGaitError, match="status 'no_fixed_point'"):
+        CertificateRef.load(failed)
+    gait_path = tmp_path / "gait.json"
+    exo_gait.save(gait_path)
+    code = main(["validate", str(gait_path), "--robot", "exo", "--certificate", str(p), "--trials", "4",
+                 "--steps-after", "2", "--json", "--plot", str(tmp_path / "v.png"), "-o", str(tmp_path / "v.json")])
+    assert code == 0
+    full = json.loads((tmp_path / "v.json").read_text())
+    assert full["kinds"]["push"]["trials"] == 4 and len(full["kinds"]["push"]["trials_detail"]["size"]) == 4
+    assert (tmp_path / "v.png").stat().st_size > 10_000
+    assert main(["validate", str(gait_path), "--robot", "exo", "--certificate", str(bad)]) == 2
+
+
+def test_gait_tiles_are_a_real_image(tmp_path, exo, exo_gait):
+    import imageio.v2 as imageio
+
+    from robustgait.report.tiles import render_tiles
+
+    out = tmp_path / "tiles.png"
+    shape = render_tiles(exo, exo_gait, out, frames=4, width=160, height=240, warmup_steps=2)
+    img = imageio.imread(out)
+    assert shape == (480, 640) and img.shape[:2] == (480, 640)
+    assert img.std() > 20  # not blank
+    tiles = [img[:240, i * 160:(i + 1) * 160].astype(float) for i in range(4)]
+    assert np.abs(tiles[0] - tiles[2]).mean() > 1.0  # the legs move between frames
+    assert np.abs(img[:240].astype(float) - img[240:].astype(float)).mean() > 5  # side and front differ
+
+
+def test_validate_refuses_a_multicontact_gait(exo, exo_mc_gait):
+    from robustgait.validate import validate_gait
+
+    with pytest.raises(RobustGaitError, match="one-domain"):
+        validate_gait(exo, exo_mc_gait)
