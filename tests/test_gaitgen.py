@@ -14,6 +14,8 @@ from robustgait.gaitgen.check import check_solution
 from tests.conftest import ATALANTE_SPEC, EXO_GAIT, EXO_MC_GAIT, needs_atalante
 
 
+# The generator's build (≈ 7 s) and default solve make most of this module slow: plain `pytest` covers
+# generated gaits through the stored ones (tests/data), CI runs everything.
 @pytest.fixture(scope="module")
 def gen(exo):
     return GaitGenerator(exo)
@@ -26,6 +28,7 @@ def default(gen):
     return res
 
 
+@pytest.mark.slow
 def test_default_gait_passes_the_physics_check(exo, gen, default):
     c = default.check
     assert c.passed and c.dynamics_residual <= 1e-6 and c.periodicity <= 1e-6 and c.stance_drift <= 1e-6
@@ -51,12 +54,14 @@ def test_default_gait_passes_the_physics_check(exo, gen, default):
     np.testing.assert_allclose(dx[:2], [0.15, -0.25], atol=1e-9)
 
 
+@pytest.mark.slow
 def test_physics_check_catches_a_wrong_solution(gen, default):
     ns = dataclasses.replace(default.nodes[0], u=default.nodes[0].u * 1.01)
     bad = check_solution(gen.dyn, gen.problem, default.params, [ns], [default.params.step_duration])
     assert not bad.passed and bad.dynamics_residual > 1e-4 and "dynamics residual" in bad.failures[0]
 
 
+@pytest.mark.slow
 def test_default_gait_meets_the_gait_quality_bounds(exo, gen, default):
     """Pelvis bands, angular velocity, joint speeds and the swing sole's attitude hold at every node."""
     from robustgait.dynamics import foot_frame
@@ -79,6 +84,7 @@ def test_default_gait_meets_the_gait_quality_bounds(exo, gen, default):
         assert min(corners) >= gen.config.flat_approach * h[2, 3] - tol
 
 
+@pytest.mark.slow
 def test_stored_test_gait_is_what_the_generator_makes(exo, default):
     """tests/data/exo_gait.json (used by the simulator, return-map and certificate tests) is today's default."""
     stored = load_gait(EXO_GAIT, exo)
@@ -104,6 +110,7 @@ def _walks_like_an_exoskeleton(robot, gait, max_speed_error=0.03):
     return res
 
 
+@pytest.mark.slow
 def test_default_gait_walks_and_gets_a_certificate(exo, default):
     _walks_like_an_exoskeleton(exo, default.gait)
     cert = certify_gait(exo, default.gait, CertifyConfig(n_samples=50))
@@ -117,6 +124,7 @@ def test_default_gait_walks_and_gets_a_certificate(exo, default):
     assert c.violation_bound <= 0.2 or c.budget_exhausted
 
 
+@pytest.mark.slow
 def test_warm_start_converges_faster(gen, default):
     params = GaitParams(step_length=0.17)
     cold, warm = gen.solve(params), gen.solve(params, warm_start=default.gait)
@@ -153,6 +161,7 @@ def test_grid_over_the_action_space_walks(exo, gen):
     ({"step_duration": 0.0}, "step_duration"),
     ({"step_height": -0.01}, "step_height"),
 ])
+@pytest.mark.slow
 def test_infeasible_parameters_fail_with_a_reason(exo, gen, kwargs, reason):
     res = generate_gait(exo, **kwargs, generator=gen)
     assert not res.success and res.gait is None and res.status == "Infeasible_Parameters" and reason in res.reason

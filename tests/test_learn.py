@@ -47,6 +47,16 @@ def test_exo_action_space_from_spec(exo_space):
                                [1 / 6, 1.0, 1.0, 0.0])
 
 
+def test_exo_multicontact_action_space_searches_the_rolling_fraction():
+    space = ActionSpace.from_robot(load_robot("exo"), "multicontact")
+    assert space.names == ("step_length", "step_duration", "step_width", "step_height", "rolling_fraction")
+    assert space.values[1] == (0.8, 0.9, 1.0, 1.1) and space.values[4] == (0.15, 0.2, 0.25)
+    p = space.params(space.size - 1)
+    assert p.rolling_fraction == 0.25 and space.index(p) == space.size - 1
+    with pytest.raises(RobustGaitError, match="domains must be"):
+        ActionSpace.from_robot(load_robot("exo"), "hopping")
+
+
 def test_action_space_rejects_off_grid_and_missing(exo_space):
     with pytest.raises(RobustGaitError, match="not on the action-space grid"):
         exo_space.index(GaitParams(0.13, 0.7, 0.24, 0.06))
@@ -58,6 +68,9 @@ def test_action_space_rejects_off_grid_and_missing(exo_space):
     robot.spec = replace(robot.spec, action_space=None)
     with pytest.raises(RobustGaitError, match=r"no \[action_space\]"):
         ActionSpace.from_robot(robot)
+    robot.spec = replace(robot.spec, multicontact_action_space=None)
+    with pytest.raises(RobustGaitError, match=r"no \[action_space.multicontact\]"):
+        ActionSpace.from_robot(robot, "multicontact")
 
 
 def test_neighbourhood_is_the_clipped_box(exo_space):

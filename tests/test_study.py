@@ -152,6 +152,37 @@ def test_study_run_bad_options_leave_nothing_behind(tmp_path, capsys):
         assert not d.exists()
 
 
+def test_multicontact_study_is_created_on_its_own_action_space(tmp_path):
+    from robustgait.cli import main
+
+    d = tmp_path / "mc"
+    # --iterations 0 is refused, so create through the API: the CLI's --domains only sets the gaitgen config
+    cfg = replace(TINY, evaluation=replace(CHEAP, gaitgen=replace(CHEAP.gaitgen, domains="multicontact")))
+    create_study(d, cfg)
+    assert load_config(d).evaluation.gaitgen.domains == "multicontact"
+    st = study_status(d)
+    assert st["trials_done"] == 0 and st["trials_planned"] == 6
+    from robustgait.study.run import StudyRunner
+
+    assert StudyRunner(d).space == ActionSpace.from_robot(load_robot("exo"), "multicontact")
+    assert main(["study", "run", str(tmp_path / "bad"), "--robot", "exo", "--domains", "hopping"]) == 2
+
+
+@pytest.mark.slow
+def test_multicontact_study_runs(tmp_path):
+    """One batch of two multi-contact gaits, generated, walked and certified (≈ 2 min: two 40 s builds)."""
+    d = tmp_path / "mc"
+    res = cli("study", "run", str(d), "--robot", "exo", "--domains", "multicontact", "--iterations", "1", "--batch",
+              "2", "--method", "uniform", "--samples", "10", "--steps", "5", "--workers", "2", "--quiet")
+    assert res.returncode == 0, res.stderr
+    st = json.loads(cli("study", "status", str(d), "--json").stdout)
+    assert st["trials_done"] == 2
+    for t in st["trials"]:
+        assert set(t["params"]) >= {"rolling_fraction"} and 0.8 <= t["params"]["step_duration"] <= 1.1
+        assert t["status"] in ("certified", "not_certified", "fell", "generation_failed")
+    assert any(t["status"] != "generation_failed" for t in st["trials"]), st["trials"]
+
+
 # ---- evaluation -------------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def exo_generator():

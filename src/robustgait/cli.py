@@ -282,6 +282,7 @@ def _cmd_study_run(args: argparse.Namespace) -> int:
     import dataclasses
     import time
 
+    from robustgait.gaitgen.config import GaitGenConfig
     from robustgait.study.config import StudyConfig
     from robustgait.study.evaluate import EvaluationConfig
     from robustgait.study.run import create_study
@@ -294,7 +295,8 @@ def _cmd_study_run(args: argparse.Namespace) -> int:
                                   **({"n_samples": args.samples} if args.samples is not None else {}))
     config = StudyConfig(robot=args.robot, metric=args.metric, learner=args.learner, iterations=args.iterations,
                          batch=args.batch, seed=args.seed, storage=args.storage,
-                         evaluation=EvaluationConfig(step_cap=args.steps, certify=certify))
+                         evaluation=EvaluationConfig(step_cap=args.steps, certify=certify,
+                                                     gaitgen=GaitGenConfig(domains=args.domains)))
     create_study(args.dir, config)
     t0 = time.perf_counter()
     if not _run_interruptible(args.dir, options):
@@ -426,6 +428,9 @@ def _add_study_parsers(sub: Any) -> None:
                    help="sequential: certified bound on the violating volume fraction (default 0.02)")
     r.add_argument("--steps", type=int_in(L.STEPS), default=50,
                    help="step cap of the walk before certifying (default 50)")
+    r.add_argument("--domains", choices=("flat", "multicontact"), default="flat",
+                   help="domain graph of the gaits: flat-foot (default) or multi-contact heel/toe rolling, "
+                   "searched over the spec's [action_space.multicontact]")
     r.add_argument("--storage", help="SQLAlchemy URL of the Optuna database (default: sqlite file in DIR)")
     r.add_argument("--seed", type=int_in(L.SEED), default=0,
                    help="seed of the learner and of the certificates (default 0)")

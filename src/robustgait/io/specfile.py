@@ -81,11 +81,20 @@ class GaitQualityTable(Table):
     joint_velocity: JointVelocity | Annotated[list[JointVelocity], Meta(max_length=L.MAX_JOINTS)] = 10.0
 
 
+class MultiContactActionSpaceTable(Table):
+    step_length: ActionAxis
+    step_duration: ActionAxis
+    step_width: ActionAxis
+    step_height: ActionAxis
+    rolling_fraction: ActionAxis | None = None
+
+
 class ActionSpaceTable(Table):
     step_length: ActionAxis
     step_duration: ActionAxis
     step_width: ActionAxis
     step_height: ActionAxis
+    multicontact: MultiContactActionSpaceTable | None = None
 
 
 class SpecFile(Table):
@@ -111,13 +120,15 @@ def _band(src: Path, key: str, band: tuple[float, float]) -> tuple[float, float]
     return lo, hi
 
 
-def _action_space(t: ActionSpaceTable, src: Path) -> dict[str, ParamRange]:
+def _action_space(t: ActionSpaceTable | MultiContactActionSpaceTable, src: Path,
+                  prefix: str = "action_space") -> dict[str, ParamRange]:
     from robustgait.gait import GaitParams
 
     out = {}
-    for key in ACTION_FIELDS:
+    keys = ACTION_FIELDS + (("rolling_fraction",) if getattr(t, "rolling_fraction", None) is not None else ())
+    for key in keys:
         lo, hi, step = getattr(t, key)
-        field = f"action_space.{key}"
+        field = f"{prefix}.{key}"
         if not all(math.isfinite(v) for v in (lo, hi, step)):
             raise field_error(src, field, f"[low, high, step] must be finite numbers (got [{lo}, {hi}, {step}])")
         if not (lo <= hi and step > 0):
@@ -199,6 +210,9 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
         source=path.resolve(),
         gait_quality=quality,
         action_space=_action_space(s.action_space, path) if s.action_space is not None else None,
+        multicontact_action_space=(_action_space(s.action_space.multicontact, path, "action_space.multicontact")
+                                   if s.action_space is not None and s.action_space.multicontact is not None
+                                   else None),
         posture=tuple(float(s.posture.get(j, 0.0)) for j in names),
     )
 

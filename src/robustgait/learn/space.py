@@ -46,8 +46,18 @@ class ActionSpace:
         return cls(names, tuple(ranges[k].grid() for k in names))
 
     @classmethod
-    def from_robot(cls, robot: Robot) -> ActionSpace:
-        """The robot spec's ``[action_space]``; a spec without one cannot be studied."""
+    def from_robot(cls, robot: Robot, domains: str = "flat") -> ActionSpace:
+        """The robot spec's ``[action_space]`` (``domains="flat"``) or its ``[action_space.multicontact]``
+        sub-table (``domains="multicontact"``: multi-contact gaits need longer steps in time and may also
+        search the rolling fraction); a spec without the table cannot be studied with that domain graph."""
+        if domains == "multicontact":
+            if robot.spec.multicontact_action_space is None:
+                raise RobustGaitError(f"{robot.spec.source or robot.name}: the robot spec has no "
+                                      "[action_space.multicontact] table (bounds and grid step per gait parameter "
+                                      "of multi-contact gaits), which multi-contact studies search")
+            return cls.from_ranges(robot.spec.multicontact_action_space)
+        if domains != "flat":
+            raise RobustGaitError(f"domains must be 'flat' or 'multicontact', got {domains!r}")
         if robot.spec.action_space is None:
             raise RobustGaitError(f"{robot.spec.source or robot.name}: the robot spec has no [action_space] table "
                                   "(bounds and grid step per gait parameter), which studies search")

@@ -132,7 +132,7 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
     from robustgait.study.run import completed_batches, history_before, open_store
 
     cfg = load_config(directory)
-    space = ActionSpace.from_robot(load_robot(cfg.robot))
+    space = ActionSpace.from_robot(load_robot(cfg.robot), cfg.evaluation.gaitgen.domains)
     for name in axes_names:
         if name not in space.names:
             raise RobustGaitError(f"--axes: {name!r} is not a parameter of the action space ({', '.join(space.names)})")

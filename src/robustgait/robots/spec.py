@@ -117,6 +117,7 @@ class RobotSpec:
     source: Path | None = None
     gait_quality: GaitQuality = field(default_factory=GaitQuality)
     action_space: dict[str, ParamRange] | None = None
+    multicontact_action_space: dict[str, ParamRange] | None = None
     posture: tuple[float, ...] = ()
 
     @property

@@ -47,7 +47,7 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs)."""
     d = Path(directory)
     cfg = load_config(d)
-    space = ActionSpace.from_robot(load_robot(cfg.robot))
+    space = ActionSpace.from_robot(load_robot(cfg.robot), cfg.evaluation.gaitgen.domains)
     store = open_store(d, cfg, space)
     try:
         records = store.records()
