@@ -297,7 +297,7 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None, 
                     path = run_path(d, k, keys[k], label)
                     path.parent.mkdir(parents=True, exist_ok=True)
                     write_json(path, stored)
-                    results[label][k] = stored
+                    results[label][k] = json.loads(json.dumps(stored))  # as a later run reads it back
                 sr = next(iter(res["kinds"].values()))["success"]
                 bar.set_postfix_str(f"{label}: success {sr['k']}/{sr['n']}")
             bar.update(1)
