@@ -29,7 +29,7 @@ from robustgait.study.evaluate import Evaluation
 from robustgait.study.run import StudyRunner, create_study, open_store
 from robustgait.study.validate import RUNS_DIR, VALIDATION_DIR, config_key, study_validate_config, validate_study
 from robustgait.validate import ValidateConfig, spearman
-from tests.conftest import EXO_GAIT
+from tests.conftest import EXO_GAIT, EXO_MC_GAIT
 from tests.test_study import CHEAP, CLI_TINY, cli
 
 SMALL = ValidateConfig(trials=8, steps_after=3)
@@ -49,7 +49,7 @@ def _evaluation(robot, gait, params, certify):  # type: ignore[no-untyped-def]
 @pytest.fixture(scope="module")
 def small_study(tmp_path_factory):
     d = tmp_path_factory.mktemp("sv") / "study"
-    create_study(d, StudyConfig(robot="exo", iterations=1, batch=5, evaluation=CHEAP))
+    create_study(d, StudyConfig(robot="exo", iterations=1, batch=6, evaluation=CHEAP))
     robot = load_robot("exo")
     exo = load_gait(EXO_GAIT, robot)
     no_fp = replace(CHEAP.certify, fp_tol=1e-12, fp_min_steps=1, fp_max_steps=2)
@@ -57,8 +57,9 @@ def small_study(tmp_path_factory):
     store = open_store(d, runner.config, runner.space)
     bar = tqdm(disable=True)
     try:
+        mc = load_gait(EXO_MC_GAIT, robot)  # validate runs flat-foot gaits only: refused, with the reason
         plan = [(10, exo, CHEAP.certify), (20, exo.mirrored(robot), CHEAP.certify), (40, exo, no_fp),
-                (30, None, None), (10, "again", None)]
+                (30, None, None), (10, "again", None), (50, mc, no_fp)]
         for slot, (index, gait, certify) in enumerate(plan):
             store.enqueue(0, slot, index)
             trial = store.start()
@@ -102,10 +103,11 @@ def test_spearman_defined_and_undefined():
 def test_every_unique_gait_meets_the_same_disturbances(small_study, first_run):
     out, _ = first_run
     rows = {r["grid_index"]: r for r in out["gaits"]}
-    assert sorted(rows) == [10, 20, 40] and out["n_validated"] == 3 and out["study"]["unique_gaits"] == 4
+    assert sorted(rows) == [10, 20, 40] and out["n_validated"] == 3 and out["study"]["unique_gaits"] == 5
     assert rows[10]["trials"] == [0, 4]  # proposed twice, validated once
-    assert [s["grid_index"] for s in out["skipped"]] == [30] and out["skipped_counts"] == {"generation_failed": 1}
-    assert "no gait file" in out["skipped"][0]["why"]
+    skipped = {s["grid_index"]: s for s in out["skipped"]}
+    assert sorted(skipped) == [30, 50] and out["skipped_counts"] == {"generation_failed": 1, "refused": 1}
+    assert "no gait file" in skipped[30]["why"] and "one-domain" in skipped[50]["why"]
     assert rows[10]["start"] == rows[20]["start"] == "fixed_point" and rows[40]["start"] == "initial_state"
     assert rows[40]["status"] == "not_certified" and rows[40]["r_star"] == 0.0 and rows[40]["certificate_check"] is None
     assert rows[10]["r_star"] > 0 and rows[10]["certificate"]["r_star"] == rows[10]["r_star"]
@@ -156,18 +158,6 @@ def test_rerun_reuses_stored_results(small_study, first_run):
         [{k: v for k, v in r.items() if k not in strip} for r in out["gaits"]]
     assert again["correlations"] == out["correlations"]
     assert took < seconds
-    # a changed gait file is validated again (the key covers the files), the others are reused
-    g = next(r for r in out["gaits"] if r["grid_index"] == 20)
-    path = small_study / g["gait_file"]
-    text = path.read_text()
-    try:
-        path.write_text(text + "\n")  # other bytes, the same gait
-        third = validate_study(small_study, SMALL, progress=False)["push"]
-        assert third["n_from_earlier_runs"] == 2
-        assert not next(r for r in third["gaits"] if r["grid_index"] == 20)["from_earlier_run"]
-    finally:
-        path.write_text(text)
-    assert validate_study(small_study, SMALL, progress=False)["push"]["n_from_earlier_runs"] == 2  # stored again
 
 
 def test_config_key_ignores_threads_only():
@@ -199,7 +189,8 @@ def test_cli_errors_exit_2_with_one_line(tmp_path, capsys, small_study):
 def test_cli_text_and_json(small_study, first_run, capsys):
     assert main(["study", "validate", str(small_study), "--trials", "8", "--steps", "3", "--quiet"]) == 0
     text = capsys.readouterr().out
-    assert "3 of 4 unique gaits validated (3 from an earlier run); skipped: 1 generation failed" in text
+    assert "3 of 5 unique gaits validated (3 from an earlier run); skipped: 1 generation failed, 1 refused" in text
+    assert "skipped: validate runs one-domain (flat-foot) gaits" in text
     assert "steps taken vs push success: Spearman ρ undefined (steps taken is the same" in text
     assert main(["study", "validate", str(small_study), "--trials", "8", "--steps-after", "3", "--json",
                  "--quiet"]) == 0
@@ -221,6 +212,16 @@ def test_report_with_and_without_validation(small_study, first_run, tmp_path):
     # the copy's database path is its own (sqlite URL from the directory)
     page = write_study_report(bare, video=False).read_text()
     assert "Validation:" not in page and (bare / "report" / "history.png").is_file()
+
+
+def test_a_changed_gait_file_is_validated_again(small_study, first_run):
+    """The stored results are keyed by the files too (last in this module: it leaves one gait stored twice)."""
+    g = next(r for r in first_run[0]["gaits"] if r["grid_index"] == 20)
+    path = small_study / g["gait_file"]
+    path.write_text(path.read_text() + "\n")  # other bytes, the same gait
+    again = validate_study(small_study, SMALL, progress=False)["push"]
+    assert again["n_from_earlier_runs"] == 2
+    assert not next(r for r in again["gaits"] if r["grid_index"] == 20)["from_earlier_run"]
 
 
 @pytest.mark.slow

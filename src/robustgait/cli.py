@@ -382,7 +382,12 @@ def _cmd_study_validate(args: argparse.Namespace) -> int:
     from robustgait.validate.stats import correlation_text
 
     cfg = ValidateConfig(trials=args.trials, seed=args.seed, steps_after=args.steps_after)
-    out = validate_study(args.dir, cfg, kinds=[args.disturbance], workers=args.workers, progress=not args.quiet)
+    try:
+        out = validate_study(args.dir, cfg, kinds=[args.disturbance], workers=args.workers, progress=not args.quiet)
+    except KeyboardInterrupt:
+        print("\nrobustgait: interrupted; the gaits validated so far are stored: run the same command again to "
+              "continue", file=sys.stderr)
+        return 130
     if args.json:
         print(json.dumps(out, allow_nan=False))
         return 0

@@ -127,7 +127,10 @@ def config_key(config: ValidateConfig, kind: str) -> str:
 def _files_key(directory: Path, g: StudyGait) -> str:
     h = hashlib.sha256()
     for rel in (g.gait_file, g.certificate_file):
-        h.update(b"\0" if rel is None else (directory / rel).read_bytes())
+        try:
+            h.update(b"\0" if rel is None else (directory / rel).read_bytes())
+        except OSError as exc:
+            raise input_error(directory / str(rel), f"cannot read the study's file ({exc.strerror or exc})") from None
     return h.hexdigest()
 
 
