@@ -3,6 +3,7 @@ success against r* and steps taken (the gaits of a study)."""
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -102,7 +103,7 @@ def plot_study_validation(summary: dict[str, Any], path: str | Path) -> Path:
             ax.set_xlim(-0.04 * cap, 1.04 * cap)
         ax.set_xlabel(label)
         ax.set_ylabel(f"{kind} success (95 % Wilson)")
-        ax.set_title(correlation_text(summary["correlations"][key], names=False), fontsize=9)
+        ax.set_title(textwrap.fill(correlation_text(summary["correlations"][key], names=False), 58), fontsize=9)
         if rows:
             ax.legend(fontsize=7, loc="best", title="study outcome", title_fontsize=7)
         else:
@@ -112,5 +113,5 @@ def plot_study_validation(summary: dict[str, Any], path: str | Path) -> Path:
     skipped = sum(summary["skipped_counts"].values())
     fig.suptitle(f"{kind}: {summary['n_validated']} gaits of the study under the same {cfg['trials']} disturbances "
                  f"(seed {cfg['seed']}, {cfg['steps_after']} steps after)"
-                 + (f"; {skipped} skipped" if skipped else ""), fontsize=10)
+                 + (f"; {skipped} skipped" if skipped else ""), fontsize=10, y=1.04)  # above two-line titles
     return _save(fig, path)
