@@ -378,6 +378,43 @@ def _cmd_study_compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_study_validate(args: argparse.Namespace) -> int:
+    from robustgait.study.validate import summary_path, validate_study
+    from robustgait.validate import ValidateConfig
+    from robustgait.validate.stats import correlation_text
+
+    cfg = ValidateConfig(trials=args.trials, seed=args.seed, steps_after=args.steps_after)
+    try:
+        out = validate_study(args.dir, cfg, kinds=[args.disturbance], workers=args.workers, progress=not args.quiet)
+    except KeyboardInterrupt:
+        print("\nrobustgait: interrupted; the gaits validated so far are stored: run the same command again to "
+              "continue", file=sys.stderr)
+        return 130
+    if args.json:
+        print(json.dumps(out, allow_nan=False))
+        return 0
+    for kind, s in out.items():
+        st, name, unit = s["study"], s["size"], s["unit"]
+        skipped = ", ".join(f"{n} {what.replace('_', ' ')}" for what, n in s["skipped_counts"].items())
+        print(f"{kind}: {s['n_validated']} of {st['unique_gaits']} unique gaits validated"
+              + (f" ({s['n_from_earlier_runs']} from an earlier run)" if s["n_from_earlier_runs"] else "")
+              + (f"; skipped: {skipped}" if skipped else "") + f"; {cfg.trials} trials each, seed {cfg.seed}, "
+              f"success = no fall in {cfg.steps_after} steps after the first switching event")
+        print(f"  {'gait':<26} {'study':<13} {'r*':>7} {'steps':>7}  {'success [95% CI]':<27} half fail at ({name})")
+        for r in s["gaits"]:
+            c = r["critical"]
+            crit = (f"{c['s50']:.4g} ± {c['s50_se'] or 0:.2g} {unit}" if c["s50"] is not None else f"— ({c['note']})")
+            sr = r["success"]
+            print(f"  {r['label']:<26} {r['status']:<13} {r['r_star']:>7.4f} {r['steps_taken']:>3}/{r['step_cap']:<3}  "
+                  f"{sr['k']}/{sr['n']} = {sr['rate']:.2f} [{sr['low']:.2f}, {sr['high']:.2f}]{'':<4} {crit}")
+        for sk in s["skipped"]:
+            print(f"  {sk['label']:<26} skipped: {sk['why']}")
+        for c in s["correlations"].values():
+            print(f"  {correlation_text(c)}")
+        print(f"  results: {summary_path(args.dir, kind)}")
+    return 0
+
+
 def _cmd_demo(args: argparse.Namespace) -> int:
     import time
     from pathlib import Path
@@ -458,6 +495,24 @@ def _add_study_parsers(sub: Any) -> None:
     cp.add_argument("--samples", type=int_in(L.SAMPLES), help="certificate samples N (default: study A's)")
     cp.add_argument("--json", action="store_true")
     cp.set_defaults(func=_cmd_study_compare)
+
+    va = ssub.add_parser("validate", help="every unique gait of a study under the same disturbances: success "
+                         "rates and the Spearman correlation of r* and of steps taken with success")
+    va.add_argument("dir", help="study directory")
+    va.add_argument("--trials", type=int_in(L.TRIALS), default=200,
+                    help=f"trials per gait and disturbance kind (default 200; {L.TRIALS.text()})")
+    va.add_argument("--seed", type=int_in(L.SEED), default=0,
+                    help="seed of the disturbances, the same for every gait (default 0)")
+    va.add_argument("--disturbance", choices=("push", "mass", "friction", "latency", "noise", "terrain", "all"),
+                    default="push", help="disturbance kind (default push; all = every kind in turn)")
+    va.add_argument("--steps-after", "--steps", dest="steps_after", type=int_in(L.STEPS_AFTER), default=20,
+                    help="steps to walk after the first switching event after the disturbance (default 20)")
+    va.add_argument("--workers", type=int_in(L.WORKERS), default=1,
+                    help="gaits validated in parallel processes, each with cores / workers rollout threads "
+                    "(default 1: one process, the rollout on every core)")
+    va.add_argument("--json", action="store_true", help="print one JSON object: the summary of each kind")
+    va.add_argument("--quiet", action="store_true", help="no progress bar")
+    va.set_defaults(func=_cmd_study_validate)
 
     dm = sub.add_parser("demo", help="the main job on shipped defaults: a small robustness study on exo + report")
     dm.add_argument("--dir", default="robustgait-demo", help="study directory (default ./robustgait-demo)")

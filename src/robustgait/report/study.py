@@ -4,7 +4,9 @@ embedded) plus the PNG files, in ``DIR/report/``.
 Figures: the best r* and steps per iteration (the learner's recommendation after each iteration, and every
 evaluated gait), the explored parameters coloured by outcome, the posterior mean of the preference model
 over two parameters (the others at the best gait's values), the best gait's invariant set
-(:func:`plot_certificate`), and a short video of the best gait walking (:func:`render_video`).
+(:func:`plot_certificate`), when ``robustgait study validate`` has results, the success of every gait under
+the same disturbances against r* and steps taken (:func:`plot_study_validation`), and a short video of the
+best gait walking (:func:`render_video`).
 """
 
 from __future__ import annotations
@@ -238,6 +240,7 @@ def write_study_report(directory: str | Path, *, axes: tuple[str, str] = ("step_
         parts.append(f"<h2>Invariant set of the best gait</h2>{_img(p)}<p>{html.escape(cert.statement())}</p>")
     else:
         notes.append("The best gait has no certificate (no gait walked the step cap and was certified).")
+    parts += _validation_parts(d, status, out, notes)
     if video and best is not None and best.get("gait_file"):
         try:
             v = render_best_video(d, status, out / "best.mp4", video_steps)
@@ -247,6 +250,43 @@ def write_study_report(directory: str | Path, *, axes: tuple[str, str] = ("step_
         except RobustGaitError as exc:
             notes.append(f"No video: {exc}")
     return write_text(out / "index.html", _page(status, parts, notes), "html")
+
+
+def _validation_parts(d: Path, status: dict[str, Any], out: Path, notes: list[str]) -> list[str]:
+    """One section per disturbance kind that ``study validate`` has results for (none: no section): the
+    scatter of success against r* and steps taken, the correlations and one row per gait."""
+    from robustgait.report.validation import plot_study_validation
+    from robustgait.study.validate import load_summaries
+    from robustgait.validate.stats import correlation_text
+
+    try:
+        summaries = load_summaries(d)
+    except RobustGaitError as exc:
+        notes.append(f"Validation results not shown: {exc}")
+        return []
+    parts = []
+    for kind, s in summaries.items():
+        png = plot_study_validation(s, out / f"validation_{kind}.png")
+        cfg = s["config"]
+        rows = [[r["label"], r["status"], _fmt(r["r_star"], 4), f"{r['steps_taken']}/{r['step_cap']}",
+                 f"{r['success']['k']}/{r['success']['n']} = {r['success']['rate']:.2f} [{r['success']['low']:.2f}, "
+                 f"{r['success']['high']:.2f}]",
+                 "—" if r["critical"]["s50"] is None else f"{r['critical']['s50']:.4g} {s['unit']}"]
+                for r in s["gaits"]]
+        rows += [[k["label"], k["status"], "", "", f"skipped: {k['why']}", ""] for k in s["skipped"]]
+        corr = "".join(f"<li>{html.escape(correlation_text(c))}</li>" for c in s["correlations"].values())
+        parts.append(
+            f"<h2>Validation: {html.escape(kind)} (robustgait study validate)</h2>{_img(png)}<ul>{corr}</ul>"
+            f"<p>{cfg['trials']} trials per gait, seed {cfg['seed']} (the same disturbances for every gait), success "
+            f"= no fall in {cfg['steps_after']} steps after the first switching event; certified gaits start on "
+            "their fixed point, the others from their initial state.</p>"
+            + _table(rows, ["gait", "study outcome", "r*", "steps", "success [95 % CI]",
+                            f"half fail at ({s['size']})"]))
+        if s["study"]["unique_gaits"] != status["unique_gaits"]:
+            notes.append(f"The {kind} validation covers the {s['study']['unique_gaits']} unique gaits the study had "
+                         f"then; it has {status['unique_gaits']} now: run robustgait study validate again (stored "
+                         "gaits are reused).")
+    return parts
 
 
 def _certify_text(ev: dict[str, Any]) -> str:

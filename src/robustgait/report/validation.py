@@ -1,14 +1,18 @@
-"""Figure of a validation: success against disturbance size, and the certificate check, per kind."""
+"""Figures of a validation: success against disturbance size and the certificate check per kind (one gait);
+success against r* and steps taken (the gaits of a study)."""
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import Normalize
 
 from robustgait.report.figures import _save, plt
-from robustgait.validate.stats import binned_rates
+from robustgait.validate.stats import binned_rates, correlation_text
 
 if TYPE_CHECKING:
     from robustgait.validate import ValidationResult
@@ -62,4 +66,52 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
     fig.suptitle(title or f"{result.robot}: validation ({result.config.trials} trials per kind, seed "
                  f"{result.config.seed}, {result.config.steps_after} steps after)")
     fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.35 / fig.get_figheight()))  # room for the title
+    return _save(fig, path)
+
+
+_STUDY_MARKERS = {"certified": "o", "not_certified": "s", "fell": "X"}
+
+
+def plot_study_validation(summary: dict[str, Any], path: str | Path) -> Path:
+    """A study's gaits under one disturbance kind (a summary of :func:`robustgait.study.validate.validate_study`):
+    the success rate (y, 95 % Wilson error bars) against r* (left) and against the steps taken in the study
+    (right), each titled with its Spearman ρ, p and n; colour = steps taken (the cap's colour: walked it),
+    marker = the study's outcome (○ certified: trials from its fixed point; ■ not certified, ✕ fell: trials
+    from the gait's initial state)."""
+    rows = summary["gaits"]
+    kind, cap = summary["kind"], summary["study"]["step_cap"]
+    fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.4))
+    rate = np.array([r["success"]["rate"] for r in rows], dtype=float)
+    err = np.maximum(0.0, np.array([[r["success"]["rate"] - r["success"]["low"] for r in rows],
+                                    [r["success"]["high"] - r["success"]["rate"] for r in rows]], dtype=float))
+    steps = np.array([r["steps_taken"] for r in rows], dtype=float)
+    norm = Normalize(vmin=0.0, vmax=float(cap))
+    cmap = plt.get_cmap("viridis")
+    panels = ((axes[0], "r_star", "r* in the study [rad/s]"), (axes[1], "steps_taken", f"steps taken in the study "
+                                                                                        f"(cap {cap})"))
+    for ax, key, label in panels:
+        x = np.array([r[key] for r in rows], dtype=float)
+        if rows:
+            ax.errorbar(x, rate, yerr=err.reshape(2, -1), fmt="none", ecolor="0.55", elinewidth=1, capsize=3, zorder=1)
+        for status, marker in _STUDY_MARKERS.items():
+            m = np.array([r["status"] == status for r in rows], dtype=bool)
+            if m.any():
+                ax.scatter(x[m], rate[m], c=steps[m], cmap=cmap, norm=norm, marker=marker, s=55, edgecolors="k",
+                           linewidths=0.6, zorder=2, label=status.replace("_", " "))
+        ax.set_ylim(-0.05, 1.05)
+        if key == "steps_taken":
+            ax.set_xlim(-0.04 * cap, 1.04 * cap)
+        ax.set_xlabel(label)
+        ax.set_ylabel(f"{kind} success (95 % Wilson)")
+        ax.set_title(textwrap.fill(correlation_text(summary["correlations"][key], names=False), 58), fontsize=9)
+        if rows:
+            ax.legend(fontsize=7, loc="best", title="study outcome", title_fontsize=7)
+        else:
+            ax.text(0.5, 0.5, "no validated gait", ha="center", va="center", transform=ax.transAxes)
+    fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=list(axes), label="steps taken in the study", shrink=0.9)
+    cfg = summary["config"]
+    skipped = sum(summary["skipped_counts"].values())
+    fig.suptitle(f"{kind}: {summary['n_validated']} gaits of the study under the same {cfg['trials']} disturbances "
+                 f"(seed {cfg['seed']}, {cfg['steps_after']} steps after)"
+                 + (f"; {skipped} skipped" if skipped else ""), fontsize=10, y=1.04)  # above two-line titles
     return _save(fig, path)

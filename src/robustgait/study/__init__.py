@@ -1,6 +1,6 @@
 """Studies (DESIGN §7): the simulation-in-the-loop preference-learning loop — ``evaluate`` (generate, walk,
 certify), the study configuration, its Optuna storage, the executors (local processes, Ray), status,
-comparison of studies.
+comparison of studies, validation of every gait of a study.
 
 Submodules load lazily: a worker process that only evaluates gaits does not import torch or Optuna."""
 
@@ -13,11 +13,12 @@ if TYPE_CHECKING:
     from robustgait.study.evaluate import Evaluation, EvaluationConfig, evaluate
     from robustgait.study.run import RunOptions, create_study, run_study
     from robustgait.study.status import study_status
+    from robustgait.study.validate import validate_study
 
 _EXPORTS = {
     "StudyConfig": "config", "Evaluation": "evaluate", "EvaluationConfig": "evaluate", "evaluate": "evaluate",
     "RunOptions": "run", "create_study": "run", "run_study": "run", "study_status": "status",
-    "compare_studies": "compare",
+    "compare_studies": "compare", "validate_study": "validate",
 }
 
 
@@ -33,4 +34,5 @@ __all__ = [
     "evaluate",
     "run_study",
     "study_status",
+    "validate_study",
 ]

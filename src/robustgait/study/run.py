@@ -73,7 +73,12 @@ def robot_reference(robot: str) -> str:
 
 def gait_label(space: ActionSpace, index: int) -> str:
     """Directory name of a gait's files, e.g. ``L0.12_T0.8_W0.24_H0.06``."""
-    return "_".join(f"{_ABBREV.get(n, n)}{v:g}" for n, v in space.value(index).items())
+    return params_label(space.value(index))
+
+
+def params_label(params: dict[str, float]) -> str:
+    """:func:`gait_label` of a grid point's parameters."""
+    return "_".join(f"{_ABBREV.get(n, n)}{v:g}" for n, v in params.items())
 
 
 @contextlib.contextmanager

@@ -10,8 +10,16 @@ from robustgait.validate.run import (
     simulate_trials,
     validate_gait,
 )
-from robustgait.validate.stats import LogisticFit, Rate, binned_rates, logistic_fit, wilson_interval
+from robustgait.validate.stats import (
+    Correlation,
+    LogisticFit,
+    Rate,
+    binned_rates,
+    logistic_fit,
+    spearman,
+    wilson_interval,
+)
 
-__all__ = ["KINDS", "SIZE_LABELS", "CertificateRef", "Draws", "KindResult", "LogisticFit", "Rate", "ValidateConfig",
-           "ValidationResult", "Validator", "binned_rates", "draw", "logistic_fit", "simulate_trials", "validate_gait",
-           "wilson_interval"]
+__all__ = ["KINDS", "SIZE_LABELS", "CertificateRef", "Correlation", "Draws", "KindResult", "LogisticFit", "Rate",
+           "ValidateConfig", "ValidationResult", "Validator", "binned_rates", "draw", "logistic_fit", "simulate_trials",
+           "spearman", "validate_gait", "wilson_interval"]

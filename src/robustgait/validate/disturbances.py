@@ -3,7 +3,9 @@
 Every kind draws one scalar *size* per trial (the x axis of "success against disturbance size") and the
 other parameters of the trial from ``numpy.random.default_rng((seed, kind index))`` alone — not from the
 gait — so validating many gaits with one config puts every gait through the same disturbances (common
-random numbers). Ranges are fields of :class:`ValidateConfig` (documented in ``docs/validation.md``).
+random numbers). Realizations that are drawn per physics step or per ground tile (noise, terrain) are laid
+out so that a longer step or a longer terrain only appends numbers: the first ones stay the same. Ranges
+are fields of :class:`ValidateConfig` (documented in ``docs/validation.md``).
 
 How each kind reaches MuJoCo (:class:`robustgait.sim.StepInputs`):
 
@@ -309,10 +311,15 @@ def terrain_model(robot: Robot, layout: TerrainLayout) -> mujoco.MjModel:
 
 def terrain_tiles(layout: TerrainLayout, amplitude: float, seed: int) -> tuple[FloatArray, FloatArray]:
     """Per tile (nx, ny): the height of its centre, uniform in ±2A/3, and its slopes (dh/dx, dh/dy), each
-    changing the height by up to ±A/3 across the tile (so the ground stays within ±A)."""
+    changing the height by up to ±A/3 across the tile (so the ground stays within ±A).
+
+    Tile (i, j) is drawn from the same numbers whatever ``nx`` (which grows with the gait's step length): all
+    three values of a tile are drawn together, row by row, so gaits validated with one seed meet the same
+    ground in front of them."""
     rng = np.random.default_rng(seed)
-    level = rng.uniform(-2 * amplitude / 3, 2 * amplitude / 3, (layout.nx, layout.ny))
-    slope = rng.uniform(-amplitude / 3, amplitude / 3, (layout.nx, layout.ny, 2)) / layout.tile
+    u = rng.uniform(-1.0, 1.0, (layout.nx, layout.ny, 3))
+    level = u[..., 0] * (2 * amplitude / 3)
+    slope = u[..., 1:] * (amplitude / 3) / layout.tile
     return level, slope
 
 
@@ -353,10 +360,14 @@ def latency_offsets(ctrl: FloatArray, prev_ctrl: FloatArray, delay_steps: NDArra
 
 def noise_offsets(robot: Robot, sigma_q: FloatArray, ratio: float, horizon: int, seed: int, kind_step: int
                   ) -> FloatArray:
-    """Control offsets (K, H, nu) = −(n_q + (kd/kp) n_v) of encoder noise, from (seed, step) alone."""
+    """Control offsets (K, H, nu) = −(n_q + (kd/kp) n_v) of encoder noise, from (seed, step) alone.
+
+    The numbers are drawn time-major ((H, 2, K, nu): physics step first), so the noise of trial i at physics
+    step j does not depend on the horizon H, which grows with the gait's step duration: gaits validated with
+    one seed get the same noise sequence."""
     rng = np.random.default_rng((seed, KINDS.index("noise"), kind_step))
     k, nu = sigma_q.size, robot.n_joints
-    nq = rng.standard_normal((k, horizon, nu))
-    nv = rng.standard_normal((k, horizon, nu))
+    white = rng.standard_normal((horizon, 2, k, nu)).transpose(1, 2, 0, 3)  # (2, K, H, nu)
+    nq, nv = white[0], white[1]
     s = sigma_q[:, None, None]
     return np.asarray(-(s * nq + (robot.kd / robot.kp) * (ratio * s) * nv))

@@ -244,10 +244,15 @@ class Validator:
     Build it once per gait; the disturbances of a kind depend only on the config (seed) and the robot, so
     every gait validated with one config meets the same disturbances (for ``study validate``, loop over
     gaits with one :class:`ValidateConfig`).
+
+    ``start``: where every trial starts instead of the certificate's fixed point (no fixed-point search; for
+    a gait that has none — ``study validate`` starts the gaits that fell or were not certified in the study
+    from their initial state, with a :class:`CertificateRef` of r* = 0).
     """
 
     def __init__(self, robot: Robot, gait: Gait, config: ValidateConfig | None = None, *,
-                 certificate: GaitCertificate | CertificateRef | str | Path | None = None, progress: bool = False):
+                 certificate: GaitCertificate | CertificateRef | str | Path | None = None, progress: bool = False,
+                 start: FixedPoint | None = None):
         if len(gait.domains) != 1:
             raise RobustGaitError(f"validate runs one-domain (flat-foot) gaits; this one is {gait.domain_graph} with "
                                   f"{len(gait.domains)} domains")
@@ -263,6 +268,8 @@ class Validator:
             ref, fp = CertificateRef.of(certificate), certificate.fixed_point
         else:
             ref = certificate if isinstance(certificate, CertificateRef) else CertificateRef.load(certificate)
+        if start is not None:
+            fp = start
         if fp is None:
             with ReturnMap(robot, gait, kind=ref.map, frame=ref.frame, sim=self.config.sim) as pmap:
                 fp = pmap.find_fixed_point(tol=ref.fp_tol, min_steps=ref.fp_min_steps, max_steps=ref.fp_max_steps)
@@ -275,7 +282,8 @@ class Validator:
         self.engine = StepEngine(robot, gait, self.config.sim)
         nominal = self.engine.step(fp.qpos[None], fp.qvel[None], gait.stance)
         if nominal.fell[0]:
-            raise RobustGaitError(f"the gait falls from its own fixed point ({nominal.fall_reason[0]})")
+            raise RobustGaitError(f"the gait falls from its {'start' if start is not None else 'own fixed point'} "
+                                  f"({nominal.fall_reason[0]}) in the first step, undisturbed")
         self.nominal_at = round(float(nominal.duration[0]) / robot.dt)
         self.step_length = float(np.linalg.norm(nominal.qpos[0, :2] - fp.qpos[:2]))
         self._physics_model: Any = None

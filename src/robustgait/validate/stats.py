@@ -150,3 +150,60 @@ def binned_rates(size: NDArray[np.float64], success: NDArray[np.bool_], bins: in
         out.append({"size_low": float(edges[b]), "size_high": float(edges[b + 1]),
                     **Rate.of(int(ok[m].sum()), int(m.sum())).to_dict()})
     return out
+
+
+@dataclass(frozen=True)
+class Correlation:
+    """Spearman's rank correlation ρ of ``x`` and ``y`` over ``n`` gaits with its two-sided p-value (H₀: no
+    monotone association), or ``defined`` False with the ``reason`` (ρ and p are then None, never NaN)."""
+
+    x: str
+    y: str
+    n: int
+    rho: float | None
+    p: float | None
+    defined: bool
+    reason: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    def text(self, names: bool = True) -> str:
+        return correlation_text(self.to_dict(), names)
+
+
+def correlation_text(c: dict[str, Any], names: bool = True) -> str:
+    """One line for a :class:`Correlation` or its JSON: ``r* vs push success: Spearman ρ = +0.512, p = 0.13
+    (n = 10)`` or ``...: Spearman ρ undefined (reason)``."""
+    head = f"{c['x']} vs {c['y']}: " if names else ""
+    if not c["defined"]:
+        return f"{head}Spearman ρ undefined ({c['reason']})"
+    return f"{head}Spearman ρ = {c['rho']:+.3f}, p = {c['p']:.3g} (n = {c['n']})"
+
+
+def spearman(x: NDArray[np.float64], y: NDArray[np.float64], x_name: str, y_name: str) -> Correlation:
+    """Spearman's ρ = Pearson's correlation of the ranks (ties get their average rank), and the p-value of
+    ``scipy.stats.spearmanr`` (t = ρ √((n − 2)/(1 − ρ²)) with n − 2 degrees of freedom: approximate for small
+    n). Undefined — with the reason, instead of scipy's NaN and warning — for n < 3 (with two points ρ is
+    ±1 whatever the data, and the test has no degree of freedom) or when either column is constant (a rank
+    correlation needs an ordering of both)."""
+    from scipy.stats import spearmanr
+
+    a, b = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if a.shape != b.shape or a.ndim != 1:
+        raise ValueError(f"need two 1-D arrays of one length, got {a.shape} and {b.shape}")
+    n = int(a.size)
+    if not (np.isfinite(a).all() and np.isfinite(b).all()):
+        raise ValueError("spearman: the values must be finite")
+
+    def undefined(reason: str) -> Correlation:
+        return Correlation(x_name, y_name, n, None, None, False, reason)
+
+    if n < 3:
+        return undefined(f"fewer than 3 gaits (n = {n})")
+    for name, v in ((x_name, a), (y_name, b)):
+        if np.ptp(v) == 0:
+            return undefined(f"{name} is the same for every gait ({v[0]:g})")
+    res = spearmanr(a, b)
+    rho, p = float(res.statistic), float(res.pvalue)
+    return Correlation(x_name, y_name, n, rho, min(max(p, 0.0), 1.0), True, "")

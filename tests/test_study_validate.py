@@ -1,0 +1,264 @@
+"""``robustgait study validate`` (issue 12): every unique gait of a study under the same disturbances, the
+Spearman correlations, stored and reused per gait, the scatter in the study report.
+
+Fast tests use a small study on exo written through the study's own storage and file writers (Optuna for
+real) with gaits that need no solve: the stored exo gait (certified), its mirror image (certified), the exo
+gait again at another grid point whose certificate failed (a fixed-point search cut to 2 steps: a real
+``not_certified`` outcome), a grid point whose generation failed, and a repeated proposal. The slow test
+runs ``study run`` end to end first."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict, replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from tqdm import tqdm
+
+from robustgait import RobustGaitError, load_gait, load_robot
+from robustgait.certify import certify_gait
+from robustgait.cli import main
+from robustgait.gait import GaitParams
+from robustgait.sim import walk
+from robustgait.study.config import StudyConfig
+from robustgait.study.evaluate import Evaluation
+from robustgait.study.run import StudyRunner, create_study, open_store
+from robustgait.study.validate import RUNS_DIR, VALIDATION_DIR, config_key, study_validate_config, validate_study
+from robustgait.validate import ValidateConfig, spearman
+from tests.conftest import EXO_GAIT, EXO_MC_GAIT
+from tests.test_study import CHEAP, CLI_TINY, cli
+
+SMALL = ValidateConfig(trials=8, steps_after=3)
+
+
+def _evaluation(robot, gait, params, certify):  # type: ignore[no-untyped-def]
+    """What ``evaluate`` returns for a gait that was given instead of generated: walk the cap, certify."""
+    w = walk(robot, gait, steps=CHEAP.step_cap, config=certify.sim)
+    gc = certify_gait(robot, gait, certify)
+    ok = gc.ok and w.steps_taken == CHEAP.step_cap
+    return Evaluation(params=params, status="certified" if ok else "not_certified",
+                      reason="" if ok else f"{gc.status}: {gc.reason}", step_cap=CHEAP.step_cap,
+                      steps_taken=w.steps_taken, fell=w.fell, r_star=float(gc.r_star) if ok else 0.0,
+                      certificate=gc.to_dict(samples=True) if ok else None, gait=gait)
+
+
+@pytest.fixture(scope="module")
+def small_study(tmp_path_factory):
+    d = tmp_path_factory.mktemp("sv") / "study"
+    create_study(d, StudyConfig(robot="exo", iterations=1, batch=6, evaluation=CHEAP))
+    robot = load_robot("exo")
+    exo = load_gait(EXO_GAIT, robot)
+    no_fp = replace(CHEAP.certify, fp_tol=1e-12, fp_min_steps=1, fp_max_steps=2)
+    runner = StudyRunner(d)
+    store = open_store(d, runner.config, runner.space)
+    bar = tqdm(disable=True)
+    try:
+        mc = load_gait(EXO_MC_GAIT, robot)  # validate runs flat-foot gaits only: refused, with the reason
+        plan = [(10, exo, CHEAP.certify), (20, exo.mirrored(robot), CHEAP.certify), (40, exo, no_fp),
+                (30, None, None), (10, "again", None), (50, mc, no_fp)]
+        for slot, (index, gait, certify) in enumerate(plan):
+            store.enqueue(0, slot, index)
+            trial = store.start()
+            assert trial is not None
+            params = GaitParams(**trial.params)
+            if gait == "again":
+                first = next(r for r in store.records() if r.index == index and r.state == "COMPLETE")
+                runner._complete(store, trial, first.result or {}, bar, reused_from=first.number)
+                continue
+            ev = (Evaluation(params=params, status="generation_failed", reason="Infeasible_Parameters: test",
+                             step_cap=CHEAP.step_cap) if gait is None else _evaluation(robot, gait, params, certify))
+            runner._complete(store, trial, runner._write_files(trial, ev.to_dict()), bar)
+    finally:
+        store.close()
+    return d
+
+
+@pytest.fixture(scope="module")
+def first_run(small_study):
+    t0 = time.perf_counter()
+    out = validate_study(small_study, SMALL, progress=False)["push"]
+    return out, time.perf_counter() - t0
+
+
+def test_spearman_defined_and_undefined():
+    from scipy.stats import spearmanr
+
+    x, y = np.array([0.1, 0.4, 0.3, 0.9, 0.5]), np.array([0.2, 0.5, 0.1, 0.8, 0.6])
+    c = spearman(x, y, "r*", "push success")
+    ref = spearmanr(x, y)
+    assert c.defined and c.n == 5 and c.rho == pytest.approx(ref.statistic) and c.p == pytest.approx(ref.pvalue)
+    assert c.rho == pytest.approx(0.9)  # ranks (1 3 2 5 4) vs (2 3 1 5 4): 1 − 6·2/(5·24)
+    for a, b, why in (([0.1, 0.2], [0.3, 0.4], "fewer than 3 gaits (n = 2)"),
+                      ([0.1, 0.2, 0.3], [0.5, 0.5, 0.5], "push success is the same for every gait (0.5)"),
+                      ([50, 50, 50], [0.1, 0.2, 0.3], "r* is the same for every gait (50)")):
+        u = spearman(np.array(a, float), np.array(b, float), "r*", "push success")
+        assert not u.defined and u.rho is None and u.p is None and u.reason == why
+        json.dumps(u.to_dict(), allow_nan=False)  # never NaN
+
+
+def test_every_unique_gait_meets_the_same_disturbances(small_study, first_run):
+    out, _ = first_run
+    rows = {r["grid_index"]: r for r in out["gaits"]}
+    assert sorted(rows) == [10, 20, 40] and out["n_validated"] == 3 and out["study"]["unique_gaits"] == 5
+    assert rows[10]["trials"] == [0, 4]  # proposed twice, validated once
+    skipped = {s["grid_index"]: s for s in out["skipped"]}
+    assert sorted(skipped) == [30, 50] and out["skipped_counts"] == {"generation_failed": 1, "refused": 1}
+    assert "no gait file" in skipped[30]["why"] and "one-domain" in skipped[50]["why"]
+    assert rows[10]["start"] == rows[20]["start"] == "fixed_point" and rows[40]["start"] == "initial_state"
+    assert rows[40]["status"] == "not_certified" and rows[40]["r_star"] == 0.0 and rows[40]["certificate_check"] is None
+    assert rows[10]["r_star"] > 0 and rows[10]["certificate"]["r_star"] == rows[10]["r_star"]
+    for r in rows.values():
+        s = r["success"]
+        assert s["n"] == SMALL.trials and s["low"] <= s["rate"] <= s["high"] and 0 <= s["k"] <= s["n"]
+    # same seed → the same draws for every gait, whatever its start, stance or step
+    runs = sorted((small_study / VALIDATION_DIR / RUNS_DIR).glob("push-*/*.json"))
+    assert len(runs) == 3 and len({p.parent for p in runs}) == 1
+    details = [json.loads(p.read_text())["result"]["trials_detail"] for p in runs]
+    for d in details[1:]:
+        assert d["size"] == details[0]["size"] and d["params"] == details[0]["params"]
+    assert details[0]["x_first"] != details[1]["x_first"]  # ... but different gaits, different walks
+    other = validate_study(small_study, replace(SMALL, seed=1), progress=False)["push"]
+    assert other["config_key"] != out["config_key"]
+    seed1 = json.loads(next((small_study / VALIDATION_DIR / RUNS_DIR).glob(f"push-{other['config_key']}/*.json"))
+                       .read_text())["result"]["trials_detail"]
+    assert seed1["size"] != details[0]["size"]
+    validate_study(small_study, SMALL, progress=False)  # push.json back to seed 0 (stored: nothing runs)
+
+
+def test_correlations_have_n_and_p_or_a_reason(small_study, first_run):
+    out, _ = first_run
+    stored = json.loads((small_study / VALIDATION_DIR / "push.json").read_text())
+    assert stored["correlations"] == out["correlations"] and stored["config"]["trials"] == SMALL.trials
+    steps = out["correlations"]["steps_taken"]
+    # every validated gait walked the cap (a certificate needs it): undefined, and said why
+    assert steps == {"x": "steps taken", "y": "push success", "n": 3, "rho": None, "p": None, "defined": False,
+                     "reason": "steps taken is the same for every gait (5): every validated gait walked the step cap"}
+    r = out["correlations"]["r_star"]
+    assert r["n"] == 3 and set(r) == {"x", "y", "n", "rho", "p", "defined", "reason"}
+    rates = [g["success"]["rate"] for g in out["gaits"]]
+    if r["defined"]:
+        assert -1 <= r["rho"] <= 1 and 0 <= r["p"] <= 1 and r["reason"] == ""
+    else:
+        assert len(set(rates)) == 1 and r["reason"].startswith("push success is the same")
+    assert stored["config"]["sim"] == {**asdict(CHEAP.certify.sim), "n_threads": 0}  # the study's simulation
+
+
+def test_rerun_reuses_stored_results(small_study, first_run):
+    out, seconds = first_run
+    t0 = time.perf_counter()
+    again = validate_study(small_study, SMALL, progress=False)["push"]
+    took = time.perf_counter() - t0
+    assert again["n_from_earlier_runs"] == 3 and all(r["from_earlier_run"] for r in again["gaits"])
+    strip = ("from_earlier_run", "seconds")
+    assert [{k: v for k, v in r.items() if k not in strip} for r in again["gaits"]] == \
+        [{k: v for k, v in r.items() if k not in strip} for r in out["gaits"]]
+    assert again["correlations"] == out["correlations"]
+    assert took < seconds
+
+
+def test_config_key_ignores_threads_only():
+    a = study_validate_config(StudyConfig(evaluation=CHEAP), SMALL)
+    assert config_key(a, "push") == config_key(replace(a, sim=replace(a.sim, n_threads=3)), "push")
+    assert config_key(a, "push") != config_key(a, "mass")
+    assert config_key(a, "push") != config_key(replace(a, steps_after=4), "push")
+
+
+def test_cli_errors_exit_2_with_one_line(tmp_path, capsys, small_study):
+    (tmp_path / "plain").mkdir()
+    empty = tmp_path / "empty"
+    create_study(empty, StudyConfig(robot="exo", iterations=1, batch=2, evaluation=CHEAP))
+    for args, msg in ((["study", "validate", str(tmp_path / "plain")], "not a study directory"),
+                      (["study", "validate", str(tmp_path / "missing")], "not a study directory"),
+                      (["study", "validate", str(empty)], "no completed trial"),
+                      (["study", "validate", str(small_study), "--trials", "0"], "--trials"),
+                      (["study", "validate", str(small_study), "--steps", "-1"], "--steps"),
+                      (["study", "validate", str(small_study), "--workers", "1000"], "--workers"),
+                      (["study", "validate", str(small_study), "--disturbance", "quake"], "--disturbance")):
+        assert main(args) == 2, args
+        err = capsys.readouterr().err
+        assert err.startswith("robustgait: error:") and msg in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "plain" / VALIDATION_DIR).exists()
+    with pytest.raises(RobustGaitError, match="--trials"):
+        validate_study(small_study, replace(SMALL, trials=20_000), progress=False)
+
+
+def test_cli_text_and_json(small_study, first_run, capsys):
+    assert main(["study", "validate", str(small_study), "--trials", "8", "--steps", "3", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "3 of 5 unique gaits validated (3 from an earlier run); skipped: 1 generation failed, 1 refused" in text
+    assert "skipped: validate runs one-domain (flat-foot) gaits" in text
+    assert "steps taken vs push success: Spearman ρ undefined (steps taken is the same" in text
+    assert main(["study", "validate", str(small_study), "--trials", "8", "--steps-after", "3", "--json",
+                 "--quiet"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["push"]["correlations"] == first_run[0]["correlations"]
+
+
+def test_report_with_and_without_validation(small_study, first_run, tmp_path):
+    import shutil
+
+    from robustgait.report.study import write_study_report
+
+    page = write_study_report(small_study, video=False).read_text()
+    assert "Validation: push" in page and "Spearman ρ" in page and "skipped: no gait file" in page
+    png = small_study / "report" / "validation_push.png"
+    assert png.stat().st_size > 10_000
+    bare = tmp_path / "bare"
+    shutil.copytree(small_study, bare, ignore=shutil.ignore_patterns(VALIDATION_DIR, "report", ".lock"))
+    # the copy's database path is its own (sqlite URL from the directory)
+    page = write_study_report(bare, video=False).read_text()
+    assert "Validation:" not in page and (bare / "report" / "history.png").is_file()
+
+
+def test_a_changed_gait_file_is_validated_again(small_study, first_run):
+    """The stored results are keyed by the files too (last in this module: it leaves one gait stored twice)."""
+    g = next(r for r in first_run[0]["gaits"] if r["grid_index"] == 20)
+    path = small_study / g["gait_file"]
+    path.write_text(path.read_text() + "\n")  # other bytes, the same gait
+    again = validate_study(small_study, SMALL, progress=False)["push"]
+    assert again["n_from_earlier_runs"] == 2
+    assert not next(r for r in again["gaits"] if r["grid_index"] == 20)["from_earlier_run"]
+
+
+@pytest.mark.slow
+def test_study_validate_on_a_study_run_end_to_end(tmp_path):
+    """``study run`` (2 × 3 gaits, generated, walked and certified), then ``study validate`` with 2 worker
+    processes; again with 1 process after removing the stored results: identical (the rollout's thread count
+    does not change results); the report shows the scatter."""
+    d = tmp_path / "study"
+    res = cli("study", "run", str(d), *CLI_TINY, "--workers", "2", "--quiet")
+    assert res.returncode == 0, res.stderr
+    args = ("study", "validate", str(d), "--trials", "12", "--steps", "3", "--json", "--quiet")
+    two = cli(*args, "--workers", "2")
+    assert two.returncode == 0, two.stderr
+    a = json.loads(two.stdout)["push"]
+    st = json.loads(cli("study", "status", str(d), "--json").stdout)
+    assert a["n_validated"] + len(a["skipped"]) == st["unique_gaits"] and a["n_validated"] >= 1
+    for c in a["correlations"].values():
+        assert c["n"] == a["n_validated"]
+        if c["defined"]:
+            assert -1 <= c["rho"] <= 1 and 0 <= c["p"] <= 1
+            x = [g["r_star" if c["x"] == "r*" else "steps_taken"] for g in a["gaits"]]
+            from scipy.stats import spearmanr
+
+            ref = spearmanr(x, [g["success"]["rate"] for g in a["gaits"]])
+            assert math.isclose(c["rho"], ref.statistic) and math.isclose(c["p"], ref.pvalue)
+        else:
+            assert c["rho"] is None and c["reason"]
+    import shutil
+
+    shutil.rmtree(d / VALIDATION_DIR / RUNS_DIR)
+    one = cli(*args, "--workers", "1")
+    b = json.loads(one.stdout)["push"]
+    assert b["n_from_earlier_runs"] == 0
+    strip = ("from_earlier_run", "seconds")
+    assert [{k: v for k, v in r.items() if k not in strip} for r in a["gaits"]] == \
+        [{k: v for k, v in r.items() if k not in strip} for r in b["gaits"]]
+    rep = cli("study", "report", str(d), "--no-video")
+    assert rep.returncode == 0, rep.stderr
+    page = Path(rep.stdout.strip()).read_text()
+    assert "Validation: push" in page and (d / "report" / "validation_push.png").stat().st_size > 10_000
