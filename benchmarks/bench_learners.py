@@ -32,6 +32,7 @@ import numpy as np
 
 from robustgait import load_robot
 from robustgait.learn import ActionSpace, LearnerConfig, Outcome, PreferenceModelConfig, make_learner, replay, score
+from robustgait.robots.spec import ACTION_FIELDS
 from robustgait.study.evaluate import EvaluationConfig
 from robustgait.study.executors import LocalExecutor, WorkerSpec
 
@@ -72,7 +73,9 @@ def load_table(path: Path, config: str) -> dict[str, dict]:
 
 
 def key(params: dict[str, float]) -> str:
-    return ",".join(f"{params[k]:.6g}" for k in sorted(params))
+    """The row of a gait: its values on the action space's axes (a stored gait's params also hold the fields
+    outside the space, e.g. the rolling fraction of flat-foot gaits)."""
+    return ",".join(f"{params[k]:.6g}" for k in sorted(ACTION_FIELDS))
 
 
 def evaluate_table(space: ActionSpace, path: Path, workers: int, method: str, samples: int,
