@@ -118,6 +118,7 @@ def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
     assert "falls from its own fixed point" in unstable.statement()
 
 
+@pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_figures(tmp_path, small_cert, seq_cert):
     from robustgait.barrier import barrier_along
 
@@ -163,6 +164,7 @@ def test_cli_certify_json(capsys, tmp_path):
     assert (tmp_path / "c.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_cli_certify_sequential(capsys, tmp_path):
     code, out, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--method", "sequential", "--epsilon",
                         "0.5", "--budget", "210", "--barrier", "paper", "--json", "-o", str(tmp_path / "c.json"))

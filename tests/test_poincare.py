@@ -93,6 +93,7 @@ def test_angular_only_changes_only_the_angular_velocity(step_map):
     assert set(changed) <= {3, 4, 5} and np.array_equal(qpos[0], fp.qpos)
 
 
+@pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_stride_map_fixed_point(robot_gait):
     with ReturnMap(*robot_gait, kind="stride") as pmap:
         fp = pmap.find_fixed_point()

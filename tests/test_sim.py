@@ -93,6 +93,7 @@ def test_bad_sim_inputs(exo, exo_gait):
         eng.step(np.zeros((2, 5)), np.zeros((2, 18)), "right")
 
 
+@pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_video(tmp_path, exo, exo_gait):
     res = walk(exo, exo_gait, steps=1, keep_trajectory=True)
     out = tmp_path / "walk.mp4"

@@ -198,6 +198,7 @@ def test_cli_text_and_json(small_study, first_run, capsys):
     assert out["push"]["correlations"] == first_run[0]["correlations"]
 
 
+@pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_report_with_and_without_validation(small_study, first_run, tmp_path):
     import shutil
 

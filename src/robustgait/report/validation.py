@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
+from scipy.special import expit
 
 from robustgait.report.figures import _save, plt
 from robustgait.validate.stats import binned_rates, correlation_text
@@ -39,7 +40,7 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
         fit = kr.critical()
         if np.isfinite(fit.a) and np.isfinite(fit.b):
             s = np.linspace(kr.size.min(), kr.size.max(), 200)
-            a1.plot(s, 1 / (1 + np.exp(-(fit.a + fit.b * s))), color="tab:blue", lw=1, label="logistic fit")
+            a1.plot(s, expit(fit.a + fit.b * s), color="tab:blue", lw=1, label="logistic fit")
         if fit.s50 is not None and fit.in_range:
             a1.axvline(fit.s50, color="tab:red", ls="--", lw=1, label=f"half fail: {fit.s50:.3g} {unit}")
         sr = kr.success_rate()
