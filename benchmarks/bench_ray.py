@@ -90,12 +90,13 @@ def main() -> None:
             walls[w] = time.perf_counter() - t0
             st = study_status(d)
             gaits = [t["params"] for t in st["trials"] if t["state"] == "COMPLETE" and t["reused_from"] is None]
-            t0 = time.perf_counter()  # the executor alone: every gait at once, no iteration barrier
-            for i, p in enumerate(gaits if not args.no_executor else []):
-                ex.submit(i, p)
-            for _ in gaits if not args.no_executor else []:
-                ex.next_result()
-            raw[w] = time.perf_counter() - t0
+            if not args.no_executor:  # the executor alone: every gait at once, no iteration barrier
+                t0 = time.perf_counter()
+                for i, p in enumerate(gaits):
+                    ex.submit(i, p)
+                for _ in gaits:
+                    ex.next_result()
+                raw[w] = time.perf_counter() - t0
             ex.close()
             print(f"{w} actor(s): {st['trials_done']} gaits ({st['unique_gaits']} unique) in {walls[w]:.1f} s "
                   f"= {st['trials_done'] / walls[w] * 60:.1f} gaits/min (load {load:.1f} → {os.getloadavg()[0]:.1f})",
@@ -103,7 +104,7 @@ def main() -> None:
     finally:
         ray.shutdown()
     b = args.batch
-    alone = raw[1] / raw[2] if not args.no_executor else float("nan")
+    alone = raw[1] / raw[2] if raw else float("nan")
     print(f"throughput ratio 2 vs 1 actors: study {walls[1] / walls[2]:.2f} (ideal {b / -(-b // 2):.2f}, goal ≥ 1.7); "
           f"executor alone {alone:.2f}; machine {machine:.2f} (what 2 processes got on this machine "
           "in this run)")

@@ -81,19 +81,20 @@ class GaitQualityTable(Table):
     joint_velocity: JointVelocity | Annotated[list[JointVelocity], Meta(max_length=L.MAX_JOINTS)] = 10.0
 
 
-class MultiContactActionSpaceTable(Table):
+class ActionAxesTable(Table):
+    """The axes every action space has (``ACTION_FIELDS``)."""
+
     step_length: ActionAxis
     step_duration: ActionAxis
     step_width: ActionAxis
     step_height: ActionAxis
+
+
+class MultiContactActionSpaceTable(ActionAxesTable):
     rolling_fraction: ActionAxis | None = None
 
 
-class ActionSpaceTable(Table):
-    step_length: ActionAxis
-    step_duration: ActionAxis
-    step_width: ActionAxis
-    step_height: ActionAxis
+class ActionSpaceTable(ActionAxesTable):
     multicontact: MultiContactActionSpaceTable | None = None
 
 
@@ -120,7 +121,7 @@ def _band(src: Path, key: str, band: tuple[float, float]) -> tuple[float, float]
     return lo, hi
 
 
-def _action_space(t: ActionSpaceTable | MultiContactActionSpaceTable, src: Path,
+def _action_space(t: ActionAxesTable, src: Path,
                   prefix: str = "action_space") -> dict[str, ParamRange]:
     from robustgait.gait import GaitParams
 

@@ -50,18 +50,17 @@ class ActionSpace:
         """The robot spec's ``[action_space]`` (``domains="flat"``) or its ``[action_space.multicontact]``
         sub-table (``domains="multicontact"``: multi-contact gaits need longer steps in time and may also
         search the rolling fraction); a spec without the table cannot be studied with that domain graph."""
-        if domains == "multicontact":
-            if robot.spec.multicontact_action_space is None:
-                raise RobustGaitError(f"{robot.spec.source or robot.name}: the robot spec has no "
-                                      "[action_space.multicontact] table (bounds and grid step per gait parameter "
-                                      "of multi-contact gaits), which multi-contact studies search")
-            return cls.from_ranges(robot.spec.multicontact_action_space)
-        if domains != "flat":
+        tables = {"flat": ("[action_space]", "", robot.spec.action_space),
+                  "multicontact": ("[action_space.multicontact]", "of multi-contact gaits",
+                                   robot.spec.multicontact_action_space)}
+        if domains not in tables:
             raise RobustGaitError(f"domains must be 'flat' or 'multicontact', got {domains!r}")
-        if robot.spec.action_space is None:
-            raise RobustGaitError(f"{robot.spec.source or robot.name}: the robot spec has no [action_space] table "
-                                  "(bounds and grid step per gait parameter), which studies search")
-        return cls.from_ranges(robot.spec.action_space)
+        table, of, ranges = tables[domains]
+        if ranges is None:
+            raise RobustGaitError(f"{robot.spec.source or robot.name}: the robot spec has no {table} table "
+                                  f"(bounds and grid step per gait parameter{' ' + of if of else ''}), which "
+                                  f"{'multi-contact ' if of else ''}studies search")
+        return cls.from_ranges(ranges)
 
     @property
     def shape(self) -> tuple[int, ...]:

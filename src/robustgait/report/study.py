@@ -128,13 +128,11 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
     grid values; evaluated gaits on that slice marked."""
     from robustgait.learn.learners import make_learner
     from robustgait.learn.model import posterior_mean
-    from robustgait.learn.space import ActionSpace
-    from robustgait.robots import load_robot
     from robustgait.study.config import load_config
     from robustgait.study.run import completed_batches, history_before, open_store
 
     cfg = load_config(directory)
-    space = ActionSpace.from_robot(load_robot(cfg.robot), cfg.evaluation.gaitgen.domains)
+    space = cfg.action_space()
     for name in axes_names:
         if name not in space.names:
             raise RobustGaitError(f"--axes: {name!r} is not a parameter of the action space ({', '.join(space.names)})")

@@ -7,7 +7,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_json
@@ -15,6 +15,10 @@ from robustgait.io.schema import read_json
 from robustgait.learn.config import LEARNERS, LearnerConfig
 from robustgait.learn.oracle import METRICS
 from robustgait.study.evaluate import EvaluationConfig
+
+if TYPE_CHECKING:
+    from robustgait.learn.space import ActionSpace
+    from robustgait.robots import Robot
 
 CONFIG_FILE = "study.json"
 FORMAT_VERSION = 1
@@ -56,6 +60,14 @@ class StudyConfig:
     @property
     def trials_planned(self) -> int:
         return self.iterations * self.batch
+
+    def action_space(self, robot: Robot | None = None) -> ActionSpace:
+        """The grid this study searches: the robot spec's action space of the study's domain graph
+        (``evaluation.gaitgen.domains``). ``robot``: the loaded ``self.robot`` (loaded here when None)."""
+        from robustgait.learn.space import ActionSpace
+        from robustgait.robots import load_robot
+
+        return ActionSpace.from_robot(robot or load_robot(self.robot), self.evaluation.gaitgen.domains)
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)

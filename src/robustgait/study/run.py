@@ -130,7 +130,7 @@ def create_study(directory: str | Path, config: StudyConfig) -> Path:
         # a shared database holds many studies: a name of its own (saved in study.json)
         config = replace(config, study_name=f"{d.resolve().name}-{uuid.uuid4().hex[:8]}")
     robot = load_robot(config.robot)
-    space = ActionSpace.from_robot(robot, config.evaluation.gaitgen.domains)
+    space = config.action_space(robot)
     if config.batch > space.size:
         raise RobustGaitError(f"a batch of {config.batch} gaits does not fit in an action space of {space.size}")
     check_evaluation_work(config, space, robot.dt)
@@ -198,7 +198,7 @@ class StudyRunner:
         self.config = load_config(self.directory)
         self.options = options or RunOptions()
         self.robot = load_robot(self.config.robot)
-        self.space = ActionSpace.from_robot(self.robot, self.config.evaluation.gaitgen.domains)
+        self.space = self.config.action_space(self.robot)
         self.learner: Learner = make_learner(self.config.learner, self.space, self.config.learning, self.config.seed)
         self._executor = executor
         self._own_executor = executor is None

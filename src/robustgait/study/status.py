@@ -7,8 +7,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from robustgait.learn.space import ActionSpace
-from robustgait.robots import load_robot
 from robustgait.study.config import load_config
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord
@@ -47,7 +45,7 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs)."""
     d = Path(directory)
     cfg = load_config(d)
-    space = ActionSpace.from_robot(load_robot(cfg.robot), cfg.evaluation.gaitgen.domains)
+    space = cfg.action_space()
     store = open_store(d, cfg, space)
     try:
         records = store.records()
