@@ -113,7 +113,8 @@ def _closure_pose(dyn: Dynamics, prob: GaitProblem, targets: list[tuple[Contact,
 
 
 def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duration: float, *, domain: int = 0,
-                     params: GaitParams | None = None, base: FloatArray | None = None) -> NodeStates:
+                     params: GaitParams | None = None, base: FloatArray | None = None,
+                     torques: FloatArray | None = None) -> NodeStates:
     """Every node variable of a domain implied by β and its duration: the base from the contacts (pose,
     velocity, acceleration), u and λ from the 6 + m equations of motion, and the rigid impact map at τ = 1
     onto the next domain's contacts (:meth:`Dynamics.impact_map`).
@@ -122,7 +123,9 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
     any β gives a consistent x₀. Double support (two line contacts, 10 rows) determines the base and the 4
     free joints (:func:`~robustgait.gaitgen.problem.double_support_free_joints`) from the 8 outputs: solved
     by least squares from ``base`` (the previous domain's last pose; exact when the loop can close), then
-    square velocity and acceleration systems; λ is the least-norm wrench."""
+    square velocity and acceleration systems. Its wrench is not determined by the motion (two contacts share
+    the load): λ is the one that gives the node ``torques`` (n, m) when they are known (a warm start's
+    stored torques: then x₀ is that gait's solution), else the least-norm wrench."""
     kd = dyn.kindyn
     m = prob.m
     taus = prob.domain_taus[domain]
@@ -165,7 +168,12 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
             ab, sdd[i][free] = a[:6], a[6:]
         M = np.asarray(dyn.mass_matrix_fun(H, s[i])) + np.diag(arm)
         rhs = M @ np.concatenate([ab, sdd[i]]) + np.asarray(dyn.bias_force_fun(H, s[i], vb, sd[i])).ravel()
-        lam = np.linalg.solve(J[:, :6].T, rhs[:6]) if single else np.linalg.lstsq(J[:, :6].T, rhs[:6], rcond=None)[0]
+        if single:
+            lam = np.linalg.solve(J[:, :6].T, rhs[:6])
+        elif torques is not None:
+            lam = np.linalg.lstsq(J.T, rhs - np.concatenate([np.zeros(6), torques[i]]), rcond=None)[0]
+        else:
+            lam = np.linalg.lstsq(J[:, :6].T, rhs[:6], rcond=None)[0]
         out["vb"][i], out["ab"][i], out["lam"][i], out["u"][i] = vb, ab, lam, rhs[6:] - J[:, 6:].T @ lam
     qpos, qvel = to_mujoco_state(dyn.robot, Hs[-1], s[-1], out["vb"][-1], sd[-1])
     target = prob.graph.target_contacts(domain)
@@ -248,21 +256,39 @@ class GaitGenerator:
 
     def initial_guess(self, params: GaitParams, warm_start: Gait | None = None) -> FloatArray:
         """x₀ from a warm-start gait's β (relabeled to this stance if needed; a flat gait seeds the single
-        support of a multi-contact problem) or a standing-like posture held in every domain."""
+        support of a multi-contact problem) or a standing-like posture held in every domain.
+
+        A warm start of this domain graph is rebuilt with its own durations, contact targets and stored
+        torques, not with ``params``: its β describes its own step, so x₀ is then that gait's solution (the
+        new essential constraints are IPOPT's to meet). Rebuilt with the new step length instead, a
+        multi-contact warm start's double support no longer closes and IPOPT needs ≈ 4× the iterations."""
         prob, robot = self.problem, self.robot
         n_dom = len(prob.graph)
+        durations = domain_durations(prob, params)
+        ref = params
+        torques: list[FloatArray | None] = [None] * n_dom
         if warm_start is not None:
             g = warm_start if warm_start.stance == prob.stance else warm_start.mirrored(robot)
             betas = [d.beta.copy() for d in g.domains[:n_dom]]
+            if g.domain_graph == prob.graph.name and len(g.domains) == n_dom and g.params is not None:
+                ref, durations = g.params, [d.duration for d in g.domains]
+                torques = [self._node_torques(d, taus) for d, taus in zip(g.domains, prob.domain_taus, strict=True)]
         else:
             betas = [np.repeat(self.standing_posture()[:, None], BEZIER_DEGREE + 1, axis=1)]
         while len(betas) < n_dom:  # hold the last posture through the missing domains
             betas.append(np.repeat(betas[-1][:, -1:], BEZIER_DEGREE + 1, axis=1))
         states: list[NodeStates] = []
-        for d, (beta, duration) in enumerate(zip(betas, domain_durations(prob, params), strict=True)):
-            states.append(kinematic_states(self.dyn, prob, beta, duration, domain=d, params=params,
-                                           base=states[-1].H[-1] if states else None))
+        for d, (beta, duration) in enumerate(zip(betas, durations, strict=True)):
+            states.append(kinematic_states(self.dyn, prob, beta, duration, domain=d, params=ref,
+                                           base=states[-1].H[-1] if states else None, torques=torques[d]))
         return pack(prob, betas, states)
+
+    @staticmethod
+    def _node_torques(domain: Domain, taus: FloatArray) -> FloatArray | None:
+        """A domain's stored torques (n, m) at this problem's nodes, or None when they are not stored there."""
+        if domain.ff_tau is None or domain.ff_torque is None or domain.ff_tau.shape != taus.shape:
+            return None
+        return domain.ff_torque if np.allclose(domain.ff_tau, taus) else None
 
     def standing_posture(self) -> FloatArray:
         """The cold-start posture (spec order): the spec's ``[posture]`` clipped to the joint ranges."""
