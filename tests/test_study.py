@@ -152,6 +152,17 @@ def test_study_run_bad_options_leave_nothing_behind(tmp_path, capsys):
         assert not d.exists()
 
 
+def test_local_workers_each_get_every_core_unless_told():
+    """A batch's last gait is certified alone: its worker must be able to use the cores the others left idle."""
+    from robustgait.study.executors import LocalExecutor, WorkerSpec
+
+    spec = WorkerSpec("exo", EvaluationConfig().__dict__)
+    assert LocalExecutor(spec, workers=2).spec.threads == (os.cpu_count() or 1)
+    assert LocalExecutor(spec, workers=2, threads=1).spec.threads == 1
+    with pytest.raises(RobustGaitError, match="--workers"):
+        LocalExecutor(spec, workers=0)
+
+
 def test_multicontact_study_is_created_on_its_own_action_space(tmp_path):
     from robustgait.cli import main
 

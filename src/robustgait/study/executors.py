@@ -3,8 +3,10 @@
 Every worker loads the robot and builds the gait generator once (≈ 6.5 s on exo), then evaluates gait
 after gait with it. The study's driver process keeps the database: workers receive parameters and return
 :meth:`Evaluation.to_dict`, so they need no access to the study directory (Ray workers may run on other
-machines). MuJoCo's rollout threads are divided among the workers; results do not depend on the thread
-count (the certificate is identical for any count).
+machines). Each local worker gets one MuJoCo rollout thread per core rather than a share of the cores
+(measured: a paper-size exo study 620 s → 555 s, because a batch of 5 gaits on 2 workers ends with one
+worker certifying alone); results do not depend on the thread count (the certificate is identical for any
+count).
 
 Both executors retry the task of a worker that died (a local process killed or crashed, a Ray actor
 lost): local ones up to ``retries`` times by restarting the pool, Ray ones by restarting the actor and
@@ -120,13 +122,15 @@ class Executor:
 
 class LocalExecutor(Executor):
     """``workers`` processes (spawn context: no fork of a process holding threads and a database
-    connection), started on the first submit; MuJoCo threads = cores // workers (at least 1)."""
+    connection), started on the first submit, each with ``threads`` MuJoCo rollout threads (default: one
+    per core, not cores // workers: while every worker certifies, the OS shares the cores among them; when
+    a batch's last gait is certified alone, its worker uses the cores the others left idle)."""
 
-    def __init__(self, spec: WorkerSpec, workers: int = 1, retries: int = 2):
+    def __init__(self, spec: WorkerSpec, workers: int = 1, retries: int = 2, threads: int | None = None):
         if workers < 1:
             raise RobustGaitError(f"--workers must be ≥ 1, got {workers}")
         self.workers = workers
-        self.spec = replace(spec, threads=max(1, (os.cpu_count() or 1) // workers))
+        self.spec = replace(spec, threads=threads if threads is not None else (os.cpu_count() or 1))
         self.retries = retries
         self._pool: ProcessPoolExecutor | None = None
         self._futures: dict[Future[dict[str, Any]], tuple[int, dict[str, float]]] = {}
