@@ -4,7 +4,7 @@ Every worker loads the robot and builds the gait generator once (≈ 6.5 s on ex
 after gait with it. The study's driver process keeps the database: workers receive parameters and return
 :meth:`Evaluation.to_dict`, so they need no access to the study directory (Ray workers may run on other
 machines). Each local worker gets one MuJoCo rollout thread per core rather than a share of the cores
-(measured: a paper-size exo study 620 s → 555 s, because a batch of 5 gaits on 2 workers ends with one
+(measured: paper-size exo studies 620 s → 549 s and 605 s → 559 s, because a batch of 5 gaits on 2 workers ends with one
 worker certifying alone); results do not depend on the thread count (the certificate is identical for any
 count).
 
