@@ -201,6 +201,26 @@ def test_atalante_generated_gait_walks(tmp_path, capsys):
 
 
 @pytest.mark.slow
+@needs_atalante
+def test_atalante_multicontact_gait_walks_and_is_certified():
+    """Atalante rolls heel-to-toe only with its swing sole free to leave toe-off toe-down
+    (gait_quality.swing_toe_down_until = 0.5 in examples/atalante.toml): then the T = 1.0 s gait walks 50 steps,
+    striking at the planned time, at L/T, and has a certificate."""
+    from robustgait.gaitgen import GaitGenConfig
+
+    robot = load_robot(ATALANTE_SPEC)
+    assert robot.spec.gait_quality.swing_toe_down_until == 0.5
+    res = GaitGenerator(robot, GaitGenConfig(domains="multicontact")).solve(GaitParams(step_duration=1.0))
+    assert res.success and res.check.passed, res.reason
+    w = walk(robot, res.gait, steps=50)
+    assert w.steps_taken == 50 and not w.fell
+    assert all(abs(e.tau - 1.0) < 0.02 for e in w.events)  # no early heel strike
+    assert w.mean_speed == pytest.approx(0.15 / 1.0, rel=0.05)
+    cert = certify_gait(robot, res.gait, CertifyConfig(n_samples=24, r_max=1.0, seed=3))
+    assert cert.ok, cert.reason
+
+
+@pytest.mark.slow
 def test_multicontact_generation(exo):
     """The 2-domain problem: solves from a cold start, passes the physics check in both domains and through both
     impacts, reproduces the stored multi-contact test gait, and warm-starts faster."""

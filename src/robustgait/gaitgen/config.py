@@ -38,7 +38,9 @@ class GaitGenConfig:
     between the soles' edges; max_iter, tol: IPOPT.
 
     Multi-contact only: heel_strike_pitch [rad]: (min, max) toe-up pitch of the swing sole when its heel
-    strikes; toe_off_pitch [rad]: (min, max) toe-down pitch of the stance sole at toe-off; foot_flat_rate
+    strikes; toe_off_pitch [rad]: (min, max) toe-down pitch of the stance sole at toe-off (the max also
+    bounds the swing sole's toe-down pitch early in the next swing when the robot's gait quality sets
+    ``swing_toe_down_until``); foot_flat_rate
     [rad/s]: bound on the front sole's pitch rate when it lands flat (a gentle foot-flat);
     min_line_force [N]: normal force of each line contact in double support; ds_free_joints: the 4 joints of
     the swing leg (of a ``stance`` gait) that are not Bézier outputs in double support (None: picked from

@@ -79,6 +79,17 @@ def matrix_to_rpy(r: FloatArray) -> FloatArray:
                      math.atan2(r[1, 0], r[0, 0])])
 
 
+def swing_toe_down(swing_tilt: float, toe_off_pitch: float, until: float, tau: float) -> float:
+    """Largest toe-down pitch [rad] of the swing sole at phase τ of multi-contact single support:
+    max(swing_tilt, θ_off (1 − τ / τ_u)) with θ_off the toe-off pitch bound and τ_u the robot's
+    ``swing_toe_down_until`` (:class:`~robustgait.robots.spec.GaitQuality`; τ_u = 0: swing_tilt throughout).
+    The sole leaves toe-off toe-down; held within swing_tilt from the first node, Atalante's had to snap
+    flat and its heel grazed the ground (docs/gaitgen.md)."""
+    if until <= 0.0:
+        return swing_tilt
+    return max(swing_tilt, toe_off_pitch * (1.0 - tau / until))
+
+
 def double_support_free_joints(robot: Robot, side: str, names: tuple[str, ...] | None = None) -> list[int]:
     """Joints (spec order) of the ``side`` leg that are *not* Bézier outputs in double support.
 
@@ -401,9 +412,12 @@ class GaitProblem:
             # flat graph: the nearer the ground, the flatter the foot; multi-contact: heel first, any corner ≥ 0
             add("swing_flat_approach", corners - (0.0 if multi else config.flat_approach) * psw[2], 0.0, cs.inf)
             tilt = math.sin(quality.swing_tilt)
-            # R[2, 0] = −sin(pitch): multi-contact lets the toe come up to the heel-strike pitch
+            # R[2, 0] = −sin(pitch): multi-contact lets the toe come up to the heel-strike pitch and, on robots
+            # that ask for it, the foot leave toe-off toe-down
             pitch_hi = math.sin(config.heel_strike_pitch[1]) if multi else tilt
-            add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [-tilt, -tilt], [pitch_hi, tilt])
+            pitch_lo = -math.sin(swing_toe_down(quality.swing_tilt, config.toe_off_pitch[1],
+                                                quality.swing_toe_down_until, i / (n - 1))) if multi else -tilt
+            add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [pitch_lo, -tilt], [pitch_hi, tilt])
             add("swing_yaw", Hsw[1, 0], -math.sin(quality.swing_yaw), math.sin(quality.swing_yaw))
             add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.foot_gap), 0.0, cs.inf)
         if i == (n - 1) // 2:

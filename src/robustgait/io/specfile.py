@@ -77,6 +77,8 @@ class GaitQualityTable(Table):
     pelvis_angular_velocity: Annotated[float, L.QUALITY_ANGULAR_VELOCITY.meta()] = GaitQuality.pelvis_angular_velocity
     swing_tilt: QualityAngle = GaitQuality.swing_tilt
     swing_yaw: QualityAngle = GaitQuality.swing_yaw
+    swing_toe_down_until: Annotated[float, Meta(ge=0.0, le=1.0, extra={"unit": "phase"})] = (
+        GaitQuality.swing_toe_down_until)
     pelvis_acceleration: Annotated[float, Meta(gt=0, extra={"unit": "m/s²"})] = GaitQuality.pelvis_acceleration
     joint_velocity: JointVelocity | Annotated[list[JointVelocity], Meta(max_length=L.MAX_JOINTS)] = 10.0
 
@@ -187,7 +189,8 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
     quality = GaitQuality(
         pelvis_roll=q.pelvis_roll, pelvis_yaw=q.pelvis_yaw, pelvis_pitch=_band(path, "pelvis_pitch", q.pelvis_pitch),
         pelvis_height=height, pelvis_angular_velocity=q.pelvis_angular_velocity, swing_tilt=q.swing_tilt,
-        swing_yaw=q.swing_yaw, pelvis_acceleration=q.pelvis_acceleration, joint_velocity=joint_velocity)
+        swing_yaw=q.swing_yaw, swing_toe_down_until=q.swing_toe_down_until, pelvis_acceleration=q.pelvis_acceleration,
+        joint_velocity=joint_velocity)
     for key in s.posture:
         if key not in names:
             raise field_error(path, f"posture.{key}", "not an actuated joint (joints.names)")

@@ -66,6 +66,9 @@ class GaitQuality:
     passenger feels; unbounded by default).
     swing_tilt [rad]: swing sole roll and pitch ≤ bound (kept nearly parallel to the ground).
     swing_yaw [rad]: |yaw| of the swing sole ≤ bound (relative to the stance sole: no twisting foot).
+    swing_toe_down_until: multi-contact only — the phase of single support by which the swing sole, which
+    leaves toe-off pitched toe-down, must be back within swing_tilt (its toe-down bound falls linearly from
+    the toe-off pitch bound at τ = 0; 0: within swing_tilt from the first node on).
     joint_velocity [rad/s]: |q̇_i| ≤ bound per actuated joint (output order).
     """
 
@@ -77,6 +80,7 @@ class GaitQuality:
     pelvis_acceleration: float = math.inf
     swing_tilt: float = 0.15
     swing_yaw: float = 0.15
+    swing_toe_down_until: float = 0.0
     joint_velocity: tuple[float, ...] = ()
 
 
