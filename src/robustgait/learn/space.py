@@ -50,16 +50,18 @@ class ActionSpace:
         """The robot spec's ``[action_space]`` (``domains="flat"``) or its ``[action_space.multicontact]``
         sub-table (``domains="multicontact"``: multi-contact gaits need longer steps in time and may also
         search the rolling fraction); a spec without the table cannot be studied with that domain graph."""
-        tables = {"flat": ("[action_space]", "", robot.spec.action_space),
-                  "multicontact": ("[action_space.multicontact]", "of multi-contact gaits",
-                                   robot.spec.multicontact_action_space)}
+        tables = {  # domain graph: (its ranges, what is missing when the spec has none)
+            "flat": (robot.spec.action_space, "[action_space] table (bounds and grid step per gait parameter), "
+                     "which studies search"),
+            "multicontact": (robot.spec.multicontact_action_space, "[action_space.multicontact] table (bounds and "
+                             "grid step per gait parameter of multi-contact gaits), which multi-contact studies "
+                             "search"),
+        }
         if domains not in tables:
             raise RobustGaitError(f"domains must be 'flat' or 'multicontact', got {domains!r}")
-        table, of, ranges = tables[domains]
+        ranges, missing = tables[domains]
         if ranges is None:
-            raise RobustGaitError(f"{robot.spec.source or robot.name}: the robot spec has no {table} table "
-                                  f"(bounds and grid step per gait parameter{' ' + of if of else ''}), which "
-                                  f"{'multi-contact ' if of else ''}studies search")
+            raise RobustGaitError(f"{robot.spec.source or robot.name}: the robot spec has no {missing}")
         return cls.from_ranges(ranges)
 
     @property
