@@ -12,7 +12,7 @@ import subprocess
 import sys
 import threading
 import time
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import pytest
@@ -156,7 +156,7 @@ def test_local_workers_each_get_every_core_unless_told():
     """A batch's last gait is certified alone: its worker must be able to use the cores the others left idle."""
     from robustgait.study.executors import LocalExecutor, WorkerSpec
 
-    spec = WorkerSpec("exo", EvaluationConfig().__dict__)
+    spec = WorkerSpec("exo", asdict(EvaluationConfig()))
     assert LocalExecutor(spec, workers=2).spec.threads == (os.cpu_count() or 1)
     assert LocalExecutor(spec, workers=2, threads=1).spec.threads == 1
     with pytest.raises(RobustGaitError, match="--workers"):
