@@ -9,10 +9,13 @@ against L/T, pelvis roll range over the walk, ‖x̄*‖ of the step map's fixed
 samples). Markdown rows are printed for benchmarks/README.md. Gait generation runs on one core (BLAS/OpenMP
 pinned to 1); the simulator uses its default threads.
 
-    python benchmarks/bench_gaitgen.py [--robot exo] [--domains flat|multicontact] [--samples 200] [--no-walk]
+    python benchmarks/bench_gaitgen.py [--robot exo] [--domains flat|multicontact] [--step-duration T]
+        [--samples 200] [--no-walk] [--no-grid]
 
 With ``--domains multicontact`` the default gait (step duration 0.9 s) is also certified with the sequential
 estimator, and its walk reports how far each sole pitches during double support (the rolling).
+``--step-duration`` replaces the graph's default step duration of the default gait (Atalante's multi-contact
+gait walks at 1.0 s, not 0.9 s); ``--no-grid`` stops after the default gait.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import argparse
 import platform
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -100,6 +104,8 @@ def main() -> None:
     ap.add_argument("--domains", choices=("flat", "multicontact"), default="flat")
     ap.add_argument("--samples", type=int, default=200, help="certificate samples (uniform) per gait")
     ap.add_argument("--no-walk", action="store_true")
+    ap.add_argument("--step-duration", type=float, help="the default gait's step duration [s]")
+    ap.add_argument("--no-grid", action="store_true", help="stop after the default gait")
     args = ap.parse_args()
     robot = load_robot(args.robot)
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}; gait generation "
@@ -109,6 +115,8 @@ def main() -> None:
     print(f"domain graph {args.domains}; build: {time.perf_counter() - t0:.1f} s ({gen.n_variables} variables, "
           f"{gen.n_constraints} constraints, {gen.config.nodes} nodes)")
     dflt = default_params(args.domains)
+    if args.step_duration is not None:
+        dflt = replace(dflt, step_duration=args.step_duration)
     base = gen.solve(dflt)
     print(f"default {dflt} cold: {base.status}, {base.iterations} iterations, {base.solve_seconds:.2f} s "
           f"({base.solve_seconds / max(base.iterations, 1) * 1e3:.0f} ms/iteration)")
@@ -122,6 +130,8 @@ def main() -> None:
                 seq = certify_gait(robot, base.gait, CertifyConfig(method="sequential"))
                 print(f"default gait, sequential certificate: {seq.status}, r* = {seq.r_star:.4f} rad/s, "
                       f"{seq.to_dict().get('n_samples')} samples")
+    if args.no_grid:
+        return
     a = robot.spec.action_space
     if a is None:
         raise SystemExit(f"{robot.name}: the spec has no [action_space] to take the grid from")
