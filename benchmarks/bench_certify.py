@@ -8,8 +8,7 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
   gait, ``--seeds`` seeds each, methods ``uniform`` (N = 200) and ``sequential`` (defaults): mean, sd, CV and
   range of r*, the statement's bound, samples, physics steps, wall time. After every certificate raw
   ``mujoco.rollout`` (same model and threads, 100 states near x*, zero control) measures the machine's speed
-  under the same load; the sampler/raw ratio carries over to another machine, and the wall time is also given
-  for a machine whose raw rollout runs at ``--quiet-speed`` steps/s.
+  under the same load: the sampler/raw ratio, measured in the run (wall times are this machine's, as measured).
 * ``coverage``: ``--runs`` sequential certificates of each synthetic map (:mod:`robustgait.synthetic`):
   fraction of runs whose true violating fraction in B(r*) exceeds ε (must be ≤ β) — and the same for a naive
   rule that ignores the data-dependent choice of r*, to show the check can fail.
@@ -33,11 +32,12 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from robustgait import SimConfig, load_gait, load_robot
+from robustgait import load_gait, load_robot
 from robustgait.barrier import distances, sample_ball, solve_radius
-from robustgait.certify import CertifyConfig, GaitCertificate, certify_gait
-from robustgait.estimators import SequentialConfig, certify_map_sequential
-from robustgait.gait import Gait, GaitParams
+from robustgait.certify import GaitCertificate, certify_gait
+from robustgait.config import CertifyConfig, GaitParams, SequentialConfig, SimConfig
+from robustgait.estimators import certify_map_sequential
+from robustgait.gait import Gait
 from robustgait.poincare import ReturnMap
 from robustgait.robots import Robot
 from robustgait.synthetic import BandMap, ConeMap
@@ -61,7 +61,7 @@ def gaits(args: argparse.Namespace) -> dict[str, tuple[Robot, Gait]]:
         from robustgait.gaitgen import generate_gait
 
         p = GaitParams(args.step_length, args.step_duration, args.step_width, args.step_height)
-        res = generate_gait(exo, p.step_length, p.step_duration, p.step_width, p.step_height)
+        res = generate_gait(exo, p)
         if res.gait is None:
             raise SystemExit(f"exo gait generation failed: {res.status} {res.reason}")
         print(f"exo gait regenerated: {p} ({res.status}, {res.iterations} iterations)")
@@ -80,7 +80,7 @@ class RawRollout:
     def __init__(self, robot: Robot, gait: Gait, sim: SimConfig, n: int = 100, nstep: int = 500):
         self.robot, self.n, self.nstep = robot, n, nstep
         self.pool = rollout.Rollout(nthread=sim.threads)
-        with ReturnMap(robot, gait, sim=sim) as pmap:
+        with ReturnMap(robot, gait, CertifyConfig(), sim) as pmap:
             fp = pmap.find_fixed_point()
             qpos, qvel = pmap.reconstruct(sample_ball(n, 3, 0.05, fp.x_star, np.random.default_rng(0)))
             self.init = pmap.engine.full_states(qpos, qvel)
@@ -97,7 +97,7 @@ class RawRollout:
         self.pool.close()
 
 
-def summary(name: str, gcs: list[GaitCertificate], raw: list[float], quiet: float) -> str:
+def summary(name: str, gcs: list[GaitCertificate], raw: list[float]) -> str:
     r = np.array([g.r_star for g in gcs])
     c = [g.certificate for g in gcs]
     bound = np.array([x.violation_bound for x in c if x is not None])
@@ -105,28 +105,27 @@ def summary(name: str, gcs: list[GaitCertificate], raw: list[float], quiet: floa
     wall = np.array([g.seconds["total"] for g in gcs])
     steps = np.array([g.physics_steps for g in gcs])
     ratio = np.array([g.seconds["sim_steps_per_s"] for g in gcs]) / np.array(raw)
-    est = wall * np.array(raw) / quiet  # the same work on a machine whose raw rollout runs at `quiet` steps/s
     sd = r.std(ddof=1) if r.size > 1 else 0.0
     return (f"| {name} | {r.mean():.4f} | {sd:.4f} | {100 * sd / r.mean():.1f} % | {r.min():.4f}–{r.max():.4f} | "
             f"{100 * np.median(bound):.3g} % ({100 * bound.max():.3g} %) | {n.mean():.0f} ({n.min()}–{n.max()}) | "
             f"{steps.mean() / 1e3:.0f} k | {wall.mean():.1f} s ({wall.max():.1f}) | {np.median(ratio):.2f} | "
-            f"{est.mean():.1f} s ({est.max():.1f}) |")
+            f"{np.median(raw) / 1e3:.0f} k |")
 
 
 def cmd_seeds(args: argparse.Namespace) -> None:
     sim = SimConfig(n_threads=args.threads)
     print(f"## seeds: {args.seeds} seeds per gait and method; {load()}")
-    print(f"| gait, method | mean r* | sd | CV | range | bound: median (max) | samples: mean (range) | physics steps | "
-          f"wall now: mean (max) | sampler/raw | wall at raw {args.quiet_speed / 1e3:.0f} k steps/s: mean (max) |")
+    print("| gait, method | mean r* | sd | CV | range | bound: median (max) | samples: mean (range) | physics steps | "
+          "wall: mean (max) | sampler/raw | raw rollout [steps/s], median |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for gname, (robot, gait) in gaits(args).items():
         raw = RawRollout(robot, gait, sim)
         for method in args.methods.split(","):
-            cfg = CertifyConfig(method=method, sim=sim, sequential=SequentialConfig(epsilon=args.epsilon,  # type: ignore[arg-type]
-                                                                                   budget=args.budget))
+            cfg = CertifyConfig(method=method, sequential=SequentialConfig(epsilon=args.epsilon,  # type: ignore[arg-type]
+                                                                          budget=args.budget))
             gcs, speeds = [], []
             for seed in range(args.seeds):
-                gc = certify_gait(robot, gait, replace(cfg, seed=seed))
+                gc = certify_gait(robot, gait, replace(cfg, seed=seed), sim)
                 speeds.append(raw.speed())  # right after: the same load
                 if not gc.ok:
                     raise SystemExit(f"{gname}: {gc.status}: {gc.reason}")
@@ -138,7 +137,7 @@ def cmd_seeds(args: argparse.Namespace) -> None:
                     print(f"  {gname} {method} seed {seed}: r* {gc.r_star:.4f} bound {c.violation_bound:.4f} "
                           f"N {c.n_samples} {gc.seconds['total']:.1f} s (raw {speeds[-1]:.0f} steps/s)  {tr}",
                           flush=True)
-            print(summary(f"{gname}, {method}", gcs, speeds, args.quiet_speed), flush=True)
+            print(summary(f"{gname}, {method}", gcs, speeds), flush=True)
         raw.close()
         print(f"  ({gname} done; {load()})")
 
@@ -163,7 +162,7 @@ def _naive(P: ConeMap | BandMap, seed: int, eps: float, beta: float, budget: int
 
 def cmd_coverage(args: argparse.Namespace) -> None:
     eps, beta = args.epsilon, 0.05
-    cfg = SequentialConfig(epsilon=eps, budget=args.budget)
+    seq = SequentialConfig(epsilon=eps, budget=args.budget)
     xs = np.array([0.4, 0.2, 0.3])
     maps = {
         f"bands, fraction {1.05 * eps:g} in every ball (true r* = 0)": BandMap(xs, a=1.05 * eps),
@@ -178,7 +177,7 @@ def cmd_coverage(args: argparse.Namespace) -> None:
         fails = certified = 0
         rs, ns = [], []
         for seed in range(args.runs):
-            c = certify_map_sequential(P, xs, seed=seed, beta=beta, config=cfg)
+            c = certify_map_sequential(P, xs, CertifyConfig(seed=seed, beta=beta, sequential=seq))
             if c.violation_bound < 1.0:
                 certified += 1
                 fails += P.violating_fraction(c.r_star) > eps
@@ -208,8 +207,8 @@ def cmd_barrier(args: argparse.Namespace) -> None:
         for method, seeds in (("uniform", [0]), ("sequential", list(range(args.barrier_seeds)))):
             res = {}
             for barrier in ("ball", "paper"):
-                cfg = CertifyConfig(method=method, barrier=barrier, sim=sim)  # type: ignore[arg-type]
-                res[barrier] = np.array([certify_gait(robot, gait, replace(cfg, seed=s)).r_star for s in seeds])
+                cfg = CertifyConfig(method=method, barrier=barrier)  # type: ignore[arg-type]
+                res[barrier] = np.array([certify_gait(robot, gait, replace(cfg, seed=s), sim).r_star for s in seeds])
             cells = " | ".join(f"{v.mean():.4f} ({v.min():.4f}–{v.max():.4f})" for v in res.values())
             print(f"| {gname} | {method} | {len(seeds)} | {cells} |", flush=True)
 
@@ -242,10 +241,10 @@ def cmd_speed(args: argparse.Namespace) -> None:
     print(f"## speed: N = {n}, r_max = 2, alpha = 0.05, seed 0, heading frame, uniform; threads {threads}; {load()}")
 
     def config(kind: str, rec: str) -> CertifyConfig:
-        return CertifyConfig(n_samples=n, r_max=2.0, alpha=0.05, seed=0, map=kind,  # type: ignore[arg-type]
-                             reconstruction=rec, sim=sim)  # type: ignore[arg-type]
+        return CertifyConfig(method="uniform", n_samples=n, r_max=2.0, alpha=0.05, seed=0, map=kind,  # type: ignore[arg-type]
+                             reconstruction=rec)  # type: ignore[arg-type]
 
-    certs = {combo: certify_gait(robot, gait, config(*combo)) for combo in COMBOS}
+    certs = {combo: certify_gait(robot, gait, config(*combo), sim) for combo in COMBOS}
     for combo in COMBOS:
         print(row(certs[combo]))
     cfg = config("step", "holonomic")
@@ -253,9 +252,8 @@ def cmd_speed(args: argparse.Namespace) -> None:
     raw = []
     first = runs[0].certificate
     assert first is not None and runs[0].fixed_point is not None
-    with ReturnMap(robot, gait, kind="step", reconstruction="holonomic", sim=sim) as pmap, \
-            rollout.Rollout(nthread=threads) as pool:
-        fp = pmap.find_fixed_point(tol=cfg.fp_tol, min_steps=cfg.fp_min_steps, max_steps=cfg.fp_max_steps)
+    with ReturnMap(robot, gait, cfg, sim) as pmap, rollout.Rollout(nthread=threads) as pool:
+        fp = pmap.find_fixed_point()
         assert np.array_equal(fp.x_star, runs[0].fixed_point.x_star)
         qpos, qvel = pmap.reconstruct(np.asarray(first.samples))
         init = pmap.engine.full_states(qpos, qvel)
@@ -265,7 +263,7 @@ def cmd_speed(args: argparse.Namespace) -> None:
         pool.rollout(robot.model, datas, init[:threads], ctrl[:threads, :10])  # start the threads
         for i in range(args.repeat):  # interleaved, so that load from other jobs hits both alike
             if i:
-                runs.append(certify_gait(robot, gait, cfg))
+                runs.append(certify_gait(robot, gait, cfg, sim))
             t0 = time.perf_counter()
             pool.rollout(robot.model, datas, init, ctrl)
             raw.append(n * nstep / (time.perf_counter() - t0))
@@ -290,7 +288,7 @@ def main() -> None:
     ap.add_argument("--epsilon", type=float, default=0.02)
     ap.add_argument("--budget", type=int, default=3000)
     ap.add_argument("--exo-gait", help="use this exo gait file instead of regenerating the default one")
-    defaults = GaitParams()
+    defaults = GaitParams().resolved("flat")
     for name in ("step_length", "step_duration", "step_width", "step_height"):
         ap.add_argument(f"--{name.replace('_', '-')}", type=float, default=getattr(defaults, name),
                         help=f"exo gait parameter (default {getattr(defaults, name)})")
@@ -299,9 +297,6 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5, help="speed: repeats (median; >= 2)")
     ap.add_argument("--samples", type=int, default=200, help="speed: N")
     ap.add_argument("--threads", type=int, default=0, help="0 = one per core")
-    ap.add_argument("--quiet-speed", type=float, default=150e3,
-                    help="seeds: raw mujoco.rollout steps/s of a quiet machine, for the wall-time estimate (default "
-                    "150e3, benchmarks/README.md)")
     ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")
     args = ap.parse_args()
     if args.repeat < 2:

@@ -33,9 +33,10 @@ from dataclasses import replace
 import numpy as np
 
 from robustgait import GaitParams, load_robot, walk
-from robustgait.certify import CertifyConfig, certify_gait
+from robustgait.certify import certify_gait
+from robustgait.config import CertifyConfig, GenerationConfig
 from robustgait.gait import Gait
-from robustgait.gaitgen import GaitGenConfig, GaitGenerator, GaitGenResult, default_params
+from robustgait.gaitgen import GaitGenerator, GaitGenResult
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 
@@ -71,7 +72,7 @@ def walk_figures(robot: Robot, gait: Gait, samples: int) -> dict[str, object]:
     r = quat_to_mat(w.trajectory[:, 4:8])
     roll = np.degrees(np.arctan2(r[:, 2, 1], r[:, 2, 2]))
     out: dict[str, object] = {"steps": w.steps_taken, "fall": w.fall_reason,
-                              "speed_error": w.mean_speed / (p.step_length / p.step_duration) - 1,
+                              "speed_error": w.mean_speed / (p.step_length / p.duration) - 1,
                               "roll": (float(roll.min()), float(roll.max())), "x_star": None, "r_star": None}
     if len(gait.domains) > 1 and w.steps_taken >= 20:
         out["rolling"] = rolling(robot, gait, w.trajectory, w.events)
@@ -111,10 +112,10 @@ def main() -> None:
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}; gait generation "
           f"on 1 thread; robot {robot.name}")
     t0 = time.perf_counter()
-    gen = GaitGenerator(robot, GaitGenConfig(domains=args.domains))
+    gen = GaitGenerator(robot, GenerationConfig(domains=args.domains))
     print(f"domain graph {args.domains}; build: {time.perf_counter() - t0:.1f} s ({gen.n_variables} variables, "
           f"{gen.n_constraints} constraints, {gen.config.nodes} nodes)")
-    dflt = default_params(args.domains)
+    dflt = GaitParams().resolved(args.domains)
     if args.step_duration is not None:
         dflt = replace(dflt, step_duration=args.step_duration)
     base = gen.solve(dflt)

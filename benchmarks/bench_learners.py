@@ -25,15 +25,14 @@ import argparse
 import json
 import os
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from robustgait import load_robot
-from robustgait.learn import ActionSpace, LearnerConfig, Outcome, PreferenceModelConfig, make_learner, replay, score
+from robustgait.config import CertifyConfig, Config, LearnerConfig, PreferenceModelConfig, SimConfig, to_dict
+from robustgait.learn import ActionSpace, Outcome, make_learner, replay, score
 from robustgait.robots.spec import ACTION_FIELDS
-from robustgait.study.evaluate import EvaluationConfig
 from robustgait.study.executors import LocalExecutor, WorkerSpec
 
 REPO = Path(__file__).resolve().parents[1]
@@ -48,13 +47,19 @@ def coarse_space(full: ActionSpace, counts: list[int]) -> ActionSpace:
     return ActionSpace(full.names, tuple(values))
 
 
-def config_hash(cfg: EvaluationConfig) -> str:
-    """Rows evaluated with another evaluation config or another exo model (spec or MJCF) are not reused.
+def evaluation_sections(cfg: Config) -> dict:
+    """What an evaluation depends on: the generation, simulation and certificate sections."""
+    d = to_dict(cfg)
+    return {k: d[k] for k in ("generate", "sim", "certify")}
+
+
+def config_hash(cfg: Config) -> str:
+    """Rows evaluated with other evaluation settings or another exo model (spec or MJCF) are not reused.
     (A change of the generator's or the certificate's code is not seen: delete the table then.)"""
     import hashlib
 
     robot = load_robot("exo")
-    h = hashlib.sha256(json.dumps(_asdict(cfg), sort_keys=True).encode())
+    h = hashlib.sha256(json.dumps(evaluation_sections(cfg), sort_keys=True).encode())
     for f in (robot.spec.source, robot.spec.mjcf):
         if f is not None:
             h.update(Path(f).read_bytes())
@@ -80,8 +85,7 @@ def key(params: dict[str, float]) -> str:
 
 def evaluate_table(space: ActionSpace, path: Path, workers: int, method: str, samples: int,
                    step_cap: int) -> dict[str, dict]:
-    cfg = EvaluationConfig(step_cap=step_cap, certify=replace(EvaluationConfig().certify, method=method,
-                                                              n_samples=samples))
+    cfg = Config(sim=SimConfig(step_cap=step_cap), certify=CertifyConfig(method=method, n_samples=samples))  # type: ignore[arg-type]
     h = config_hash(cfg)
     rows = load_table(path, h)
     todo = [i for i in range(space.size) if key(space.value(i)) not in rows]
@@ -89,7 +93,7 @@ def evaluate_table(space: ActionSpace, path: Path, workers: int, method: str, sa
           flush=True)
     if not todo:
         return rows
-    spec = WorkerSpec("exo", json.loads(json.dumps(_asdict(cfg))))
+    spec = WorkerSpec("exo", to_dict(cfg))
     path.parent.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     with LocalExecutor(spec, workers) as ex, path.open("a") as fh:
@@ -105,12 +109,6 @@ def evaluate_table(space: ActionSpace, path: Path, workers: int, method: str, sa
             print(f"[{n + 1}/{len(todo)}] {row['params']} {row['status']} steps {row['steps_taken']} "
                   f"r* {row['r_star']:.3f} ({time.perf_counter() - t0:.0f} s)", flush=True)
     return rows
-
-
-def _asdict(cfg: EvaluationConfig) -> dict:
-    import dataclasses
-
-    return dataclasses.asdict(cfg)
 
 
 def smooth_utility(space: ActionSpace, seed: int) -> np.ndarray:

@@ -18,13 +18,11 @@ import argparse
 import os
 import shutil
 import time
-from dataclasses import replace
 from pathlib import Path
 
-from robustgait.study.config import StudyConfig
-from robustgait.study.evaluate import EvaluationConfig
+from robustgait.config import CertifyConfig, Config, StudyConfig, to_dict
 from robustgait.study.executors import RayExecutor, WorkerSpec
-from robustgait.study.run import RunOptions, create_study, run_study
+from robustgait.study.run import create_study, run_study
 from robustgait.study.status import study_status
 
 REPO = Path(__file__).resolve().parents[1]
@@ -69,9 +67,8 @@ def main() -> None:
     args = ap.parse_args()
     import ray
 
-    cfg = StudyConfig(robot="exo", iterations=args.iterations, batch=args.batch,
-                      evaluation=EvaluationConfig(certify=replace(EvaluationConfig().certify, method=args.method,
-                                                                  n_samples=args.samples)))
+    cfg = Config(study=StudyConfig(iterations=args.iterations, batch=args.batch),
+                 certify=CertifyConfig(method=args.method, n_samples=args.samples))
     machine = machine_ratio()
     print(f"machine: 1 vs 2 processes on pure CPU work: ratio {machine:.2f} (load {os.getloadavg()[0]:.1f})",
           flush=True)
@@ -81,12 +78,12 @@ def main() -> None:
         for w in (1, 2):
             d = args.out / f"w{w}"
             shutil.rmtree(d, ignore_errors=True)
-            create_study(d, cfg)
-            ex = RayExecutor(WorkerSpec("exo", cfg.to_dict()["evaluation"]), workers=w)
+            create_study(d, "exo", cfg)
+            ex = RayExecutor(WorkerSpec("exo", to_dict(cfg)), workers=w)
             ex.pids()  # wait until every actor has built its gait generator
             load = os.getloadavg()[0]
             t0 = time.perf_counter()
-            run_study(d, RunOptions(progress=True), executor=ex)
+            run_study(d, progress=True, executor=ex)
             walls[w] = time.perf_counter() - t0
             st = study_status(d)
             gaits = [t["params"] for t in st["trials"] if t["state"] == "COMPLETE" and t["reused_from"] is None]

@@ -47,7 +47,7 @@ def main() -> None:
     gait = load_gait(ATALANTE / "jt_bez_2023-09-10.yaml", robot)
     config = SimConfig(n_threads=args.threads)
     threads = config.threads
-    warm = walk(robot, gait, steps=10, config=config)
+    warm = walk(robot, gait, config, steps=10)
     ev = warm.events[-1]
     stance = "left" if ev.stance == "right" else "right"
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; mujoco "

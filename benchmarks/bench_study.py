@@ -2,7 +2,7 @@
 stability metric, then ``study compare`` of the two best gaits.
 
 Per study it prints: wall time (goal ≤ 10 min on 2 cores), unique gaits, the learner's best after every
-iteration (r*, steps), the best gait's r* and steps, and the default gait's (``GaitParams()``) r* with
+iteration (r*, steps), the best gait's r* and steps, and the default gait's (``Config().params``) r* with
 the same estimator and seed (the study's), then both re-certified with ``--compare-seeds`` fresh seeds.
 Studies live in ``--out`` (default benchmarks/data/bench_study/<metric>); an existing one is resumed
 (the wall time is then that of the resumed part only, and is flagged), so a killed benchmark continues.
@@ -17,37 +17,31 @@ import argparse
 import json
 import os
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from robustgait import GaitParams, load_gait, load_robot
-from robustgait.certify import CertifyConfig
+from robustgait import load_gait, load_robot
+from robustgait.config import CertifyConfig, CompareConfig, Config, RunConfig, StudyConfig
 from robustgait.study.compare import compare_studies, recertify
-from robustgait.study.config import StudyConfig, load_config
-from robustgait.study.evaluate import EvaluationConfig, evaluate
-from robustgait.study.run import RunOptions, create_study, run_study
+from robustgait.study.config import load_config
+from robustgait.study.evaluate import evaluate
+from robustgait.study.run import create_study, run_study
 from robustgait.study.status import study_status
 
 REPO = Path(__file__).resolve().parents[1]
 
 
-def certify_config(method: str, samples: int, seed: int = 0) -> CertifyConfig:
-    """The study default (sequential estimator) or the paper's uniform one with ``samples``."""
-    return replace(EvaluationConfig().certify, method=method, n_samples=samples, seed=seed)
-
-
 def run_one(d: Path, metric: str, args: argparse.Namespace) -> dict:
     resumed = (d / "study.json").exists()
     if not resumed:
-        cfg = StudyConfig(robot="exo", metric=metric, learner=args.learner, iterations=args.iterations,
-                          batch=args.batch, seed=args.seed,
-                          evaluation=EvaluationConfig(certify=certify_config(args.method, args.samples, args.seed)))
-        create_study(d, cfg)
+        cfg = Config(study=StudyConfig(metric=metric, learner=args.learner, iterations=args.iterations,
+                                       batch=args.batch, seed=args.seed),
+                     certify=CertifyConfig(method=args.method, n_samples=args.samples, seed=args.seed))
+        create_study(d, "exo", cfg)
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
-    run_study(d, RunOptions(workers=args.workers, progress=True))
+    run_study(d, RunConfig(workers=args.workers))
     wall = time.perf_counter() - t0
     st = study_status(d)
     return {"metric": metric, "directory": str(d), "wall_s": wall, "resumed": resumed, "load_before": load0,
@@ -71,10 +65,10 @@ def main() -> None:
     print(f"machine: {os.cpu_count()} cores; load {os.getloadavg()}", flush=True)
     runs = [run_one(args.out / m, m, args) for m in args.metrics.split(",")]
     robot = load_robot("exo")
-    cfg0 = load_config(runs[0]["directory"])
-    default = evaluate(robot, GaitParams(), cfg0.evaluation)  # the study's estimator and seed
+    cfg0 = load_config(runs[0]["directory"]).config
+    default = evaluate(robot, cfg0.params, cfg0)  # the study's estimator and seed
     fresh = [args.seed + 1000 + i for i in range(args.compare_seeds)]
-    default_fresh = (recertify(robot, default.gait, cfg0.evaluation.certify, fresh) if default.gait is not None
+    default_fresh = (recertify(robot, default.gait, cfg0.certify, fresh, cfg0.sim) if default.gait is not None
                      and default.status == "certified" else [])
     for run in runs:
         st = run["status"]
@@ -89,16 +83,16 @@ def main() -> None:
                       f"{', '.join(f'{v:g}' for v in b['params'].values())}")
         if best:
             gait = load_gait(Path(run["directory"]) / best["gait_file"], robot)
-            r = np.array([c["r_star"] for c in recertify(robot, gait, cfg0.evaluation.certify, fresh)])
+            r = np.array([c["r_star"] for c in recertify(robot, gait, cfg0.certify, fresh, cfg0.sim)])
             print(f"  best gait: r* {best['r_star']:.4f} (study seed), {best['steps_taken']} steps; fresh seeds "
                   f"{fresh[0]}–{fresh[-1]}: {r.mean():.4f} ± {r.std(ddof=1) if r.size > 1 else 0:.4f}")
     rd = np.array([c["r_star"] for c in default_fresh]) if default_fresh else np.zeros(1)
     sd = rd.std(ddof=1) if rd.size > 1 else 0.0
-    print(f"\ndefault gait {GaitParams().to_dict()}: {default.status}, {default.steps_taken} steps, r* "
+    print(f"\ndefault gait {cfg0.params.to_dict()}: {default.status}, {default.steps_taken} steps, r* "
           f"{default.r_star:.4f} (study seed); fresh seeds: {rd.mean():.4f} ± {sd:.4f}")
     if len(runs) == 2:
-        cmp = compare_studies(runs[0]["directory"], runs[1]["directory"], seeds=args.compare_seeds,
-                              seed_base=args.seed + 1000)
+        cmp = compare_studies(runs[0]["directory"], runs[1]["directory"],
+                              CompareConfig(seeds=args.compare_seeds, seed_base=args.seed + 1000))
         print("\nstudy compare (A = " + runs[0]["metric"] + ", B = " + runs[1]["metric"] + "):")
         for name, s in zip("AB", cmp["studies"], strict=True):
             print(f"  {name}: {', '.join(f'{v:g}' for v in s['params'].values())}: r* {s['r_star_mean']:.4f} ± "

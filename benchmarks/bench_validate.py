@@ -23,7 +23,8 @@ import numpy as np
 from mujoco import rollout
 
 from robustgait import load_gait, load_robot
-from robustgait.validate import ValidateConfig, Validator
+from robustgait.config import ValidateConfig
+from robustgait.validate import Validator
 
 REPO = Path(__file__).resolve().parents[1]
 ATALANTE = REPO.parent / "shared" / "atalante"
@@ -43,7 +44,7 @@ def main() -> None:
     t0 = time.perf_counter()
     v = Validator(robot, gait, cfg)
     setup = time.perf_counter() - t0
-    threads = cfg.sim.threads
+    threads = v.sim.threads
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; mujoco "
           f"{mujoco.__version__}; threads {threads}; {robot.name}, dt {robot.dt} s; r* = {v.certificate.r_star:.4f}; "
           f"certificate + fixed point {setup:.2f} s")

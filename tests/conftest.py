@@ -61,6 +61,31 @@ def exo_mc_gait(exo):  # type: ignore[no-untyped-def]
     return load_gait(EXO_MC_GAIT, exo)
 
 
+@pytest.fixture(scope="session", params=["exo", "atalante"])
+def flat_robot_gait(request):  # type: ignore[no-untyped-def]
+    """(robot, flat-foot gait): the shipped exo with its stored gait, and Atalante with its FROST gait (skipped
+    with the reason when ../shared is absent)."""
+    if request.param == "exo":
+        return request.getfixturevalue("exo"), request.getfixturevalue("exo_gait")
+    return request.getfixturevalue("atalante"), request.getfixturevalue("atalante_gait")
+
+
+def write_frost_yaml(gait, path, *, inputparams=None):  # type: ignore[no-untyped-def]
+    """Write a one-domain gait as a FROST/ambersim YAML (``coeff_jt`` in Fortran order, ``step_dur``, the initial
+    state as ``ffPos``/``startingPos``/``ffVel``/``startingVel``): a FROST file for any robot, for the importer's
+    tests without the AMBER lab's file."""
+    import yaml
+
+    s = gait.initial_state
+    data = {"coeff_jt": gait.domains[0].beta.ravel(order="F").tolist(), "step_dur": float(gait.domains[0].duration),
+            "ffPos": s.qpos[:7].tolist(), "startingPos": s.qpos[7:].tolist(), "ffVel": s.qvel[:6].tolist(),
+            "startingVel": s.qvel[6:].tolist(), "coeff_output": [0.0], "SL": 0.1}
+    if inputparams is not None:
+        data["inputparams"] = inputparams
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
 @pytest.fixture(scope="session", params=["exo", "exo-multicontact", "atalante"])
 def robot_gait(request):  # type: ignore[no-untyped-def]
     """(robot, gait) for the shipped exo with its stored flat-foot and multi-contact gaits, and for Atalante with
@@ -88,13 +113,13 @@ def standing_gait(robot, *, extras: bool = False):  # type: ignore[no-untyped-de
     mujoco.mj_kinematics(m, d)
     lowest = min(d.geom_xpos[g][2] - np.min(m.geom_size[g]) for g in robot.sole_geom_id.values())
     d.qpos[2] -= lowest
-    from robustgait.gait import GaitParams
+    from robustgait.config import GaitParams
 
     beta = np.repeat(np.asarray(robot.spec.posture, dtype=float)[:, None], 8, axis=1)
     ff = (np.linspace(0.0, 1.0, 5), np.zeros((5, robot.n_joints))) if extras else (None, None)
     state = State(d.qpos.copy(), np.zeros(m.nv))
     return Gait(robot=robot.name, domain_graph="flat", stance="right", joints=robot.spec.joints,
                 domains=(Domain("single_support", 0.7, beta, *ff),), initial_state=state,
-                pre_impact_state=state if extras else None, params=GaitParams() if extras else None,
+                pre_impact_state=state if extras else None, params=GaitParams().resolved("flat") if extras else None,
                 solver={"status": "none", "iterations": 0} if extras else None,
                 meta={"source": "test", "tags": ["standing", 1.5, None, True]} if extras else {})

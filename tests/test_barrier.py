@@ -26,13 +26,19 @@ from robustgait.barrier import (
     violation_bound,
     violation_end,
 )
+from robustgait.config import CertifyConfig
 from robustgait.errors import RobustGaitError
+
+
+def uniform(**kw: object) -> CertifyConfig:
+    """The paper's estimator with these options."""
+    return CertifyConfig(method="uniform", **kw)  # type: ignore[arg-type]
 
 # ------------------------------------------------------------------------------ brute-force reference
 
 
 def _feasible(r: float, d: np.ndarray, p: np.ndarray, alpha: float, slack: float, barrier: str = "ball") -> bool:
-    """Definition of DESIGN §6, checked directly: every sample with d_i ≤ r has α r² ≥ p_i² − (1−α) d_i²
+    """Definition of docs/certificate.md, checked directly: every sample with d_i ≤ r has α r² ≥ p_i² − (1−α) d_i²
     (α r ≥ … for the paper's barrier)."""
     act = d <= r
     with np.errstate(over="ignore", invalid="ignore"):
@@ -109,7 +115,7 @@ def test_invariant_radius_matches_brute_force(case: tuple[np.ndarray, np.ndarray
     ref_lenient = _reference(d, p, alpha, r_max, slack=-1e-12, barrier=barrier)
     assert ref_strict - 1e-7 <= r_star <= ref_lenient + 1e-7
 
-    cert = certificate_from_samples(x0, x1, x_star, alpha=alpha, r_max=r_max, barrier=barrier)  # type: ignore[arg-type]
+    cert = certificate_from_samples(x0, x1, x_star, alpha=alpha, r_max=r_max, beta=0.05, barrier=barrier)  # type: ignore[arg-type]
     assert cert.r_star == r_star
     inside = d <= r_star if cert.attained else d < r_star
     assert cert.n_inside == int(inside.sum())
@@ -151,12 +157,12 @@ def test_paper_barrier_condition_and_interval() -> None:
     assert barrier_value(np.array([[0.5, 0.0]]), [0, 0], 0.5, "paper")[0] == 0.25
     m = barrier_margin(np.array([[0.125]]), np.array([[0.625]]), [0.0], 0.7, 0.5, "paper")[0]
     assert m == pytest.approx(0.5 * 0.7 - 0.625**2 + 0.5 * 0.125**2)
-    with pytest.raises(RobustGaitError, match="barrier must be one of ball, paper"):
-        solve_radius(d, p, alpha=0.5, r_max=1.0, barrier="hat")  # type: ignore[arg-type]
+    with pytest.raises(RobustGaitError, match="barrier: must be one of 'ball', 'paper'"):
+        uniform(barrier="hat")
     # for r < 1 the paper's condition is weaker: its r* is at least the ball's on the same samples
     x_star = np.zeros(3)
-    cb = certify_map(lambda x: 1.02 * x + 0.02 * x**2, x_star, r_max=0.9, seed=3)
-    cp = certify_map(lambda x: 1.02 * x + 0.02 * x**2, x_star, r_max=0.9, seed=3, barrier="paper")
+    cb = certify_map(lambda x: 1.02 * x + 0.02 * x**2, x_star, uniform(r_max=0.9, seed=3))
+    cp = certify_map(lambda x: 1.02 * x + 0.02 * x**2, x_star, uniform(r_max=0.9, seed=3, barrier="paper"))
     assert cp.r_star > cb.r_star and cp.barrier == "paper" and "paper barrier" in cp.statement()
 
 
@@ -174,7 +180,7 @@ def test_fell_sample_gives_unattained_supremum() -> None:
     x0 = np.array([[0.2], [-0.5], [0.8], [1.5]])
     x1 = np.array([[0.1], [-0.25], [np.nan], [0.0]])  # the sample at 0.8 fell
     assert invariant_radius(x0, x1, [0.0], alpha=0.05, r_max=2.0) == 0.8
-    cert = certificate_from_samples(x0, x1, [0.0], alpha=0.05, r_max=2.0)
+    cert = certificate_from_samples(x0, x1, [0.0], alpha=0.05, r_max=2.0, beta=0.05, barrier="ball")
     assert not cert.attained and cert.n_inside == 2  # the open ball: 0.2 and 0.5
     assert cert.fell.tolist() == [False, False, True, False]
     assert cert.margins[2] == -np.inf
@@ -190,7 +196,7 @@ def test_fell_sample_gives_unattained_supremum() -> None:
 
 def test_linear_contraction_gives_r_max() -> None:
     x_star = np.array([0.3, -0.2, 1.0])
-    cert = certify_map(lambda x: x_star + 0.5 * (x - x_star), x_star, r_max=1.5, n_samples=500, seed=1)
+    cert = certify_map(lambda x: x_star + 0.5 * (x - x_star), x_star, uniform(r_max=1.5, n_samples=500, seed=1))
     assert cert.r_star == 1.5 and cert.attained
     assert cert.n_inside == 500 and not cert.fell.any()
     assert np.all(cert.margins >= 0)
@@ -199,7 +205,7 @@ def test_linear_contraction_gives_r_max() -> None:
 def test_expanding_direction_drives_r_star_to_zero() -> None:
     # P(x) = diag(0.5, 0.5, 1.5) x: points on the third axis leave every ball, so the true r* is 0.
     D = np.diag([0.5, 0.5, 1.5])
-    radii = [certify_map(lambda x: x @ D, np.zeros(3), n_samples=N, seed=0).r_star for N in (50, 500, 5000)]
+    radii = [certify_map(lambda x: x @ D, np.zeros(3), uniform(n_samples=N, seed=0)).r_star for N in (50, 500, 5000)]
     assert radii[0] > radii[1] > radii[2]
     assert radii[2] < 0.25
 
@@ -212,7 +218,7 @@ def test_cubic_map_hand_derived_radius() -> None:
     # r* = the smallest d_i > 1 (the bad intervals [d, d·√((d⁴−1+α)/α)) chain up to r_max for dense
     # samples), i.e. 1 ≤ r* ≤ 1 + t with P(no d_i in (1, 1+t)) = (1 − t/2)^N ≈ e^{−Nt/2}: t = 24/N.
     for N in (400, 4000):
-        cert = certify_map(lambda x: x**3, np.zeros(1), r_max=2.0, n_samples=N, seed=2)
+        cert = certify_map(lambda x: x**3, np.zeros(1), uniform(r_max=2.0, n_samples=N, seed=2))
         assert 1.0 <= cert.r_star <= 1.0 + 24.0 / N
         assert not cert.attained
 
@@ -227,7 +233,7 @@ def test_fell_region_hand_derived_radius() -> None:
         return np.where(np.linalg.norm(x, axis=1, keepdims=True) <= a, 0.5 * x, np.nan)
 
     for N in (300, 3000):
-        cert = certify_map(P, np.zeros(2), r_max=2.0, n_samples=N, seed=3)
+        cert = certify_map(P, np.zeros(2), uniform(r_max=2.0, n_samples=N, seed=3))
         assert a <= cert.r_star <= a + 24.0 / (a * N)
         assert not cert.attained
         assert cert.n_inside == int(np.sum(np.linalg.norm(cert.samples, axis=1) <= a))
@@ -263,7 +269,8 @@ def test_violation_bound_formula() -> None:
 
 
 def test_certificate_statement_and_json() -> None:
-    cert = certify_map(lambda x: np.where(np.abs(x) > 1.2, np.nan, 0.5 * x), np.zeros(1), n_samples=100, seed=4)
+    P = lambda x: np.where(np.abs(x) > 1.2, np.nan, 0.5 * x)  # noqa: E731
+    cert = certify_map(P, np.zeros(1), uniform(n_samples=100, seed=4))
     assert cert.confidence == 0.95
     assert cert.violation_bound == violation_bound(cert.n_inside, 100, 0.05)
     text = cert.statement()
@@ -280,9 +287,9 @@ def test_same_seed_same_certificate() -> None:
     def P(x: np.ndarray) -> np.ndarray:
         return 0.9 * x + 0.2 * x**2
 
-    a = certify_map(P, np.zeros(2), n_samples=150, seed=11)
-    b = certify_map(P, np.zeros(2), n_samples=150, seed=11)
-    c = certify_map(P, np.zeros(2), n_samples=150, seed=12)
+    a = certify_map(P, np.zeros(2), uniform(n_samples=150, seed=11))
+    b = certify_map(P, np.zeros(2), uniform(n_samples=150, seed=11))
+    c = certify_map(P, np.zeros(2), uniform(n_samples=150, seed=12))
     assert a.to_dict() == b.to_dict()
     assert np.array_equal(a.samples, b.samples) and a.seed == 11
     assert not np.array_equal(a.samples, c.samples)
@@ -309,7 +316,7 @@ def test_same_seed_same_certificate() -> None:
 def test_certify_map_bad_inputs(kwargs: dict) -> None:
     args: dict = {"P": lambda x: 0.5 * x, "x_star": [0.0, 0.0], **kwargs}
     with pytest.raises(RobustGaitError) as err:
-        certify_map(args.pop("P"), args.pop("x_star"), **args)
+        certify_map(args.pop("P"), args.pop("x_star"), uniform(**args))
     assert "\n" not in str(err.value)
 
 
@@ -322,8 +329,6 @@ def test_invariant_radius_bad_inputs() -> None:
         (x, x, [0, 0, 0], good),
         (np.full((4, 2), np.nan), x, [0, 0], good),
         (x, x, [np.nan, 0], good),
-        (x, x, [0, 0], {"alpha": 1.5, "r_max": 1.0}),
-        (x, x, [0, 0], {"alpha": 0.05, "r_max": 0.0}),
     ]
     for x0, x1, xs, kw in cases:
         with pytest.raises(RobustGaitError):

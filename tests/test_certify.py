@@ -6,18 +6,21 @@ import numpy as np
 import pytest
 
 from robustgait import RobustGaitError
-from robustgait.certify import CertifyConfig, certify_gait
+from robustgait.certify import certify_gait
 from robustgait.cli import main
-from robustgait.estimators import SequentialConfig
+from robustgait.config import CertifyConfig, SequentialConfig, SimConfig
 from robustgait.poincare import ReturnMap
 from robustgait.report import outcome_masks, plot_barrier_trace, plot_certificate
-from robustgait.sim.engine import SimConfig
-from tests.conftest import ATALANTE_GAIT, ATALANTE_SPEC, EXO_GAIT, needs_atalante, standing_gait
+from tests.conftest import EXO_GAIT, standing_gait
+
+
+def uniform(**kw):  # type: ignore[no-untyped-def]
+    return CertifyConfig(method="uniform", **kw)
 
 
 @pytest.fixture(scope="module")
 def small_cert(robot_gait):
-    return certify_gait(*robot_gait, CertifyConfig(n_samples=24, r_max=1.0, seed=3))
+    return certify_gait(*robot_gait, uniform(n_samples=24, r_max=1.0, seed=3))
 
 
 # a sequential certificate small enough for a test: ε = 0.2 needs 17 verification samples
@@ -47,14 +50,14 @@ def test_certificate_is_consistent(small_cert):
 def test_same_seed_same_json(robot_gait, small_cert):
     """Same seed, same certificate — also on one rollout thread instead of one per core (studies give every
     worker all cores and rely on it)."""
-    again = certify_gait(*robot_gait, CertifyConfig(n_samples=24, r_max=1.0, seed=3, sim=SimConfig(n_threads=1)))
+    again = certify_gait(*robot_gait, uniform(n_samples=24, r_max=1.0, seed=3), SimConfig(n_threads=1))
     a, b = small_cert.to_dict(), again.to_dict()
     a.pop("seconds")
     b.pop("seconds")
-    assert b["config"]["sim"]["n_threads"] == 1
-    b["config"]["sim"]["n_threads"] = a["config"]["sim"]["n_threads"]
+    assert b["sim"]["n_threads"] == 1
+    b["sim"]["n_threads"] = a["sim"]["n_threads"]
     assert json.dumps(a) == json.dumps(b)
-    other = certify_gait(*robot_gait, CertifyConfig(n_samples=24, r_max=1.0, seed=4))
+    other = certify_gait(*robot_gait, uniform(n_samples=24, r_max=1.0, seed=4))
     assert other.to_dict()["samples"] != a["samples"]
 
 
@@ -68,7 +71,7 @@ def test_sequential_certificate(robot_gait, seq_cert):
     d = np.linalg.norm(c.samples - c.x_star, axis=1)
     assert np.all(c.margins[d < c.r_star] >= 0)
     # round 1 is the uniform estimator's draw (16 samples, seed 3): relative to x*, it depends on the seed only
-    u = certify_gait(*robot_gait, CertifyConfig(n_samples=16, r_max=1.0, seed=3))
+    u = certify_gait(*robot_gait, uniform(n_samples=16, r_max=1.0, seed=3))
     np.testing.assert_array_equal(c.samples[:16], u.certificate.samples)
     assert c.rounds[0].r_hat == u.r_star
     res = json.loads(json.dumps(seq_cert.to_dict(), allow_nan=False))
@@ -99,11 +102,11 @@ def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
     qvel = stand.initial_state.qvel.copy()
     qvel[3] = 6.0
     tipped = dataclasses.replace(stand, initial_state=dataclasses.replace(stand.initial_state, qvel=qvel))
-    fell = certify_gait(exo, tipped, CertifyConfig())
+    fell = certify_gait(exo, tipped, uniform())
     assert fell.status == "fell_before_fixed_point" and fell.r_star == 0 and fell.vacuous
     assert fell.certificate is None and fell.fixed_point is None and "fell within step 1" in fell.reason
     assert fell.steps_walked == 0
-    none = certify_gait(exo, exo_gait, CertifyConfig(fp_tol=1e-9, fp_max_steps=12, fp_min_steps=10))
+    none = certify_gait(exo, exo_gait, uniform(fp_tol=1e-9, fp_max_steps=12, fp_min_steps=10))
     assert none.status == "no_fixed_point" and none.r_star == 0 and none.steps_walked == 12
     res = json.loads(json.dumps(none.to_dict(), allow_nan=False))
     assert res["status"] == "no_fixed_point" and res["r_star"] == 0 and res["vacuous"] and res["x_star"] is None
@@ -117,7 +120,7 @@ def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
         return out
 
     monkeypatch.setattr(ReturnMap, "__call__", falls_at_x_star)
-    unstable = certify_gait(exo, exo_gait, CertifyConfig(n_samples=4))
+    unstable = certify_gait(exo, exo_gait, uniform(n_samples=4))
     assert unstable.status == "unstable_fixed_point" and unstable.r_star == 0
     assert unstable.fixed_point is not None and unstable.steps_walked == unstable.fixed_point.steps
     assert "falls from its own fixed point" in unstable.statement()
@@ -143,7 +146,7 @@ def test_figures(tmp_path, small_cert, seq_cert):
     ({"r_max": 0.0}, "r_max"), ({"r_max": -1.0}, "r_max"), ({"alpha": 0.0}, "alpha"), ({"alpha": 1.0}, "alpha"),
     ({"n_samples": 0}, "samples"), ({"seed": -1}, "seed"), ({"method": "grid"}, "method"),
     ({"barrier": "hat"}, "barrier"), ({"method": "sequential", "sequential": SequentialConfig(budget=300)},
-                                      "budget 300 cannot hold"),
+                                      "budget: 300 samples cannot hold"),
 ])
 def test_bad_config(kwargs, message):
     with pytest.raises(RobustGaitError, match=message):
@@ -157,7 +160,7 @@ def _cli(capsys, *argv):
 
 
 def test_cli_certify_json(capsys, tmp_path):
-    code, out, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--samples", "12",
+    code, out, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--method", "uniform", "--samples", "12",
                         "--json", "--plot", str(tmp_path / "c.png"), "-o", str(tmp_path / "c.json"))
     res = json.loads(out)
     assert code == 0
@@ -181,31 +184,33 @@ def test_cli_certify_sequential(capsys, tmp_path):
     assert len(full["samples"]) == len(full["sample_round"]) == res["n_samples"]
 
 
-@needs_atalante
 @pytest.mark.parametrize("extra, status, message", [
-    (["--switching", "time"], "fell_before_fixed_point", "before a fixed point was reached"),
+    (["--override", "sim.max_step_tau=1.002"], "fell_before_fixed_point", "before a fixed point was reached"),
     (["--fp-tol", "1e-9", "--fp-max-steps", "12"], "no_fixed_point", "no fixed point within 12 steps"),
 ])
 def test_cli_certify_gait_failure_is_a_result(capsys, tmp_path, extra, status, message):
     out_json = tmp_path / "c.json"
-    code, out, err = _cli(capsys, "certify", str(ATALANTE_GAIT), "--robot", str(ATALANTE_SPEC), "--samples", "4",
+    code, out, err = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--method", "uniform", "--samples", "4",
                           "-o", str(out_json), *extra)
     assert code == 1 and err == "" and out.startswith(f"{status}: r* = 0") and message in out
     assert json.loads(out_json.read_text())["status"] == status
-    code, out, _ = _cli(capsys, "certify", str(ATALANTE_GAIT), "--robot", str(ATALANTE_SPEC), "--json", *extra)
+    code, out, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--json", *extra)
     assert code == 1 and json.loads(out)["status"] == status
 
 
-@needs_atalante
 @pytest.mark.parametrize("extra, message", [
-    (["--r-max", "0"], "--r-max"), (["--r-max", "-2"], "--r-max"), (["--alpha", "1.5"], "--alpha"),
+    (["--r-max", "0"], "argument --r-max: must satisfy 0 < x ≤ 10 rad/s (got 0.0)"),
+    (["--r-max", "-2"], "--r-max"), (["--alpha", "1.5"], "--alpha"),
     (["--alpha", "0"], "--alpha"), (["--samples", "0"], "--samples"), (["--epsilon", "0"], "--epsilon"),
     (["--beta", "1"], "--beta"), (["--budget", "0"], "--budget"),
-    (["--method", "sequential", "--budget", "100"], "budget 100 cannot hold"),
+    (["--method", "grid"], "argument --method: must be one of 'sequential', 'uniform' (got 'grid')"),
+    (["--method", "sequential", "--budget", "100"], "argument --budget: 100 samples cannot hold"),
+    (["--override", "certify.sequential.budget=100"], "--override certify.sequential.budget=100: "),
+    (["--override", "certify.nope=1"], "certify.nope: unknown setting"),
 ])
 def test_cli_certify_bad_input(capsys, tmp_path, extra, message):
     out_json = tmp_path / "c.json"
-    code, out, err = _cli(capsys, "certify", str(ATALANTE_GAIT), "--robot", str(ATALANTE_SPEC), "--samples", "4",
+    code, out, err = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--samples", "4",
                           "-o", str(out_json), *extra)
     assert code == 2 and out == "" and message in err and len(err.strip().splitlines()) == 1
     assert not out_json.exists()

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from robustgait.dynamics import FOOT_FRAME_KINDS, Dynamics, base_transform, foot_frame, quat_to_rotation
+from robustgait.io.robotfile import load_robot
 from robustgait.robots import Robot
 
 REPO = Path(__file__).resolve().parents[1]
@@ -39,7 +40,7 @@ _CACHE: dict[str, Dynamics] = {}
 def dyn(request: pytest.FixtureRequest) -> Dynamics:
     name = request.param
     if name not in _CACHE:
-        _CACHE[name] = Dynamics(name)
+        _CACHE[name] = Dynamics(load_robot(name))
     return _CACHE[name]
 
 
@@ -124,7 +125,7 @@ def test_base_transform_numeric_and_symbolic() -> None:
 
 
 def test_exo_frames_match_mujoco_frame_bodies() -> None:
-    dyn = _CACHE.setdefault("exo", Dynamics("exo"))
+    dyn = _CACHE.setdefault("exo", Dynamics(load_robot("exo")))
     m = dyn.robot.model
     assert set(dyn.frames) == {foot_frame(s, k) for s in SIDES for k in FOOT_FRAME_KINDS}
     for qpos, qvel in random_states(dyn.robot, seed=3):
@@ -140,7 +141,7 @@ def test_atalante_foot_frames_sit_on_the_sole_box() -> None:
     """Atalante has no frame bodies: they are added from the sole box (bottom face, toe/heel edges), placed as
     exact mirror images of each other — Atalante's two sole boxes both sit 33 µm to the right of their feet,
     so each frame is within that of its box and the pair is symmetric to 1e-12."""
-    dyn = _CACHE.setdefault(str(ATALANTE_SPEC), Dynamics(ATALANTE_SPEC))
+    dyn = _CACHE.setdefault(str(ATALANTE_SPEC), Dynamics(load_robot(ATALANTE_SPEC)))
     robot = dyn.robot
     m = robot.model
     signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
@@ -189,7 +190,7 @@ def test_joint_offsets_and_static_bodies_are_handled(tmp_path: Path) -> None:
         "<!-- pelvis:": '<body name="crate" pos="2 0 0.2"><inertial pos="0 0 0" mass="10" diaginertia="1 1 1"/>'
                         '<geom type="box" size="0.2 0.2 0.2"/></body>\n<!-- pelvis:',
     })
-    dyn = Dynamics(spec)
+    dyn = Dynamics(load_robot(spec))
     m = dyn.robot.model
     assert dyn.total_mass == pytest.approx(dyn.robot.mass, rel=1e-9)
     for qpos, qvel in random_states(dyn.robot, n=4, seed=5):
@@ -205,8 +206,8 @@ def test_joint_offsets_and_static_bodies_are_handled(tmp_path: Path) -> None:
 def test_missing_frame_bodies_are_added_from_the_sole(tmp_path: Path) -> None:
     edit = {f'<body name="{side}_{kind}_frame"': f'<site name="{side}_{kind}_site"'
             for side in SIDES for kind in FOOT_FRAME_KINDS}
-    dyn = Dynamics(_write_exo_variant(tmp_path, edit))
-    ref = _CACHE.setdefault("exo", Dynamics("exo"))
+    dyn = Dynamics(load_robot(_write_exo_variant(tmp_path, edit)))
+    ref = _CACHE.setdefault("exo", Dynamics(load_robot("exo")))
     for qpos, _ in random_states(dyn.robot, n=3, seed=6):
         for name, (pos, rot) in dyn.foot_frames(qpos).items():
             pos_ref, rot_ref = ref.frame_pose(name, qpos)
@@ -216,7 +217,7 @@ def test_missing_frame_bodies_are_added_from_the_sole(tmp_path: Path) -> None:
 
 def test_armature_is_added_to_the_mass_matrix(tmp_path: Path) -> None:
     spec = _write_exo_variant(tmp_path, {'armature="0"': 'armature="0.3"'})
-    dyn = Dynamics(spec)
+    dyn = Dynamics(load_robot(spec))
     m = dyn.robot.model
     assert np.all(m.dof_armature[6:] == 0.3)
     qpos, qvel = random_states(dyn.robot, n=1, seed=7)[0]

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from robustgait.barrier import certify_map, distances, sample_ball, solve_radius
+from robustgait.config import CertifyConfig, SequentialConfig
 from robustgait.errors import RobustGaitError
 from robustgait.estimators import (
-    SequentialConfig,
     certify_map_sequential,
     propose_round,
     verification_beta,
@@ -25,6 +25,16 @@ from robustgait.synthetic import BandMap, ConeMap
 X_STAR = np.array([0.4, 0.2, 0.3])
 
 
+def seq(seed: int = 0, beta: float = 0.05, **sequential: object) -> CertifyConfig:
+    """The sequential estimator with this seed, β and options."""
+    return CertifyConfig(method="sequential", seed=seed, beta=beta,
+                         sequential=SequentialConfig(**sequential))  # type: ignore[arg-type]
+
+
+def uniform(**kw: object) -> CertifyConfig:
+    return CertifyConfig(method="uniform", **kw)  # type: ignore[arg-type]
+
+
 def test_verification_sizes_spend_beta() -> None:
     assert sum(verification_beta(0.05, a) for a in range(1, 60)) == pytest.approx(0.05)
     for eps, beta in ((0.02, 0.05), (0.1, 0.05), (0.05, 0.01)):
@@ -34,7 +44,7 @@ def test_verification_sizes_spend_beta() -> None:
             assert verification_bound(n, beta, a) <= eps
             assert (1 - verification_bound(n, beta, a)) ** n == pytest.approx(verification_beta(beta, a))
     assert verification_size(0.02, 0.05, 1) == 183  # ln(0.025) / ln(0.98) = 182.6
-    with pytest.raises(RobustGaitError):
+    with pytest.raises(ValueError, match="count from 1"):
         verification_size(0.02, 0.05, 0)
 
 
@@ -47,8 +57,10 @@ def test_bad_sequential_config(kwargs: dict) -> None:
 
 
 def test_budget_must_hold_a_verification() -> None:
-    with pytest.raises(RobustGaitError, match="budget 300 cannot hold"):
-        certify_map_sequential(lambda x: x, X_STAR, config=SequentialConfig(budget=300))
+    with pytest.raises(RobustGaitError, match=r"CertifyConfig.sequential.budget: 300 samples cannot hold the first "
+                       r"round \(200\) and one verification batch \(183 for epsilon = 0.02, beta = 0.05\)"):
+        seq(budget=300)
+    CertifyConfig(method="uniform", sequential=SequentialConfig(budget=300))  # the budget is the sequential's
 
 
 # ----------------------------------------------------------------------------------- known answers
@@ -61,20 +73,19 @@ def test_sequential_converges_to_the_true_radius_and_uniform_overestimates() -> 
     seeds = range(6)
     errors = []
     for explore in (50, 200, 800):
-        cfg = SequentialConfig(explore=explore, budget=5000)
-        r = np.array([certify_map_sequential(P, X_STAR, seed=s, config=cfg).r_star for s in seeds])
+        r = np.array([certify_map_sequential(P, X_STAR, seq(s, explore=explore, budget=5000)).r_star for s in seeds])
         assert np.all(r >= P.r_star)  # an estimate from samples can only be too large
         errors.append(float(np.mean(r / P.r_star - 1)))
     assert errors[0] > errors[1] > errors[2]
     assert errors[2] < 0.002
     # the paper's estimator, N = 200 uniform in B(2): ~1.6 samples in the cone, far beyond r0
-    uniform = np.array([certify_map(P, X_STAR, n_samples=200, seed=s).r_star for s in range(10)])
-    assert np.all(uniform >= P.r_star) and np.median(uniform) > 2 * P.r_star
+    paper = np.array([certify_map(P, X_STAR, uniform(n_samples=200, seed=s)).r_star for s in range(10)])
+    assert np.all(paper >= P.r_star) and np.median(paper) > 2 * P.r_star
 
 
 def test_certificate_rounds_and_statement() -> None:
     P = ConeMap(X_STAR, r0=0.3, half_angle=0.2003)
-    c = certify_map_sequential(P, X_STAR, seed=3)
+    c = certify_map_sequential(P, X_STAR, seq(3))
     cfg = SequentialConfig()
     kinds = [r.kind for r in c.rounds]
     assert kinds[0] == "uniform" and kinds[-1] == "verify" and set(kinds[1:-1]) == {"explore"}
@@ -95,21 +106,21 @@ def test_certificate_rounds_and_statement() -> None:
     assert "95%" in text and "183 fresh samples" in text and "\n" not in text
     js = json.loads(json.dumps(c.to_dict(), allow_nan=False))
     assert [r["r_hat"] for r in js["rounds"]] == r_hat and len(js["sample_round"]) == c.n_samples
-    again = certify_map_sequential(P, X_STAR, seed=3)
+    again = certify_map_sequential(P, X_STAR, seq(3))
     assert again.to_dict() == c.to_dict()
 
 
 def test_budget_spent_and_vacuous_statements() -> None:
     # every ball has 30 % violating volume: no verification batch can pass
     P = BandMap(X_STAR, a=0.3)
-    c = certify_map_sequential(P, X_STAR, config=SequentialConfig(budget=1500))
+    c = certify_map_sequential(P, X_STAR, seq(budget=1500))
     assert c.budget_exhausted and c.violation_bound == 1.0 and c.n_samples <= 1500
     assert [r.kind for r in c.rounds].count("verify") >= 2 and not any(r.passed for r in c.rounds)
     assert "budget" in c.statement() and "no confidence statement" in c.statement()
     # a map that moves every point away (a translation by 5): r* is the nearest sample, nothing inside
     shift = np.array([5.0, 0.0, 0.0])
-    for c in (certify_map(lambda x: x + shift, X_STAR, seed=1),
-              certify_map_sequential(lambda x: x + shift, X_STAR, seed=1, config=SequentialConfig(budget=800))):
+    for c in (certify_map(lambda x: x + shift, X_STAR, uniform(seed=1)),
+              certify_map_sequential(lambda x: x + shift, X_STAR, seq(1, budget=800))):
         assert c.vacuous and c.n_inside == 0 and c.violation_bound == 1.0
         assert "vacuous" in c.statement()
         assert c.r_star == np.min(np.linalg.norm(c.samples - X_STAR, axis=1))
@@ -141,11 +152,10 @@ def test_coverage_of_the_sequential_statement(a: float, c: float) -> None:
     # 0.05 + 0.15 r grows with r, exceeding ε beyond r = 1/3.
     eps, beta, runs = 0.1, 0.05, 200
     P = BandMap(X_STAR, a=a, c=c)
-    cfg = SequentialConfig(epsilon=eps, budget=600, first_round=50, round_size=50, explore=100,
-                           explore_after_failure=50)
     wrong = 0
     for seed in range(runs):
-        cert = certify_map_sequential(P, X_STAR, seed=seed, beta=beta, config=cfg)
+        cert = certify_map_sequential(P, X_STAR, seq(seed, beta, epsilon=eps, budget=600, first_round=50, round_size=50,
+                                                     explore=100, explore_after_failure=50))
         wrong += cert.violation_bound < 1.0 and P.violating_fraction(cert.r_star) > eps
     # one-sided binomial test at level 0.001: 200 runs with a failure rate ≤ β give > 20 failures w.p. 0.0012
     assert wrong <= 20
@@ -160,15 +170,15 @@ def test_coverage_of_the_sequential_statement(a: float, c: float) -> None:
 def test_common_random_numbers_across_maps() -> None:
     # two different maps and fixed points, one seed: the same relative perturbations wherever the radii agree
     xa, xb = np.array([0.4, 0.2, 0.3]), np.array([-1.0, 2.0, 0.5])
-    ca = certify_map_sequential(lambda x: xa + 0.5 * (x - xa), xa, seed=7)
-    cb = certify_map_sequential(lambda x: xb + 0.8 * (x - xb), xb, seed=7)
+    ca = certify_map_sequential(lambda x: xa + 0.5 * (x - xa), xa, seq(7))
+    cb = certify_map_sequential(lambda x: xb + 0.8 * (x - xb), xb, seq(7))
     assert ca.r_star == cb.r_star == 2.0 and ca.n_samples == cb.n_samples
     np.testing.assert_allclose(ca.samples - xa, cb.samples - xb, atol=1e-12)
     # with data-dependent radii: the first round is identical; exploration draws the same directions and
     # radius fractions (global proposals) and verification the same directions and fractions, scaled by r̂
     P1, P2 = ConeMap(xa, r0=0.3, half_angle=0.2003), ConeMap(xb, r0=0.6, half_angle=0.3)
-    c1 = certify_map_sequential(P1, xa, seed=7)
-    c2 = certify_map_sequential(P2, xb, seed=7)
+    c1 = certify_map_sequential(P1, xa, seq(7))
+    c2 = certify_map_sequential(P2, xb, seq(7))
     first = c1.round_of_sample == 0
     np.testing.assert_allclose(c1.samples[first] - xa, c2.samples[c2.round_of_sample == 0] - xb, atol=1e-12)
 
@@ -188,8 +198,8 @@ def test_common_random_numbers_across_maps() -> None:
 
 def test_first_round_is_the_uniform_estimator() -> None:
     P = ConeMap(X_STAR, r0=0.3, half_angle=0.2003)
-    u = certify_map(P, X_STAR, n_samples=200, seed=5)
-    s = certify_map_sequential(P, X_STAR, seed=5)
+    u = certify_map(P, X_STAR, uniform(n_samples=200, seed=5))
+    s = certify_map_sequential(P, X_STAR, seq(5))
     np.testing.assert_array_equal(s.samples[:200], u.samples)
     assert s.rounds[0].r_hat == u.r_star and u.rounds[0].r_hat == u.r_star
 

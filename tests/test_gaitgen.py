@@ -5,10 +5,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from robustgait import GaitParams, load_gait, load_robot, walk
-from robustgait.certify import CertifyConfig, certify_gait
+from robustgait import GaitParams, RobustGaitError, load_gait, load_robot, walk
+from robustgait.certify import certify_gait
 from robustgait.cli import main
-from robustgait.estimators import SequentialConfig
+from robustgait.config import CertifyConfig, GenerationConfig, SequentialConfig
 from robustgait.gaitgen import GaitGenerator, generate_gait
 from robustgait.gaitgen.check import check_solution
 from robustgait.gaitgen.solve import pack
@@ -41,7 +41,7 @@ def test_default_gait_passes_the_physics_check(exo, gen, default):
     assert np.all(np.abs(ns.u) <= exo.torque_limit + 1e-6)
     g = default.gait
     assert g.domains[0].beta.shape == (12, 8) and g.domains[0].ff_torque.shape == (17, 12)
-    assert g.params == GaitParams() and g.solver["status"] == "Solve_Succeeded"
+    assert g.params == GaitParams().resolved("flat") and g.solver["status"] == "Solve_Succeeded"
     # both soles flat on the floor at τ = 0, the feet a step apart (MuJoCo kinematics)
     m, d = exo.model, mujoco.MjData(exo.model)
     d.qpos[:] = g.initial_state.qpos
@@ -114,7 +114,7 @@ def _walks_like_an_exoskeleton(robot, gait, max_speed_error=0.03):
 @pytest.mark.slow
 def test_default_gait_walks_and_gets_a_certificate(exo, default):
     _walks_like_an_exoskeleton(exo, default.gait)
-    cert = certify_gait(exo, default.gait, CertifyConfig(n_samples=50))
+    cert = certify_gait(exo, default.gait, CertifyConfig(method="uniform", n_samples=50))
     assert cert.ok and np.linalg.norm(cert.fixed_point.x_star) <= 1.0 and cert.r_star > 0
     # the sequential estimator, small: ε = 0.2 (17 verification samples), 40 exploration samples
     seq = certify_gait(exo, default.gait, CertifyConfig(method="sequential", sequential=SequentialConfig(
@@ -159,13 +159,18 @@ def test_grid_over_the_action_space_walks(exo, gen):
 @pytest.mark.parametrize("kwargs, reason", [
     ({"step_width": 0.1}, "feet collide"),
     ({"step_length": 1.3}, "beyond the leg reach"),
-    ({"step_duration": 0.0}, "step_duration"),
-    ({"step_height": -0.01}, "step_height"),
 ])
 @pytest.mark.slow
 def test_infeasible_parameters_fail_with_a_reason(exo, gen, kwargs, reason):
-    res = generate_gait(exo, **kwargs, generator=gen)
+    res = generate_gait(exo, GaitParams(**kwargs), generator=gen)
     assert not res.success and res.gait is None and res.status == "Infeasible_Parameters" and reason in res.reason
+
+
+@pytest.mark.parametrize("kwargs, field", [({"step_duration": 0.0}, "step_duration"),
+                                           ({"step_height": -0.01}, "step_height")])
+def test_parameters_out_of_their_bounds_are_refused(kwargs, field):
+    with pytest.raises(RobustGaitError, match=f"GaitParams.{field}: must satisfy"):
+        GaitParams(**kwargs)
 
 
 def test_cli_generate_errors_exit_2_and_write_nothing(tmp_path, capsys):
@@ -196,7 +201,7 @@ def test_atalante_generated_gait_walks(tmp_path, capsys):
     robot = load_robot(ATALANTE_SPEC)
     gait = load_gait(out, robot)
     _walks_like_an_exoskeleton(robot, gait)
-    cert = certify_gait(robot, gait, CertifyConfig(n_samples=20))
+    cert = certify_gait(robot, gait, CertifyConfig(method="uniform", n_samples=20))
     assert np.linalg.norm(cert.fixed_point.x_star) <= 1.0
 
 
@@ -206,17 +211,15 @@ def test_atalante_multicontact_gait_walks_and_is_certified():
     """Atalante rolls heel-to-toe only with its swing sole free to leave toe-off toe-down
     (gait_quality.swing_toe_down_until = 0.5 in examples/atalante.toml): then the T = 1.0 s gait walks 50 steps,
     striking at the planned time, at L/T, and has a certificate."""
-    from robustgait.gaitgen import GaitGenConfig
-
     robot = load_robot(ATALANTE_SPEC)
     assert robot.spec.gait_quality.swing_toe_down_until == 0.5
-    res = GaitGenerator(robot, GaitGenConfig(domains="multicontact")).solve(GaitParams(step_duration=1.0))
+    res = GaitGenerator(robot, GenerationConfig(domains="multicontact")).solve(GaitParams(step_duration=1.0))
     assert res.success and res.check.passed, res.reason
     w = walk(robot, res.gait, steps=50)
     assert w.steps_taken == 50 and not w.fell
     assert all(abs(e.tau - 1.0) < 0.02 for e in w.events)  # no early heel strike
     assert w.mean_speed == pytest.approx(0.15 / 1.0, rel=0.05)
-    cert = certify_gait(robot, res.gait, CertifyConfig(n_samples=24, r_max=1.0, seed=3))
+    cert = certify_gait(robot, res.gait, CertifyConfig(method="uniform", n_samples=24, r_max=1.0, seed=3))
     assert cert.ok, cert.reason
 
 
@@ -225,10 +228,9 @@ def test_multicontact_generation(exo):
     """The 2-domain problem: solves from a cold start, passes the physics check in both domains and through both
     impacts, reproduces the stored multi-contact test gait, and warm-starts faster."""
     from robustgait.bezier import bezier
-    from robustgait.gaitgen import GaitGenConfig, default_params
 
-    gen = GaitGenerator(exo, GaitGenConfig(domains="multicontact"))
-    params = default_params("multicontact")
+    gen = GaitGenerator(exo, GenerationConfig(domains="multicontact"))
+    params = GaitParams().resolved("multicontact")
     res = gen.solve(params)
     assert res.success, res.reason
     c = res.check
@@ -260,4 +262,5 @@ def test_cli_multicontact_bad_rolling_fraction(tmp_path, capsys):
     assert main(["gait", "generate", "--robot", "exo", "--domains", "multicontact", "--rolling-fraction", "0.9",
                  "-o", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "rolling_fraction" in err and len(err.strip().splitlines()) == 1 and not out.exists()
+    assert "--rolling-fraction: must satisfy 0.05 ≤ x ≤ 0.6 (got 0.9)" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()

@@ -35,6 +35,7 @@ from hypothesis.extra import numpy as hnp
 
 from robustgait import load_gait, load_robot
 from robustgait.cli import main
+from robustgait.io.gaitfile import save_gait
 from robustgait.robots.spec import SHIPPED_DIR
 from tests.conftest import standing_gait
 
@@ -287,7 +288,7 @@ def test_mutated_spec_toml_loads_or_fails_cleanly(exo, spec_tree, data):
     with workdir() as wd:
         spec, gait = wd / "spec.toml", wd / "gait.json"
         spec.write_bytes(raw)
-        standing_gait(exo).save(gait)
+        save_gait(standing_gait(exo), gait)
         mjcf = Path(spec_tree["mjcf"])
         code, out = run_cli(["walk", gait, "--robot", spec, "--steps", "1", "--json"], wd, [spec, gait, mjcf], [])
         if code == 0:
@@ -377,6 +378,7 @@ OPTIONS = {"walk": ["--steps"], "certify": ["--samples", "--r-max", "--alpha", "
 def test_numeric_arguments_are_bounded(command, data):
     """Any text for a numeric option: refused in one line (exit 2) or accepted within its documented limit."""
     from robustgait.cli import build_parser
+    from robustgait.config import Config, field_at
     from robustgait.io import limits as L
 
     option = data.draw(st.sampled_from(OPTIONS[command]))
@@ -384,18 +386,19 @@ def test_numeric_arguments_are_bounded(command, data):
     argv = [command, "in.csv"] + (["--robot", "exo"] if command != "barrier-eval" else ["--x-star", "0", "--r", "1"])
     argv += [f"{option}={text}"]
     err = io.StringIO()
+    parser = build_parser()
     try:
         with contextlib.redirect_stderr(err):
-            args = build_parser().parse_args(argv)
+            args = parser.parse_args(argv)
     except SystemExit as exc:
         assert exc.code == 2
         lines = err.getvalue().splitlines()
         assert len(lines) == 1 and lines[0].startswith("robustgait: error: argument " + option)
         return
-    value = getattr(args, option.lstrip("-").replace("-", "_"))
-    limit = {"--steps": L.STEPS, "--samples": L.SAMPLES, "--r-max": L.R_MAX, "--alpha": L.ALPHA, "--seed": L.SEED,
-             "--fp-tol": L.FP_TOL, "--fp-max-steps": L.FP_MAX_STEPS, "--r": L.BARRIER_R, "--epsilon": L.EPSILON,
-             "--beta": L.BETA, "--budget": L.BUDGET}[option]
+    sub = parser._subparsers._group_actions[0].choices[command]  # type: ignore[union-attr]
+    action = next(a for a in sub._actions if option in a.option_strings)
+    value = getattr(args, action.dest)
+    limit = L.BARRIER_R if option == "--r" else field_at(Config, action.robustgait_paths[0]).doc
     assert math.isfinite(value) and limit.contains(value), (option, text, value)
 
 

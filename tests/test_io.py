@@ -10,9 +10,7 @@ import os
 import stat
 import time
 from pathlib import Path
-from typing import Annotated
 
-import msgspec
 import numpy as np
 import pytest
 import yaml
@@ -23,12 +21,10 @@ from robustgait.cli import main
 from robustgait.io import limits as L
 from robustgait.io.logs import load_reduced_log
 from robustgait.io.output import atomic_output, check_output, kind_of, write_csv, write_text
-from robustgait.io.schema import Table, load_file
-from robustgait.robots.spec import SHIPPED_DIR
 from tests.conftest import REPO, standing_gait
+from tests.test_robots import spec_text
 
-EXO_SPEC = (SHIPPED_DIR / "exo" / "spec.toml").read_text().replace(
-    'mjcf = "exo.xml"', f'mjcf = "{SHIPPED_DIR / "exo" / "exo.xml"}"')
+EXO_SPEC = spec_text("exo")
 
 
 def cli(*argv: str) -> tuple[int, str, str]:
@@ -252,7 +248,7 @@ def test_npz_header_is_checked_before_decompressing(tmp_path):
     (["certify", "{g}", "--robot", "exo", "--samples", "1000000000"], "argument --samples: must satisfy"),
     (["certify", "{g}", "--robot", "exo", "--fp-max-steps", "1000000000"], "argument --fp-max-steps: must"),
     (["certify", "{g}", "--robot", "exo", "--r-max", "1e6"], "argument --r-max: must satisfy 0 < x ≤ 10 rad/s"),
-    (["certify", "{g}", "--robot", "exo", "--r-max", "nan"], "argument --r-max: expected a finite number"),
+    (["certify", "{g}", "--robot", "exo", "--r-max", "nan"], "argument --r-max: must be a finite number (got nan)"),
     (["certify", "{g}", "--robot", "exo", "--plot", "{t}/c.txt"], "unknown plot format '.txt'"),
     (["walk", "{g}", "--robot", "exo", "--video", "{t}/v.txt"], "unknown video format '.txt'"),
     (["certify", "{g}", "--robot", "exo", "-o", "{t}"], "is a directory"),
@@ -277,10 +273,12 @@ def test_total_work_is_bounded_before_simulating(tmp_path, gait_file):
     t0 = time.perf_counter()
     code, _, err = cli("walk", slow, "--robot", "exo", "--steps", "1000", "--video", tmp_path / "v.mp4")
     assert code == 2
-    one_error_line(err, f"{slow}: --steps 1000: 1000 simulated steps of up to 15 s", "over the limit of 2e+06")
-    code, _, err = cli("certify", gait_file(), "--robot", "exo", "--samples", "10000", "--map", "stride")
+    one_error_line(err, f"{slow}: 1000 steps (sim.step_cap) with a video: 1000 simulated steps of up to 15 s",
+                   "over the limit of 2e+06")
+    code, _, err = cli("certify", gait_file(), "--robot", "exo", "--method", "uniform", "--samples", "10000", "--map",
+                       "stride")
     assert code == 2
-    one_error_line(err, "--fp-max-steps 100 + --samples 10000", "over the limit of 2e+07")
+    one_error_line(err, "certify.fp_max_steps 100 + certify.n_samples 10000", "over the limit of 2e+07")
     code, _, err = cli("walk", gait_file(), "--robot", "exo", "--steps", "100", "--video", tmp_path / "v.gif")
     assert code == 2
     one_error_line(err, "v.gif: this walk could last 105 s, 3150 frames at 30 fps: a .gif holds at most 1800")
@@ -370,35 +368,14 @@ def test_check_output_kinds():
         check_output("x" * 300 + ".json", "json")
 
 
-# ------------------------------------------------------------------------- the pattern new inputs reuse
-class _ExampleConfig(Table):
-    iterations: Annotated[int, msgspec.Meta(ge=1, le=100)] = 10
-    learner: str = "polar"
-
-
-@pytest.mark.parametrize("name, text, message", [
-    ("c.toml", "iterations = 0\n", "iterations: must satisfy 1 ≤ x ≤ 100 (got 0)"),
-    ("c.toml", 'iterations = "5"\n', "iterations: expected an integer, got a string ('5')"),
-    ("c.json", '{"iterations": 5, "learner": 3}', "learner: expected a string, got an integer (3)"),
-    ("c.yaml", "iteration: 5\n", "iteration: unknown key (known: iterations, learner)"),
-    ("c.ini", "", "unknown study config format '.ini'"),
-])
-def test_load_file_pattern(tmp_path, name, text, message):
-    p = tmp_path / name
-    p.write_text(text)
-    with pytest.raises(RobustGaitError) as err:
-        load_file(p, _ExampleConfig, what="study config")
-    assert str(err.value) == f"{p}: {message}" or message in str(err.value)
-    (tmp_path / "ok.toml").write_text("iterations = 7\n")
-    assert load_file(tmp_path / "ok.toml", _ExampleConfig).iterations == 7
-
-
 # ----------------------------------------------------------------------------------------------- docs
-def test_every_limit_is_documented():
+def test_every_file_limit_is_documented():
+    from robustgait.config import Doc
+
     doc = (REPO / "docs" / "inputs.md").read_text()
-    limits = [v for v in vars(L).values() if isinstance(v, L.Limit)]
-    assert len(limits) >= 25
+    limits = [v for v in vars(L).values() if isinstance(v, Doc)]
+    assert len(limits) >= 20
     for lim in limits:
-        assert lim.text() in doc, (lim.name, lim.text())
+        assert lim.text() in doc, (lim.help, lim.text())
     for name in (n for n, v in vars(L).items() if n.isupper() and isinstance(v, (int, float))):
         assert f"`{name}`" in doc, name

@@ -1,4 +1,4 @@
-"""Learning (DESIGN §7): action space, oracles, Thompson draws, learners on synthetic utilities."""
+"""Learning (docs/studies.md): action space, oracles, Thompson draws, learners on synthetic utilities."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ import pytest
 import torch
 
 from robustgait import GaitParams, RobustGaitError, load_robot
+from robustgait.config import LearnerConfig
 from robustgait.learn import (
     ActionSpace,
     History,
-    LearnerConfig,
     Outcome,
     batch_comparisons,
     make_learner,

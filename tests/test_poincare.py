@@ -2,7 +2,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from robustgait import RobustGaitError
+from robustgait import CertifyConfig, RobustGaitError
 from robustgait.poincare import ReturnMap, frame_rotation, holonomic_reconstruction, reduce_state
 from robustgait.rotations import quat_to_mat
 
@@ -27,7 +27,8 @@ def test_reduced_frames(robot_gait):
     # heading frame: invariant under a rotation of the whole robot about the vertical
     turned = qpos.copy()
     turned[0, 3:7] = _qmul(_yaw_quat(0.7), s.qpos[3:7])
-    np.testing.assert_allclose(reduce_state(turned, qvel)[0], reduce_state(qpos, qvel)[0], atol=1e-12)
+    np.testing.assert_allclose(reduce_state(turned, qvel, "heading")[0], reduce_state(qpos, qvel, "heading")[0],
+                               atol=1e-12)
     assert not np.allclose(reduce_state(turned, qvel, "world"), reduce_state(qpos, qvel, "world"))
     a = frame_rotation(s.qpos, "heading")
     np.testing.assert_allclose(a @ a.T, np.eye(3), atol=1e-14)
@@ -37,7 +38,8 @@ def test_reduced_state_of_mirror_is_reflected(robot_gait):
     robot, gait = robot_gait
     s = gait.initial_state
     mq, mv = robot.mirror_state(s.qpos[None], s.qvel[None])
-    np.testing.assert_allclose(reduce_state(mq, mv)[0], reduce_state(s.qpos[None], s.qvel[None])[0] * [-1, 1, -1],
+    np.testing.assert_allclose(reduce_state(mq, mv, "heading")[0],
+                               reduce_state(s.qpos[None], s.qvel[None], "heading")[0] * [-1, 1, -1],
                                atol=1e-12)
 
 
@@ -61,7 +63,7 @@ def test_holonomic_reconstruction_keeps_the_stance_sole_twist(step_map):
     xbar = fp.x_star + np.array([[0.3, -0.2, 0.1], [0.0, 0.0, 0.0]])
     qpos, qvel = step_map.reconstruct(xbar)
     np.testing.assert_array_equal(qvel[1], fp.qvel)  # ι(x̄*) = x* exactly
-    np.testing.assert_allclose(reduce_state(qpos, qvel)[0], xbar[0], atol=1e-12)
+    np.testing.assert_allclose(reduce_state(qpos, qvel, "heading")[0], xbar[0], atol=1e-12)
     m, d = robot.model, mujoco.MjData(robot.model)
     d.qpos[:] = qpos[0]
     mujoco.mj_kinematics(m, d)
@@ -85,7 +87,7 @@ def test_holonomic_reconstruction_keeps_the_stance_sole_twist(step_map):
 
 
 def test_angular_only_changes_only_the_angular_velocity(step_map):
-    with ReturnMap(step_map.robot, step_map.gait, reconstruction="angular-only") as pmap:
+    with ReturnMap(step_map.robot, step_map.gait, CertifyConfig(reconstruction="angular-only")) as pmap:
         pmap.fixed_point = step_map.fixed_point
         fp = step_map.fixed_point
         qpos, qvel = pmap.reconstruct(fp.x_star[None] + 0.25)
@@ -95,7 +97,7 @@ def test_angular_only_changes_only_the_angular_velocity(step_map):
 
 @pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_stride_map_fixed_point(robot_gait):
-    with ReturnMap(*robot_gait, kind="stride") as pmap:
+    with ReturnMap(*robot_gait, CertifyConfig(map="stride")) as pmap:
         fp = pmap.find_fixed_point()
         assert fp.steps % 2 == 0 and fp.residual < 5e-3
         out = pmap(np.vstack([fp.x_star, fp.x_star + np.array([3.0, 0, 0])]))
@@ -112,10 +114,10 @@ def test_fixed_point_errors(robot_gait):
     kicked = dataclasses.replace(gait, initial_state=State(s.qpos, s.qvel + np.r_[0, 0, 0, 4.0, 0, 0, np.zeros(12)]))
     with ReturnMap(robot, kicked) as pmap, pytest.raises(RobustGaitError, match="fell within step"):
         pmap.find_fixed_point()
-    with ReturnMap(robot, gait) as pmap:
+    with ReturnMap(robot, gait, CertifyConfig(fp_tol=1e-9, fp_max_steps=12)) as pmap:
         with pytest.raises(RobustGaitError, match=r"no fixed point within 12 steps.*smallest"):
-            pmap.find_fixed_point(tol=1e-9, max_steps=12)
+            pmap.find_fixed_point()
         with pytest.raises(RobustGaitError, match="find the fixed point first"):
             pmap(np.zeros((1, 3)))
-    with pytest.raises(RobustGaitError, match="map must be"):
-        ReturnMap(robot, gait, kind="hop")  # type: ignore[arg-type]
+    with pytest.raises(RobustGaitError, match="map: must be one of 'step', 'stride'"):
+        CertifyConfig(map="hop")  # type: ignore[arg-type]

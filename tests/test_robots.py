@@ -2,61 +2,85 @@ import numpy as np
 import pytest
 
 from robustgait import RobustGaitError, load_robot
-from robustgait.robots import shipped_robots
-from tests.conftest import ATALANTE_SPEC, needs_atalante
+from robustgait.io.robotfile import shipped_robots
+from robustgait.robots.spec import SHIPPED_DIR
+from tests.conftest import ATALANTE_DIR, ATALANTE_SPEC, needs_atalante
 
 
-@needs_atalante
-def test_atalante_spec_loads_with_pd_servos(atalante):
-    assert atalante.n_joints == 12 and abs(atalante.mass - 133.49) < 0.01
-    m = atalante.model
+@pytest.fixture(scope="module", params=["exo", "atalante"])
+def any_robot(request):  # type: ignore[no-untyped-def]
+    return request.getfixturevalue(request.param)
+
+
+def test_spec_loads_with_pd_servos(any_robot):
+    robot = any_robot
+    assert robot.n_joints == 12 and 100.0 <= robot.mass <= 135.0
+    m = robot.model
     assert m.nu == 12 and m.opt.timestep == 0.001
-    np.testing.assert_array_equal(m.actuator_gainprm[:, 0], atalante.kp)
-    np.testing.assert_array_equal(-m.actuator_biasprm[:, 1], atalante.kp)
-    np.testing.assert_array_equal(-m.actuator_biasprm[:, 2], atalante.kd)
-    np.testing.assert_array_equal(m.actuator_forcerange[:, 1], atalante.torque_limit)
+    np.testing.assert_array_equal(m.actuator_gainprm[:, 0], robot.kp)
+    np.testing.assert_array_equal(-m.actuator_biasprm[:, 1], robot.kp)
+    np.testing.assert_array_equal(-m.actuator_biasprm[:, 2], robot.kd)
+    np.testing.assert_array_equal(m.actuator_forcerange[:, 1], robot.torque_limit)
     # actuator i drives joint i of the spec's output order
-    np.testing.assert_array_equal(m.actuator_trnid[:, 0], [m.joint(j).id for j in atalante.spec.joints])
+    np.testing.assert_array_equal(m.actuator_trnid[:, 0], [m.joint(j).id for j in robot.spec.joints])
 
 
 @needs_atalante
-def test_pd_servo_torque_law(atalante):
+def test_atalante_mass(atalante):
+    assert abs(atalante.mass - 133.49) < 0.01
+
+
+def test_pd_servo_torque_law(any_robot):
     """u = kp (c − q) − kd q̇, clamped at the torque limit."""
     import mujoco
 
-    d = mujoco.MjData(atalante.model)
+    robot = any_robot
+    d = mujoco.MjData(robot.model)
     d.qpos[2] = 2.0
-    d.qvel[atalante.dof_idx] = 0.3
+    d.qvel[robot.dof_idx] = 0.3
     d.ctrl[:] = 0.001
-    mujoco.mj_forward(atalante.model, d)
-    q = d.qpos[atalante.qpos_idx]
-    expect = np.clip(atalante.kp * (0.001 - q) - atalante.kd * 0.3, -atalante.torque_limit, atalante.torque_limit)
+    mujoco.mj_forward(robot.model, d)
+    q = d.qpos[robot.qpos_idx]
+    expect = np.clip(robot.kp * (0.001 - q) - robot.kd * 0.3, -robot.torque_limit, robot.torque_limit)
     np.testing.assert_allclose(d.actuator_force, expect, rtol=1e-12)
 
 
-def _spec_text() -> str:
-    return ATALANTE_SPEC.read_text()
+def spec_text(robot: str) -> str:
+    """A robot's spec TOML with its MJCF path made absolute (so the text works from any directory)."""
+    if robot == "exo":
+        return (SHIPPED_DIR / "exo" / "spec.toml").read_text().replace(
+            'mjcf = "exo.xml"', f'mjcf = "{SHIPPED_DIR / "exo" / "exo.xml"}"')
+    return ATALANTE_SPEC.read_text().replace("../../shared/atalante/", f"{ATALANTE_DIR}/")
 
 
-@needs_atalante
-@pytest.mark.parametrize("old, new, message", [
-    ("LeftSagittalKneeJoint", "LeftKnee", "unknown joint name 'LeftKnee'"),
-    ('sole_geom = "left_sole"', 'sole_geom = "left_foot"', "unknown geom name 'left_foot'"),
-    ('floor_geom = "terrain_mesh"', 'floor_geom = "ground"', "unknown geom name 'ground'"),
-    ('base_body = "torso"', 'base_body = "LeftFrontalHipLink"', "has no free joint"),
-    ("joint_perm = [6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]", "joint_perm = [6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 4]",
-     "permutation"),
-    ("kd = [500, 140,", "kd = [500,", "joints.kd: must be a list of 12 numbers"),
-    ('name = "atalante"\n', 'name = "atalante\n', "malformed TOML"),
-    ('mjcf = "../../shared/atalante/loadedExo.xml"', 'mjcf = "nowhere.xml"', "MJCF file not found"),
-])
-def test_bad_specs(tmp_path, old, new, message):
-    text = _spec_text()
+BAD_SPECS = {
+    "exo": [
+        ('"left_ankle_roll"', '"left_ankle_rol"', "unknown joint name 'left_ankle_rol'"),
+        ('sole_geom = "left_sole"', 'sole_geom = "left_foot"', "unknown geom name 'left_foot'"),
+        ('floor_geom = "floor"', 'floor_geom = "ground"', "unknown geom name 'ground'"),
+        ('base_body = "pelvis"', 'base_body = "left_thigh"', "has no free joint"),
+        ("joint_perm = [6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]", "joint_perm = [6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 4]",
+         "permutation"),
+        ("kd = [400, 120,", "kd = [400,", "joints.kd: must be a list of 12 numbers"),
+        ('name = "exo"\n', 'name = "exo\n', "malformed TOML"),
+        ("mjcf = ", 'mjcf = "nowhere.xml"\n# ', "MJCF file not found"),
+    ],
+    "atalante": [
+        ("LeftSagittalKneeJoint", "LeftKnee", "unknown joint name 'LeftKnee'"),
+        ('floor_geom = "terrain_mesh"', 'floor_geom = "ground"', "unknown geom name 'ground'"),
+        ('base_body = "torso"', 'base_body = "LeftFrontalHipLink"', "has no free joint"),
+    ],
+}
+
+
+@pytest.mark.parametrize("robot, old, new, message", [(r, *case) for r, cases in BAD_SPECS.items() for case in cases])
+def test_bad_specs(tmp_path, robot, old, new, message):
+    if robot == "atalante" and not (ATALANTE_DIR / "loadedExo.xml").is_file():
+        pytest.skip("../shared/atalante (AMBER lab model) is not beside the repository")
+    text = spec_text(robot)
     assert old in text
-    text = text.replace(old, new).replace("../../shared/atalante/", str(ATALANTE_SPEC.parent.parent.parent
-                                                                        / "shared" / "atalante") + "/")
     p = tmp_path / "bad.toml"
-    p.write_text(text)
+    p.write_text(text.replace(old, new))
     with pytest.raises(RobustGaitError, match=message) as err:
         load_robot(p)
     msg = str(err.value)
@@ -97,13 +121,10 @@ def test_exo_spec_has_gait_quality_action_space_and_posture():
 def test_bad_gait_quality_action_space_posture(tmp_path, extra, message):
     import re
 
-    from robustgait.robots.spec import SHIPPED_DIR
-
-    text = (SHIPPED_DIR / "exo" / "spec.toml").read_text()
+    text = spec_text("exo")
     section = extra.split("]")[0] + "]"
     text = re.sub(re.escape(section) + r"\n(?:[^\[].*\n|\n)*", "", text)  # drop the shipped section
     assert section not in text
-    text = text.replace('mjcf = "exo.xml"', f'mjcf = "{SHIPPED_DIR / "exo" / "exo.xml"}"')
     p = tmp_path / "bad.toml"
     p.write_text(text + "\n" + extra)
     with pytest.raises(RobustGaitError, match=message):

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from robustgait.dynamics import Dynamics
-from robustgait.robots import Robot, load_robot, shipped_robots
-from robustgait.robots.spec import CONTACT_SENSORS
+from robustgait.io.robotfile import load_robot, shipped_robots
+from robustgait.robots import Robot
+from robustgait.robots.model import CONTACT_SENSORS
 
 # Nominal standing posture, per leg: hip roll, hip yaw, hip pitch, knee, ankle pitch, ankle roll.
 # hip + knee + ankle pitch = 0 keeps the soles flat under an upright pelvis.

@@ -1,4 +1,4 @@
-"""Studies (DESIGN §7): evaluation, config, Optuna storage contract, resume after kill -9, determinism
+"""Studies (docs/studies.md): evaluation, config, Optuna storage contract, resume after kill -9, determinism
 across worker counts, Ray retries, status/report/compare. Real components at small sizes: exo, a step cap
 of 5, 10 certificate samples, 2 iterations × 3 gaits."""
 
@@ -12,25 +12,36 @@ import subprocess
 import sys
 import threading
 import time
-from dataclasses import asdict, replace
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
 from robustgait import GaitParams, Robot, RobustGaitError, load_robot
-from robustgait.certify import CertifyConfig
+from robustgait.config import (
+    CertifyConfig,
+    Config,
+    GenerationConfig,
+    LearnerConfig,
+    PreferenceModelConfig,
+    RunConfig,
+    SimConfig,
+    StudyConfig,
+    to_dict,
+)
+from robustgait.io.robotfile import read_mjcf
 from robustgait.learn import ActionSpace
-from robustgait.learn.config import LearnerConfig, PreferenceModelConfig
 from robustgait.robots import FallCriteria
-from robustgait.study.config import StudyConfig, load_config, save_config
-from robustgait.study.evaluate import EvaluationConfig, evaluate
-from robustgait.study.run import RunOptions, create_study, run_study
+from robustgait.study.config import StudySetup, load_config, save_config
+from robustgait.study.evaluate import evaluate
+from robustgait.study.run import create_study, run_study
 from robustgait.study.status import study_status
 from robustgait.study.storage import StudyStore, default_url
 
 REPO = Path(__file__).resolve().parents[1]
-CHEAP = EvaluationConfig(step_cap=5, certify=CertifyConfig(n_samples=10))
-TINY = StudyConfig(robot="exo", iterations=2, batch=3, seed=0, evaluation=CHEAP)
+# a study's evaluations walk 5 steps and certify with 10 uniform samples; 2 iterations × 3 gaits
+TINY = Config(study=StudyConfig(iterations=2, batch=3, seed=0), sim=SimConfig(step_cap=5),
+              certify=CertifyConfig(method="uniform", n_samples=10))
 CLI_TINY = ["--robot", "exo", "--iterations", "2", "--batch", "3", "--method", "uniform", "--samples", "10", "--steps",
             "5", "--seed", "0"]
 
@@ -43,41 +54,61 @@ def cli(*args: str, **kw) -> subprocess.CompletedProcess:  # type: ignore[no-unt
 
 # ---- config and storage (fast) ---------------------------------------------------------------------------
 def test_study_config_round_trip(tmp_path):
-    cfg = replace(TINY, learner="eubo", learning=LearnerConfig(model=PreferenceModelConfig(lengthscale=(0.3, 0.2, 0.4,
-                                                                                                       0.5))))
-    save_config(tmp_path, cfg)
+    study = replace(TINY.study, learner="eubo", learning=LearnerConfig(model=PreferenceModelConfig(
+        lengthscale=(0.3, 0.2, 0.4, 0.5))))
+    setup = StudySetup("exo", replace(TINY, study=study))
+    save_config(tmp_path, setup)
     back = load_config(tmp_path)
-    assert back == cfg and isinstance(back.learning.model.lengthscale, tuple)
-    assert back.evaluation.certify.sim == cfg.evaluation.certify.sim
+    assert back == setup and isinstance(back.config.study.learning.model.lengthscale, tuple)
     raw = json.loads((tmp_path / "study.json").read_text())
-    del raw["config"]["evaluation"]["certify"]["alpha"]  # a field this file predates keeps its default
-    raw["config"]["evaluation"]["step_cap"] = 7
+    del raw["config"]["certify"]["alpha"]  # a field this file predates keeps its default
+    raw["config"]["sim"]["step_cap"] = 7
     (tmp_path / "study.json").write_text(json.dumps(raw))
-    assert load_config(tmp_path).evaluation == replace(CHEAP, step_cap=7)
-    raw["config"]["evaluation"]["step_cap"] = "many"
+    assert load_config(tmp_path).config.sim == replace(TINY.sim, step_cap=7)
+    raw["config"]["sim"]["step_cap"] = "many"
     (tmp_path / "study.json").write_text(json.dumps(raw))
-    with pytest.raises(RobustGaitError, match=r"study.json: evaluation.step_cap"):
+    with pytest.raises(RobustGaitError, match=r"study.json: sim.step_cap: expected an integer, got a string"):
         load_config(tmp_path)
-    raw["config"]["evaluation"]["step_cap"] = 0  # the config's own checks run too
+    raw["config"]["sim"]["step_cap"] = 0  # the config's own checks run too
     (tmp_path / "study.json").write_text(json.dumps(raw))
-    with pytest.raises(RobustGaitError, match=r"study.json: .*step cap"):
+    with pytest.raises(RobustGaitError, match=r"study.json: sim.step_cap: must satisfy 1 ≤ x ≤ 1000 \(got 0\)"):
         load_config(tmp_path)
+
+
+def test_a_study_written_before_the_config_tree_still_loads(tmp_path):
+    """format_version 1 (one StudyConfig holding the evaluation) → today's sections, same values."""
+    old = {"format_version": 1, "config": {
+        "robot": "exo", "metric": "stability", "learner": "eubo", "iterations": 4, "batch": 3, "seed": 2,
+        "storage": None, "study_name": "robustgait",
+        "learning": {"model": {"lengthscale": [0.4], "outputscale": 10.0, "hyperparameters": "fixed",
+                               "jitter": 1e-6}, "max_candidates": 1000, "neighbourhood": 1, "max_redraws": 50,
+                     "eubo_samples": 256},
+        "evaluation": {"step_cap": 30, "certify": {"n_samples": 50, "method": "uniform", "seed": 5,
+                                                   "sim": {"switching": "time", "n_threads": 0}},
+                       "gaitgen": {"domains": "multicontact", "nodes": 17, "pelvis_roll": None}}}}
+    (tmp_path / "study.json").write_text(json.dumps(old))
+    setup = load_config(tmp_path)
+    c = setup.config
+    assert setup.robot == "exo" and c.study.metric == "stability" and c.study.iterations == 4
+    assert c.sim.step_cap == 30 and c.sim.switching == "time" and c.certify.n_samples == 50 and c.certify.seed == 5
+    assert c.generate.domains == "multicontact"
 
 
 def test_studies_use_the_sequential_estimator_by_default():
-    assert StudyConfig().evaluation.certify.method == "sequential"
-    assert EvaluationConfig().certify.sequential.budget == 3000
+    assert Config().certify.method == "sequential" and Config().certify.sequential.budget == 3000
 
 
 def test_study_config_rejects_bad_values():
-    with pytest.raises(RobustGaitError, match="unknown metric"):
-        StudyConfig(metric="speed")
-    with pytest.raises(RobustGaitError, match="at least 2"):
+    with pytest.raises(RobustGaitError, match=r"StudyConfig\.metric: must be one of 'robustness', 'stability'"):
+        StudyConfig(metric="speed")  # type: ignore[arg-type]
+    with pytest.raises(RobustGaitError, match=r"batch: must satisfy 2 ≤ x ≤ 100 \(got 1\)"):
         StudyConfig(batch=1)
     with pytest.raises(RobustGaitError, match="iterations"):
         StudyConfig(iterations=1001)
-    with pytest.raises(RobustGaitError, match="step cap"):
-        EvaluationConfig(step_cap=0)
+    with pytest.raises(RobustGaitError, match="step_cap"):
+        SimConfig(step_cap=0)
+    with pytest.raises(RobustGaitError, match="workers"):
+        RunConfig(workers=0)
 
 
 def test_storage_contract_round_trip(tmp_path):
@@ -120,9 +151,9 @@ def test_create_study_refuses_existing_and_bad_robot(tmp_path, capsys):
     (tmp_path / "full").mkdir()
     (tmp_path / "full" / "x.txt").write_text("x")
     with pytest.raises(RobustGaitError, match="not empty"):
-        create_study(tmp_path / "full", TINY)
+        create_study(tmp_path / "full", "exo", TINY)
     with pytest.raises(RobustGaitError, match="not a shipped robot"):
-        create_study(tmp_path / "new", replace(TINY, robot="nope"))
+        create_study(tmp_path / "new", "nope", TINY)
     from robustgait.cli import main
 
     assert main(["study", "status", str(tmp_path / "full")]) == 2
@@ -156,21 +187,18 @@ def test_local_workers_each_get_every_core_unless_told():
     """A batch's last gait is certified alone: its worker must be able to use the cores the others left idle."""
     from robustgait.study.executors import LocalExecutor, WorkerSpec
 
-    spec = WorkerSpec("exo", asdict(EvaluationConfig()))
+    spec = WorkerSpec("exo", to_dict(Config()))
     assert LocalExecutor(spec, workers=2).spec.threads == (os.cpu_count() or 1)
     assert LocalExecutor(spec, workers=2, threads=1).spec.threads == 1
-    with pytest.raises(RobustGaitError, match="--workers"):
-        LocalExecutor(spec, workers=0)
 
 
 def test_multicontact_study_is_created_on_its_own_action_space(tmp_path):
     from robustgait.cli import main
 
     d = tmp_path / "mc"
-    # --iterations 0 is refused, so create through the API: the CLI's --domains only sets the gaitgen config
-    cfg = replace(TINY, evaluation=replace(CHEAP, gaitgen=replace(CHEAP.gaitgen, domains="multicontact")))
-    create_study(d, cfg)
-    assert load_config(d).evaluation.gaitgen.domains == "multicontact"
+    # --iterations 0 is refused, so create through the API: the CLI's --domains only sets generate.domains
+    create_study(d, "exo", replace(TINY, generate=GenerationConfig(domains="multicontact")))
+    assert load_config(d).config.generate.domains == "multicontact"
     st = study_status(d)
     assert st["trials_done"] == 0 and st["trials_planned"] == 6
     from robustgait.study.run import StudyRunner
@@ -200,32 +228,33 @@ def exo_generator():
     from robustgait.gaitgen import GaitGenerator
 
     robot = load_robot("exo")
-    return robot, GaitGenerator(robot, CHEAP.gaitgen)
+    return robot, GaitGenerator(robot, TINY.generate)
 
 
 @pytest.mark.slow
 def test_evaluate_never_raises_and_records_stages(exo_generator):
     robot, gen = exo_generator
-    good = evaluate(robot, GaitParams(), CHEAP, generator=gen)
+    good = evaluate(robot, GaitParams(), TINY, generator=gen)
     assert good.status == "certified" and good.steps_taken == 5 and not good.fell and good.r_star > 0
     assert good.certificate is not None and good.certificate["r_star"] == good.r_star
     assert set(good.seconds) >= {"generate", "walk", "certify", "total"} and good.gait is not None
     assert "build" not in good.seconds  # the generator was given
-    bad = evaluate(robot, GaitParams(step_width=0.1), CHEAP, generator=gen)  # the feet would collide
+    bad = evaluate(robot, GaitParams(step_width=0.1), TINY, generator=gen)  # the feet would collide
     assert bad.status == "generation_failed" and "Infeasible_Parameters" in bad.reason and bad.gait is None
     assert bad.steps_taken == 0 and bad.r_star == 0.0 and bad.outcome().steps_taken == 0
     # a fall: the same robot with a fall criterion its pelvis cannot meet (base above 0.99 m)
-    strict = Robot(replace(robot.spec, fall=FallCriteria(min_base_height=0.99, max_tilt=0.8)))
-    falls = evaluate(strict, GaitParams(), CHEAP, generator=gen)
+    strict_spec = replace(robot.spec, fall=FallCriteria(min_base_height=0.99, max_tilt=0.8))
+    strict = Robot(strict_spec, read_mjcf(strict_spec))
+    falls = evaluate(strict, GaitParams(), TINY, generator=gen)
     assert falls.status == "fell" and falls.fell and falls.fall_reason == "base_low" and falls.r_star == 0.0
     assert falls.reason == f"fell in step {falls.steps_taken + 1} (base_low)" and "certify" not in falls.seconds
     # walks the cap but has no certificate: a fixed-point search that cannot converge
-    no_fp = replace(CHEAP, certify=replace(CHEAP.certify, fp_tol=1e-12, fp_min_steps=1, fp_max_steps=2))
+    no_fp = replace(TINY, certify=replace(TINY.certify, fp_tol=1e-12, fp_min_steps=1, fp_max_steps=2))
     nc = evaluate(robot, GaitParams(), no_fp, generator=gen)
     assert nc.status == "not_certified" and nc.steps_taken == 5 and nc.r_star == 0.0 and "fixed point" in nc.reason
     assert nc.outcome().walked_cap
     # an evaluation is a function of the parameters and the config alone (what resume and reuse rely on)
-    again = evaluate(robot, GaitParams(), CHEAP, generator=gen)
+    again = evaluate(robot, GaitParams(), TINY, generator=gen)
     assert without_times(again.to_dict()) == without_times(good.to_dict())
 
 
@@ -339,10 +368,10 @@ def test_ray_worker_killed_mid_task_is_retried(tmp_path, reference_study):
     from robustgait.study.executors import RayExecutor, WorkerSpec
 
     d = tmp_path / "study"
-    create_study(d, TINY)
+    create_study(d, "exo", TINY)
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
     try:
-        ex = RayExecutor(WorkerSpec("exo", TINY.to_dict()["evaluation"]), workers=2)
+        ex = RayExecutor(WorkerSpec("exo", to_dict(TINY)), workers=2)
         pids = ex.pids()
         killed: list[int] = []
 
@@ -360,7 +389,7 @@ def test_ray_worker_killed_mid_task_is_retried(tmp_path, reference_study):
 
         th = threading.Thread(target=killer)
         th.start()
-        run_study(d, RunOptions(progress=False), executor=ex)
+        run_study(d, progress=False, executor=ex)
         th.join()
         assert killed, "no actor was killed"
         assert pids[0] not in ex.pids()  # the actor was restarted

@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from dataclasses import asdict, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -22,26 +22,26 @@ from tqdm import tqdm
 from robustgait import RobustGaitError, load_gait, load_robot
 from robustgait.certify import certify_gait
 from robustgait.cli import main
-from robustgait.gait import GaitParams
+from robustgait.config import GaitParams, StudyConfig, ValidateConfig, to_dict
 from robustgait.sim import walk
-from robustgait.study.config import StudyConfig
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.run import StudyRunner, create_study, open_store
-from robustgait.study.validate import RUNS_DIR, VALIDATION_DIR, config_key, study_validate_config, validate_study
-from robustgait.validate import ValidateConfig, spearman
+from robustgait.study.validate import RUNS_DIR, VALIDATION_DIR, config_key, validate_study
+from robustgait.validate import spearman
 from tests.conftest import EXO_GAIT, EXO_MC_GAIT
-from tests.test_study import CHEAP, CLI_TINY, cli
+from tests.test_study import CLI_TINY, TINY, cli
 
 SMALL = ValidateConfig(trials=8, steps_after=3)
+CAP = TINY.sim.step_cap
 
 
 def _evaluation(robot, gait, params, certify):  # type: ignore[no-untyped-def]
     """What ``evaluate`` returns for a gait that was given instead of generated: walk the cap, certify."""
-    w = walk(robot, gait, steps=CHEAP.step_cap, config=certify.sim)
-    gc = certify_gait(robot, gait, certify)
-    ok = gc.ok and w.steps_taken == CHEAP.step_cap
+    w = walk(robot, gait, TINY.sim)
+    gc = certify_gait(robot, gait, certify, TINY.sim)
+    ok = gc.ok and w.steps_taken == CAP
     return Evaluation(params=params, status="certified" if ok else "not_certified",
-                      reason="" if ok else f"{gc.status}: {gc.reason}", step_cap=CHEAP.step_cap,
+                      reason="" if ok else f"{gc.status}: {gc.reason}", step_cap=CAP,
                       steps_taken=w.steps_taken, fell=w.fell, r_star=float(gc.r_star) if ok else 0.0,
                       certificate=gc.to_dict(samples=True) if ok else None, gait=gait)
 
@@ -49,16 +49,16 @@ def _evaluation(robot, gait, params, certify):  # type: ignore[no-untyped-def]
 @pytest.fixture(scope="module")
 def small_study(tmp_path_factory):
     d = tmp_path_factory.mktemp("sv") / "study"
-    create_study(d, StudyConfig(robot="exo", iterations=1, batch=6, evaluation=CHEAP))
+    create_study(d, "exo", replace(TINY, study=StudyConfig(iterations=1, batch=6)))
     robot = load_robot("exo")
     exo = load_gait(EXO_GAIT, robot)
-    no_fp = replace(CHEAP.certify, fp_tol=1e-12, fp_min_steps=1, fp_max_steps=2)
+    no_fp = replace(TINY.certify, fp_tol=1e-12, fp_min_steps=1, fp_max_steps=2)
     runner = StudyRunner(d)
-    store = open_store(d, runner.config, runner.space)
+    store = open_store(d, runner.setup, runner.space)
     bar = tqdm(disable=True)
     try:
         mc = load_gait(EXO_MC_GAIT, robot)  # validate runs flat-foot gaits only: refused, with the reason
-        plan = [(10, exo, CHEAP.certify), (20, exo.mirrored(robot), CHEAP.certify), (40, exo, no_fp),
+        plan = [(10, exo, TINY.certify), (20, exo.mirrored(robot), TINY.certify), (40, exo, no_fp),
                 (30, None, None), (10, "again", None), (50, mc, no_fp)]
         for slot, (index, gait, certify) in enumerate(plan):
             store.enqueue(0, slot, index)
@@ -70,7 +70,7 @@ def small_study(tmp_path_factory):
                 runner._complete(store, trial, first.result or {}, bar, reused_from=first.number)
                 continue
             ev = (Evaluation(params=params, status="generation_failed", reason="Infeasible_Parameters: test",
-                             step_cap=CHEAP.step_cap) if gait is None else _evaluation(robot, gait, params, certify))
+                             step_cap=CAP) if gait is None else _evaluation(robot, gait, params, certify))
             runner._complete(store, trial, runner._write_files(trial, ev.to_dict()), bar)
     finally:
         store.close()
@@ -144,7 +144,7 @@ def test_correlations_have_n_and_p_or_a_reason(small_study, first_run):
         assert -1 <= r["rho"] <= 1 and 0 <= r["p"] <= 1 and r["reason"] == ""
     else:
         assert len(set(rates)) == 1 and r["reason"].startswith("push success is the same")
-    assert stored["config"]["sim"] == {**asdict(CHEAP.certify.sim), "n_threads": 0}  # the study's simulation
+    assert stored["sim"] == {**to_dict(TINY.sim), "n_threads": 0}  # the study's simulation
 
 
 def test_rerun_reuses_stored_results(small_study, first_run):
@@ -160,34 +160,38 @@ def test_rerun_reuses_stored_results(small_study, first_run):
     assert took < seconds
 
 
-def test_config_key_ignores_threads_only():
-    a = study_validate_config(StudyConfig(evaluation=CHEAP), SMALL)
-    assert config_key(a, "push") == config_key(replace(a, sim=replace(a.sim, n_threads=3)), "push")
-    assert config_key(a, "push") != config_key(a, "mass")
-    assert config_key(a, "push") != config_key(replace(a, steps_after=4), "push")
+def test_config_key_ignores_threads_and_workers_only():
+    c, s = TINY.certify, TINY.sim
+    key = config_key(SMALL, c, s, "push")
+    assert key == config_key(SMALL, c, replace(s, n_threads=3), "push") == config_key(replace(SMALL, workers=2), c, s,
+                                                                                      "push")
+    assert key != config_key(SMALL, c, s, "mass")
+    assert key != config_key(replace(SMALL, steps_after=4), c, s, "push")
+    assert key != config_key(SMALL, replace(c, seed=1), s, "push")
+    assert key != config_key(SMALL, c, replace(s, step_cap=6), "push")
 
 
 def test_cli_errors_exit_2_with_one_line(tmp_path, capsys, small_study):
     (tmp_path / "plain").mkdir()
     empty = tmp_path / "empty"
-    create_study(empty, StudyConfig(robot="exo", iterations=1, batch=2, evaluation=CHEAP))
+    create_study(empty, "exo", replace(TINY, study=StudyConfig(iterations=1, batch=2)))
     for args, msg in ((["study", "validate", str(tmp_path / "plain")], "not a study directory"),
                       (["study", "validate", str(tmp_path / "missing")], "not a study directory"),
                       (["study", "validate", str(empty)], "no completed trial"),
                       (["study", "validate", str(small_study), "--trials", "0"], "--trials"),
-                      (["study", "validate", str(small_study), "--steps", "-1"], "--steps"),
+                      (["study", "validate", str(small_study), "--steps-after", "-1"], "--steps-after"),
                       (["study", "validate", str(small_study), "--workers", "1000"], "--workers"),
                       (["study", "validate", str(small_study), "--disturbance", "quake"], "--disturbance")):
         assert main(args) == 2, args
         err = capsys.readouterr().err
         assert err.startswith("robustgait: error:") and msg in err and len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "plain" / VALIDATION_DIR).exists()
-    with pytest.raises(RobustGaitError, match="--trials"):
+    with pytest.raises(RobustGaitError, match="trials"):
         validate_study(small_study, replace(SMALL, trials=20_000), progress=False)
 
 
 def test_cli_text_and_json(small_study, first_run, capsys):
-    assert main(["study", "validate", str(small_study), "--trials", "8", "--steps", "3", "--quiet"]) == 0
+    assert main(["study", "validate", str(small_study), "--trials", "8", "--steps-after", "3", "--quiet"]) == 0
     text = capsys.readouterr().out
     assert "3 of 5 unique gaits validated (3 from an earlier run); skipped: 1 generation failed, 1 refused" in text
     assert "skipped: validate runs one-domain (flat-foot) gaits" in text
@@ -202,16 +206,17 @@ def test_cli_text_and_json(small_study, first_run, capsys):
 def test_report_with_and_without_validation(small_study, first_run, tmp_path):
     import shutil
 
+    from robustgait.config import ReportConfig
     from robustgait.report.study import write_study_report
 
-    page = write_study_report(small_study, video=False).read_text()
+    page = write_study_report(small_study, ReportConfig(video=False)).read_text()
     assert "Validation: push" in page and "Spearman ρ" in page and "skipped: no gait file" in page
     png = small_study / "report" / "validation_push.png"
     assert png.stat().st_size > 10_000
     bare = tmp_path / "bare"
     shutil.copytree(small_study, bare, ignore=shutil.ignore_patterns(VALIDATION_DIR, "report", ".lock"))
     # the copy's database path is its own (sqlite URL from the directory)
-    page = write_study_report(bare, video=False).read_text()
+    page = write_study_report(bare, ReportConfig(video=False)).read_text()
     assert "Validation:" not in page and (bare / "report" / "history.png").is_file()
 
 
@@ -233,7 +238,7 @@ def test_study_validate_on_a_study_run_end_to_end(tmp_path):
     d = tmp_path / "study"
     res = cli("study", "run", str(d), *CLI_TINY, "--workers", "2", "--quiet")
     assert res.returncode == 0, res.stderr
-    args = ("study", "validate", str(d), "--trials", "12", "--steps", "3", "--json", "--quiet")
+    args = ("study", "validate", str(d), "--trials", "12", "--steps-after", "3", "--json", "--quiet")
     two = cli(*args, "--workers", "2")
     assert two.returncode == 0, two.stderr
     a = json.loads(two.stdout)["push"]

@@ -10,13 +10,14 @@ import numpy as np
 import pytest
 
 from robustgait import RobustGaitError, load_robot
-from robustgait.certify import CertifyConfig, certify_gait
+from robustgait.certify import certify_gait
 from robustgait.cli import main
+from robustgait.config import CertifyConfig, ReportConfig, ValidateConfig
+from robustgait.io.gaitfile import save_gait
 from robustgait.sim import StepEngine, StepInputs
 from robustgait.validate import (
     CertificateRef,
     Draws,
-    ValidateConfig,
     Validator,
     draw,
     logistic_fit,
@@ -63,10 +64,12 @@ def test_draws_depend_on_seed_and_robot_only():
     assert not np.array_equal(a.size, c.size)
     with pytest.raises(RobustGaitError, match="unknown disturbance"):
         draw("earthquake", 5, cfg, robot)
-    with pytest.raises(RobustGaitError, match="trials"):
+    with pytest.raises(RobustGaitError, match=r"ValidateConfig.trials: must satisfy 1 ≤ x ≤ 10000 \(got 0\)"):
         ValidateConfig(trials=0)
-    with pytest.raises(RobustGaitError, match="friction_range"):
+    with pytest.raises(RobustGaitError, match=r"ValidateConfig.friction_range\[0\]: must satisfy 0 < x ≤ 10"):
         ValidateConfig(friction_range=(0.0, 1.0))
+    with pytest.raises(RobustGaitError, match=r"ValidateConfig.push_phase: must be \[low, high\] with low ≤ high"):
+        ValidateConfig(push_phase=(0.5, 0.2))
 
 
 def test_noise_is_a_control_offset():
@@ -107,7 +110,7 @@ def test_latency_offsets_shift_the_command():
 
 @pytest.fixture(scope="module")
 def small_cert(exo, exo_gait):
-    return certify_gait(exo, exo_gait, CertifyConfig(n_samples=20))
+    return certify_gait(exo, exo_gait, CertifyConfig(method="uniform", n_samples=20))
 
 
 @pytest.fixture(scope="module")
@@ -211,14 +214,14 @@ def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_ce
     np.testing.assert_allclose(ref.x_star, small_cert.fixed_point.x_star)
     bad = tmp_path / "bad.json"
     bad.write_text('{"r_star": 1}')
-    with pytest.raises(RobustGaitError, match=r"bad\.json: not a certificate"):
+    with pytest.raises(RobustGaitError, match=r"bad\.json: attained: required, but missing"):
         CertificateRef.load(bad)
     failed = tmp_path / "failed.json"
     failed.write_text('{"status": "no_fixed_point", "reason": "no iterate converged", "r_star": 0.0}')
     with pytest.raises(RobustGaitError, match="status 'no_fixed_point'"):
         CertificateRef.load(failed)
     gait_path = tmp_path / "gait.json"
-    exo_gait.save(gait_path)
+    save_gait(exo_gait, gait_path)
     code = main(["validate", str(gait_path), "--robot", "exo", "--certificate", str(p), "--trials", "4",
                  "--steps-after", "2", "--json", "--plot", str(tmp_path / "v.png"), "-o", str(tmp_path / "v.json")])
     assert code == 0
@@ -234,7 +237,7 @@ def test_gait_tiles_are_a_real_image(tmp_path, exo, exo_gait):
     from robustgait.report.tiles import render_tiles
 
     out = tmp_path / "tiles.png"
-    shape = render_tiles(exo, exo_gait, out, frames=4, width=160, height=240, warmup_steps=2)
+    shape = render_tiles(exo, exo_gait, out, ReportConfig(tile_frames=4, tile_warmup_steps=2), width=160, height=240)
     img = imageio.imread(out)
     assert shape == (480, 640) and img.shape[:2] == (480, 640)
     assert img.std() > 20  # not blank

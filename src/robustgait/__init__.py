@@ -5,73 +5,87 @@ Public API (everything else is reachable from the submodules)::
 
     robot = robustgait.load_robot("exo")                 # or a spec .toml path
     gait = robustgait.load_gait("gait.json", robot)      # or a FROST/ambersim .yaml
-    result = robustgait.walk(robot, gait, steps=50)
-    cert = robustgait.certify_gait(robot, gait)          # cert.status, cert.r_star (paper's estimator)
-    cert = robustgait.certify_gait(robot, gait, robustgait.CertifyConfig(method="sequential"))
-    res = robustgait.validate_gait(robot, gait, kinds=["push"])  # disturbed walks, certificate check
+    result = robustgait.walk(robot, gait)                # SimConfig: switching, step cap, ...
+    cert = robustgait.certify_gait(robot, gait)          # cert.status, cert.r_star, cert.statement()
+    cert = robustgait.certify_gait(robot, gait, robustgait.CertifyConfig(method="uniform"))  # the paper's
+    res = robustgait.validate_gait(robot, gait)          # disturbed walks, certificate check
     gen = robustgait.GaitGenerator(robot)                # build the HZD problem once, then gen.solve(params)
-    robustgait.create_study("runs/rob", robustgait.StudyConfig(robot="exo"))   # the learning loop
+    robustgait.create_study("runs/rob", "exo")           # the learning loop (Config().study: 10 × 5)
     robustgait.run_study("runs/rob"); robustgait.study_status("runs/rob")["best"]
+
+Every option is a field of :class:`Config` (:mod:`robustgait.config`). Names load their module on first use:
+``import robustgait`` itself costs nothing (MuJoCo, CasADi, torch and Optuna load with what needs them).
 """
 
 import os
+from typing import TYPE_CHECKING, Any
 
 # Offscreen rendering needs a headless GL backend, and MuJoCo reads the choice once, at import.
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-from typing import TYPE_CHECKING, Any
-
-from robustgait.barrier import Certificate, certify_map, invariant_radius
-from robustgait.certify import CertifyConfig, GaitCertificate, certify_gait
-from robustgait.errors import RobustGaitError
-from robustgait.estimators import SequentialConfig, certify_map_sequential
-from robustgait.gait import Gait, GaitParams, load_gait
-from robustgait.robots import Robot, load_robot
-from robustgait.sim import SimConfig, StepEngine, WalkResult, walk
-from robustgait.validate import ValidateConfig, ValidationResult, validate_gait
+from robustgait._lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from robustgait.gaitgen import GaitGenerator, generate_gait
-    from robustgait.study import (
-        EvaluationConfig,
-        RunOptions,
+    from robustgait.barrier import Certificate, certify_map, invariant_radius
+    from robustgait.certify import GaitCertificate, certify_gait
+    from robustgait.config import (
+        CertifyConfig,
+        Config,
+        GaitParams,
+        GenerationConfig,
+        SequentialConfig,
+        SimConfig,
         StudyConfig,
-        create_study,
-        evaluate,
-        run_study,
-        study_status,
+        ValidateConfig,
     )
+    from robustgait.errors import RobustGaitError
+    from robustgait.estimators import certify_map_sequential
+    from robustgait.gait import Gait
+    from robustgait.gaitgen import GaitGenerator, generate_gait
+    from robustgait.io.gaitfile import load_gait, save_gait
+    from robustgait.io.robotfile import load_robot
+    from robustgait.robots import Robot
+    from robustgait.sim import StepEngine, WalkResult, walk
+    from robustgait.study import create_study, evaluate, run_study, study_status
+    from robustgait.validate import ValidationResult, validate_gait
 
 __version__ = "0.1.0"
 
+_EXPORTS = {
+    **dict.fromkeys(("Certificate", "certify_map", "invariant_radius"), "barrier"),
+    **dict.fromkeys(("GaitCertificate", "certify_gait"), "certify"),
+    **dict.fromkeys(("CertifyConfig", "Config", "GaitParams", "GenerationConfig", "SequentialConfig", "SimConfig",
+                     "StudyConfig", "ValidateConfig"), "config"),
+    "RobustGaitError": "errors",
+    "certify_map_sequential": "estimators",
+    "Gait": "gait",
+    **dict.fromkeys(("GaitGenerator", "generate_gait"), "gaitgen"),
+    **dict.fromkeys(("load_gait", "save_gait"), "io.gaitfile"),
+    "load_robot": "io.robotfile",
+    "Robot": "robots",
+    **dict.fromkeys(("StepEngine", "WalkResult", "walk"), "sim"),
+    **dict.fromkeys(("create_study", "evaluate", "run_study", "study_status"), "study"),
+    **dict.fromkeys(("ValidationResult", "validate_gait"), "validate"),
+}
 
-_STUDY = ("EvaluationConfig", "RunOptions", "StudyConfig", "create_study", "evaluate", "run_study", "study_status")
+_getattr = lazy_exports(__name__, _EXPORTS)
 
 
 def __getattr__(name: str) -> Any:
-    # gait generation imports CasADi and adam (about a second), studies torch and Optuna: load them when asked
-    if name in ("GaitGenerator", "generate_gait"):
-        from robustgait import gaitgen
-
-        return getattr(gaitgen, name)
-    if name in _STUDY:
-        from robustgait import study
-
-        return getattr(study, name)
-    raise AttributeError(f"module 'robustgait' has no attribute {name!r}")
+    return _getattr(name)
 
 
 __all__ = [
     "Certificate",
     "CertifyConfig",
-    "EvaluationConfig",
+    "Config",
     "Gait",
     "GaitCertificate",
     "GaitGenerator",
     "GaitParams",
+    "GenerationConfig",
     "Robot",
     "RobustGaitError",
-    "RunOptions",
     "SequentialConfig",
     "SimConfig",
     "StepEngine",
@@ -90,6 +104,7 @@ __all__ = [
     "load_gait",
     "load_robot",
     "run_study",
+    "save_gait",
     "study_status",
     "validate_gait",
     "walk",

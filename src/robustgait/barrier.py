@@ -2,7 +2,7 @@
 
 Reference: N. Tucker, K. Li, A. D. Ames, "Synthesizing Robust Walking Gaits via Discrete-Time Barrier
 Functions with Application to Multi-Contact Exoskeleton Locomotion", arXiv:2310.06169 (the paper).
-See DESIGN §6.
+See ``docs/certificate.md``.
 
 Barrier. ``ball`` (default): H(x) = r² − ‖x − x*‖² on the reduced state x ∈ R^n. The paper writes
 H = r − ‖x − x*‖² while defining the safe set as the ball B_r; we use r² so that {H ≥ 0} = B_r exactly (the
@@ -22,16 +22,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from typing import Any, Literal, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from robustgait.config import Barrier, CertifyConfig
 from robustgait.errors import RobustGaitError
 from robustgait.io.logs import load_reduced_log  # re-exported: the log readers live in robustgait.io
 
 __all__ = [
-    "BARRIERS",
     "BarrierTrace",
     "Certificate",
     "RadiusSolution",
@@ -41,7 +41,6 @@ __all__ = [
     "barrier_value",
     "certificate_from_samples",
     "certify_map",
-    "check_barrier",
     "distances",
     "evaluate_map",
     "invariant_radius",
@@ -55,39 +54,9 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 BatchedMap = Callable[[FloatArray], ArrayLike]
-Barrier = Literal["ball", "paper"]
-BARRIERS: tuple[Barrier, ...] = ("ball", "paper")
 
 
 # --------------------------------------------------------------------------------------- validation
-def _check_unit(name: str, value: float) -> float:
-    v = float(value)
-    if not 0.0 < v < 1.0:
-        raise RobustGaitError(f"{name} must satisfy 0 < {name} < 1, got {value!r}")
-    return v
-
-
-def _check_alpha(alpha: float) -> float:
-    return _check_unit("alpha", alpha)
-
-
-def _check_beta(beta: float) -> float:
-    return _check_unit("beta", beta)
-
-
-def check_barrier(barrier: str) -> Barrier:
-    if barrier not in BARRIERS:
-        raise RobustGaitError(f"barrier must be one of {', '.join(BARRIERS)}, got {barrier!r}")
-    return barrier
-
-
-def _check_positive(name: str, value: float) -> float:
-    v = float(value)
-    if not (math.isfinite(v) and v > 0.0):
-        raise RobustGaitError(f"{name} must be a finite number > 0, got {value!r}")
-    return v
-
-
 def _check_point(name: str, x: ArrayLike, n: int | None = None) -> FloatArray:
     a = np.asarray(x, dtype=np.float64)
     if a.ndim != 1 or a.size == 0 or (n is not None and a.shape[0] != n):
@@ -124,7 +93,7 @@ def barrier_value(x: ArrayLike, x_star: ArrayLike, r: float, barrier: Barrier = 
     """
     xa = np.asarray(x, dtype=np.float64)
     diff = xa - np.asarray(x_star, dtype=np.float64)
-    level = float(r) ** 2 if check_barrier(barrier) == "ball" else float(r)
+    level = float(r) ** 2 if barrier == "ball" else float(r)
     return np.asarray(level - np.sum(diff * diff, axis=-1), dtype=np.float64)
 
 
@@ -136,7 +105,7 @@ def barrier_margin(x0: ArrayLike, x1: ArrayLike, x_star: ArrayLike, r: float, al
     condition holds; equivalently m = α r² − p² + (1 − α) d² (``ball``; α r − … for ``paper``) with
     d = ‖x0 − x*‖, p = ‖x1 − x*‖. An image row with NaN (or inf) — the sample fell — gives m = −inf.
     """
-    a = _check_alpha(alpha)
+    a = float(alpha)
     h0 = barrier_value(x0, x_star, r, barrier)
     h1 = barrier_value(x1, x_star, r, barrier)
     m = np.asarray(h1 - h0 + a * h0, dtype=np.float64)
@@ -151,7 +120,7 @@ def radius_threshold_sq(d: ArrayLike, p: ArrayLike, alpha: float) -> FloatArray:
     Sample i satisfies α r² ≥ p² − (1 − α) d² iff r² ≥ c_i, and α r ≥ p² − (1 − α) d² iff r ≥ c_i
     (c_i = inf for a fall; c_i ≤ 0: always).
     """
-    a = _check_alpha(alpha)
+    a = float(alpha)
     da = np.asarray(d, dtype=np.float64)
     pa = np.asarray(p, dtype=np.float64)
     with np.errstate(over="ignore", invalid="ignore"):
@@ -166,7 +135,7 @@ def violation_end(d: ArrayLike, p: ArrayLike, alpha: float, barrier: Barrier = "
     Shapes: d (N,), p (N,) → (N,). The interval is empty (never violated) when s ≤ d.
     """
     c = np.maximum(radius_threshold_sq(d, p, alpha), 0.0)
-    return np.sqrt(c) if check_barrier(barrier) == "ball" else c
+    return np.sqrt(c) if barrier == "ball" else c
 
 
 class RadiusSolution(NamedTuple):
@@ -195,7 +164,7 @@ def solve_radius(d: ArrayLike, p: ArrayLike, *, alpha: float, r_max: float,
     The candidates are r_max, the d_i and the s_i (= √c_i); sorting the bad intervals by start and
     sweeping a running maximum of their ends finds the component in O(N log N). No grid.
     """
-    r_max_f = _check_positive("r_max", r_max)
+    r_max_f = float(r_max)
     da = np.asarray(d, dtype=np.float64)
     pa = np.asarray(p, dtype=np.float64)
     if da.ndim != 1 or da.size < 1 or pa.shape != da.shape:
@@ -240,7 +209,7 @@ def violation_bound(n_inside: int, n_samples: int, beta: float) -> float:
     """
     if n_inside < 0 or n_samples < 1 or n_inside > n_samples:
         raise RobustGaitError(f"need 0 <= n_inside <= n_samples, n_samples >= 1; got {n_inside}, {n_samples}")
-    b = _check_beta(beta)
+    b = float(beta)
     if n_inside == 0:
         return 1.0
     return float(-math.expm1(math.log(b / (n_samples + 1)) / n_inside))
@@ -256,7 +225,9 @@ def sample_ball(n_samples: int, dim: int, radius: float, center: ArrayLike, rng:
         raise RobustGaitError(f"n_samples must be an integer >= 1, got {n_samples!r}")
     if int(dim) != dim or dim < 1:
         raise RobustGaitError(f"dim must be an integer >= 1, got {dim!r}")
-    rad = _check_positive("radius", radius)
+    rad = float(radius)
+    if not (math.isfinite(rad) and rad > 0.0):
+        raise RobustGaitError(f"radius must be a finite number > 0, got {radius!r}")
     c = _check_point("center", center, int(dim))
     n, k = int(n_samples), int(dim)
     g = rng.standard_normal((n, k))
@@ -278,7 +249,6 @@ def invariant_radius(x0: ArrayLike, x1: ArrayLike, x_star: ArrayLike, *, alpha: 
     :func:`solve_radius` or :class:`Certificate` (``attained``) to tell the two apart.
     """
     a0, a1, xs = _check_samples(x0, x1, x_star)
-    _check_alpha(alpha)
     d, p = distances(a0, a1, xs)
     return solve_radius(d, p, alpha=alpha, r_max=r_max, barrier=barrier).r_star
 
@@ -401,6 +371,7 @@ class Certificate:
             "vacuous": self.vacuous,
             "budget_exhausted": bool(self.budget_exhausted),
             "statement": self.statement(),
+            "basis": self.basis,
             "rounds": [asdict(r) for r in self.rounds],
             "samples": [[float(v) for v in row] for row in self.samples],
             "images": [None if f else [float(v) for v in row] for row, f in zip(self.images, self.fell, strict=True)],
@@ -421,11 +392,11 @@ def certificate_from_samples(
     x1: ArrayLike,
     x_star: ArrayLike,
     *,
-    alpha: float = 0.05,
-    r_max: float = 2.0,
-    beta: float = 0.05,
+    alpha: float,
+    r_max: float,
+    beta: float,
+    barrier: Barrier,
     seed: int | None = None,
-    barrier: Barrier = "ball",
 ) -> Certificate:
     """Certificate from given samples x0 (N, n) and images x1 (N, n) (NaN row = fell), x_star (n,).
 
@@ -433,8 +404,7 @@ def certificate_from_samples(
     the sequential estimator replaces it with its own (:mod:`robustgait.estimators`).
     """
     a0, a1, xs = _check_samples(x0, x1, x_star)
-    a = _check_alpha(alpha)
-    b = _check_beta(beta)
+    a, b = float(alpha), float(beta)
     d, p = distances(a0, a1, xs)
     sol = solve_radius(d, p, alpha=a, r_max=r_max, barrier=barrier)
     fell = _fell_rows(a1)
@@ -474,32 +444,21 @@ def evaluate_map(P: BatchedMap, x0: FloatArray) -> FloatArray:
     return x1
 
 
-def certify_map(
-    P: BatchedMap,
-    x_star: ArrayLike,
-    *,
-    r_max: float = 2.0,
-    alpha: float = 0.05,
-    n_samples: int = 200,
-    seed: int = 0,
-    beta: float = 0.05,
-    barrier: Barrier = "ball",
-) -> Certificate:
+def certify_map(P: BatchedMap, x_star: ArrayLike, config: CertifyConfig | None = None) -> Certificate:
     """The paper's estimator (``uniform``): certify a batched map P: (N, n) → (N, n) (NaN rows = fell)
-    around its fixed point x_star (n,).
+    around its fixed point x_star (n,) with ``config`` (its ``n_samples``, ``r_max``, ``alpha``, ``beta``,
+    ``seed``, ``barrier``).
 
-    Draws n_samples points uniform in B_{r_max}(x*) with ``np.random.default_rng(seed)``
-    (:func:`sample_ball`), evaluates P once on the batch and returns :func:`certificate_from_samples`.
-    The sequential estimator is :func:`robustgait.estimators.certify_map_sequential`.
+    Draws N points uniform in B_{r_max}(x*) with ``np.random.default_rng(seed)`` (:func:`sample_ball`),
+    evaluates P once on the batch and returns :func:`certificate_from_samples`. The sequential estimator is
+    :func:`robustgait.estimators.certify_map_sequential`.
     """
+    cfg = config or CertifyConfig(method="uniform")
     xs = _check_point("x_star", x_star)
-    r = _check_positive("r_max", r_max)
-    _check_alpha(alpha)
-    _check_beta(beta)
-    check_barrier(barrier)
-    x0 = sample_ball(n_samples, xs.shape[0], r, xs, np.random.default_rng(seed))
+    x0 = sample_ball(cfg.n_samples, xs.shape[0], cfg.r_max, xs, np.random.default_rng(cfg.seed))
     x1 = evaluate_map(P, x0)
-    return certificate_from_samples(x0, x1, xs, alpha=alpha, r_max=r, beta=beta, seed=seed, barrier=barrier)
+    return certificate_from_samples(x0, x1, xs, alpha=cfg.alpha, r_max=cfg.r_max, beta=cfg.beta, seed=cfg.seed,
+                                    barrier=cfg.barrier)
 
 
 # ------------------------------------------------------------------------------ logged trajectories
@@ -530,8 +489,7 @@ def barrier_along(xs: ArrayLike, x_star: ArrayLike, r: float, alpha: float) -> B
     if not np.all(np.isfinite(a)):
         raise RobustGaitError("states contain NaN or inf")
     x0 = _check_point("x_star", x_star, a.shape[1])
-    rr = _check_positive("r", r)
-    al = _check_alpha(alpha)
+    rr, al = float(r), float(alpha)
     h = barrier_value(a, x0, rr)
     m = barrier_margin(a[:-1], a[1:], x0, rr, al)
     bad = np.flatnonzero(m < 0.0)

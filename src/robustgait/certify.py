@@ -1,5 +1,5 @@
 """Certify a gait: fixed point of its return map (:mod:`robustgait.poincare`) → sampled images → r* and a
-confidence statement (:mod:`robustgait.estimators`, :mod:`robustgait.barrier`). DESIGN §6;
+confidence statement (:mod:`robustgait.estimators`, :mod:`robustgait.barrier`). ``docs/certificate.md``;
 ``robustgait certify`` calls this.
 
 A gait that falls before reaching a fixed point, has none, or falls from its own fixed point is a result,
@@ -9,80 +9,21 @@ not an error: the certificate has a ``status`` other than ``ok`` and r* = 0 (in 
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from tqdm import tqdm
 
-from robustgait.barrier import BARRIERS, Barrier, Certificate, certify_map
-from robustgait.errors import RobustGaitError
-from robustgait.estimators import METHODS, Method, SequentialConfig, certify_map_sequential, verification_size
+from robustgait.barrier import Certificate, certify_map
+from robustgait.config import CertifyConfig, SimConfig, to_dict
+from robustgait.config.work import check_work
+from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
-from robustgait.poincare import (
-    FRAMES,
-    MAPS,
-    RECONSTRUCTIONS,
-    FixedPoint,
-    FixedPointFailure,
-    Frame,
-    MapKind,
-    Reconstruction,
-    ReturnMap,
-)
+from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap
 from robustgait.robots import Robot
-from robustgait.sim.engine import SimConfig
 
 STATUSES = ("ok", "fell_before_fixed_point", "no_fixed_point", "unstable_fixed_point")
-
-
-@dataclass(frozen=True)
-class CertifyConfig:
-    """Options of a certificate (defaults: DESIGN §6). ``method``: ``uniform`` (the paper's estimator, N =
-    ``n_samples`` uniform samples in B(r_max)) or ``sequential`` (options in ``sequential``, see
-    :class:`~robustgait.estimators.SequentialConfig`); ``barrier``: ``ball`` (H = r² − ‖x − x*‖²) or ``paper``
-    (H = r − ‖x − x*‖²); ``beta``: 1 − confidence of the violation bound; ``fp_*``: fixed-point search (see
-    :meth:`ReturnMap.find_fixed_point`)."""
-
-    n_samples: int = 200
-    r_max: float = 2.0
-    alpha: float = 0.05
-    seed: int = 0
-    beta: float = 0.05
-    method: Method = "uniform"
-    barrier: Barrier = "ball"
-    sequential: SequentialConfig = field(default_factory=SequentialConfig)
-    map: MapKind = "step"
-    reconstruction: Reconstruction = "holonomic"
-    frame: Frame = "heading"
-    fp_tol: float = 5e-3
-    fp_min_steps: int = 10
-    fp_max_steps: int = 100
-    sim: SimConfig = field(default_factory=SimConfig)
-
-    def __post_init__(self) -> None:
-        if isinstance(self.n_samples, bool) or not (isinstance(self.n_samples, int) and self.n_samples >= 1):
-            raise RobustGaitError(f"the number of samples must be ≥ 1, got {self.n_samples}")
-        if not (np.isfinite(self.r_max) and self.r_max > 0):
-            raise RobustGaitError(f"r_max must be positive and finite, got {self.r_max}")
-        if not 0 < self.alpha < 1:
-            raise RobustGaitError(f"alpha must be in (0, 1), got {self.alpha}")
-        if not 0 < self.beta < 1:
-            raise RobustGaitError(f"beta must be in (0, 1), got {self.beta}")
-        if isinstance(self.seed, bool) or not (isinstance(self.seed, int) and self.seed >= 0):
-            raise RobustGaitError(f"the seed must be an integer ≥ 0, got {self.seed!r}")
-        if self.method not in METHODS or self.barrier not in BARRIERS:
-            raise RobustGaitError(f"method/barrier must be in {METHODS}/{BARRIERS}, got {self.method!r}/"
-                                  f"{self.barrier!r}")
-        if self.map not in MAPS or self.reconstruction not in RECONSTRUCTIONS or self.frame not in FRAMES:
-            raise RobustGaitError(f"map/reconstruction/frame must be in {MAPS}/{RECONSTRUCTIONS}/{FRAMES}")
-        if not (self.fp_tol > 0 and 1 <= self.fp_min_steps <= self.fp_max_steps):
-            raise RobustGaitError("need fp_tol > 0 and 1 ≤ fp_min_steps ≤ fp_max_steps")
-        seq = self.sequential
-        if self.method == "sequential" and seq.budget < seq.first_round + verification_size(seq.epsilon, self.beta, 1):
-            raise RobustGaitError(f"the sample budget {seq.budget} cannot hold the first round ({seq.first_round}) "
-                                  f"and one verification batch ({verification_size(seq.epsilon, self.beta, 1)} for "
-                                  f"epsilon = {seq.epsilon:g}, beta = {self.beta:g})")
 
 
 @dataclass
@@ -102,6 +43,7 @@ class GaitCertificate:
     fixed_point: FixedPoint | None
     map_residual: float | None
     config: CertifyConfig
+    sim: SimConfig
     robot: str
     seconds: dict[str, float]
     physics_steps: int
@@ -153,52 +95,63 @@ class GaitCertificate:
                 for key in ("samples", "images", "fell", "margins", "sample_round"):
                     c.pop(key)
             out.update(c)
-        out.update({"physics_steps": self.physics_steps, "config": asdict(cfg), "seconds": self.seconds})
+        out.update({"physics_steps": self.physics_steps, "config": to_dict(cfg), "sim": to_dict(self.sim),
+                    "seconds": self.seconds})
         return out
 
 
 def _estimate(pmap: ReturnMap, x_star: np.ndarray, cfg: CertifyConfig, progress: bool) -> Certificate:
     """Run the configured estimator on the gait's return map (progress bar: samples, stderr)."""
-    total = cfg.n_samples if cfg.method == "uniform" else cfg.sequential.budget
-    with tqdm(total=total, desc=f"{cfg.map} map, {cfg.method}", unit="sample", disable=not progress,
+    with tqdm(total=cfg.samples_planned, desc=f"{cfg.map} map, {cfg.method}", unit="sample", disable=not progress,
               leave=False) as bar:
         def P(x: np.ndarray) -> np.ndarray:
             return pmap(x, progress=bar.update)
         if cfg.method == "uniform":
-            return certify_map(P, x_star, r_max=cfg.r_max, alpha=cfg.alpha, n_samples=cfg.n_samples, seed=cfg.seed,
-                               beta=cfg.beta, barrier=cfg.barrier)
-        return certify_map_sequential(P, x_star, r_max=cfg.r_max, alpha=cfg.alpha, beta=cfg.beta, seed=cfg.seed,
-                                      barrier=cfg.barrier, config=cfg.sequential)
+            return certify_map(P, x_star, cfg)
+        return certify_map_sequential(P, x_star, cfg)
 
 
-def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, *,
+def check_certify_work(robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig) -> int:
+    """Bound a certificate's simulation before it starts (:func:`robustgait.config.work.check_work`): the
+    fixed-point steps, the samples (N, or the sequential budget) and the map at x*, each a step (two for the
+    stride map) of up to the gait's step duration × ``max_step_tau``."""
+    per_map = 2 if config.map == "stride" else 1
+    what = "sequential.budget" if config.method == "sequential" else "n_samples"
+    return check_work(per_map * (config.fp_max_steps + config.samples_planned + 1),
+                      gait.step_duration * sim.max_step_tau, robot.dt,
+                      f"certify.fp_max_steps {config.fp_max_steps} + certify.{what} {config.samples_planned}")
+
+
+def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
                  progress: bool = False) -> GaitCertificate:
     """Find x* by iterating the map, then certify B(r*) around it with the configured estimator (``uniform``:
     :func:`robustgait.barrier.certify_map`; ``sequential``: :func:`robustgait.estimators.certify_map_sequential`).
 
     A gait that falls, has no fixed point or falls from it returns a certificate with that ``status`` and
-    r* = 0 (no exception); bad options raise :class:`RobustGaitError`. ``progress``: bars on stderr.
+    r* = 0 (no exception); too much work for the limits raises :class:`RobustGaitError` before any simulation.
+    ``progress``: bars on stderr.
     """
     cfg = config or CertifyConfig()
+    sim = sim or SimConfig()
+    check_certify_work(robot, gait, cfg, sim)
     t0 = time.perf_counter()
 
     def failed(status: str, reason: str, steps: int, fp: FixedPoint | None = None,
                map_residual: float | None = None) -> GaitCertificate:
         t = time.perf_counter() - t0
         return GaitCertificate(status=status, certificate=None, fixed_point=fp, map_residual=map_residual,
-                               config=cfg, robot=robot.name, physics_steps=0, steps_walked=steps, reason=reason,
+                               config=cfg, sim=sim, robot=robot.name, physics_steps=0, steps_walked=steps,
+                               reason=reason,
                                seconds={"fixed_point": t, "sampling": 0.0, "total": t, "sim_steps_per_s": 0.0})
 
-    with ReturnMap(robot, gait, kind=cfg.map, frame=cfg.frame, reconstruction=cfg.reconstruction,
-                   sim=cfg.sim) as pmap:
+    with ReturnMap(robot, gait, cfg, sim) as pmap:
         with tqdm(total=cfg.fp_max_steps, desc="fixed point", unit="step", disable=not progress,
                   leave=False) as bar:
             def on_step(k: int, residual: float) -> None:
                 bar.update(k - bar.n)
                 bar.set_postfix(residual=f"{residual:.2e}")
             try:
-                fp = pmap.find_fixed_point(tol=cfg.fp_tol, min_steps=cfg.fp_min_steps, max_steps=cfg.fp_max_steps,
-                                           progress=on_step)
+                fp = pmap.find_fixed_point(progress=on_step)
             except FixedPointFailure as exc:
                 return failed(exc.status, str(exc), exc.steps)
         t1 = time.perf_counter()
@@ -212,6 +165,6 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         t3 = time.perf_counter()
         steps = pmap.physics_steps
     return GaitCertificate(status="ok", certificate=cert, fixed_point=fp, map_residual=map_residual, config=cfg,
-                           robot=robot.name, physics_steps=steps, steps_walked=fp.steps,
+                           sim=sim, robot=robot.name, physics_steps=steps, steps_walked=fp.steps,
                            seconds={"fixed_point": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,
                                     "sim_steps_per_s": steps / max(t3 - t2, 1e-9)})

@@ -17,7 +17,7 @@ is MuJoCo's ``mj_fullM`` / ``qfrc_bias`` form. Passive forces (joint damping, sp
 are not in ``qfrc_bias`` and are not modelled here; the shipped robots have none.
 
 Pitfalls of adam 0.5 ``from_mujoco_model`` (found with MuJoCo 4.0; handled here on a private copy of
-the model, compiled from the robot's spec, that only adam sees):
+the model, compiled from the robot's MjSpec, that only adam sees):
 
 * Joint ``pos``: adam puts the child link's frame at the joint, keeping the body's inertial offset
   and children's positions — a wrong model (3.9 % mass-matrix error on a test model). We move each
@@ -42,7 +42,6 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 from functools import cached_property
-from pathlib import Path
 from typing import Any, overload
 
 import casadi as cs
@@ -53,7 +52,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from robustgait.domains import Contact
 from robustgait.errors import input_error
-from robustgait.robots.spec import SIDES, Robot, build_mjspec, load_robot
+from robustgait.robots import Robot
+from robustgait.robots.spec import SIDES
 from robustgait.rotations import quat_to_mat
 
 FOOT_FRAME_KINDS = ("sole", "toe", "heel")
@@ -150,7 +150,7 @@ def _symmetrize(m: mujoco.MjModel, robot: Robot, frames: dict[str, dict[str, tup
 
 def _adam_model(robot: Robot) -> mujoco.MjModel:
     """The robot's model prepared for adam: foot frames added, joint frames moved, statics massless."""
-    mjs = build_mjspec(robot.spec)
+    mjs = robot.mjspec()
     m = robot.model
     frames = {side: _sole_frames(m, robot.sole_geom_id[side]) for side in SIDES}
     _symmetrize(m, robot, frames)
@@ -193,8 +193,8 @@ class Dynamics:
     ``qvel`` (nv,) and return arrays in MuJoCo's coordinates (see the module docstring).
     """
 
-    def __init__(self, robot: Robot | str | Path):
-        self.robot = load_robot(robot)
+    def __init__(self, robot: Robot):
+        self.robot = robot
         m = self.robot.model
         self.nv: int = int(m.nv)
         self.armature: Array = m.dof_armature.copy()

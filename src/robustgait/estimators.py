@@ -1,6 +1,6 @@
 """Estimators of r* from samples of a batched return map, and the confidence statement each one supports.
 
-DESIGN §6 and ``docs/certificate.md`` (derivations). Two estimators, both exact for their samples
+``docs/certificate.md`` (derivations). Two estimators, both exact for their samples
 (:func:`robustgait.barrier.solve_radius`):
 
 * ``uniform`` — the paper's: N i.i.d. samples uniform in B(x*, r_max); the statement is a union bound over
@@ -38,35 +38,27 @@ for local proposals, around their own elites) and the same verification directio
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
-from typing import Literal
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from robustgait.barrier import (
-    Barrier,
     BatchedMap,
     Certificate,
     Round,
-    _check_alpha,
-    _check_beta,
     _check_point,
-    _check_positive,
     certificate_from_samples,
-    check_barrier,
     distances,
     evaluate_map,
     sample_ball,
     solve_radius,
     violation_end,
 )
+from robustgait.config import Barrier, CertifyConfig, SequentialConfig, verification_beta, verification_size
 from robustgait.errors import RobustGaitError
 
 __all__ = [
-    "METHODS",
-    "Method",
-    "SequentialConfig",
     "certify_map_sequential",
     "propose_round",
     "verification_beta",
@@ -74,70 +66,10 @@ __all__ = [
     "verification_size",
 ]
 
-Method = Literal["uniform", "sequential"]
-METHODS: tuple[Method, ...] = ("uniform", "sequential")
 FloatArray = NDArray[np.float64]
 
 
-@dataclass(frozen=True)
-class SequentialConfig:
-    """Options of the sequential estimator (module docstring; defaults measured in ``docs/certificate.md``).
-
-    epsilon: the bound on the violating volume fraction to certify (with confidence 1 − β, β given apart);
-    budget: most map evaluations in all rounds; first_round: round 1, uniform in B(r_max); round_size:
-    proposals per exploration round; explore: exploration samples before the first verification;
-    explore_after_failure: before each further verification; local_fraction: share of local proposals;
-    spread: σ of the local directions, u = (u_elite + σ g)/‖·‖, g ~ N(0, I); elites: how many of the
-    violating samples closest to x* local proposals start from; min_depth: smallest relative depth
-    1 − d/r̂ of a local proposal (depths are log-uniform in [min_depth, 1]).
-    """
-
-    epsilon: float = 0.02
-    budget: int = 3000
-    first_round: int = 200
-    round_size: int = 50
-    explore: int = 600
-    explore_after_failure: int = 200
-    local_fraction: float = 0.5
-    spread: float = 0.15
-    elites: int = 8
-    min_depth: float = 1e-3
-
-    def __post_init__(self) -> None:
-        for name in ("budget", "first_round", "round_size", "elites"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise RobustGaitError(f"sequential {name} must be an integer ≥ 1, got {v!r}")
-        for name in ("explore", "explore_after_failure"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
-                raise RobustGaitError(f"sequential {name} must be an integer ≥ 0, got {v!r}")
-        if not 0.0 < self.epsilon < 1.0:
-            raise RobustGaitError(f"epsilon must be in (0, 1), got {self.epsilon!r}")
-        if not 0.0 <= self.local_fraction <= 1.0:
-            raise RobustGaitError(f"local_fraction must be in [0, 1], got {self.local_fraction!r}")
-        if not (math.isfinite(self.spread) and self.spread > 0.0):
-            raise RobustGaitError(f"spread must be a finite number > 0, got {self.spread!r}")
-        if not 0.0 < self.min_depth < 1.0:
-            raise RobustGaitError(f"min_depth must be in (0, 1), got {self.min_depth!r}")
-
-
 # ------------------------------------------------------------------------------------ verification
-def verification_beta(beta: float, attempt: int) -> float:
-    """β_a = β / 2^a: the share of β spent on verification attempt a ≥ 1 (Σ_a β_a = β)."""
-    if attempt < 1:
-        raise RobustGaitError(f"verification attempts count from 1, got {attempt}")
-    return float(_check_beta(beta)) * 0.5**attempt
-
-
-def verification_size(epsilon: float, beta: float, attempt: int) -> int:
-    """n_a = ⌈ln β_a / ln(1 − ε)⌉: the least batch with (1 − ε)^{n_a} ≤ β_a (:func:`verification_beta`)."""
-    if not 0.0 < epsilon < 1.0:
-        raise RobustGaitError(f"epsilon must be in (0, 1), got {epsilon!r}")
-    n = math.log(verification_beta(beta, attempt)) / math.log1p(-epsilon)
-    return max(1, math.ceil(n - 1e-9))  # the slack absorbs rounding when n is an integer
-
-
 def verification_bound(n: int, beta: float, attempt: int) -> float:
     """ε_a = 1 − β_a^{1/n}: the bound certified by n fresh uniform samples that all satisfy (attempt a)."""
     if n < 1:
@@ -217,33 +149,18 @@ class _Pool:
         return _unit(x0[idx] - self.x_star)
 
 
-def certify_map_sequential(
-    P: BatchedMap,
-    x_star: ArrayLike,
-    *,
-    r_max: float = 2.0,
-    alpha: float = 0.05,
-    beta: float = 0.05,
-    seed: int = 0,
-    barrier: Barrier = "ball",
-    config: SequentialConfig | None = None,
-) -> Certificate:
+def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConfig | None = None) -> Certificate:
     """The sequential estimator (module docstring): certify a batched map P: (N, n) → (N, n) (NaN rows =
-    fell) around its fixed point x_star (n,). Returns a :class:`~robustgait.barrier.Certificate` with
-    ``method="sequential"``, every round (``rounds``: kind, radius, samples, samples used, r̂ after it) and,
-    if a verification batch passed, ``violation_bound`` = ε_a ≤ ε (:func:`verification_bound`) at
+    fell) around its fixed point x_star (n,) with ``config`` (``r_max``, ``alpha``, ``beta``, ``seed``,
+    ``barrier`` and the estimator's options ``sequential``). Returns a :class:`~robustgait.barrier.Certificate`
+    with ``method="sequential"``, every round (``rounds``: kind, radius, samples, samples used, r̂ after it)
+    and, if a verification batch passed, ``violation_bound`` = ε_a ≤ ε (:func:`verification_bound`) at
     confidence 1 − β; otherwise ``budget_exhausted`` (bound 1) or, if r̂ reached 0, a vacuous certificate.
     """
-    cfg = config or SequentialConfig()
+    full = config or CertifyConfig()
+    cfg = full.sequential
     xs = _check_point("x_star", x_star)
-    r = _check_positive("r_max", r_max)
-    a = _check_alpha(alpha)
-    b = _check_beta(beta)
-    check_barrier(barrier)
-    if cfg.budget < cfg.first_round + verification_size(cfg.epsilon, b, 1):
-        raise RobustGaitError(f"the sample budget {cfg.budget} cannot hold the first round ({cfg.first_round}) and "
-                              f"one verification batch ({verification_size(cfg.epsilon, b, 1)} for epsilon = "
-                              f"{cfg.epsilon:g}, beta = {b:g})")
+    r, a, b, seed, barrier = full.r_max, full.alpha, full.beta, full.seed, full.barrier
     n = xs.shape[0]
     explore_rng = np.random.default_rng([seed, 1])
     verify_rng = np.random.default_rng([seed, 2])

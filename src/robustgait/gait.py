@@ -1,4 +1,4 @@
-"""Gaits: parameters, the versioned JSON format, FROST/ambersim YAML import, relabeling (DESIGN §3).
+"""Gaits as data: the Bézier outputs of each domain, the states, relabeling for the other stance (``docs/gaits.md``).
 
 A :class:`Gait` holds, per domain, the Bézier coefficients β ∈ R^{m×8} of the desired actuated-joint
 trajectory y_d(τ) and the domain duration T (phase τ = (t − t₀)/T), written for one stance leg. The other
@@ -6,63 +6,27 @@ leg's step uses the relabeled coefficients (:meth:`Gait.mirrored`). States are s
 convention: ``qpos`` = [base position (world), base quaternion (w, x, y, z), joints in the MJCF's order];
 ``qvel`` = [base linear velocity (world), base angular velocity (body frame), joints].
 
-Files: ``.json`` is our format (``schema_version`` :data:`SCHEMA_VERSION`, exact round trip);
-``.yaml``/``.yml`` is a FROST/ambersim gait (see :func:`import_frost_yaml`).
+Files are read and written by :mod:`robustgait.io.gaitfile`: ``.json`` is our format (``schema_version``
+:data:`SCHEMA_VERSION`, exact round trip), ``.yaml``/``.yml`` a FROST/ambersim gait. The parameters a gait was
+made for are a :class:`~robustgait.config.GaitParams`.
 """
 
 from __future__ import annotations
 
-import json
-import math
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.errors import RobustGaitError, input_error
+from robustgait.config import GaitParams
+from robustgait.errors import RobustGaitError
 
 if TYPE_CHECKING:
     from robustgait.robots import Robot
 
 SCHEMA_VERSION = 1
 BEZIER_DEGREE = 7
-DOMAIN_GRAPHS = ("flat", "multicontact")
-STANCES = ("left", "right")
-
-
-@dataclass(frozen=True)
-class GaitParams:
-    """The four essential constraints of a gait (DESIGN §4): step length [m] (forward displacement of the
-    base per step), step duration [s], step width [m] (lateral distance between the feet centres) and
-    swing-foot height [m] (sole clearance at mid-step, the maximum); and, for multi-contact gaits only, the
-    fraction of the step spent rolling in double support (heel strike to toe-off). The bounds are generic
-    sanity bounds; whether a robot can walk them is decided by the gait generator (reach, foot collision,
-    IPOPT)."""
-
-    step_length: float = 0.15
-    step_duration: float = 0.7
-    step_width: float = 0.25
-    step_height: float = 0.07
-    rolling_fraction: float = 0.2
-
-    BOUNDS = {  # noqa: RUF012 - class-level constant, not a dataclass field
-        "step_length": (0.0, 1.5),
-        "step_duration": (0.1, 5.0),
-        "step_width": (0.0, 1.0),
-        "step_height": (0.005, 0.5),
-        "rolling_fraction": (0.05, 0.6),
-    }
-
-    def __post_init__(self) -> None:
-        for name, (lo, hi) in self.BOUNDS.items():
-            v = getattr(self, name)
-            if not isinstance(v, (int, float)) or not math.isfinite(v) or not lo <= v <= hi:
-                raise RobustGaitError(f"GaitParams.{name} = {v!r} is outside its bounds [{lo}, {hi}]")
-
-    def to_dict(self) -> dict[str, float]:
-        return {k: float(getattr(self, k)) for k in self.BOUNDS}
 
 
 @dataclass(frozen=True)
@@ -132,13 +96,6 @@ class Gait:
             "meta": self.meta,
         }
 
-    def save(self, path: str | Path) -> None:
-        """Write JSON (a ``.json`` path) through :func:`robustgait.io.output.write_text`: the target is checked
-        first, the file is written atomically, nothing half-written or temporary is left behind."""
-        from robustgait.io.output import write_text
-
-        write_text(path, json.dumps(self.to_dict(), indent=1, allow_nan=False), "json")
-
     def check_robot(self, robot: Robot) -> None:
         """Raise if this gait cannot drive ``robot`` (output count, joint names, initial state size)."""
         if self.n_outputs != robot.n_joints:
@@ -164,50 +121,3 @@ class Gait:
 
         return replace(self, stance="left" if self.stance == "right" else "right", domains=doms,
                        initial_state=mirror(self.initial_state), pre_impact_state=mirror(self.pre_impact_state))
-
-
-def gait_from_dict(raw: Any, src: str | Path = "<gait>") -> Gait:
-    """Validate and build a :class:`Gait` from the JSON structure of :meth:`Gait.to_dict` (schema and limits:
-    :mod:`robustgait.io.gaitfile`)."""
-    from robustgait.io.gaitfile import gait_from_raw
-
-    return gait_from_raw(raw, src)
-
-
-def load_gait_json(path: str | Path) -> Gait:
-    from robustgait.io.gaitfile import read_gait_json
-
-    return read_gait_json(path)
-
-
-def import_frost_yaml(path: str | Path, robot: Robot | None = None, stance: str = "right") -> Gait:
-    """Import a FROST/ambersim gait YAML (DESIGN §3).
-
-    ``coeff_jt`` (m·8 numbers) → β = reshape (m, 8) in Fortran order; ``step_dur`` → T; ``ffPos`` (base
-    position + quaternion w, x, y, z, normalized), ``startingPos`` (m) → qpos; ``ffVel`` (6: base linear
-    velocity in the world frame, angular velocity in the body frame, as ambersim fed MuJoCo's ``qvel``),
-    ``startingVel`` (m) → qvel (all four or none). The coefficients are for ``stance`` (AMBER's Atalante gaits:
-    right). ``inputparams`` and the base Bézier ``coeff_b`` are kept in ``meta``. Schema and limits:
-    :mod:`robustgait.io.gaitfile`.
-    """
-    from robustgait.io.gaitfile import read_frost_yaml
-
-    return read_frost_yaml(path, robot, stance)
-
-
-def load_gait(path: str | Path, robot: Robot | None = None) -> Gait:
-    """Load a gait file of either format (by extension) and, given a robot, check it fits."""
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix == ".json":
-        gait = load_gait_json(path)
-    elif suffix in (".yaml", ".yml"):
-        gait = import_frost_yaml(path, robot)
-    else:
-        raise input_error(path, "unknown gait format (expected .json, or .yaml/.yml from FROST/ambersim)")
-    if robot is not None:
-        try:
-            gait.check_robot(robot)
-        except RobustGaitError as exc:
-            raise input_error(path, str(exc)) from None
-    return gait

@@ -1,4 +1,5 @@
-"""The step-to-step Poincaré map on the switching surface, reduced to the base angular velocity (DESIGN §6).
+"""The step-to-step Poincaré map on the switching surface, reduced to the base angular velocity
+(``docs/certificate.md``).
 
 Section S: the switching events of the simulator (swing-foot touchdown once τ ≥ 0.8, the paper's x⁻ ∈ S).
 A state on S starts a step of one stance. *Canonical* states are written for the gait's own stance
@@ -29,25 +30,19 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.config import CertifyConfig, Frame, SimConfig
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
-from robustgait.sim.engine import SimConfig, StepEngine
+from robustgait.sim.engine import StepEngine
 from robustgait.sim.walk import SwitchEvent
 
-Frame = Literal["heading", "world", "body"]
-Reconstruction = Literal["holonomic", "angular-only"]
-MapKind = Literal["step", "stride"]
-FRAMES = ("heading", "world", "body")
-RECONSTRUCTIONS = ("holonomic", "angular-only")
-MAPS = ("step", "stride")
 FloatArray = NDArray[np.float64]
 
 
@@ -65,7 +60,7 @@ def frame_rotation(qpos: FloatArray, frame: Frame) -> FloatArray:
     return np.asarray(rz_t @ r)
 
 
-def reduce_state(qpos: FloatArray, qvel: FloatArray, frame: Frame = "heading") -> FloatArray:
+def reduce_state(qpos: FloatArray, qvel: FloatArray, frame: Frame) -> FloatArray:
     """Φ(x) = A(q) ω_body, the base angular velocity in ``frame``: qpos (K, nq), qvel (K, nv) → (K, 3).
 
     Paper: x̄ = [0 I 0] x (Tucker, Li, Ames, arXiv 2310.06169, §IV).
@@ -74,8 +69,7 @@ def reduce_state(qpos: FloatArray, qvel: FloatArray, frame: Frame = "heading") -
     return np.einsum("kij,kj->ki", a, np.asarray(qvel)[..., 3:6])
 
 
-def canonical_reduced_events(robot: Robot, gait: Gait, events: list[SwitchEvent],
-                             frame: Frame = "heading") -> FloatArray:
+def canonical_reduced_events(robot: Robot, gait: Gait, events: list[SwitchEvent], frame: Frame) -> FloatArray:
     """Reduced states (len(events), 3) of a walk's switching events, each written for the gait's own stance
     (events that start a step of the other stance are mirrored) — the sequence the step map acts on."""
     rows = []
@@ -111,20 +105,16 @@ class FixedPoint:
 
 
 class ReturnMap:
-    """The batched return map P: (N, 3) → (N, 3) of a gait (NaN rows: the sample fell)."""
+    """The batched return map P: (N, 3) → (N, 3) of a gait (NaN rows: the sample fell), of the kind, frame and
+    reconstruction of ``config`` (``map``, ``frame``, ``reconstruction``), simulated with ``sim``."""
 
-    def __init__(self, robot: Robot, gait: Gait, *, kind: MapKind = "step", frame: Frame = "heading",
-                 reconstruction: Reconstruction = "holonomic", sim: SimConfig | None = None):
-        if kind not in MAPS:
-            raise RobustGaitError(f"map must be one of {MAPS}, got {kind!r}")
-        if frame not in FRAMES:
-            raise RobustGaitError(f"frame must be one of {FRAMES}, got {frame!r}")
-        if reconstruction not in RECONSTRUCTIONS:
-            raise RobustGaitError(f"reconstruction must be one of {RECONSTRUCTIONS}, got {reconstruction!r}")
+    def __init__(self, robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None):
+        config = config or CertifyConfig()
         if gait.initial_state is None:
             raise RobustGaitError("the gait has no initial state to find a fixed point from")
-        self.robot, self.gait, self.kind, self.frame = robot, gait, kind, frame
-        self.reconstruction = reconstruction
+        self.config = config
+        self.robot, self.gait, self.kind, self.frame = robot, gait, config.map, config.frame
+        self.reconstruction = config.reconstruction
         self.engine = StepEngine(robot, gait, sim)
         self.stance = gait.stance
         self.other = "left" if gait.stance == "right" else "right"
@@ -144,10 +134,10 @@ class ReturnMap:
     def period(self) -> int:
         return 1 if self.kind == "step" else 2
 
-    def find_fixed_point(self, *, tol: float = 5e-3, min_steps: int = 10, max_steps: int = 100,
-                         progress: Callable[[int, float], None] | None = None) -> FixedPoint:
+    def find_fixed_point(self, progress: Callable[[int, float], None] | None = None) -> FixedPoint:
         """Iterate the map on full states from the gait's initial state until the reduced state converges:
-        x* = the first iterate after ``min_steps`` steps with ‖x̄_k − x̄_{k−1}‖ < tol.
+        x* = the first iterate after ``min_steps`` steps with ‖x̄_k − x̄_{k−1}‖ < tol (the config's ``fp_tol``,
+        ``min_steps``, ``fp_max_steps``).
 
         Iterating the map itself (canonical stance, then mirror) rather than walking on alternating legs
         makes x̄* a fixed point of exactly the map that is certified, also for a robot whose MJCF is not
@@ -155,6 +145,7 @@ class ReturnMap:
         first or no iterate within ``max_steps`` steps converges (with the residuals seen).
         ``progress(step, residual)`` after each.
         """
+        tol, min_steps, max_steps = self.config.fp_tol, self.config.min_steps, self.config.fp_max_steps
         init = self.gait.initial_state
         assert init is not None
         qpos, qvel = init.qpos[None].copy(), init.qvel[None].copy()
@@ -259,7 +250,7 @@ def holonomic_reconstruction(robot: Robot, qpos: FloatArray, stance: str) -> Flo
     Solves  min ½‖δq̇_j‖²  s.t.  J_s δq̇ = 0,  δq̇ = (δv, δω, δq̇_j),  δω given,  δv free,
     via its KKT system [[I, 0, J_jᵀ], [0, 0, J_vᵀ], [J_j, J_v, 0]] [δq̇_j; δv; λ] = [0; 0; −J_ω δω], where
     J_s = [J_v J_ω J_j] (6 × nv) is the stance sole geom's (translational; rotational) Jacobian in MuJoCo's
-    velocity coordinates (``mj_jacGeom``). qpos (nq,). (DESIGN §6, "holonomic" reconstruction.)
+    velocity coordinates (``mj_jacGeom``). qpos (nq,). (``docs/certificate.md``, "holonomic" reconstruction.)
     """
     m = robot.model
     d = mujoco.MjData(m)

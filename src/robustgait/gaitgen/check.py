@@ -21,9 +21,9 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.config import GaitParams
 from robustgait.domains import Contact
 from robustgait.dynamics import Dynamics, foot_frame, impact_map
-from robustgait.gait import GaitParams
 from robustgait.gaitgen.problem import GaitProblem
 from robustgait.gaitgen.states import NodeStates, to_mujoco_state
 
@@ -160,7 +160,7 @@ def check_solution(dyn: Dynamics, prob: GaitProblem, params: GaitParams, states:
         "step_length_error": abs(p_sw[0] - params.step_length),
         "step_width_error": abs(side * p_sw[1] - params.step_width),
         "step_height_error": abs(h_mid - params.step_height),
-        "duration_error": abs(sum(durations) - params.step_duration),
+        "duration_error": abs(sum(durations) - params.duration),
     }
     failures = []
     if dyn_res > DYNAMICS_TOL:

@@ -39,7 +39,7 @@ The essential constraints (L, T, W, h) and the rolling fraction ρ (double suppo
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import casadi as cs
@@ -48,12 +48,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.bezier import bernstein_basis, bezier_derivative_coeffs
+from robustgait.config import GenerationConfig
 from robustgait.domains import Contact, domain_graph, other_side
 from robustgait.dynamics import Dynamics, foot_frame, impact_residual
 from robustgait.errors import RobustGaitError
 from robustgait.gait import BEZIER_DEGREE
-from robustgait.gaitgen.config import GaitGenConfig
-from robustgait.robots.spec import Robot
+from robustgait.robots import GaitQuality, Robot
 
 FloatArray = NDArray[np.float64]
 U_SCALE = 100.0
@@ -119,7 +119,7 @@ def double_support_free_joints(robot: Robot, side: str, names: tuple[str, ...] |
     pitches = [j for j, k in zip(chain, kinds, strict=True) if k == "y"]
     if len(rolls) < 2 or not yaws or len(pitches) < 2:
         raise RobustGaitError(f"cannot pick the double-support free joints of the {side} leg from its joint axes "
-                              f"({', '.join(m.joint(j).name for j in chain)}): set GaitGenConfig.ds_free_joints")
+                              f"({', '.join(m.joint(j).name for j in chain)}): set GenerationConfig.ds_free_joints")
     picked = [rolls[0], yaws[0], pitches[1], rolls[-1]]
     ids = [m.joint(n).id for n in spec.joints]
     return [ids.index(j) for j in picked]
@@ -190,7 +190,7 @@ def make_layout(m: int, n_nodes: list[int], wrench_rows: list[int], impulse_rows
     return Layout(m, doms, k)
 
 
-def wrench_rows(c: Contact, lam: cs.SX, config: GaitGenConfig, half_length: float, half_width: float
+def wrench_rows(c: Contact, lam: cs.SX, config: GenerationConfig, half_length: float, half_width: float
                 ) -> list[tuple[str, cs.SX, float, float]]:
     """Contact wrench conditions (expr ≤ 0 unless noted) of one contact, world axes at its frame:
 
@@ -227,15 +227,21 @@ def impulse_rows(contacts: tuple[Contact, ...], imp: cs.SX, mu: float) -> cs.SX:
     return cs.vertcat(*out)
 
 
+def gait_quality(robot: Robot) -> GaitQuality:
+    """The robot spec's gait-quality bounds, with a joint-speed bound of 10 rad/s per joint when it sets none."""
+    q = robot.spec.gait_quality
+    return q if q.joint_velocity else replace(q, joint_velocity=(10.0,) * robot.n_joints)
+
+
 class GaitProblem:
     """The NLP of a domain graph (``config.domains``), built once for a robot and stance, solved for any
     essential constraints. See the module docstring for the formulation."""
 
-    def __init__(self, dyn: Dynamics, config: GaitGenConfig):
+    def __init__(self, dyn: Dynamics, config: GenerationConfig):
         self.dyn, self.config = dyn, config
         robot = dyn.robot
         self.graph = graph = domain_graph(config.domains)
-        self.quality = config.quality(robot)
+        self.quality = gait_quality(robot)
         self.m = m = robot.n_joints
         counts = [config.nodes] + [config.ds_nodes] * (len(graph) - 1)
         self.domain_taus = [np.linspace(0.0, 1.0, n) for n in counts]

@@ -13,12 +13,11 @@ from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
 from robustgait.bezier import bernstein_basis, bezier, bezier_derivative, bezier_derivative_coeffs
+from robustgait.config import GaitParams, GenerationConfig
 from robustgait.domains import Contact
 from robustgait.dynamics import Dynamics, foot_frame
-from robustgait.errors import RobustGaitError
-from robustgait.gait import BEZIER_DEGREE, Domain, Gait, GaitParams, State
+from robustgait.gait import BEZIER_DEGREE, Domain, Gait, State
 from robustgait.gaitgen.check import PhysicsCheck, check_solution
-from robustgait.gaitgen.config import GaitGenConfig
 from robustgait.gaitgen.problem import (
     F_SCALE,
     U_SCALE,
@@ -66,9 +65,10 @@ def joint_trajectories(beta: FloatArray, taus: FloatArray, duration: float
 
 def domain_durations(prob: GaitProblem, params: GaitParams) -> list[float]:
     """Duration of each domain: T (flat), or T (1 − ρ) single and T ρ double support (multi-contact)."""
+    t = params.resolved(prob.graph.name).duration
     if len(prob.graph) == 1:
-        return [params.step_duration]
-    return [params.step_duration * (1 - params.rolling_fraction), params.step_duration * params.rolling_fraction]
+        return [t]
+    return [t * (1 - params.rolling_fraction), t * params.rolling_fraction]
 
 
 def _contact_targets(prob: GaitProblem, params: GaitParams, d: int) -> list[tuple[Contact, FloatArray]]:
@@ -143,7 +143,7 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
     free = [j for j in range(m) if j not in prob.outputs[domain]]
     cols = list(range(6)) + [6 + j for j in free]  # the unknown velocities: base and free joints
     known = [6 + j for j in prob.outputs[domain]]
-    targets = None if single else _contact_targets(prob, params or GaitParams(), domain)
+    targets = None if single else _contact_targets(prob, params or GaitParams().resolved(prob.graph.name), domain)
     prev = np.eye(4) if base is None else base
     for i in range(n):
         if single:  # stance sole at the origin, identity orientation
@@ -240,9 +240,9 @@ class GaitGenerator:
     """Builds the NLP of a domain graph once for a robot (flat: ≈ 6 s for exo, 10 s for Atalante) and solves
     it for any :class:`GaitParams`."""
 
-    def __init__(self, robot: Robot, config: GaitGenConfig | None = None, *, verbose: bool = False):
+    def __init__(self, robot: Robot, config: GenerationConfig | None = None, *, verbose: bool = False):
         self.robot = robot
-        self.config = cfg = config or GaitGenConfig()
+        self.config = cfg = config or GenerationConfig()
         t0 = time.perf_counter()
         self.dyn = Dynamics(robot)
         self.problem = prob = GaitProblem(self.dyn, cfg)
@@ -325,8 +325,10 @@ class GaitGenerator:
 
     def solve(self, params: GaitParams, warm_start: Gait | None = None) -> GaitGenResult:
         """Solve for one set of essential constraints; never raises on infeasible input or solver failure:
-        a failed result carries the pre-check's reason, IPOPT's status or the physics check's failures."""
+        a failed result carries the pre-check's reason, IPOPT's status or the physics check's failures. A step
+        duration that is not set is the domain graph's default."""
         prob = self.problem
+        params = params.resolved(prob.graph.name)
         reason = self.precheck(params)
         if reason is not None:
             return GaitGenResult(success=False, status="Infeasible_Parameters", reason=reason, params=params)
@@ -379,15 +381,11 @@ class GaitGenerator:
                     solver=solver, meta={"source": f"robustgait gaitgen ({prob.graph.name} HZD)"})
 
 
-def generate_gait(robot: Robot, step_length: float = 0.15, step_duration: float = 0.7, step_width: float = 0.25,
-                  step_height: float = 0.07, rolling_fraction: float = 0.2, *, warm_start: Gait | None = None,
-                  generator: GaitGenerator | None = None, config: GaitGenConfig | None = None,
+def generate_gait(robot: Robot, params: GaitParams | None = None, config: GenerationConfig | None = None, *,
+                  warm_start: Gait | None = None, generator: GaitGenerator | None = None,
                   verbose: bool = False) -> GaitGenResult:
-    """One gait from raw essential constraints: parameters out of bounds give a failed result (never an
-    exception). Pass a ``generator`` to reuse its built problem across calls."""
-    try:
-        params = GaitParams(step_length, step_duration, step_width, step_height, rolling_fraction)
-    except RobustGaitError as exc:
-        return GaitGenResult(success=False, status="Infeasible_Parameters", reason=str(exc), params=None)
+    """One gait: ``params`` (default :class:`GaitParams`, its step duration the domain graph's default) solved with
+    ``config`` (or ``generator``, built for it once, to reuse across calls). A failed solve is a result, never an
+    exception."""
     gen = generator or GaitGenerator(robot, config, verbose=verbose)
-    return gen.solve(params, warm_start)
+    return gen.solve(params or GaitParams(), warm_start)

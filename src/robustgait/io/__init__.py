@@ -1,13 +1,13 @@
-"""Everything robustgait reads and writes, validated in one place (issue 11; ``docs/inputs.md``).
+"""Everything robustgait reads and writes, validated in one place (``docs/inputs.md``): no other module opens a file.
 
-* :mod:`robustgait.io.limits` — the documented limits of every input (files and command-line arguments).
-* :mod:`robustgait.io.schema` — reading files safely (size, encoding, syntax) and validating their data
-  against msgspec schemas; errors read ``FILE: field: problem`` on one line.
-* :mod:`robustgait.io.gaitfile`, :mod:`robustgait.io.specfile`, :mod:`robustgait.io.logs` — the schemas
-  and builders of gait files (JSON, FROST YAML), robot specs (TOML) and reduced-state logs (CSV, NPY, NPZ).
+* :mod:`robustgait.io.schema` — reading files safely (size, encoding, syntax) and validating their data with the
+  configuration's schema library (pydantic); errors read ``FILE: field: problem`` on one line.
+* :mod:`robustgait.io.limits` — the limits of every input file.
+* :mod:`robustgait.io.gaitfile`, :mod:`robustgait.io.robotfile`, :mod:`robustgait.io.logs`,
+  :mod:`robustgait.io.certfile`, :mod:`robustgait.io.configfile` — gait files (JSON, FROST YAML), robots (spec
+  TOML, MJCF), reduced-state logs (CSV, NPY, NPZ), certificate files, configuration files (TOML).
 * :mod:`robustgait.io.output` — the one output writer: checks a target before any work, writes atomically.
-* :mod:`robustgait.io.args` — argparse types with the documented bounds, for the command line.
 
-The public dataclasses (:class:`~robustgait.gait.Gait`, :class:`~robustgait.robots.RobotSpec`, ...) stay
-where they are; this package validates raw data and builds them. Submodules are imported on demand.
+The data they build (:class:`~robustgait.gait.Gait`, :class:`~robustgait.robots.RobotSpec`, the configuration) is
+plain data defined elsewhere. Submodules are imported on demand.
 """

@@ -1,94 +1,89 @@
-"""Gait files: the schema of robustgait's JSON and of FROST/ambersim YAML, and the builders of
-:class:`~robustgait.gait.Gait` (``docs/gaits.md``, limits in ``docs/inputs.md``)."""
+"""Gait files: robustgait's JSON and FROST/ambersim YAML — their schemas, reading them into a
+:class:`~robustgait.gait.Gait`, writing one (``docs/gaits.md``, limits in ``docs/inputs.md``)."""
 
 from __future__ import annotations
 
+import dataclasses
+import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-import msgspec
+import annotated_types as at
 import numpy as np
-from msgspec import Meta
 from numpy.typing import NDArray
+from pydantic import StringConstraints
 
-from robustgait.gait import BEZIER_DEGREE, SCHEMA_VERSION, Domain, Gait, GaitParams, State
+from robustgait.config import GaitParams
+from robustgait.config.base import Float, Str
+from robustgait.errors import RobustGaitError, input_error
+from robustgait.gait import BEZIER_DEGREE, SCHEMA_VERSION, Domain, Gait, State
 from robustgait.io import limits as L
-from robustgait.io.schema import Table, check_free_form, field_error, read_json, read_yaml, validate
+from robustgait.io.output import write_text
+from robustgait.io.schema import check_free_form, field_error, read_json, read_yaml, table, validate
 
 if TYPE_CHECKING:
     from robustgait.robots import Robot
 
 N_COEF = BEZIER_DEGREE + 1
-Name = Annotated[str, Meta(min_length=1, max_length=200, pattern=r"^[^\x00]+$")]
-Coef = Annotated[float, L.BEZIER_COEFFICIENT.meta()]
-BetaRow = Annotated[list[Coef], Meta(min_length=N_COEF, max_length=N_COEF)]
-Qpos = Annotated[float, L.QPOS.meta()]
-Qvel = Annotated[float, L.QVEL.meta()]
-Duration = Annotated[float, L.DOMAIN_DURATION.meta()]
-Torque = Annotated[float, L.FEEDFORWARD_TORQUE.meta()]
-Phase = Annotated[float, L.FEEDFORWARD_PHASE.meta()]
+Name = Annotated[str, StringConstraints(strict=True, min_length=1, max_length=200, pattern=r"^[^\x00]+$")]
+Coef = Annotated[Float, L.BEZIER_COEFFICIENT]
+BetaRow = Annotated[list[Coef], at.MinLen(N_COEF), at.MaxLen(N_COEF)]
+Qpos = Annotated[Float, L.QPOS]
+Qvel = Annotated[Float, L.QVEL]
+Duration = Annotated[Float, L.DOMAIN_DURATION]
+Torque = Annotated[Float, L.FEEDFORWARD_TORQUE]
+Phase = Annotated[Float, L.FEEDFORWARD_PHASE]
 
 
-_B = GaitParams.BOUNDS
-StepLength = Annotated[float, Meta(ge=_B["step_length"][0], le=_B["step_length"][1], extra={"unit": "m"})]
-StepDuration = Annotated[float, Meta(ge=_B["step_duration"][0], le=_B["step_duration"][1], extra={"unit": "s"})]
-StepWidth = Annotated[float, Meta(ge=_B["step_width"][0], le=_B["step_width"][1], extra={"unit": "m"})]
-StepHeight = Annotated[float, Meta(ge=_B["step_height"][0], le=_B["step_height"][1], extra={"unit": "m"})]
-RollingFraction = Annotated[float, Meta(ge=_B["rolling_fraction"][0], le=_B["rolling_fraction"][1])]
+@table
+class FeedforwardFile:
+    tau: Annotated[list[Phase], at.MinLen(2), at.MaxLen(L.MAX_FEEDFORWARD_SAMPLES)]
+    torque: Annotated[list[Annotated[list[Torque], at.MinLen(1), at.MaxLen(L.MAX_JOINTS)]],
+                      at.MinLen(2), at.MaxLen(L.MAX_FEEDFORWARD_SAMPLES)]
 
 
-class FeedforwardFile(Table):
-    tau: Annotated[list[Phase], Meta(min_length=2, max_length=L.MAX_FEEDFORWARD_SAMPLES)]
-    torque: Annotated[list[Annotated[list[Torque], Meta(min_length=1, max_length=L.MAX_JOINTS)]],
-                      Meta(min_length=2, max_length=L.MAX_FEEDFORWARD_SAMPLES)]
-
-
-class DomainFile(Table):
+@table
+class DomainFile:
     duration: Duration
-    beta: Annotated[list[BetaRow], Meta(min_length=1, max_length=L.MAX_JOINTS)]
-    name: Annotated[str, Meta(max_length=200)] = ""
+    beta: Annotated[list[BetaRow], at.MinLen(1), at.MaxLen(L.MAX_JOINTS)]
+    name: Annotated[Str, at.MaxLen(200)] = ""
     feedforward: FeedforwardFile | None = None
 
 
-class StateFile(Table):
-    qpos: Annotated[list[Qpos], Meta(min_length=8, max_length=7 + L.MAX_JOINTS)]
-    qvel: Annotated[list[Qvel], Meta(min_length=7, max_length=6 + L.MAX_JOINTS)]
+@table
+class StateFile:
+    qpos: Annotated[list[Qpos], at.MinLen(8), at.MaxLen(7 + L.MAX_JOINTS)]
+    qvel: Annotated[list[Qvel], at.MinLen(7), at.MaxLen(6 + L.MAX_JOINTS)]
 
 
-class ParamsFile(Table):
-    step_length: StepLength
-    step_duration: StepDuration
-    step_width: StepWidth
-    step_height: StepHeight
-    rolling_fraction: RollingFraction = GaitParams.rolling_fraction
-
-
-class GaitFile(Table):
-    """robustgait's gait JSON, ``schema_version`` 1 (:meth:`Gait.to_dict` writes exactly these keys)."""
+@table
+class GaitFile:
+    """robustgait's gait JSON, ``schema_version`` 1 (:func:`gait_to_dict` writes exactly these keys)."""
 
     schema_version: Literal[1]
     robot: Name
     domain_graph: Literal["flat", "multicontact"]
     stance: Literal["left", "right"]
-    domains: Annotated[list[DomainFile], Meta(min_length=1, max_length=L.MAX_DOMAINS)]
-    joints: Annotated[list[Name], Meta(max_length=L.MAX_JOINTS)] = msgspec.field(default_factory=list)
+    domains: Annotated[list[DomainFile], at.MinLen(1), at.MaxLen(L.MAX_DOMAINS)]
+    joints: Annotated[list[Name], at.MaxLen(L.MAX_JOINTS)] = dataclasses.field(default_factory=list)
     initial_state: StateFile | None = None
     pre_impact_state: StateFile | None = None
-    params: ParamsFile | None = None
+    params: GaitParams | None = None
     solver: dict[str, Any] | None = None
-    meta: dict[str, Any] = msgspec.field(default_factory=dict)
+    meta: dict[str, Any] = dataclasses.field(default_factory=dict)
 
 
-class FrostFile(msgspec.Struct, frozen=True, kw_only=True):
+@table(extra="ignore")
+class FrostFile:
     """A FROST/ambersim gait YAML (other keys, which ambersim writes too, are ignored)."""
 
-    coeff_jt: Annotated[list[Coef], Meta(min_length=N_COEF, max_length=N_COEF * L.MAX_JOINTS)]
+    coeff_jt: Annotated[list[Coef], at.MinLen(N_COEF), at.MaxLen(N_COEF * L.MAX_JOINTS)]
     step_dur: Duration
-    ffPos: Annotated[list[Qpos], Meta(min_length=7, max_length=7)] | None = None  # FROST's key names
-    startingPos: Annotated[list[Qpos], Meta(min_length=1, max_length=L.MAX_JOINTS)] | None = None
-    ffVel: Annotated[list[Qvel], Meta(min_length=6, max_length=6)] | None = None
-    startingVel: Annotated[list[Qvel], Meta(min_length=1, max_length=L.MAX_JOINTS)] | None = None
-    coeff_b: Annotated[list[Coef], Meta(max_length=N_COEF * L.MAX_JOINTS)] | None = None
+    ffPos: Annotated[list[Qpos], at.MinLen(7), at.MaxLen(7)] | None = None  # FROST's key names
+    startingPos: Annotated[list[Qpos], at.MinLen(1), at.MaxLen(L.MAX_JOINTS)] | None = None
+    ffVel: Annotated[list[Qvel], at.MinLen(6), at.MaxLen(6)] | None = None
+    startingVel: Annotated[list[Qvel], at.MinLen(1), at.MaxLen(L.MAX_JOINTS)] | None = None
+    coeff_b: Annotated[list[Coef], at.MaxLen(N_COEF * L.MAX_JOINTS)] | None = None
     inputparams: dict[str, Any] | None = None
 
 
@@ -122,7 +117,7 @@ def _step_duration(total: float, src: str | Path, field: str) -> None:
         raise field_error(src, field, f"the step lasts {total:g} s; it must satisfy {L.STEP_DURATION.text()}")
 
 
-def gait_from_raw(raw: Any, src: str | Path = "<gait>") -> Gait:
+def gait_from_dict(raw: Any, src: str | Path = "<gait>") -> Gait:
     """Validate the JSON structure of :meth:`Gait.to_dict` and build the :class:`Gait`."""
     g = validate(raw, GaitFile, src, "json")
     assert g.schema_version == SCHEMA_VERSION
@@ -152,10 +147,9 @@ def gait_from_raw(raw: Any, src: str | Path = "<gait>") -> Gait:
     if g.solver is not None:
         check_free_form(g.solver, src, "solver")
     check_free_form(g.meta, src, "meta")
-    params = None
-    if g.params is not None:
-        params = GaitParams(g.params.step_length, g.params.step_duration, g.params.step_width, g.params.step_height,
-                            g.params.rolling_fraction)
+    params = g.params
+    if params is not None and params.step_duration is None:  # the gait's own duration
+        params = dataclasses.replace(params, step_duration=sum(d.duration for d in g.domains))
     return Gait(robot=g.robot, domain_graph=g.domain_graph, stance=g.stance, joints=tuple(g.joints),
                 domains=tuple(domains), initial_state=_state(g.initial_state, m, src, "initial_state"),
                 pre_impact_state=_state(g.pre_impact_state, m, src, "pre_impact_state"), params=params,
@@ -163,14 +157,21 @@ def gait_from_raw(raw: Any, src: str | Path = "<gait>") -> Gait:
 
 
 def read_gait_json(path: str | Path) -> Gait:
-    return gait_from_raw(read_json(path, "gait file"), path)
+    return gait_from_dict(read_json(path, "gait file"), path)
 
 
 FROST_STATE_KEYS = ("ffPos", "startingPos", "ffVel", "startingVel")
 
 
-def read_frost_yaml(path: str | Path, robot: Robot | None = None, stance: str = "right") -> Gait:
-    """A FROST/ambersim gait YAML → :class:`Gait` (see :func:`robustgait.gait.import_frost_yaml`)."""
+def import_frost_yaml(path: str | Path, robot: Robot | None = None, stance: str = "right") -> Gait:
+    """Import a FROST/ambersim gait YAML (``docs/gaits.md``).
+
+    ``coeff_jt`` (m·8 numbers) → β = reshape (m, 8) in Fortran order; ``step_dur`` → T; ``ffPos`` (base
+    position + quaternion w, x, y, z, normalized), ``startingPos`` (m) → qpos; ``ffVel`` (6: base linear
+    velocity in the world frame, angular velocity in the body frame, as ambersim fed MuJoCo's ``qvel``),
+    ``startingVel`` (m) → qvel (all four or none). The coefficients are for ``stance`` (AMBER's Atalante gaits:
+    right). ``inputparams`` and the base Bézier ``coeff_b`` are kept in ``meta``.
+    """
     raw = read_yaml(path, "gait file")
     if not isinstance(raw, dict):
         raise field_error(path, "", f"a FROST gait YAML must be a mapping, got {type(raw).__name__}")
@@ -208,3 +209,28 @@ def read_frost_yaml(path: str | Path, robot: Robot | None = None, stance: str = 
     return Gait(robot=robot.name if robot is not None else "unknown", domain_graph="flat", stance=stance,
                 joints=robot.spec.joints if robot is not None else (),
                 domains=(Domain("single_support", float(f.step_dur), beta),), initial_state=state, meta=meta)
+
+
+def load_gait(path: str | Path, robot: Robot | None = None) -> Gait:
+    """Load a gait file of either format (by extension: ``.json`` robustgait, ``.yaml``/``.yml`` FROST/ambersim)
+    and, given a robot, check it fits."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".json":
+        gait = read_gait_json(path)
+    elif suffix in (".yaml", ".yml"):
+        gait = import_frost_yaml(path, robot)
+    else:
+        raise input_error(path, "unknown gait format (expected .json, or .yaml/.yml from FROST/ambersim)")
+    if robot is not None:
+        try:
+            gait.check_robot(robot)
+        except RobustGaitError as exc:
+            raise input_error(path, str(exc)) from None
+    return gait
+
+
+def save_gait(gait: Gait, path: str | Path) -> Path:
+    """Write a gait as robustgait JSON (a ``.json`` path) through :func:`robustgait.io.output.write_text`: the
+    target is checked first, the file is written atomically, nothing half-written or temporary is left behind."""
+    return write_text(path, json.dumps(gait.to_dict(), indent=1, allow_nan=False), "json")

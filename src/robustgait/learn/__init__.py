@@ -1,4 +1,4 @@
-"""Preference learning over a robot's action space (DESIGN §7): the grid (``space``), the oracles
+"""Preference learning over a robot's action space (``docs/studies.md``): the grid (``space``), the oracles
 (``oracle``), the preference GP (``model``), the learners (``learners``: POLAR-style Thompson sampling,
 qEUBO, random) and the loop against known scores (``offline``).
 
@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING
 from robustgait._lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from robustgait.learn.config import LEARNERS, LearnerConfig, PreferenceModelConfig
     from robustgait.learn.learners import (
         EuboLearner,
         History,
@@ -21,15 +20,14 @@ if TYPE_CHECKING:
     )
     from robustgait.learn.model import thompson_draws
     from robustgait.learn.offline import ReplayResult, replay
-    from robustgait.learn.oracle import METRICS, Outcome, batch_comparisons, prefer, score
+    from robustgait.learn.oracle import Outcome, batch_comparisons, prefer, score
     from robustgait.learn.space import ActionSpace
 
 _EXPORTS = {
     **dict.fromkeys(("EuboLearner", "History", "Learner", "PolarLearner",
                      "RandomLearner", "iteration_seed", "make_learner"), "learners"),
-    **dict.fromkeys(("LEARNERS", "LearnerConfig", "PreferenceModelConfig"), "config"),
     "thompson_draws": "model",
-    **dict.fromkeys(("METRICS", "Outcome", "batch_comparisons", "prefer", "score"), "oracle"),
+    **dict.fromkeys(("Outcome", "batch_comparisons", "prefer", "score"), "oracle"),
     **dict.fromkeys(("ReplayResult", "replay"), "offline"),
     "ActionSpace": "space",
 }
@@ -38,16 +36,12 @@ _EXPORTS = {
 __getattr__ = lazy_exports(__name__, _EXPORTS)
 
 __all__ = [
-    "LEARNERS",
-    "METRICS",
     "ActionSpace",
     "EuboLearner",
     "History",
     "Learner",
-    "LearnerConfig",
     "Outcome",
     "PolarLearner",
-    "PreferenceModelConfig",
     "RandomLearner",
     "ReplayResult",
     "batch_comparisons",

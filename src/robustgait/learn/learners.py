@@ -31,8 +31,8 @@ import numpy as np
 import torch
 from numpy.typing import NDArray
 
+from robustgait.config import LearnerConfig, LearnerName, choices_of
 from robustgait.errors import RobustGaitError
-from robustgait.learn.config import LEARNERS, LearnerConfig
 from robustgait.learn.model import (
     cholesky_root,
     posterior_mean,
@@ -206,8 +206,10 @@ class EuboLearner(Learner):
         return [int(i) for i in rows]
 
 
-def make_learner(name: str, space: ActionSpace, config: LearnerConfig | None = None, seed: int = 0) -> Learner:
-    classes: dict[str, type[Learner]] = {"polar": PolarLearner, "eubo": EuboLearner, "random": RandomLearner}
-    if name not in classes:
-        raise RobustGaitError(f"unknown learner {name!r} (choose from {', '.join(LEARNERS)})")
-    return classes[name](space, config, seed)
+LEARNER_CLASSES: dict[str, type[Learner]] = {"polar": PolarLearner, "eubo": EuboLearner, "random": RandomLearner}
+assert set(LEARNER_CLASSES) == set(choices_of(LearnerName))
+
+
+def make_learner(name: LearnerName, space: ActionSpace, config: LearnerConfig | None = None, seed: int = 0) -> Learner:
+    """The learner called ``name`` (a :data:`~robustgait.config.LearnerName`) over ``space``."""
+    return LEARNER_CLASSES[name](space, config, seed)

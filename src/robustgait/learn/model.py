@@ -20,8 +20,8 @@ import numpy as np
 import torch
 from numpy.typing import NDArray
 
+from robustgait.config import PreferenceModelConfig
 from robustgait.errors import RobustGaitError
-from robustgait.learn.config import PreferenceModelConfig
 
 FloatArray = NDArray[np.float64]
 

@@ -15,12 +15,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
 
+from robustgait.config import Metric
 from robustgait.errors import RobustGaitError
-
-Metric = Literal["robustness", "stability"]
-METRICS: tuple[Metric, ...] = ("robustness", "stability")
 
 
 @dataclass(frozen=True)
@@ -43,7 +40,7 @@ def score(metric: Metric | str, outcome: Outcome) -> float:
         return float(outcome.step_cap + outcome.r_star) if outcome.walked_cap else float(outcome.steps_taken)
     if metric == "stability":
         return float(outcome.steps_taken)
-    raise RobustGaitError(f"unknown metric {metric!r} (choose from {', '.join(METRICS)})")
+    raise RobustGaitError(f"unknown metric {metric!r}")
 
 
 def prefer(metric: Metric | str, a: Outcome, b: Outcome) -> int:

@@ -17,8 +17,8 @@ from itertools import product
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.config import GaitParams
 from robustgait.errors import RobustGaitError
-from robustgait.gait import GaitParams
 from robustgait.robots import Robot
 from robustgait.robots.spec import ACTION_FIELDS, ParamRange
 

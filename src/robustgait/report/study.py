@@ -14,7 +14,6 @@ from __future__ import annotations
 import base64
 import dataclasses
 import html
-import json
 from itertools import combinations
 from pathlib import Path
 from typing import Any
@@ -28,8 +27,10 @@ import numpy as np
 from matplotlib.ticker import MaxNLocator
 
 from robustgait.barrier import Certificate, Round
+from robustgait.config import ReportConfig
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_text
+from robustgait.io.schema import read_json
 from robustgait.report.figures import _save, plot_certificate
 
 OUTCOME_COLORS = {"certified": "tab:green", "not_certified": "tab:olive", "fell": "tab:red",
@@ -131,12 +132,14 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
     from robustgait.study.config import load_config
     from robustgait.study.run import completed_batches, history_before, open_store
 
-    cfg = load_config(directory)
-    space = cfg.action_space()
+    setup = load_config(directory)
+    cfg = setup.config.study
+    space = setup.action_space()
     for name in axes_names:
         if name not in space.names:
-            raise RobustGaitError(f"--axes: {name!r} is not a parameter of the action space ({', '.join(space.names)})")
-    store = open_store(directory, cfg, space)
+            raise RobustGaitError(f"report.axes: {name!r} is not a parameter of the action space "
+                                  f"({', '.join(space.names)})")
+    store = open_store(directory, setup, space)
     try:
         batches = completed_batches(store.records())
     finally:
@@ -178,11 +181,11 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
 
 def render_best_video(directory: Path, status: dict[str, Any], path: Path, steps: int = 8) -> Path:
     """Walk the best gait ``steps`` steps and render it (MuJoCo offscreen)."""
-    from robustgait.gait import load_gait
-    from robustgait.robots import load_robot
+    from robustgait.io.gaitfile import load_gait
+    from robustgait.io.robotfile import load_robot
     from robustgait.sim import render_video, walk
 
-    robot = load_robot(status["config"]["robot"])
+    robot = load_robot(status["robot"])
     gait = load_gait(directory / status["best"]["gait_file"], robot)
     res = walk(robot, gait, steps=steps, keep_trajectory=True)
     if res.trajectory is None:
@@ -209,11 +212,14 @@ def _fmt(v: Any, nd: int = 3) -> str:
     return str(v)
 
 
-def write_study_report(directory: str | Path, *, axes: tuple[str, str] = ("step_length", "step_duration"),
-                       video: bool = True, video_steps: int = 8) -> Path:
-    """Write ``DIR/report/index.html`` and its PNGs (and ``best.mp4``); returns the HTML path. Parts that
-    cannot be made (no certified gait, no offscreen GL for the video) are replaced by a note."""
+def write_study_report(directory: str | Path, config: ReportConfig | None = None, *, video_steps: int = 8) -> Path:
+    """Write ``DIR/report/index.html`` and its PNGs (and ``best.mp4`` when ``config.video``); returns the HTML path.
+    ``config.axes``: the two parameters of the posterior-mean map. Parts that cannot be made (no certified gait,
+    no offscreen GL for the video) are replaced by a note."""
     from robustgait.study.status import study_status
+
+    config = config or ReportConfig()
+    axes, video = config.axes, config.video
 
     d = Path(directory)
     status = study_status(d)
@@ -233,7 +239,7 @@ def write_study_report(directory: str | Path, *, axes: tuple[str, str] = ("step_
         parts.append(f"<h2>{html.escape(title)}</h2>{_img(make(out / name))}")
     cert_file = best.get("certificate_file") if best else None
     if cert_file:
-        cert = certificate_from_json(json.loads((d / cert_file).read_text()))
+        cert = certificate_from_json(read_json(d / cert_file, "certificate file"))
         p = plot_certificate(cert, out / "certificate.png", title=f"best gait: r* = {cert.r_star:.4f} rad/s")
         parts.append(f"<h2>Invariant set of the best gait</h2>{_img(p)}<p>{html.escape(cert.statement())}</p>")
     else:
@@ -287,11 +293,11 @@ def _validation_parts(d: Path, status: dict[str, Any], out: Path, notes: list[st
     return parts
 
 
-def _certify_text(ev: dict[str, Any]) -> str:
-    c = ev["certify"]
+def _certify_text(cfg: dict[str, Any]) -> str:
+    c = cfg["certify"]
     how = (f"sequential (ε = {c['sequential']['epsilon']:g}, budget {c['sequential']['budget']})"
            if c.get("method") == "sequential" else f"uniform, N = {c['n_samples']}")
-    return f"{how}, seed {c['seed']}, step cap {ev['step_cap']}"
+    return f"{how}, seed {c['seed']}, step cap {cfg['sim']['step_cap']}"
 
 
 def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
@@ -299,10 +305,10 @@ def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
     cfg = status["config"]
     summary = [["study", status["directory"]], ["robot", status["robot"]], ["metric", status["metric"]],
                ["learner", status["learner"]], ["seed", status["seed"]],
-               ["budget", f"{cfg['iterations']} iterations × {cfg['batch']} gaits"],
+               ["budget", f"{cfg['study']['iterations']} iterations × {cfg['study']['batch']} gaits"],
                ["trials done", f"{status['trials_done']} / {status['trials_planned']} ({status['unique_gaits']} unique "
                                f"gaits)"], ["state", status["state"]],
-               ["certificate", _certify_text(cfg["evaluation"])]]
+               ["certificate", _certify_text(cfg)]]
     if best is not None:
         summary += [["best gait (learner)", ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())],
                     ["best r* / steps", f"{_fmt(best['r_star'], 4)} rad/s / {best['steps_taken']}"],

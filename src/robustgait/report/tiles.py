@@ -9,11 +9,11 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.config import ReportConfig, SimConfig
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.io.output import atomic_output, check_output
 from robustgait.robots import Robot
-from robustgait.sim.engine import SimConfig
 from robustgait.sim.walk import offscreen_renderer, walk
 
 # camera azimuths [deg] of the two rows: MuJoCo's free camera at azimuth 90 looks along +y (it sees the
@@ -21,11 +21,11 @@ from robustgait.sim.walk import offscreen_renderer, walk
 VIEWS = (("side", 90.0), ("front", 180.0))
 
 
-def step_frames(robot: Robot, gait: Gait, frames: int, *, warmup_steps: int = 4,
-                config: SimConfig | None = None) -> NDArray[np.float64]:
+def step_frames(robot: Robot, gait: Gait, frames: int, warmup_steps: int,
+                sim: SimConfig | None = None) -> NDArray[np.float64]:
     """Full-physics states (frames, nstate) equally spaced in time over one step, from its first to its last
     physics step, after ``warmup_steps`` steps from the gait's initial state (to be on the periodic orbit)."""
-    res = walk(robot, gait, steps=warmup_steps + 1, config=config, keep_trajectory=True)
+    res = walk(robot, gait, sim, steps=warmup_steps + 1, keep_trajectory=True)
     if res.fell or res.trajectory is None or len(res.events) < warmup_steps + 1:
         raise RobustGaitError(f"the gait fell ({res.fall_reason}) after {res.steps_taken} steps: no step to draw")
     t0 = res.events[warmup_steps - 1].time if warmup_steps > 0 else 0.0
@@ -36,17 +36,19 @@ def step_frames(robot: Robot, gait: Gait, frames: int, *, warmup_steps: int = 4,
     return np.asarray(seg[idx])
 
 
-def render_tiles(robot: Robot, gait: Gait, path: str | Path, *, frames: int = 6, width: int = 320,
-                 height: int = 480, warmup_steps: int = 4, distance: float = 3.4,
-                 config: SimConfig | None = None) -> tuple[int, int]:
-    """Write a PNG of ``frames`` frames of one step (columns) seen from the side and from the front (rows);
-    each tile is width × height pixels, the camera follows the base. Returns the image's (height, width)."""
+def render_tiles(robot: Robot, gait: Gait, path: str | Path, config: ReportConfig | None = None,
+                 sim: SimConfig | None = None, *, width: int = 320, height: int = 480,
+                 distance: float = 3.4) -> tuple[int, int]:
+    """Write a PNG of ``config.tile_frames`` frames of one step (columns), after ``config.tile_warmup_steps``
+    steps, seen from the side and from the front (rows); each tile is width × height pixels, the camera follows
+    the base. Returns the image's (height, width)."""
     import imageio.v2 as imageio
 
+    config = config or ReportConfig()
     check_output(path, "plot")
-    if frames < 2 or width < 16 or height < 16:
-        raise RobustGaitError("need frames ≥ 2 and tiles of at least 16 × 16 pixels")
-    states = step_frames(robot, gait, frames, warmup_steps=warmup_steps, config=config)
+    if width < 16 or height < 16:
+        raise RobustGaitError("tiles need at least 16 × 16 pixels")
+    states = step_frames(robot, gait, config.tile_frames, config.tile_warmup_steps, sim)
     m = robot.model
     data = mujoco.MjData(m)
     renderer = offscreen_renderer(robot, width, height)

@@ -1,14 +1,7 @@
-"""Robot specs and the shipped robots (one folder each: MJCF + ``spec.toml``)."""
+"""Robots: their specs as data (:mod:`robustgait.robots.spec`), the compiled robot (:mod:`robustgait.robots.model`)
+and the shipped robots (one folder each: MJCF + ``spec.toml``, read by :func:`robustgait.io.robotfile.load_robot`)."""
 
-from robustgait.robots.spec import (
-    FallCriteria,
-    GaitQuality,
-    LegSpec,
-    ParamRange,
-    Robot,
-    RobotSpec,
-    load_robot,
-    shipped_robots,
-)
+from robustgait.robots.model import Robot
+from robustgait.robots.spec import FallCriteria, GaitQuality, LegSpec, ParamRange, RobotSpec
 
-__all__ = ["FallCriteria", "GaitQuality", "LegSpec", "ParamRange", "Robot", "RobotSpec", "load_robot", "shipped_robots"]
+__all__ = ["FallCriteria", "GaitQuality", "LegSpec", "ParamRange", "Robot", "RobotSpec"]

@@ -1,4 +1,4 @@
-"""Batched one-step engine (DESIGN §5): K states at a step start → each one's state at its next switching
+"""Batched one-step engine (``docs/simulation.md``): K states at a step start → each one's state at its next switching
 event, or a fall, on :func:`mujoco.rollout` (multi-threaded C) — no Python call per physics step.
 
 A step's controls depend on time only (:mod:`robustgait.sim.controller`), so all K samples share one
@@ -19,22 +19,21 @@ rollout calls are exactly those of the undisturbed engine.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Literal
 
 import mujoco
 import numpy as np
 from mujoco import rollout
 from numpy.typing import NDArray
 
+from robustgait.config import SimConfig
 from robustgait.domains import domain_graph
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
-from robustgait.robots.spec import CONTACT_SENSORS
+from robustgait.robots.model import CONTACT_SENSORS
 from robustgait.sim.controller import step_controls
 
 FALL_REASONS = ("base_low", "tilt", "non_foot_contact", "diverged", "no_touchdown")
@@ -66,39 +65,6 @@ def quiet_mujoco() -> Iterator[None]:
         yield
     finally:
         saved.set()
-
-
-@dataclass(frozen=True)
-class SimConfig:
-    """Simulation options (DESIGN §5).
-
-    switching: ``impact`` — switch stance when the swing sole touches the floor once τ ≥ ``min_switch_tau``
-    (a step without touchdown by τ = ``max_step_tau`` is a fall, ``no_touchdown``); ``time`` — switch at τ = 1.
-    feedforward: add the gait's feedforward torques to the PD (when the gait has them).
-    chunk_steps: physics steps rolled out per :func:`mujoco.rollout` call between event scans.
-    n_threads: rollout threads (0 = one per core).
-    max_speed: a joint or base speed above this [rad/s or m/s] counts as diverged (a numerical blow-up).
-    """
-
-    switching: Literal["impact", "time"] = "impact"
-    min_switch_tau: float = 0.8
-    max_step_tau: float = 1.5
-    feedforward: bool = True
-    chunk_steps: int = 100
-    n_threads: int = 0
-    max_speed: float = 100.0
-
-    def __post_init__(self) -> None:
-        if self.switching not in ("impact", "time"):
-            raise RobustGaitError(f"switching must be 'impact' or 'time', got {self.switching!r}")
-        if not 0.0 <= self.min_switch_tau <= 1.0 < self.max_step_tau:
-            raise RobustGaitError("need 0 ≤ min_switch_tau ≤ 1 < max_step_tau")
-        if self.chunk_steps < 1 or self.n_threads < 0:
-            raise RobustGaitError("chunk_steps must be ≥ 1 and n_threads ≥ 0")
-
-    @property
-    def threads(self) -> int:
-        return self.n_threads or os.cpu_count() or 1
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""Walking a gait in MuJoCo (DESIGN §5): steps taken before a fall, speed, and the switching states.
+"""Walking a gait in MuJoCo (``docs/simulation.md``): steps taken before a fall, speed, and the switching states.
 
 Stability in the sense of the paper is the number of steps completed before a fall, up to a cap.
 """
@@ -15,12 +15,14 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.config import SimConfig
+from robustgait.config.work import MAX_GIF_FRAMES, MAX_VIDEO_PHYSICS_STEPS, check_gif, check_work
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import Gait
 from robustgait.io.output import atomic_output, check_output
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
-from robustgait.sim.engine import SimConfig, StepEngine
+from robustgait.sim.engine import StepEngine
 
 
 @dataclass(frozen=True)
@@ -71,21 +73,36 @@ def _heading(qpos: NDArray[np.float64]) -> NDArray[np.float64]:
     return fwd / max(float(np.linalg.norm(fwd)), 1e-12)
 
 
-def walk(robot: Robot, gait: Gait, *, steps: int = 50, config: SimConfig | None = None,
-         keep_trajectory: bool = False, engine: StepEngine | None = None) -> WalkResult:
-    """Walk ``gait`` from its initial state for up to ``steps`` steps, switching stance at each event.
+def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: int | None = None,
+         keep_trajectory: bool = False, video: str | Path | None = None,
+         engine: StepEngine | None = None) -> WalkResult:
+    """Walk ``gait`` from its initial state for up to ``steps`` steps (default ``config.step_cap``), switching
+    stance at each event.
 
     A step runs the gait's domains in order (flat: single support; multi-contact: single support, then rolling
     double support); its :class:`SwitchEvent` is the state at the end of single support (touchdown or heel
     strike: the Poincaré section), and it counts as taken once all its domains are done.
 
     The trajectory (every physics step's full state, (n, nstate), MuJoCo's ``mjSTATE_FULLPHYSICS`` layout,
-    time continuing across steps) is kept when ``keep_trajectory`` — for video and logs.
+    time continuing across steps) is kept when ``keep_trajectory`` or ``video`` (an ``.mp4`` or ``.gif`` path,
+    rendered after the walk by :func:`render_video`). The work is bounded before anything runs
+    (:func:`robustgait.config.work.check_work`; a video's stricter limits, the output path checked).
     """
+    config = config or SimConfig()
+    steps = config.step_cap if steps is None else steps
     if steps < 1:
         raise RobustGaitError(f"steps must be ≥ 1, got {steps}")
     if gait.initial_state is None:
         raise RobustGaitError("the gait has no initial state to start walking from")
+    longest = gait.step_duration * config.max_step_tau
+    if video is not None:
+        check_output(video, "video")
+        check_work(steps, longest, robot.dt, f"{steps} steps (sim.step_cap) with a video", MAX_VIDEO_PHYSICS_STEPS)
+        if Path(video).suffix.lower() == ".gif":
+            check_gif(steps * longest, str(video))
+        keep_trajectory = True
+    else:
+        check_work(steps, longest, robot.dt, f"{steps} steps (sim.step_cap)")
     own = engine is None
     eng = engine or StepEngine(robot, gait, config)
     try:
@@ -127,7 +144,7 @@ def walk(robot: Robot, gait: Gait, *, steps: int = 50, config: SimConfig | None 
             events.append(section)
             stance = "left" if stance == "right" else "right"
         disp = float(np.dot(last[:2] - start[:2], heading))
-        return WalkResult(
+        result = WalkResult(
             steps_taken=len(events), fell=fell, fall_reason=reason, time=t,
             mean_speed=disp / t if t > 0 else 0.0, min_base_height=min_z, max_steps=steps,
             switching=eng.config.switching, events=events,
@@ -135,6 +152,9 @@ def walk(robot: Robot, gait: Gait, *, steps: int = 50, config: SimConfig | None 
     finally:
         if own:
             eng.close()
+    if video is not None and result.trajectory is not None:
+        render_video(robot, result.trajectory, video)
+    return result
 
 
 def offscreen_renderer(robot: Robot, width: int, height: int) -> mujoco.Renderer:
@@ -150,13 +170,11 @@ def offscreen_renderer(robot: Robot, width: int, height: int) -> mujoco.Renderer
 def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path, *, fps: int = 30,
                  width: int = 640, height: int = 480) -> int:
     """Render a trajectory (full-physics states, as kept by :func:`walk`) to an ``.mp4`` (H.264 via ffmpeg) or
-    an animated ``.gif`` (half the size, at most :data:`~robustgait.io.limits.MAX_GIF_FRAMES` frames: GIFs are
+    an animated ``.gif`` (half the size, at most :data:`~robustgait.config.work.MAX_GIF_FRAMES` frames: GIFs are
     big) with MuJoCo's offscreen renderer (EGL or OSMesa, chosen by ``MUJOCO_GL``); returns the number of frames
     written. Written through :func:`robustgait.io.output.atomic_output` (checked target, atomic)."""
     import imageio.v2 as imageio
     from PIL import Image
-
-    from robustgait.io.limits import MAX_GIF_FRAMES
 
     path = check_output(path, "video")
     gif = path.suffix.lower() == ".gif"

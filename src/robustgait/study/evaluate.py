@@ -1,4 +1,4 @@
-"""One evaluation of the loop (DESIGN §7): gait parameters → generate (HZD) → walk to the step cap → certify.
+"""One evaluation of the loop (``docs/studies.md``): gait parameters → generate (HZD) → walk to the step cap → certify.
 
 :func:`evaluate` never raises for a bad gait: a failed generation, a fall at step k, a gait without a
 fixed point are outcomes with a status and a reason. Gait generation starts cold (from the spec's
@@ -13,10 +13,11 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
-from robustgait.certify import CertifyConfig, certify_gait
+from robustgait.certify import certify_gait
+from robustgait.config import Config, GaitParams
 from robustgait.errors import RobustGaitError
-from robustgait.gait import Gait, GaitParams, gait_from_dict
-from robustgait.gaitgen.problem import GaitGenConfig
+from robustgait.gait import Gait
+from robustgait.io.gaitfile import gait_from_dict
 from robustgait.learn.oracle import Outcome
 from robustgait.robots import Robot
 from robustgait.sim import walk
@@ -26,23 +27,6 @@ if TYPE_CHECKING:
 
 Status = Literal["certified", "generation_failed", "fell", "not_certified"]
 STATUSES: tuple[Status, ...] = ("certified", "generation_failed", "fell", "not_certified")
-
-
-@dataclass(frozen=True)
-class EvaluationConfig:
-    """step_cap: steps walked before certifying (a gait that falls earlier is not certified);
-    certify: the certificate's options — by default the ``sequential`` estimator (its r* varies by ~1 % between
-    seeds, the paper's ``uniform`` N = 200 by ±15 %: a study ranks gaits by r*); its ``seed`` fixes the
-    perturbations: within a study every gait is certified on the same ones; gaitgen: the HZD problem's
-    options."""
-
-    step_cap: int = 50
-    certify: CertifyConfig = field(default_factory=lambda: CertifyConfig(method="sequential"))
-    gaitgen: GaitGenConfig = field(default_factory=GaitGenConfig)
-
-    def __post_init__(self) -> None:
-        if isinstance(self.step_cap, bool) or not (isinstance(self.step_cap, int) and self.step_cap >= 1):
-            raise RobustGaitError(f"the step cap must be an integer ≥ 1, got {self.step_cap}")
 
 
 @dataclass
@@ -79,7 +63,7 @@ class Evaluation:
         """The certificate without its samples (what a study keeps in its database)."""
         if self.certificate is None:
             return None
-        drop = ("samples", "images", "fell", "margins", "config")
+        drop = ("samples", "images", "fell", "margins", "config", "sim")
         return {k: v for k, v in self.certificate.items() if k not in drop}
 
     def summary(self) -> dict[str, Any]:
@@ -104,40 +88,41 @@ class Evaluation:
                    seconds=d["seconds"])
 
 
-def evaluate(robot: Robot, params: GaitParams, config: EvaluationConfig | None = None, *,
+def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
              generator: GaitGenerator | None = None) -> Evaluation:
-    """Generate the gait of ``params`` (cold start), walk it up to ``config.step_cap`` steps and, if it
-    walked the cap, certify it. Pass a ``generator`` built for ``robot`` with ``config.gaitgen`` to
-    reuse it (building costs ≈ 6.5 s on exo). Never raises for a bad gait (see :class:`Evaluation`)."""
+    """Generate the gait of ``params`` (cold start, ``config.generate``), walk it up to ``config.sim.step_cap``
+    steps and, if it walked the cap, certify it (``config.certify``). Pass a ``generator`` built for ``robot`` with
+    ``config.generate`` to reuse it (building costs seconds). Never raises for a bad gait (see :class:`Evaluation`)."""
     from robustgait.gaitgen import GaitGenerator
 
-    cfg = config or EvaluationConfig()
+    cfg = config or Config()
+    cap = cfg.sim.step_cap
     t0 = time.perf_counter()
-    gen = generator or GaitGenerator(robot, cfg.gaitgen)
+    gen = generator or GaitGenerator(robot, cfg.generate)
     t_build = time.perf_counter()
     res = gen.solve(params)
     t_gen = time.perf_counter()
     seconds = {"generate": t_gen - t_build} | ({} if generator is not None else {"build": t_build - t0})
-    ev = Evaluation(params=params, status="generation_failed", reason=f"{res.status}: {res.reason}",
-                    step_cap=cfg.step_cap, generation=res.summary(), seconds=seconds)
+    ev = Evaluation(params=res.params or params, status="generation_failed", reason=f"{res.status}: {res.reason}",
+                    step_cap=cap, generation=res.summary(), seconds=seconds)
     if res.gait is None:
         seconds["total"] = t_gen - t0
         return ev
     ev.gait = res.gait
     try:
-        w = walk(robot, res.gait, steps=cfg.step_cap, config=cfg.certify.sim)
+        w = walk(robot, res.gait, cfg.sim)
     except RobustGaitError as exc:  # e.g. the generated gait has no initial state to start from
         ev.status, ev.reason, ev.fell = "fell", f"walk failed: {exc}", True
     else:
         ev.steps_taken, ev.fell, ev.fall_reason, ev.mean_speed = w.steps_taken, w.fell, w.fall_reason, w.mean_speed
-        if w.steps_taken < cfg.step_cap:
+        if w.steps_taken < cap:
             ev.status, ev.reason = "fell", f"fell in step {w.steps_taken + 1} ({w.fall_reason})"
     t_walk = time.perf_counter()
     seconds["walk"] = t_walk - t_gen
     if ev.status == "fell":
         seconds["total"] = t_walk - t0
         return ev
-    gc = certify_gait(robot, res.gait, cfg.certify)  # a fall, no fixed point: a status, never an exception
+    gc = certify_gait(robot, res.gait, cfg.certify, cfg.sim)  # a fall, no fixed point: a status, not an exception
     if gc.ok:
         ev.status, ev.reason = "certified", ""
         ev.r_star = float(gc.r_star)

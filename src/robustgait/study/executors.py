@@ -1,4 +1,4 @@
-"""Where evaluations run (DESIGN §7): local worker processes (default) or Ray actors.
+"""Where evaluations run (``docs/studies.md``): local worker processes (default) or Ray actors.
 
 Every worker loads the robot and builds the gait generator once (≈ 6.5 s on exo), then evaluates gait
 after gait with it. The study's driver process keeps the database: workers receive parameters and return
@@ -25,6 +25,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, replace
 from typing import Any
 
+from robustgait.config import RunConfig
 from robustgait.errors import RobustGaitError
 
 # Filled once per worker process by _init_worker: (robot, generator, evaluation config).
@@ -34,11 +35,12 @@ _BLAS_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 @dataclass(frozen=True)
 class WorkerSpec:
-    """What a worker needs: the robot (shipped name or spec path), the evaluation config as a dict (see
-    :class:`~robustgait.study.evaluate.EvaluationConfig`), MuJoCo threads, and IPOPT's log on/off."""
+    """What a worker needs: the robot (shipped name or spec path), the study's configuration as plain data
+    (:func:`robustgait.config.to_dict`; :func:`robustgait.study.evaluate.evaluate` uses its ``generate``, ``sim``
+    and ``certify`` sections), MuJoCo threads, and IPOPT's log on/off."""
 
     robot: str
-    evaluation: dict[str, Any]
+    config: dict[str, Any]
     threads: int = 1
     verbose: bool = False
 
@@ -47,19 +49,17 @@ class EvaluationWorker:
     """A robot and its gait generator, built once; :meth:`evaluate` many times."""
 
     def __init__(self, spec: WorkerSpec):
+        from robustgait.config import Config, from_dict
         from robustgait.gaitgen import GaitGenerator
-        from robustgait.io.schema import validate
-        from robustgait.robots import load_robot
-        from robustgait.study.evaluate import EvaluationConfig
+        from robustgait.io.robotfile import load_robot
 
-        cfg = validate(spec.evaluation, EvaluationConfig, "<evaluation config>")
-        sim = replace(cfg.certify.sim, n_threads=spec.threads)
-        self.config = replace(cfg, certify=replace(cfg.certify, sim=sim))
+        cfg = from_dict(Config, spec.config, "<study config>")
+        self.config = replace(cfg, sim=replace(cfg.sim, n_threads=spec.threads))
         self.robot = load_robot(spec.robot)
-        self.generator = GaitGenerator(self.robot, self.config.gaitgen, verbose=spec.verbose)
+        self.generator = GaitGenerator(self.robot, self.config.generate, verbose=spec.verbose)
 
     def evaluate(self, params: dict[str, float]) -> dict[str, Any]:
-        from robustgait.gait import GaitParams
+        from robustgait.config import GaitParams
         from robustgait.study.evaluate import evaluate
 
         ev = evaluate(self.robot, GaitParams(**params), self.config, generator=self.generator)
@@ -258,11 +258,10 @@ class RayExecutor(Executor):
             self.ray.shutdown()
 
 
-def make_executor(kind: str, spec: WorkerSpec, workers: int = 1, address: str | None = None) -> Executor:
-    if kind == "local":
-        if address is not None:
-            raise RobustGaitError("--address is for the Ray executor (--executor ray)")
-        return LocalExecutor(spec, workers)
-    if kind == "ray":
-        return RayExecutor(spec, workers, address)
-    raise RobustGaitError(f"unknown executor {kind!r} (choose from local, ray)")
+def make_executor(run: RunConfig, spec: WorkerSpec) -> Executor:
+    """The executor of ``run`` (``local`` or ``ray``) with ``run.n_workers`` workers."""
+    if run.executor == "local":
+        if run.address is not None:
+            raise RobustGaitError("run.address (--address) is for the Ray executor (--executor ray)")
+        return LocalExecutor(spec, run.n_workers)
+    return RayExecutor(spec, run.n_workers, run.address)

@@ -1,10 +1,10 @@
-"""The simulation-in-the-loop learning loop (DESIGN §7): propose a batch → evaluate it (generate, walk,
+"""The simulation-in-the-loop learning loop (``docs/studies.md``): propose a batch → evaluate it (generate, walk,
 certify) → rank it with the oracle → all pairwise comparisons → next batch, for ``iterations`` batches.
 
 A study lives in a directory::
 
-    DIR/study.json            StudyConfig (format_version 1)
-    DIR/study.db              the Optuna database (unless config.storage names another)
+    DIR/study.json            the robot and the whole configuration (format_version 2, StudySetup)
+    DIR/study.db              the Optuna database (unless config.study.storage names another)
     DIR/gaits/<label>/        gait.json and certificate.json of every evaluated gait
     DIR/report/               written by ``robustgait study report``
     DIR/.lock                 held by the process running the study
@@ -25,20 +25,22 @@ import sys
 import time
 import uuid
 from collections.abc import Iterator
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
 
+from robustgait.config import Config, RunConfig, StudyConfig
+from robustgait.config.work import check_work
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_json
+from robustgait.io.robotfile import load_robot
 from robustgait.learn.learners import History, Learner, iteration_seed, make_learner
 from robustgait.learn.oracle import Outcome, batch_comparisons, score
 from robustgait.learn.space import ActionSpace
-from robustgait.robots import load_robot
 from robustgait.robots.spec import SHIPPED_DIR
-from robustgait.study.config import StudyConfig, load_config, save_config
+from robustgait.study.config import StudySetup, load_config, save_config
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.executors import Executor, WorkerSpec, make_executor
 from robustgait.study.storage import StudyStore, TrialRecord, default_url
@@ -46,19 +48,6 @@ from robustgait.study.storage import StudyStore, TrialRecord, default_url
 LOCK_FILE = ".lock"
 GAITS_DIR = "gaits"
 _ABBREV = {"step_length": "L", "step_duration": "T", "step_width": "W", "step_height": "H"}
-
-
-@dataclass(frozen=True)
-class RunOptions:
-    """How to run (not saved: a study may be resumed with other options). executor: ``local`` | ``ray``;
-    workers: processes or actors; address: Ray cluster address; progress: bars on stderr; verbose: IPOPT's
-    iteration log in the workers."""
-
-    executor: str = "local"
-    workers: int = 1
-    address: str | None = None
-    progress: bool = True
-    verbose: bool = False
 
 
 def robot_reference(robot: str) -> str:
@@ -112,12 +101,13 @@ def is_running(directory: Path) -> bool:
         return False
 
 
-def storage_url(directory: Path, config: StudyConfig) -> str:
-    return config.storage or default_url(directory)
+def storage_url(directory: Path, setup: StudySetup) -> str:
+    return setup.config.study.storage or default_url(directory)
 
 
-def create_study(directory: str | Path, config: StudyConfig) -> Path:
-    """Make a new study directory (it may exist, empty) with its config and database; nothing runs yet."""
+def create_study(directory: str | Path, robot: str, config: Config | None = None) -> Path:
+    """Make a new study directory (it may exist, empty) with its configuration and database; nothing runs yet.
+    ``robot``: a shipped robot name or a spec .toml path (made absolute: a study may be resumed from elsewhere)."""
     d = Path(directory)
     if d.exists() and not d.is_dir():
         raise input_error(d, "exists and is not a directory")
@@ -125,40 +115,39 @@ def create_study(directory: str | Path, config: StudyConfig) -> Path:
         raise input_error(d, "already holds a study: use `robustgait study resume`")
     if d.exists() and any(p.name != LOCK_FILE for p in d.iterdir()):
         raise input_error(d, "exists and is not empty: a new study needs a new or empty directory")
-    config = replace(config, robot=robot_reference(config.robot))
-    if config.storage is not None and config.study_name == StudyConfig.study_name:
+    config = config or Config()
+    study = config.study
+    if study.storage is not None and study.study_name == StudyConfig().study_name:
         # a shared database holds many studies: a name of its own (saved in study.json)
-        config = replace(config, study_name=f"{d.resolve().name}-{uuid.uuid4().hex[:8]}")
-    robot = load_robot(config.robot)
-    space = config.action_space(robot)
-    if config.batch > space.size:
-        raise RobustGaitError(f"a batch of {config.batch} gaits does not fit in an action space of {space.size}")
-    check_evaluation_work(config, space, robot.dt)
+        study = replace(study, study_name=f"{d.resolve().name}-{uuid.uuid4().hex[:8]}")
+    setup = StudySetup(robot_reference(robot), replace(config, study=study))
+    loaded = load_robot(setup.robot)
+    space = setup.action_space(loaded)
+    if study.batch > space.size:
+        raise RobustGaitError(f"a batch of {study.batch} gaits does not fit in an action space of {space.size}")
+    check_evaluation_work(setup.config, space, loaded.dt)
     d.mkdir(parents=True, exist_ok=True)
     with study_lock(d):
-        store = StudyStore(storage_url(d, config), config.study_name, space, create=True,
-                           user_attrs={"robustgait_config": config.to_dict(), "directory": str(d.resolve())})
+        store = StudyStore(storage_url(d, setup), study.study_name, space, create=True,
+                           user_attrs={"robustgait_config": setup.to_dict(), "directory": str(d.resolve())})
         store.close()
-        save_config(d, config)  # last: a directory with study.json has a database
+        save_config(d, setup)  # last: a directory with study.json has a database
     return d
 
 
-def check_evaluation_work(config: StudyConfig, space: ActionSpace, timestep: float) -> None:
-    """Bound one evaluation's simulation like ``walk``/``certify`` bound theirs (``io.limits.check_work``):
-    the walk to the step cap plus the certificate (fixed-point steps + samples + 1, twice for the stride
-    map), each step up to the longest step duration of the action space × ``max_step_tau``."""
-    from robustgait.io import limits as L
-
-    cert = config.evaluation.certify
-    n = cert.n_samples if cert.method == "uniform" else cert.sequential.budget
-    steps = config.evaluation.step_cap + (cert.fp_max_steps + n + 1) * (2 if cert.map == "stride" else 1)
+def check_evaluation_work(config: Config, space: ActionSpace, timestep: float) -> None:
+    """Bound one evaluation's simulation like ``walk``/``certify`` bound theirs (:func:`check_work`): the walk to
+    the step cap plus the certificate (fixed-point steps + samples + 1, twice for the stride map), each step up to
+    the longest step duration of the action space × ``max_step_tau``."""
+    cert, sim = config.certify, config.sim
+    steps = sim.step_cap + (cert.fp_max_steps + cert.samples_planned + 1) * (2 if cert.map == "stride" else 1)
     longest = max(space.values[space.names.index("step_duration")]) if "step_duration" in space.names else 0.0
-    L.check_work(steps, longest * cert.sim.max_step_tau, timestep,
-                 "study: one evaluation (--steps, --samples or --budget)")
+    check_work(steps, longest * sim.max_step_tau, timestep,
+               "study: one evaluation (sim.step_cap, certify.n_samples or certify.sequential.budget)")
 
 
-def open_store(directory: Path, config: StudyConfig, space: ActionSpace) -> StudyStore:
-    return StudyStore(storage_url(directory, config), config.study_name, space)
+def open_store(directory: Path, setup: StudySetup, space: ActionSpace) -> StudyStore:
+    return StudyStore(storage_url(directory, setup), setup.config.study.study_name, space)
 
 
 def outcome_of(result: dict[str, Any]) -> Outcome:
@@ -190,28 +179,31 @@ def history_before(k: int, batches: dict[int, list[TrialRecord]], config: StudyC
 
 
 class StudyRunner:
-    """Runs (or resumes) the study in ``directory`` to its total budget."""
+    """Runs (or resumes) the study in ``directory`` to its total budget, its evaluations spread as ``run`` says
+    (executor, workers); ``progress``: a bar on stderr; ``verbose``: IPOPT's iteration log in the workers."""
 
-    def __init__(self, directory: str | Path, options: RunOptions | None = None, *,
-                 executor: Executor | None = None):
+    def __init__(self, directory: str | Path, run: RunConfig | None = None, *, progress: bool = True,
+                 verbose: bool = False, executor: Executor | None = None):
         self.directory = Path(directory)
-        self.config = load_config(self.directory)
-        self.options = options or RunOptions()
-        self.robot = load_robot(self.config.robot)
-        self.space = self.config.action_space(self.robot)
+        self.setup = load_config(self.directory)
+        self.config = self.setup.config.study
+        self.run_config = run or RunConfig()
+        self.progress, self.verbose = progress, verbose
+        self.robot = load_robot(self.setup.robot)
+        self.space = self.setup.action_space(self.robot)
         self.learner: Learner = make_learner(self.config.learner, self.space, self.config.learning, self.config.seed)
         self._executor = executor
         self._own_executor = executor is None
 
     def executor(self) -> Executor:
         if self._executor is None:
-            spec = WorkerSpec(self.config.robot, self.config.to_dict()["evaluation"], verbose=self.options.verbose)
-            self._executor = make_executor(self.options.executor, spec, self.options.workers, self.options.address)
+            spec = WorkerSpec(self.setup.robot, self.setup.to_dict()["config"], verbose=self.verbose)
+            self._executor = make_executor(self.run_config, spec)
         return self._executor
 
     def run(self) -> None:
         with study_lock(self.directory):
-            store = open_store(self.directory, self.config, self.space)
+            store = open_store(self.directory, self.setup, self.space)
             ok = False
             try:
                 store.retry_interrupted()
@@ -226,7 +218,7 @@ class StudyRunner:
         cfg = self.config
         done = sum(len(b) for b in completed_batches(store.records()).values())
         with tqdm(total=cfg.trials_planned, initial=done, desc="study", unit="gait", file=sys.stderr,
-                  disable=not self.options.progress, dynamic_ncols=True) as bar:
+                  disable=not self.progress, dynamic_ncols=True) as bar:
             for k in range(cfg.iterations):
                 batches = completed_batches(store.records())
                 if len(batches.get(k, [])) == cfg.batch and "recommendation" in store.iterations().get(k, {}):
@@ -250,7 +242,7 @@ class StudyRunner:
         if k not in store.iterations():
             store.set_iteration(k, {"proposals": proposal, "learner_seed": iteration_seed(cfg.seed, k),
                                     "propose_seconds": seconds})
-        seeds = {"learner": cfg.seed, "certify": cfg.evaluation.certify.seed}
+        seeds = {"learner": cfg.seed, "certify": self.setup.config.certify.seed}
         for slot, index in enumerate(proposal):
             if slot not in stored:
                 store.enqueue(k, slot, index, {"seeds": seeds})
@@ -318,6 +310,7 @@ class StudyRunner:
                                 f"{rec_trial.result['r_star']:.3f}, steps {rec_trial.result['steps_taken']}")
 
 
-def run_study(directory: str | Path, options: RunOptions | None = None, *, executor: Executor | None = None) -> None:
+def run_study(directory: str | Path, run: RunConfig | None = None, *, progress: bool = True, verbose: bool = False,
+              executor: Executor | None = None) -> None:
     """Run or resume the study in ``directory`` to its total budget (see :class:`StudyRunner`)."""
-    StudyRunner(directory, options, executor=executor).run()
+    StudyRunner(directory, run, progress=progress, verbose=verbose, executor=executor).run()

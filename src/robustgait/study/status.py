@@ -44,9 +44,10 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     steps_taken, gait file), ``best_observed`` (the evaluated gait with the highest oracle score), one
     record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs)."""
     d = Path(directory)
-    cfg = load_config(d)
-    space = cfg.action_space()
-    store = open_store(d, cfg, space)
+    setup = load_config(d)
+    cfg = setup.config.study
+    space = setup.action_space()
+    store = open_store(d, setup, space)
     try:
         records = store.records()
         iterations = store.iterations()
@@ -75,10 +76,10 @@ def study_status(directory: str | Path) -> dict[str, Any]:
                                       by_number)})
     state = ("complete" if len(finished) == cfg.iterations else
              "running" if is_running(d) else "stopped")
-    return {"directory": str(d.resolve()), "state": state, "robot": cfg.robot, "metric": cfg.metric,
+    return {"directory": str(d.resolve()), "state": state, "robot": setup.robot, "metric": cfg.metric,
             "learner": cfg.learner, "seed": cfg.seed, "trials_done": done, "trials_planned": cfg.trials_planned,
             "iterations_done": len(finished), "iterations_planned": cfg.iterations,
             "unique_gaits": len({r.index for r in complete}),
             "best": _best_entry(best, by_number), "best_observed": _best_entry(observed, by_number),
             "iterations": per_iteration, "trials": [trial_summary(r) for r in sorted(records, key=lambda r: r.number)],
-            "config": cfg.to_dict()}
+            "config": setup.to_dict()["config"]}

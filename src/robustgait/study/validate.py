@@ -1,9 +1,9 @@
 """Every unique gait of a study under the same disturbances (issue 12, ``robustgait study validate DIR``): does
 r* — or the steps taken — predict how often a gait survives disturbances it never met in the study?
 
-One :class:`~robustgait.validate.ValidateConfig` for all gaits, so every gait meets the same draws (common
-random numbers: :mod:`robustgait.validate.disturbances` draws from the seed and the robot only). Its
-simulation and certificate options are the study's (``evaluation.certify``): the study's certificates were
+One :class:`~robustgait.config.ValidateConfig` for all gaits, so every gait meets the same draws (common
+random numbers: :mod:`robustgait.validate.disturbances` draws from the seed and the robot only). The simulation
+and certificate options are the study's (its ``sim`` and ``certify`` sections): the study's certificates were
 computed with them, and their fixed points are found again with them.
 
 Which gaits, and where their trials start:
@@ -50,17 +50,17 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from robustgait.config import KINDS, CertifyConfig, SimConfig, ValidateConfig, to_dict
 from robustgait.errors import RobustGaitError, input_error
-from robustgait.io import limits as L
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
-from robustgait.study.config import StudyConfig, load_config
-from robustgait.validate.disturbances import KINDS, SIZE_LABELS, ValidateConfig
+from robustgait.study.config import load_config
+from robustgait.validate.disturbances import SIZE_LABELS
 from robustgait.validate.stats import Correlation, spearman
 
 VALIDATION_DIR = "validation"
 RUNS_DIR = "runs"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -104,23 +104,17 @@ def study_gaits(directory: Path) -> tuple[dict[str, Any], list[StudyGait]]:
         label = Path(gait_file).parent.name if gait_file else params_label(t["params"])
         out.append(StudyGait(label, tuple(x["number"] for x in ts), int(t["grid_index"]), dict(t["params"]),
                              str(t["status"]), str(t["reason"] or ""), float(t["r_star"] or 0.0),
-                             int(t["steps_taken"] or 0), int(t["step_cap"] or st["config"]["evaluation"]["step_cap"]),
+                             int(t["steps_taken"] or 0), int(t["step_cap"] or st["config"]["sim"]["step_cap"]),
                              gait_file, t["certificate_file"] if t["status"] == "certified" else None))
     return st, sorted(out, key=lambda g: g.trials[0])
 
 
-def study_validate_config(study: StudyConfig, config: ValidateConfig | None = None) -> ValidateConfig:
-    """``config`` (default :class:`ValidateConfig`) with the study's simulation and certificate options; the
-    rollout threads are left to the run (results do not depend on them)."""
-    base = config or ValidateConfig()
-    cert = study.evaluation.certify
-    return replace(base, sim=replace(cert.sim, n_threads=0), certify=cert)
-
-
-def config_key(config: ValidateConfig, kind: str) -> str:
-    """16 hex digits of the SHA-256 of the kind and the config (rollout threads excluded)."""
-    cfg = replace(config, sim=replace(config.sim, n_threads=0))
-    text = json.dumps({"format_version": FORMAT_VERSION, "kind": kind, "config": asdict(cfg)}, sort_keys=True)
+def config_key(config: ValidateConfig, certify: CertifyConfig, sim: SimConfig, kind: str) -> str:
+    """16 hex digits of the SHA-256 of the kind and everything the results depend on: the validation config (not
+    its workers nor the kind choice), the certificate and simulation options (not the rollout threads)."""
+    parts = {"validate": {k: v for k, v in to_dict(config).items() if k not in ("workers", "disturbance")},
+             "certify": to_dict(certify), "sim": to_dict(replace(sim, n_threads=0))}
+    text = json.dumps({"format_version": FORMAT_VERSION, "kind": kind, "config": parts}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -150,10 +144,12 @@ class _Task:
     gait: str
     certificate: str | None
     config: ValidateConfig
+    certify: CertifyConfig
+    sim: SimConfig
     kinds: tuple[str, ...]
 
 
-def _orbitless_start(robot: Any, gait: Any, config: ValidateConfig) -> tuple[Any, Any]:
+def _orbitless_start(robot: Any, gait: Any, c: CertifyConfig) -> tuple[Any, Any]:
     """A start and a :class:`CertificateRef` of r* = 0 for a gait without a certified fixed point: its initial
     state, x̄ of that state as the 'centre' (there is no ball: nothing lies inside it)."""
     from robustgait.poincare import FixedPoint, reduce_state
@@ -162,11 +158,10 @@ def _orbitless_start(robot: Any, gait: Any, config: ValidateConfig) -> tuple[Any
     if gait.initial_state is None:
         raise RobustGaitError("the gait has no initial state to start the trials from")
     q, v = gait.initial_state.qpos, gait.initial_state.qvel
-    c = config.certify
     xbar = reduce_state(q[None], v[None], c.frame)[0]
     start = FixedPoint(q.copy(), v.copy(), xbar, math.nan, 0, ())
     ref = CertificateRef(0.0, False, tuple(float(x) for x in xbar), c.map, c.frame, c.reconstruction, c.fp_tol,
-                         c.fp_min_steps, c.fp_max_steps, "none: no certified fixed point (started from the "
+                         c.min_steps, c.fp_max_steps, "none: no certified fixed point (started from the "
                          "gait's initial state)")
     return start, ref
 
@@ -174,15 +169,16 @@ def _orbitless_start(robot: Any, gait: Any, config: ValidateConfig) -> tuple[Any
 def _validate_one(task: _Task) -> dict[str, Any]:
     """Validate one gait against ``task.kinds``: {label, certificate, setup_seconds, kinds: {kind:
     KindResult.to_dict()}} or {label, error} when the validation refuses the gait."""
-    from robustgait.gait import load_gait
-    from robustgait.robots import load_robot
+    from robustgait.io.gaitfile import load_gait
+    from robustgait.io.robotfile import load_robot
     from robustgait.validate.run import Validator
 
     try:
         robot = load_robot(task.robot)
         gait = load_gait(task.gait, robot)
-        start, ref = (None, task.certificate) if task.certificate else _orbitless_start(robot, gait, task.config)
-        with Validator(robot, gait, task.config, certificate=ref, start=start) as v:
+        start, ref = (None, task.certificate) if task.certificate else _orbitless_start(robot, gait, task.certify)
+        with Validator(robot, gait, task.config, certify=task.certify, sim=task.sim, certificate=ref,
+                       start=start) as v:
             kinds = {k: v.run(k).to_dict(trials=True) for k in task.kinds}
             return {"label": task.label, "certificate": asdict(v.certificate), "setup_seconds": v.seconds_setup,
                     "kinds": kinds}
@@ -206,8 +202,7 @@ def _results(tasks: list[_Task], workers: int) -> Iterator[Iterator[dict[str, An
     ok = False
     try:
         futures: list[Future[dict[str, Any]]] = [
-            pool.submit(_validate_one, replace(t, config=replace(t.config, sim=replace(t.config.sim,
-                                                                                       n_threads=threads))))
+            pool.submit(_validate_one, replace(t, sim=replace(t.sim, n_threads=threads)))
             for t in tasks]
         yield (f.result() for f in as_completed(futures))
         ok = True
@@ -219,13 +214,6 @@ def _results(tasks: list[_Task], workers: int) -> Iterator[Iterator[dict[str, An
 
 
 # ---- the study ---------------------------------------------------------------------------------------------
-def _check_request(config: ValidateConfig, workers: int) -> None:
-    for lim, value in ((L.TRIALS, config.trials), (L.STEPS_AFTER, config.steps_after), (L.SEED, config.seed),
-                       (L.WORKERS, workers)):
-        if isinstance(value, bool) or not isinstance(value, int) or not lim.contains(value):
-            raise RobustGaitError(f"{lim.name} must be an integer with {lim.text()}, got {value!r}")
-
-
 def _load_run(path: Path, key: str, files: str) -> dict[str, Any] | None:
     """A stored per-gait result if it is for these files and this config, else None."""
     if not path.is_file():
@@ -239,36 +227,36 @@ def _load_run(path: Path, key: str, files: str) -> dict[str, Any] | None:
     return raw
 
 
-def validate_study(directory: str | Path, config: ValidateConfig | None = None, kinds: Sequence[str] = ("push",), *,
-                   workers: int = 1, progress: bool = True) -> dict[str, dict[str, Any]]:
-    """Validate every unique gait of the study in ``directory`` against each of ``kinds`` (``("all",)``: every
-    kind) with one config (:func:`study_validate_config`); write ``DIR/validation/<kind>.json`` per kind and
-    return those summaries ({kind: summary}, see :func:`kind_summary`). Gaits already validated with the same
-    files and config are not run again (module docstring)."""
+def validate_study(directory: str | Path, config: ValidateConfig | None = None,
+                   kinds: Sequence[str] | None = None, *, progress: bool = True) -> dict[str, dict[str, Any]]:
+    """Validate every unique gait of the study in ``directory`` against each of ``kinds`` (default
+    ``config.kinds``; ``("all",)``: every kind) with one config, the study's certificate and simulation options,
+    in ``config.workers`` processes; write ``DIR/validation/<kind>.json`` per kind and return those summaries
+    ({kind: summary}, see :func:`kind_summary`). Gaits already validated with the same files and config are not
+    run again (module docstring)."""
+    from robustgait.io.gaitfile import load_gait
+    from robustgait.io.robotfile import load_robot
+    from robustgait.validate.run import check_validate_work
+
     t0 = time.perf_counter()
     d = Path(directory)
-    study = load_config(d)
-    kinds = list(KINDS) if "all" in kinds else list(dict.fromkeys(kinds))
+    setup = load_config(d)
+    cfg = config or ValidateConfig()
+    certify, sim = setup.config.certify, replace(setup.config.sim, n_threads=0)
+    kinds = list(cfg.kinds if kinds is None else (KINDS if "all" in kinds else dict.fromkeys(kinds)))
     for k in kinds:
         if k not in KINDS:
             raise RobustGaitError(f"unknown disturbance {k!r} (choose from {', '.join(KINDS)} or all)")
-    cfg = study_validate_config(study, config)
-    _check_request(cfg, workers)
     status, gaits = study_gaits(d)
     runnable = [g for g in gaits if g.gait_file is not None]
     if not runnable:
         raise input_error(d, f"no gait of the study has a gait file ({len(gaits)} unique gaits, all failed "
                           "generation): nothing to validate")
-    from robustgait.gait import load_gait
-    from robustgait.robots import load_robot
-
-    robot = load_robot(study.robot)
+    robot = load_robot(setup.robot)
     for g in runnable:  # bound the work before any of it (as `robustgait validate` does)
         assert g.gait_file is not None
-        gait = load_gait(d / g.gait_file, robot)
-        L.check_work(cfg.trials * (2 + cfg.steps_after), gait.step_duration * cfg.sim.max_step_tau, robot.dt,
-                     f"{d / g.gait_file}: --trials {cfg.trials} × (--steps-after {cfg.steps_after} + 1) per kind")
-    keys = {k: config_key(cfg, k) for k in kinds}
+        check_validate_work(robot, load_gait(d / g.gait_file, robot), cfg, sim, f"{d / g.gait_file}: ")
+    keys = {k: config_key(cfg, certify, sim, k) for k in kinds}
     files = {g.label: _files_key(d, g) for g in runnable}
     results: dict[str, dict[str, dict[str, Any]]] = {g.label: {} for g in runnable}
     cached: dict[str, set[str]] = {g.label: set() for g in runnable}
@@ -282,12 +270,12 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None, 
         missing = tuple(k for k in kinds if k not in results[g.label])
         if missing:
             assert g.gait_file is not None
-            tasks.append(_Task(g.label, study.robot, str(d / g.gait_file),
-                               str(d / g.certificate_file) if g.certificate_file else None, cfg, missing))
+            tasks.append(_Task(g.label, setup.robot, str(d / g.gait_file),
+                               str(d / g.certificate_file) if g.certificate_file else None, cfg, certify, sim, missing))
     errors: dict[str, str] = {}
     with tqdm(total=len(runnable), initial=len(runnable) - len(tasks), desc=f"study validate {','.join(kinds)}",
               unit="gait", file=sys.stderr, disable=not progress, dynamic_ncols=True) as bar, \
-            _results(tasks, workers) as finished:
+            _results(tasks, cfg.workers) as finished:
         for res in finished:
             label = res["label"]
             if "error" in res:
@@ -307,7 +295,8 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None, 
     seconds = time.perf_counter() - t0
     out = {}
     for k in kinds:
-        summary = kind_summary(k, cfg, keys[k], status, gaits, {lb: r[k] for lb, r in results.items() if k in r},
+        summary = kind_summary(k, cfg, certify, sim, keys[k], status, gaits,
+                               {lb: r[k] for lb, r in results.items() if k in r},
                                {lb for lb, c in cached.items() if k in c}, errors, seconds)
         (d / VALIDATION_DIR).mkdir(exist_ok=True)
         write_json(summary_path(d, k), summary)
@@ -315,7 +304,8 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None, 
     return out
 
 
-def kind_summary(kind: str, config: ValidateConfig, key: str, status: dict[str, Any], gaits: list[StudyGait],
+def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim: SimConfig, key: str,
+                 status: dict[str, Any], gaits: list[StudyGait],
                  stored: dict[str, dict[str, Any]], cached: set[str], errors: dict[str, str],
                  seconds: float) -> dict[str, Any]:
     """JSON-ready summary of one kind: ``gaits`` (one row per validated gait: the study's view of it — params,
@@ -344,7 +334,7 @@ def kind_summary(kind: str, config: ValidateConfig, key: str, status: dict[str, 
         counts[what] = counts.get(what, 0) + 1
     success = np.array([r["success"]["rate"] for r in rows], dtype=float)
     y = f"{kind} success"
-    cap = status["config"]["evaluation"]["step_cap"]
+    cap = status["config"]["sim"]["step_cap"]
     steps = np.array([r["steps_taken"] for r in rows], dtype=float)
     corr_steps = spearman(steps, success, "steps taken", y)
     if corr_steps.reason.startswith("steps taken is the same") and steps[0] == cap:
@@ -352,8 +342,8 @@ def kind_summary(kind: str, config: ValidateConfig, key: str, status: dict[str, 
     correlations: dict[str, Correlation] = {
         "r_star": spearman(np.array([r["r_star"] for r in rows], dtype=float), success, "r*", y),
         "steps_taken": corr_steps}
-    return {"format_version": FORMAT_VERSION, "kind": kind, "size": name, "unit": unit, "config": asdict(config),
-            "config_key": key,
+    return {"format_version": FORMAT_VERSION, "kind": kind, "size": name, "unit": unit, "config": to_dict(config),
+            "certify": to_dict(certify), "sim": to_dict(sim), "config_key": key,
             "study": {k: status[k] for k in ("directory", "robot", "metric", "learner", "state", "trials_done",
                                              "trials_planned", "unique_gaits")} | {"step_cap": cap},
             "n_validated": len(rows), "n_from_earlier_runs": sum(r["from_earlier_run"] for r in rows),

@@ -1,7 +1,7 @@
 """Does r* predict robustness? Disturbed walks of a gait — pushes, model mismatch, rough ground — and the
 certificate's promise tested (issue 12; ``robustgait validate``, ``docs/validation.md``)."""
 
-from robustgait.validate.disturbances import KINDS, SIZE_LABELS, Draws, ValidateConfig, draw
+from robustgait.validate.disturbances import KINDS, SIZE_LABELS, Draws, draw
 from robustgait.validate.run import (
     CertificateRef,
     KindResult,
@@ -21,5 +21,5 @@ from robustgait.validate.stats import (
 )
 
 __all__ = ["KINDS", "SIZE_LABELS", "CertificateRef", "Correlation", "Draws", "KindResult", "LogisticFit", "Rate",
-           "ValidateConfig", "ValidationResult", "Validator", "binned_rates", "draw", "logistic_fit", "simulate_trials",
+           "ValidationResult", "Validator", "binned_rates", "draw", "logistic_fit", "simulate_trials",
            "spearman", "validate_gait", "wilson_interval"]

@@ -34,19 +34,17 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.certify import CertifyConfig
+from robustgait.config import KINDS, ValidateConfig
 from robustgait.errors import RobustGaitError
 from robustgait.robots import Robot
-from robustgait.robots.spec import CONTACT_SENSORS, build_mjspec
-from robustgait.sim.engine import SimConfig
+from robustgait.robots.model import CONTACT_SENSORS
 
-KINDS = ("push", "mass", "friction", "latency", "noise", "terrain")
 # name and unit of the size axis of each kind
 SIZE_LABELS = {
     "push": ("impulse", "N s"),
@@ -57,60 +55,6 @@ SIZE_LABELS = {
     "terrain": ("terrain amplitude", "m"),
 }
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class ValidateConfig:
-    """Options of a validation; saved with its results.
-
-    trials: trials per disturbance kind; seed: draws of every kind (common random numbers across gaits);
-    steps_after: K, the steps a trial must walk after its first switching event after the disturbance.
-    Ranges (uniform draws): push impulse [0, mass·push_dv_max] N s over push_duration s starting at a phase
-    in push_phase of the step; mass severity [0, 1] scaling mass_max (relative base-mass change),
-    com_offset_max [m], inertia_max (relative); friction μ in friction_range; latency [0, latency_max] s;
-    noise σ_q in [0, noise_q_max] rad with σ_v = noise_v_ratio·σ_q; terrain amplitude [0, terrain_max] m on
-    tiles of terrain_tile m. certify: used when no certificate is given.
-    """
-
-    trials: int = 200
-    seed: int = 0
-    steps_after: int = 20
-    push_dv_max: float = 0.6
-    push_duration: float = 0.1
-    push_phase: tuple[float, float] = (0.0, 0.6)
-    mass_max: float = 0.4
-    com_offset_max: float = 0.08
-    inertia_max: float = 0.3
-    friction_range: tuple[float, float] = (0.05, 1.0)
-    latency_max: float = 0.1
-    noise_q_max: float = 0.02
-    noise_v_ratio: float = 50.0
-    terrain_max: float = 0.03
-    terrain_tile: float = 0.3
-    sim: SimConfig = field(default_factory=SimConfig)
-    certify: CertifyConfig = field(default_factory=CertifyConfig)
-
-    def __post_init__(self) -> None:
-        def bad(what: str) -> RobustGaitError:
-            return RobustGaitError(f"validation config: {what}")
-        for name in ("trials", "steps_after"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise bad(f"{name} must be an integer ≥ 1, got {v!r}")
-        positive = ("push_dv_max", "push_duration", "mass_max", "com_offset_max", "inertia_max", "latency_max",
-                    "noise_q_max", "noise_v_ratio", "terrain_max", "terrain_tile")
-        for name in positive:
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise bad(f"{name} must be finite and ≥ 0, got {v!r}")
-        if self.push_duration <= 0 or self.terrain_tile <= 0:
-            raise bad("push_duration and terrain_tile must be > 0")
-        if not 0.0 <= self.push_phase[0] <= self.push_phase[1] <= 1.0:
-            raise bad(f"push_phase must be (low, high) in [0, 1], got {self.push_phase}")
-        if not 0.0 < self.friction_range[0] <= self.friction_range[1]:
-            raise bad(f"friction_range must be (low, high) with 0 < low ≤ high, got {self.friction_range}")
-        if self.mass_max >= 1.0:
-            raise bad(f"mass_max must be < 1 (a relative mass change), got {self.mass_max}")
 
 
 @dataclass
@@ -164,7 +108,7 @@ def push_wrench(draws: Draws, duration: float, period: float, dt: float, horizon
 def physics_spec(robot: Robot) -> mujoco.MjSpec:
     """The robot's MjSpec without geoms that neither collide nor carry mass (visual meshes): per-trial model
     copies stay small. The dynamics are unchanged (checked in :func:`physics_model`)."""
-    mjs = build_mjspec(robot.spec)
+    mjs = robot.mjspec()
     for g in list(mjs.geoms):
         if g.contype == 0 and g.conaffinity == 0:
             mjs.delete(g)

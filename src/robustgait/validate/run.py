@@ -18,7 +18,7 @@ import json
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -27,13 +27,15 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 from robustgait.certify import GaitCertificate, certify_gait
-from robustgait.errors import RobustGaitError, input_error
+from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, SimConfig, ValidateConfig, to_dict
+from robustgait.config.work import check_work
+from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.poincare import FRAMES, MAPS, FixedPoint, Frame, MapKind, ReturnMap, reduce_state
+from robustgait.poincare import FixedPoint, ReturnMap, reduce_state
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine, StepInputs
 from robustgait.validate import disturbances as dist
-from robustgait.validate.disturbances import KINDS, SIZE_LABELS, Draws, ValidateConfig
+from robustgait.validate.disturbances import SIZE_LABELS, Draws
 from robustgait.validate.stats import LogisticFit, Rate, binned_rates, logistic_fit
 
 FloatArray = NDArray[np.float64]
@@ -62,33 +64,25 @@ class CertificateRef:
         if c is None or gc.fixed_point is None:
             raise RobustGaitError(f"the gait has no certificate to validate against ({gc.status}: {gc.reason})")
         return CertificateRef(float(c.r_star), bool(c.attained), tuple(float(v) for v in c.x_star), cfg.map,
-                              cfg.frame, cfg.reconstruction, cfg.fp_tol, cfg.fp_min_steps, cfg.fp_max_steps,
+                              cfg.frame, cfg.reconstruction, cfg.fp_tol, cfg.min_steps, cfg.fp_max_steps,
                               "computed")
 
     @staticmethod
     def load(path: str | Path) -> CertificateRef:
         """From a certificate JSON written by ``robustgait certify -o``."""
-        path = Path(path)
-        try:
-            raw = json.loads(path.read_text())
-        except FileNotFoundError:
-            raise input_error(path, "certificate file not found") from None
-        except (OSError, ValueError) as exc:
-            raise input_error(path, f"not a certificate JSON ({type(exc).__name__}: {exc})") from None
-        if isinstance(raw, dict) and raw.get("status", "ok") != "ok":
-            raise input_error(path, f"the certificate has status {raw['status']!r} ({raw.get('reason', '')}): "
-                              "nothing to validate against")
-        try:
-            cfg = raw.get("config", {})
-            ref = CertificateRef(float(raw["r_star"]), bool(raw["attained"]), tuple(float(v) for v in raw["x_star"]),
-                                 raw["map"], raw["frame"], raw["reconstruction"], float(cfg.get("fp_tol", 5e-3)),
-                                 int(cfg.get("fp_min_steps", 10)), int(cfg.get("fp_max_steps", 100)), str(path))
-        except (AttributeError, ValueError, KeyError, TypeError) as exc:
-            raise input_error(path, f"not a certificate JSON ({type(exc).__name__}: {exc})") from None
-        if ref.map not in MAPS or ref.frame not in FRAMES or len(ref.x_star) != 3 or not (
-                math.isfinite(ref.r_star) and ref.r_star >= 0):
-            raise input_error(path, "certificate has an unknown map or frame, or a bad r_star / x_star")
-        return ref
+        from robustgait.io.certfile import read_certificate
+
+        c = read_certificate(path)
+        cfg = c.certify_config(path)
+        return CertificateRef(c.r_star, c.attained, tuple(c.x_star), cfg.map, cfg.frame, cfg.reconstruction,
+                              cfg.fp_tol, cfg.min_steps, cfg.fp_max_steps, str(path))
+
+    def certify_config(self, base: CertifyConfig) -> CertifyConfig:
+        """``base`` with this certificate's map, frame, reconstruction and fixed-point search."""
+        from dataclasses import replace
+
+        return replace(base, map=self.map, frame=self.frame, reconstruction=self.reconstruction,  # type: ignore[arg-type]
+                       fp_tol=self.fp_tol, fp_min_steps=self.fp_min_steps, fp_max_steps=self.fp_max_steps)
 
     def inside(self, distance: FloatArray) -> NDArray[np.bool_]:
         """Membership in the certified ball (closed if r* is attained, else open); NaN distances: False."""
@@ -175,12 +169,15 @@ class ValidationResult:
     gait: dict[str, Any]
     certificate: CertificateRef
     config: ValidateConfig
+    sim: SimConfig
     kinds: dict[str, KindResult] = field(default_factory=dict)
     seconds: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self, *, trials: bool = True) -> dict[str, Any]:
+        from dataclasses import asdict
+
         return {"robot": self.robot, "gait": self.gait, "certificate": asdict(self.certificate),
-                "config": asdict(self.config), "seconds": self.seconds,
+                "config": to_dict(self.config), "sim": to_dict(self.sim), "seconds": self.seconds,
                 "kinds": {k: v.to_dict(trials) for k, v in self.kinds.items()}}
 
     def to_json(self, *, trials: bool = True) -> str:
@@ -189,7 +186,7 @@ class ValidationResult:
 
 def _gait_info(gait: Gait) -> dict[str, Any]:
     return {"robot": gait.robot, "stance": gait.stance, "step_duration": gait.step_duration,
-            "params": asdict(gait.params) if gait.params is not None else None}
+            "params": gait.params.to_dict() if gait.params is not None else None}
 
 
 def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_steps: int, period: int,
@@ -251,6 +248,7 @@ class Validator:
     """
 
     def __init__(self, robot: Robot, gait: Gait, config: ValidateConfig | None = None, *,
+                 certify: CertifyConfig | None = None, sim: SimConfig | None = None,
                  certificate: GaitCertificate | CertificateRef | str | Path | None = None, progress: bool = False,
                  start: FixedPoint | None = None):
         if len(gait.domains) != 1:
@@ -258,11 +256,12 @@ class Validator:
                                   f"{len(gait.domains)} domains")
         self.robot, self.gait = robot, gait
         self.config = config or ValidateConfig()
+        self.sim = sim or SimConfig()
         self.progress = progress
         t0 = time.perf_counter()
         fp: FixedPoint | None = None
         if certificate is None:
-            gc = certify_gait(robot, gait, self.config.certify, progress=progress)
+            gc = certify_gait(robot, gait, certify, self.sim, progress=progress)
             ref, fp = CertificateRef.of(gc), gc.fixed_point
         elif isinstance(certificate, GaitCertificate):
             ref, fp = CertificateRef.of(certificate), certificate.fixed_point
@@ -271,15 +270,15 @@ class Validator:
         if start is not None:
             fp = start
         if fp is None:
-            with ReturnMap(robot, gait, kind=ref.map, frame=ref.frame, sim=self.config.sim) as pmap:
-                fp = pmap.find_fixed_point(tol=ref.fp_tol, min_steps=ref.fp_min_steps, max_steps=ref.fp_max_steps)
+            with ReturnMap(robot, gait, ref.certify_config(certify or CertifyConfig()), self.sim) as pmap:
+                fp = pmap.find_fixed_point()
             if float(np.linalg.norm(fp.x_star - np.asarray(ref.x_star))) > 1e-6:
                 raise RobustGaitError(f"{ref.source}: the certificate's x* {np.round(ref.x_star, 4).tolist()} is not "
                                       f"this gait's fixed point {np.round(fp.x_star, 4).tolist()} (another gait, "
                                       "robot or simulation option?)")
         self.certificate, self.fixed_point = ref, fp
         self.period = 1 if ref.map == "step" else 2
-        self.engine = StepEngine(robot, gait, self.config.sim)
+        self.engine = StepEngine(robot, gait, self.sim)
         nominal = self.engine.step(fp.qpos[None], fp.qvel[None], gait.stance)
         if nominal.fell[0]:
             raise RobustGaitError(f"the gait falls from its {'start' if start is not None else 'own fixed point'} "
@@ -354,23 +353,36 @@ class Validator:
                           physics_steps=physics, seconds=time.perf_counter() - t0)
 
 
+def check_validate_work(robot: Robot, gait: Gait, config: ValidateConfig, sim: SimConfig, what: str = "") -> int:
+    """Bound one disturbance kind's work (one batch of trials, each 1 (or 2, stride map) + ``steps_after``
+    steps) before it starts (:func:`robustgait.config.work.check_work`)."""
+    return check_work(config.trials * (2 + config.steps_after), gait.step_duration * sim.max_step_tau, robot.dt,
+                      f"{what}validate.trials {config.trials} × (validate.steps_after {config.steps_after} + 1) per "
+                      "kind")
+
+
 def validate_gait(robot: Robot, gait: Gait, config: ValidateConfig | None = None, *,
-                  kinds: Sequence[str] = ("push",),
+                  certify: CertifyConfig | None = None, sim: SimConfig | None = None,
+                  kinds: Sequence[str] | None = None,
                   certificate: GaitCertificate | CertificateRef | str | Path | None = None,
                   progress: bool = False) -> ValidationResult:
-    """Validate a gait against the disturbance ``kinds`` (any of :data:`KINDS`; ``("all",)`` for all).
+    """Validate a gait against the disturbance ``kinds`` (any of :data:`~robustgait.config.KINDS`; default
+    ``config.kinds``: ``config.disturbance``, or every kind for ``all``).
 
     ``certificate``: a :class:`GaitCertificate`, a :class:`CertificateRef`, or a certificate JSON path; None
-    certifies the gait with ``config.certify`` first.
+    certifies the gait with ``certify`` first.
     """
-    kinds = list(KINDS) if "all" in kinds else list(kinds)
+    config = config or ValidateConfig()
+    sim = sim or SimConfig()
+    kinds = list(config.kinds if kinds is None else (KINDS if "all" in kinds else kinds))
     for k in kinds:
         if k not in KINDS:
             raise RobustGaitError(f"unknown disturbance {k!r} (choose from {', '.join(KINDS)} or all)")
+    check_validate_work(robot, gait, config, sim)
     t0 = time.perf_counter()
-    with Validator(robot, gait, config, certificate=certificate, progress=progress) as v:
+    with Validator(robot, gait, config, certify=certify, sim=sim, certificate=certificate, progress=progress) as v:
         result = ValidationResult(robot=robot.name, gait=_gait_info(gait), certificate=v.certificate,
-                                  config=v.config, seconds={"setup": v.seconds_setup})
+                                  config=v.config, sim=v.sim, seconds={"setup": v.seconds_setup})
         for k in kinds:
             result.kinds[k] = v.run(k)
             result.seconds[k] = result.kinds[k].seconds

@@ -1,89 +1,108 @@
-"""Robot spec TOML: its schema and the builder of :class:`~robustgait.robots.RobotSpec` (``docs/robots.md``,
-limits in ``docs/inputs.md``). Names (joints, geoms, bodies) are checked against the MJCF when the robot is
-loaded (:func:`robustgait.robots.spec.build_mjspec`); everything else is checked here."""
+"""Robots from files: the robot spec TOML (its schema and the builder of :class:`~robustgait.robots.RobotSpec`),
+the MJCF it names (parsed by MuJoCo), and :func:`load_robot` (``docs/robots.md``, limits in ``docs/inputs.md``).
+Names (joints, geoms, bodies) are checked against the MJCF when the robot is compiled
+(:func:`robustgait.robots.model.build_mjspec`); everything else is checked here."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Any
 
-import msgspec
-from msgspec import Meta
+import annotated_types as at
+import mujoco
+from pydantic import Field, StringConstraints
 
+from robustgait.config import field_at
+from robustgait.config.base import Doc, Float, Int, Str
+from robustgait.errors import RobustGaitError, input_error
 from robustgait.io import limits as L
-from robustgait.io.schema import Table, field_error, read_toml, validate
+from robustgait.io.schema import field_error, read_toml, table, validate
+from robustgait.robots.model import INTEGRATORS, Robot
 from robustgait.robots.spec import (
     ACTION_FIELDS,
-    INTEGRATORS,
+    SHIPPED_DIR,
     FallCriteria,
     GaitQuality,
+    Integrator,
     LegSpec,
     ParamRange,
     RobotSpec,
 )
 
-Name = Annotated[str, Meta(min_length=1, max_length=200, pattern=r"^[^\x00]+$")]
-Sign = Annotated[float, Meta(ge=-1.0, le=1.0)]
-QualityAngle = Annotated[float, L.QUALITY_ANGLE.meta()]
-BandEnd = Annotated[float, L.QUALITY_BAND.meta()]
-HeightBandEnd = Annotated[float, Meta(ge=-L.QUALITY_BAND.high, extra={"unit": "m"})]  # high end may be inf
-JointVelocity = Annotated[float, L.QUALITY_JOINT_VELOCITY.meta()]
-ActionAxis = Annotated[tuple[float, float, float], Meta(description="[low, high, step]")]
-Integrator = Literal["euler", "implicitfast", "implicit", "rk4"]
+Name = Annotated[str, StringConstraints(strict=True, min_length=1, max_length=200, pattern=r"^[^\x00]+$")]
+Sign = Annotated[Float, Doc(ge=-1.0, le=1.0)]
+QualityAngle = Annotated[Float, L.QUALITY_ANGLE]
+BandEnd = Annotated[Float, L.QUALITY_BAND]
+# the high end of the pelvis height band may be inf (unbounded above)
+HeightBandEnd = Annotated[float, Field(strict=True, allow_inf_nan=True), Doc(unit="m", ge=-10.0)]
+JointVelocity = Annotated[Float, L.QUALITY_JOINT_VELOCITY]
+ActionAxis = Annotated[tuple[Float, Float, Float], Doc("[low, high, step]")]
 assert set(Integrator.__args__) == set(INTEGRATORS)  # type: ignore[attr-defined]
 
 
-class JointsTable(Table):
-    names: Annotated[list[Name], Meta(min_length=1, max_length=L.MAX_JOINTS)]
-    kp: Annotated[list[Annotated[float, L.KP.meta()]], Meta(min_length=1, max_length=L.MAX_JOINTS)]
-    kd: Annotated[list[Annotated[float, L.KD.meta()]], Meta(min_length=1, max_length=L.MAX_JOINTS)]
-    torque_limit: Annotated[list[Annotated[float, L.TORQUE_LIMIT.meta()]], Meta(min_length=1, max_length=L.MAX_JOINTS)]
+def _joints(item: Any) -> Any:
+    """A list of one value per joint."""
+    return Annotated[list[item], at.MinLen(1), at.MaxLen(L.MAX_JOINTS)]
 
 
-class LegTable(Table):
+@table
+class JointsTable:
+    names: _joints(Name)  # type: ignore[valid-type]
+    kp: _joints(Annotated[Float, L.KP])  # type: ignore[valid-type]
+    kd: _joints(Annotated[Float, L.KD])  # type: ignore[valid-type]
+    torque_limit: _joints(Annotated[Float, L.TORQUE_LIMIT])  # type: ignore[valid-type]
+
+
+@table
+class LegTable:
     sole_geom: Name
 
 
-class LegsTable(Table):
+@table
+class LegsTable:
     left: LegTable
     right: LegTable
 
 
-class MirrorTable(Table):
-    joint_perm: Annotated[list[Annotated[int, Meta(ge=0, lt=L.MAX_JOINTS)]], Meta(min_length=1,
-                                                                                  max_length=L.MAX_JOINTS)]
-    joint_sign: Annotated[list[Sign], Meta(min_length=1, max_length=L.MAX_JOINTS)]
-    base_sign: Annotated[tuple[Sign, Sign, Sign, Sign, Sign, Sign], Meta(description="(x, y, z, roll, pitch, yaw)")] = (
+@table
+class MirrorTable:
+    joint_perm: _joints(Annotated[Int, Doc(ge=0, lt=L.MAX_JOINTS)])  # type: ignore[valid-type]
+    joint_sign: _joints(Sign)  # type: ignore[valid-type]
+    base_sign: Annotated[tuple[Sign, Sign, Sign, Sign, Sign, Sign], Doc("(x, y, z, roll, pitch, yaw)")] = (
         1.0, -1.0, 1.0, -1.0, 1.0, -1.0)
 
 
-class FallTable(Table):
-    min_base_height: Annotated[float, L.MIN_BASE_HEIGHT.meta()] = FallCriteria.min_base_height
-    max_tilt: Annotated[float, L.MAX_TILT.meta()] = FallCriteria.max_tilt
+@table
+class FallTable:
+    min_base_height: Annotated[Float, L.MIN_BASE_HEIGHT] = FallCriteria.min_base_height
+    max_tilt: Annotated[Float, L.MAX_TILT] = FallCriteria.max_tilt
 
 
-class SimTable(Table):
-    timestep: Annotated[float, L.TIMESTEP.meta()] | None = None
+@table
+class SimTable:
+    timestep: Annotated[Float, L.TIMESTEP] | None = None
     integrator: Integrator | None = None
 
 
-class GaitQualityTable(Table):
+@table
+class GaitQualityTable:
     pelvis_roll: QualityAngle = GaitQuality.pelvis_roll
     pelvis_yaw: QualityAngle = GaitQuality.pelvis_yaw
-    pelvis_pitch: Annotated[tuple[BandEnd, BandEnd], Meta(description="[low, high]")] = GaitQuality.pelvis_pitch
-    pelvis_height: Annotated[tuple[HeightBandEnd, HeightBandEnd], Meta(description="[low, high]")] = (
-        GaitQuality.pelvis_height)
-    pelvis_angular_velocity: Annotated[float, L.QUALITY_ANGULAR_VELOCITY.meta()] = GaitQuality.pelvis_angular_velocity
+    pelvis_pitch: Annotated[tuple[BandEnd, BandEnd], Doc("[low, high]")] = GaitQuality.pelvis_pitch
+    pelvis_height: Annotated[tuple[HeightBandEnd, HeightBandEnd], Doc("[low, high]")] = GaitQuality.pelvis_height
+    pelvis_angular_velocity: Annotated[Float, L.QUALITY_ANGULAR_VELOCITY] = GaitQuality.pelvis_angular_velocity
     swing_tilt: QualityAngle = GaitQuality.swing_tilt
     swing_yaw: QualityAngle = GaitQuality.swing_yaw
-    swing_toe_down_until: Annotated[float, Meta(ge=0.0, le=1.0, extra={"unit": "phase"})] = (
-        GaitQuality.swing_toe_down_until)
-    pelvis_acceleration: Annotated[float, Meta(gt=0, extra={"unit": "m/s²"})] = GaitQuality.pelvis_acceleration
-    joint_velocity: JointVelocity | Annotated[list[JointVelocity], Meta(max_length=L.MAX_JOINTS)] = 10.0
+    swing_toe_down_until: Annotated[Float, Doc(unit="phase", ge=0.0, le=1.0)] = GaitQuality.swing_toe_down_until
+    pelvis_acceleration: Annotated[float, Field(strict=True, allow_inf_nan=True), Doc(unit="m/s²", gt=0)] = (
+        GaitQuality.pelvis_acceleration)
+    joint_velocity: JointVelocity | Annotated[list[JointVelocity], at.MaxLen(L.MAX_JOINTS)] = 10.0
 
 
-class ActionAxesTable(Table):
+@table
+class ActionAxesTable:
     """The axes every action space has (``ACTION_FIELDS``)."""
 
     step_length: ActionAxis
@@ -92,15 +111,18 @@ class ActionAxesTable(Table):
     step_height: ActionAxis
 
 
+@table
 class MultiContactActionSpaceTable(ActionAxesTable):
     rolling_fraction: ActionAxis | None = None
 
 
+@table
 class ActionSpaceTable(ActionAxesTable):
     multicontact: MultiContactActionSpaceTable | None = None
 
 
-class SpecFile(Table):
+@table
+class SpecFile:
     name: Name
     mjcf: Name
     base_body: Name
@@ -108,12 +130,12 @@ class SpecFile(Table):
     joints: JointsTable
     legs: LegsTable
     mirror: MirrorTable
-    description: Annotated[str, Meta(max_length=2000)] = ""
-    fall: FallTable = msgspec.field(default_factory=FallTable)
-    sim: SimTable = msgspec.field(default_factory=SimTable)
-    gait_quality: GaitQualityTable = msgspec.field(default_factory=GaitQualityTable)
+    description: Annotated[Str, at.MaxLen(2000)] = ""
+    fall: FallTable = dataclasses.field(default_factory=FallTable)
+    sim: SimTable = dataclasses.field(default_factory=SimTable)
+    gait_quality: GaitQualityTable = dataclasses.field(default_factory=GaitQualityTable)
     action_space: ActionSpaceTable | None = None
-    posture: dict[Name, Annotated[float, L.POSTURE.meta()]] = msgspec.field(default_factory=dict)
+    posture: dict[Name, Annotated[Float, L.POSTURE]] = dataclasses.field(default_factory=dict)
 
 
 def _band(src: Path, key: str, band: tuple[float, float]) -> tuple[float, float]:
@@ -137,10 +159,10 @@ def _action_space(t: ActionAxesTable, src: Path,
         if not (lo <= hi and step > 0):
             raise field_error(src, field, "must be [low, high, step] with low ≤ high and step > 0 "
                               f"(got [{lo:g}, {hi:g}, {step:g}])")
-        blo, bhi = GaitParams.BOUNDS[key]
-        if lo < blo or hi > bhi:
+        doc = field_at(GaitParams, key).doc
+        if not (doc.contains(lo) and doc.contains(hi)):
             raise field_error(src, field, f"[low, high] = [{lo:g}, {hi:g}] must lie within the bounds of "
-                              f"GaitParams.{key}, [{blo:g}, {bhi:g}]")
+                              f"GaitParams.{key}, {doc.text()}")
         if (hi - lo) / step + 1 > L.MAX_GRID_POINTS:
             raise field_error(src, field, f"the grid has {math.floor((hi - lo) / step) + 1} points, over the "
                               f"limit of {L.MAX_GRID_POINTS} per axis (use a larger step)")
@@ -225,3 +247,35 @@ def read_spec(path: str | Path) -> RobotSpec:
     """Read, validate and build a robot spec from a TOML file."""
     p = Path(path)
     return spec_from_raw(read_toml(p, "robot spec file"), p)
+
+
+def read_mjcf(spec: RobotSpec) -> mujoco.MjSpec:
+    """The robot's MJCF file parsed by MuJoCo (one-line errors for a missing or unparsable file)."""
+    src = spec.source or spec.mjcf
+    if not spec.mjcf.is_file():
+        raise input_error(src, f"MJCF file not found: {spec.mjcf}")
+    try:
+        return mujoco.MjSpec.from_file(str(spec.mjcf))
+    except ValueError as exc:
+        raise input_error(spec.mjcf, f"MuJoCo could not parse the MJCF: {exc}") from None
+
+
+def shipped_robots() -> list[str]:
+    """Names of the robots that ship with the package."""
+    return sorted(p.parent.name for p in SHIPPED_DIR.glob("*/spec.toml"))
+
+
+def load_robot(robot: str | Path | Robot) -> Robot:
+    """Load a shipped robot by name (``"exo"``) or a user robot from a spec ``.toml`` path."""
+    if isinstance(robot, Robot):
+        return robot
+    text = str(robot)
+    if text in shipped_robots():
+        path = SHIPPED_DIR / text / "spec.toml"
+    elif Path(text).suffix == ".toml" or Path(text).exists():
+        path = Path(text)
+    else:
+        raise RobustGaitError(
+            f"{text}: unknown robot (shipped: {', '.join(shipped_robots()) or 'none'}; or give a spec .toml path)")
+    spec = read_spec(path)
+    return Robot(spec, read_mjcf(spec))

@@ -1,0 +1,5 @@
+import sys
+
+from robustgait.cli import main
+
+sys.exit(main())

@@ -1,0 +1,109 @@
+"""``robustgait certify`` (a gait's robustness certificate) and ``robustgait barrier-eval`` (the DTBF condition along
+a logged sequence of reduced states)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
+from robustgait.cli.options import config_from, number_within, numbers_within, output_path
+from robustgait.errors import RobustGaitError
+from robustgait.io.limits import BARRIER_R, X_STAR
+
+CERTIFY = {"--method": "certify.method", "--samples": "certify.n_samples", "--epsilon": "certify.sequential.epsilon",
+           "--budget": "certify.sequential.budget", "--beta": "certify.beta", "--barrier": "certify.barrier",
+           "--r-max": "certify.r_max", "--alpha": "certify.alpha", "--seed": "certify.seed", "--map": "certify.map",
+           "--reconstruction": "certify.reconstruction", "--frame": "certify.frame",
+           "--switching": "sim.switching", "--fp-tol": "certify.fp_tol", "--fp-max-steps": "certify.fp_max_steps"}
+
+
+def _certify(args: argparse.Namespace) -> int:
+    from robustgait.certify import certify_gait
+
+    config, robot, gait = inputs(args)
+    cfg = config.certify
+    with about(args.gait):
+        gc = certify_gait(robot, gait, cfg, config.sim, progress=not args.json and sys.stderr.isatty())
+    c, fp = gc.certificate, gc.fixed_point
+    if args.plot is not None and c is not None:
+        from robustgait.report import plot_certificate
+
+        label = f"N = {c.n_samples}" + (f" in {len(c.rounds)} rounds" if cfg.method == "sequential" else "")
+        plot_certificate(c, args.plot, title=f"{robot.name}: r* = {gc.r_star:.4f} rad/s ({cfg.map} map, "
+                         f"{cfg.reconstruction}, {cfg.method}, {label}, α = {cfg.alpha:g})")
+    if args.output is not None:
+        from robustgait.io.output import write_json
+
+        write_json(args.output, gc.to_dict())
+    if args.json:
+        print(json.dumps(gc.to_dict(samples=False), allow_nan=False))
+    elif c is None:
+        print(f"{gc.status}: r* = 0 ({gc.reason}; {gc.steps_walked} steps walked)")
+    else:
+        assert fp is not None and gc.map_residual is not None
+        print(f"r* = {c.r_star:.4f} rad/s  ({cfg.map} map, {cfg.reconstruction} reconstruction, {cfg.frame} frame, "
+              f"{cfg.barrier} barrier, α = {cfg.alpha:g}, {cfg.method}: N = {c.n_samples}, seed {cfg.seed})")
+        print(f"x* = [{', '.join(f'{v:.4f}' for v in fp.x_star)}] rad/s after {fp.steps} steps; residual "
+              f"{fp.residual:.2e} (map at x*: {gc.map_residual:.2e})")
+        if cfg.method == "sequential":
+            print("r̂ after each round: " + " ".join(f"{r.kind[0]}{r.samples_used}:{r.r_hat:.4g}" for r in c.rounds)
+                  + "  (u = uniform, e = explore, v = verify; samples used: r̂)")
+        print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside B(r*)")
+        print(c.statement())
+        print(f"time: fixed point {gc.seconds['fixed_point']:.2f} s, sampling {gc.seconds['sampling']:.2f} s "
+              f"({gc.seconds['sim_steps_per_s']:.0f} simulated steps/s)")
+    return 0 if gc.ok else 1
+
+
+def _barrier_eval(args: argparse.Namespace) -> int:
+    from robustgait.barrier import barrier_along
+    from robustgait.io.logs import load_reduced_log
+
+    alpha = config_from(args).certify.alpha
+    x_star = numbers_within(X_STAR, args.x_star, "argument --x-star")
+    xs = load_reduced_log(args.log, args.columns.split(",") if args.columns else None)
+    if xs.shape[1] != len(x_star):
+        raise RobustGaitError(f"{args.log}: the log has {xs.shape[1]} columns but --x-star has "
+                              f"{len(x_star)} values")
+    if xs.shape[0] < 2:
+        raise RobustGaitError(f"{args.log}: the DTBF condition needs at least 2 consecutive states (rows), got "
+                              f"{xs.shape[0]}")
+    trace = barrier_along(xs, x_star, args.r, alpha)
+    if args.plot is not None:
+        from robustgait.report import plot_barrier_trace
+
+        plot_barrier_trace(trace, args.plot)
+    if args.json:
+        print(json.dumps({"ok": trace.ok, "first_violation": trace.first_violation, "r": trace.r,
+                          "alpha": trace.alpha, "h": trace.h.tolist(), "margins": trace.margins.tolist()}))
+    else:
+        verdict = "holds at every step" if trace.ok else f"is violated first at step {trace.first_violation}"
+        print(f"DTBF condition (r = {trace.r:g}, α = {trace.alpha:g}) {verdict} over {trace.h.size} states; "
+              f"min H = {trace.h.min():.4g}, min margin = {trace.margins.min():.4g}")
+    return 0 if trace.ok or not args.check else 1
+
+
+def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    c = command(sub, "certify", "robustness certificate r* of a gait (DTBF on the Poincaré map); exit 1 if the "
+                "gait falls or has no fixed point (r* = 0)", _certify, CERTIFY)
+    c.add_argument("gait", help=GAIT_HELP)
+    c.add_argument("--robot", required=True, help=ROBOT_HELP)
+    c.add_argument("--plot", metavar="CERT.png", type=output_path("plot"),
+                   help="draw the invariant set (samples, r* sphere, projections): .png, .pdf or .svg")
+    c.add_argument("-o", "--output", metavar="CERT.json", type=output_path("json"),
+                   help="write the full certificate with samples")
+    c.add_argument("--json", action="store_true", help="print one JSON object (without the samples)")
+
+    b = command(sub, "barrier-eval", "evaluate the DTBF condition along a logged sequence of reduced states",
+                _barrier_eval, {"--alpha": "certify.alpha"})
+    b.add_argument("log", help="CSV with a header row, NPY (one 2-D array) or NPZ (array 'x')")
+    b.add_argument("--x-star", nargs="+", required=True,
+                   help="fixed point: 0.42,0.21,0.30 or 0.42 0.21 0.30 (negative values: -0.4 0.2 0.3)")
+    b.add_argument("--r", type=number_within(BARRIER_R), required=True, help=f"ball radius r ({BARRIER_R.text()})")
+    b.add_argument("--columns", help="comma-separated CSV columns to use (default: all numeric columns)")
+    b.add_argument("--plot", metavar="OUT.png", type=output_path("plot"),
+                   help="plot H and the DTBF margin along the sequence (.png, .pdf or .svg)")
+    b.add_argument("--json", action="store_true")
+    b.add_argument("--check", action="store_true", help="exit 1 if the condition is violated anywhere")

@@ -1,0 +1,102 @@
+"""``robustgait gait convert | generate | tiles``: gait files, HZD gait generation, frames of a step."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
+from robustgait.cli.options import config_from, output_path
+from robustgait.errors import RobustGaitError
+
+GENERATE = {"--domains": "generate.domains", "--step-length": "gait.step_length",
+            "--step-duration": "gait.step_duration", "--step-width": "gait.step_width",
+            "--step-height": "gait.step_height", "--rolling-fraction": "gait.rolling_fraction",
+            "--nodes": "generate.nodes", "--stance": "generate.stance"}
+
+
+def _convert(args: argparse.Namespace) -> int:
+    from robustgait.io.gaitfile import load_gait, save_gait
+    from robustgait.io.robotfile import load_robot
+
+    robot = load_robot(args.robot)
+    gait = load_gait(args.gait, robot)
+    if args.mirror:
+        gait = gait.mirrored(robot)
+    save_gait(gait, args.output)
+    print(f"wrote {args.output} ({gait.stance} stance, {gait.n_outputs} outputs, T = {gait.step_duration} s)")
+    return 0
+
+
+def _generate(args: argparse.Namespace) -> int:
+    from robustgait.gaitgen import GaitGenerator
+    from robustgait.io.gaitfile import load_gait, save_gait
+    from robustgait.io.robotfile import load_robot
+
+    config = config_from(args)
+    params = config.params
+    robot = load_robot(args.robot)
+    warm = load_gait(args.warm_start, robot) if args.warm_start else None
+    live = not args.json
+    if live:
+        what = "flat-foot" if config.generate.domains == "flat" else "multi-contact (heel/toe rolling)"
+        print(f"building the {what} HZD problem for {robot.name} ({config.generate.nodes} nodes) ...", flush=True)
+    gen = GaitGenerator(robot, config.generate, verbose=live and args.verbose)
+    if live:
+        print(f"built in {gen.build_seconds:.1f} s: {gen.n_variables} variables, {gen.n_constraints} constraints; "
+              + ("IPOPT iterations:" if args.verbose else f"solving T = {params.duration:g} s ..."), flush=True)
+    res = gen.solve(params, warm)
+    summary = {**res.summary(), "build_seconds": gen.build_seconds, "output": args.output if res.gait else None}
+    if res.gait is None:
+        if args.json:
+            print(json.dumps(summary, allow_nan=False))
+        raise RobustGaitError(f"gait generation failed ({res.status}): {res.reason}")
+    save_gait(res.gait, args.output)
+    if args.json:
+        print(json.dumps(summary, allow_nan=False))
+    else:
+        c = res.check
+        assert c is not None
+        print(f"{res.status}: {res.iterations} iterations in {res.solve_seconds:.2f} s "
+              f"({res.solve_seconds / max(res.iterations, 1) * 1e3:.0f} ms/iteration), ∫‖u‖²dt = {res.objective:.4g}")
+        print(f"physics check passed: dynamics residual {c.dynamics_residual:.1e} (MuJoCo), periodicity "
+              f"{c.periodicity:.1e}, min normal force {c.min_normal_force:.0f} N, friction |f_t|/f_z ≤ "
+              f"{c.friction_ratio:.2f}, CoP margin {c.cop_margin * 1e3:.1f} mm")
+        print(f"wrote {args.output}")
+    return 0
+
+
+def _tiles(args: argparse.Namespace) -> int:
+    from robustgait.report.tiles import render_tiles
+
+    config, robot, gait = inputs(args)
+    with about(args.gait):
+        shape = render_tiles(robot, gait, args.output, config.report, config.sim)
+    print(f"wrote {args.output} ({shape[1]} x {shape[0]} px: {config.report.tile_frames} frames of one step, side "
+          "and front)")
+    return 0
+
+
+def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    g = sub.add_parser("gait", help="gait files: convert, generate (HZD), tiles")
+    gsub = g.add_subparsers(dest="gait_command", required=True, parser_class=type(g))
+    gc = command(gsub, "convert", "read a gait (either format) and write robustgait JSON", _convert)
+    gc.add_argument("gait", help=GAIT_HELP)
+    gc.add_argument("--robot", required=True, help=ROBOT_HELP)
+    gc.add_argument("-o", "--output", required=True, type=output_path("json"), help="output gait .json")
+    gc.add_argument("--mirror", action="store_true", help="relabel for the other stance leg")
+
+    gg = command(gsub, "generate", "HZD trajectory optimization of a gait (CasADi + IPOPT): flat-foot or "
+                 "multi-contact heel/toe rolling", _generate, GENERATE)
+    gg.add_argument("--robot", required=True, help=ROBOT_HELP)
+    gg.add_argument("--warm-start", metavar="GAIT", help="start from a neighbouring gait (.json or .yaml)")
+    gg.add_argument("-o", "--output", required=True, type=output_path("json"),
+                    help="output gait .json (checked before the solve)")
+    gg.add_argument("--json", action="store_true", help="print one JSON summary instead of the live log")
+    gg.add_argument("--verbose", action="store_true", help="print IPOPT's iteration log")
+
+    gt = command(gsub, "tiles", "frames of one step side by side, seen from the side and the front (PNG)", _tiles,
+                 {"--frames": "report.tile_frames", "--warmup-steps": "report.tile_warmup_steps"})
+    gt.add_argument("gait", help=GAIT_HELP)
+    gt.add_argument("--robot", required=True, help=ROBOT_HELP)
+    gt.add_argument("-o", "--output", required=True, metavar="TILES.png", type=output_path("plot"))

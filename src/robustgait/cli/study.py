@@ -1,0 +1,231 @@
+"""``robustgait study run | resume | status | report | compare | validate`` and ``robustgait demo``: they parse
+arguments and call :mod:`robustgait.study`."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from robustgait.cli.common import ROBOT_HELP, command
+from robustgait.cli.options import FlagTable, config_from
+from robustgait.config import DEMO_DIRECTORY, DEMO_ROBOT, Config, RunConfig
+from robustgait.errors import RobustGaitError
+
+RUN: FlagTable = {"--executor": "run.executor", "--workers": "run.workers", "--address": "run.address"}
+STUDY: FlagTable = {"--metric": "study.metric", "--learner": "study.learner", "--iterations": "study.iterations",
+         "--batch": "study.batch", "--method": "certify.method", "--samples": "certify.n_samples",
+         "--budget": "certify.sequential.budget", "--epsilon": "certify.sequential.epsilon", "--steps": "sim.step_cap",
+         "--domains": "generate.domains", "--storage": "study.storage", "--seed": ("study.seed", "certify.seed")}
+
+
+def _check_executor(run: RunConfig) -> None:
+    if run.executor == "ray":
+        try:
+            import ray  # noqa: F401
+        except ImportError:
+            raise RobustGaitError('--executor ray needs Ray: pip install "robustgait[ray]"') from None
+
+
+def print_summary(directory: str | Path, seconds: float | None = None) -> None:
+    from robustgait.study.status import study_status
+
+    st = study_status(directory)
+    best = st["best"]
+    took = f" in {seconds:.0f} s" if seconds is not None else ""
+    print(f"study {directory}: {st['trials_done']}/{st['trials_planned']} gaits evaluated{took} "
+          f"({st['unique_gaits']} unique), {st['iterations_done']}/{st['iterations_planned']} iterations, "
+          f"{st['state']}")
+    if best is not None:
+        params = ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())
+        print(f"best gait (trial {best['trial']}): {params}; r* = {best['r_star']:.4f} rad/s, "
+              f"{best['steps_taken']} steps; {best['gait_file'] or 'no gait file'}")
+    obs = st["best_observed"]
+    if obs is not None and (best is None or obs["score"] != best["score"]):
+        params = ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
+        print(f"best evaluated gait (trial {obs['trial']}; the best gait above is the learner's highest posterior "
+              f"mean): {params}; r* = {obs['r_star']:.4f} rad/s, {obs['steps_taken']} steps")
+
+
+def _run_interruptible(directory: str, run: RunConfig, args: argparse.Namespace) -> bool:
+    """Run a study; on Ctrl-C say how to continue (the running trials are re-run by resume)."""
+    from robustgait.study.run import run_study
+
+    _check_executor(run)
+    try:
+        run_study(directory, run, progress=not getattr(args, "quiet", False), verbose=getattr(args, "verbose", False))
+    except KeyboardInterrupt:
+        print(f"\nrobustgait: interrupted; continue with: robustgait study resume {directory}", file=sys.stderr)
+        return False
+    return True
+
+
+def _study_run(args: argparse.Namespace) -> int:
+    from robustgait.study.run import create_study
+
+    config = config_from(args)
+    _check_executor(config.run)
+    create_study(args.dir, args.robot, config)
+    t0 = time.perf_counter()
+    if not _run_interruptible(args.dir, config.run, args):
+        return 130
+    print_summary(args.dir, time.perf_counter() - t0)
+    return 0
+
+
+def _study_resume(args: argparse.Namespace) -> int:
+    t0 = time.perf_counter()
+    if not _run_interruptible(args.dir, config_from(args).run, args):
+        return 130
+    print_summary(args.dir, time.perf_counter() - t0)
+    return 0
+
+
+def _study_status(args: argparse.Namespace) -> int:
+    from robustgait.study.status import study_status
+
+    st = study_status(args.dir)
+    if args.json:
+        print(json.dumps(st, allow_nan=False))
+        return 0
+    print_summary(args.dir)
+    print(f"{'iteration':>9}  {'best r*':>8}  {'steps':>5}  best gait")
+    for it in st["iterations"]:
+        b = it["best"]
+        if b is None:
+            print(f"{it['iteration'] + 1:>9}  {'—':>8}  {'—':>5}  {'running' if it['trials'] else 'not started'}")
+        else:
+            print(f"{it['iteration'] + 1:>9}  {b['r_star']:>8.4f}  {b['steps_taken']:>5}  "
+                  + ", ".join(f"{v:g}" for v in b["params"].values()))
+    return 0
+
+
+def _study_report(args: argparse.Namespace) -> int:
+    from robustgait.report.study import write_study_report
+
+    print(write_study_report(args.dir, config_from(args).report))
+    return 0
+
+
+def _study_compare(args: argparse.Namespace) -> int:
+    from robustgait.study.compare import compare_studies
+
+    res = compare_studies(args.dir_a, args.dir_b, config_from(args).compare)
+    if args.json:
+        print(json.dumps(res, allow_nan=False))
+        return 0
+    print(f"best gaits re-certified with seeds {res['seeds'][0]}–{res['seeds'][-1]} (N = {res['n_samples']}), "
+          f"walked {res['step_cap']} steps")
+    for name, s in zip("AB", res["studies"], strict=True):
+        params = ", ".join(f"{v:g}" for v in s["params"].values())
+        print(f"{name} {s['directory']} ({s['learner']}, {s['metric']}): gait ({params}), {s['steps_taken']} steps, "
+              f"r* = {s['r_star_mean']:.4f} ± {s['r_star_sd']:.4f} rad/s  "
+              f"[{', '.join(f'{r:.3f}' for r in s['r_star'])}] (study: {s['study_r_star']:.4f})")
+    w = res["winner"]
+    print("equal mean r*" if w is None else f"higher mean r*: {'AB'[w]} (per seed: A wins {res['wins_per_seed'][0]}, "
+          f"B wins {res['wins_per_seed'][1]})")
+    if res["note"]:
+        print(f"note: {res['note']}")
+    return 0
+
+
+def _study_validate(args: argparse.Namespace) -> int:
+    from robustgait.study.validate import summary_path, validate_study
+    from robustgait.validate.stats import correlation_text
+
+    cfg = config_from(args).validate
+    try:
+        out = validate_study(args.dir, cfg, progress=not args.quiet)
+    except KeyboardInterrupt:
+        print("\nrobustgait: interrupted; the gaits validated so far are stored: run the same command again to "
+              "continue", file=sys.stderr)
+        return 130
+    if args.json:
+        print(json.dumps(out, allow_nan=False))
+        return 0
+    for kind, s in out.items():
+        st, name, unit = s["study"], s["size"], s["unit"]
+        skipped = ", ".join(f"{n} {what.replace('_', ' ')}" for what, n in s["skipped_counts"].items())
+        print(f"{kind}: {s['n_validated']} of {st['unique_gaits']} unique gaits validated"
+              + (f" ({s['n_from_earlier_runs']} from an earlier run)" if s["n_from_earlier_runs"] else "")
+              + (f"; skipped: {skipped}" if skipped else "") + f"; {cfg.trials} trials each, seed {cfg.seed}, "
+              f"success = no fall in {cfg.steps_after} steps after the first switching event")
+        print(f"  {'gait':<26} {'study':<13} {'r*':>7} {'steps':>7}  {'success [95% CI]':<27} half fail at ({name})")
+        for r in s["gaits"]:
+            c = r["critical"]
+            crit = (f"{c['s50']:.4g} ± {c['s50_se'] or 0:.2g} {unit}" if c["s50"] is not None else f"— ({c['note']})")
+            sr = r["success"]
+            print(f"  {r['label']:<26} {r['status']:<13} {r['r_star']:>7.4f} {r['steps_taken']:>3}/{r['step_cap']:<3}  "
+                  f"{sr['k']}/{sr['n']} = {sr['rate']:.2f} [{sr['low']:.2f}, {sr['high']:.2f}]{'':<4} {crit}")
+        for sk in s["skipped"]:
+            print(f"  {sk['label']:<26} skipped: {sk['why']}")
+        for c in s["correlations"].values():
+            print(f"  {correlation_text(c)}")
+        print(f"  results: {summary_path(args.dir, kind)}")
+    return 0
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from robustgait.config import preset
+    from robustgait.report.study import write_study_report
+    from robustgait.study.run import create_study
+
+    config: Config = config_from(args, preset("demo"))
+    d = Path(args.dir)
+    t0 = time.perf_counter()
+    if not (d / "study.json").exists():
+        create_study(d, DEMO_ROBOT, config)
+        s = config.study
+        print(f"demo: a robustness study on the shipped exoskeleton ({s.iterations} iterations × {s.batch} gaits) "
+              f"in {d}", flush=True)
+    else:
+        print(f"demo: resuming the study in {d}", flush=True)
+    if not _run_interruptible(str(d), config.run, args):
+        return 130
+    print_summary(str(d), time.perf_counter() - t0)
+    print(write_study_report(d, config.report))
+    return 0
+
+
+def _run_flags(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--verbose", action="store_true", help="print IPOPT's iteration log of every gait")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    s = sub.add_parser("study", help="learn the most robust gait: the simulation-in-the-loop preference study")
+    ssub = s.add_subparsers(dest="study_command", required=True, parser_class=type(s))
+    r = command(ssub, "run", "start a study in a new directory and run it to its budget", _study_run,
+                {**STUDY, **RUN})
+    r.add_argument("dir", help="study directory (new or empty)")
+    r.add_argument("--robot", required=True, help=f"{ROBOT_HELP} with [action_space]")
+    _run_flags(r)
+    rs = command(ssub, "resume", "continue a stopped or killed study to its total budget", _study_resume, RUN)
+    rs.add_argument("dir")
+    _run_flags(rs)
+    st = ssub.add_parser("status", help="progress, best gait and every trial of a study")
+    st.add_argument("dir")
+    st.add_argument("--json", action="store_true", help="print one JSON object")
+    st.set_defaults(func=_study_status)
+    rp = command(ssub, "report", "write DIR/report/index.html (self-contained) and its figures", _study_report,
+                 {"--axes": "report.axes", "--video": "report.video"})
+    rp.add_argument("dir")
+    cp = command(ssub, "compare", "re-certify the best gaits of two studies with fresh seeds, side by side",
+                 _study_compare, {"--seeds": "compare.seeds", "--seed-base": "compare.seed_base",
+                                  "--samples": "compare.samples"})
+    cp.add_argument("dir_a")
+    cp.add_argument("dir_b")
+    cp.add_argument("--json", action="store_true")
+    va = command(ssub, "validate", "every unique gait of a study under the same disturbances: success rates and the "
+                 "Spearman correlation of r* and of steps taken with success", _study_validate,
+                 {"--trials": "validate.trials", "--seed": "validate.seed", "--disturbance": "validate.disturbance",
+                  "--steps-after": "validate.steps_after", "--workers": "validate.workers"})
+    va.add_argument("dir", help="study directory")
+    va.add_argument("--json", action="store_true", help="print one JSON object: the summary of each kind")
+    va.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    dm = command(sub, "demo", "the main job on shipped defaults: a small robustness study on exo + report", _demo,
+                 {"--workers": "run.workers"})
+    dm.add_argument("--dir", default=DEMO_DIRECTORY, help=f"study directory (default ./{DEMO_DIRECTORY})")

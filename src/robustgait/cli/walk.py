@@ -1,0 +1,47 @@
+"""``robustgait walk``: a gait walked in MuJoCo."""
+
+from __future__ import annotations
+
+import argparse
+
+from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
+from robustgait.cli.options import output_path
+
+SIM = {"--switching": "sim.switching", "--feedforward": "sim.feedforward"}
+
+
+def _walk(args: argparse.Namespace) -> int:
+    from robustgait.io.output import write_csv
+    from robustgait.poincare import canonical_reduced_events
+    from robustgait.sim import walk
+
+    config, robot, gait = inputs(args)
+    with about(args.gait):
+        result = walk(robot, gait, config.sim, video=args.video)
+    if args.log is not None:
+        xs = canonical_reduced_events(robot, gait, result.events, config.certify.frame)
+        write_csv(args.log, ["wx", "wy", "wz"], xs.tolist())
+    if args.json:
+        print(result.to_json())
+    else:
+        end = f"fell ({result.fall_reason}) at t = {result.time:.2f} s" if result.fell else "no fall"
+        print(f"{gait.robot} gait on {robot.name}: {result.steps_taken}/{result.max_steps} steps, {end}; "
+              f"mean forward speed {result.mean_speed:.3f} m/s; lowest base height "
+              f"{result.min_base_height:.3f} m; {result.switching} switching")
+        for what, out in (("video", args.video), ("reduced-state log", args.log)):
+            if out is not None:
+                print(f"{what}: {out}")
+    return 0
+
+
+def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    w = command(sub, "walk", "walk a gait in MuJoCo and report steps taken, falls and speed", _walk,
+                {"--steps": "sim.step_cap", **SIM, "--frame": "certify.frame"})
+    w.add_argument("gait", help=GAIT_HELP)
+    w.add_argument("--robot", required=True, help=ROBOT_HELP)
+    w.add_argument("--json", action="store_true", help="print one JSON object")
+    w.add_argument("--video", metavar="OUT.mp4", type=output_path("video"),
+                   help="render the walk with MuJoCo's offscreen renderer (.mp4 or .gif)")
+    w.add_argument("--log", metavar="OUT.csv", type=output_path("csv"),
+                   help="write the reduced state (base angular velocity in --frame, canonical stance) at every "
+                   "switching event, one row per step, for barrier-eval")

@@ -1,0 +1,97 @@
+"""Options of a certificate (:mod:`robustgait.certify`, :mod:`robustgait.estimators`, :mod:`robustgait.barrier`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Annotated, Literal
+
+from robustgait.config.base import Doc, FieldProblem, Float, Int, config
+
+Method = Literal["sequential", "uniform"]
+Barrier = Literal["ball", "paper"]
+MapKind = Literal["step", "stride"]
+Frame = Literal["heading", "world", "body"]
+Reconstruction = Literal["holonomic", "angular-only"]
+
+SEED_LIMIT = 2**63 - 1  # a seed fits a signed 64-bit integer (study storage)
+
+
+def verification_beta(beta: float, attempt: int) -> float:
+    """β_a = β / 2^a: the share of β spent on verification attempt a ≥ 1 of the sequential estimator (Σ_a β_a = β)."""
+    if attempt < 1:
+        raise ValueError(f"verification attempts count from 1, got {attempt}")
+    return beta * 0.5**attempt
+
+
+def verification_size(epsilon: float, beta: float, attempt: int) -> int:
+    """n_a = ⌈ln β_a / ln(1 − ε)⌉: the least batch with (1 − ε)^{n_a} ≤ β_a (:func:`verification_beta`)."""
+    n = math.log(verification_beta(beta, attempt)) / math.log1p(-epsilon)
+    return max(1, math.ceil(n - 1e-9))  # the slack absorbs rounding when n is an integer
+
+
+@config
+class SequentialConfig:
+    """Options of the sequential estimator (:mod:`robustgait.estimators`; defaults measured in
+    ``docs/certificate.md``)."""
+
+    epsilon: Annotated[Float, Doc("bound on the violating volume fraction of B(r*) to certify", gt=0.0,
+                                  lt=1.0)] = 0.02
+    budget: Annotated[Int, Doc("most map evaluations in all rounds", ge=1, le=10_000)] = 3000
+    first_round: Annotated[Int, Doc("round 1: uniform samples in B(r_max)", ge=1, le=10_000)] = 200
+    round_size: Annotated[Int, Doc("proposals per exploration round", ge=1, le=10_000)] = 50
+    explore: Annotated[Int, Doc("exploration samples before the first verification", ge=0, le=100_000)] = 600
+    explore_after_failure: Annotated[Int, Doc("exploration samples before each further verification", ge=0,
+                                              le=100_000)] = 200
+    local_fraction: Annotated[Float, Doc("share of local proposals (around the violating samples closest to x*)",
+                                         ge=0.0, le=1.0)] = 0.5
+    spread: Annotated[Float, Doc("σ of the local directions, u = (u_elite + σ g)/‖·‖", gt=0.0, le=10.0)] = 0.15
+    elites: Annotated[Int, Doc("violating samples closest to x* that local proposals start from", ge=1,
+                               le=1000)] = 8
+    min_depth: Annotated[Float, Doc("smallest relative depth 1 − d/r̂ of a local proposal (log-uniform depths)",
+                                    gt=0.0, lt=1.0)] = 1e-3
+
+
+@config
+class CertifyConfig:
+    """Options of a certificate: the estimator (``sequential``: rounds with a verified bound; ``uniform``: the
+    paper's N samples uniform in B(r_max)), the DTBF (barrier, α, r_max), the confidence 1 − β, the seed of the
+    perturbations (common random numbers: gaits certified with one seed meet the same perturbations), the map,
+    reduced state and reconstruction, and the fixed-point search."""
+
+    method: Annotated[Method, Doc(
+        "r* estimator: sequential (rounds inside B(r̂) until a fresh batch certifies the violating fraction ≤ "
+        "epsilon) or uniform (the paper's N samples in B(r_max))")] = "sequential"
+    n_samples: Annotated[Int, Doc("uniform: number of sampled perturbations N", ge=1, le=10_000)] = 200
+    r_max: Annotated[Float, Doc("radius of the sampled ball", unit="rad/s", gt=0.0, le=10.0)] = 2.0
+    alpha: Annotated[Float, Doc("DTBF decay rate α", gt=0.0, lt=1.0)] = 0.05
+    beta: Annotated[Float, Doc("1 − confidence of the violation bound", gt=0.0, lt=1.0)] = 0.05
+    seed: Annotated[Int, Doc("seed of the perturbations", ge=0, le=SEED_LIMIT)] = 0
+    barrier: Annotated[Barrier, Doc("ball: H = r² − ‖x − x*‖²; paper: the paper's literal H = r − ‖x − x*‖²")] = "ball"
+    map: Annotated[MapKind, Doc("step (one step, mirrored) or stride (two steps) return map")] = "step"
+    reconstruction: Annotated[Reconstruction, Doc("how a full state is rebuilt from a reduced one")] = "holonomic"
+    frame: Annotated[Frame, Doc("frame of the base angular velocity (heading: world frame without yaw)")] = "heading"
+    fp_tol: Annotated[Float, Doc("fixed point: stop when successive reduced states differ by less", unit="rad/s",
+                                 gt=0.0, le=1.0)] = 5e-3
+    fp_min_steps: Annotated[Int, Doc("fixed point: least steps before stopping (at most fp_max_steps)", ge=1,
+                                     le=1000)] = 10
+    fp_max_steps: Annotated[Int, Doc("fixed point: give up after this many steps", ge=1, le=1000)] = 100
+    sequential: SequentialConfig = dataclasses.field(default_factory=SequentialConfig)
+
+    def __post_init__(self) -> None:
+        seq = self.sequential
+        need = seq.first_round + verification_size(seq.epsilon, self.beta, 1)
+        if self.method == "sequential" and seq.budget < need:
+            raise FieldProblem("sequential.budget", f"{seq.budget} samples cannot hold the first round "
+                               f"({seq.first_round}) and one verification batch ({need - seq.first_round} for "
+                               f"epsilon = {seq.epsilon:g}, beta = {self.beta:g})")
+
+    @property
+    def min_steps(self) -> int:
+        """Least fixed-point steps in effect: fp_min_steps, or fp_max_steps if that is smaller."""
+        return min(self.fp_min_steps, self.fp_max_steps)
+
+    @property
+    def samples_planned(self) -> int:
+        """Most map evaluations of the estimator: N (uniform) or the budget (sequential)."""
+        return self.n_samples if self.method == "uniform" else self.sequential.budget

@@ -1,0 +1,109 @@
+"""Gait parameters (the four essential constraints) and the options of gait generation (HZD trajectory
+optimization, :mod:`robustgait.gaitgen`)."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Annotated, Literal
+
+from robustgait.config.base import Doc, FieldProblem, Float, Int, Str, config
+
+DomainGraph = Literal["flat", "multicontact"]
+Stance = Literal["left", "right"]
+
+# The step duration of each domain graph when none is given [s]: multi-contact gaits of 0.7 s solve but do not
+# walk on exo (the 0.14 s of rolling is too fast for the simulator's soft contacts; measured, docs/gaitgen.md),
+# 0.8–1.1 s do.
+DEFAULT_STEP_DURATION: dict[str, float] = {"flat": 0.7, "multicontact": 0.9}
+
+
+@config
+class GaitParams:
+    """The four essential constraints of a gait — step length (forward displacement of the base per step), step
+    duration, step width (lateral distance between the feet centres), swing-foot height (sole clearance at
+    mid-step, the maximum) — and, for multi-contact gaits, the fraction of the step spent rolling in double support.
+    The bounds are generic sanity bounds; whether a robot can walk a gait is decided by the gait generator (reach,
+    foot collision, IPOPT). ``step_duration`` None means the domain graph's default (:meth:`resolved`)."""
+
+    step_length: Annotated[Float, Doc("forward displacement of the base per step", unit="m", ge=0.0, le=1.5)] = 0.15
+    step_duration: Annotated[Float | None, Doc(
+        "duration of a step; not set: 0.7 s flat-foot, 0.9 s multi-contact", unit="s", ge=0.1, le=5.0)] = None
+    step_width: Annotated[Float, Doc("lateral distance between the feet centres", unit="m", ge=0.0, le=1.0)] = 0.25
+    step_height: Annotated[Float, Doc("swing-sole clearance at mid-step", unit="m", ge=0.005, le=0.5)] = 0.07
+    rolling_fraction: Annotated[Float, Doc("multi-contact: fraction of the step in rolling double support",
+                                           ge=0.05, le=0.6)] = 0.2
+
+    def resolved(self, domains: str) -> GaitParams:
+        """These parameters with the step duration set (the domain graph's default when it is not)."""
+        if self.step_duration is not None:
+            return self
+        return dataclasses.replace(self, step_duration=DEFAULT_STEP_DURATION[domains])
+
+    @property
+    def duration(self) -> float:
+        """The step duration of resolved parameters [s]."""
+        if self.step_duration is None:
+            raise ValueError("step_duration is not set: use GaitParams.resolved(domains)")
+        return self.step_duration
+
+    def to_dict(self) -> dict[str, float]:
+        """The five values (resolved parameters only: a gait file stores its actual step duration)."""
+        return {"step_length": self.step_length, "step_duration": self.duration, "step_width": self.step_width,
+                "step_height": self.step_height, "rolling_fraction": self.rolling_fraction}
+
+
+GAIT_PARAM_NAMES = tuple(f.name for f in dataclasses.fields(GaitParams))
+
+Pitch = Annotated[Float, Doc(unit="rad", ge=-1.5, le=1.5)]
+Velocity = Annotated[Float, Doc(unit="m/s", ge=-10.0, le=10.0)]
+
+
+@config
+class GenerationConfig:
+    """Options of the gait-generation problem (besides the :class:`GaitParams`). The gait-quality bounds a
+    passenger needs (pelvis roll/yaw/pitch, swing sole, joint speeds) are the robot spec's ``[gait_quality]``."""
+
+    domains: Annotated[DomainGraph, Doc(
+        "domain graph: flat (one domain, flat foot) or multicontact (single support, heel strike, rolling double "
+        "support, toe-off)")] = "flat"
+    nodes: Annotated[Int, Doc("collocation nodes of single support, odd (τ = ½ is a node)", ge=5, le=101)] = 17
+    ds_nodes: Annotated[Int, Doc("collocation nodes of double support (multi-contact)", ge=3, le=101)] = 17
+    stance: Annotated[Stance, Doc("stance leg the gait is written for")] = "right"
+    friction: Annotated[Float, Doc("μ of the friction pyramid (below the simulator's 1.0 for margin)", gt=0.0,
+                                   le=2.0)] = 0.6
+    torsional_friction: Annotated[Float, Doc("torsional friction coefficient μ_t", unit="m", ge=0.0, le=1.0)] = 0.02
+    min_normal_force: Annotated[Float, Doc("least normal force of a flat stance sole", unit="N", ge=0.0,
+                                           le=1e5)] = 50.0
+    cop_margin: Annotated[Float, Doc("centre of pressure margin inside the sole edges", unit="m", ge=0.0,
+                                     le=0.2)] = 0.02
+    impact_velocity: Annotated[tuple[Velocity, Velocity], Doc(
+        "[low, high] vertical velocity of the swing sole at the guard", unit="m/s")] = (-0.4, -0.05)
+    max_impact_tangential: Annotated[Float, Doc("bound on the swing sole's horizontal velocity at the guard",
+                                                unit="m/s", ge=0.0, le=10.0)] = 0.15
+    max_impact_angular: Annotated[Float, Doc("bound on each component of the swing sole's angular velocity at the "
+                                             "guard", unit="rad/s", ge=0.0, le=50.0)] = 0.5
+    flat_approach: Annotated[Float, Doc("every corner of the swing sole stays this fraction of the sole centre's "
+                                        "height above the ground (touchdown is not a corner grazing early)",
+                                        ge=0.0, le=1.0)] = 0.5
+    foot_gap: Annotated[Float, Doc("lateral clearance between the soles' edges", unit="m", ge=0.0, le=1.0)] = 0.02
+    heel_strike_pitch: Annotated[tuple[Pitch, Pitch], Doc(
+        "multi-contact: [min, max] toe-up pitch of the swing sole when its heel strikes", unit="rad")] = (0.2, 0.35)
+    toe_off_pitch: Annotated[tuple[Pitch, Pitch], Doc(
+        "multi-contact: [min, max] toe-down pitch of the stance sole at toe-off", unit="rad")] = (0.2, 0.6)
+    foot_flat_rate: Annotated[Float, Doc("multi-contact: bound on the front sole's pitch rate when it lands flat",
+                                         unit="rad/s", gt=0.0, le=50.0)] = 1.0
+    min_line_force: Annotated[Float, Doc("multi-contact: least normal force of each line contact", unit="N",
+                                         ge=0.0, le=1e5)] = 150.0
+    ds_free_joints: Annotated[tuple[Str, ...] | None, Doc(
+        "multi-contact: the 4 swing-leg joints that are not outputs in double support; not set: picked from the "
+        "joint axes")] = None
+    max_iter: Annotated[Int, Doc("IPOPT iteration limit", ge=1, le=100_000)] = 300
+    tol: Annotated[Float, Doc("IPOPT convergence tolerance", gt=0.0, le=1.0)] = 1e-8
+
+    def __post_init__(self) -> None:
+        if self.nodes % 2 == 0:
+            raise FieldProblem("nodes", f"must be odd (τ = ½ is a node), got {self.nodes}")
+        for name in ("impact_velocity", "heel_strike_pitch", "toe_off_pitch"):
+            lo, hi = getattr(self, name)
+            if lo > hi:
+                raise FieldProblem(name, f"must be [low, high] with low ≤ high, got [{lo:g}, {hi:g}]")

@@ -1,0 +1,120 @@
+"""Options of studies (:mod:`robustgait.study`), their learners (:mod:`robustgait.learn`), how they run, and the
+commands around them (compare, report)."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from typing import Annotated, Literal
+
+from robustgait.config.base import Bool, Doc, Float, Int, Str, config
+from robustgait.config.certify import SEED_LIMIT
+
+Metric = Literal["robustness", "stability"]
+LearnerName = Literal["polar", "eubo", "random"]
+Hyperparameters = Literal["fixed", "fit"]
+ExecutorName = Literal["local", "ray"]
+Lengthscale = Annotated[Float, Doc(gt=0.0, le=1e3)]
+
+
+@config
+class PreferenceModelConfig:
+    """Hyperparameters of the preference GP (POLAR: fixed)."""
+
+    lengthscale: Annotated[tuple[Lengthscale, ...], Doc(
+        "ℓ per action dimension (or one for all), as a fraction of each axis' range")] = (0.4,)
+    outputscale: Annotated[Float, Doc("prior variance s² of the utility, in units of the logistic likelihood's "
+                                      "scale", gt=0.0, le=1e6)] = 10.0
+    hyperparameters: Annotated[Hyperparameters, Doc(
+        "fixed (POLAR: the values above) or fit (BoTorch's priors, Laplace marginal likelihood, every iteration)")] = (
+        "fixed")
+    jitter: Annotated[Float, Doc("added to covariance diagonals before Cholesky (relative to s²)", gt=0.0,
+                                 le=1.0)] = 1e-6
+
+    def __post_init__(self) -> None:
+        if not self.lengthscale:
+            raise ValueError("lengthscale: needs at least one value")
+
+    def lengthscales(self, dim: int) -> tuple[float, ...]:
+        if len(self.lengthscale) == 1:
+            return self.lengthscale * dim
+        if len(self.lengthscale) != dim:
+            raise ValueError(f"{len(self.lengthscale)} lengthscales for a {dim}-dimensional action space")
+        return self.lengthscale
+
+
+@config
+class LearnerConfig:
+    """Options of the learners: Thompson sampling draws jointly over the whole grid when it has at most
+    ``max_candidates`` points, else over that many (visited + neighbourhood of the best + uniformly random)."""
+
+    model: PreferenceModelConfig = dataclasses.field(default_factory=PreferenceModelConfig)
+    max_candidates: Annotated[Int, Doc("largest grid drawn jointly by Thompson sampling", ge=2,
+                                       le=1_000_000)] = 1000
+    neighbourhood: Annotated[Int, Doc("grid steps around the current best kept in the candidate subset", ge=0,
+                                      le=100)] = 1
+    max_redraws: Annotated[Int, Doc("draws per batch slot before taking the best new point", ge=1,
+                                    le=10_000)] = 50
+    eubo_samples: Annotated[Int, Doc("quasi-MC samples of qEUBO", ge=1, le=100_000)] = 256
+
+
+@config
+class StudyConfig:
+    """A study: the preference oracle (``robustness``: r* among gaits that walk the step cap; ``stability``: steps
+    only), the learner, the budget (iterations × batch gaits), the learner's seed (iteration k is seeded from
+    (seed, k); the certificates' seed is ``certify.seed``), where it is stored."""
+
+    metric: Annotated[Metric, Doc("preference oracle: r* among gaits that walk the step cap, or steps only")] = (
+        "robustness")
+    learner: Annotated[LearnerName, Doc("polar (Thompson sampling), eubo (qEUBO) or random")] = "polar"
+    iterations: Annotated[Int, Doc("batches", ge=1, le=1000)] = 10
+    batch: Annotated[Int, Doc("gaits per batch (a batch is ranked: at least 2)", ge=2, le=100)] = 5
+    seed: Annotated[Int, Doc("seed of the learner", ge=0, le=SEED_LIMIT)] = 0
+    storage: Annotated[Str | None, Doc(
+        "SQLAlchemy URL of the Optuna database; not set: a SQLite file in the study directory")] = None
+    study_name: Annotated[Str, Doc("the Optuna study's name in its database")] = "robustgait"
+    learning: LearnerConfig = dataclasses.field(default_factory=LearnerConfig)
+
+    @property
+    def trials_planned(self) -> int:
+        return self.iterations * self.batch
+
+
+@config
+class RunConfig:
+    """How a study runs (not saved with it: a study may be resumed with other options)."""
+
+    executor: Annotated[ExecutorName, Doc(
+        'local worker processes or Ray actors (pip install "robustgait[ray]")')] = "local"
+    workers: Annotated[Int | None, Doc("parallel evaluations; not set: min(cores, 2)", ge=1, le=256)] = None
+    address: Annotated[Str | None, Doc("Ray cluster address, e.g. auto; not set: start a local Ray")] = None
+
+    @property
+    def n_workers(self) -> int:
+        return self.workers if self.workers is not None else default_workers()
+
+
+def default_workers() -> int:
+    """min(cores, 2): a study's evaluations in parallel when not set."""
+    return max(1, min(os.cpu_count() or 1, 2))
+
+
+@config
+class CompareConfig:
+    """``robustgait study compare``: the best gaits of two studies re-certified with fresh seeds."""
+
+    seeds: Annotated[Int, Doc("fresh certificate seeds", ge=1, le=1000)] = 5
+    seed_base: Annotated[Int, Doc("first fresh seed", ge=0, le=SEED_LIMIT)] = 1000
+    samples: Annotated[Int | None, Doc("uniform certificates: samples N; not set: study A's", ge=1,
+                                       le=10_000)] = None
+
+
+@config
+class ReportConfig:
+    """Figures: the study report and gait tiles."""
+
+    axes: Annotated[tuple[Str, Str], Doc("the two parameters of the posterior-mean map")] = (
+        "step_length", "step_duration")
+    video: Annotated[Bool, Doc("render a video of the best gait")] = True
+    tile_frames: Annotated[Int, Doc("gait tiles: frames of one step (each a 320 × 480 tile)", ge=2, le=60)] = 6
+    tile_warmup_steps: Annotated[Int, Doc("gait tiles: steps walked before the step shown", ge=0, le=1000)] = 4
