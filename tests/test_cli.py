@@ -140,3 +140,87 @@ def test_interrupt_and_closed_stdout_are_one_line_or_silent(monkeypatch, capsys)
     monkeypatch.setattr(info, "_robots", closed)
     assert main(["robots"]) == 1
     assert capsys.readouterr().err == ""
+
+
+# ---- every option comes from the configuration -------------------------------------------------------------
+# Options that are inputs or outputs of a command, not configuration: file paths, printing, the robot.
+IO_OPTIONS = {"-h", "--help", "--json", "--plot", "-o", "--output", "--video", "--log", "--config", "--override",
+              "--robot", "--certificate", "--warm-start", "--verbose", "--quiet", "--mirror", "--check", "--columns",
+              "--x-star", "--r", "--dir", "--preset"}
+
+
+def _subparsers(parser, path=()):  # type: ignore[no-untyped-def]
+    """(command path, parser) of every leaf command."""
+    import argparse
+
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        yield path, parser
+    for a in subs:
+        for name, p in a.choices.items():
+            yield from _subparsers(p, (*path, name))
+
+
+def test_every_option_default_and_choice_is_its_config_field():
+    import argparse
+
+    from robustgait.cli import build_parser
+    from robustgait.cli.options import default_text
+    from robustgait.config import Config, field_at
+
+    seen = 0
+    for path, parser in _subparsers(build_parser()):
+        for action in parser._actions:
+            flags = [o for o in action.option_strings if o not in IO_OPTIONS and not o.startswith("--no-")]
+            if not flags or isinstance(action, argparse._HelpAction):
+                continue
+            fields = getattr(action, "robustgait_paths", None)
+            assert fields, f"{' '.join(path)} {flags}: an option that is no config field"
+            info = field_at(Config, fields[0])
+            assert action.default is argparse.SUPPRESS, (path, flags)  # the value in force comes from the config
+            if info.choices:
+                assert tuple(action.choices) == info.choices, (path, flags)
+            if default_text(info):
+                assert f"default {default_text(info)}" in action.help, (path, flags, action.help)
+            for other in fields[1:]:  # one flag for several fields: they must agree on default and type
+                assert field_at(Config, other).default == info.default, (path, flags)
+            seen += 1
+    assert seen >= 60
+
+
+def test_no_literal_default_or_choice_in_the_cli():
+    """cli/ restates no default and no choice: add_argument calls take neither a literal default (other than the
+    'not given' markers) nor a literal tuple or list of choices."""
+    import ast
+    from pathlib import Path
+
+    import robustgait.cli
+
+    root = Path(robustgait.cli.__file__).parent
+    bad = []
+    for file in sorted(root.glob("*.py")):
+        for node in ast.walk(ast.parse(file.read_text())):
+            if not (isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "add_argument"):
+                continue
+            for kw in node.keywords:
+                v = kw.value
+                if kw.arg == "default" and isinstance(v, ast.Constant) and v.value not in (None, False):
+                    bad.append(f"{file.name}:{node.lineno} default={v.value!r}")
+                if kw.arg == "default" and isinstance(v, (ast.List, ast.Tuple)) and v.elts:
+                    bad.append(f"{file.name}:{node.lineno} default literal")
+                if kw.arg == "choices" and isinstance(v, (ast.List, ast.Tuple, ast.Set)):
+                    bad.append(f"{file.name}:{node.lineno} choices literal")
+    assert not bad, bad
+
+
+def test_library_and_cli_resolve_the_same_multicontact_gait():
+    """The multi-contact default step duration is the config's: `gait generate --domains multicontact` and the
+    library's GaitParams().resolved("multicontact") (what GaitGenerator.solve uses) agree."""
+    from robustgait.cli import build_parser
+    from robustgait.cli.options import config_from
+    from robustgait.config import GaitParams
+
+    argv = ["gait", "generate", "--robot", "exo", "--domains", "multicontact", "-o", "g.json"]
+    args = build_parser().parse_args(argv)
+    assert config_from(args).params == GaitParams().resolved("multicontact")
+    assert config_from(args).params.step_duration == 0.9

@@ -86,7 +86,7 @@ def _fell_rows(x1: FloatArray) -> NDArray[np.bool_]:
 
 # ---------------------------------------------------------------------------------------- equations
 def barrier_value(x: ArrayLike, x_star: ArrayLike, r: float, barrier: Barrier = "ball") -> FloatArray:
-    """Barrier H(x) = r² − ‖x − x*‖² (``ball``) or r − ‖x − x*‖² (``paper``)  (DESIGN §6).
+    """Barrier H(x) = r² − ‖x − x*‖² (``ball``) or r − ‖x − x*‖² (``paper``)  (docs/design.md §6).
 
     Shapes: x (..., n), x_star (n,) → (...). The paper writes H = r − ‖x − x*‖² while defining the
     safe set as the ball B_r; ``ball`` uses r² so that {H ≥ 0} = B_r = {‖x − x*‖ ≤ r} exactly.
@@ -149,7 +149,7 @@ def solve_radius(d: ArrayLike, p: ArrayLike, *, alpha: float, r_max: float,
                  barrier: Barrier = "ball") -> RadiusSolution:
     """Exact r* = sup{r ∈ [0, r_max] : every i with d_i ≤ r has α r² ≥ p_i² − (1 − α) d_i²}  (α r for ``paper``).
 
-    Shapes: d (N,), p (N,) (inf = fell). DESIGN §6; the paper's r* search, made exact for the sample.
+    Shapes: d (N,), p (N,) (inf = fell). docs/design.md §6; the paper's r* search, made exact for the sample.
     Sample i is violated exactly for r ∈ [d_i, s_i) with s_i = √max(c_i, 0) (``ball``) or max(c_i, 0)
     (``paper``) (see :func:`violation_end`): it is inactive below d_i and satisfied from s_i on, so the feasible
     set is [0, r_max] minus a union of half-open intervals — not an interval in general. Hence:
@@ -240,7 +240,7 @@ def sample_ball(n_samples: int, dim: int, radius: float, center: ArrayLike, rng:
 
 def invariant_radius(x0: ArrayLike, x1: ArrayLike, x_star: ArrayLike, *, alpha: float, r_max: float,
                      barrier: Barrier = "ball") -> float:
-    """r* for a sample set: the supremum of the feasible radii in [0, r_max] (DESIGN §6).
+    """r* for a sample set: the supremum of the feasible radii in [0, r_max] (docs/design.md §6).
 
     Shapes: x0 (N, n) samples, x1 (N, n) their images (a NaN row = fell), x_star (n,). With
     d_i = ‖x_i − x*‖ and p_i = ‖P(x_i) − x*‖ (∞ if fell), r is feasible iff every i with d_i ≤ r has

@@ -1,4 +1,4 @@
-"""Bézier polynomials for the virtual-constraint outputs (DESIGN §3).
+"""Bézier polynomials for the virtual-constraint outputs (docs/design.md §3).
 
 A gait's desired joint trajectory is y_d(τ) = Σ_k β_k b_{k,M}(τ), τ ∈ [0, 1], with the Bernstein basis
 b_{k,M}(τ) = C(M, k) τ^k (1 − τ)^(M−k) of degree M (M = 7 for 8 coefficients per output). Functions are

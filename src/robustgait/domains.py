@@ -1,4 +1,4 @@
-"""Domain graphs (DESIGN §4): the contact set of each continuous domain of a step, its guard, the transitions.
+"""Domain graphs (docs/design.md §4): the contact set of each continuous domain of a step, its guard, the transitions.
 
 One definition serves gait generation (which constraints hold in each domain, which impact ends it), the
 simulator (which event ends each domain) and the return map (where the Poincaré section is).

@@ -320,7 +320,7 @@ def impact_residual(M: Any, J: Any, v_minus: Any, v_plus: Any, impulse: Any) -> 
     M (nv, nv) the mass matrix at the impact configuration, J (k, nv) the Jacobian of the contact set that
     holds after the impact (the target domain's contacts), q̇⁻, q̇⁺ (nv,), Λ (k,) the impulses. The velocity
     coordinates of M, J and q̇ must agree (MuJoCo's or adam's mixed ones). Westervelt et al., *Feedback
-    Control of Dynamic Bipedal Robot Locomotion* (2007), §3.4; DESIGN §4.
+    Control of Dynamic Bipedal Robot Locomotion* (2007), §3.4; docs/design.md §4.
     """
     return M @ (v_plus - v_minus) - J.T @ impulse, J @ v_plus
 

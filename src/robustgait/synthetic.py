@@ -1,4 +1,4 @@
-"""Batched maps with known answers, to check an estimator of r* and its confidence statement (DESIGN §6).
+"""Batched maps with known answers, to check an estimator of r* and its confidence statement (docs/design.md §6).
 
 Both maps contract by ``gain`` < √(1 − α) around x* (such a sample never violates the DTBF condition, for
 either barrier) except on a violating set where the sample falls (NaN image: violated for every r ≥ d, for

@@ -30,6 +30,11 @@ def _robots(args: argparse.Namespace) -> int:
 def _config_show(args: argparse.Namespace) -> int:
     from robustgait.config import preset
 
+    if args.markdown:
+        from robustgait.config import Config
+
+        print(Config.markdown(), end="")
+        return 0
     config = config_from(args, preset(args.preset) if args.preset else None)
     header = ["robustgait configuration: read it back with --config FILE.toml (flags override it)."]
     if args.preset:
@@ -73,3 +78,4 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
                 _config_show, {"--domains": "generate.domains"})
     s.add_argument("--robot", help=f"{ROBOT_HELP}: add what its spec decides (comments)")
     s.add_argument("--preset", choices=sorted(PRESETS), help="start from a shipped preset (demo: robustgait demo's)")
+    s.add_argument("--markdown", action="store_true", help="every field as markdown tables (docs/configuration.md)")

@@ -37,6 +37,7 @@ from robustgait.config.base import (
     merge,
     nest,
     to_dict,
+    to_markdown,
     to_toml,
 )
 from robustgait.config.certify import (
@@ -101,6 +102,11 @@ class Config:
         """The configuration as TOML, each key with its help, unit and limits (``robustgait config show``)."""
         top = "".join(f"# {line}\n" for line in header.splitlines())
         return top + to_toml(self, unset=self.unset())
+
+    @classmethod
+    def markdown(cls) -> str:
+        """Every field as markdown tables, one per section (``docs/configuration.md``; ``config show --markdown``)."""
+        return to_markdown(cls, cls().unset())
 
 
 # Named configurations shipped with the package: overrides of the defaults, as a config file would hold them.
@@ -176,6 +182,7 @@ __all__ = [
     "nest",
     "preset",
     "to_dict",
+    "to_markdown",
     "to_toml",
     "verification_beta",
     "verification_size",

@@ -218,6 +218,22 @@ class FieldInfo:
     def adapter(self) -> TypeAdapter[Any]:
         return _adapter(self.annotation)
 
+    @property
+    def item_doc(self) -> Doc | None:
+        """The :class:`Doc` with limits of the items of a tuple field (``impact_velocity``: each in ±10 m/s)."""
+        if get_origin(self.bare) is not tuple:
+            return None
+        docs = [doc_of(strip(a)[1]) for a in get_args(self.bare) if a is not Ellipsis]
+        return next((d for d in docs if d is not None and d.bounded), None)
+
+    def limits_text(self) -> str:
+        """The field's limits (or its items'), without the unit: ``0 < x ≤ 10``, ``each -10 ≤ x ≤ 10``."""
+        d = self.doc if self.doc.bounded else self.item_doc
+        if d is None:
+            return ""
+        text = d.text().removesuffix(f" {d.unit}") if d.unit else d.text()
+        return text if d is self.doc else f"each {text}"
+
 
 @functools.cache
 def _adapter(tp: Any) -> TypeAdapter[Any]:
@@ -330,9 +346,9 @@ def toml_value(v: Any) -> str:
 def field_comment(info: FieldInfo) -> str:
     """``help [unit]; limits; choices`` of a field, for comments and --help."""
     d = info.doc
-    bits = [d.help + (f" [{d.unit}]" if d.unit and not d.bounded else "")]
-    if d.bounded:
-        bits.append(d.text())
+    bits = [d.help + (f" [{d.unit}]" if d.unit else "")]
+    if info.limits_text():
+        bits.append(info.limits_text())
     if info.choices:
         bits.append("one of " + ", ".join(str(c) for c in info.choices))
     return "; ".join(b for b in bits if b)
@@ -366,6 +382,26 @@ def to_toml(obj: Any, *, comments: bool = True, unset: Mapping[str, str] | None 
 
     section(obj, "")
     return "\n".join(lines) + "\n"
+
+
+def to_markdown(cls: Any, unset: Mapping[str, str] | None = None) -> str:
+    """One markdown table per section of a config class: key, default, unit, limits or choices, help."""
+    out: list[str] = []
+    section = None
+    for f in fields_of(cls):
+        head = f.path.rsplit(".", 1)[0] if "." in f.path else ""
+        if head != section:
+            section = head
+            out += ["", f"### `[{head}]`" if head else "### (top level)", "",
+                    "| key | default | unit | limits / choices | help |", "|---|---|---|---|---|"]
+        d = f.doc
+        if f.default is None:
+            default = (unset or {}).get(f.path, "not set")
+        else:
+            default = f"`{toml_value(f.default)}`"
+        limits = f.limits_text() or ", ".join(f"`{c}`" for c in f.choices)
+        out.append(f"| `{f.name}` | {default} | {d.unit} | {limits} | {d.help} |".replace("\n", " "))
+    return "\n".join(out).lstrip("\n") + "\n"
 
 
 # ------------------------------------------------------------------------------------------- error messages

@@ -1,4 +1,4 @@
-"""Physics check of an optimized gait, re-evaluated with MuJoCo's own model (DESIGN §4, run on every solve),
+"""Physics check of an optimized gait, re-evaluated with MuJoCo's own model (docs/design.md §4, run on every solve),
 in every domain of its graph and at every transition:
 
 * Dynamics residual at every node: r = M q̈ + c − B u − J_cᵀ λ in MuJoCo's coordinates, with M from

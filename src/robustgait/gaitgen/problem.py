@@ -1,4 +1,4 @@
-"""HZD gait optimization (DESIGN §4) over a domain graph (:mod:`robustgait.domains`): ``flat`` — one domain,
+"""HZD gait optimization (docs/design.md §4) over a domain graph (:mod:`robustgait.domains`): ``flat`` — one domain,
 stance sole flat, rigid impact, mirrored period — or ``multicontact`` — single support, heel strike, rolling
 double support on the stance toe and swing heel lines, foot-flat and toe-off, mirrored period.
 

@@ -1,4 +1,4 @@
-"""Learners (DESIGN §7): which gaits to evaluate next, from the comparisons so far.
+"""Learners (docs/design.md §7): which gaits to evaluate next, from the comparisons so far.
 
 A learner is a pure function of (action space, its config, the study seed, the history of earlier
 iterations, the iteration number): the proposals of iteration k are reproduced exactly from the stored

@@ -1,4 +1,4 @@
-"""The preference model (DESIGN §7): a Gaussian-process utility over the normalized action grid, learned
+"""The preference model (docs/design.md §7): a Gaussian-process utility over the normalized action grid, learned
 from pairwise comparisons with the logistic likelihood and the Laplace approximation of the posterior
 (BoTorch :class:`~botorch.models.PairwiseGP` with ``PairwiseLogitLikelihood``), and exact joint draws from
 that posterior for Thompson sampling.

@@ -1,4 +1,4 @@
-"""Preference oracles (DESIGN §7): who wins between two evaluated gaits, decided from simulation.
+"""Preference oracles (docs/design.md §7): who wins between two evaluated gaits, decided from simulation.
 
 An oracle maps an :class:`Outcome` to a score; of two gaits the one with the higher score is preferred,
 and equal scores give no comparison. The scores are a faithful scalarization of the rules, chosen so

@@ -1,4 +1,4 @@
-"""The action space of a study (DESIGN §7): a grid over gait parameters, from the robot spec's
+"""The action space of a study (docs/design.md §7): a grid over gait parameters, from the robot spec's
 ``[action_space]`` (bounds and grid step per :class:`~robustgait.gait.GaitParams` field).
 
 An action is a grid index ``i ∈ {0, …, size − 1}`` (row-major over the axes, in the order of

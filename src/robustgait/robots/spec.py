@@ -36,7 +36,7 @@ class FallCriteria:
 
 @dataclass(frozen=True)
 class GaitQuality:
-    """Bounds that a generated gait must satisfy at every node (DESIGN §2, §4): what an exoskeleton's
+    """Bounds that a generated gait must satisfy at every node (docs/design.md §2, §4): what an exoskeleton's
     passenger needs besides the essential constraints. Angles of the pelvis are roll-pitch-yaw (ZYX)
     relative to the stance sole's frame; heights are above the stance sole.
 

@@ -1,4 +1,4 @@
-"""Tracking controller (DESIGN §5): joint PD on the Bézier outputs, optionally + feedforward torque.
+"""Tracking controller (docs/design.md §5): joint PD on the Bézier outputs, optionally + feedforward torque.
 
 The robot's actuators are affine servos u = kp (c − q) − kd q̇ (see :mod:`robustgait.robots.spec`). With
 the control c chosen as
@@ -26,7 +26,7 @@ def desired_outputs(gait: Gait, tau: NDArray[np.float64], domain: int = 0
     """y_d and dy_d/dt of domain ``domain`` of a gait at phases τ (K,) of that domain: (K, m) each.
 
     Past τ = 1 the outputs continue along their tangent at τ = 1, y_d(τ) = y_d(1) + ẏ_d(1) (τ − 1) T, so a
-    swing foot that has not touched down yet keeps descending at its landing velocity (DESIGN §4:
+    swing foot that has not touched down yet keeps descending at its landing velocity (docs/design.md §4:
     touchdown margin) instead of hovering.
     """
     dom = gait.domains[domain]

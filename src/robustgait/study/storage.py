@@ -1,4 +1,4 @@
-"""A study's database: an Optuna study in an RDB storage (DESIGN §7) — a SQLite file in the study
+"""A study's database: an Optuna study in an RDB storage (docs/design.md §7) — a SQLite file in the study
 directory by default, any SQLAlchemy URL otherwise — so Optuna's tools (``optuna-dashboard``, plots) open
 our studies.
 

@@ -1,0 +1,185 @@
+"""The configuration (robustgait.config): every field documented and bounded, one-line errors from pydantic's error
+objects, the TOML of ``config show`` round-tripping through ``--config``, presets, and what depends on another
+choice resolved in the config."""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from typing import Any
+
+import pytest
+
+from robustgait.cli import main
+from robustgait.config import (
+    DEFAULT_STEP_DURATION,
+    CertifyConfig,
+    Config,
+    ConfigError,
+    GaitParams,
+    SequentialConfig,
+    SimConfig,
+    field_at,
+    fields_of,
+    from_dict,
+    preset,
+    to_dict,
+    with_overrides,
+)
+from tests.conftest import EXO_GAIT
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+def test_every_field_has_help_a_default_and_limits():
+    fields = list(fields_of(Config))
+    assert len(fields) >= 90
+    for f in fields:
+        assert f.doc.help, f.path  # one line of help
+        assert f.default is not dataclasses.MISSING, f.path
+        if f.scalar in (int, float) and not f.choices:
+            assert f.doc.bounded, f"{f.path}: a number without limits"
+        if f.scalar in (int, float) and f.default is not None and not f.choices:
+            assert f.doc.contains(f.default), f"{f.path}: default {f.default} outside {f.doc.text()}"
+    assert field_at(Config, "certify.sequential.epsilon").doc.text() == "0 < x < 1"
+    assert field_at(Config, "certify.method").choices == ("sequential", "uniform")
+
+
+def test_errors_name_the_field_and_the_limit():
+    cases: list[tuple[Any, str]] = [
+        (lambda: CertifyConfig(alpha=2), "CertifyConfig.alpha: must satisfy 0 < x < 1 (got 2)"),
+        (lambda: CertifyConfig(alpha="0.1"), "CertifyConfig.alpha: expected a number, got a string ('0.1'): a quoted "
+                                             "number is text, remove the quotes"),
+        (lambda: CertifyConfig(n_samples=True), "CertifyConfig.n_samples: expected an integer, got a boolean (true)"),
+        (lambda: CertifyConfig(r_max=float("nan")), "CertifyConfig.r_max: must be a finite number (got nan)"),
+        (lambda: CertifyConfig(frame="north"), "CertifyConfig.frame: must be one of 'heading', 'world', 'body' "
+                                               "(got 'north')"),
+        (lambda: CertifyConfig(sequential={"budget": 0}), "CertifyConfig.sequential.budget: must satisfy 1 ≤ x ≤ "
+                                                          "10000 (got 0)"),
+        (lambda: SimConfig(chunk=3), "SimConfig.chunk: unknown key (known: switching, min_switch_tau"),
+        (lambda: CertifyConfig(sequential=SequentialConfig(budget=300)),
+         "CertifyConfig.sequential.budget: 300 samples cannot hold the first round (200) and one verification batch "
+         "(183 for epsilon = 0.02, beta = 0.05)"),
+    ]
+    for make, message in cases:
+        with pytest.raises(ConfigError) as err:
+            make()
+        assert str(err.value).startswith(message), str(err.value)
+        assert "\n" not in str(err.value)
+    with pytest.raises(ConfigError, match=r"c.toml: certify.alpha: must satisfy 0 < x < 1 \(got 2\) \(and 1 more "
+                       r"problem\)"):
+        from_dict(Config, {"certify": {"alpha": 2, "beta": 7}}, "c.toml", "toml")
+    with pytest.raises(ConfigError, match=r"c.toml: sim: expected a table, got an array \(1 item\)"):
+        from_dict(Config, {"sim": [1]}, "c.toml", "toml")
+
+
+def test_replace_validates():
+    cfg = CertifyConfig()
+    assert dataclasses.replace(cfg, alpha=0.1).alpha == 0.1
+    with pytest.raises(ConfigError, match="alpha"):
+        dataclasses.replace(cfg, alpha=1.0)
+
+
+def test_the_step_duration_depends_on_the_domain_graph_in_the_config():
+    assert GaitParams().step_duration is None
+    for domains, t in DEFAULT_STEP_DURATION.items():
+        cfg = with_overrides(Config(), {"generate": {"domains": domains}})
+        assert cfg.params.step_duration == t == GaitParams().resolved(domains).step_duration
+    assert with_overrides(Config(), {"gait": {"step_duration": 1.0}, "generate": {"domains": "multicontact"}}) \
+        .params.step_duration == 1.0
+
+
+def test_presets_are_overrides_of_the_defaults():
+    demo = preset("demo")
+    assert (demo.study.iterations, demo.study.batch, demo.run.workers) == (3, 4, 2)
+    assert demo.certify.sequential.epsilon == 0.05 and demo.certify.alpha == Config().certify.alpha
+    with pytest.raises(ConfigError, match="unknown preset"):
+        preset("huge")
+
+
+def _show(capsys: pytest.CaptureFixture[str], *argv: str) -> str:
+    assert main(["config", "show", *argv]) == 0
+    return capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv", [(), ("--domains", "multicontact"), ("--preset", "demo"), ("--robot", "exo"),
+                                  ("--override", "certify.sequential.spread=0.3", "--override", "run.workers=3")])
+def test_config_show_round_trips_through_config(tmp_path, capsys, argv):
+    text = _show(capsys, *argv)
+    raw = tomllib.loads(text)
+    expected = from_dict(Config, raw, "shown", "toml")
+    path = tmp_path / "c.toml"
+    path.write_text(text)
+    assert tomllib.loads(_show(capsys, "--config", str(path))) == raw  # show → --config → show: a fixed point
+    from robustgait.cli import build_parser
+    from robustgait.cli.options import config_from
+
+    for cmd in (["certify", str(EXO_GAIT), "--robot", "exo"], ["walk", str(EXO_GAIT), "--robot", "exo"],
+                ["study", "run", "d", "--robot", "exo"], ["gait", "generate", "--robot", "exo", "-o", "g.json"]):
+        args = build_parser().parse_args([*cmd, "--config", str(path)])
+        assert config_from(args) == expected, cmd
+
+
+def test_config_show_documents_every_field(capsys):
+    text = _show(capsys, "--robot", "exo")
+    for f in fields_of(Config):
+        assert f"{f.name} = " in text and f.doc.help.split(";")[0] in text, f.path
+    assert "# step_duration = ...  (not set: 0.7 s, the default of flat gaits)" in text
+    assert "robot exo" in text and "action space (studies)" in text
+
+
+def test_flags_override_the_file_and_the_overrides(tmp_path, capsys):
+    from robustgait.cli import build_parser
+    from robustgait.cli.options import config_from
+
+    path = tmp_path / "c.toml"
+    path.write_text("[certify]\nn_samples = 10\nalpha = 0.2\n[certify.sequential]\nspread = 0.3\n")
+    args = build_parser().parse_args(["certify", str(EXO_GAIT), "--robot", "exo", "--config", str(path), "--samples",
+                                      "12", "--override", "certify.alpha=0.3"])
+    cfg = config_from(args)
+    assert (cfg.certify.n_samples, cfg.certify.alpha, cfg.certify.sequential.spread) == (12, 0.3, 0.3)
+    assert to_dict(cfg)["sim"] == to_dict(Config())["sim"]  # what the file does not set keeps its default
+
+
+@pytest.mark.parametrize("text, message", [
+    ("[certify]\nalpah = 0.1\n", "certify.alpah: unknown key (known: method, n_samples, r_max, alpha"),
+    ("[cerify]\nalpha = 0.1\n", "cerify: unknown key (known: gait, generate, sim, certify, validate"),
+    ('[certify]\nalpha = "0.1"\n', "certify.alpha: expected a number, got a string ('0.1'): a quoted number is text"),
+    ("[certify]\nn_samples = 1.5\n", "certify.n_samples: expected an integer, got a number (1.5)"),
+    ("[certify]\nalpha = 1.5\n", "certify.alpha: must satisfy 0 < x < 1 (got 1.5)"),
+    ("[sim]\nstep_cap = 0\n", "sim.step_cap: must satisfy 1 ≤ x ≤ 1000 (got 0)"),
+    ('[certify]\nmethod = "grid"\n', "certify.method: must be one of 'sequential', 'uniform' (got 'grid')"),
+    ("[validate]\npush_phase = [0.5]\n", "validate.push_phase: must have exactly 2 items (got 1)"),
+    ("[certify\n", "malformed TOML"),
+])
+def test_bad_config_file_is_one_line_exit_2(tmp_path, capsys, text, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    out_json = tmp_path / "c.json"
+    code = main(["certify", str(EXO_GAIT), "--robot", "exo", "--config", str(path), "-o", str(out_json)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and not out_json.exists()
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"robustgait: error: {path}: {message}"), lines
+
+
+def test_bad_overrides_are_one_line(capsys):
+    for argv, message in ((["--override", "certify.alpha"], "expected KEY=VALUE"),
+                          (["--override", "certify.nope=1"], "certify.nope: unknown setting"),
+                          (["--override", "certify.alpha=3"], "--override certify.alpha=3: certify.alpha: must "
+                                                              "satisfy 0 < x < 1 (got 3.0)")):
+        assert main(["config", "show", *argv]) == 2
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1 and message in err, err
+    assert main(["config", "show", "--config", "c.yaml"]) == 2
+    assert "expected .toml" in capsys.readouterr().err
+
+
+def test_the_configuration_page_lists_every_field():
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "configuration.md").read_text()
+    assert Config.markdown() in page, "docs/configuration.md is stale: robustgait config show --markdown"
