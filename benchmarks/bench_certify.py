@@ -82,7 +82,7 @@ class RawRollout:
         self.pool = rollout.Rollout(nthread=sim.threads)
         with ReturnMap(robot, gait, CertifyConfig(), sim) as pmap:
             fp = pmap.find_fixed_point()
-            qpos, qvel = pmap.reconstruct(sample_ball(n, 3, 0.05, fp.x_star, np.random.default_rng(0)))
+            qpos, qvel = pmap.reconstruct(sample_ball(n, 3, 0.05, fp.omega, np.random.default_rng(0)))
             self.init = pmap.engine.full_states(qpos, qvel)
         self.ctrl = np.zeros((n, nstep, robot.model.nu))
         self.datas = [robot.new_data() for _ in range(sim.threads)]
@@ -222,7 +222,7 @@ def deterministic_json(gc: GaitCertificate) -> str:
 def row(gc: GaitCertificate) -> str:
     c, fp, s = gc.certificate, gc.fixed_point, gc.seconds
     assert c is not None and fp is not None and gc.map_residual is not None
-    x = ", ".join(f"{v:.4f}" for v in fp.x_star)
+    x = ", ".join(f"{v:.4f}" for v in fp.omega)
     return (f"{gc.config.map:6s} {gc.config.reconstruction:12s} r* {c.r_star:.4f}{'' if c.attained else ' (sup)'}  "
             f"x* [{x}]  fp residual {fp.residual:.2e} after {fp.steps:3d} steps  map residual {gc.map_residual:.2e}  "
             f"fell {int(c.fell.sum()):3d}  inside {c.n_inside:3d}  fixed point {s['fixed_point']:.2f} s  "
@@ -254,7 +254,7 @@ def cmd_speed(args: argparse.Namespace) -> None:
     assert first is not None and runs[0].fixed_point is not None
     with ReturnMap(robot, gait, cfg, sim) as pmap, rollout.Rollout(nthread=threads) as pool:
         fp = pmap.find_fixed_point()
-        assert np.array_equal(fp.x_star, runs[0].fixed_point.x_star)
+        assert np.array_equal(fp.omega, runs[0].fixed_point.omega)
         qpos, qvel = pmap.reconstruct(np.asarray(first.samples))
         init = pmap.engine.full_states(qpos, qvel)
         nstep = int(np.ceil(runs[0].physics_steps / n))

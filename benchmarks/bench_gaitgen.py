@@ -79,7 +79,7 @@ def walk_figures(robot: Robot, gait: Gait, samples: int) -> dict[str, object]:
     if w.steps_taken == 50:
         c = certify_gait(robot, gait, CertifyConfig(n_samples=samples, method="uniform"))
         if c.fixed_point is not None:
-            out["x_star"] = float(np.linalg.norm(c.fixed_point.x_star))
+            out["x_star"] = float(np.linalg.norm(c.fixed_point.omega))
         if c.ok:
             out["r_star"] = c.r_star
         else:

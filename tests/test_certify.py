@@ -115,7 +115,7 @@ def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
 
     def falls_at_x_star(self, xbar, progress=None):
         out = real_call(self, xbar, progress)
-        if self.fixed_point is not None and np.allclose(xbar, self.fixed_point.x_star):
+        if self.fixed_point is not None and np.allclose(xbar, self.reduced.x_star):
             out[:] = np.nan
         return out
 
@@ -199,8 +199,13 @@ def test_cli_certify_gait_failure_is_a_result(capsys, tmp_path, extra, status, m
 
 
 @pytest.mark.parametrize("extra, message", [
-    (["--r-max", "0"], "argument --r-max: must satisfy 0 < x ≤ 10 rad/s (got 0.0)"),
+    (["--r-max", "0"], "argument --r-max: must satisfy 0 < x ≤ 10000 (got 0.0)"),
     (["--r-max", "-2"], "--r-max"), (["--alpha", "1.5"], "--alpha"),
+    (["--r-max", "50"], "argument --r-max: must satisfy 0 < x ≤ 10 rad/s when certifying omega (got 50)"),
+    (["--state", "momentum"], "argument --state: must be one of 'omega', 'centroidal', 'velocity' (got 'momentum')"),
+    (["--set", "box"], "argument --set: must be one of 'ball', 'ellipsoid' (got 'box')"),
+    (["--horizon", "0"], "argument --horizon: must satisfy 1 ≤ x ≤ 10 (got 0)"),
+    (["--disturbance", "kick"], "argument --disturbance: must be one of 'state', 'push' (got 'kick')"),
     (["--alpha", "0"], "--alpha"), (["--samples", "0"], "--samples"), (["--epsilon", "0"], "--epsilon"),
     (["--beta", "1"], "--beta"), (["--budget", "0"], "--budget"),
     (["--method", "grid"], "argument --method: must be one of 'sequential', 'uniform' (got 'grid')"),
@@ -250,5 +255,76 @@ PINNED = {("exo", "uniform"): 0.48816619978446785, ("exo", "sequential"): 0.3544
 def test_stored_gaits_keep_their_r_star_for_seed_0(request, name, method):
     robot = request.getfixturevalue("exo")
     gait = request.getfixturevalue("exo_gait" if name == "exo" else "exo_mc_gait")
-    gc = certify_gait(robot, gait, CertifyConfig(method=method, seed=0))
+    # the paper's certificate, named explicitly: the pins hold whatever the defaults become
+    gc = certify_gait(robot, gait, CertifyConfig(method=method, seed=0, state="omega", set="ball", horizon=1))
     assert gc.ok and gc.r_star == pytest.approx(PINNED[(name, method)], abs=1e-6)
+
+
+# ---- reduced states, shaped sets, horizons, pushes -----------------------------------------------------------
+@pytest.mark.parametrize("state, dim", [("centroidal", 6), ("velocity", 12)])
+def test_energy_state_certificate(exo, exo_gait, state, dim):
+    gc = certify_gait(exo, exo_gait, uniform(state=state, n_samples=12, seed=1))
+    c, co = gc.certificate, gc.coordinates
+    assert gc.ok and c.samples.shape == (12, dim) and co.space == state and co.unit == "√J"
+    assert gc.energy == pytest.approx(c.r_star**2 / 2)  # a ball of the energy metric: E* = r*²/2
+    assert c.r_max == 10.0  # r_max unset: the energy states' default
+    res = json.loads(json.dumps(gc.to_dict(), allow_nan=False))
+    assert res["state"] == state and res["unit"] == "√J" and res["energy"] == pytest.approx(gc.energy)
+    t = np.array(res["coordinates"]["transform"])
+    np.testing.assert_allclose(t @ np.array(res["coordinates"]["x_bar_star"]), res["x_star"], atol=1e-9)
+    assert "rad/s" not in gc.statement()
+
+
+def test_ellipsoid_certificate_with_its_ball(exo, exo_gait, tmp_path):
+    from robustgait.config import EllipsoidConfig
+
+    cfg = uniform(set="ellipsoid", n_samples=16, seed=2, ellipsoid=EllipsoidConfig(fit_samples=12, compare_ball=True))
+    gc = certify_gait(exo, exo_gait, cfg)
+    sh = gc.coordinates.shape
+    assert gc.ok and sh.fallback == "" and sh.fit.used == 12 and sh.fit.spectral_radius < 1
+    assert np.all(np.linalg.eigvalsh(sh.s) > 0) and np.linalg.det(sh.s) == pytest.approx(1.0)
+    assert gc.ball is not None and gc.ball.n_samples == 16
+    assert gc.volume_ratio == pytest.approx((gc.r_star / gc.ball.r_star) ** 3)
+    res = json.loads(json.dumps(gc.to_dict(), allow_nan=False))
+    assert res["set"] == "ellipsoid" and res["ball"]["volume_ratio"] == pytest.approx(gc.volume_ratio)
+    assert len(res["coordinates"]["shape"]["S"]) == 3
+    # the figure draws both sets (in the ellipsoid's axes)
+    out = plot_certificate(gc.certificate, tmp_path / "e.png", coordinates=gc.coordinates, ball=gc.ball)
+    assert out.stat().st_size > 10_000
+
+
+def test_horizon_certificate_reports_its_excursion(exo, exo_gait):
+    gc = certify_gait(exo, exo_gait, uniform(horizon=2, n_samples=8, seed=1))
+    assert gc.ok and len(gc.excursion) == 2 and gc.to_dict()["horizon"] == 2
+    # the same samples (one seed): a sample that falls within one step falls within two, and costs more physics
+    one = certify_gait(exo, exo_gait, uniform(n_samples=8, seed=1))
+    np.testing.assert_array_equal(gc.certificate.samples, one.certificate.samples)
+    assert np.all(gc.certificate.fell[one.certificate.fell]) and gc.physics_steps > one.physics_steps
+
+
+def test_push_certificate(exo, exo_gait):
+    gc = certify_gait(exo, exo_gait, uniform(disturbance="push", n_samples=12, seed=1, push_steps=1))
+    c = gc.certificate
+    assert gc.ok and c.samples.shape == (12, 2) and c.r_max == 100.0 and gc.config.unit == "N s"
+    # the image of a push is the origin (absorbed) or a fall: J* is the smallest impulse that fell (or r_max)
+    d = np.linalg.norm(c.samples, axis=1)
+    assert np.all(np.isnan(c.images[c.fell])) and np.all(c.images[~c.fell] == 0)
+    assert c.r_star == pytest.approx(d[c.fell].min() if c.fell.any() else 100.0)
+    assert "N s" in gc.statement() and "pushes" in gc.statement()
+    assert gc.to_dict()["push"]["duration"] == 0.1
+
+
+def test_cli_validate_refuses_a_certificate_of_another_state(capsys, tmp_path):
+    cert = tmp_path / "c.json"
+    code, _, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--state", "centroidal", "--method",
+                      "uniform", "--samples", "8", "-o", str(cert), "--json")
+    assert code == 0 and json.loads(cert.read_text())["state"] == "centroidal"
+    code, out, err = _cli(capsys, "validate", str(EXO_GAIT), "--robot", "exo", "--certificate", str(cert),
+                          "--state", "velocity", "--trials", "2", "--steps-after", "1")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert "the certificate is of state centroidal, not the state velocity" in err
+    # without --state the certificate's own state is checked: in its coordinates, with the energy it certifies
+    code, out, _ = _cli(capsys, "validate", str(EXO_GAIT), "--robot", "exo", "--certificate", str(cert),
+                        "--trials", "4", "--steps-after", "1", "--json")
+    res = json.loads(out)
+    assert code == 0 and res["certificate"]["space"] == "centroidal" and res["kinds"]["push"]["energy_star"] > 0

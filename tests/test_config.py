@@ -145,7 +145,7 @@ def test_flags_override_the_file_and_the_overrides(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("text, message", [
-    ("[certify]\nalpah = 0.1\n", "certify.alpah: unknown key (known: method, n_samples, r_max, alpha"),
+    ("[certify]\nalpah = 0.1\n", "certify.alpah: unknown key (known: method, state, set, horizon, disturbance,"),
     ("[cerify]\nalpha = 0.1\n", "cerify: unknown key (known: gait, generate, sim, certify, validate"),
     ('[certify]\nalpha = "0.1"\n', "certify.alpha: expected a number, got a string ('0.1'): a quoted number is text"),
     ("[certify]\nn_samples = 1.5\n", "certify.n_samples: expected an integer, got a number (1.5)"),

@@ -20,7 +20,7 @@ from robustgait.estimators import (
     verification_bound,
     verification_size,
 )
-from robustgait.synthetic import BandMap, ConeMap
+from robustgait.synthetic import BandMap, ConeMap, PushThresholdMap
 
 X_STAR = np.array([0.4, 0.2, 0.3])
 
@@ -162,6 +162,59 @@ def test_coverage_of_the_sequential_statement(a: float, c: float) -> None:
     if c == 0.0:  # the check has power: a bound that ignores the data-dependent choice of r̂ fails it
         naive = [_naive_rule(P, seed, eps, beta, 600) for seed in range(100)]
         assert sum(r is not None and P.violating_fraction(r) > eps for r in naive) > 50
+
+
+def test_band_map_has_the_violating_fraction_it_claims_in_12_d() -> None:
+    P = BandMap(np.zeros(12), a=0.05, c=0.1)
+    x = sample_ball(40_000, 12, 1.0, np.zeros(12), np.random.default_rng(0))
+    fell = np.isnan(P(x)[:, 0])
+    assert fell.mean() == pytest.approx(P.violating_fraction(1.0), abs=0.006)  # 0.05 + 0.1·12/13 ≈ 0.142
+
+
+@pytest.mark.parametrize(("a", "c"), [(0.105, 0.0), (0.05, 0.2)])
+def test_coverage_of_the_sequential_statement_in_12_d(a: float, c: float) -> None:
+    # the statement does not depend on the dimension: the same check as in 3-D on a 12-D map (the velocity state's
+    # dimension on exo), a fraction 0.05 + 0.185 r growing past ε = 0.1 beyond r ≈ 0.27
+    eps, beta, runs = 0.1, 0.05, 200
+    x_star = np.linspace(-0.5, 0.5, 12)
+    P = BandMap(x_star, a=a, c=c)
+    wrong = issued = 0
+    for seed in range(runs):
+        cert = certify_map_sequential(P, x_star, seq(seed, beta, epsilon=eps, budget=600, first_round=50,
+                                                     round_size=50, explore=100, explore_after_failure=50))
+        issued += cert.violation_bound < 1.0
+        wrong += cert.violation_bound < 1.0 and P.violating_fraction(cert.r_star) > eps
+    assert wrong <= 20  # as in 3-D: > 20 of 200 would reject "failure rate ≤ β" at level 0.001
+    if c > 0.0:  # certificates are issued (25 of 200 here: a verification batch of 35 passes where the fraction is
+        assert issued >= 10  # small), so the check is not passed by refusing
+
+
+def test_push_threshold_map_truth() -> None:
+    P = PushThresholdMap(j0=20.0, a=0.3, b=0.4)
+    assert P.r_star == pytest.approx(8.4)
+    assert P.violating_fraction(P.r_star) == 0.0 and P.violating_fraction(12.0) > 0.0
+    j = sample_ball(50_000, 2, 20.0, np.zeros(2), np.random.default_rng(1))
+    fell = np.isnan(P(j)[:, 0])
+    # the hashed phases behave as uniform draws: the quadrature's fraction is the sampled one
+    assert fell.mean() == pytest.approx(P.violating_fraction(20.0), abs=0.006)
+
+
+def test_coverage_of_the_push_certificate() -> None:
+    """J*: pushes uniform in the impulse disk, success = the origin, failure = NaN. The statement "at most ε of the
+    disk B(J*) fails" holds in ≥ 1 − β of the runs, and J* is close to the true threshold."""
+    eps, beta, runs = 0.05, 0.05, 100
+    P = PushThresholdMap(j0=20.0, a=0.3, b=0.4)
+    wrong, js = 0, []
+    for seed in range(runs):
+        cert = certify_map_sequential(P, np.zeros(2), CertifyConfig(
+            seed=seed, beta=beta, r_max=60.0, disturbance="push",
+            sequential=SequentialConfig(epsilon=eps, budget=800, first_round=100, explore=200, round_size=50,
+                                        explore_after_failure=100)))
+        if cert.violation_bound < 1.0:
+            js.append(cert.r_star)
+            wrong += P.violating_fraction(cert.r_star) > eps
+    assert len(js) > runs // 2 and wrong <= 12  # 100 runs at a failure rate ≤ β: > 12 has probability < 0.002
+    assert P.r_star <= np.median(js) <= 1.25 * P.r_star
 
 
 # ------------------------------------------------------------------------------ common random numbers

@@ -247,7 +247,7 @@ def test_npz_header_is_checked_before_decompressing(tmp_path):
     (["walk", "{g}", "--robot", "exo", "--steps", "1000000000"], "argument --steps: must satisfy 1 ≤ x ≤ 1000"),
     (["certify", "{g}", "--robot", "exo", "--samples", "1000000000"], "argument --samples: must satisfy"),
     (["certify", "{g}", "--robot", "exo", "--fp-max-steps", "1000000000"], "argument --fp-max-steps: must"),
-    (["certify", "{g}", "--robot", "exo", "--r-max", "1e6"], "argument --r-max: must satisfy 0 < x ≤ 10 rad/s"),
+    (["certify", "{g}", "--robot", "exo", "--r-max", "1e6"], "argument --r-max: must satisfy 0 < x ≤ 10000"),
     (["certify", "{g}", "--robot", "exo", "--r-max", "nan"], "argument --r-max: must be a finite number (got nan)"),
     (["certify", "{g}", "--robot", "exo", "--plot", "{t}/c.txt"], "unknown plot format '.txt'"),
     (["walk", "{g}", "--robot", "exo", "--video", "{t}/v.txt"], "unknown video format '.txt'"),

@@ -92,6 +92,21 @@ def test_a_study_written_before_the_config_tree_still_loads(tmp_path):
     assert setup.robot == "exo" and c.study.metric == "stability" and c.study.iterations == 4
     assert c.sim.step_cap == 30 and c.sim.switching == "time" and c.certify.n_samples == 50 and c.certify.seed == 5
     assert c.generate.domains == "multicontact"
+    # format 1 and 2 certified the base angular velocity in a ball, one step: so do they when resumed
+    assert (c.certify.state, c.certify.set, c.certify.horizon, c.certify.disturbance) == ("omega", "ball", 1, "state")
+
+
+def test_a_format_2_study_keeps_its_certificate_whatever_the_defaults(tmp_path):
+    raw = {"format_version": 2, "robot": "exo", "config": {"certify": {"method": "uniform", "n_samples": 40}}}
+    (tmp_path / "study.json").write_text(json.dumps(raw))
+    c = load_config(tmp_path).config.certify
+    assert (c.state, c.set, c.horizon, c.n_samples) == ("omega", "ball", 1, 40)
+
+
+def test_push_metric_certifies_pushes():
+    c = Config(study=StudyConfig(metric="push"))
+    assert c.study_certify.disturbance == "push" and c.study_certify.unit == "N s"
+    assert Config().study_certify == Config().certify
 
 
 def test_studies_use_the_sequential_estimator_by_default():
@@ -99,7 +114,7 @@ def test_studies_use_the_sequential_estimator_by_default():
 
 
 def test_study_config_rejects_bad_values():
-    with pytest.raises(RobustGaitError, match=r"StudyConfig\.metric: must be one of 'robustness', 'stability'"):
+    with pytest.raises(RobustGaitError, match=r"StudyConfig\.metric: must be one of 'robustness', 'stability', 'push'"):
         StudyConfig(metric="speed")  # type: ignore[arg-type]
     with pytest.raises(RobustGaitError, match=r"batch: must satisfy 2 ≤ x ≤ 100 \(got 1\)"):
         StudyConfig(batch=1)

@@ -202,6 +202,30 @@ def test_cli_text_and_json(small_study, first_run, capsys):
     assert out["push"]["correlations"] == first_run[0]["correlations"]
 
 
+def test_another_state_certifies_every_gait_again(small_study, first_run, capsys):
+    """--state: every certified gait gets a certificate of that state (the study's other options), is checked in
+    its coordinates, and its r* is the one correlated; the study's own results stay stored under their key."""
+    assert main(["study", "validate", str(small_study), "--trials", "8", "--steps-after", "3", "--state",
+                 "centroidal", "--json", "--quiet"]) == 0
+    out = json.loads(capsys.readouterr().out)["push"]
+    assert out["certify"]["state"] == "centroidal" and out["config_key"] != first_run[0]["config_key"]
+    rows = {r["grid_index"]: r for r in out["gaits"]}
+    study_rows = {r["grid_index"]: r for r in first_run[0]["gaits"]}
+    for i in (10, 20):
+        cert = rows[i]["certificate"]
+        assert cert["space"] == "centroidal" and cert["source"] == "computed" and len(cert["x_star"]) == 6
+        assert rows[i]["r_star"] == cert["r_star"] and rows[i]["study_r_star"] == study_rows[i]["r_star"]
+        assert cert["energy"] == pytest.approx(cert["r_star"] ** 2 / 2)
+    assert rows[40]["start"] == "initial_state" and rows[40]["r_star"] == 0.0
+    # the same pushes as the study's own validation (the draws depend on the seed only)
+    mine = json.loads(next((small_study / VALIDATION_DIR / RUNS_DIR).glob(f"push-{out['config_key']}/*.json"))
+                      .read_text())["result"]["trials_detail"]
+    theirs = json.loads(next((small_study / VALIDATION_DIR / RUNS_DIR).glob(
+        f"push-{first_run[0]['config_key']}/*.json")).read_text())["result"]["trials_detail"]
+    assert mine["size"] == theirs["size"] and len(mine["x_first"][0] or [0] * 6) == 6
+    validate_study(small_study, SMALL, progress=False)  # push.json back to the study's certificates (stored)
+
+
 @pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_report_with_and_without_validation(small_study, first_run, tmp_path):
     import shutil

@@ -144,9 +144,11 @@ def test_zero_push_reproduces_the_undisturbed_walk_exactly(validator):
     # the undisturbed walk from the same state with the same engine, no inputs at all
     from robustgait.validate import simulate_trials
 
-    ok, _, _, x1, steps = simulate_trials(validator.engine, fp.qpos[None], fp.qvel[None], 1 + 3, 1, "heading",
-                                          lambda *a: None, first_at=validator.nominal_at)
+    ok, _, _, first, steps = simulate_trials(validator.engine, fp.qpos[None], fp.qvel[None], 1 + 3, 1,
+                                             lambda *a: None, first_at=validator.nominal_at)
     assert ok[0] and res.success.all()
+    nq = validator.robot.model.nq
+    x1 = validator.certificate.to_z(validator.reduced.phi(first[:, :nq], first[:, nq:]))
     for i in range(n):
         np.testing.assert_array_equal(res.x_first[i], x1[0])
     assert res.physics_steps == n * steps
@@ -211,7 +213,8 @@ def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_ce
     p.write_text(json.dumps(small_cert.to_dict()))
     ref = CertificateRef.load(p)
     assert ref.r_star == small_cert.r_star and ref.map == "step"
-    np.testing.assert_allclose(ref.x_star, small_cert.fixed_point.x_star)
+    np.testing.assert_allclose(ref.x_star, small_cert.certificate.x_star)
+    assert ref.space == "omega" and ref.set == "ball" and ref.horizon == 1
     bad = tmp_path / "bad.json"
     bad.write_text('{"r_star": 1}')
     with pytest.raises(RobustGaitError, match=r"bad\.json: attained: required, but missing"):

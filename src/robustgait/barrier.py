@@ -455,9 +455,9 @@ def certify_map(P: BatchedMap, x_star: ArrayLike, config: CertifyConfig | None =
     """
     cfg = config or CertifyConfig(method="uniform")
     xs = _check_point("x_star", x_star)
-    x0 = sample_ball(cfg.n_samples, xs.shape[0], cfg.r_max, xs, np.random.default_rng(cfg.seed))
+    x0 = sample_ball(cfg.n_samples, xs.shape[0], cfg.radius, xs, np.random.default_rng(cfg.seed))
     x1 = evaluate_map(P, x0)
-    return certificate_from_samples(x0, x1, xs, alpha=cfg.alpha, r_max=cfg.r_max, beta=cfg.beta, seed=cfg.seed,
+    return certificate_from_samples(x0, x1, xs, alpha=cfg.alpha, r_max=cfg.radius, beta=cfg.beta, seed=cfg.seed,
                                     barrier=cfg.barrier)
 
 

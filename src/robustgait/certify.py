@@ -1,6 +1,7 @@
-"""Certify a gait: fixed point of its return map (:mod:`robustgait.poincare`) → sampled images → r* and a
-confidence statement (:mod:`robustgait.estimators`, :mod:`robustgait.barrier`). ``docs/certificate.md``;
-``robustgait certify`` calls this.
+"""Certify a gait: fixed point of its return map (:mod:`robustgait.poincare`) → its reduced state
+(:mod:`robustgait.reduced`) → the certified set's coordinates (:mod:`robustgait.shape`) → sampled images → r* and a
+confidence statement (:mod:`robustgait.estimators`, :mod:`robustgait.barrier`); or, for ``disturbance = push``,
+sampled pushes → J* (:mod:`robustgait.push`). ``docs/certificate.md``; ``robustgait certify`` calls this.
 
 A gait that falls before reaching a fixed point, has none, or falls from its own fixed point is a result,
 not an error: the certificate has a ``status`` other than ``ok`` and r* = 0 (in a study it is a data point).
@@ -8,20 +9,25 @@ not an error: the certificate has a ``status`` other than ``ok`` and r* = 0 (in 
 
 from __future__ import annotations
 
+import dataclasses
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from tqdm import tqdm
 
-from robustgait.barrier import Certificate, certify_map
-from robustgait.config import CertifyConfig, SimConfig, to_dict
+from robustgait.barrier import Certificate, certify_map, evaluate_map, sample_ball
+from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, to_dict
 from robustgait.config.work import check_work
 from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
 from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap
+from robustgait.push import PushMap
+from robustgait.reduced import Coordinates
 from robustgait.robots import Robot
+from robustgait.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
 
 STATUSES = ("ok", "fell_before_fixed_point", "no_fixed_point", "unstable_fixed_point")
 
@@ -32,10 +38,14 @@ class GaitCertificate:
 
     status: one of :data:`STATUSES` — ``ok``; ``fell_before_fixed_point`` (the gait fell while its fixed point
     was searched); ``no_fixed_point`` (no iterate converged within ``fp_max_steps``); ``unstable_fixed_point``
-    (the reduced map falls from x̄* itself: through the reconstruction x̄* is not on a walking orbit). reason:
-    one line (empty if ok). steps_walked: steps of the fixed-point search (completed before a fall).
-    certificate (the barrier :class:`Certificate`: r*, samples, images, margins, rounds, statement), fixed_point
-    and map_residual ‖P(x̄*) − x̄*‖ are None where the search did not get that far. r_star is 0 unless ok.
+    (the reduced map falls from x̄* itself within the horizon: through the reconstruction x̄* is not on a walking
+    orbit). reason: one line (empty if ok). steps_walked: steps of the fixed-point search (completed before a fall).
+    certificate (the barrier :class:`Certificate` in the certificate's coordinates: r*, samples, images, margins,
+    rounds, statement), coordinates (z = T x̄ of the reduced state, the shape of the set; :class:`Coordinates`),
+    fixed_point and map_residual ‖P(x̄*) − x̄*‖ (certificate coordinates, one map) are None where the search did not
+    get that far. r_star is 0 unless ok. ball: for an ellipsoid certified with ``ellipsoid.compare_ball``, the ball
+    certified beside it (its volume ratio: :attr:`volume_ratio`). excursion: horizon k ≥ 2, per j = 1 … k the
+    largest ‖P^j(z) − z*‖ over the samples in the certified set.
     """
 
     status: str
@@ -49,6 +59,10 @@ class GaitCertificate:
     physics_steps: int
     steps_walked: int
     reason: str = ""
+    coordinates: Coordinates | None = None
+    ball: Certificate | None = None
+    excursion: list[float] | None = None
+    validate: ValidateConfig | None = None  # push certificates: the push duration and phases used
 
     @property
     def ok(self) -> bool:
@@ -63,10 +77,31 @@ class GaitCertificate:
         """True when nothing is certified: a failed status, or no sample inside B(r*)."""
         return self.certificate is None or self.certificate.vacuous
 
+    @property
+    def energy(self) -> float | None:
+        """E* [J] of an energy state: every perturbation adding at most E* of kinetic energy is in the set."""
+        if self.coordinates is None or self.certificate is None:
+            return None
+        return self.coordinates.energy(self.certificate.r_star)
+
+    @property
+    def volume_ratio(self) -> float | None:
+        """vol(certified ellipsoid) / vol(certified ball), when both were certified."""
+        if self.ball is None or self.certificate is None or self.coordinates is None:
+            return None
+        return volume_ratio(self.certificate.r_star, self.ball.r_star, self.coordinates.dim)
+
     def statement(self) -> str:
-        if self.certificate is not None:
-            return self.certificate.statement()
-        return f"No certificate ({self.status}): {self.reason}; r* = 0 after {self.steps_walked} steps."
+        if self.certificate is None:
+            return f"No certificate ({self.status}): {self.reason}; r* = 0 after {self.steps_walked} steps."
+        c, cfg = self.certificate, self.config
+        if cfg.disturbance != "push" or c.vacuous or c.budget_exhausted:
+            return c.statement()
+        v = self.validate or ValidateConfig()
+        return (f"With confidence {100.0 * c.confidence:g}%, at most {100.0 * c.violation_bound:.3g}% of the pushes "
+                f"with impulse |J| ≤ J* = {c.r_star:.4g} N s (uniform in that disk; {v.push_duration:g} s long, "
+                f"starting at a phase in [{v.push_phase[0]:g}, {v.push_phase[1]:g}] of the step) make the robot fall "
+                f"within that step and {cfg.push_steps} more: {c.basis}.")
 
     def to_dict(self, *, samples: bool = True) -> dict[str, Any]:
         """JSON-ready; everything but ``seconds`` is deterministic for a given seed."""
@@ -78,7 +113,13 @@ class GaitCertificate:
             "r_star": 0.0,
             "vacuous": True,
             "steps_walked": self.steps_walked,
-            "x_star": None if fp is None else [float(v) for v in fp.x_star],
+            "state": cfg.state,
+            "set": cfg.set,
+            "horizon": cfg.horizon,
+            "disturbance": cfg.disturbance,
+            "unit": cfg.unit,
+            "x_star": None,
+            "omega_star": None if fp is None else [float(v) for v in fp.omega],
             "fixed_point_residual": None if fp is None else fp.residual,
             "fixed_point_steps": None if fp is None else fp.steps,
             "map_residual": self.map_residual,
@@ -87,6 +128,7 @@ class GaitCertificate:
             "frame": cfg.frame,
             "method": cfg.method,
             "barrier": cfg.barrier,
+            "energy": self.energy,
             "statement": self.statement(),
         }
         if self.certificate is not None:
@@ -94,45 +136,113 @@ class GaitCertificate:
             if not samples:
                 for key in ("samples", "images", "fell", "margins", "sample_round"):
                     c.pop(key)
+            c["statement"] = self.statement()
             out.update(c)
+        if self.coordinates is not None:
+            out["coordinates"] = self.coordinates.to_dict()
+        if self.ball is not None:
+            out["ball"] = {"r_star": self.ball.r_star, "attained": self.ball.attained,
+                           "n_samples": self.ball.n_samples, "violation_bound": self.ball.violation_bound,
+                           "statement": self.ball.statement(), "volume_ratio": self.volume_ratio}
+        if self.excursion is not None:
+            out["excursion"] = self.excursion
         out.update({"physics_steps": self.physics_steps, "config": to_dict(cfg), "sim": to_dict(self.sim),
                     "seconds": self.seconds})
+        if self.validate is not None:
+            out["push"] = {"duration": self.validate.push_duration, "phase": list(self.validate.push_phase)}
         return out
 
 
-def _estimate(pmap: ReturnMap, x_star: np.ndarray, cfg: CertifyConfig, progress: bool) -> Certificate:
-    """Run the configured estimator on the gait's return map (progress bar: samples, stderr)."""
-    with tqdm(total=cfg.samples_planned, desc=f"{cfg.map} map, {cfg.method}", unit="sample", disable=not progress,
-              leave=False) as bar:
-        def P(x: np.ndarray) -> np.ndarray:
-            return pmap(x, progress=bar.update)
+Progress = Callable[[int], None]
+BatchMap = Callable[[np.ndarray, "Progress | None"], np.ndarray]
+
+
+def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: bool, desc: str) -> Certificate:
+    """Run the configured estimator on a map in certificate coordinates (progress bar: samples, stderr; the map is
+    called with the bar's update, per sample that reaches its end)."""
+    total = cfg.n_samples if cfg.method == "uniform" else cfg.sequential.budget
+    with tqdm(total=total, desc=desc, unit="sample", disable=not progress, leave=False) as bar:
+        def counted(x: np.ndarray) -> np.ndarray:
+            return P(x, bar.update)
         if cfg.method == "uniform":
-            return certify_map(P, x_star, cfg)
-        return certify_map_sequential(P, x_star, cfg)
+            return certify_map(counted, x_star, cfg)
+        return certify_map_sequential(counted, x_star, cfg)
 
 
 def check_certify_work(robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig) -> int:
     """Bound a certificate's simulation before it starts (:func:`robustgait.config.work.check_work`): the
-    fixed-point steps, the samples (N, or the sequential budget) and the map at x*, each a step (two for the
-    stride map) of up to the gait's step duration × ``max_step_tau``."""
+    fixed-point steps, then per sample (N, or the sequential budget, plus the ellipsoid's fit and, with
+    ``compare_ball``, the ball's samples) and for the map at x* the steps of :attr:`CertifyConfig.steps_per_sample`,
+    each of up to the gait's step duration × ``max_step_tau``."""
     per_map = 2 if config.map == "stride" else 1
     what = "sequential.budget" if config.method == "sequential" else "n_samples"
-    return check_work(per_map * (config.fp_max_steps + config.samples_planned + 1),
+    return check_work(per_map * config.fp_max_steps + config.steps_per_sample * (config.samples_planned + 1),
                       gait.step_duration * sim.max_step_tau, robot.dt,
-                      f"certify.fp_max_steps {config.fp_max_steps} + certify.{what} {config.samples_planned}")
+                      f"certify.fp_max_steps {config.fp_max_steps} + certify.{what} {config.samples_planned} × "
+                      f"{config.steps_per_sample} steps")
+
+
+class _Paths:
+    """The reduced iterates P^1 … P^k of every sample the estimator evaluated, in its order (k, N, n)."""
+
+    def __init__(self) -> None:
+        self.parts: list[np.ndarray] = []
+
+    def excursion(self, cert: Certificate, coords: Coordinates) -> list[float]:
+        """Per j: the largest ‖P^j − z*‖ over the samples in the certified set (the set's own coordinates)."""
+        path = coords.to_z(np.concatenate(self.parts, axis=1).reshape(-1, coords.dim)).reshape(
+            len(self.parts[0]), -1, coords.dim)
+        d = np.linalg.norm(np.asarray(cert.samples) - cert.x_star, axis=1)
+        inside = d <= cert.r_star if cert.attained else d < cert.r_star
+        if not inside.any():
+            return [0.0] * path.shape[0]
+        dist = np.linalg.norm(path[:, inside] - coords.x_star, axis=2)
+        return [float(v) for v in np.max(np.where(np.isfinite(dist), dist, np.inf), axis=1)]
+
+
+def _in_coordinates(pmap: ReturnMap, coords: Coordinates, paths: _Paths | None = None) -> BatchMap:
+    """P^k in the certificate's coordinates: z ↦ T P^k(T⁻¹ z)."""
+    def P(z: np.ndarray, progress: Progress | None = None) -> np.ndarray:
+        out = coords.to_z(pmap(coords.to_xbar(z), progress=progress))
+        if paths is not None and pmap.last_path is not None:
+            paths.parts.append(pmap.last_path)
+        return out
+    return P
+
+
+def fit_shape(pmap: ReturnMap, ball: Coordinates, cfg: CertifyConfig) -> Shape:
+    """The ellipsoid's shape S in the state's metric coordinates: P^k on ``ellipsoid.fit_samples`` samples uniform in
+    the ball of radius ``fit_radius`` × r_max (seed stream ``[seed, 3]``: common random numbers), a least-squares
+    linearization and its Lyapunov ellipsoid (:func:`robustgait.shape.shape_from_fit`)."""
+    e = cfg.ellipsoid
+    rng = np.random.default_rng([cfg.seed, 3])
+    z0 = sample_ball(e.fit_samples, ball.dim, e.fit_radius * cfg.radius, ball.x_star, rng)
+    P = _in_coordinates(pmap, ball)
+    z1 = evaluate_map(lambda z: P(z, None), z0)
+    try:
+        fit = fit_linearization(z0, z1, ball.x_star)
+    except Exception as exc:  # too many falls to fit: no ellipsoid
+        return Shape(np.eye(ball.dim), None, fallback=str(exc))
+    return shape_from_fit(fit)
 
 
 def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
-                 progress: bool = False) -> GaitCertificate:
-    """Find x* by iterating the map, then certify B(r*) around it with the configured estimator (``uniform``:
-    :func:`robustgait.barrier.certify_map`; ``sequential``: :func:`robustgait.estimators.certify_map_sequential`).
+                 validate: ValidateConfig | None = None, progress: bool = False) -> GaitCertificate:
+    """Find x* by iterating the map, then certify the set of ``config`` around it with the configured estimator
+    (``uniform``: :func:`robustgait.barrier.certify_map`; ``sequential``:
+    :func:`robustgait.estimators.certify_map_sequential`), in the state, set and horizon of the config; or, with
+    ``disturbance = push``, the impulse disk J* (pushes as ``validate``'s: duration and phases of ``validate``).
 
-    A gait that falls, has no fixed point or falls from it returns a certificate with that ``status`` and
-    r* = 0 (no exception); too much work for the limits raises :class:`RobustGaitError` before any simulation.
+    With ``ellipsoid.compare_ball`` an ellipsoid's certificate also certifies the ball of the same state (its r* and
+    the volume ratio are reported). A gait that falls, has no fixed point or falls from it returns a certificate with
+    that ``status`` and r* = 0 (no exception); too much work for the limits raises :class:`RobustGaitError` before any
+    simulation.
     ``progress``: bars on stderr.
     """
     cfg = config or CertifyConfig()
     sim = sim or SimConfig()
+    push = cfg.disturbance == "push"
+    vcfg = (validate or ValidateConfig()) if push else None
     check_certify_work(robot, gait, cfg, sim)
     t0 = time.perf_counter()
 
@@ -141,7 +251,7 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         t = time.perf_counter() - t0
         return GaitCertificate(status=status, certificate=None, fixed_point=fp, map_residual=map_residual,
                                config=cfg, sim=sim, robot=robot.name, physics_steps=0, steps_walked=steps,
-                               reason=reason,
+                               reason=reason, validate=vcfg,
                                seconds={"fixed_point": t, "sampling": 0.0, "total": t, "sim_steps_per_s": 0.0})
 
     with ReturnMap(robot, gait, cfg, sim) as pmap:
@@ -155,16 +265,40 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
             except FixedPointFailure as exc:
                 return failed(exc.status, str(exc), exc.steps)
         t1 = time.perf_counter()
-        map_residual = float(np.linalg.norm(pmap(fp.x_star[None])[0] - fp.x_star))
-        if not np.isfinite(map_residual):
-            return failed("unstable_fixed_point", "the return map falls from its own fixed point (through the "
-                          f"{cfg.reconstruction} reconstruction x̄* is not on a walking orbit)", fp.steps, fp)
+        coords = Coordinates.of(pmap.reduced)
+        image = coords.to_z(pmap(pmap.reduced.x_star[None]))[0]
+        first = coords.to_z(pmap.last_path[0])[0] if pmap.last_path is not None else image
+        map_residual = float(np.linalg.norm(first - coords.x_star))
+        if not np.all(np.isfinite(image)):
+            return failed("unstable_fixed_point", f"the return map falls from its own fixed point within "
+                          f"{cfg.horizon} step(s) (through the {cfg.reconstruction} reconstruction x̄* is not on a "
+                          "walking orbit)", fp.steps, fp)
         pmap.physics_steps = 0
         t2 = time.perf_counter()
-        cert = _estimate(pmap, fp.x_star, cfg, progress)
+        ball: Certificate | None = None
+        excursion: list[float] | None = None
+        if push:
+            assert vcfg is not None
+            coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
+            pushes = PushMap(pmap.engine, fp, gait.stance, vcfg, cfg.push_steps)
+            cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}")
+            steps = pushes.physics_steps
+        else:
+            if cfg.set == "ellipsoid":
+                shape = fit_shape(pmap, coords, cfg)
+                if cfg.ellipsoid.compare_ball:
+                    ball = _estimate(_in_coordinates(pmap, coords), coords.x_star, cfg, progress,
+                                     f"{cfg.state} ball, {cfg.method}")
+                coords = dataclasses.replace(coords, shape=shape)
+            paths = _Paths()
+            desc = f"{cfg.state} {cfg.set}{'' if cfg.horizon == 1 else f', P^{cfg.horizon}'}, {cfg.method}"
+            cert = _estimate(_in_coordinates(pmap, coords, paths), coords.x_star, cfg, progress, desc)
+            if cfg.horizon > 1:
+                excursion = paths.excursion(cert, coords)
+            steps = pmap.physics_steps
         t3 = time.perf_counter()
-        steps = pmap.physics_steps
     return GaitCertificate(status="ok", certificate=cert, fixed_point=fp, map_residual=map_residual, config=cfg,
                            sim=sim, robot=robot.name, physics_steps=steps, steps_walked=fp.steps,
+                           coordinates=coords, ball=ball, excursion=excursion, validate=vcfg,
                            seconds={"fixed_point": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,
                                     "sim_steps_per_s": steps / max(t3 - t2, 1e-9)})

@@ -160,7 +160,7 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
     full = config or CertifyConfig()
     cfg = full.sequential
     xs = _check_point("x_star", x_star)
-    r, a, b, seed, barrier = full.r_max, full.alpha, full.beta, full.seed, full.barrier
+    r, a, b, seed, barrier = full.radius, full.alpha, full.beta, full.seed, full.barrier
     n = xs.shape[0]
     explore_rng = np.random.default_rng([seed, 1])
     verify_rng = np.random.default_rng([seed, 2])

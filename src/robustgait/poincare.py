@@ -1,13 +1,15 @@
-"""The step-to-step Poincaré map on the switching surface, reduced to the base angular velocity
-(``docs/certificate.md``).
+"""The step-to-step Poincaré map on the switching surface, in a reduced state (``docs/certificate.md``).
 
-Section S: the switching events of the simulator (swing-foot touchdown once τ ≥ 0.8, the paper's x⁻ ∈ S).
-A state on S starts a step of one stance. *Canonical* states are written for the gait's own stance
+Section S: the switching events of the simulator (swing-foot touchdown once τ ≥ ``min_switch_tau``, the paper's
+x⁻ ∈ S). A state on S starts a step of one stance. *Canonical* states are written for the gait's own stance
 (``gait.stance``); a state that starts a step of the other stance is mirrored (:meth:`Robot.mirror_state`),
 so a symmetric gait has a period-1 fixed point of the **step map** P: S → S (one step, then mirror). The
-**stride map** is two steps, no mirroring.
+**stride map** is two steps, no mirroring. With a horizon k the map certified is P^k: k maps on full states, a
+fall in any of them a fall.
 
-Reduced coordinates x̄ = Φ(x) (paper: x̄ = [0 I 0] x, the base angular velocity):
+The fixed point x* is searched on full states and converged in the paper's reduced state, the base angular
+velocity ω in the ``heading`` frame (:func:`robustgait.reduced.reduce_state`); the certificate's reduced state
+(Φ, ι and metric of ``certify.state``: :class:`robustgait.reduced.ReducedState`) is set up at it. Frames of ω:
 
 * ``heading`` (default): ω in the world frame rotated by the base's yaw, R_z(ψ)ᵀ ω. Equals the world frame
   for a robot heading along +x, and is invariant to the slow heading drift of a real walk — which the
@@ -16,14 +18,6 @@ Reduced coordinates x̄ = Φ(x) (paper: x̄ = [0 I 0] x, the base angular veloci
   frame median 2.7e-3, max 4.9e-3).
 * ``world``: ω in the world frame, R ω_body.
 * ``body``: ω_body, MuJoCo's ``qvel[3:6]``.
-
-Reconstruction ι(x̄) of a full state from the fixed point's full state x* (names reported in certificates):
-
-* ``holonomic`` (default): set the base angular velocity to x̄ and change the joint velocities and base
-  linear velocity by the least-squares change (in the joint velocities) that keeps the stance sole's
-  linear and angular velocity what they are at x*: J_s δq̇ = 0 (:func:`holonomic_reconstruction`).
-  ι(x̄*) = x* exactly, so x̄* stays a fixed point of the reconstructed map.
-* ``angular-only``: replace the base angular velocity, nothing else.
 """
 
 from __future__ import annotations
@@ -31,42 +25,18 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.config import CertifyConfig, Frame, SimConfig
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
+from robustgait.reduced import ReducedState, reduce_state
 from robustgait.robots import Robot
-from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import StepEngine
 from robustgait.sim.walk import SwitchEvent
 
 FloatArray = NDArray[np.float64]
-
-
-def frame_rotation(qpos: FloatArray, frame: Frame) -> FloatArray:
-    """A (..., 3, 3) with Φ = A ω_body: R (world), R_z(ψ)ᵀ R (heading, ψ = yaw of the base x axis), I (body)."""
-    r = quat_to_mat(np.asarray(qpos)[..., 3:7])
-    if frame == "body":
-        return np.broadcast_to(np.eye(3), r.shape).copy()
-    if frame == "world":
-        return r
-    psi = np.arctan2(r[..., 1, 0], r[..., 0, 0])
-    c, s = np.cos(psi), np.sin(psi)
-    zero, one = np.zeros_like(c), np.ones_like(c)
-    rz_t = np.stack([np.stack([c, s, zero], -1), np.stack([-s, c, zero], -1), np.stack([zero, zero, one], -1)], -2)
-    return np.asarray(rz_t @ r)
-
-
-def reduce_state(qpos: FloatArray, qvel: FloatArray, frame: Frame) -> FloatArray:
-    """Φ(x) = A(q) ω_body, the base angular velocity in ``frame``: qpos (K, nq), qvel (K, nv) → (K, 3).
-
-    Paper: x̄ = [0 I 0] x (Tucker, Li, Ames, arXiv 2310.06169, §IV).
-    """
-    a = frame_rotation(qpos, frame)
-    return np.einsum("kij,kj->ki", a, np.asarray(qvel)[..., 3:6])
 
 
 def canonical_reduced_events(robot: Robot, gait: Gait, events: list[SwitchEvent], frame: Frame) -> FloatArray:
@@ -93,20 +63,23 @@ class FixedPointFailure(RobustGaitError):
 
 @dataclass(frozen=True)
 class FixedPoint:
-    """x* of the chosen map: its full canonical state (qpos, qvel), reduced x̄* (3,), the residual
-    ‖x̄_k − x̄_{k−1}‖ of the map's iterates where it was taken, the steps walked, and all residuals."""
+    """x* of the chosen map: its full canonical state (qpos, qvel), its base angular velocity ω* (3,) in the search's
+    frame, the residual ‖ω_k − ω_{k−1}‖ of the map's iterates where it was taken, the steps walked, and all
+    residuals."""
 
     qpos: FloatArray
     qvel: FloatArray
-    x_star: FloatArray
+    omega: FloatArray
     residual: float
     steps: int
     residuals: tuple[float, ...]
 
 
 class ReturnMap:
-    """The batched return map P: (N, 3) → (N, 3) of a gait (NaN rows: the sample fell), of the kind, frame and
-    reconstruction of ``config`` (``map``, ``frame``, ``reconstruction``), simulated with ``sim``."""
+    """The batched return map P^k: (N, n) → (N, n) of a gait in its reduced state (NaN rows: the sample fell within
+    the k maps), of the kind, horizon, state, frame and reconstruction of ``config`` (``map``, ``horizon``,
+    ``state``, ``frame``, ``reconstruction``), simulated with ``sim``. The reduced state is set up at the fixed
+    point: call :meth:`find_fixed_point` (or :meth:`set_fixed_point`) first."""
 
     def __init__(self, robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None):
         config = config or CertifyConfig()
@@ -118,8 +91,12 @@ class ReturnMap:
         self.engine = StepEngine(robot, gait, sim)
         self.stance = gait.stance
         self.other = "left" if gait.stance == "right" else "right"
+        self.horizon = config.horizon
         self.fixed_point: FixedPoint | None = None
+        self._reduced: ReducedState | None = None
         self.physics_steps = 0
+        # the reduced iterates P^1 … P^k of the last call's samples, (k, N, n); NaN from a fall on
+        self.last_path: FloatArray | None = None
 
     def close(self) -> None:
         self.engine.close()
@@ -170,9 +147,8 @@ class ReturnMap:
             if progress is not None:
                 progress(k, residuals[-1])
             if k >= min_steps and residuals[-1] < tol:
-                self.fixed_point = FixedPoint(qpos[0].copy(), qvel[0].copy(), x.copy(), residuals[-1], k,
-                                              tuple(residuals))
-                return self.fixed_point
+                return self.set_fixed_point(FixedPoint(qpos[0].copy(), qvel[0].copy(), x.copy(), residuals[-1], k,
+                                                       tuple(residuals)))
         raise FixedPointFailure("no_fixed_point", len(residuals) * self.period,
                                 f"no fixed point within {max_steps} steps: the {self.kind}-map residual "
                                 f"‖x̄_k+1 − x̄_k‖ stayed above tol = {tol:g} (smallest {min(residuals):.3g}, last "
@@ -214,65 +190,38 @@ class ReturnMap:
             return mq, mv, reasons
         return self._run(qpos, qvel, self._phases(self.stance) + self._phases(self.other), progress)
 
-    def reconstruct(self, xbar: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """ι(x̄): full canonical states (N, nq), (N, nv) from reduced states (N, 3) (module docstring)."""
-        fp = self._fp()
-        xbar = np.asarray(xbar, dtype=float)
-        n = xbar.shape[0]
-        qpos = np.tile(fp.qpos, (n, 1))
-        qvel = np.tile(fp.qvel, (n, 1))
-        a = frame_rotation(fp.qpos, self.frame)
-        d_omega = (xbar - fp.x_star) @ np.linalg.inv(a).T  # body-frame change of ω for each sample
-        if self.reconstruction == "angular-only":
-            qvel[:, 3:6] += d_omega
-        else:
-            qvel += d_omega @ holonomic_reconstruction(self.robot, fp.qpos, self.stance).T
-        return qpos, qvel
+    def set_fixed_point(self, fp: FixedPoint) -> FixedPoint:
+        """Use ``fp`` as x* (e.g. found earlier by this map) and set the reduced state up at it."""
+        self.fixed_point = fp
+        self._reduced = ReducedState.at(self.config.state, self.robot, fp.qpos, fp.qvel, self.stance, self.config)
+        return fp
 
-    def _fp(self) -> FixedPoint:
-        if self.fixed_point is None:
+    @property
+    def reduced(self) -> ReducedState:
+        """The certificate's reduced state (Φ, ι, metric) at the fixed point."""
+        if self._reduced is None:
             raise RobustGaitError("find the fixed point first (ReturnMap.find_fixed_point)")
-        return self.fixed_point
+        return self._reduced
+
+    @property
+    def dim(self) -> int:
+        return self.reduced.dim
+
+    def reconstruct(self, xbar: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """ι(x̄): full canonical states (N, nq), (N, nv) from reduced states (N, n)
+        (:meth:`robustgait.reduced.ReducedState.iota`)."""
+        return self.reduced.iota(np.atleast_2d(np.asarray(xbar, dtype=float)))
 
     def __call__(self, xbar: FloatArray, progress: Callable[[int], None] | None = None) -> FloatArray:
-        """P(x̄) = Φ(Δ(ι(x̄))) for a batch (N, 3); NaN rows where the sample fell (within the step or stride)."""
-        qpos, qvel, _ = self._advance(*self.reconstruct(xbar), progress=progress)
-        out = np.full((qpos.shape[0], 3), np.nan)
-        ok = np.isfinite(qvel).all(axis=1)
-        out[ok] = reduce_state(qpos[ok], qvel[ok], self.frame)
-        return out
-
-
-def holonomic_reconstruction(robot: Robot, qpos: FloatArray, stance: str) -> FloatArray:
-    """Linear map G (nv, 3): the velocity change δq̇ = G δω for a change δω of the base's body-frame
-    angular velocity that keeps the stance sole's twist unchanged, with the least joint-velocity change.
-
-    Solves  min ½‖δq̇_j‖²  s.t.  J_s δq̇ = 0,  δq̇ = (δv, δω, δq̇_j),  δω given,  δv free,
-    via its KKT system [[I, 0, J_jᵀ], [0, 0, J_vᵀ], [J_j, J_v, 0]] [δq̇_j; δv; λ] = [0; 0; −J_ω δω], where
-    J_s = [J_v J_ω J_j] (6 × nv) is the stance sole geom's (translational; rotational) Jacobian in MuJoCo's
-    velocity coordinates (``mj_jacGeom``). qpos (nq,). (``docs/certificate.md``, "holonomic" reconstruction.)
-    """
-    m = robot.model
-    d = mujoco.MjData(m)
-    d.qpos[:] = qpos
-    mujoco.mj_kinematics(m, d)
-    mujoco.mj_comPos(m, d)
-    jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
-    mujoco.mj_jacGeom(m, d, jp, jr, robot.sole_geom_id[stance])
-    js = np.vstack([jp, jr])
-    jv, jw, jj = js[:, 0:3], js[:, 3:6], js[:, 6:]
-    nj = jj.shape[1]
-    kkt = np.zeros((nj + 3 + 6, nj + 3 + 6))
-    kkt[:nj, :nj] = np.eye(nj)
-    kkt[:nj, nj + 3:] = jj.T
-    kkt[nj:nj + 3, nj + 3:] = jv.T
-    kkt[nj + 3:, :nj] = jj
-    kkt[nj + 3:, nj:nj + 3] = jv
-    rhs = np.zeros((nj + 9, 3))
-    rhs[nj + 3:] = -jw
-    sol = np.linalg.lstsq(kkt, rhs, rcond=None)[0]
-    g = np.zeros((m.nv, 3))
-    g[3:6] = np.eye(3)
-    g[0:3] = sol[nj:nj + 3]
-    g[6:] = sol[:nj]
-    return g
+        """P^k(x̄) = Φ(Δ^k(ι(x̄))) for a batch (N, n), k = the horizon; NaN rows where the sample fell within any of
+        the k steps (or strides). The iterates P^1 … P^k are kept in ``last_path`` (k, N, n)."""
+        red = self.reduced
+        qpos, qvel = self.reconstruct(xbar)
+        path = np.full((self.horizon, qpos.shape[0], red.dim), np.nan)
+        for j in range(self.horizon):
+            qpos, qvel, _ = self._advance(qpos, qvel, progress=progress if j == self.horizon - 1 else None)
+            ok = np.isfinite(qvel).all(axis=1)
+            if ok.any():
+                path[j, ok] = red.phi(qpos[ok], qvel[ok])
+        self.last_path = path
+        return path[-1].copy()

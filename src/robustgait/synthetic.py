@@ -6,8 +6,12 @@ either barrier). Only the volume fraction of the violating set in a ball matters
 
 * :class:`ConeMap` — a thin cone of directions beyond a radius r0: the true r* is r0 (for r0 < r_max).
 * :class:`BandMap` — thin bands of directions whose width grows with the distance, so that the violating
-  fraction of B(r) is a + (3/4) c r at every r (n = 3): with c = 0 every ball has fraction a and the true
-  r* is 0, which makes every certificate with ε < a wrong — the case that tests a confidence statement.
+  fraction of B(r) is a + c r n/(n + 1) at every r (any dimension n ≥ 2): with c = 0 every ball has fraction a
+  and the true r* is 0, which makes every certificate with ε < a wrong — the case that tests a confidence
+  statement.
+* :class:`PushThresholdMap` — a 2-D impulse disk whose pushes fail beyond a threshold that depends on the push's
+  direction and on its hashed phase (:func:`robustgait.push.push_phase`): the push certificate's J* (true J* and
+  violating fraction of every disk known by quadrature).
 """
 
 from __future__ import annotations
@@ -70,9 +74,10 @@ class ConeMap:
 
 @dataclass(frozen=True)
 class BandMap:
-    """P(x) = x* + gain (x − x*), except that x falls when frac(K (u_z + 1)/2) < a + c ‖x − x*‖, u = the unit
-    direction of x − x* (K = ``bands``). For uniform directions in 3-D u_z ~ U(−1, 1) (Archimedes), so a
-    fraction a + c d of the sphere of radius d falls and the violating fraction of B(r) is a + (3/4) c r."""
+    """P(x) = x* + gain (x − x*), except that x falls when frac(K t) < a + c ‖x − x*‖, with t = F((u_n + 1)/2), u the
+    unit direction of x − x* (K = ``bands``), u_n its last coordinate and F the CDF of (u_n + 1)/2 for uniform
+    directions in n dimensions, Beta((n − 1)/2, (n − 1)/2) — the identity for n = 3 (Archimedes) — so t is uniform,
+    a fraction a + c d of the sphere of radius d falls and the violating fraction of B(r) is a + c r n/(n + 1)."""
 
     x_star: FloatArray
     a: float
@@ -83,8 +88,8 @@ class BandMap:
 
     def __post_init__(self) -> None:
         _check_gain(self.gain)
-        if np.asarray(self.x_star).shape != (3,):
-            raise RobustGaitError("BandMap is 3-D: x_star must have shape (3,)")
+        if np.asarray(self.x_star).ndim != 1 or np.asarray(self.x_star).shape[0] < 2:
+            raise RobustGaitError("BandMap needs x_star of shape (n,), n ≥ 2")
         if not (0.0 <= self.a and 0.0 <= self.c and self.a + self.c * self.r_max <= 1.0 and self.bands >= 1):
             raise RobustGaitError("need a, c ≥ 0, a + c r_max ≤ 1 and bands ≥ 1")
 
@@ -92,14 +97,65 @@ class BandMap:
     def r_star(self) -> float:
         return 0.0 if self.a > 0.0 or self.c > 0.0 else float(self.r_max)
 
+    @property
+    def dim(self) -> int:
+        return int(np.asarray(self.x_star).shape[0])
+
     def violating_fraction(self, r: float) -> float:
-        return self.a + 0.75 * self.c * r if r > 0.0 else self.a
+        n = self.dim
+        return self.a + self.c * r * n / (n + 1) if r > 0.0 else self.a
 
     def __call__(self, x: ArrayLike) -> FloatArray:
+        from scipy.special import betainc
+
         dx = np.asarray(x, dtype=np.float64) - self.x_star
         d = np.linalg.norm(dx, axis=1)
-        uz = dx[:, 2] / np.where(d > 0.0, d, 1.0)
-        falls = np.mod(self.bands * (uz + 1.0) / 2.0, 1.0) < self.a + self.c * d
+        un = dx[:, -1] / np.where(d > 0.0, d, 1.0)
+        h = 0.5 * (self.dim - 1)
+        t = betainc(h, h, np.clip((un + 1.0) / 2.0, 0.0, 1.0))
+        falls = np.mod(self.bands * t, 1.0) < self.a + self.c * d
         out = self.x_star + self.gain * dx
         out[falls] = np.nan
         return np.asarray(out, dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class PushThresholdMap:
+    """A push-failure model on the impulse disk: J = (J_x, J_y) ↦ (0, 0) (absorbed) or NaN (fell), falling when
+    |J| > J_c = j0 (1 + a cos θ)(1 − b φ), θ the direction of J and φ ∈ [0, 1) its phase from
+    :func:`robustgait.push.push_phase` (the certificate's hashed phase). True J* = j0 (1 − a)(1 − b) (the infimum
+    over directions and phases); :meth:`violating_fraction` of the disk B(r) by quadrature over θ and φ (uniform)."""
+
+    j0: float = 20.0
+    a: float = 0.3
+    b: float = 0.4
+
+    def __post_init__(self) -> None:
+        if not (self.j0 > 0.0 and 0.0 <= self.a < 1.0 and 0.0 <= self.b < 1.0):
+            raise RobustGaitError("need j0 > 0, 0 ≤ a < 1 and 0 ≤ b < 1")
+
+    @property
+    def r_star(self) -> float:
+        return float(self.j0 * (1.0 - self.a) * (1.0 - self.b))
+
+    def threshold(self, theta: FloatArray, phase: FloatArray) -> FloatArray:
+        return np.asarray(self.j0 * (1.0 + self.a * np.cos(theta)) * (1.0 - self.b * phase))
+
+    def violating_fraction(self, r: float, grid: int = 400) -> float:
+        """∫∫ max(0, 1 − J_c(θ, φ)²/r²) dθ/2π dφ: the share of the disk's area beyond the threshold."""
+        if r <= 0.0:
+            return 0.0
+        theta = (np.arange(grid) + 0.5) / grid * 2.0 * math.pi
+        phase = (np.arange(grid) + 0.5) / grid
+        jc = self.threshold(theta[:, None], phase[None, :])
+        return float(np.mean(np.maximum(0.0, 1.0 - (jc / r) ** 2)))
+
+    def __call__(self, x: ArrayLike) -> FloatArray:
+        from robustgait.push import push_phase
+
+        j = np.atleast_2d(np.asarray(x, dtype=np.float64))
+        theta = np.arctan2(j[:, 1], j[:, 0])
+        falls = np.linalg.norm(j, axis=1) > self.threshold(theta, push_phase(j, 0.0, 1.0))
+        out = np.zeros_like(j)
+        out[falls] = np.nan
+        return out

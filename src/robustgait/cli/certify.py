@@ -9,14 +9,28 @@ import sys
 
 from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
 from robustgait.cli.options import config_from, number_within, numbers_within, output_path
+from robustgait.config import CertifyConfig
 from robustgait.errors import RobustGaitError
 from robustgait.io.limits import BARRIER_R, X_STAR
 
-CERTIFY = {"--method": "certify.method", "--samples": "certify.n_samples", "--epsilon": "certify.sequential.epsilon",
+CERTIFY = {"--state": "certify.state", "--set": "certify.set", "--horizon": "certify.horizon",
+           "--disturbance": "certify.disturbance", "--push-steps": "certify.push_steps",
+           "--push-duration": "validate.push_duration", "--compare-ball": "certify.ellipsoid.compare_ball",
+           "--method": "certify.method", "--samples": "certify.n_samples", "--epsilon": "certify.sequential.epsilon",
            "--budget": "certify.sequential.budget", "--beta": "certify.beta", "--barrier": "certify.barrier",
            "--r-max": "certify.r_max", "--alpha": "certify.alpha", "--seed": "certify.seed", "--map": "certify.map",
            "--reconstruction": "certify.reconstruction", "--frame": "certify.frame",
            "--switching": "sim.switching", "--fp-tol": "certify.fp_tol", "--fp-max-steps": "certify.fp_max_steps"}
+
+
+def _what(cfg: CertifyConfig) -> str:
+    """The certificate's kind in a few words: state, set, horizon, map, reconstruction (or the push's steps)."""
+    if cfg.disturbance == "push":
+        return f"pushes, {cfg.push_steps} steps after"
+    bits = [f"{cfg.state} {cfg.set}", f"{cfg.map} map" + ("" if cfg.horizon == 1 else f" ^{cfg.horizon}")]
+    if cfg.state == "omega":
+        bits += [f"{cfg.frame} frame", f"{cfg.reconstruction} reconstruction"]
+    return ", ".join(bits)
 
 
 def _certify(args: argparse.Namespace) -> int:
@@ -25,14 +39,16 @@ def _certify(args: argparse.Namespace) -> int:
     config, robot, gait = inputs(args)
     cfg = config.certify
     with about(args.gait):
-        gc = certify_gait(robot, gait, cfg, config.sim, progress=not args.json and sys.stderr.isatty())
-    c, fp = gc.certificate, gc.fixed_point
+        gc = certify_gait(robot, gait, cfg, config.sim, validate=config.validate,
+                          progress=not args.json and sys.stderr.isatty())
+    c, fp, co = gc.certificate, gc.fixed_point, gc.coordinates
+    name = "J*" if cfg.disturbance == "push" else "r*"
     if args.plot is not None and c is not None:
         from robustgait.report import plot_certificate
 
         label = f"N = {c.n_samples}" + (f" in {len(c.rounds)} rounds" if cfg.method == "sequential" else "")
-        plot_certificate(c, args.plot, title=f"{robot.name}: r* = {gc.r_star:.4f} rad/s ({cfg.map} map, "
-                         f"{cfg.reconstruction}, {cfg.method}, {label}, α = {cfg.alpha:g})")
+        plot_certificate(c, args.plot, title=f"{robot.name}: {name} = {gc.r_star:.4g} {cfg.unit} ({_what(cfg)}, "
+                         f"{cfg.method}, {label}, α = {cfg.alpha:g})", coordinates=co, ball=gc.ball)
     if args.output is not None:
         from robustgait.io.output import write_json
 
@@ -40,18 +56,36 @@ def _certify(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(gc.to_dict(samples=False), allow_nan=False))
     elif c is None:
-        print(f"{gc.status}: r* = 0 ({gc.reason}; {gc.steps_walked} steps walked)")
+        print(f"{gc.status}: {name} = 0 ({gc.reason}; {gc.steps_walked} steps walked)")
     else:
-        assert fp is not None and gc.map_residual is not None
-        print(f"r* = {c.r_star:.4f} rad/s  ({cfg.map} map, {cfg.reconstruction} reconstruction, {cfg.frame} frame, "
-              f"{cfg.barrier} barrier, α = {cfg.alpha:g}, {cfg.method}: N = {c.n_samples}, seed {cfg.seed})")
-        print(f"x* = [{', '.join(f'{v:.4f}' for v in fp.x_star)}] rad/s after {fp.steps} steps; residual "
-              f"{fp.residual:.2e} (map at x*: {gc.map_residual:.2e})")
+        assert fp is not None and gc.map_residual is not None and co is not None
+        energy = "" if gc.energy is None else f", E* = {gc.energy:.4g} J"
+        print(f"{name} = {c.r_star:.4g} {cfg.unit}{energy}  ({_what(cfg)}, {cfg.barrier} barrier, α = {cfg.alpha:g}, "
+              f"{cfg.method}: N = {c.n_samples}, seed {cfg.seed})")
+        print(f"ω* = [{', '.join(f'{v:.4f}' for v in fp.omega)}] rad/s after {fp.steps} steps; residual "
+              f"{fp.residual:.2e}" + ("" if cfg.disturbance == "push" else
+                                      f" (map at x*: {gc.map_residual:.2e} {cfg.unit})"))
+        if cfg.set == "ellipsoid" and cfg.disturbance == "state":
+            sh = co.shape
+            if sh.fallback:
+                print(f"ellipsoid: fell back to the ball ({sh.fallback})")
+            else:
+                assert sh.fit is not None
+                print(f"ellipsoid: semi-axes at r = 1 {' '.join(f'{v:.3g}' for v in sh.axes)} (det S = 1); fitted "
+                      f"linearization spectral radius {sh.fit.spectral_radius:.3g}, relative residual "
+                      f"{sh.fit.relative_residual:.2g} on {sh.fit.used} samples")
+            if gc.ball is not None:
+                print(f"ball of the same state: r* = {gc.ball.r_star:.4g} {cfg.unit}; volume ratio ellipsoid / ball "
+                      f"= {gc.volume_ratio:.3g}")
+        if gc.excursion is not None:
+            print("largest ‖P^j(z) − z*‖ over the samples inside, j = 1 … k: "
+                  + " ".join(f"{v:.4g}" for v in gc.excursion))
         if cfg.method == "sequential":
-            print("r̂ after each round: " + " ".join(f"{r.kind[0]}{r.samples_used}:{r.r_hat:.4g}" for r in c.rounds)
-                  + "  (u = uniform, e = explore, v = verify; samples used: r̂)")
-        print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside B(r*)")
-        print(c.statement())
+            print(f"{name[0]}̂ after each round: " + " ".join(f"{r.kind[0]}{r.samples_used}:{r.r_hat:.4g}"
+                                                           for r in c.rounds)
+                  + "  (u = uniform, e = explore, v = verify; samples used: estimate)")
+        print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside")
+        print(gc.statement())
         print(f"time: fixed point {gc.seconds['fixed_point']:.2f} s, sampling {gc.seconds['sampling']:.2f} s "
               f"({gc.seconds['sim_steps_per_s']:.0f} simulated steps/s)")
     return 0 if gc.ok else 1
@@ -86,8 +120,8 @@ def _barrier_eval(args: argparse.Namespace) -> int:
 
 
 def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    c = command(sub, "certify", "robustness certificate r* of a gait (DTBF on the Poincaré map); exit 1 if the "
-                "gait falls or has no fixed point (r* = 0)", _certify, CERTIFY)
+    c = command(sub, "certify", "robustness certificate of a gait: r* (DTBF on the Poincaré map, in a reduced state) "
+                "or J* (pushes); exit 1 if the gait falls or has no fixed point (r* = 0)", _certify, CERTIFY)
     c.add_argument("gait", help=GAIT_HELP)
     c.add_argument("--robot", required=True, help=ROBOT_HELP)
     c.add_argument("--plot", metavar="CERT.png", type=output_path("plot"),

@@ -18,7 +18,8 @@ RUN: FlagTable = {"--executor": "run.executor", "--workers": "run.workers", "--a
 STUDY: FlagTable = {"--metric": "study.metric", "--learner": "study.learner", "--iterations": "study.iterations",
          "--batch": "study.batch", "--method": "certify.method", "--samples": "certify.n_samples",
          "--budget": "certify.sequential.budget", "--epsilon": "certify.sequential.epsilon", "--steps": "sim.step_cap",
-         "--domains": "generate.domains", "--storage": "study.storage", "--seed": ("study.seed", "certify.seed")}
+         "--domains": "generate.domains", "--storage": "study.storage", "--seed": ("study.seed", "certify.seed"),
+         "--state": "certify.state", "--set": "certify.set", "--horizon": "certify.horizon"}
 
 
 def _check_executor(run: RunConfig) -> None:
@@ -27,6 +28,11 @@ def _check_executor(run: RunConfig) -> None:
             import ray  # noqa: F401
         except ImportError:
             raise RobustGaitError('--executor ray needs Ray: pip install "robustgait[ray]"') from None
+
+
+def _name(status: dict[str, object]) -> str:
+    """r* or J* (a push study's certificate)."""
+    return "J*" if status.get("certificate") == "push" else "r*"
 
 
 def print_summary(directory: str | Path, seconds: float | None = None) -> None:
@@ -40,13 +46,13 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
           f"{st['state']}")
     if best is not None:
         params = ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())
-        print(f"best gait (trial {best['trial']}): {params}; r* = {best['r_star']:.4f} rad/s, "
+        print(f"best gait (trial {best['trial']}): {params}; {_name(st)} = {best['r_star']:.4g} {st['unit']}, "
               f"{best['steps_taken']} steps; {best['gait_file'] or 'no gait file'}")
     obs = st["best_observed"]
     if obs is not None and (best is None or obs["score"] != best["score"]):
         params = ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
         print(f"best evaluated gait (trial {obs['trial']}; the best gait above is the learner's highest posterior "
-              f"mean): {params}; r* = {obs['r_star']:.4f} rad/s, {obs['steps_taken']} steps")
+              f"mean): {params}; {_name(st)} = {obs['r_star']:.4g} {st['unit']}, {obs['steps_taken']} steps")
 
 
 def _run_interruptible(directory: str, run: RunConfig, args: argparse.Namespace) -> bool:
@@ -121,7 +127,7 @@ def _study_compare(args: argparse.Namespace) -> int:
     for name, s in zip("AB", res["studies"], strict=True):
         params = ", ".join(f"{v:g}" for v in s["params"].values())
         print(f"{name} {s['directory']} ({s['learner']}, {s['metric']}): gait ({params}), {s['steps_taken']} steps, "
-              f"r* = {s['r_star_mean']:.4f} ± {s['r_star_sd']:.4f} rad/s  "
+              f"{_name(res)} = {s['r_star_mean']:.4g} ± {s['r_star_sd']:.4g} {res['unit']}  "
               f"[{', '.join(f'{r:.3f}' for r in s['r_star'])}] (study: {s['study_r_star']:.4f})")
     w = res["winner"]
     print("equal mean r*" if w is None else f"higher mean r*: {'AB'[w]} (per seed: A wins {res['wins_per_seed'][0]}, "
@@ -132,12 +138,18 @@ def _study_compare(args: argparse.Namespace) -> int:
 
 
 def _study_validate(args: argparse.Namespace) -> int:
+    from robustgait.cli.validate import CERTIFICATE_KIND, given
+    from robustgait.study.config import load_config
     from robustgait.study.validate import summary_path, validate_study
     from robustgait.validate.stats import correlation_text
 
-    cfg = config_from(args).validate
+    setup = load_config(args.dir)
+    config = config_from(args, setup.config)
+    cfg = config.validate
+    # --state/--set/--horizon/--method: certify every gait again with them (default: the study's certificates)
+    again = given(args, (*CERTIFICATE_KIND, "certify.method"))
     try:
-        out = validate_study(args.dir, cfg, progress=not args.quiet)
+        out = validate_study(args.dir, cfg, certify=config.study_certify if again else None, progress=not args.quiet)
     except KeyboardInterrupt:
         print("\nrobustgait: interrupted; the gaits validated so far are stored: run the same command again to "
               "continue", file=sys.stderr)
@@ -221,7 +233,9 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     va = command(ssub, "validate", "every unique gait of a study under the same disturbances: success rates and the "
                  "Spearman correlation of r* and of steps taken with success", _study_validate,
                  {"--trials": "validate.trials", "--seed": "validate.seed", "--disturbance": "validate.disturbance",
-                  "--steps-after": "validate.steps_after", "--workers": "validate.workers"})
+                  "--steps-after": "validate.steps_after", "--workers": "validate.workers",
+                  "--state": "certify.state", "--set": "certify.set", "--horizon": "certify.horizon",
+                  "--method": "certify.method"})
     va.add_argument("dir", help="study directory")
     va.add_argument("--json", action="store_true", help="print one JSON object: the summary of each kind")
     va.add_argument("--quiet", action="store_true", help="no progress bar")

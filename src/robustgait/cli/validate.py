@@ -9,7 +9,15 @@ from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
 from robustgait.cli.options import output_path
 
 VALIDATE = {"--trials": "validate.trials", "--seed": "validate.seed", "--disturbance": "validate.disturbance",
-            "--steps-after": "validate.steps_after"}
+            "--steps-after": "validate.steps_after", "--state": "certify.state", "--set": "certify.set",
+            "--horizon": "certify.horizon", "--method": "certify.method"}
+CERTIFICATE_KIND = ("certify.state", "certify.set", "certify.horizon")
+
+
+def given(args: argparse.Namespace, paths: tuple[str, ...]) -> bool:
+    """Whether any of these config paths was set by a flag on the command line."""
+    return any(f"cfg:{'|'.join(f.paths)}" in vars(args) and set(f.paths) & set(paths)
+               for f in getattr(args, "robustgait_flags", []))
 
 
 def _validate(args: argparse.Namespace) -> int:
@@ -17,8 +25,10 @@ def _validate(args: argparse.Namespace) -> int:
 
     config, robot, gait = inputs(args)
     cfg = config.validate
+    # with --certificate the file says what was certified; --state/--set/--horizon given too must agree with it
+    certify = config.certify if args.certificate is None or given(args, CERTIFICATE_KIND) else None
     with about(args.gait):
-        res = validate_gait(robot, gait, cfg, certify=config.certify, sim=config.sim, certificate=args.certificate,
+        res = validate_gait(robot, gait, cfg, certify=certify, sim=config.sim, certificate=args.certificate,
                             progress=not args.json and sys.stderr.isatty())
     if args.output is not None:  # the results first: they took minutes, the figure is redrawn from them
         from robustgait.io.output import write_text
@@ -32,10 +42,15 @@ def _validate(args: argparse.Namespace) -> int:
         print(res.to_json(trials=False))
         return 0
     c = res.certificate
-    print(f"{robot.name}: r* = {c.r_star:.4f} rad/s ({'closed' if c.attained else 'open'} ball, {c.map} map, "
-          f"certificate {c.source}); {cfg.trials} trials per kind, seed {cfg.seed}, success = no fall in "
-          f"{cfg.steps_after} steps after the first switching event")
-    print(f"{'kind':<9} {'success [95% CI]':<24} {'half fail at (± s.e.)':<30} {'falls inside B(r*)':<26} "
+    from robustgait.config.certify import R_MAX_UNIT
+
+    name = "J*" if c.space == "push" else "r*"
+    energy = "" if c.energy is None else f", E* = {c.energy:.4g} J"
+    print(f"{robot.name}: {name} = {c.r_star:.4g} {R_MAX_UNIT[c.space]}{energy} ({'closed' if c.attained else 'open'} "
+          f"{c.space} {c.set}, horizon {c.horizon}, {c.map} map, certificate {c.source}); {cfg.trials} trials per "
+          f"kind, seed {cfg.seed}, success = no fall in {cfg.steps_after} steps after the first switching event")
+    inside = "pushes |J| ≤ J* that fell" if c.space == "push" else "falls inside the set"
+    print(f"{'kind':<9} {'success [95% CI]':<24} {'half fail at (± s.e.)':<30} {inside:<26} "
           f"{'falls outside':<24} {'fell before event':>17}")
     for kind, kr in res.kinds.items():
         sr, fit, chk = kr.success_rate(), kr.critical(), kr.certificate_check()
@@ -47,6 +62,13 @@ def _validate(args: argparse.Namespace) -> int:
             crit = f"— ({fit.note})"
         print(f"{kind:<9} {rate_text(sr):<24} {crit:<30} {rate_text(chk['inside']):<26} "
               f"{rate_text(chk['outside']):<24} {chk['fell_before_event']:>17}")
+        q = kr.summary()["energy"]
+        if q is not None:
+            line = (f"          kinetic energy added at the first section: median {q['median']:.3g} J "
+                    f"[{q['q25']:.3g}, {q['q75']:.3g}]")
+            if "energy_below_star" in chk:
+                line += f"; falls among trials adding ≤ E*: {rate_text(chk['energy_below_star'])}"
+            print(line)
     print(f"time: setup {res.seconds['setup']:.1f} s, " + ", ".join(
         f"{k} {v.seconds:.1f} s" for k, v in res.kinds.items()))
     for what, out in (("plot", args.plot), ("results", args.output)):

@@ -41,13 +41,19 @@ from robustgait.config.base import (
     to_toml,
 )
 from robustgait.config.certify import (
+    DEFAULT_R_MAX,
+    R_MAX_UNIT,
     Barrier,
+    CertifiedSet,
     CertifyConfig,
+    CertifyDisturbance,
+    EllipsoidConfig,
     Frame,
     MapKind,
     Method,
     Reconstruction,
     SequentialConfig,
+    State,
     verification_beta,
     verification_size,
 )
@@ -82,6 +88,13 @@ class Config:
     report: ReportConfig = dataclasses.field(default_factory=ReportConfig)
 
     @property
+    def study_certify(self) -> CertifyConfig:
+        """The certificate a study's evaluation computes: ``certify``, of pushes (J*) for the ``push`` metric."""
+        if self.study.metric == "push":
+            return dataclasses.replace(self.certify, disturbance="push")
+        return self.certify
+
+    @property
     def params(self) -> GaitParams:
         """The gait parameters with the step duration resolved for ``generate.domains``."""
         return self.gait.resolved(self.generate.domains)
@@ -91,6 +104,7 @@ class Config:
         d = self.generate.domains
         return {
             "gait.step_duration": f"not set: {DEFAULT_STEP_DURATION[d]:g} s, the default of {d} gaits",
+            "certify.r_max": "not set: " + ", ".join(f"{v:g} {R_MAX_UNIT[k]} ({k})" for k, v in DEFAULT_R_MAX.items()),
             "generate.ds_free_joints": "not set: picked from the joint axes",
             "study.storage": "not set: a SQLite file in the study directory",
             "run.workers": f"not set: min(cores, 2) = {default_workers()} here",
@@ -139,13 +153,17 @@ def with_overrides(base: Config, overrides: dict[str, Any], source: str | None =
 
 
 __all__ = [
+    "DEFAULT_R_MAX",
     "DEFAULT_STEP_DURATION",
     "DEMO_DIRECTORY",
     "DEMO_ROBOT",
     "KINDS",
     "PRESETS",
+    "R_MAX_UNIT",
     "Barrier",
+    "CertifiedSet",
     "CertifyConfig",
+    "CertifyDisturbance",
     "CompareConfig",
     "Config",
     "ConfigError",
@@ -153,6 +171,7 @@ __all__ = [
     "DisturbanceKind",
     "Doc",
     "DomainGraph",
+    "EllipsoidConfig",
     "FieldInfo",
     "Frame",
     "GaitParams",
@@ -169,6 +188,7 @@ __all__ = [
     "SequentialConfig",
     "SimConfig",
     "Stance",
+    "State",
     "StudyConfig",
     "Switching",
     "ValidateConfig",

@@ -6,13 +6,22 @@ import dataclasses
 import math
 from typing import Annotated, Literal
 
-from robustgait.config.base import Doc, FieldProblem, Float, Int, config
+from robustgait.config.base import Bool, Doc, FieldProblem, Float, Int, config
 
 Method = Literal["sequential", "uniform"]
 Barrier = Literal["ball", "paper"]
 MapKind = Literal["step", "stride"]
 Frame = Literal["heading", "world", "body"]
 Reconstruction = Literal["holonomic", "angular-only"]
+State = Literal["omega", "centroidal", "velocity"]
+CertifiedSet = Literal["ball", "ellipsoid"]
+CertifyDisturbance = Literal["state", "push"]
+
+# r_max when unset: the paper's 2 rad/s for ``omega``; for the energy states a ball of twice-kinetic-energy radius
+# (√J) and for pushes an impulse (N s) — both well beyond what the exo gaits absorb (docs/certificate.md)
+DEFAULT_R_MAX = {"omega": 2.0, "centroidal": 10.0, "velocity": 10.0, "push": 100.0}
+R_MAX_UNIT = {"omega": "rad/s", "centroidal": "√J", "velocity": "√J", "push": "N s"}
+R_MAX_LIMIT = {"omega": 10.0, "centroidal": 1000.0, "velocity": 1000.0, "push": 10_000.0}
 
 SEED_LIMIT = 2**63 - 1  # a seed fits a signed 64-bit integer (study storage)
 
@@ -53,6 +62,17 @@ class SequentialConfig:
 
 
 @config
+class EllipsoidConfig:
+    """How the shape S of the ellipsoid {δ : δᵀ S δ ≤ r²} is found (:mod:`robustgait.shape`): a least-squares fit
+    of the certified map's linearization A at x* on a small ball, then AᵀSA − S = −I, det S = 1."""
+
+    fit_samples: Annotated[Int, Doc("map evaluations of the fit (uniform in the fit ball)", ge=4, le=10_000)] = 64
+    fit_radius: Annotated[Float, Doc("radius of the fit ball, as a fraction of r_max", gt=0.0, le=1.0)] = 0.05
+    compare_ball: Annotated[Bool, Doc("also certify the ball of the same state and report the ellipsoid's volume "
+                                      "ratio to it (twice the samples)")] = False
+
+
+@config
 class CertifyConfig:
     """Options of a certificate: the estimator (``sequential``: rounds with a verified bound; ``uniform``: the
     paper's N samples uniform in B(r_max)), the DTBF (barrier, α, r_max), the confidence 1 − β, the seed of the
@@ -62,8 +82,22 @@ class CertifyConfig:
     method: Annotated[Method, Doc(
         "r* estimator: sequential (rounds inside B(r̂) until a fresh batch certifies the violating fraction ≤ "
         "epsilon) or uniform (the paper's N samples in B(r_max))")] = "sequential"
+    state: Annotated[State, Doc(
+        "reduced state certified: omega (the paper's base angular velocity, rad/s), centroidal (centroidal momentum, "
+        "kinetic-energy metric) or velocity (every contact-consistent velocity, kinetic-energy metric)")] = "omega"
+    set: Annotated[CertifiedSet, Doc(
+        "certified set: ball (in the state's metric) or ellipsoid (shaped by the map's linearization at x*)")] = "ball"
+    horizon: Annotated[Int, Doc("steps k between a sample and the iterate the DTBF condition is checked on (no fall "
+                                "within the k steps)", ge=1, le=10)] = 1
+    disturbance: Annotated[CertifyDisturbance, Doc(
+        "what is certified: state (a ball of perturbed states, r*) or push (a disk of push impulses at the "
+        "validation's push duration and phases, J*)")] = "state"
+    push_steps: Annotated[Int, Doc("push: steps after the pushed one within which a fall is a failure", ge=1,
+                                   le=100)] = 3
     n_samples: Annotated[Int, Doc("uniform: number of sampled perturbations N", ge=1, le=10_000)] = 200
-    r_max: Annotated[Float, Doc("radius of the sampled ball", unit="rad/s", gt=0.0, le=10.0)] = 2.0
+    r_max: Annotated[Float | None, Doc(
+        "radius of the sampled ball (unset: 2 rad/s for omega, 10 √J for centroidal and velocity, 100 N s for push)",
+        gt=0.0, le=10_000.0)] = None
     alpha: Annotated[Float, Doc("DTBF decay rate α", gt=0.0, lt=1.0)] = 0.05
     beta: Annotated[Float, Doc("1 − confidence of the violation bound", gt=0.0, lt=1.0)] = 0.05
     seed: Annotated[Int, Doc("seed of the perturbations", ge=0, le=SEED_LIMIT)] = 0
@@ -77,8 +111,12 @@ class CertifyConfig:
                                      le=1000)] = 10
     fp_max_steps: Annotated[Int, Doc("fixed point: give up after this many steps", ge=1, le=1000)] = 100
     sequential: SequentialConfig = dataclasses.field(default_factory=SequentialConfig)
+    ellipsoid: EllipsoidConfig = dataclasses.field(default_factory=EllipsoidConfig)
 
     def __post_init__(self) -> None:
+        if self.r_max is not None and self.r_max > R_MAX_LIMIT[self.space]:
+            raise FieldProblem("r_max", f"must satisfy 0 < x ≤ {R_MAX_LIMIT[self.space]:g} {R_MAX_UNIT[self.space]} "
+                               f"when certifying {self.space} (got {self.r_max:g})")
         seq = self.sequential
         need = seq.first_round + verification_size(seq.epsilon, self.beta, 1)
         if self.method == "sequential" and seq.budget < need:
@@ -87,11 +125,36 @@ class CertifyConfig:
                                f"epsilon = {seq.epsilon:g}, beta = {self.beta:g})")
 
     @property
+    def space(self) -> str:
+        """What the certified radius measures: the reduced state's name, or ``push``."""
+        return "push" if self.disturbance == "push" else self.state
+
+    @property
+    def radius(self) -> float:
+        """r_max in effect: the field, or the default of the space (:data:`DEFAULT_R_MAX`)."""
+        return self.r_max if self.r_max is not None else DEFAULT_R_MAX[self.space]
+
+    @property
+    def unit(self) -> str:
+        """Unit of r* and of the certificate's coordinates."""
+        return R_MAX_UNIT[self.space]
+
+    @property
     def min_steps(self) -> int:
         """Least fixed-point steps in effect: fp_min_steps, or fp_max_steps if that is smaller."""
         return min(self.fp_min_steps, self.fp_max_steps)
 
     @property
     def samples_planned(self) -> int:
-        """Most map evaluations of the estimator: N (uniform) or the budget (sequential)."""
-        return self.n_samples if self.method == "uniform" else self.sequential.budget
+        """Most map evaluations of the estimator: N (uniform) or the budget (sequential), plus the ellipsoid's fit."""
+        n = self.n_samples if self.method == "uniform" else self.sequential.budget
+        if self.set != "ellipsoid" or self.disturbance != "state":
+            return n
+        return n + self.ellipsoid.fit_samples + (n if self.ellipsoid.compare_ball else 0)
+
+    @property
+    def steps_per_sample(self) -> int:
+        """Steps simulated per sample at most: the horizon (× 2 for the stride map), or a push's steps."""
+        if self.disturbance == "push":
+            return 1 + self.push_steps
+        return self.horizon * (2 if self.map == "stride" else 1)

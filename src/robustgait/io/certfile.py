@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -18,8 +19,10 @@ from robustgait.io.schema import read_json, table, validate
 @table(extra="ignore")
 class CertificateFile:
     """What ``validate`` needs of a certificate JSON (:meth:`robustgait.certify.GaitCertificate.to_dict`; its other
-    keys are ignored): status, r*, whether the supremum is attained, x̄*, the map, frame, reconstruction and the
-    certificate's config (its fixed-point search)."""
+    keys are ignored): status, r*, whether the supremum is attained, z* (the centre in the certificate's coordinates),
+    the map, frame, reconstruction, the coordinates' transform T (z = T x̄; absent in certificates of the base angular
+    velocity written before states were a choice: the identity), E* and the certificate's config (its state, set,
+    horizon and fixed-point search)."""
 
     r_star: Annotated[Float, Doc(ge=0.0)]
     attained: Bool
@@ -28,14 +31,36 @@ class CertificateFile:
     frame: Frame
     reconstruction: Reconstruction
     config: dict[str, Any] = dataclasses.field(default_factory=dict)
+    coordinates: dict[str, Any] | None = None
+    energy: Annotated[Float, Doc(ge=0.0)] | None = None
+
+    def transform(self, src: str | Path) -> list[list[float]] | None:
+        """T (k, k) of the certificate's coordinates, checked square of the size of x*; None if absent."""
+        t = (self.coordinates or {}).get("transform")
+        if t is None:
+            return None
+        k = len(self.x_star)
+        if (not isinstance(t, list) or len(t) != k
+                or not all(isinstance(r, list) and len(r) == k and all(isinstance(v, (int, float)) and
+                                                                       not isinstance(v, bool) and math.isfinite(v)
+                                                                       for v in r) for r in t)):
+            raise input_error(src, f"coordinates.transform must be a {k} × {k} matrix of finite numbers")
+        return [[float(v) for v in r] for r in t]
 
     def certify_config(self, src: str | Path) -> CertifyConfig:
-        """The certificate's own options (a certificate of an older version: the fields it has)."""
+        """The certificate's own options (a certificate of an older version: the fields it has; one written before
+        states were a choice certified the base angular velocity in a ball, one step)."""
         from robustgait.config import from_dict
 
         keep = {k: v for k, v in self.config.items() if k in {f.name for f in dataclasses.fields(CertifyConfig)}}
+        for k, v in (("state", "omega"), ("set", "ball"), ("horizon", 1), ("disturbance", "state")):
+            keep.setdefault(k, v)
         keep.update({"map": self.map, "frame": self.frame, "reconstruction": self.reconstruction})
-        return from_dict(CertifyConfig, keep, f"{src}: config", "json")
+        cfg = from_dict(CertifyConfig, keep, f"{src}: config", "json")
+        want = 2 if cfg.disturbance == "push" else {"omega": 3, "centroidal": 6}.get(cfg.state)
+        if want is not None and len(self.x_star) != want:
+            raise input_error(src, f"x_star has {len(self.x_star)} values, a {cfg.space} certificate has {want}")
+        return cfg
 
 
 def read_certificate(path: str | Path) -> CertificateFile:

@@ -7,6 +7,7 @@ that a study's objective value (what Optuna's tools plot) orders trials exactly 
 * ``robustness`` — a gait that walks the step cap beats one that falls; among walkers the higher r*
   wins; among fallers the one with more steps: score = cap + r* for a walker, steps for a faller
   (steps < cap ≤ cap + r*). A failed generation is a faller with 0 steps.
+* ``push`` — as ``robustness`` with the push certificate J* [N s] (``certify --disturbance push``) for r*.
 * ``stability`` — the paper's baseline: steps only, score = steps taken (r* is ignored, so all the
   gaits that walk the cap tie).
 """
@@ -23,7 +24,7 @@ from robustgait.errors import RobustGaitError
 @dataclass(frozen=True)
 class Outcome:
     """What an oracle sees of one evaluated gait: steps completed (0 if generation failed), the step cap
-    of the walk, and r* (0 when the gait was not certified)."""
+    of the walk, and r* (J* for the push metric; 0 when the gait was not certified)."""
 
     steps_taken: int
     step_cap: int
@@ -35,8 +36,9 @@ class Outcome:
 
 
 def score(metric: Metric | str, outcome: Outcome) -> float:
-    """The oracle's scalar: robustness = cap + r* if the gait walked the cap, else steps; stability = steps."""
-    if metric == "robustness":
+    """The oracle's scalar: robustness (push) = cap + r* (J*) if the gait walked the cap, else steps; stability =
+    steps."""
+    if metric in ("robustness", "push"):
         return float(outcome.step_cap + outcome.r_star) if outcome.walked_cap else float(outcome.steps_taken)
     if metric == "stability":
         return float(outcome.steps_taken)

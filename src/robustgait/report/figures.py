@@ -12,11 +12,15 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from numpy.typing import NDArray
 
 from robustgait.barrier import BarrierTrace, Certificate
 from robustgait.io.output import atomic_output, check_output
+from robustgait.reduced import Coordinates
 
-LABELS = ("ω_x [rad/s]", "ω_y [rad/s]", "ω_z [rad/s]")
+FloatArray = NDArray[np.float64]
+
+OMEGA_LABELS = ("ω_x", "ω_y", "ω_z")
 COLORS = {"satisfies": "tab:green", "violates": "tab:orange", "fell": "tab:red"}
 
 
@@ -39,64 +43,127 @@ def _save(fig: Figure, path: str | Path) -> Path:
     return Path(path)
 
 
-def _zoom(cert: Certificate) -> float:
-    """Half-width of the spatial panels: the whole sampled ball, or 3 r* when r* is much smaller."""
-    return float(cert.r_max if cert.r_star <= 0 else min(cert.r_max, 3.0 * cert.r_star))
+def _axis_labels(coordinates: Coordinates | None, dim: int, shaped: bool) -> list[str]:
+    """Names of the plotted axes: the state's coordinates, or the ellipsoid's axes (longest first)."""
+    unit = coordinates.unit if coordinates is not None else "rad/s"
+    space = coordinates.space if coordinates is not None else "omega"
+    if shaped:
+        return [f"ellipsoid axis {i + 1} [{unit}]" for i in range(dim)]
+    if space == "omega":
+        return [f"{n} [{unit}]" for n in OMEGA_LABELS]
+    if space == "push":
+        return ["J_x (heading frame) [N s]", "J_y [N s]"]
+    if space == "centroidal":
+        names = ["p_x/√m", "p_y/√m", "p_z/√m", "(I_c^-½ L)_1", "(I_c^-½ L)_2", "(I_c^-½ L)_3"]
+        return [f"{n} [{unit}]" for n in names]
+    return [f"y_{i + 1} [{unit}]" for i in range(dim)]
 
 
-def plot_certificate(cert: Certificate, path: str | Path, *, title: str = "") -> Path:
+def _ellipse(s_inv: FloatArray, r: float, n: int = 200) -> FloatArray:
+    """(n, 2) boundary of the 2-D shadow {p : pᵀ (S⁻¹)_sub⁻¹ p ≤ r²} of an ellipsoid {yᵀ S y ≤ r²}."""
+    t = np.linspace(0, 2 * np.pi, n)
+    chol = np.linalg.cholesky(s_inv)
+    return np.asarray((r * chol @ np.stack([np.cos(t), np.sin(t)])).T)
+
+
+def plot_certificate(cert: Certificate, path: str | Path, *, title: str = "", coordinates: Coordinates | None = None,
+                     ball: Certificate | None = None) -> Path:
     """The certified invariant set (paper Fig. 4) and how the estimator got there. Writes ``path``
     (PNG/PDF/SVG by extension).
 
-    Top left: samples in the 3-D reduced space coloured by outcome at r*, with the r* sphere; then the three
-    2-D projections (circles of radius r* around x*). The spatial panels show the cube of half-width
-    min(r_max, 3 r*) around x*. Bottom middle: each sample's distance ‖x_i − x*‖ against its index,
-    coloured by the round it came from (uniform / exploration / verification), with r̂ after each round.
-    Bottom right: r̂ against samples used.
+    Samples are drawn in the state's metric coordinates y (the ball is a disk there; ``coordinates`` gives them —
+    without it the certificate's own coordinates, the paper's ω), coloured by outcome at r*. For an ellipsoid the
+    axes are the ellipsoid's principal axes (longest first) and both certified sets are drawn: the ellipsoid's
+    shadow and, when ``ball`` (the ball of the same state) is given, its disk. Top row: the image distance
+    ‖P(x) − x*‖ against the sample's (the DTBF boundary p² = α r*² + (1 − α) d² dashed), then the 2-D projections
+    on axes (1, 2) and (1, 3) (for a 3-D ball, the first panel is the 3-D view). Bottom: projection (2, 3), each
+    sample's distance by round, r̂ against samples used.
     """
     check_output(path, "plot")
-    x = np.asarray(cert.samples)
-    xs = np.asarray(cert.x_star)
-    if x.shape[1] != 3:
-        raise ValueError("plot_certificate draws 3-D reduced states")
+    z = np.asarray(cert.samples)
+    k = z.shape[1]
+    zs = np.asarray(cert.x_star)
+    s_mat = coordinates.shape.s if coordinates is not None else np.eye(k)
+    shaped = not np.allclose(s_mat, np.eye(k))
+    c_t = np.linalg.cholesky(s_mat).T  # z − z* = Cᵀ y
+    y = np.linalg.solve(c_t, (z - zs).T).T
+    if shaped:
+        w, v = np.linalg.eigh(s_mat)  # smallest eigenvalue first: the longest axis first
+        view = v
+    else:
+        w, view = np.ones(k), np.eye(k)
+    yv = y @ view
+    s_inv_view = view.T @ np.linalg.inv(s_mat) @ view
+    labels = _axis_labels(coordinates, k, shaped)
     masks = outcome_masks(cert)
-    half = _zoom(cert)
-    near = np.all(np.abs(x - xs) <= half, axis=1)
-    fig = plt.figure(figsize=(17, 10))
-    ax3 = fig.add_subplot(2, 3, 1, projection="3d")
-    for name, m in masks.items():
-        ax3.scatter(*x[m & near].T, s=8, c=COLORS[name], label=f"{name} ({int(m.sum())})", depthshade=False)
-    u, v = np.mgrid[0:2 * np.pi:40j, 0:np.pi:20j]
     r = cert.r_star
-    ax3.plot_wireframe(xs[0] + r * np.cos(u) * np.sin(v), xs[1] + r * np.sin(u) * np.sin(v),
-                       xs[2] + r * np.cos(v), color="tab:blue", linewidth=0.4, alpha=0.6)
-    for k, set_lim in enumerate((ax3.set_xlim, ax3.set_ylim, ax3.set_zlim)):
-        set_lim(xs[k] - half, xs[k] + half)
-    ax3.set_xlabel(LABELS[0])
-    ax3.set_ylabel(LABELS[1])
-    ax3.set_zlabel(LABELS[2])
-    ax3.legend(loc="upper left", fontsize=8)
-    t = np.linspace(0, 2 * np.pi, 200)
-    for k, (i, j) in enumerate(((0, 1), (0, 2), (1, 2))):
-        ax = fig.add_subplot(2, 3, k + 2 if k < 2 else 4)
+    rb = ball.r_star if ball is not None else (r if not shaped else None)
+    longest = float(1.0 / np.sqrt(w.min())) if shaped else 1.0
+    half = float(cert.r_max if r <= 0 else min(cert.r_max * longest, 3.0 * r * longest))
+    near = np.all(np.abs(yv) <= half, axis=1)
+    fig = plt.figure(figsize=(17, 10))
+    if k == 3 and not shaped:
+        ax3 = fig.add_subplot(2, 3, 1, projection="3d")
         for name, m in masks.items():
-            ax.scatter(x[m & near, i], x[m & near, j], s=8, c=COLORS[name], marker="x" if name == "fell" else "o")
-        ax.plot(xs[i] + r * np.cos(t), xs[j] + r * np.sin(t), color="tab:blue", label=f"r* = {r:.3f}")
-        ax.plot(xs[i] + cert.r_max * np.cos(t), xs[j] + cert.r_max * np.sin(t), color="0.6", ls="--",
-                label=f"r_max = {cert.r_max:g}")
-        ax.plot(xs[i], xs[j], "k+", ms=12)
-        ax.set_xlim(xs[i] - half, xs[i] + half)
-        ax.set_ylim(xs[j] - half, xs[j] + half)
-        ax.set_xlabel(LABELS[i])
-        ax.set_ylabel(LABELS[j])
+            ax3.scatter(*yv[m & near].T, s=8, c=COLORS[name], label=f"{name} ({int(m.sum())})", depthshade=False)
+        u, vv = np.mgrid[0:2 * np.pi:40j, 0:np.pi:20j]
+        ax3.plot_wireframe(r * np.cos(u) * np.sin(vv), r * np.sin(u) * np.sin(vv), r * np.cos(vv),
+                           color="tab:blue", linewidth=0.4, alpha=0.6)
+        for set_lim in (ax3.set_xlim, ax3.set_ylim, ax3.set_zlim):
+            set_lim(-half, half)
+        ax3.set_xlabel("δ" + labels[0])
+        ax3.set_ylabel("δ" + labels[1])
+        ax3.set_zlabel("δ" + labels[2])
+        ax3.legend(loc="upper left", fontsize=8)
+    else:
+        _plot_distances(cert, fig.add_subplot(2, 3, 1))
+    planes = [(0, 1), (0, 2), (1, 2)] if k >= 3 else [(0, 1)]
+    slots = [2, 3, 4]
+    t = np.linspace(0, 2 * np.pi, 200)
+    for (i, j), slot in zip(planes, slots, strict=False):
+        ax = fig.add_subplot(2, 3, slot)
+        for name, m in masks.items():
+            ax.scatter(yv[m & near, i], yv[m & near, j], s=8, c=COLORS[name], marker="x" if name == "fell" else "o",
+                       label=f"{name} ({int(m.sum())})")
+        if shaped:
+            e = _ellipse(s_inv_view[np.ix_([i, j], [i, j])], r)
+            ax.plot(e[:, 0], e[:, 1], color="tab:blue", label=f"ellipsoid r* = {r:.3g}")
+        if rb is not None:
+            ax.plot(rb * np.cos(t), rb * np.sin(t), color="tab:blue" if not shaped else "tab:gray",
+                    ls="-" if not shaped else "--", label=f"ball r* = {rb:.3g}")
+        ax.plot(0, 0, "k+", ms=12)
+        ax.set_xlim(-half, half)
+        ax.set_ylim(-half, half)
+        ax.set_xlabel("δ" + labels[i])
+        ax.set_ylabel("δ" + labels[j])
         ax.set_aspect("equal")
-        if k == 0:
+        if slot == 2:
             ax.legend(fontsize=8)
     _plot_rounds(cert, fig.add_subplot(2, 3, 5), fig.add_subplot(2, 3, 6))
     n = f"N = {cert.n_samples}" + (f" in {len(cert.rounds)} rounds" if len(cert.rounds) > 1 else "")
     fig.suptitle(title or f"DTBF certificate ({cert.method}): r* = {r:.4f}, {n}, α = {cert.alpha:g} "
                  f"({cert.n_inside} samples inside, {int(np.sum(cert.fell))} fell)")
     return _save(fig, path)
+
+
+def _plot_distances(cert: Certificate, ax: Axes) -> None:
+    """Image distance p = ‖P(x) − x*‖ against the sample's d (falls on top), with the DTBF boundary at r*."""
+    d = np.linalg.norm(np.asarray(cert.samples) - np.asarray(cert.x_star), axis=1)
+    with np.errstate(invalid="ignore"):
+        p = np.linalg.norm(np.asarray(cert.images) - np.asarray(cert.x_star), axis=1)
+    masks = outcome_masks(cert)
+    top = float(np.nanmax(np.concatenate([d, p[np.isfinite(p)]]))) * 1.05 if d.size else 1.0
+    for name, m in masks.items():
+        ax.scatter(d[m], np.full(int(m.sum()), top) if name == "fell" else p[m], s=6, c=COLORS[name],
+                   marker="x" if name == "fell" else "o", label=f"{name} ({int(m.sum())})")
+    dd = np.linspace(0, max(cert.r_star, 1e-12), 100)
+    ax.plot(dd, np.sqrt(cert.alpha * cert.r_star ** 2 + (1 - cert.alpha) * dd ** 2), "b--", lw=0.8,
+            label="DTBF boundary at r*")
+    ax.plot([0, top], [0, top], color="0.6", lw=0.6)
+    ax.axvline(cert.r_star, color="tab:blue", ls=":", lw=0.8)
+    ax.set_xlabel("‖x − x*‖ (sample)")
+    ax.set_ylabel("‖P(x) − x*‖ (image; falls at the top)")
+    ax.legend(fontsize=8)
 
 
 ROUND_COLORS = {"uniform": "tab:gray", "explore": "tab:purple", "verify": "tab:cyan"}
@@ -124,9 +191,9 @@ def _plot_rounds(cert: Certificate, ax_d: Axes, ax_r: Axes) -> None:
         if rd.kind == "verify":
             ax_r.plot(rd.samples_used, rd.r_hat, "o" if rd.passed else "x", color="tab:green" if rd.passed
                       else "tab:red", ms=8, label=f"verification {'passed' if rd.passed else 'failed'}")
-    ax_d.set_ylabel("‖x_i − x*‖ [rad/s] (colour: round kind)")
+    ax_d.set_ylabel("‖x_i − x*‖ (colour: round kind)")
     ax_d.legend(fontsize=8, loc="upper right")
-    ax_r.set_ylabel("r̂ [rad/s]")
+    ax_r.set_ylabel("r̂")
     handles, labels = ax_r.get_legend_handles_labels()
     uniq = dict(zip(labels, handles, strict=True))
     ax_r.legend(uniq.values(), uniq.keys(), fontsize=8)

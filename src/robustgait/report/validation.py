@@ -12,6 +12,7 @@ from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
 from scipy.special import expit
 
+from robustgait.config import R_MAX_UNIT, CertifyConfig
 from robustgait.report.figures import _save, plt
 from robustgait.validate.stats import binned_rates, correlation_text
 
@@ -25,7 +26,9 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
     against the size, by outcome, with r*. Writes ``path`` (PNG/PDF/SVG by extension)."""
     kinds = list(result.kinds.values())
     fig, axes = plt.subplots(len(kinds), 2, figsize=(11, 3.4 * len(kinds)), squeeze=False)
-    r_star = result.certificate.r_star
+    ref = result.certificate
+    r_star, cunit = ref.r_star, R_MAX_UNIT[ref.space]
+    star = "J*" if ref.space == "push" else "r*"
     for row, kr in zip(axes, kinds, strict=True):
         name, unit = kr.size_label
         a1, a2 = row
@@ -53,15 +56,16 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
         for ok, color, label in ((True, "tab:green", "walked"), (False, "tab:red", "fell")):
             m = reached & (kr.success == ok)
             a2.scatter(kr.size[m], kr.distance[m], s=8, c=color, label=f"{label} ({int(m.sum())})")
-        a2.axhline(r_star, color="tab:blue", lw=1, label=f"r* = {r_star:.3f}")
+        a2.axhline(r_star, color="tab:blue", lw=1, label=f"{star} = {r_star:.3g} {cunit}")
         chk = kr.certificate_check()
         inside = chk["inside"]
         n_in = getattr(inside, "n", 0)
         k_in = getattr(inside, "k", 0)
         a2.set_yscale("log")
         a2.set_xlabel(f"{name} [{unit}]")
-        a2.set_ylabel("‖x̄₁ − x̄*‖ [rad/s]")
-        a2.set_title(f"inside B(r*): {k_in}/{n_in} fell; {chk['fell_before_event']} fell before the event",
+        a2.set_ylabel("impulse |J| [N s]" if ref.space == "push" else f"‖z₁ − z*‖ ({ref.space} {ref.set}) [{cunit}]")
+        inside_what = "|J| ≤ J*" if ref.space == "push" else "inside the set"
+        a2.set_title(f"{inside_what}: {k_in}/{n_in} fell; {chk['fell_before_event']} fell before the event",
                      fontsize=10)
         a2.legend(fontsize=7)
     fig.suptitle(title or f"{result.robot}: validation ({result.config.trials} trials per kind, seed "
@@ -88,8 +92,10 @@ def plot_study_validation(summary: dict[str, Any], path: str | Path) -> Path:
     steps = np.array([r["steps_taken"] for r in rows], dtype=float)
     norm = Normalize(vmin=0.0, vmax=float(cap))
     cmap = plt.get_cmap("viridis")
-    panels = ((axes[0], "r_star", "r* in the study [rad/s]"), (axes[1], "steps_taken", f"steps taken in the study "
-                                                                                        f"(cap {cap})"))
+    cert = CertifyConfig(**{k: v for k, v in summary["certify"].items() if k in ("state", "disturbance")})
+    star = "J*" if cert.space == "push" else "r*"
+    panels = ((axes[0], "r_star", f"{star} ({cert.space}) [{cert.unit}]"),
+              (axes[1], "steps_taken", f"steps taken in the study (cap {cap})"))
     for ax, key, label in panels:
         x = np.array([r[key] for r in rows], dtype=float)
         if rows:

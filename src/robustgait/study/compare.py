@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from robustgait.certify import certify_gait
-from robustgait.config import CertifyConfig, CompareConfig, SimConfig
+from robustgait.config import CertifyConfig, CompareConfig, SimConfig, ValidateConfig
 from robustgait.errors import input_error
 from robustgait.gait import Gait
 from robustgait.io.gaitfile import load_gait
@@ -24,12 +24,12 @@ from robustgait.study.status import study_status
 
 
 def recertify(robot: Robot, gait: Gait, config: CertifyConfig, seeds: Sequence[int],
-              sim: SimConfig | None = None) -> list[dict[str, Any]]:
+              sim: SimConfig | None = None, validate: ValidateConfig | None = None) -> list[dict[str, Any]]:
     """Certify ``gait`` once per seed (``config`` with its seed replaced); a failed certificate (a fall, no
     fixed point) counts r* = 0 with its status and reason."""
     out = []
     for s in seeds:
-        gc = certify_gait(robot, gait, dataclasses.replace(config, seed=int(s)), sim)
+        gc = certify_gait(robot, gait, dataclasses.replace(config, seed=int(s)), sim, validate=validate)
         out.append({"seed": int(s), "r_star": float(gc.r_star) if gc.ok else 0.0, "status": gc.status,
                     "reason": gc.reason, "n_inside": gc.certificate.n_inside if gc.certificate is not None else 0})
     return out
@@ -42,7 +42,7 @@ def compare_studies(dir_a: str | Path, dir_b: str | Path, config: CompareConfig 
     config = config or CompareConfig()
     dirs = [Path(dir_a), Path(dir_b)]
     setups = [load_config(d) for d in dirs]
-    certify, sim = setups[0].config.certify, setups[0].config.sim
+    certify, sim = setups[0].config.study_certify, setups[0].config.sim
     if config.samples is not None:
         certify = dataclasses.replace(certify, n_samples=config.samples)
     cap = sim.step_cap
@@ -57,16 +57,17 @@ def compare_studies(dir_a: str | Path, dir_b: str | Path, config: CompareConfig 
         robot = load_robot(setup.robot)
         gait = load_gait(d / best["gait_file"], robot)
         w = walk(robot, gait, sim)
-        certs = recertify(robot, gait, certify, seed_list, sim)
+        certs = recertify(robot, gait, certify, seed_list, sim, setups[0].config.validate)
         r = np.array([c["r_star"] for c in certs])
         studies.append({"directory": str(d), "metric": cfg.metric, "learner": cfg.learner, "robot": setup.robot,
                         "params": best["params"], "study_r_star": best["r_star"], "steps_taken": w.steps_taken,
                         "fell": w.fell, "r_star": r.tolist(), "r_star_mean": float(r.mean()),
                         "r_star_sd": float(r.std(ddof=1)) if r.size > 1 else 0.0, "certificates": certs})
     ma, mb = studies[0]["r_star_mean"], studies[1]["r_star_mean"]
-    same = (dataclasses.replace(setups[0].config.certify, seed=0), setups[0].config.sim) == (
-        dataclasses.replace(setups[1].config.certify, seed=0), setups[1].config.sim)
-    return {"seeds": seed_list, "n_samples": certify.n_samples, "step_cap": cap, "studies": studies,
+    same = (dataclasses.replace(setups[0].config.study_certify, seed=0), setups[0].config.sim) == (
+        dataclasses.replace(setups[1].config.study_certify, seed=0), setups[1].config.sim)
+    return {"seeds": seed_list, "n_samples": certify.n_samples, "step_cap": cap, "unit": certify.unit,
+            "certificate": certify.space, "studies": studies,
             "winner": None if ma == mb else (0 if ma > mb else 1),
             "wins_per_seed": [int(np.sum(np.array(studies[0]["r_star"]) > np.array(studies[1]["r_star"]))),
                               int(np.sum(np.array(studies[1]["r_star"]) > np.array(studies[0]["r_star"])))],

@@ -19,7 +19,10 @@ if TYPE_CHECKING:
     from robustgait.robots import Robot
 
 CONFIG_FILE = "study.json"
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
+# fields added to the certificate since format 2, and what a format-2 study certified (the base angular velocity in
+# a ball, one step): a study resumed keeps its certificate whatever today's defaults are
+_CERTIFY_BEFORE_3 = {"state": "omega", "set": "ball", "horizon": 1, "disturbance": "state"}
 
 
 @dataclass(frozen=True)
@@ -53,7 +56,12 @@ def load_config(directory: str | Path) -> StudySetup:
         raise input_error(directory, f"not a study directory (no {CONFIG_FILE})")
     raw = read_json(path, "study config")
     if isinstance(raw, dict) and raw.get("format_version") == 1 and isinstance(raw.get("config"), dict):
-        raw = {"format_version": FORMAT_VERSION, **_from_v1(raw["config"])}
+        raw = {"format_version": 2, **_from_v1(raw["config"])}
+    if isinstance(raw, dict) and raw.get("format_version") == 2 and isinstance(raw.get("config"), dict):
+        certify = raw["config"].get("certify")
+        certify = dict(certify) if isinstance(certify, dict) else {}
+        raw = {**raw, "format_version": FORMAT_VERSION,
+               "config": {**raw["config"], "certify": {**_CERTIFY_BEFORE_3, **certify}}}
     if not (isinstance(raw, dict) and raw.get("format_version") == FORMAT_VERSION and isinstance(raw.get("robot"), str)
             and "config" in raw):
         raise input_error(path, f"unsupported study file (format_version {FORMAT_VERSION} expected)")

@@ -92,7 +92,8 @@ def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
              generator: GaitGenerator | None = None) -> Evaluation:
     """Generate the gait of ``params`` (cold start, ``config.generate``), walk it up to ``config.sim.step_cap``
     steps and, if it walked the cap, certify it (``config.certify``). Pass a ``generator`` built for ``robot`` with
-    ``config.generate`` to reuse it (building costs seconds). Never raises for a bad gait (see :class:`Evaluation`)."""
+    ``config.generate`` to reuse it (building costs seconds). The certificate is ``config.study_certify`` (J* for the
+    ``push`` metric). Never raises for a bad gait (see :class:`Evaluation`)."""
     from robustgait.gaitgen import GaitGenerator
 
     cfg = config or Config()
@@ -122,7 +123,8 @@ def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
     if ev.status == "fell":
         seconds["total"] = t_walk - t0
         return ev
-    gc = certify_gait(robot, res.gait, cfg.certify, cfg.sim)  # a fall, no fixed point: a status, not an exception
+    # a fall, no fixed point: a status, not an exception
+    gc = certify_gait(robot, res.gait, cfg.study_certify, cfg.sim, validate=cfg.validate)
     if gc.ok:
         ev.status, ev.reason = "certified", ""
         ev.r_star = float(gc.r_star)

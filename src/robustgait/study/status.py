@@ -77,6 +77,7 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     state = ("complete" if len(finished) == cfg.iterations else
              "running" if is_running(d) else "stopped")
     return {"directory": str(d.resolve()), "state": state, "robot": setup.robot, "metric": cfg.metric,
+            "unit": setup.config.study_certify.unit, "certificate": setup.config.study_certify.space,
             "learner": cfg.learner, "seed": cfg.seed, "trials_done": done, "trials_planned": cfg.trials_planned,
             "iterations_done": len(finished), "iterations_planned": cfg.iterations,
             "unique_gaits": len({r.index for r in complete}),

@@ -147,22 +147,28 @@ class _Task:
     certify: CertifyConfig
     sim: SimConfig
     kinds: tuple[str, ...]
+    certified: bool = False  # the study certified this gait (its trials start on its periodic orbit)
+    recertify: bool = False  # certify it again with ``certify`` instead of reading the study's certificate
 
 
 def _orbitless_start(robot: Any, gait: Any, c: CertifyConfig) -> tuple[Any, Any]:
     """A start and a :class:`CertificateRef` of r* = 0 for a gait without a certified fixed point: its initial
-    state, x̄ of that state as the 'centre' (there is no ball: nothing lies inside it)."""
-    from robustgait.poincare import FixedPoint, reduce_state
+    state, x̄ of that state (the certificate's state, identity transform) as the 'centre' (there is no set: nothing
+    lies inside it)."""
+    from robustgait.poincare import FixedPoint
+    from robustgait.reduced import ReducedState, reduce_state
     from robustgait.validate.run import CertificateRef
 
     if gait.initial_state is None:
         raise RobustGaitError("the gait has no initial state to start the trials from")
     q, v = gait.initial_state.qpos, gait.initial_state.qvel
-    xbar = reduce_state(q[None], v[None], c.frame)[0]
-    start = FixedPoint(q.copy(), v.copy(), xbar, math.nan, 0, ())
-    ref = CertificateRef(0.0, False, tuple(float(x) for x in xbar), c.map, c.frame, c.reconstruction, c.fp_tol,
-                         c.min_steps, c.fp_max_steps, "none: no certified fixed point (started from the "
-                         "gait's initial state)")
+    start = FixedPoint(q.copy(), v.copy(), reduce_state(q[None], v[None], c.frame)[0], math.nan, 0, ())
+    state = "omega" if c.space == "push" else c.state
+    xbar = ReducedState.at(state, robot, q, v, gait.stance, c).x_star
+    k = xbar.shape[0]
+    ref = CertificateRef(0.0, False, tuple(float(x) for x in xbar), tuple(tuple(r) for r in np.eye(k).tolist()),
+                         c.space, c.set, c.horizon, None, c.map, c.frame, c.reconstruction, c.fp_tol, c.min_steps,
+                         c.fp_max_steps, "none: no certified fixed point (started from the gait's initial state)")
     return start, ref
 
 
@@ -176,7 +182,12 @@ def _validate_one(task: _Task) -> dict[str, Any]:
     try:
         robot = load_robot(task.robot)
         gait = load_gait(task.gait, robot)
-        start, ref = (None, task.certificate) if task.certificate else _orbitless_start(robot, gait, task.certify)
+        if task.certified and task.recertify:
+            start, ref = None, None  # the Validator certifies the gait with task.certify
+        elif task.certificate:
+            start, ref = None, task.certificate
+        else:
+            start, ref = _orbitless_start(robot, gait, task.certify)
         with Validator(robot, gait, task.config, certify=task.certify, sim=task.sim, certificate=ref,
                        start=start) as v:
             kinds = {k: v.run(k).to_dict(trials=True) for k in task.kinds}
@@ -228,10 +239,13 @@ def _load_run(path: Path, key: str, files: str) -> dict[str, Any] | None:
 
 
 def validate_study(directory: str | Path, config: ValidateConfig | None = None,
-                   kinds: Sequence[str] | None = None, *, progress: bool = True) -> dict[str, dict[str, Any]]:
+                   kinds: Sequence[str] | None = None, *, certify: CertifyConfig | None = None,
+                   progress: bool = True) -> dict[str, dict[str, Any]]:
     """Validate every unique gait of the study in ``directory`` against each of ``kinds`` (default
     ``config.kinds``; ``("all",)``: every kind) with one config, the study's certificate and simulation options,
-    in ``config.workers`` processes; write ``DIR/validation/<kind>.json`` per kind and return those summaries
+    in ``config.workers`` processes. ``certify``: certificate options other than the study's (e.g. another state,
+    set or horizon): every gait the study certified is certified again with them and checked against that
+    certificate (its r* is the one correlated); write ``DIR/validation/<kind>.json`` per kind and return those summaries
     ({kind: summary}, see :func:`kind_summary`). Gaits already validated with the same files and config are not
     run again (module docstring)."""
     from robustgait.io.gaitfile import load_gait
@@ -242,7 +256,9 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None,
     d = Path(directory)
     setup = load_config(d)
     cfg = config or ValidateConfig()
-    certify, sim = setup.config.certify, replace(setup.config.sim, n_threads=0)
+    sim = replace(setup.config.sim, n_threads=0)
+    recertify = certify is not None and certify != setup.config.study_certify
+    certify = certify if certify is not None else setup.config.study_certify
     kinds = list(cfg.kinds if kinds is None else (KINDS if "all" in kinds else dict.fromkeys(kinds)))
     for k in kinds:
         if k not in KINDS:
@@ -271,7 +287,8 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None,
         if missing:
             assert g.gait_file is not None
             tasks.append(_Task(g.label, setup.robot, str(d / g.gait_file),
-                               str(d / g.certificate_file) if g.certificate_file else None, cfg, certify, sim, missing))
+                               str(d / g.certificate_file) if g.certificate_file else None, cfg, certify, sim, missing,
+                               certified=g.certificate_file is not None, recertify=recertify))
     errors: dict[str, str] = {}
     with tqdm(total=len(runnable), initial=len(runnable) - len(tasks), desc=f"study validate {','.join(kinds)}",
               unit="gait", file=sys.stderr, disable=not progress, dynamic_ncols=True) as bar, \
@@ -318,7 +335,9 @@ def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim:
     for g in gaits:
         if g.label in stored:
             res = stored[g.label]["result"]
-            rows.append({**g.row(), "start": "fixed_point" if g.certificate_file else "initial_state",
+            cert = stored[g.label]["certificate"]
+            rows.append({**g.row(), "r_star": float(cert["r_star"]) if g.certificate_file else 0.0,
+                         "study_r_star": g.r_star, "start": "fixed_point" if g.certificate_file else "initial_state",
                          "certificate": stored[g.label]["certificate"], "success": res["success"],
                          "critical": res["critical"], "size_range": res["size_range"],
                          "certificate_check": res["certificate_check"] if g.certificate_file else None,
@@ -339,8 +358,12 @@ def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim:
     corr_steps = spearman(steps, success, "steps taken", y)
     if corr_steps.reason.startswith("steps taken is the same") and steps[0] == cap:
         corr_steps = replace(corr_steps, reason=f"{corr_steps.reason}: every validated gait walked the step cap")
+    r_star = np.array([r["r_star"] for r in rows], dtype=float)
+    s50 = np.array([np.nan if r["critical"]["s50"] is None else r["critical"]["s50"] for r in rows], dtype=float)
+    has = np.isfinite(s50)
     correlations: dict[str, Correlation] = {
-        "r_star": spearman(np.array([r["r_star"] for r in rows], dtype=float), success, "r*", y),
+        "r_star": spearman(r_star, success, "r*", y),
+        "r_star_critical": spearman(r_star[has], s50[has], "r*", f"{kind} s₅₀ (gaits with a fit)"),
         "steps_taken": corr_steps}
     return {"format_version": FORMAT_VERSION, "kind": kind, "size": name, "unit": unit, "config": to_dict(config),
             "certify": to_dict(certify), "sim": to_dict(sim), "config_key": key,

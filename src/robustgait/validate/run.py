@@ -31,7 +31,8 @@ from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, SimConfig, V
 from robustgait.config.work import check_work
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.poincare import FixedPoint, ReturnMap, reduce_state
+from robustgait.poincare import FixedPoint, ReturnMap
+from robustgait.reduced import ReducedState
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine, StepInputs
 from robustgait.validate import disturbances as dist
@@ -43,13 +44,20 @@ FloatArray = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class CertificateRef:
-    """What a validation needs of a gait's certificate: r*, whether the supremum is attained (closed ball)
-    or not (open ball), x̄*, the map, frame and reconstruction, the fixed-point search options, and where
-    it came from ("computed" or a file path)."""
+    """What a validation needs of a gait's certificate: r*, whether the supremum is attained (closed set) or not
+    (open set), the centre z* = T x̄* and the transform T (z = T x̄, :class:`robustgait.reduced.Coordinates`) of its
+    coordinates, the space certified (omega, centroidal, velocity, or push: then r* is J* [N s] and the check is on
+    the pushes' impulses), the set and horizon, E* [J] for an energy state, the map, frame, reconstruction, the
+    fixed-point search options, and where it came from ("computed" or a file path)."""
 
     r_star: float
     attained: bool
     x_star: tuple[float, ...]
+    transform: tuple[tuple[float, ...], ...]
+    space: str
+    set: str
+    horizon: int
+    energy: float | None
     map: MapKind
     frame: Frame
     reconstruction: str
@@ -60,12 +68,13 @@ class CertificateRef:
 
     @staticmethod
     def of(gc: GaitCertificate) -> CertificateRef:
-        c, cfg = gc.certificate, gc.config
-        if c is None or gc.fixed_point is None:
+        c, cfg, co = gc.certificate, gc.config, gc.coordinates
+        if c is None or gc.fixed_point is None or co is None:
             raise RobustGaitError(f"the gait has no certificate to validate against ({gc.status}: {gc.reason})")
-        return CertificateRef(float(c.r_star), bool(c.attained), tuple(float(v) for v in c.x_star), cfg.map,
-                              cfg.frame, cfg.reconstruction, cfg.fp_tol, cfg.min_steps, cfg.fp_max_steps,
-                              "computed")
+        return CertificateRef(float(c.r_star), bool(c.attained), tuple(float(v) for v in c.x_star),
+                              tuple(tuple(float(v) for v in row) for row in co.transform), cfg.space, cfg.set,
+                              cfg.horizon, gc.energy, cfg.map, cfg.frame, cfg.reconstruction, cfg.fp_tol,
+                              cfg.min_steps, cfg.fp_max_steps, "computed")
 
     @staticmethod
     def load(path: str | Path) -> CertificateRef:
@@ -74,18 +83,35 @@ class CertificateRef:
 
         c = read_certificate(path)
         cfg = c.certify_config(path)
-        return CertificateRef(c.r_star, c.attained, tuple(c.x_star), cfg.map, cfg.frame, cfg.reconstruction,
-                              cfg.fp_tol, cfg.min_steps, cfg.fp_max_steps, str(path))
+        k = len(c.x_star)
+        t = c.transform(path) or np.eye(k).tolist()
+        return CertificateRef(c.r_star, c.attained, tuple(c.x_star), tuple(tuple(row) for row in t), cfg.space,
+                              cfg.set, cfg.horizon, c.energy, cfg.map, cfg.frame, cfg.reconstruction, cfg.fp_tol,
+                              cfg.min_steps, cfg.fp_max_steps, str(path))
 
     def certify_config(self, base: CertifyConfig) -> CertifyConfig:
-        """``base`` with this certificate's map, frame, reconstruction and fixed-point search."""
+        """``base`` with this certificate's state, set, horizon, map, frame, reconstruction and fixed-point search."""
         from dataclasses import replace
 
-        return replace(base, map=self.map, frame=self.frame, reconstruction=self.reconstruction,  # type: ignore[arg-type]
-                       fp_tol=self.fp_tol, fp_min_steps=self.fp_min_steps, fp_max_steps=self.fp_max_steps)
+        kw: dict[str, Any] = {"disturbance": "push"} if self.space == "push" else {"state": self.space,
+                                                                                  "disturbance": "state"}
+        kw.update(set=self.set, reconstruction=self.reconstruction)
+        return replace(base, horizon=self.horizon, map=self.map, frame=self.frame, fp_tol=self.fp_tol,
+                       fp_min_steps=self.fp_min_steps, fp_max_steps=self.fp_max_steps, **kw)
+
+    def check_matches(self, config: CertifyConfig) -> None:
+        """Refuse a certificate of another space, set or horizon than ``config`` asks for (one line)."""
+        for name, mine, asked in (("state", self.space, config.space), ("set", self.set, config.set),
+                                  ("horizon", self.horizon, config.horizon)):
+            if mine != asked:
+                raise RobustGaitError(f"{self.source}: the certificate is of {name} {mine}, not the {name} {asked} "
+                                      f"asked for (validate against it with --{name} {mine})")
+
+    def to_z(self, xbar: FloatArray) -> FloatArray:
+        return np.asarray(np.atleast_2d(xbar) @ np.asarray(self.transform).T)
 
     def inside(self, distance: FloatArray) -> NDArray[np.bool_]:
-        """Membership in the certified ball (closed if r* is attained, else open); NaN distances: False."""
+        """Membership in the certified set (closed if r* is attained, else open); NaN distances: False."""
         with np.errstate(invalid="ignore"):
             return np.asarray(distance <= self.r_star if self.attained else distance < self.r_star)
 
@@ -105,6 +131,8 @@ class KindResult:
     inside: NDArray[np.bool_]
     physics_steps: int
     seconds: float
+    energy: FloatArray | None = None  # (N,) kinetic energy the disturbance added at the first section [J]
+    energy_star: float | None = None  # E* of the certificate [J] (energy states)
 
     @property
     def size_label(self) -> tuple[str, str]:
@@ -118,14 +146,21 @@ class KindResult:
         return logistic_fit(self.size, self.success)
 
     def certificate_check(self) -> dict[str, Rate | int]:
-        """Fall rates of the trials whose x̄₁ lies inside B(r*) (the certificate says 0) and outside it,
-        and the number of trials that fell before reaching their first switching event (no x̄₁)."""
+        """Fall rates of the trials whose x̄₁ lies inside the certified set (the certificate says 0; for a push
+        certificate: the pushes with |J| ≤ J*) and outside it, the number of trials that fell before reaching their
+        first switching event (no x̄₁), and for an energy certificate the falls among the trials that added at most
+        E* of kinetic energy at the first section."""
         fell = ~self.success
         reached = np.isfinite(self.distance)
         out = reached & ~self.inside
-        return {"inside": Rate.of(int((fell & self.inside).sum()), int(self.inside.sum())),
-                "outside": Rate.of(int((fell & out).sum()), int(out.sum())),
-                "fell_before_event": int((~reached).sum())}
+        check: dict[str, Rate | int] = {"inside": Rate.of(int((fell & self.inside).sum()), int(self.inside.sum())),
+                                        "outside": Rate.of(int((fell & out).sum()), int(out.sum())),
+                                        "fell_before_event": int((~reached).sum())}
+        if self.energy is not None and self.energy_star is not None:
+            with np.errstate(invalid="ignore"):
+                low = np.isfinite(self.energy) & (self.energy <= self.energy_star)
+            check["energy_below_star"] = Rate.of(int((fell & low).sum()), int(low.sum()))
+        return check
 
     def summary(self) -> dict[str, Any]:
         name, unit = self.size_label
@@ -140,6 +175,7 @@ class KindResult:
             "success": self.success_rate().to_dict(), "critical": self.critical().to_dict(),
             "binned": binned_rates(self.size, self.success),
             "certificate_check": {k: v.to_dict() if isinstance(v, Rate) else v for k, v in check.items()},
+            "energy": None if self.energy is None else _quartiles(self.energy), "energy_star": self.energy_star,
             "fall_reasons": reasons, "physics_steps": self.physics_steps, "seconds": self.seconds,
         }
 
@@ -156,8 +192,19 @@ class KindResult:
                 "x_first": [None if not np.isfinite(r).all() else r.tolist() for r in self.x_first],
                 "distance": [None if not math.isfinite(v) else v for v in clean(self.distance)],
                 "inside": self.inside.tolist(),
+                "energy": None if self.energy is None else [None if not math.isfinite(v) else v
+                                                            for v in clean(self.energy)],
             }
         return out
+
+
+def _quartiles(a: FloatArray) -> dict[str, float] | None:
+    """Median and quartiles of the finite values of ``a`` (None if there are none)."""
+    v = a[np.isfinite(a)]
+    if v.size == 0:
+        return None
+    q = np.quantile(v, [0.25, 0.5, 0.75])
+    return {"q25": float(q[0]), "median": float(q[1]), "q75": float(q[2])}
 
 
 @dataclass
@@ -190,7 +237,7 @@ def _gait_info(gait: Gait) -> dict[str, Any]:
 
 
 def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_steps: int, period: int,
-                    frame: Frame, inputs: Callable[[int, NDArray[np.int64], str, NDArray[np.int64]], StepInputs | None],
+                    inputs: Callable[[int, NDArray[np.int64], str, NDArray[np.int64]], StepInputs | None],
                     *, first_at: int, progress: Callable[[int], None] | None = None
                     ) -> tuple[NDArray[np.bool_], list[str | None], NDArray[np.int64], FloatArray, int]:
     """Walk K trials from canonical start states (K, nq), (K, nv) for ``n_steps`` steps (stances alternate
@@ -198,8 +245,8 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
 
     ``inputs(k, idx, stance, prev_at)`` gives the per-sample inputs of step k (0-based) for the trials ``idx``
     (``prev_at``: the physics step of each one's previous switching event; ``first_at`` for step 0).
-    Returns success (K,), fall reasons, the 1-based step of each fall (0 = none), x̄ after ``period`` steps
-    (K, 3; canonical stance; NaN if fell before) and the physics steps simulated.
+    Returns success (K,), fall reasons, the 1-based step of each fall (0 = none), the full state (qpos, qvel)
+    after ``period`` steps ((K, nq + nv); canonical stance; NaN if fell before) and the physics steps simulated.
     """
     robot = engine.robot
     k_all = qpos.shape[0]
@@ -207,7 +254,7 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
     alive = np.ones(k_all, dtype=bool)
     fall_step = np.zeros(k_all, dtype=np.int64)
     reasons: list[str | None] = [None] * k_all
-    x_first = np.full((k_all, 3), np.nan)
+    first = np.full((k_all, engine.nq + engine.nv), np.nan)
     prev_at = np.full(k_all, first_at, dtype=np.int64)
     stance = next(iter(engine.gaits))
     physics = 0
@@ -228,11 +275,11 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
             qp, qv = b.qpos[ok], b.qvel[ok]
             if period % 2 == 1:  # the state starts a step of the other stance: write it for the canonical one
                 qp, qv = robot.mirror_state(qp, qv)
-            x_first[idx[ok]] = reduce_state(qp, qv, frame)
+            first[idx[ok]] = np.hstack([qp, qv])
         stance = "left" if stance == "right" else "right"
         if progress is not None:
             progress(1)
-    return alive, reasons, fall_step, x_first, physics
+    return alive, reasons, fall_step, first, physics
 
 
 class Validator:
@@ -260,22 +307,33 @@ class Validator:
         self.progress = progress
         t0 = time.perf_counter()
         fp: FixedPoint | None = None
+        base = certify or CertifyConfig()
         if certificate is None:
-            gc = certify_gait(robot, gait, certify, self.sim, progress=progress)
+            gc = certify_gait(robot, gait, certify, self.sim, validate=self.config, progress=progress)
             ref, fp = CertificateRef.of(gc), gc.fixed_point
         elif isinstance(certificate, GaitCertificate):
             ref, fp = CertificateRef.of(certificate), certificate.fixed_point
         else:
             ref = certificate if isinstance(certificate, CertificateRef) else CertificateRef.load(certificate)
+        if certify is not None and certificate is not None:
+            ref.check_matches(certify)
         if start is not None:
             fp = start
+        cert_cfg = ref.certify_config(base)
         if fp is None:
-            with ReturnMap(robot, gait, ref.certify_config(certify or CertifyConfig()), self.sim) as pmap:
+            with ReturnMap(robot, gait, cert_cfg, self.sim) as pmap:
                 fp = pmap.find_fixed_point()
-            if float(np.linalg.norm(fp.x_star - np.asarray(ref.x_star))) > 1e-6:
+        state = "omega" if ref.space == "push" else ref.space
+        # Φ of the certificate's state at this fixed point: x̄₁ of a trial in the certificate's coordinates; also the
+        # kinetic energy a disturbance added (any state: M(q*) of the fixed point)
+        self.reduced = ReducedState.at(state, robot, fp.qpos, fp.qvel, gait.stance,  # type: ignore[arg-type]
+                                       cert_cfg)
+        if start is None and ref.space != "push":
+            z = ref.to_z(self.reduced.x_star[None])[0]
+            if float(np.linalg.norm(z - np.asarray(ref.x_star))) > 1e-6 * max(1.0, float(np.linalg.norm(z))):
                 raise RobustGaitError(f"{ref.source}: the certificate's x* {np.round(ref.x_star, 4).tolist()} is not "
-                                      f"this gait's fixed point {np.round(fp.x_star, 4).tolist()} (another gait, "
-                                      "robot or simulation option?)")
+                                      f"this gait's fixed point {np.round(z, 4).tolist()} (another gait, robot or "
+                                      "simulation option?)")
         self.certificate, self.fixed_point = ref, fp
         self.period = 1 if ref.map == "step" else 2
         self.engine = StepEngine(robot, gait, self.sim)
@@ -344,13 +402,26 @@ class Validator:
         fp = self.fixed_point
         n_steps = self.period + cfg.steps_after
         with tqdm(total=n_steps, desc=f"validate {kind}", unit="step", disable=not self.progress, leave=False) as bar:
-            ok, reasons, fall_step, x1, physics = simulate_trials(
+            ok, reasons, fall_step, first, physics = simulate_trials(
                 self.engine, np.tile(fp.qpos, (n, 1)), np.tile(fp.qvel, (n, 1)), n_steps, self.period,
-                self.certificate.frame, self.inputs_for(kind, d), first_at=self.nominal_at, progress=bar.update)
-        dist_ = np.linalg.norm(x1 - np.asarray(self.certificate.x_star), axis=1)
+                self.inputs_for(kind, d), first_at=self.nominal_at, progress=bar.update)
+        ref, nq = self.certificate, self.robot.model.nq
+        reached = np.isfinite(first).all(axis=1)
+        energy = np.full(n, np.nan)
+        x1 = np.full((n, self.reduced.dim), np.nan)
+        if reached.any():
+            energy[reached] = self.reduced.kinetic_energy(first[reached, :nq], first[reached, nq:])
+            x1[reached] = self.reduced.phi(first[reached, :nq], first[reached, nq:])
+        if ref.space == "push":
+            # a push certificate certifies impulses: the check is on the push's own |J| (other kinds: nothing inside)
+            dist_ = d.size.astype(float) if kind == "push" else np.full(n, np.nan)
+        else:
+            x1 = ref.to_z(x1)
+            dist_ = np.linalg.norm(x1 - np.asarray(ref.x_star), axis=1)
         return KindResult(kind=kind, size=d.size, params=d.params, success=ok, fall_reason=reasons,
-                          fall_step=fall_step, x_first=x1, distance=dist_, inside=self.certificate.inside(dist_),
-                          physics_steps=physics, seconds=time.perf_counter() - t0)
+                          fall_step=fall_step, x_first=x1, distance=dist_, inside=ref.inside(dist_),
+                          physics_steps=physics, seconds=time.perf_counter() - t0, energy=energy,
+                          energy_star=ref.energy)
 
 
 def check_validate_work(robot: Robot, gait: Gait, config: ValidateConfig, sim: SimConfig, what: str = "") -> int:

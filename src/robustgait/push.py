@@ -1,0 +1,103 @@
+"""The push map of a certificate in the disturbance's own units (``certify --disturbance push``,
+``docs/certificate.md``, "J*").
+
+A sample is a horizontal impulse J = (J_x, J_y) [N s] in the heading frame of the fixed point x*. The robot starts on
+its periodic orbit at x* (canonical stance), is pushed at its base's centre of mass with the force J / duration for
+the validation's ``push_duration``, starting at a phase φ of the step in the validation's ``push_phase`` range (as
+``robustgait validate --disturbance push``), and walks on for ``push_steps`` steps. The map returns the fixed point
+(0, 0) when it did not fall and NaN when it fell, so the DTBF condition of :mod:`robustgait.barrier` reads "no fall"
+and the largest certified ball is J*: with confidence 1 − β at most ε of the pushes uniform in the disk |J| ≤ J*
+(the estimators' statement) make the robot fall within those steps.
+
+The phase is a function of the sample (:func:`push_phase`: a hash of J's bytes mapped into the phase range), so the
+map is deterministic — the estimators' assumption — while over the disk the phases are uniform, and the pushes of
+one seed (common random numbers) meet every gait at the same phases.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from robustgait.config import ValidateConfig
+from robustgait.errors import RobustGaitError
+from robustgait.poincare import FixedPoint
+from robustgait.rotations import quat_to_mat
+from robustgait.sim.engine import StepEngine, StepInputs
+
+FloatArray = NDArray[np.float64]
+
+
+def push_phase(impulse: FloatArray, low: float, high: float) -> FloatArray:
+    """φ (N,) ∈ [low, high): the phase of the step at which push i starts, low + u_i (high − low) with u_i the first
+    8 bytes of BLAKE2b(J_i as two little-endian float64) / 2⁶⁴ — uniform over the disk, a function of J alone."""
+    j = np.ascontiguousarray(np.atleast_2d(impulse), dtype="<f8")
+    u = np.array([int.from_bytes(hashlib.blake2b(row.tobytes(), digest_size=8).digest(), "little") / 2.0**64
+                  for row in j])
+    return np.asarray(low + u * (high - low))
+
+
+def push_series(impulse: FloatArray, phase: FloatArray, heading: float, duration: float, period: float, dt: float,
+                horizon: int) -> FloatArray:
+    """Base wrench series (N, horizon, 6) [N, N m]: the force J/duration, J rotated from the heading frame into the
+    world by the heading ψ, over round(duration/dt) physics steps from step round(φ·period/dt)."""
+    n = impulse.shape[0]
+    out = np.zeros((n, horizon, 6))
+    width = max(1, round(duration / dt))
+    c, s = math.cos(heading), math.sin(heading)
+    world = np.stack([c * impulse[:, 0] - s * impulse[:, 1], s * impulse[:, 0] + c * impulse[:, 1]], axis=1)
+    force = world / (width * dt)
+    start = np.round(phase * period / dt).astype(int)
+    for i in range(n):
+        a = min(int(start[i]), horizon)
+        out[i, a:a + width, :2] = force[i]
+    return out
+
+
+class PushMap:
+    """J (N, 2) → (N, 2): (0, 0) if the pushed robot did not fall within the pushed step and ``steps`` more, NaN if
+    it fell (module docstring). ``engine``: the gait's engine; ``fp``: its fixed point (canonical stance
+    ``stance``)."""
+
+    def __init__(self, engine: StepEngine, fp: FixedPoint, stance: str, validate: ValidateConfig, steps: int):
+        if len(engine.graph) != 1:
+            raise RobustGaitError("a push certificate needs a one-domain (flat-foot) gait")
+        self.engine, self.fp, self.stance, self.steps = engine, fp, stance, steps
+        self.validate = validate
+        r = quat_to_mat(fp.qpos[3:7])
+        self.heading = float(math.atan2(r[1, 0], r[0, 0]))
+        self.physics_steps = 0
+        self.fall_step: list[NDArray[np.int64]] = []  # per call: the 1-based step each sample fell in (0: none)
+
+    def __call__(self, impulse: FloatArray, progress: Callable[[int], None] | None = None) -> FloatArray:
+        j = np.atleast_2d(np.asarray(impulse, dtype=float))
+        n = j.shape[0]
+        eng, cfg = self.engine, self.validate
+        phase = push_phase(j, *cfg.push_phase)
+        wrench = push_series(j, phase, self.heading, cfg.push_duration, eng.period, eng.robot.dt, eng.horizon)
+        qpos, qvel = np.tile(self.fp.qpos, (n, 1)), np.tile(self.fp.qvel, (n, 1))
+        alive = np.ones(n, dtype=bool)
+        fall_step = np.zeros(n, dtype=np.int64)
+        stance = self.stance
+        for k in range(1 + self.steps):
+            idx = np.flatnonzero(alive)
+            if idx.size == 0:
+                break
+            inputs = StepInputs(base_wrench=wrench[idx]) if k == 0 else None
+            b = eng.step(qpos[idx], qvel[idx], stance, inputs=inputs)
+            self.physics_steps += b.physics_steps
+            fall_step[idx[b.fell]] = k + 1
+            alive[idx[b.fell]] = False
+            ok = ~b.fell
+            qpos[idx[ok]], qvel[idx[ok]] = b.qpos[ok], b.qvel[ok]
+            stance = "left" if stance == "right" else "right"
+        if progress is not None:
+            progress(n)
+        self.fall_step.append(fall_step)
+        out = np.zeros((n, 2))
+        out[~alive] = np.nan
+        return out
