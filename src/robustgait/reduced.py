@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import mujoco
 import numpy as np
@@ -361,6 +361,15 @@ class Coordinates:
         if not self.energy_metric:
             return None
         return energy_of_radius(self.shape.inner_radius(r))
+
+    @staticmethod
+    def from_dict(d: dict[str, Any]) -> Coordinates:
+        """Back from :meth:`to_dict` (a certificate JSON's ``coordinates``)."""
+        k = len(d["x_bar_star"])
+        s = np.asarray(d.get("shape", {}).get("S", np.eye(k)), dtype=float)
+        return Coordinates(str(d["space"]), str(d["unit"]), bool(d["energy_metric"]),
+                           np.asarray(d["x_bar_star"], dtype=float), np.asarray(d["metric_factor"], dtype=float),
+                           Shape(s, None, str(d.get("shape", {}).get("fallback", ""))))
 
     def to_dict(self) -> dict[str, object]:
         return {"space": self.space, "unit": self.unit, "energy_metric": self.energy_metric,

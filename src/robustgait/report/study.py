@@ -31,6 +31,7 @@ from robustgait.config import ReportConfig
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_text
 from robustgait.io.schema import read_json
+from robustgait.reduced import Coordinates
 from robustgait.report.figures import _save, plot_certificate
 
 OUTCOME_COLORS = {"certified": "tab:green", "not_certified": "tab:olive", "fell": "tab:red",
@@ -84,9 +85,9 @@ def plot_history(status: dict[str, Any], path: Path) -> Path:
     a2.plot([i for i, _ in observed], [b["steps_taken"] for _, b in observed], "--", color="0.4", lw=1.2)
     for name, c in OUTCOME_COLORS.items():
         a1.scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=name.replace("_", " "))
-    a1.set_ylabel("r* [rad/s]")
+    a1.set_ylabel(f"{'J*' if status.get('certificate') == 'push' else 'r*'} [{status.get('unit', 'rad/s')}]")
     a1.legend(fontsize=8, loc="best")
-    cap = status["config"]["evaluation"]["step_cap"]
+    cap = status["config"]["sim"]["step_cap"]
     a2.axhline(cap, color="0.6", ls="--", lw=0.8)
     a2.set_ylabel(f"steps (cap {cap})")
     a2.set_xlabel("iteration")
@@ -239,9 +240,15 @@ def write_study_report(directory: str | Path, config: ReportConfig | None = None
         parts.append(f"<h2>{html.escape(title)}</h2>{_img(make(out / name))}")
     cert_file = best.get("certificate_file") if best else None
     if cert_file:
-        cert = certificate_from_json(read_json(d / cert_file, "certificate file"))
-        p = plot_certificate(cert, out / "certificate.png", title=f"best gait: r* = {cert.r_star:.4f} rad/s")
-        parts.append(f"<h2>Invariant set of the best gait</h2>{_img(p)}<p>{html.escape(cert.statement())}</p>")
+        raw = read_json(d / cert_file, "certificate file")
+        cert = certificate_from_json(raw)
+        coords = Coordinates.from_dict(raw["coordinates"]) if isinstance(raw.get("coordinates"), dict) else None
+        name = "J*" if raw.get("disturbance") == "push" else "r*"
+        what = f"{raw.get('state', 'omega')} {raw.get('set', 'ball')}" if name == "r*" else "pushes"
+        p = plot_certificate(cert, out / "certificate.png", coordinates=coords,
+                             title=f"best gait: {name} = {cert.r_star:.4g} {raw.get('unit', 'rad/s')} ({what})")
+        parts.append(f"<h2>Certificate of the best gait</h2>{_img(p)}"
+                     f"<p>{html.escape(str(raw.get('statement') or cert.statement()))}</p>")
     else:
         notes.append("The best gait has no certificate (no gait walked the step cap and was certified).")
     parts += _validation_parts(d, status, out, notes)
@@ -295,9 +302,14 @@ def _validation_parts(d: Path, status: dict[str, Any], out: Path, notes: list[st
 
 def _certify_text(cfg: dict[str, Any]) -> str:
     c = cfg["certify"]
-    how = (f"sequential (ε = {c['sequential']['epsilon']:g}, budget {c['sequential']['budget']})"
-           if c.get("method") == "sequential" else f"uniform, N = {c['n_samples']}")
-    return f"{how}, seed {c['seed']}, step cap {cfg['sim']['step_cap']}"
+    how = (f"sequential estimator (ε = {c['sequential']['epsilon']:g}, budget {c['sequential']['budget']}: rounds "
+           "until a fresh uniform batch certifies the violating fraction)"
+           if c.get("method") == "sequential" else f"uniform estimator (the paper's N = {c['n_samples']} samples)")
+    if cfg["study"].get("metric") == "push" or c.get("disturbance") == "push":
+        what = f"push certificate J* ({c.get('push_steps', 3)} steps after the push)"
+    else:
+        what = (f"{c.get('state', 'omega')} {c.get('set', 'ball')}, horizon {c.get('horizon', 1)}")
+    return f"{what}; {how}, seed {c['seed']}, step cap {cfg['sim']['step_cap']}"
 
 
 def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
@@ -311,12 +323,14 @@ def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
                ["certificate", _certify_text(cfg)]]
     if best is not None:
         summary += [["best gait (learner)", ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())],
-                    ["best r* / steps", f"{_fmt(best['r_star'], 4)} rad/s / {best['steps_taken']}"],
+                    ["best r* / steps", f"{_fmt(best['r_star'], 4)} {status.get('unit', 'rad/s')} / "
+                                        f"{best['steps_taken']}"],
                     ["best gait file", best["gait_file"] or "—"]]
     obs = status["best_observed"]
     if obs is not None and (best is None or obs["trial"] != best["trial"]):
         summary += [["best evaluated gait", ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
-                     + f": r* {_fmt(obs['r_star'], 4)} rad/s, {obs['steps_taken']} steps (trial {obs['trial']}; the "
+                     + f": r* {_fmt(obs['r_star'], 4)} {status.get('unit', 'rad/s')}, {obs['steps_taken']} steps "
+                     f"(trial {obs['trial']}; the "
                      "learner's best is the highest posterior mean, from comparisons only)"]]
     it_rows = [[it["iteration"] + 1, _fmt(it["best"]["r_star"], 4) if it["best"] else "—",
                 it["best"]["steps_taken"] if it["best"] else "—",
