@@ -27,8 +27,9 @@ REPO = Path(__file__).resolve().parents[1]
 ATALANTE = REPO.parent / "shared" / "atalante"
 
 
-def start_states(engine: StepEngine, qpos: np.ndarray, qvel: np.ndarray, k: int, seed: int = 0
-                 ) -> tuple[np.ndarray, np.ndarray]:
+def start_states(qpos: np.ndarray, qvel: np.ndarray, k: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """K certificate-like start states: the section state with its base angular velocity perturbed uniformly in a
+    ball of 0.3 rad/s (also used by bench_feedback.py)."""
     rng = np.random.default_rng(seed)
     d = rng.normal(size=(k, 3))
     d *= (0.3 * rng.uniform(size=(k, 1)) ** (1 / 3)) / np.linalg.norm(d, axis=1, keepdims=True)
@@ -55,7 +56,7 @@ def main() -> None:
     with StepEngine(robot, gait, config) as eng, rollout.Rollout(nthread=threads) as pool:
         datas = [robot.new_data() for _ in range(threads)]
         for k in args.k:
-            qpos, qvel = start_states(eng, np.array(ev.qpos), np.array(ev.qvel), k)
+            qpos, qvel = start_states(np.array(ev.qpos), np.array(ev.qvel), k)
             ours, raw = [], []
             for _ in range(args.repeat):
                 t0 = time.perf_counter()

@@ -167,8 +167,26 @@ def test_huge_push_always_falls(validator, exo):
     assert chk["inside"].n == 0  # type: ignore[union-attr]
 
 
+def test_zero_slope_walks_like_the_floor_and_steep_slopes_fall(validator):
+    """Slopes tilt gravity (a rigid rotation of the world): a 0° slope is the flat floor exactly, whatever its
+    direction; 30° downhill ahead and 30° sideways fall, and fall detection reports it (relative to the ground)."""
+    z = Draws("push", np.zeros(1), {"direction": np.zeros(1), "phase": np.zeros(1)})
+    floor = validator.run("push", draws=z)
+    d = Draws("slope", np.array([0.0, 0.0, 30.0, 30.0]), {"direction": np.array([0.0, 2.0, 0.0, math.pi / 2])})
+    res = validator.run("slope", draws=d)
+    np.testing.assert_array_equal(res.x_first[:2], np.repeat(floor.x_first, 2, axis=0))
+    assert res.success[:2].all() and not res.success[2:].any()
+    assert all(r in ("tilt", "base_low", "non_foot_contact") for r in res.fall_reason[2:])
+    g = validator._base_model().opt.gravity
+    from robustgait.validate.disturbances import slope_gravity
+
+    up = slope_gravity(g, 10.0, math.pi, 0.0)  # uphill ahead: gravity pulls back, along −x
+    assert up[0] < 0 and abs(up[1]) < 1e-12 and np.linalg.norm(up) == pytest.approx(np.linalg.norm(g))
+    assert math.degrees(math.acos(-up[2] / np.linalg.norm(up))) == pytest.approx(10.0)
+
+
 def test_every_kind_runs_and_summarizes(validator):
-    for kind in ("mass", "friction", "latency", "noise"):
+    for kind in ("mass", "friction", "latency", "noise", "slope"):
         res = validator.run(kind)
         s = res.summary()
         assert s["trials"] == 6 and 0 <= s["success"]["k"] <= 6

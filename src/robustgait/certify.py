@@ -63,6 +63,8 @@ class GaitCertificate:
     ball: Certificate | None = None
     excursion: list[float] | None = None
     validate: ValidateConfig | None = None  # push certificates: the push duration and phases used
+    controller: str = "pd"  # the tracking law that ran (sim.controller, unless the note says why not)
+    controller_note: str = ""
 
     @property
     def ok(self) -> bool:
@@ -129,6 +131,8 @@ class GaitCertificate:
             "method": cfg.method,
             "barrier": cfg.barrier,
             "energy": self.energy,
+            "controller": self.controller,
+            "controller_note": self.controller_note,
             "statement": self.statement(),
         }
         if self.certificate is not None:
@@ -251,7 +255,8 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         t = time.perf_counter() - t0
         return GaitCertificate(status=status, certificate=None, fixed_point=fp, map_residual=map_residual,
                                config=cfg, sim=sim, robot=robot.name, physics_steps=0, steps_walked=steps,
-                               reason=reason, validate=vcfg,
+                               reason=reason, validate=vcfg, controller=pmap.engine.controller_name,
+                               controller_note=pmap.engine.controller_note,
                                seconds={"fixed_point": t, "sampling": 0.0, "total": t, "sim_steps_per_s": 0.0})
 
     with ReturnMap(robot, gait, cfg, sim) as pmap:
@@ -300,5 +305,6 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
     return GaitCertificate(status="ok", certificate=cert, fixed_point=fp, map_residual=map_residual, config=cfg,
                            sim=sim, robot=robot.name, physics_steps=steps, steps_walked=fp.steps,
                            coordinates=coords, ball=ball, excursion=excursion, validate=vcfg,
+                           controller=pmap.engine.controller_name, controller_note=pmap.engine.controller_note,
                            seconds={"fixed_point": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,
                                     "sim_steps_per_s": steps / max(t3 - t2, 1e-9)})

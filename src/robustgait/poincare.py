@@ -33,7 +33,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.reduced import ReducedState, reduce_state
 from robustgait.robots import Robot
-from robustgait.sim.engine import StepEngine
+from robustgait.sim.factory import make_engine
 from robustgait.sim.walk import SwitchEvent
 
 FloatArray = NDArray[np.float64]
@@ -88,7 +88,7 @@ class ReturnMap:
         self.config = config
         self.robot, self.gait, self.kind, self.frame = robot, gait, config.map, config.frame
         self.reconstruction = config.reconstruction
-        self.engine = StepEngine(robot, gait, sim)
+        self.engine = make_engine(robot, gait, sim)
         self.stance = gait.stance
         self.other = "left" if gait.stance == "right" else "right"
         self.horizon = config.horizon

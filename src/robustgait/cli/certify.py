@@ -20,7 +20,8 @@ CERTIFY = {"--state": "certify.state", "--set": "certify.set", "--horizon": "cer
            "--budget": "certify.sequential.budget", "--beta": "certify.beta", "--barrier": "certify.barrier",
            "--r-max": "certify.r_max", "--alpha": "certify.alpha", "--seed": "certify.seed", "--map": "certify.map",
            "--reconstruction": "certify.reconstruction", "--frame": "certify.frame",
-           "--switching": "sim.switching", "--fp-tol": "certify.fp_tol", "--fp-max-steps": "certify.fp_max_steps"}
+           "--switching": "sim.switching", "--controller": "sim.controller", "--fp-tol": "certify.fp_tol",
+           "--fp-max-steps": "certify.fp_max_steps"}
 
 
 def _what(cfg: CertifyConfig) -> str:
@@ -84,7 +85,8 @@ def _certify(args: argparse.Namespace) -> int:
             print(f"{name[0]}̂ after each round: " + " ".join(f"{r.kind[0]}{r.samples_used}:{r.r_hat:.4g}"
                                                            for r in c.rounds)
                   + "  (u = uniform, e = explore, v = verify; samples used: estimate)")
-        print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside")
+        print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside; controller {gc.controller}"
+              + (f" ({gc.controller_note})" if gc.controller_note else ""))
         print(gc.statement())
         print(f"time: fixed point {gc.seconds['fixed_point']:.2f} s, sampling {gc.seconds['sampling']:.2f} s "
               f"({gc.seconds['sim_steps_per_s']:.0f} simulated steps/s)")

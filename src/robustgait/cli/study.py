@@ -19,7 +19,8 @@ STUDY: FlagTable = {"--metric": "study.metric", "--learner": "study.learner", "-
          "--batch": "study.batch", "--method": "certify.method", "--samples": "certify.n_samples",
          "--budget": "certify.sequential.budget", "--epsilon": "certify.sequential.epsilon", "--steps": "sim.step_cap",
          "--domains": "generate.domains", "--storage": "study.storage", "--seed": ("study.seed", "certify.seed"),
-         "--state": "certify.state", "--set": "certify.set", "--horizon": "certify.horizon"}
+         "--state": "certify.state", "--set": "certify.set", "--horizon": "certify.horizon",
+         "--controller": "sim.controller"}
 
 
 def _check_executor(run: RunConfig) -> None:

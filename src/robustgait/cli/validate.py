@@ -10,7 +10,7 @@ from robustgait.cli.options import output_path
 
 VALIDATE = {"--trials": "validate.trials", "--seed": "validate.seed", "--disturbance": "validate.disturbance",
             "--steps-after": "validate.steps_after", "--state": "certify.state", "--set": "certify.set",
-            "--horizon": "certify.horizon", "--method": "certify.method"}
+            "--horizon": "certify.horizon", "--method": "certify.method", "--controller": "sim.controller"}
 CERTIFICATE_KIND = ("certify.state", "certify.set", "certify.horizon")
 
 

@@ -7,7 +7,7 @@ import argparse
 from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
 from robustgait.cli.options import output_path
 
-SIM = {"--switching": "sim.switching", "--feedforward": "sim.feedforward"}
+SIM = {"--controller": "sim.controller", "--switching": "sim.switching", "--feedforward": "sim.feedforward"}
 
 
 def _walk(args: argparse.Namespace) -> int:
@@ -28,6 +28,11 @@ def _walk(args: argparse.Namespace) -> int:
         print(f"{gait.robot} gait on {robot.name}: {result.steps_taken}/{result.max_steps} steps, {end}; "
               f"mean forward speed {result.mean_speed:.3f} m/s; lowest base height "
               f"{result.min_base_height:.3f} m; {result.switching} switching")
+        tr = result.tracking
+        print(f"controller {result.controller}: joint tracking error RMS {1e3 * tr['rms']:.3g} mrad, max "
+              f"{1e3 * tr['max']:.3g} mrad; torque saturation {tr['saturation']} joint-steps "
+              f"({100 * tr['saturation_fraction']:.3g} %)"
+              + (f"  ({result.controller_note})" if result.controller_note else ""))
         for what, out in (("video", args.video), ("reduced-state log", args.log)):
             if out is not None:
                 print(f"{what}: {out}")

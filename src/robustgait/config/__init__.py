@@ -58,7 +58,7 @@ from robustgait.config.certify import (
     verification_size,
 )
 from robustgait.config.gait import DEFAULT_STEP_DURATION, DomainGraph, GaitParams, GenerationConfig, Stance
-from robustgait.config.sim import SimConfig, Switching
+from robustgait.config.sim import Controller, SimConfig, Switching
 from robustgait.config.study import (
     CompareConfig,
     LearnerConfig,
@@ -167,6 +167,7 @@ __all__ = [
     "CompareConfig",
     "Config",
     "ConfigError",
+    "Controller",
     "Disturbance",
     "DisturbanceKind",
     "Doc",

@@ -8,6 +8,7 @@ from typing import Annotated, Literal
 from robustgait.config.base import Bool, Doc, Float, Int, config
 
 Switching = Literal["impact", "time"]
+Controller = Literal["pd", "passivity"]
 
 
 @config
@@ -22,6 +23,10 @@ class SimConfig:
                                          le=1.0)] = 0.8
     max_step_tau: Annotated[Float, Doc("latest phase of a touchdown; later is a fall (no_touchdown)", gt=1.0,
                                        le=10.0)] = 1.5
+    controller: Annotated[Controller, Doc(
+        "joint tracking law: pd (MuJoCo's position servos + feedforward, rolled out open loop) or passivity (the "
+        "paper's passivity-based law for flat-foot gaits, state feedback in the batched feedback engine; "
+        "multi-contact gaits keep the PD)")] = "pd"
     feedforward: Annotated[Bool, Doc("add the gait's feedforward torques to the joint PD")] = True
     step_cap: Annotated[Int, Doc("steps walked (the cap of a walk; a study walks it before certifying)", ge=1,
                                  le=1000)] = 50

@@ -8,9 +8,10 @@ from typing import Annotated, Literal
 from robustgait.config.base import Doc, FieldProblem, Float, Int, config
 from robustgait.config.certify import SEED_LIMIT
 
-DisturbanceKind = Literal["push", "mass", "friction", "latency", "noise", "terrain"]
-Disturbance = Literal["push", "mass", "friction", "latency", "noise", "terrain", "all"]
-KINDS: tuple[str, ...] = ("push", "mass", "friction", "latency", "noise", "terrain")
+DisturbanceKind = Literal["push", "mass", "friction", "latency", "noise", "terrain", "slope"]
+Disturbance = Literal["push", "mass", "friction", "latency", "noise", "terrain", "slope", "all"]
+# the index of a kind seeds its draws: new kinds go at the end, so the others' draws stay the same
+KINDS: tuple[str, ...] = ("push", "mass", "friction", "latency", "noise", "terrain", "slope")
 
 Phase = Annotated[Float, Doc(ge=0.0, le=1.0)]
 Friction = Annotated[Float, Doc(gt=0.0, le=10.0)]
@@ -47,6 +48,8 @@ class ValidateConfig:
     noise_v_ratio: Annotated[Float, Doc("velocity noise σ_v = this × σ_q", unit="1/s", ge=0.0, le=1e4)] = 50.0
     terrain_max: Annotated[Float, Doc("largest terrain amplitude", unit="m", ge=0.0, le=1.0)] = 0.03
     terrain_tile: Annotated[Float, Doc("side of a terrain tile", unit="m", gt=0.0, le=10.0)] = 0.3
+    slope_max: Annotated[Float, Doc("steepest slope of the (smooth) ground, in a random direction: uphill, downhill, "
+                                    "sideways or between", unit="deg", ge=0.0, le=45.0)] = 5.0
 
     def __post_init__(self) -> None:
         for name in ("push_phase", "friction_range"):

@@ -32,6 +32,7 @@ MIN_QUATERNION_NORM = 1e-6  # a base quaternion shorter than this cannot be norm
 KP = Doc("kp", unit="N·m/rad", gt=0.0, le=1e7)
 KD = Doc("kd", unit="N·m·s/rad", gt=0.0, le=1e6)
 TORQUE_LIMIT = Doc("torque_limit", unit="N·m", gt=0.0, le=1e5)
+PASSIVITY_LAMBDA = Doc("controller.passivity.lambda", unit="1/s", gt=0.0, le=1e4)
 TIMESTEP = Doc("sim.timestep", unit="s", ge=1e-4, lt=0.1)
 MIN_BASE_HEIGHT = Doc("fall.min_base_height", unit="m", ge=0.0, le=10.0)
 MAX_TILT = Doc("fall.max_tilt", unit="rad", gt=0.0, le=math.pi)

@@ -28,6 +28,7 @@ from robustgait.robots.spec import (
     Integrator,
     LegSpec,
     ParamRange,
+    PassivitySpec,
     RobotSpec,
 )
 
@@ -122,6 +123,17 @@ class ActionSpaceTable(ActionAxesTable):
 
 
 @table
+class PassivityTable:
+    lam: Annotated[_joints(Annotated[Float, L.PASSIVITY_LAMBDA]), Field(alias="lambda")]  # type: ignore[valid-type]
+    kd: _joints(Annotated[Float, L.KD])  # type: ignore[valid-type]
+
+
+@table
+class ControllerTable:
+    passivity: PassivityTable | None = None
+
+
+@table
 class SpecFile:
     name: Name
     mjcf: Name
@@ -136,6 +148,7 @@ class SpecFile:
     gait_quality: GaitQualityTable = dataclasses.field(default_factory=GaitQualityTable)
     action_space: ActionSpaceTable | None = None
     posture: dict[Name, Annotated[Float, L.POSTURE]] = dataclasses.field(default_factory=dict)
+    controller: ControllerTable | None = None
 
 
 def _band(src: Path, key: str, band: tuple[float, float]) -> tuple[float, float]:
@@ -216,6 +229,14 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
     for key in s.posture:
         if key not in names:
             raise field_error(path, f"posture.{key}", "not an actuated joint (joints.names)")
+    passivity = None
+    if s.controller is not None and s.controller.passivity is not None:
+        pt = s.controller.passivity
+        for key, values in (("lambda", pt.lam), ("kd", pt.kd)):
+            if len(values) != n:
+                raise field_error(path, f"controller.passivity.{key}", f"must be a list of {n} numbers, one per "
+                                  f"joint (got {len(values)} items)")
+        passivity = PassivitySpec(lam=tuple(float(v) for v in pt.lam), kd=tuple(float(v) for v in pt.kd))
     return RobotSpec(
         name=s.name,
         mjcf=(path.parent / s.mjcf).resolve(),
@@ -240,6 +261,7 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
                                    if s.action_space is not None and s.action_space.multicontact is not None
                                    else None),
         posture=tuple(float(s.posture.get(j, 0.0)) for j in names),
+        passivity=passivity,
     )
 
 

@@ -80,6 +80,15 @@ class ParamRange:
 
 
 @dataclass(frozen=True)
+class PassivitySpec:
+    """``[controller.passivity]``: per-joint gains (output order) of the passivity-based tracking law of
+    :mod:`robustgait.sim.passivity`: ``lam`` Λ [1/s] (the key ``lambda``) and ``kd`` K_D [N m s/rad]."""
+
+    lam: tuple[float, ...]
+    kd: tuple[float, ...]
+
+
+@dataclass(frozen=True)
 class RobotSpec:
     """Everything the pipeline needs to know about a robot beyond its MJCF."""
 
@@ -104,6 +113,7 @@ class RobotSpec:
     action_space: dict[str, ParamRange] | None = None
     multicontact_action_space: dict[str, ParamRange] | None = None
     posture: tuple[float, ...] = ()
+    passivity: PassivitySpec | None = None
 
     @property
     def n_joints(self) -> int:

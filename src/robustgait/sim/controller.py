@@ -12,6 +12,8 @@ by every sample until its switching event.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -62,3 +64,63 @@ def step_controls(robot: Robot, gait: Gait, n_steps: int, *, feedforward: bool =
     y, dy = desired_outputs(gait, tau, domain)
     u = feedforward_torque(gait, tau, domain) if feedforward else 0.0
     return np.asarray(y + (robot.kd * dy + u) / robot.kp)
+
+
+@dataclass
+class TrackingStats:
+    """Tracking totals over physics steps (per joint, output order): ``steps`` controlled, ``saturation`` the steps
+    whose commanded torque exceeded the joint's torque limit (the servo clamps it), ``error_sq`` the sum of
+    (q − y_d)², ``error_max`` the largest |q − y_d|. Filled by the feedback engine from its law, or by
+    :func:`pd_tracking` from a recorded PD trajectory (the same definitions)."""
+
+    steps: int = 0
+    saturation: NDArray[np.int64] | None = None
+    error_sq: NDArray[np.float64] | None = None
+    error_max: NDArray[np.float64] | None = None
+
+    def add(self, steps: int, saturation: NDArray[np.int64], error_sq: NDArray[np.float64],
+            error_max: NDArray[np.float64]) -> None:
+        self.steps += int(steps)
+        self.saturation = saturation.copy() if self.saturation is None else self.saturation + saturation
+        self.error_sq = error_sq.copy() if self.error_sq is None else self.error_sq + error_sq
+        self.error_max = error_max.copy() if self.error_max is None else np.maximum(self.error_max, error_max)
+
+    @property
+    def rms(self) -> NDArray[np.float64]:
+        """RMS tracking error per joint [rad]."""
+        assert self.error_sq is not None
+        return np.asarray(np.sqrt(self.error_sq / max(self.steps, 1)))
+
+    def summary(self) -> dict[str, float]:
+        """Scalars: RMS over all joints [rad], the largest error [rad], the saturation count (joint-steps) and
+        fraction."""
+        if self.error_sq is None or self.saturation is None or self.error_max is None:
+            return {"steps": 0, "rms": 0.0, "max": 0.0, "saturation": 0, "saturation_fraction": 0.0}
+        return {"steps": self.steps, "rms": float(np.sqrt(self.error_sq.sum() / max(self.steps, 1)
+                                                          / self.error_sq.size)),
+                "max": float(self.error_max.max()), "saturation": int(self.saturation.sum()),
+                "saturation_fraction": float(self.saturation.sum() / max(self.steps * self.saturation.size, 1))}
+
+    def reset(self) -> None:
+        self.steps, self.saturation, self.error_sq, self.error_max = 0, None, None, None
+
+
+def pd_tracking(robot: Robot, gait: Gait, before: NDArray[np.float64], domain: int = 0, *,
+                feedforward: bool = True) -> tuple[int, NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """Tracking of the servo PD over one recorded domain: ``before`` (n, nstate) are the full-physics states at the
+    start of its physics steps k = 0..n−1 (MuJoCo's ``mjSTATE_FULLPHYSICS``: time, qpos, qvel, ...), ``gait`` the
+    gait of this step's stance. At each: e = q − y_d(τ_k) and the commanded torque τ = kp (y_d − q) + kd (ẏ_d − q̇)
+    + u_ff (the PD the servos apply before their clamp), saturated when |τ| exceeds the torque limit. Returns
+    (n, saturation (m,), Σ e² (m,), max |e| (m,)) for :meth:`TrackingStats.add`."""
+    n = before.shape[0]
+    nq = robot.model.nq
+    q = before[:, 1 + robot.qpos_idx]
+    qd = before[:, 1 + nq + robot.dof_idx]
+    tau_k = np.arange(n, dtype=np.float64) * (robot.dt / gait.domains[domain].duration)
+    y, dy = desired_outputs(gait, tau_k, domain)
+    u = robot.kp * (y - q) + robot.kd * (dy - qd)
+    if feedforward:
+        u = u + feedforward_torque(gait, tau_k, domain)
+    e = q - y
+    return (n, (np.abs(u) > robot.torque_limit).sum(axis=0), (e * e).sum(axis=0),
+            np.abs(e).max(axis=0, initial=0.0))

@@ -103,10 +103,16 @@ class StepInputs:
 
 
 class StepEngine:
-    """One gait on one robot, both stances; call :meth:`step` with batches of states."""
+    """One gait on one robot, both stances; call :meth:`step` with batches of states.
+
+    ``controller_name``: the tracking law that runs (``pd`` here: MuJoCo's position servos, open loop);
+    ``controller_note``: why it is not the one ``sim.controller`` asked for, if it is not ("" otherwise)."""
+
+    controller_name = "pd"
 
     def __init__(self, robot: Robot, gait: Gait, config: SimConfig | None = None):
         gait.check_robot(robot)
+        self.controller_note = ""
         self.robot = robot
         self.config = config or SimConfig()
         self.graph = domain_graph(gait.domain_graph)

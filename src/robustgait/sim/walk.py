@@ -22,7 +22,9 @@ from robustgait.gait import Gait
 from robustgait.io.output import atomic_output, check_output
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
+from robustgait.sim.controller import TrackingStats, pd_tracking
 from robustgait.sim.engine import StepEngine
+from robustgait.sim.factory import make_engine
 
 
 @dataclass(frozen=True)
@@ -45,7 +47,10 @@ class WalkResult:
     """Outcome of a walk: ``steps_taken`` completed steps (≤ cap); ``fell`` and ``fall_reason`` (one of
     :data:`robustgait.sim.engine.FALL_REASONS`, None if the cap was reached); ``time`` [s] walked until the
     fall or the last switching event; ``mean_speed`` [m/s] = base displacement along the initial heading /
-    time; ``min_base_height`` [m] over the whole walk; one :class:`SwitchEvent` per completed step."""
+    time; ``min_base_height`` [m] over the whole walk; one :class:`SwitchEvent` per completed step; the tracking
+    ``controller`` that ran (and ``controller_note``: why not the one asked for, if so) and its ``tracking`` over
+    every physics step: RMS and largest |q − y_d| [rad] and the torque saturation (joint-steps whose commanded
+    torque exceeded the limit, and their fraction; :class:`~robustgait.sim.controller.TrackingStats`)."""
 
     steps_taken: int
     fell: bool
@@ -56,6 +61,9 @@ class WalkResult:
     max_steps: int
     switching: str
     events: list[SwitchEvent] = field(default_factory=list)
+    controller: str = "pd"
+    controller_note: str = ""
+    tracking: dict[str, float] = field(default_factory=dict)
     trajectory: NDArray[np.float64] | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -104,7 +112,8 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     else:
         check_work(steps, longest, robot.dt, f"{steps} steps (sim.step_cap)")
     own = engine is None
-    eng = engine or StepEngine(robot, gait, config)
+    eng = engine or make_engine(robot, gait, config)
+    stats = TrackingStats()
     try:
         qpos = gait.initial_state.qpos[None].copy()
         qvel = gait.initial_state.qvel[None].copy()
@@ -119,8 +128,10 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
         for i in range(steps):
             section: SwitchEvent | None = None
             for d in range(len(eng.graph)):  # the step's domains in order; the section ends domain 0
+                start_state = eng.full_states(qpos, qvel)[0]
                 batch = eng.step(qpos, qvel, stance, domain=d, record=True)
                 tr = batch.trajectory[0]
+                _track(stats, eng, batch, start_state, tr, stance, d)
                 if tr.size:
                     min_z = min(min_z, float(np.nanmin(tr[:, 3])))
                     if keep_trajectory:
@@ -148,13 +159,28 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
             steps_taken=len(events), fell=fell, fall_reason=reason, time=t,
             mean_speed=disp / t if t > 0 else 0.0, min_base_height=min_z, max_steps=steps,
             switching=eng.config.switching, events=events,
-            trajectory=np.concatenate(chunks) if keep_trajectory and chunks else None)
+            trajectory=np.concatenate(chunks) if keep_trajectory and chunks else None,
+            controller=eng.controller_name, controller_note=eng.controller_note, tracking=stats.summary())
     finally:
         if own:
             eng.close()
     if video is not None and result.trajectory is not None:
         render_video(robot, result.trajectory, video)
     return result
+
+
+def _track(stats: TrackingStats, eng: StepEngine, batch: object, start: NDArray[np.float64],
+           trajectory: NDArray[np.float64], stance: str, domain: int) -> None:
+    """Add one domain's tracking to ``stats``: the feedback engine's own counts, or the servo PD's recomputed from
+    the states the recorded steps started from (the step's start, then each recorded state but the last)."""
+    from robustgait.sim.feedback import FeedbackStepBatch
+
+    if isinstance(batch, FeedbackStepBatch):
+        stats.add(int(batch.control_steps[0]), batch.saturation[0], batch.error_sq[0], batch.error_max[0])
+        return
+    before = np.vstack([start[None], trajectory[:-1]]) if trajectory.size else start[None]
+    before = before[np.isfinite(before).all(axis=1)]
+    stats.add(*pd_tracking(eng.robot, eng.gaits[stance], before, domain, feedforward=eng.config.feedforward))
 
 
 def offscreen_renderer(robot: Robot, width: int, height: int) -> mujoco.Renderer:

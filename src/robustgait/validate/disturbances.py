@@ -28,6 +28,12 @@ How each kind reaches MuJoCo (:class:`robustgait.sim.StepInputs`):
   metres, each with a random height and slope, within ±A (A the trial's amplitude) — step changes between
   tiles and slopes on them. The contact sensors count contacts with any ground box (the world body), so
   sole–ground contacts are footfalls and any other ground contact is a fall, as on the flat floor.
+* ``slope``: smooth ground (no edge) inclined by θ ∈ [0, ``slope_max``] whose downhill direction makes the angle
+  φ with the heading of the fixed point (φ = 0: downhill ahead; π: uphill; ±π/2: sideways). Simulated exactly as
+  a rigid rotation of the world: the floor stays the plane z = 0 and gravity is tilted by θ towards the downhill
+  direction, g = |g| (sin θ d − cos θ e_z), so the trial starts from the fixed point's state lying on the slope
+  and the fall criteria are measured relative to the ground (base height above it, tilt from its normal).
+  One model per trial (only ``opt.gravity`` differs).
 """
 
 from __future__ import annotations
@@ -53,6 +59,7 @@ SIZE_LABELS = {
     "latency": ("command delay", "s"),
     "noise": ("encoder noise σ_q", "rad"),
     "terrain": ("terrain amplitude", "m"),
+    "slope": ("slope angle", "deg"),
 }
 FloatArray = NDArray[np.float64]
 
@@ -85,6 +92,8 @@ def draw(kind: str, n: int, config: ValidateConfig, robot: Robot) -> Draws:
         return Draws(kind, rng.uniform(0.0, config.latency_max, n), {})
     if kind == "noise":
         return Draws(kind, rng.uniform(0.0, config.noise_q_max, n), {})
+    if kind == "slope":
+        return Draws(kind, rng.uniform(0.0, config.slope_max, n), {"direction": rng.uniform(0.0, 2 * math.pi, n)})
     seeds = rng.integers(0, 2**31, n).astype(np.float64)
     return Draws(kind, rng.uniform(0.0, config.terrain_max, n), {"terrain_seed": seeds})
 
@@ -285,6 +294,25 @@ def terrain_models(base: mujoco.MjModel, layout: TerrainLayout, draws: Draws) ->
         centre[..., 2] = level
         m.geom_pos[ids] = centre - TILE_HALF_THICKNESS * normal
         m.geom_quat[ids] = quat
+        out.append(m)
+    return out
+
+
+def slope_gravity(gravity: FloatArray, angle_deg: float, direction: float, heading: float) -> FloatArray:
+    """Gravity (3,) of a slope of ``angle_deg`` whose downhill direction is ``direction`` [rad] from the heading
+    ``heading`` [rad] (world yaw): |g| (sin θ d − cos θ e_z), d = (cos(ψ + φ), sin(ψ + φ), 0)."""
+    th = math.radians(angle_deg)
+    a = heading + direction
+    return np.asarray(float(np.linalg.norm(gravity)) * np.array([math.sin(th) * math.cos(a),
+                                                                  math.sin(th) * math.sin(a), -math.cos(th)]))
+
+
+def slope_models(base: mujoco.MjModel, draws: Draws, heading: float) -> list[mujoco.MjModel]:
+    """One model per trial (copies of ``base``) with gravity tilted by its slope (:func:`slope_gravity`)."""
+    out = []
+    for angle, direction in zip(draws.size, draws.params["direction"], strict=True):
+        m = copy.copy(base)
+        m.opt.gravity[:] = slope_gravity(base.opt.gravity, float(angle), float(direction), heading)
         out.append(m)
     return out
 

@@ -34,7 +34,9 @@ from robustgait.gait import Gait
 from robustgait.poincare import FixedPoint, ReturnMap
 from robustgait.reduced import ReducedState
 from robustgait.robots import Robot
+from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import StepEngine, StepInputs
+from robustgait.sim.factory import make_engine
 from robustgait.validate import disturbances as dist
 from robustgait.validate.disturbances import SIZE_LABELS, Draws
 from robustgait.validate.stats import LogisticFit, Rate, binned_rates, logistic_fit
@@ -336,7 +338,7 @@ class Validator:
                                       "simulation option?)")
         self.certificate, self.fixed_point = ref, fp
         self.period = 1 if ref.map == "step" else 2
-        self.engine = StepEngine(robot, gait, self.sim)
+        self.engine = make_engine(robot, gait, self.sim)
         nominal = self.engine.step(fp.qpos[None], fp.qvel[None], gait.stance)
         if nominal.fell[0]:
             raise RobustGaitError(f"the gait falls from its {'start' if start is not None else 'own fixed point'} "
@@ -367,11 +369,14 @@ class Validator:
         if kind == "push":
             wrench = dist.push_wrench(draws, cfg.push_duration, self.gait.step_duration, robot.dt, eng.horizon)
             return lambda k, idx, stance, prev_at: StepInputs(base_wrench=wrench[idx]) if k == 0 else None
-        if kind in ("mass", "friction", "terrain"):
+        if kind in ("mass", "friction", "terrain", "slope"):
             if kind == "mass":
                 models = dist.mass_models(self._base_model(), robot, draws, cfg)
             elif kind == "friction":
                 models = dist.friction_models(self._base_model(), draws)
+            elif kind == "slope":
+                r = quat_to_mat(self.fixed_point.qpos[3:7])
+                models = dist.slope_models(self._base_model(), draws, math.atan2(r[1, 0], r[0, 0]))
             else:
                 fp = self.fixed_point
                 layout = dist.terrain_layout(robot, fp.qpos, self.gait.stance, cfg, self.step_length)
