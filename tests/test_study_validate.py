@@ -57,7 +57,7 @@ def small_study(tmp_path_factory):
     store = open_store(d, runner.setup, runner.space)
     bar = tqdm(disable=True)
     try:
-        mc = load_gait(EXO_MC_GAIT, robot)  # validate runs flat-foot gaits only: refused, with the reason
+        mc = load_gait(EXO_MC_GAIT, robot)  # a multi-contact gait whose certificate failed: from its heel strike
         plan = [(10, exo, TINY.certify), (20, exo.mirrored(robot), TINY.certify), (40, exo, no_fp),
                 (30, None, None), (10, "again", None), (50, mc, no_fp)]
         for slot, (index, gait, certify) in enumerate(plan):
@@ -103,11 +103,12 @@ def test_spearman_defined_and_undefined():
 def test_every_unique_gait_meets_the_same_disturbances(small_study, first_run):
     out, _ = first_run
     rows = {r["grid_index"]: r for r in out["gaits"]}
-    assert sorted(rows) == [10, 20, 40] and out["n_validated"] == 3 and out["study"]["unique_gaits"] == 5
+    assert sorted(rows) == [10, 20, 40, 50] and out["n_validated"] == 4 and out["study"]["unique_gaits"] == 5
     assert rows[10]["trials"] == [0, 4]  # proposed twice, validated once
     skipped = {s["grid_index"]: s for s in out["skipped"]}
-    assert sorted(skipped) == [30, 50] and out["skipped_counts"] == {"generation_failed": 1, "refused": 1}
-    assert "no gait file" in skipped[30]["why"] and "one-domain" in skipped[50]["why"]
+    assert sorted(skipped) == [30] and out["skipped_counts"] == {"generation_failed": 1}
+    assert "no gait file" in skipped[30]["why"]
+    assert rows[50]["start"] == "initial_state" and rows[50]["status"] == "not_certified"
     assert rows[10]["start"] == rows[20]["start"] == "fixed_point" and rows[40]["start"] == "initial_state"
     assert rows[40]["status"] == "not_certified" and rows[40]["r_star"] == 0.0 and rows[40]["certificate_check"] is None
     assert rows[10]["r_star"] > 0 and rows[10]["certificate"]["r_star"] == rows[10]["r_star"]
@@ -116,7 +117,7 @@ def test_every_unique_gait_meets_the_same_disturbances(small_study, first_run):
         assert s["n"] == SMALL.trials and s["low"] <= s["rate"] <= s["high"] and 0 <= s["k"] <= s["n"]
     # same seed → the same draws for every gait, whatever its start, stance or step
     runs = sorted((small_study / VALIDATION_DIR / RUNS_DIR).glob("push-*/*.json"))
-    assert len(runs) == 3 and len({p.parent for p in runs}) == 1
+    assert len(runs) == 4 and len({p.parent for p in runs}) == 1
     details = [json.loads(p.read_text())["result"]["trials_detail"] for p in runs]
     for d in details[1:]:
         assert d["size"] == details[0]["size"] and d["params"] == details[0]["params"]
@@ -135,10 +136,10 @@ def test_correlations_have_n_and_p_or_a_reason(small_study, first_run):
     assert stored["correlations"] == out["correlations"] and stored["config"]["trials"] == SMALL.trials
     steps = out["correlations"]["steps_taken"]
     # every validated gait walked the cap (a certificate needs it): undefined, and said why
-    assert steps == {"x": "steps taken", "y": "push success", "n": 3, "rho": None, "p": None, "defined": False,
+    assert steps == {"x": "steps taken", "y": "push success", "n": 4, "rho": None, "p": None, "defined": False,
                      "reason": "steps taken is the same for every gait (5): every validated gait walked the step cap"}
     r = out["correlations"]["r_star"]
-    assert r["n"] == 3 and set(r) == {"x", "y", "n", "rho", "p", "defined", "reason"}
+    assert r["n"] == 4 and set(r) == {"x", "y", "n", "rho", "p", "defined", "reason"}
     rates = [g["success"]["rate"] for g in out["gaits"]]
     if r["defined"]:
         assert -1 <= r["rho"] <= 1 and 0 <= r["p"] <= 1 and r["reason"] == ""
@@ -152,7 +153,7 @@ def test_rerun_reuses_stored_results(small_study, first_run):
     t0 = time.perf_counter()
     again = validate_study(small_study, SMALL, progress=False)["push"]
     took = time.perf_counter() - t0
-    assert again["n_from_earlier_runs"] == 3 and all(r["from_earlier_run"] for r in again["gaits"])
+    assert again["n_from_earlier_runs"] == 4 and all(r["from_earlier_run"] for r in again["gaits"])
     strip = ("from_earlier_run", "seconds")
     assert [{k: v for k, v in r.items() if k not in strip} for r in again["gaits"]] == \
         [{k: v for k, v in r.items() if k not in strip} for r in out["gaits"]]
@@ -193,8 +194,7 @@ def test_cli_errors_exit_2_with_one_line(tmp_path, capsys, small_study):
 def test_cli_text_and_json(small_study, first_run, capsys):
     assert main(["study", "validate", str(small_study), "--trials", "8", "--steps-after", "3", "--quiet"]) == 0
     text = capsys.readouterr().out
-    assert "3 of 5 unique gaits validated (3 from an earlier run); skipped: 1 generation failed, 1 refused" in text
-    assert "skipped: validate runs one-domain (flat-foot) gaits" in text
+    assert "4 of 5 unique gaits validated (4 from an earlier run); skipped: 1 generation failed" in text
     assert "steps taken vs push success: Spearman ρ undefined (steps taken is the same" in text
     assert main(["study", "validate", str(small_study), "--trials", "8", "--steps-after", "3", "--json",
                  "--quiet"]) == 0
@@ -250,7 +250,7 @@ def test_a_changed_gait_file_is_validated_again(small_study, first_run):
     path = small_study / g["gait_file"]
     path.write_text(path.read_text() + "\n")  # other bytes, the same gait
     again = validate_study(small_study, SMALL, progress=False)["push"]
-    assert again["n_from_earlier_runs"] == 2
+    assert again["n_from_earlier_runs"] == 3
     assert not next(r for r in again["gaits"] if r["grid_index"] == 20)["from_earlier_run"]
 
 

@@ -267,8 +267,54 @@ def test_gait_tiles_are_a_real_image(tmp_path, exo, exo_gait):
     assert np.abs(img[:240].astype(float) - img[240:].astype(float)).mean() > 5  # side and front differ
 
 
-def test_validate_refuses_a_multicontact_gait(exo, exo_mc_gait):
-    from robustgait.validate import validate_gait
+# ---- multi-contact gaits: a step is the previous leg's double support, then single support to heel strike -----
+@pytest.fixture(scope="module")
+def mc_validator(exo, exo_mc_gait):
+    cert = certify_gait(exo, exo_mc_gait, CertifyConfig(method="uniform", n_samples=8))
+    with Validator(exo, exo_mc_gait, ValidateConfig(trials=4, steps_after=2), certificate=cert) as v:
+        yield v
 
-    with pytest.raises(RobustGaitError, match="one-domain"):
-        validate_gait(exo, exo_mc_gait)
+
+def test_multicontact_zero_push_in_either_domain_is_the_undisturbed_walk(mc_validator):
+    v = mc_validator
+    ds = v.gait.domains[1].duration / v.gait.step_duration  # the step from x* starts with double support
+    assert len(v.segment_horizons) == 2 and 0.05 < ds < 0.6
+    zero = Draws("push", np.zeros(2), {"direction": np.zeros(2), "phase": np.array([0.5 * ds, 0.55])})
+    res = v.run("push", draws=zero)
+    from robustgait.validate import simulate_trials
+
+    fp = v.fixed_point
+    ok, _, _, first, _ = simulate_trials(v.engine, fp.qpos[None], fp.qvel[None], 3, 1, lambda *a: None,
+                                         first_at=v.nominal_at)
+    nq = v.robot.model.nq
+    x1 = v.certificate.to_z(v.reduced.phi(first[:, :nq], first[:, nq:]))
+    assert ok[0] and res.success.all()
+    np.testing.assert_array_equal(res.x_first, np.repeat(x1, 2, axis=0))
+    # x̄₁ is the heel-strike section after one step: the map's image of x̄*, within its residual
+    assert res.distance.max() < 0.02
+
+
+def test_multicontact_pushes_act_in_the_domain_they_start_in(mc_validator, exo):
+    """A push in double support and one in single support, both large: each changes the walk from its own segment
+    on (the same push later in the step changes nothing before it), and a huge one falls."""
+    v = mc_validator
+    ds = v.gait.domains[1].duration / v.gait.step_duration
+    d = Draws("push", np.array([40.0, 40.0, exo.mass * 5.0, 0.0]),
+              {"direction": np.full(4, math.pi / 2), "phase": np.array([0.2 * ds, 0.55, 0.3, 0.55])})
+    res = v.run("push", draws=d)
+    assert not res.success[2] and res.success[3]
+    moved = np.linalg.norm(res.x_first[:2] - res.x_first[3], axis=1)
+    assert np.all(moved[np.isfinite(moved)] > 1e-3)
+    wrench = dist_push_windows(v, d)
+    assert wrench[0] < v.segment_horizons[0] <= wrench[1]  # the first push starts in double support, the second after
+
+
+def dist_push_windows(v, d):  # type: ignore[no-untyped-def]
+    """Physics step of each push's start in the first step (from its phase)."""
+    return np.round(d.params["phase"] * v.gait.step_duration / v.robot.dt).astype(int)
+
+
+def test_every_kind_runs_on_a_multicontact_gait(mc_validator):
+    for kind in ("mass", "latency", "noise", "terrain", "slope"):
+        s = mc_validator.run(kind).summary()
+        assert s["trials"] == 4 and 0 <= s["success"]["k"] <= 4

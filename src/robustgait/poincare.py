@@ -123,16 +123,7 @@ class ReturnMap:
         ``progress(step, residual)`` after each.
         """
         tol, min_steps, max_steps = self.config.fp_tol, self.config.min_steps, self.config.fp_max_steps
-        init = self.gait.initial_state
-        assert init is not None
-        qpos, qvel = init.qpos[None].copy(), init.qvel[None].copy()
-        if len(self.engine.graph) > 1:
-            # a multi-contact gait starts at the beginning of single support: walk to its section first
-            qpos, qvel, reason = self._run(qpos, qvel, [(self.stance, 0)])
-            if reason[0] is not None:
-                raise FixedPointFailure("fell_before_fixed_point", 0,
-                                        f"the gait fell within step 1 ({reason[0]}) before a fixed point was reached")
-            qpos, qvel = self.robot.mirror_state(qpos, qvel)
+        qpos, qvel = self.initial_section()
         prev = reduce_state(qpos, qvel, self.frame)[0]
         residuals: list[float] = []
         for k in range(self.period, max_steps + 1, self.period):
@@ -153,6 +144,22 @@ class ReturnMap:
                                 f"no fixed point within {max_steps} steps: the {self.kind}-map residual "
                                 f"‖x̄_k+1 − x̄_k‖ stayed above tol = {tol:g} (smallest {min(residuals):.3g}, last "
                                 f"{residuals[-1]:.3g})")
+
+    def initial_section(self) -> tuple[FloatArray, FloatArray]:
+        """The gait's initial state as a canonical section state (1, nq), (1, nv): itself for a flat-foot gait; a
+        multi-contact gait starts at the beginning of single support, so it is walked to its heel strike first and
+        mirrored. Raises :class:`FixedPointFailure` if it falls on the way."""
+        init = self.gait.initial_state
+        if init is None:
+            raise RobustGaitError("the gait has no initial state to start from")
+        qpos, qvel = init.qpos[None].copy(), init.qvel[None].copy()
+        if len(self.engine.graph) > 1:
+            qpos, qvel, reason = self._run(qpos, qvel, [(self.stance, 0)])
+            if reason[0] is not None:
+                raise FixedPointFailure("fell_before_fixed_point", 0,
+                                        f"the gait fell within step 1 ({reason[0]}) before a fixed point was reached")
+            qpos, qvel = self.robot.mirror_state(qpos, qvel)
+        return qpos, qvel
 
     def _phases(self, first: str) -> list[tuple[str, int]]:
         """(stance, domain) of one step's worth of simulation from a section state that ends the single

@@ -12,11 +12,11 @@ Which gaits, and where their trials start:
 * ``certified`` gaits start every trial on their periodic orbit — the fixed point of the study's certificate
   (``gaits/<label>/certificate.json``), exactly as ``robustgait validate GAIT --certificate CERT``;
 * gaits that ``fell`` before the step cap or were ``not_certified`` have no certified fixed point: their trials
-  start from the gait's initial state (where the study's walk started), with r* = 0 as in the study, and no
-  certificate check. Without them every validated gait would have walked the cap and the steps-taken
-  correlation could never be defined;
-* ``generation_failed`` gaits have no gait file: skipped and counted; gaits the validation refuses (a
-  multi-contact gait, a gait that falls in its first undisturbed step) are skipped with the reason.
+  start from the gait's initial state (where the study's walk started; a multi-contact gait walked on to its first
+  heel strike, the section its trials start from), with r* = 0 as in the study, and no certificate check. Without
+  them every validated gait would have walked the cap and the steps-taken correlation could never be defined;
+* ``generation_failed`` gaits have no gait file: skipped and counted; gaits the validation refuses (a gait that
+  falls in its first undisturbed step) are skipped with the reason.
 
 Files, in the study directory (every one written atomically by :mod:`robustgait.io.output`)::
 
@@ -153,15 +153,22 @@ class _Task:
 
 def _orbitless_start(robot: Any, gait: Any, c: CertifyConfig) -> tuple[Any, Any]:
     """A start and a :class:`CertificateRef` of r* = 0 for a gait without a certified fixed point: its initial
-    state, x̄ of that state (the certificate's state, identity transform) as the 'centre' (there is no set: nothing
-    lies inside it)."""
+    state as a section state (a multi-contact gait walked to its first heel strike), x̄ of that state (the
+    certificate's state, identity transform) as the 'centre' (there is no set: nothing lies inside it)."""
     from robustgait.poincare import FixedPoint
     from robustgait.reduced import ReducedState, reduce_state
     from robustgait.validate.run import CertificateRef
 
     if gait.initial_state is None:
         raise RobustGaitError("the gait has no initial state to start the trials from")
-    q, v = gait.initial_state.qpos, gait.initial_state.qvel
+    from robustgait.poincare import FixedPointFailure, ReturnMap
+
+    with ReturnMap(robot, gait, c) as pmap:  # a multi-contact gait: walked from its start to its first heel strike
+        try:
+            qs, vs = pmap.initial_section()
+        except FixedPointFailure as exc:
+            raise RobustGaitError(f"no section state to start the trials from: {exc}") from None
+    q, v = qs[0], vs[0]
     start = FixedPoint(q.copy(), v.copy(), reduce_state(q[None], v[None], c.frame)[0], math.nan, 0, ())
     state = "omega" if c.space == "push" else c.state
     xbar = ReducedState.at(state, robot, q, v, gait.stance, c).x_star

@@ -238,17 +238,49 @@ def _gait_info(gait: Gait) -> dict[str, Any]:
             "params": gait.params.to_dict() if gait.params is not None else None}
 
 
-def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_steps: int, period: int,
-                    inputs: Callable[[int, NDArray[np.int64], str, NDArray[np.int64]], StepInputs | None],
-                    *, first_at: int, progress: Callable[[int], None] | None = None
-                    ) -> tuple[NDArray[np.bool_], list[str | None], NDArray[np.int64], FloatArray, int]:
-    """Walk K trials from canonical start states (K, nq), (K, nv) for ``n_steps`` steps (stances alternate
-    from the gait's), each step one batched :meth:`StepEngine.step` on the trials still walking.
+@dataclass(frozen=True)
+class Segment:
+    """One batched engine call of a trial: a domain of a step. ``step``: the trial's step (0-based); ``index``: the
+    segment's index in the trial (for a flat-foot gait the step); ``stance``, ``domain``: what the engine runs;
+    ``prev``: the (stance, domain) of the segment before it (the one that ended at the trial's start for the first);
+    for the samples being run, ``offset`` (physics steps from the start of this step to the start of this segment)
+    and ``prev_at`` (the physics step at which the previous segment's event happened, counted in that segment)."""
 
-    ``inputs(k, idx, stance, prev_at)`` gives the per-sample inputs of step k (0-based) for the trials ``idx``
-    (``prev_at``: the physics step of each one's previous switching event; ``first_at`` for step 0).
-    Returns success (K,), fall reasons, the 1-based step of each fall (0 = none), the full state (qpos, qvel)
-    after ``period`` steps ((K, nq + nv); canonical stance; NaN if fell before) and the physics steps simulated.
+    step: int
+    index: int
+    stance: str
+    domain: int
+    prev: tuple[str, int]
+    offset: NDArray[np.int64]
+    prev_at: NDArray[np.int64]
+
+
+Inputs = Callable[[Segment, NDArray[np.int64]], "StepInputs | None"]
+
+
+def _other(stance: str) -> str:
+    return "left" if stance == "right" else "right"
+
+
+def step_segments(stance: str, n_domains: int) -> list[tuple[str, int]]:
+    """(stance, domain) of one step of a trial from a section state that starts a step of ``stance``: the previous
+    leg's remaining domains (a multi-contact gait's double support), then ``stance``'s single support up to the
+    next section (a flat-foot step: just that). As :meth:`robustgait.poincare.ReturnMap._phases`."""
+    return [(_other(stance), d) for d in range(1, n_domains)] + [(stance, 0)]
+
+
+def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_steps: int, period: int,
+                    inputs: Inputs, *, first_at: int, progress: Callable[[int], None] | None = None
+                    ) -> tuple[NDArray[np.bool_], list[str | None], NDArray[np.int64], FloatArray, int]:
+    """Walk K trials from canonical section states (K, nq), (K, nv) for ``n_steps`` steps (stances alternate from
+    the gait's), each domain of a step one batched :meth:`StepEngine.step` on the trials still walking
+    (:func:`step_segments`: a multi-contact step is the previous leg's double support, then the single support
+    that ends at the next heel strike).
+
+    ``inputs(segment, idx)`` gives the per-sample inputs of a :class:`Segment` for the trials ``idx``
+    (``first_at``: the physics step of the event that ended the segment before the trials' start). Returns success
+    (K,), fall reasons, the 1-based step of each fall (0 = none), the full state (qpos, qvel) at the section after
+    ``period`` steps ((K, nq + nv); canonical stance; NaN if fell before) and the physics steps simulated.
     """
     robot = engine.robot
     k_all = qpos.shape[0]
@@ -259,26 +291,38 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
     first = np.full((k_all, engine.nq + engine.nv), np.nan)
     prev_at = np.full(k_all, first_at, dtype=np.int64)
     stance = next(iter(engine.gaits))
+    prev: tuple[str, int] = (_other(stance), 0)
     physics = 0
+    index = 0
+    n_domains = len(engine.graph)
     for k in range(n_steps):
-        idx = np.flatnonzero(alive)
-        if idx.size == 0:
-            break
-        b = engine.step(qpos[idx], qvel[idx], stance, inputs=inputs(k, idx, stance, prev_at[idx]))
-        physics += b.physics_steps
-        for j in np.flatnonzero(b.fell):
-            reasons[idx[j]] = b.fall_reason[j]
-        fall_step[idx[b.fell]] = k + 1
-        alive[idx[b.fell]] = False
-        ok = ~b.fell
-        qpos[idx[ok]], qvel[idx[ok]] = b.qpos[ok], b.qvel[ok]
-        prev_at[idx[ok]] = np.round(b.duration[ok] / robot.dt).astype(np.int64)
-        if k == period - 1 and ok.any():
-            qp, qv = b.qpos[ok], b.qvel[ok]
-            if period % 2 == 1:  # the state starts a step of the other stance: write it for the canonical one
-                qp, qv = robot.mirror_state(qp, qv)
-            first[idx[ok]] = np.hstack([qp, qv])
-        stance = "left" if stance == "right" else "right"
+        offset = np.zeros(k_all, dtype=np.int64)
+        for seg_stance, domain in step_segments(stance, n_domains):
+            idx = np.flatnonzero(alive)
+            if idx.size == 0:
+                break
+            seg = Segment(k, index, seg_stance, domain, prev, offset[idx], prev_at[idx])
+            b = engine.step(qpos[idx], qvel[idx], seg_stance, domain=domain, inputs=inputs(seg, idx))
+            physics += b.physics_steps
+            for j in np.flatnonzero(b.fell):
+                reasons[idx[j]] = b.fall_reason[j]
+            fall_step[idx[b.fell]] = k + 1
+            alive[idx[b.fell]] = False
+            ok = ~b.fell
+            qpos[idx[ok]], qvel[idx[ok]] = b.qpos[ok], b.qvel[ok]
+            at = np.round(b.duration[ok] / robot.dt).astype(np.int64)
+            prev_at[idx[ok]] = at
+            offset[idx[ok]] += at
+            prev = (seg_stance, domain)
+            index += 1
+        if k == period - 1:
+            ok_all = np.flatnonzero(alive)
+            if ok_all.size:
+                qp, qv = qpos[ok_all], qvel[ok_all]
+                if period % 2 == 1:  # the state starts a step of the other stance: write it for the canonical one
+                    qp, qv = robot.mirror_state(qp, qv)
+                first[ok_all] = np.hstack([qp, qv])
+        stance = _other(stance)
         if progress is not None:
             progress(1)
     return alive, reasons, fall_step, first, physics
@@ -300,9 +344,6 @@ class Validator:
                  certify: CertifyConfig | None = None, sim: SimConfig | None = None,
                  certificate: GaitCertificate | CertificateRef | str | Path | None = None, progress: bool = False,
                  start: FixedPoint | None = None):
-        if len(gait.domains) != 1:
-            raise RobustGaitError(f"validate runs one-domain (flat-foot) gaits; this one is {gait.domain_graph} with "
-                                  f"{len(gait.domains)} domains")
         self.robot, self.gait = robot, gait
         self.config = config or ValidateConfig()
         self.sim = sim or SimConfig()
@@ -339,12 +380,19 @@ class Validator:
         self.certificate, self.fixed_point = ref, fp
         self.period = 1 if ref.map == "step" else 2
         self.engine = make_engine(robot, gait, self.sim)
-        nominal = self.engine.step(fp.qpos[None], fp.qvel[None], gait.stance)
-        if nominal.fell[0]:
-            raise RobustGaitError(f"the gait falls from its {'start' if start is not None else 'own fixed point'} "
-                                  f"({nominal.fall_reason[0]}) in the first step, undisturbed")
+        # the undisturbed first step: its segments' horizons and durations, the length of the step
+        q, v = fp.qpos[None], fp.qvel[None]
+        self.segment_horizons: list[int] = []
+        for seg_stance, domain in step_segments(gait.stance, len(self.engine.graph)):
+            nominal = self.engine.step(q, v, seg_stance, domain=domain)
+            if nominal.fell[0]:
+                raise RobustGaitError(f"the gait falls from its {'start' if start is not None else 'own fixed point'} "
+                                      f"({nominal.fall_reason[0]}) in the first step, undisturbed")
+            self.segment_horizons.append(self.engine.horizons[domain])
+            q, v = nominal.qpos, nominal.qvel
+        # the segment that ended at the start: by the step map's symmetry, as long as the first step's last one
         self.nominal_at = round(float(nominal.duration[0]) / robot.dt)
-        self.step_length = float(np.linalg.norm(nominal.qpos[0, :2] - fp.qpos[:2]))
+        self.step_length = float(np.linalg.norm(q[0, :2] - fp.qpos[:2]))
         self._physics_model: Any = None
         self.seconds_setup = time.perf_counter() - t0
 
@@ -362,13 +410,25 @@ class Validator:
             self._physics_model = dist.physics_model(self.robot)
         return self._physics_model
 
-    def inputs_for(self, kind: str, draws: Draws) -> Callable[[int, NDArray[np.int64], str, NDArray[np.int64]],
-                                                              StepInputs | None]:
-        """The per-step input function of :func:`simulate_trials` for a kind's draws."""
+    def inputs_for(self, kind: str, draws: Draws) -> Inputs:
+        """The per-segment input function of :func:`simulate_trials` for a kind's draws."""
         cfg, eng, robot = self.config, self.engine, self.robot
         if kind == "push":
-            wrench = dist.push_wrench(draws, cfg.push_duration, self.gait.step_duration, robot.dt, eng.horizon)
-            return lambda k, idx, stance, prev_at: StepInputs(base_wrench=wrench[idx]) if k == 0 else None
+            # the push's window in the first step (all its segments: a multi-contact step starts in double support)
+            wrench = dist.push_wrench(draws, cfg.push_duration, self.gait.step_duration, robot.dt,
+                                      sum(self.segment_horizons))
+
+            def push(seg: Segment, idx: NDArray[np.int64]) -> StepInputs | None:
+                if seg.step != 0:
+                    return None
+                if not seg.offset.any():
+                    return StepInputs(base_wrench=wrench[idx])
+                h = eng.horizons[seg.domain]
+                cols = np.minimum(seg.offset[:, None] + np.arange(h)[None, :], wrench.shape[1] - 1)
+                w = wrench[idx[:, None], cols]
+                w[seg.offset[:, None] + np.arange(h)[None, :] >= wrench.shape[1]] = 0.0
+                return StepInputs(base_wrench=w)
+            return push
         if kind in ("mass", "friction", "terrain", "slope"):
             if kind == "mass":
                 models = dist.mass_models(self._base_model(), robot, draws, cfg)
@@ -382,18 +442,18 @@ class Validator:
                 layout = dist.terrain_layout(robot, fp.qpos, self.gait.stance, cfg, self.step_length)
                 base = dist.terrain_model(robot, layout)
                 models = dist.terrain_models(base, layout, draws)
-            return lambda k, idx, stance, prev_at: StepInputs(models=[models[i] for i in idx])
+            return lambda seg, idx: StepInputs(models=[models[i] for i in idx])
         if kind == "latency":
             delay = np.round(draws.size / robot.dt).astype(np.int64)
 
-            def latency(k: int, idx: NDArray[np.int64], stance: str, prev_at: NDArray[np.int64]) -> StepInputs:
-                other = "left" if stance == "right" else "right"
-                return StepInputs(ctrl_offset=dist.latency_offsets(eng.controls[(stance, 0)], eng.controls[(other, 0)],
-                                                                   delay[idx], prev_at))
+            def latency(seg: Segment, idx: NDArray[np.int64]) -> StepInputs:
+                return StepInputs(ctrl_offset=dist.latency_offsets(eng.controls[(seg.stance, seg.domain)],
+                                                                   eng.controls[seg.prev], delay[idx], seg.prev_at))
             return latency
         if kind == "noise":
-            def noise(k: int, idx: NDArray[np.int64], stance: str, prev_at: NDArray[np.int64]) -> StepInputs:
-                off = dist.noise_offsets(robot, draws.size, cfg.noise_v_ratio, eng.horizon, cfg.seed, k)
+            def noise(seg: Segment, idx: NDArray[np.int64]) -> StepInputs:
+                off = dist.noise_offsets(robot, draws.size, cfg.noise_v_ratio, eng.horizons[seg.domain], cfg.seed,
+                                         seg.index)
                 return StepInputs(ctrl_offset=off[idx])
             return noise
         raise RobustGaitError(f"unknown disturbance {kind!r}")
