@@ -303,7 +303,7 @@ def test_horizon_certificate_reports_its_excursion(exo, exo_gait):
 
 
 def test_push_certificate(exo, exo_gait):
-    gc = certify_gait(exo, exo_gait, uniform(disturbance="push", n_samples=12, seed=1, push_steps=1))
+    gc = certify_gait(exo, exo_gait, uniform(disturbance="push", n_samples=12, seed=1, push={"steps": 1}))
     c = gc.certificate
     assert gc.ok and c.samples.shape == (12, 2) and c.r_max == 100.0 and gc.config.unit == "N s"
     # the image of a push is the origin (absorbed) or a fall: J* is the smallest impulse that fell (or r_max)

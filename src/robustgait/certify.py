@@ -103,7 +103,7 @@ class GaitCertificate:
         return (f"With confidence {100.0 * c.confidence:g}%, at most {100.0 * c.violation_bound:.3g}% of the pushes "
                 f"with impulse |J| ≤ J* = {c.r_star:.4g} N s (uniform in that disk; {v.push_duration:g} s long, "
                 f"starting at a phase in [{v.push_phase[0]:g}, {v.push_phase[1]:g}] of the step) make the robot fall "
-                f"within that step and {cfg.push_steps} more: {c.basis}.")
+                f"within that step and {cfg.push.steps} more: {c.basis}.")
 
     def to_dict(self, *, samples: bool = True) -> dict[str, Any]:
         """JSON-ready; everything but ``seconds`` is deterministic for a given seed."""
@@ -164,7 +164,7 @@ BatchMap = Callable[[np.ndarray, "Progress | None"], np.ndarray]
 def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: bool, desc: str) -> Certificate:
     """Run the configured estimator on a map in certificate coordinates (progress bar: samples, stderr; the map is
     called with the bar's update, per sample that reaches its end)."""
-    total = cfg.n_samples if cfg.method == "uniform" else cfg.sequential.budget
+    total = cfg.n_samples if cfg.method == "uniform" else cfg.estimator.budget
     with tqdm(total=total, desc=desc, unit="sample", disable=not progress, leave=False) as bar:
         def counted(x: np.ndarray) -> np.ndarray:
             return P(x, bar.update)
@@ -285,7 +285,7 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         if push:
             assert vcfg is not None
             coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
-            pushes = PushMap(pmap.engine, fp, gait.stance, vcfg, cfg.push_steps)
+            pushes = PushMap(pmap.engine, fp, gait.stance, vcfg, cfg.push.steps)
             cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}")
             steps = pushes.physics_steps
         else:

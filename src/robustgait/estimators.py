@@ -158,7 +158,7 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
     confidence 1 − β; otherwise ``budget_exhausted`` (bound 1) or, if r̂ reached 0, a vacuous certificate.
     """
     full = config or CertifyConfig()
-    cfg = full.sequential
+    cfg = full.estimator
     xs = _check_point("x_star", x_star)
     r, a, b, seed, barrier = full.radius, full.alpha, full.beta, full.seed, full.barrier
     n = xs.shape[0]

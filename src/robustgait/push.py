@@ -4,7 +4,7 @@
 A sample is a horizontal impulse J = (J_x, J_y) [N s] in the heading frame of the fixed point x*. The robot starts on
 its periodic orbit at x* (canonical stance), is pushed at its base's centre of mass with the force J / duration for
 the validation's ``push_duration``, starting at a phase φ of the step in the validation's ``push_phase`` range (as
-``robustgait validate --disturbance push``), and walks on for ``push_steps`` steps. The map returns the fixed point
+``robustgait validate --disturbance push``), and walks on for ``push.steps`` steps. The map returns the fixed point
 (0, 0) when it did not fall and NaN when it fell, so the DTBF condition of :mod:`robustgait.barrier` reads "no fall"
 and the largest certified ball is J*: with confidence 1 − β at most ε of the pushes uniform in the disk |J| ≤ J*
 (the estimators' statement) make the robot fall within those steps.

@@ -14,7 +14,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.io.limits import BARRIER_R, X_STAR
 
 CERTIFY = {"--state": "certify.state", "--set": "certify.set", "--horizon": "certify.horizon",
-           "--disturbance": "certify.disturbance", "--push-steps": "certify.push_steps",
+           "--disturbance": "certify.disturbance", "--push-steps": "certify.push.steps",
            "--push-duration": "validate.push_duration", "--compare-ball": "certify.ellipsoid.compare_ball",
            "--method": "certify.method", "--samples": "certify.n_samples", "--epsilon": "certify.sequential.epsilon",
            "--budget": "certify.sequential.budget", "--beta": "certify.beta", "--barrier": "certify.barrier",
@@ -27,7 +27,7 @@ CERTIFY = {"--state": "certify.state", "--set": "certify.set", "--horizon": "cer
 def _what(cfg: CertifyConfig) -> str:
     """The certificate's kind in a few words: state, set, horizon, map, reconstruction (or the push's steps)."""
     if cfg.disturbance == "push":
-        return f"pushes, {cfg.push_steps} steps after"
+        return f"pushes, {cfg.push.steps} steps after"
     bits = [f"{cfg.state} {cfg.set}", f"{cfg.map} map" + ("" if cfg.horizon == 1 else f" ^{cfg.horizon}")]
     if cfg.state == "omega":
         bits += [f"{cfg.frame} frame", f"{cfg.reconstruction} reconstruction"]

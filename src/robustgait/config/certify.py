@@ -73,6 +73,21 @@ class EllipsoidConfig:
 
 
 @config
+class PushConfig:
+    """The push certificate J* (``disturbance = push``, :mod:`robustgait.push`): the steps after the pushed one within
+    which a fall is a failure, and the sizes of the sequential estimator's first round and exploration — smaller than
+    a state certificate's, since the failing set of a 2-D impulse disk needs less exploration (the statement does not
+    depend on it; ε, β, the budget and the rest are ``sequential``'s). Push duration and phases are the validation's
+    (``validate.push_duration``, ``validate.push_phase``)."""
+
+    steps: Annotated[Int, Doc("steps after the pushed one within which a fall is a failure", ge=1, le=100)] = 3
+    first_round: Annotated[Int, Doc("round 1: uniform pushes in the disk of radius r_max", ge=1, le=10_000)] = 100
+    explore: Annotated[Int, Doc("exploration pushes before the first verification", ge=0, le=100_000)] = 200
+    explore_after_failure: Annotated[Int, Doc("exploration pushes before each further verification", ge=0,
+                                              le=100_000)] = 100
+
+
+@config
 class CertifyConfig:
     """Options of a certificate: the estimator (``sequential``: rounds with a verified bound; ``uniform``: the
     paper's N samples uniform in B(r_max)), the DTBF (barrier, α, r_max), the confidence 1 − β, the seed of the
@@ -92,8 +107,6 @@ class CertifyConfig:
     disturbance: Annotated[CertifyDisturbance, Doc(
         "what is certified: state (a ball of perturbed states, r*) or push (a disk of push impulses at the "
         "validation's push duration and phases, J*)")] = "state"
-    push_steps: Annotated[Int, Doc("push: steps after the pushed one within which a fall is a failure", ge=1,
-                                   le=100)] = 3
     n_samples: Annotated[Int, Doc("uniform: number of sampled perturbations N", ge=1, le=10_000)] = 200
     r_max: Annotated[Float | None, Doc(
         "radius of the sampled ball (unset: 2 rad/s for omega, 10 √J for centroidal and velocity, 100 N s for push)",
@@ -112,15 +125,27 @@ class CertifyConfig:
     fp_max_steps: Annotated[Int, Doc("fixed point: give up after this many steps", ge=1, le=1000)] = 100
     sequential: SequentialConfig = dataclasses.field(default_factory=SequentialConfig)
     ellipsoid: EllipsoidConfig = dataclasses.field(default_factory=EllipsoidConfig)
+    push: PushConfig = dataclasses.field(default_factory=PushConfig)
+
+    @property
+    def estimator(self) -> SequentialConfig:
+        """The sequential estimator's options in effect: ``sequential``, with the push certificate's round sizes for
+        ``disturbance = push``."""
+        if self.disturbance != "push":
+            return self.sequential
+        p = self.push
+        return dataclasses.replace(self.sequential, first_round=p.first_round, explore=p.explore,
+                                   explore_after_failure=p.explore_after_failure)
 
     def __post_init__(self) -> None:
         if self.r_max is not None and self.r_max > R_MAX_LIMIT[self.space]:
             raise FieldProblem("r_max", f"must satisfy 0 < x ≤ {R_MAX_LIMIT[self.space]:g} {R_MAX_UNIT[self.space]} "
                                f"when certifying {self.space} (got {self.r_max:g})")
-        seq = self.sequential
+        seq = self.estimator
+        where = "sequential"
         need = seq.first_round + verification_size(seq.epsilon, self.beta, 1)
         if self.method == "sequential" and seq.budget < need:
-            raise FieldProblem("sequential.budget", f"{seq.budget} samples cannot hold the first round "
+            raise FieldProblem(f"{where}.budget", f"{seq.budget} samples cannot hold the first round "
                                f"({seq.first_round}) and one verification batch ({need - seq.first_round} for "
                                f"epsilon = {seq.epsilon:g}, beta = {self.beta:g})")
 
@@ -147,7 +172,7 @@ class CertifyConfig:
     @property
     def samples_planned(self) -> int:
         """Most map evaluations of the estimator: N (uniform) or the budget (sequential), plus the ellipsoid's fit."""
-        n = self.n_samples if self.method == "uniform" else self.sequential.budget
+        n = self.n_samples if self.method == "uniform" else self.estimator.budget
         if self.set != "ellipsoid" or self.disturbance != "state":
             return n
         return n + self.ellipsoid.fit_samples + (n if self.ellipsoid.compare_ball else 0)
@@ -156,5 +181,5 @@ class CertifyConfig:
     def steps_per_sample(self) -> int:
         """Steps simulated per sample at most: the horizon (× 2 for the stride map), or a push's steps."""
         if self.disturbance == "push":
-            return 1 + self.push_steps
+            return 1 + self.push.steps
         return self.horizon * (2 if self.map == "stride" else 1)

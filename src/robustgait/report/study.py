@@ -306,7 +306,7 @@ def _certify_text(cfg: dict[str, Any]) -> str:
            "until a fresh uniform batch certifies the violating fraction)"
            if c.get("method") == "sequential" else f"uniform estimator (the paper's N = {c['n_samples']} samples)")
     if cfg["study"].get("metric") == "push" or c.get("disturbance") == "push":
-        what = f"push certificate J* ({c.get('push_steps', 3)} steps after the push)"
+        what = f"push certificate J* ({c.get('push', {}).get('steps', 3)} steps after the push)"
     else:
         what = (f"{c.get('state', 'omega')} {c.get('set', 'ball')}, horizon {c.get('horizon', 1)}")
     return f"{what}; {how}, seed {c['seed']}, step cap {cfg['sim']['step_cap']}"
