@@ -103,6 +103,12 @@ def test_a_format_2_study_keeps_its_certificate_whatever_the_defaults(tmp_path):
     assert (c.state, c.set, c.horizon, c.n_samples) == ("omega", "ball", 1, 40)
 
 
+def test_a_study_with_the_first_push_steps_key_still_loads(tmp_path):
+    raw = {"format_version": 3, "robot": "exo", "config": {"certify": {"push_steps": 2, "method": "uniform"}}}
+    (tmp_path / "study.json").write_text(json.dumps(raw))
+    assert load_config(tmp_path).config.certify.push.steps == 2
+
+
 def test_push_metric_certifies_pushes():
     c = Config(study=StudyConfig(metric="push"))
     assert c.study_certify.disturbance == "push" and c.study_certify.unit == "N s"

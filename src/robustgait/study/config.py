@@ -62,6 +62,11 @@ def load_config(directory: str | Path) -> StudySetup:
         certify = dict(certify) if isinstance(certify, dict) else {}
         raw = {**raw, "format_version": FORMAT_VERSION,
                "config": {**raw["config"], "certify": {**_CERTIFY_BEFORE_3, **certify}}}
+    certify = raw["config"].get("certify") if isinstance(raw, dict) and isinstance(raw.get("config"), dict) else None
+    if isinstance(certify, dict) and "push_steps" in certify:  # format 3 as first written (284a6aa–2be8282)
+        certify = {k: v for k, v in certify.items() if k != "push_steps"} | {
+            "push": {**(certify.get("push") or {}), "steps": certify["push_steps"]}}
+        raw = {**raw, "config": {**raw["config"], "certify": certify}}
     if not (isinstance(raw, dict) and raw.get("format_version") == FORMAT_VERSION and isinstance(raw.get("robot"), str)
             and "config" in raw):
         raise input_error(path, f"unsupported study file (format_version {FORMAT_VERSION} expected)")
