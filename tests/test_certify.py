@@ -135,8 +135,8 @@ def test_figures(tmp_path, small_cert, seq_cert):
     out = plot_certificate(small_cert.certificate, tmp_path / "cert.png")
     assert out.stat().st_size > 10_000
     assert plot_certificate(seq_cert.certificate, tmp_path / "seq.png").stat().st_size > 10_000
-    xs = small_cert.fixed_point.x_star + np.outer(0.5 ** np.arange(6), [0.1, 0.0, 0.0])
-    trace = barrier_along(xs, small_cert.fixed_point.x_star, 0.2, 0.05)
+    xs = small_cert.fixed_point.omega + np.outer(0.5 ** np.arange(6), [0.1, 0.0, 0.0])
+    trace = barrier_along(xs, small_cert.fixed_point.omega, 0.2, 0.05)
     assert plot_barrier_trace(trace, tmp_path / "trace.png").stat().st_size > 5_000
     with pytest.raises(RobustGaitError, match="output directory does not exist"):
         plot_certificate(small_cert.certificate, tmp_path / "missing" / "cert.png")

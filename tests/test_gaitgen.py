@@ -115,7 +115,7 @@ def _walks_like_an_exoskeleton(robot, gait, max_speed_error=0.03):
 def test_default_gait_walks_and_gets_a_certificate(exo, default):
     _walks_like_an_exoskeleton(exo, default.gait)
     cert = certify_gait(exo, default.gait, CertifyConfig(method="uniform", n_samples=50))
-    assert cert.ok and np.linalg.norm(cert.fixed_point.x_star) <= 1.0 and cert.r_star > 0
+    assert cert.ok and np.linalg.norm(cert.fixed_point.omega) <= 1.0 and cert.r_star > 0
     # the sequential estimator, small: ε = 0.2 (17 verification samples), 40 exploration samples
     seq = certify_gait(exo, default.gait, CertifyConfig(method="sequential", sequential=SequentialConfig(
         epsilon=0.2, first_round=50, round_size=20, explore=40, budget=300)))
@@ -202,7 +202,7 @@ def test_atalante_generated_gait_walks(tmp_path, capsys):
     gait = load_gait(out, robot)
     _walks_like_an_exoskeleton(robot, gait)
     cert = certify_gait(robot, gait, CertifyConfig(method="uniform", n_samples=20))
-    assert np.linalg.norm(cert.fixed_point.x_star) <= 1.0
+    assert np.linalg.norm(cert.fixed_point.omega) <= 1.0
 
 
 @pytest.mark.slow
