@@ -133,19 +133,24 @@ def main() -> None:
                       f"{seq.to_dict().get('n_samples')} samples")
     if args.no_grid:
         return
-    a = robot.spec.action_space
+    mc = args.domains == "multicontact"
+    a = robot.spec.multicontact_action_space if mc else robot.spec.action_space
     if a is None:
-        raise SystemExit(f"{robot.name}: the spec has no [action_space] to take the grid from")
-    grid = [(float(length), float(duration), 0.25, 0.07)
+        raise SystemExit(f"{robot.name}: the spec has no [action_space{'.multicontact' if mc else ''}] to take the "
+                         "grid from")
+    # 4 × 4 of step length × duration at the middle width and height, then the four width × height corners at
+    # the default length and duration
+    mid = {k: round(float((a[k].low + a[k].high) / 2), 3) for k in ("step_width", "step_height")}
+    grid = [(float(length), float(duration), mid["step_width"], mid["step_height"])
             for length in np.linspace(a["step_length"].low, a["step_length"].high, 4)
             for duration in np.linspace(a["step_duration"].low, a["step_duration"].high, 4)]
-    grid += [(0.15, 0.7, w, h) for w in (a["step_width"].low, a["step_width"].high)
+    grid += [(dflt.step_length, dflt.step_duration, w, h) for w in (a["step_width"].low, a["step_width"].high)
              for h in (a["step_height"].low, a["step_height"].high)]
     print("\n| L [m] | T [s] | W [m] | h [m] | status | it | cold | warm | walks | speed vs L/T | roll range | "
           "‖x̄*‖ | r* |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     cold_t: list[float] = []
     warm_t: list[float] = []
-    walks = 0
+    walks = solved = fixed = 0
     prev: GaitGenResult | None = None
     for values in grid:
         params = GaitParams(*values)
@@ -158,6 +163,7 @@ def main() -> None:
         cells = [f"{v:.3g}" for v in values] + [cold.status if cold.success else f"{cold.status}: {cold.reason}",
                                                 str(cold.iterations), f"{cold.solve_seconds:.2f} s", warm_s]
         if cold.gait is not None:
+            solved += 1
             cold_t.append(cold.solve_seconds)
             prev = cold
             if not args.no_walk:
@@ -165,12 +171,14 @@ def main() -> None:
                 lo, hi = f["roll"]  # type: ignore[misc]
                 ok = f["steps"] == 50 and max(abs(lo), abs(hi)) < 6.0
                 walks += ok
+                fixed += ok and f["x_star"] is not None
                 cells += [f"{f['steps']}/50" + ("" if f["steps"] == 50 else f" ({f['fall']})"),
                           f"{f['speed_error'] * 100:+.1f} %", f"{lo:+.1f}…{hi:+.1f}°",
                           "—" if f["x_star"] is None else f"{f['x_star']:.2f}",
                           "—" if f["r_star"] is None else f"{f['r_star']:.3f}"]
         print("| " + " | ".join(cells) + " |", flush=True)
-    print(f"\n{walks}/{len(grid)} walk 50 steps with the pelvis roll within ±6°; cold solve median "
+    print(f"\n{solved}/{len(grid)} solve, {walks}/{len(grid)} walk 50 steps with the pelvis roll within ±6°, "
+          f"{fixed}/{len(grid)} of those have a fixed point; cold solve median "
           f"{np.median(cold_t):.2f} s (max {max(cold_t):.2f}); warm median {np.median(warm_t):.2f} s "
           f"(max {max(warm_t):.2f})")
 
