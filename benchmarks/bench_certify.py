@@ -1,7 +1,7 @@
 """Certificates r*: precision and cost of the estimators on real gaits, coverage of the confidence statement on
 maps with known answers, both barriers, and the sampler's speed against raw ``mujoco.rollout``.
 
-    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed] [options]
+    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed|horizon|states] [options]
 
 * ``seeds`` (issue 7 acceptance): the default ``exo`` gait (regenerated here with the API from the default
   ``GaitParams``, or ``--exo-gait FILE``; ``--step-length`` etc. change the parameters) and the Atalante FROST
@@ -15,6 +15,14 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
 * ``barrier``: r* with H = r² − ‖x − x*‖² (``ball``) and the paper's H = r − ‖x − x*‖² on the Atalante gait.
 * ``speed``: the Atalante gait's four (map × reconstruction) uniform certificates, then the sampler against raw
   ``mujoco.rollout`` on the same batch (ratio), and determinism of the JSON over ``--repeat`` runs.
+* ``horizon`` (issue 18 item 1): sequential certificates of horizon K = 1, 2, 3 (``--horizons``) on the thin
+  gaits of ``benchmarks/data/learner_table_exo.jsonl`` (table r* < 0.05) and the default flat-foot and multi-contact
+  exo gaits: r*, the excursion, samples, physics steps, wall time. Then the event-logic check: ``--probe`` states
+  uniform in B(r_max) walked one step: fall reasons, touchdown phase τ of the others (a touchdown held back by
+  ``min_switch_tau`` shows as τ at that bound; a step cut at ``max_step_tau`` as ``no_touchdown``), and the τ of
+  the samples whose image is farther from x̄* than they started against the τ of the others.
+* ``states`` (issue 18 item 7): on the default exo gait, ``--seeds`` sequential certificates of each state × set
+  and the push certificate, one after the other in the same run: r*, E*, wall time and its ratio to ``omega``'s.
 """
 
 from __future__ import annotations
@@ -35,7 +43,7 @@ from mujoco import rollout
 from robustgait import load_gait, load_robot
 from robustgait.barrier import distances, sample_ball, solve_radius
 from robustgait.certify import GaitCertificate, certify_gait
-from robustgait.config import CertifyConfig, GaitParams, SequentialConfig, SimConfig
+from robustgait.config import CertifyConfig, GaitParams, GenerationConfig, SequentialConfig, SimConfig
 from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
 from robustgait.poincare import ReturnMap
@@ -280,9 +288,105 @@ def cmd_speed(args: argparse.Namespace) -> None:
     print(f"determinism: {len(runs)} runs with seed 0 gave identical JSON (without 'seconds')")
 
 
+def thin_gaits(limit: float = 0.05) -> list[GaitParams]:
+    rows = [json.loads(line) for line in (REPO / "benchmarks" / "data" / "learner_table_exo.jsonl").open()]
+    return [GaitParams(**{k: v for k, v in r["params"].items() if k != "rolling_fraction"}) for r in rows
+            if r["status"] == "certified" and r["r_star"] is not None and r["r_star"] < limit]
+
+
+def probe_events(robot: Robot, gait: Gait, sim: SimConfig, n: int, radius: float) -> str:
+    """One step from n states uniform in B(radius) of the omega/ball/1 map: fall reasons and touchdown phases."""
+    cfg = CertifyConfig()
+    with ReturnMap(robot, gait, cfg, sim) as pmap:
+        fp = pmap.find_fixed_point()
+        red = pmap.reduced
+        x = sample_ball(n, red.dim, radius, red.x_star, np.random.default_rng(0))
+        qpos, qvel = pmap.reconstruct(x)
+        b = pmap.engine.step(qpos, qvel, pmap.stance, domain=0)
+        ok = np.array([r is None for r in b.fall_reason])
+        mq, mv = robot.mirror_state(b.qpos[ok], b.qvel[ok])
+        image = red.phi(mq, mv)
+    reasons: dict[str, int] = {}
+    for r in b.fall_reason:
+        if r is not None:
+            reasons[r] = reasons.get(r, 0) + 1
+    tau = b.tau[ok]
+    d0 = np.linalg.norm(x[ok] - fp.omega, axis=1)
+    d1 = np.linalg.norm(image - fp.omega, axis=1)
+    grows = d1 > d0
+    held = np.abs(tau - sim.min_switch_tau) < 1.5 * robot.dt / gait.step_duration
+
+    def med(a: np.ndarray) -> str:
+        return f"{np.median(a):.3f}" if a.size else "–"
+
+    return (f"r {radius:g}: falls {n - ok.sum()}/{n} {reasons or ''}; τ {tau.min():.3f}–{tau.max():.3f}, "
+            f"{held.sum()} at min_switch_tau; τ median: growing {med(tau[grows])} ({grows.sum()}), "
+            f"shrinking {med(tau[~grows])}")
+
+
+def cmd_horizon(args: argparse.Namespace) -> None:
+    from robustgait.gaitgen import generate_gait
+
+    sim = SimConfig(n_threads=args.threads)
+    exo = load_robot("exo")
+    cases: list[tuple[str, GaitParams, tuple[str, ...]]] = [("default flat", GaitParams(), ("flat",)),
+                                                           ("default multicontact", GaitParams(), ("multicontact",))]
+    cases += [(f"L{p.step_length:.2f} T{p.step_duration:.1f} W{p.step_width:.2f} h{p.step_height:.2f}", p, ("flat",))
+              for p in thin_gaits()]
+    ks = [int(k) for k in args.horizons.split(",")]
+    print(f"## horizon: sequential certificates (ε 0.02, β 1e-3), K = {ks}; {len(cases)} gaits; {load()}")
+    print("| gait | " + " | ".join(f"r* K={k} (excursion) | samples, wall K={k}" for k in ks) + " | one step from "
+          f"{args.probe} states in B(r), r in rad/s |")
+    print("|---|" + "---|---|" * len(ks) + "---|")
+    for name, params, domains in cases:
+        res = generate_gait(exo, params.resolved(domains[0]), GenerationConfig(domains=domains[0]))  # type: ignore[arg-type]
+        if res.gait is None:
+            print(f"| {name} | generation failed: {res.status} {res.reason} |")
+            continue
+        cells = []
+        for k in ks:
+            gc = certify_gait(exo, res.gait, CertifyConfig(horizon=k), sim)
+            exc = gc.excursion
+            ex = "" if not exc else " (" + ", ".join(f"{v:.2f}" for v in exc) + ")"
+            n = gc.certificate.n_samples if gc.certificate else 0
+            cells.append(f"{gc.r_star:.4f}{ex} | {n}, {gc.seconds['total']:.0f} s")
+        probe = ("<br>".join(probe_events(exo, res.gait, sim, args.probe, r) for r in (0.05, 0.5, 2.0))
+                 if domains == ("flat",) else "(flat-foot only)")
+        print(f"| {name} | " + " | ".join(cells) + f" | {probe} |", flush=True)
+
+
+def cmd_states(args: argparse.Namespace) -> None:
+    from robustgait.gaitgen import generate_gait
+
+    sim = SimConfig(n_threads=args.threads)
+    exo = load_robot("exo")
+    res = generate_gait(exo, GaitParams())
+    assert res.gait is not None
+    choices = [CertifyConfig(state=s, set=k) for s in ("omega", "centroidal", "velocity")
+               for k in ("ball", "ellipsoid")] + [CertifyConfig(disturbance="push")]
+    print(f"## states: default exo gait, {args.seeds} seeds each, sequential; {load()}")
+    print("| certificate | r* mean (range) | E* [J] | samples | physics steps | wall: mean (range) | "
+          "ratio to omega/ball |")
+    print("|---|---|---|---|---|---|---|")
+    base = None
+    for cfg in choices:
+        gcs = [certify_gait(exo, res.gait, replace(cfg, seed=s), sim) for s in range(args.seeds)]
+        r = np.array([g.r_star for g in gcs])
+        wall = np.array([g.seconds["total"] for g in gcs])
+        base = wall.mean() if base is None else base
+        energy = [g.energy for g in gcs if g.energy is not None]
+        name = "push (J*, N s)" if cfg.disturbance == "push" else f"{cfg.state}/{cfg.set}"
+        print(f"| {name} | {r.mean():.4g} ({r.min():.4g}–{r.max():.4g}) | "
+              f"{np.mean(energy) if energy else float('nan'):.3g} | "
+              f"{np.mean([g.certificate.n_samples for g in gcs if g.certificate]):.0f} | "
+              f"{np.mean([g.physics_steps for g in gcs]) / 1e6:.2f} M | {wall.mean():.1f} s ({wall.min():.1f}–"
+              f"{wall.max():.1f}) | {wall.mean() / base:.2f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("part", nargs="?", default="all", choices=("all", "seeds", "coverage", "barrier", "speed"))
+    ap.add_argument("part", nargs="?", default="all",
+                    choices=("all", "seeds", "coverage", "barrier", "speed", "horizon", "states"))
     ap.add_argument("--seeds", type=int, default=10, help="seeds: seeds per gait and method (default 10)")
     ap.add_argument("--methods", default="uniform,sequential")
     ap.add_argument("--epsilon", type=float, default=0.02)
@@ -297,13 +401,16 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5, help="speed: repeats (median; >= 2)")
     ap.add_argument("--samples", type=int, default=200, help="speed: N")
     ap.add_argument("--threads", type=int, default=0, help="0 = one per core")
+    ap.add_argument("--horizons", default="1,2,3", help="horizon: K values (default 1,2,3)")
+    ap.add_argument("--probe", type=int, default=400, help="horizon: states walked one step per gait (default 400)")
     ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")
     args = ap.parse_args()
     if args.repeat < 2:
         ap.error("--repeat must be >= 2 (the determinism check compares repeats)")
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; mujoco "
           f"{mujoco.__version__}; numpy {np.__version__}; {load()}")
-    for part, fn in (("seeds", cmd_seeds), ("coverage", cmd_coverage), ("barrier", cmd_barrier), ("speed", cmd_speed)):
+    for part, fn in (("seeds", cmd_seeds), ("coverage", cmd_coverage), ("barrier", cmd_barrier), ("speed", cmd_speed),
+                     ("horizon", cmd_horizon), ("states", cmd_states)):
         if args.part in ("all", part):
             fn(args)
 

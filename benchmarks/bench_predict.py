@@ -15,7 +15,7 @@ its ρ with the s₅₀ of each other kind; plus the gaits' own step length as a
 
     python benchmarks/bench_predict.py [--studies DIR,DIR] [--configs omega/ball/1,velocity/ellipsoid/2,...]
         [--gaits 'GLOB'] [--push-cert] [--kinds latency,noise,mass,terrain] [--trials 200] [--other-trials 100]
-        [--workers 2] [--limit N] [--out FILE.jsonl] [--report]
+        [--workers 2] [--limit N] [--spread N] [--out FILE.jsonl] [--report]
 """
 
 from __future__ import annotations
@@ -162,6 +162,11 @@ def run(args: argparse.Namespace) -> None:
 
     gaits = (gait_files(args.gaits) if args.gaits else gaits_of([Path(s) for s in args.studies.split(",")]))[
         : args.limit]
+    if args.spread is not None and args.spread < len(gaits):
+        # evenly spaced in the studies' own r* (so a short run still spans weak to strong gaits)
+        ranked = sorted(gaits, key=lambda g: (g["study_r_star"] is None, g["study_r_star"] or 0.0))
+        picks = np.unique(np.round(np.linspace(0, len(ranked) - 1, args.spread)).astype(int))
+        gaits = [ranked[i] for i in picks]
     done = set()
     if args.out.exists():
         old = [json.loads(line) for line in args.out.read_text().splitlines() if line.strip()]
@@ -257,6 +262,7 @@ def main() -> None:
     ap.add_argument("--other-trials", type=int, default=100)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--limit", type=int, default=None)
+    ap.add_argument("--spread", type=int, default=None, help="N gaits evenly spaced in the studies' r*")
     ap.add_argument("--out", type=Path, default=REPO / "benchmarks" / "data" / "bench_predict.jsonl")
     ap.add_argument("--report", action="store_true")
     args = ap.parse_args()
