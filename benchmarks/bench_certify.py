@@ -334,7 +334,7 @@ def cmd_horizon(args: argparse.Namespace) -> None:
     cases += [(f"L{p.step_length:.2f} T{p.step_duration:.1f} W{p.step_width:.2f} h{p.step_height:.2f}", p, ("flat",))
               for p in thin_gaits()]
     ks = [int(k) for k in args.horizons.split(",")]
-    print(f"## horizon: sequential certificates (ε 0.02, β 1e-3), K = {ks}; {len(cases)} gaits; {load()}")
+    print(f"## horizon: sequential certificates (the defaults: ε 0.02, β 0.05), K = {ks}; {len(cases)} gaits; {load()}")
     print("| gait | " + " | ".join(f"r* K={k} (excursion) | samples, wall K={k}" for k in ks) + " | one step from "
           f"{args.probe} states in B(r), r in rad/s |")
     print("|---|" + "---|---|" * len(ks) + "---|")

@@ -215,7 +215,7 @@ def report(path: Path) -> None:
     print("\n| choice | median r* | median cost [s] | ρ(r*, push success) | ρ(r*, push s₅₀) | falls inside / inside "
           "[95 % CI] |")
     print("|---|---|---|---|---|---|")
-    names = sorted({c for r in rows for c in r["configs"]}, key=lambda c: DEFAULT_CONFIGS.find(c))
+    names = list(dict.fromkeys(c for r in rows for c in r["configs"]))  # in the order the run listed them
     for name in names:
         have = [r for r in rows if name in r["configs"]]
         x = np.array([r["configs"][name]["r_star"] for r in have])
