@@ -46,7 +46,7 @@ from robustgait.certify import GaitCertificate, certify_gait
 from robustgait.config import CertifyConfig, GaitParams, GenerationConfig, SequentialConfig, SimConfig
 from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
-from robustgait.poincare import ReturnMap
+from robustgait.poincare import FixedPointFailure, ReturnMap
 from robustgait.robots import Robot
 from robustgait.synthetic import BandMap, ConeMap
 
@@ -298,7 +298,10 @@ def probe_events(robot: Robot, gait: Gait, sim: SimConfig, n: int, radius: float
     """One step from n states uniform in B(radius) of the omega/ball/1 map: fall reasons and touchdown phases."""
     cfg = CertifyConfig()
     with ReturnMap(robot, gait, cfg, sim) as pmap:
-        fp = pmap.find_fixed_point()
+        try:
+            fp = pmap.find_fixed_point()
+        except FixedPointFailure as e:
+            return f"no fixed point: {e}"
         red = pmap.reduced
         x = sample_ball(n, red.dim, radius, red.x_star, np.random.default_rng(0))
         qpos, qvel = pmap.reconstruct(x)
@@ -333,6 +336,7 @@ def cmd_horizon(args: argparse.Namespace) -> None:
                                                            ("default multicontact", GaitParams(), ("multicontact",))]
     cases += [(f"L{p.step_length:.2f} T{p.step_duration:.1f} W{p.step_width:.2f} h{p.step_height:.2f}", p, ("flat",))
               for p in thin_gaits()]
+    cases = cases[args.start:]
     ks = [int(k) for k in args.horizons.split(",")]
     print(f"## horizon: sequential certificates (the defaults: ε 0.02, β 0.05), K = {ks}; {len(cases)} gaits; {load()}")
     print("| gait | " + " | ".join(f"r* K={k} (excursion) | samples, wall K={k}" for k in ks) + " | one step from "
@@ -402,6 +406,7 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=200, help="speed: N")
     ap.add_argument("--threads", type=int, default=0, help="0 = one per core")
     ap.add_argument("--horizons", default="1,2,3", help="horizon: K values (default 1,2,3)")
+    ap.add_argument("--start", type=int, default=0, help="horizon: skip the first N gaits (a resumed run)")
     ap.add_argument("--probe", type=int, default=400, help="horizon: states walked one step per gait (default 400)")
     ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")
     args = ap.parse_args()
