@@ -100,6 +100,7 @@ def sample_sets(draw: st.DrawFn) -> tuple[np.ndarray, np.ndarray, np.ndarray, fl
     return x0, x1, x_star, alpha, r_max
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.one_of(sample_sets(), random_sample_sets()), st.sampled_from(["ball", "paper"]))
 def test_invariant_radius_matches_brute_force(case: tuple[np.ndarray, np.ndarray, np.ndarray, float, float],

@@ -275,6 +275,7 @@ def test_energy_state_certificate(exo, exo_gait, state, dim):
     assert "rad/s" not in gc.statement()
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_ellipsoid_certificate_with_its_ball(exo, exo_gait, tmp_path):
     from robustgait.config import EllipsoidConfig
 

@@ -353,6 +353,7 @@ def _check_tracking(walks, steps):
         assert summary["saturation"] > 0 and summary["saturation_fraction"] < 0.005
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_passivity_tracks_better_than_pd(exo, exo_gait):
     _check_tracking(_walks(exo, exo_gait, 8), 8)
 

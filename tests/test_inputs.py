@@ -238,6 +238,7 @@ def workdir() -> Iterator[Path]:
 
 
 # ------------------------------------------------------------------------------------------ properties
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 @_settings(60)
 @given(data=st.data())
 def test_mutated_gait_json_converts_or_fails_cleanly(exo, gait_tree, data):
@@ -266,6 +267,7 @@ def test_mutated_gait_json_walks_or_fails_cleanly(gait_tree, data):
             assert len(log.read_text().splitlines()) == 1 + res["steps_taken"]
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 @_settings(40)
 @given(data=st.data())
 def test_mutated_frost_yaml_converts_or_fails_cleanly(exo, frost_tree, data):
@@ -280,6 +282,7 @@ def test_mutated_frost_yaml_converts_or_fails_cleanly(exo, frost_tree, data):
             assert g.domains[0].beta.shape == (12, 8) and 0.01 <= g.step_duration <= 10
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 @_settings(40)
 @given(data=st.data())
 def test_mutated_spec_toml_loads_or_fails_cleanly(exo, spec_tree, data):
@@ -338,6 +341,7 @@ def arrays(draw: st.DrawFn) -> np.ndarray:
     return draw(hnp.arrays(ARRAY_DTYPES, hnp.array_shapes(min_dims=0, max_dims=3, min_side=0, max_side=4)))
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 @_settings(60)
 @given(data=st.data())
 def test_mutated_logs_evaluate_or_fail_cleanly(data):
@@ -373,6 +377,7 @@ OPTIONS = {"walk": ["--steps"], "certify": ["--samples", "--r-max", "--alpha", "
            "barrier-eval": ["--r", "--alpha"]}
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 @_settings(150)
 @given(command=st.sampled_from(sorted(OPTIONS)), data=st.data())
 def test_numeric_arguments_are_bounded(command, data):

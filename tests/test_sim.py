@@ -126,6 +126,7 @@ def test_a_diverging_sample_is_a_silent_fall(tmp_path, monkeypatch, capfd):
     assert config.logto_console and config.logto_file
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_multicontact_gait_rolls_both_feet(exo, exo_mc_gait):
     """Heel strike → rolling double support → foot-flat: in every double support of a 50-step walk the back sole
     pitches toe-down and the front sole from toe-up to flat, each by ≥ 10° (issue acceptance), and double

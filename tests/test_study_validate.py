@@ -100,6 +100,7 @@ def test_spearman_defined_and_undefined():
         json.dumps(u.to_dict(), allow_nan=False)  # never NaN
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_every_unique_gait_meets_the_same_disturbances(small_study, first_run):
     out, _ = first_run
     rows = {r["grid_index"]: r for r in out["gaits"]}
@@ -202,6 +203,7 @@ def test_cli_text_and_json(small_study, first_run, capsys):
     assert out["push"]["correlations"] == first_run[0]["correlations"]
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_another_state_certifies_every_gait_again(small_study, first_run, capsys):
     """--state: every certified gait gets a certificate of that state (the study's other options), is checked in
     its coordinates, and its r* is the one correlated; the study's own results stay stored under their key."""

@@ -252,6 +252,7 @@ def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_ce
     assert main(["validate", str(gait_path), "--robot", "exo", "--certificate", str(bad)]) == 2
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_gait_tiles_are_a_real_image(tmp_path, exo, exo_gait):
     import imageio.v2 as imageio
 
@@ -314,6 +315,7 @@ def dist_push_windows(v, d):  # type: ignore[no-untyped-def]
     return np.round(d.params["phase"] * v.gait.step_duration / v.robot.dt).astype(int)
 
 
+@pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_every_kind_runs_on_a_multicontact_gait(mc_validator):
     for kind in ("mass", "latency", "noise", "terrain", "slope"):
         s = mc_validator.run(kind).summary()
