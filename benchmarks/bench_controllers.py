@@ -41,7 +41,17 @@ def gait_cases(extra: list[str]) -> list[dict[str, str]]:
 
 
 def one(task: dict[str, Any]) -> dict[str, Any]:
-    """Tracking, r* over seeds and every validation kind of one gait under one controller."""
+    """Tracking, r* over seeds and every validation kind of one gait under one controller (or the one-line error
+    that stopped it, e.g. a spec without passivity gains)."""
+    from robustgait.errors import RobustGaitError
+
+    try:
+        return measure(task)
+    except RobustGaitError as e:
+        return {"name": task["name"], "controller": task["controller"], "error": str(e)}
+
+
+def measure(task: dict[str, Any]) -> dict[str, Any]:
     from robustgait import load_gait, load_robot, walk
     from robustgait.certify import certify_gait
     from robustgait.config import KINDS, CertifyConfig, GaitParams, SimConfig, ValidateConfig
@@ -96,8 +106,8 @@ def run(args: argparse.Namespace) -> None:
             r = fut.result()
             f.write(json.dumps(r, allow_nan=False) + "\n")
             f.flush()
-            print(f"[{time.perf_counter() - t0:.0f} s] {r['name']} / {r['controller']}: {r['seconds']:.0f} s",
-                  flush=True)
+            print(f"[{time.perf_counter() - t0:.0f} s] {r['name']} / {r['controller']}: "
+                  + (f"ERROR {r['error']}" if "error" in r else f"{r['seconds']:.0f} s"), flush=True)
 
 
 def fmt_s50(v: dict[str, Any], kind: str) -> str:
@@ -113,6 +123,10 @@ def report(path: Path) -> None:
     import numpy as np
 
     rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    for r in rows:
+        if "error" in r:
+            print(f"{r['name']} / {r['controller']}: not measured — {r['error']}")
+    rows = [r for r in rows if "error" not in r]
     commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip()
     print(f"{len(rows)} (gait, controller) results from {path} (report {date.today()}, commit {commit})\n")
