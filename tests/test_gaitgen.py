@@ -142,12 +142,13 @@ def test_warm_start_converges_faster(gen, default):
 
 @pytest.mark.slow
 def test_grid_over_the_action_space_walks(exo, gen):
-    """4 × 4 grid of step length × duration (default width, height) and the 4 width × height corners: every
-    gait solves, passes the physics check and walks like an exoskeleton (issue acceptance: ≥ 90 %; all do)."""
+    """The corners of the action space — step length × duration (default width, height), then width × height —
+    every gait solves, passes the physics check and walks like an exoskeleton. (The whole 4 × 4 + 4 grid is
+    benchmarks/bench_gaitgen.py's; the corners, where gaits are most extreme, keep CI within its time.)"""
     a = exo.spec.action_space
     grid = [GaitParams(step_length=float(L), step_duration=float(T))
-            for L in np.linspace(a["step_length"].low, a["step_length"].high, 4)
-            for T in np.linspace(a["step_duration"].low, a["step_duration"].high, 4)]
+            for L in (a["step_length"].low, a["step_length"].high)
+            for T in (a["step_duration"].low, a["step_duration"].high)]
     grid += [GaitParams(step_width=W, step_height=h) for W in (a["step_width"].low, a["step_width"].high)
              for h in (a["step_height"].low, a["step_height"].high)]
     for params in grid:
