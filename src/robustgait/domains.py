@@ -109,3 +109,10 @@ def domain_graph(name: str) -> DomainGraph:
 
 def other_side(side: str) -> str:
     return "left" if side == "right" else "right"
+
+
+def step_segments(stance: str, n_domains: int) -> list[tuple[str, int]]:
+    """(stance, domain) of one step from a section state that starts a step of ``stance``, in simulation order: the
+    previous leg's remaining domains (a multi-contact gait's rolling double support), then ``stance``'s single
+    support up to the next section (a flat-foot step: just that). Used by the return map and the validation."""
+    return [(other_side(stance), d) for d in range(1, n_domains)] + [(stance, 0)]

@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.config import CertifyConfig, Frame, SimConfig
+from robustgait.domains import step_segments
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.reduced import ReducedState, reduce_state
@@ -161,13 +162,6 @@ class ReturnMap:
             qpos, qvel = self.robot.mirror_state(qpos, qvel)
         return qpos, qvel
 
-    def _phases(self, first: str) -> list[tuple[str, int]]:
-        """(stance, domain) of one step's worth of simulation from a section state that ends the single
-        support of the leg other than ``first``: that step's remaining domains, then ``first``'s single
-        support up to its section (flat gaits: just ``first``'s step)."""
-        other = "left" if first == "right" else "right"
-        return [(other, d) for d in range(1, len(self.engine.graph))] + [(first, 0)]
-
     def _run(self, qpos: FloatArray, qvel: FloatArray, phases: list[tuple[str, int]],
              progress: Callable[[int], None] | None = None) -> tuple[FloatArray, FloatArray, list[str | None]]:
         """Simulate phases in order (``progress`` on the last); a sample that falls in one is NaN afterwards."""
@@ -191,11 +185,12 @@ class ReturnMap:
         A canonical state lies on the section at the end of a single support of the other leg, so the step
         map simulates the rest of that step (multi-contact: its double support) and the gait's own stance's
         single support, then mirrors; the stride map goes on through the other leg's step instead."""
+        n = len(self.engine.graph)
         if self.kind == "step":
-            qpos, qvel, reasons = self._run(qpos, qvel, self._phases(self.stance), progress)
+            qpos, qvel, reasons = self._run(qpos, qvel, step_segments(self.stance, n), progress)
             mq, mv = self.robot.mirror_state(qpos, qvel)
             return mq, mv, reasons
-        return self._run(qpos, qvel, self._phases(self.stance) + self._phases(self.other), progress)
+        return self._run(qpos, qvel, step_segments(self.stance, n) + step_segments(self.other, n), progress)
 
     def set_fixed_point(self, fp: FixedPoint) -> FixedPoint:
         """Use ``fp`` as x* (e.g. found earlier by this map) and set the reduced state up at it."""

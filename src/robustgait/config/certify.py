@@ -142,10 +142,9 @@ class CertifyConfig:
             raise FieldProblem("r_max", f"must satisfy 0 < x ≤ {R_MAX_LIMIT[self.space]:g} {R_MAX_UNIT[self.space]} "
                                f"when certifying {self.space} (got {self.r_max:g})")
         seq = self.estimator
-        where = "sequential"
         need = seq.first_round + verification_size(seq.epsilon, self.beta, 1)
         if self.method == "sequential" and seq.budget < need:
-            raise FieldProblem(f"{where}.budget", f"{seq.budget} samples cannot hold the first round "
+            raise FieldProblem("sequential.budget", f"{seq.budget} samples cannot hold the first round "
                                f"({seq.first_round}) and one verification batch ({need - seq.first_round} for "
                                f"epsilon = {seq.epsilon:g}, beta = {self.beta:g})")
 

@@ -183,6 +183,12 @@ def _action_space(t: ActionAxesTable, src: Path,
     return out
 
 
+def _check_per_joint(path: Path, key: str, values: list[float], n: int) -> None:
+    """A per-joint list of the spec must have one number per joint (``joints.names``)."""
+    if len(values) != n:
+        raise field_error(path, key, f"must be a list of {n} numbers, one per joint (got {len(values)} items)")
+
+
 def spec_from_raw(raw: object, path: Path) -> RobotSpec:
     """Validate a parsed spec TOML and build the :class:`RobotSpec` (paths relative to ``path``)."""
     s = validate(raw, SpecFile, path, "toml")
@@ -192,10 +198,7 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
         dup = next(j for j in names if names.count(j) > 1)
         raise field_error(path, "joints.names", f"joint {dup!r} is listed twice")
     for key in ("kp", "kd", "torque_limit"):
-        values = getattr(s.joints, key)
-        if len(values) != n:
-            raise field_error(path, f"joints.{key}", f"must be a list of {n} numbers, one per joint "
-                              f"(got {len(values)} items)")
+        _check_per_joint(path, f"joints.{key}", getattr(s.joints, key), n)
     if sorted(s.mirror.joint_perm) != list(range(n)):
         raise field_error(path, "mirror.joint_perm", f"must be a permutation of 0..{n - 1}")
     if len(s.mirror.joint_sign) != n:
@@ -233,9 +236,7 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
     if s.controller is not None and s.controller.passivity is not None:
         pt = s.controller.passivity
         for key, values in (("lambda", pt.lam), ("kd", pt.kd)):
-            if len(values) != n:
-                raise field_error(path, f"controller.passivity.{key}", f"must be a list of {n} numbers, one per "
-                                  f"joint (got {len(values)} items)")
+            _check_per_joint(path, f"controller.passivity.{key}", values, n)
         passivity = PassivitySpec(lam=tuple(float(v) for v in pt.lam), kd=tuple(float(v) for v in pt.kd))
     return RobotSpec(
         name=s.name,

@@ -155,14 +155,12 @@ def _orbitless_start(robot: Any, gait: Any, c: CertifyConfig) -> tuple[Any, Any]
     """A start and a :class:`CertificateRef` of r* = 0 for a gait without a certified fixed point: its initial
     state as a section state (a multi-contact gait walked to its first heel strike), x̄ of that state (the
     certificate's state, identity transform) as the 'centre' (there is no set: nothing lies inside it)."""
-    from robustgait.poincare import FixedPoint
+    from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap
     from robustgait.reduced import ReducedState, reduce_state
     from robustgait.validate.run import CertificateRef
 
     if gait.initial_state is None:
         raise RobustGaitError("the gait has no initial state to start the trials from")
-    from robustgait.poincare import FixedPointFailure, ReturnMap
-
     with ReturnMap(robot, gait, c) as pmap:  # a multi-contact gait: walked from its start to its first heel strike
         try:
             qs, vs = pmap.initial_section()

@@ -29,6 +29,7 @@ from tqdm import tqdm
 from robustgait.certify import GaitCertificate, certify_gait
 from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, SimConfig, ValidateConfig, to_dict
 from robustgait.config.work import check_work
+from robustgait.domains import other_side, step_segments
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.poincare import FixedPoint, ReturnMap
@@ -258,24 +259,13 @@ class Segment:
 Inputs = Callable[[Segment, NDArray[np.int64]], "StepInputs | None"]
 
 
-def _other(stance: str) -> str:
-    return "left" if stance == "right" else "right"
-
-
-def step_segments(stance: str, n_domains: int) -> list[tuple[str, int]]:
-    """(stance, domain) of one step of a trial from a section state that starts a step of ``stance``: the previous
-    leg's remaining domains (a multi-contact gait's double support), then ``stance``'s single support up to the
-    next section (a flat-foot step: just that). As :meth:`robustgait.poincare.ReturnMap._phases`."""
-    return [(_other(stance), d) for d in range(1, n_domains)] + [(stance, 0)]
-
-
 def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_steps: int, period: int,
                     inputs: Inputs, *, first_at: int, progress: Callable[[int], None] | None = None
                     ) -> tuple[NDArray[np.bool_], list[str | None], NDArray[np.int64], FloatArray, int]:
     """Walk K trials from canonical section states (K, nq), (K, nv) for ``n_steps`` steps (stances alternate from
     the gait's), each domain of a step one batched :meth:`StepEngine.step` on the trials still walking
-    (:func:`step_segments`: a multi-contact step is the previous leg's double support, then the single support
-    that ends at the next heel strike).
+    (:func:`robustgait.domains.step_segments`: a multi-contact step is the previous leg's double support, then the
+    single support that ends at the next heel strike).
 
     ``inputs(segment, idx)`` gives the per-sample inputs of a :class:`Segment` for the trials ``idx``
     (``first_at``: the physics step of the event that ended the segment before the trials' start). Returns success
@@ -291,7 +281,7 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
     first = np.full((k_all, engine.nq + engine.nv), np.nan)
     prev_at = np.full(k_all, first_at, dtype=np.int64)
     stance = next(iter(engine.gaits))
-    prev: tuple[str, int] = (_other(stance), 0)
+    prev: tuple[str, int] = (other_side(stance), 0)
     physics = 0
     index = 0
     n_domains = len(engine.graph)
@@ -322,7 +312,7 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
                 if period % 2 == 1:  # the state starts a step of the other stance: write it for the canonical one
                     qp, qv = robot.mirror_state(qp, qv)
                 first[ok_all] = np.hstack([qp, qv])
-        stance = _other(stance)
+        stance = other_side(stance)
         if progress is not None:
             progress(1)
     return alive, reasons, fall_step, first, physics
