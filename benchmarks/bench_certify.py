@@ -1,7 +1,7 @@
 """Certificates r*: precision and cost of the estimators on real gaits, coverage of the confidence statement on
 maps with known answers, both barriers, and the sampler's speed against raw ``mujoco.rollout``.
 
-    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed|horizon|states] [options]
+    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed|horizon|states|push] [options]
 
 * ``seeds`` (issue 7 acceptance): the default ``exo`` gait (regenerated here with the API from the default
   ``GaitParams``, or ``--exo-gait FILE``; ``--step-length`` etc. change the parameters) and the Atalante FROST
@@ -23,6 +23,9 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
   the samples whose image is farther from x̄* than they started against the τ of the others.
 * ``states`` (issue 18 item 7): on the default exo gait, ``--seeds`` sequential certificates of each state × set
   and the push certificate, one after the other in the same run: r*, E*, wall time and its ratio to ``omega``'s.
+* ``push`` (issue 18 item 7, J*'s cost): on the default exo gait, ``--seeds`` omega/ball certificates, then the
+  push certificate J* for each ``--push-variants`` tuple (first round / exploration / exploration after a failed
+  verification / steps after the push), same run: J*, samples, physics steps, wall and its ratio to omega/ball's.
 """
 
 from __future__ import annotations
@@ -387,10 +390,40 @@ def cmd_states(args: argparse.Namespace) -> None:
               f"{wall.max():.1f}) | {wall.mean() / base:.2f} |", flush=True)
 
 
+def cmd_push(args: argparse.Namespace) -> None:
+    """J*'s cost against the omega/ball certificate on the same gait, same run, per push round sizes and steps."""
+    from robustgait.config.certify import PushConfig
+    from robustgait.gaitgen import generate_gait
+
+    sim = SimConfig(n_threads=args.threads)
+    exo = load_robot("exo")
+    res = generate_gait(exo, GaitParams())
+    assert res.gait is not None
+    variants = [tuple(int(v) for v in t.split("/")) for t in args.push_variants.split(",")]
+    print(f"## push: default exo gait, {args.seeds} seeds each, sequential; J* per (first round / exploration / "
+          f"exploration after a failure / steps after the push) against omega/ball; {load()}")
+    print("| certificate | J* or r* mean (range) | samples | physics steps | wall: mean (range) | "
+          "ratio to omega/ball |")
+    print("|---|---|---|---|---|---|")
+    cfgs = [("omega/ball", CertifyConfig())] + [
+        (f"push {f}/{e}/{a}/{k}", CertifyConfig(disturbance="push", push=PushConfig(
+            first_round=f, explore=e, explore_after_failure=a, steps=k))) for f, e, a, k in variants]
+    base = None
+    for name, cfg in cfgs:
+        gcs = [certify_gait(exo, res.gait, replace(cfg, seed=s), sim) for s in range(args.seeds)]
+        r = np.array([g.r_star for g in gcs])
+        wall = np.array([g.seconds["total"] for g in gcs])
+        base = wall.mean() if base is None else base
+        print(f"| {name} | {r.mean():.4g} ({r.min():.4g}–{r.max():.4g}) | "
+              f"{np.mean([g.certificate.n_samples for g in gcs if g.certificate]):.0f} | "
+              f"{np.mean([g.physics_steps for g in gcs]) / 1e6:.2f} M | {wall.mean():.1f} s ({wall.min():.1f}–"
+              f"{wall.max():.1f}) | {wall.mean() / base:.2f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("part", nargs="?", default="all",
-                    choices=("all", "seeds", "coverage", "barrier", "speed", "horizon", "states"))
+                    choices=("all", "seeds", "coverage", "barrier", "speed", "horizon", "states", "push"))
     ap.add_argument("--seeds", type=int, default=10, help="seeds: seeds per gait and method (default 10)")
     ap.add_argument("--methods", default="uniform,sequential")
     ap.add_argument("--epsilon", type=float, default=0.02)
@@ -408,6 +441,8 @@ def main() -> None:
     ap.add_argument("--horizons", default="1,2,3", help="horizon: K values (default 1,2,3)")
     ap.add_argument("--start", type=int, default=0, help="horizon: skip the first N gaits (a resumed run)")
     ap.add_argument("--probe", type=int, default=400, help="horizon: states walked one step per gait (default 400)")
+    ap.add_argument("--push-variants", default="100/200/100/3,100/100/50/3,50/100/50/3,100/200/100/2",
+                    help="push: first-round/explore/explore-after-failure/steps tuples (the shipped one first)")
     ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")
     args = ap.parse_args()
     if args.repeat < 2:
@@ -415,7 +450,7 @@ def main() -> None:
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; mujoco "
           f"{mujoco.__version__}; numpy {np.__version__}; {load()}")
     for part, fn in (("seeds", cmd_seeds), ("coverage", cmd_coverage), ("barrier", cmd_barrier), ("speed", cmd_speed),
-                     ("horizon", cmd_horizon), ("states", cmd_states)):
+                     ("horizon", cmd_horizon), ("states", cmd_states), ("push", cmd_push)):
         if args.part in ("all", part):
             fn(args)
 

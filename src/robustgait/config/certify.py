@@ -81,10 +81,10 @@ class PushConfig:
     (``validate.push_duration``, ``validate.push_phase``)."""
 
     steps: Annotated[Int, Doc("steps after the pushed one within which a fall is a failure", ge=1, le=100)] = 3
-    first_round: Annotated[Int, Doc("round 1: uniform pushes in the disk of radius r_max", ge=1, le=10_000)] = 100
-    explore: Annotated[Int, Doc("exploration pushes before the first verification", ge=0, le=100_000)] = 200
+    first_round: Annotated[Int, Doc("round 1: uniform pushes in the disk of radius r_max", ge=1, le=10_000)] = 50
+    explore: Annotated[Int, Doc("exploration pushes before the first verification", ge=0, le=100_000)] = 100
     explore_after_failure: Annotated[Int, Doc("exploration pushes before each further verification", ge=0,
-                                              le=100_000)] = 100
+                                              le=100_000)] = 50
 
 
 @config
