@@ -14,6 +14,14 @@ prints steps walked, speed, RMS and max of q − q_d over all joints and steps, 
 direct-torque actuation and with explicit damping (see sim/feedback.py, "Actuation").
 
     python benchmarks/bench_feedback.py [--k 200] [--repeat 3] [--threads 0] [--steps 50] [--variants]
+
+Gain scan (``--scan``): walks a gait ``--steps`` steps with the passivity law for every uniform Λ in ``--lam``
+and K_D = c·kd (the spec's PD damping) for every c in ``--c``, beside the PD and the law with the PD's own
+stiffness (Λ = kp/kd, K_D = kd), and prints steps walked, tracking RMS / max and saturation per pair — how the
+``[controller.passivity]`` gains of a robot spec are chosen (docs/feedback.md).
+
+    python benchmarks/bench_feedback.py --scan [--robot exo|SPEC.toml] [--gait FILE] [--lam 10 20 40]
+        [--c 1 2 3] [--steps 10]
 """
 
 from __future__ import annotations
@@ -23,14 +31,19 @@ import os
 import platform
 import time
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
 
 from bench_rollout import start_states  # the same K start states as the rollout benchmark
-from robustgait import SimConfig, StepEngine, load_gait, load_robot, walk
+from robustgait import CertifyConfig, SimConfig, StepEngine, load_gait, load_robot, walk
+from robustgait.gait import Gait
+from robustgait.poincare import FixedPointFailure, ReturnMap
+from robustgait.robots import Robot
 from robustgait.sim.feedback import FeedbackEngine, PDController
-from robustgait.sim.passivity import PassivityController
+from robustgait.sim.passivity import PassivityController, PassivityGains
+from robustgait.sim.walk import WalkResult
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -42,7 +55,15 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=0, help="0 = one per core")
     ap.add_argument("--steps", type=int, default=50, help="walk length for the tracking comparison (0: skip)")
     ap.add_argument("--variants", action="store_true", help="also walk the passivity law's actuation variants")
+    ap.add_argument("--scan", action="store_true", help="gain scan of the passivity law instead (see above)")
+    ap.add_argument("--robot", default="exo", help="--scan: robot name or spec file")
+    ap.add_argument("--gait", default="", help="--scan: gait file (default: the robot's stored test gait)")
+    ap.add_argument("--lam", type=float, nargs="+", default=[10.0, 20.0, 40.0], help="--scan: uniform Λ [1/s]")
+    ap.add_argument("--c", type=float, nargs="+", default=[1.0, 2.0, 3.0], help="--scan: K_D = c · kd")
     args = ap.parse_args()
+    if args.scan:
+        scan(args)
+        return
     robot = load_robot("exo")
     gait = load_gait(REPO / "tests" / "data" / "exo_gait.json", robot)
     config = SimConfig(n_threads=args.threads)
@@ -91,15 +112,57 @@ def main() -> None:
         laws += [("passivity, explicit damping", PassivityController(implicit_damping=False)),
                  ("passivity, torque motors", PassivityController(actuation="motor"))]
     for name, ctl in laws:
-        with FeedbackEngine(robot, gait, ctl, config) as eng:  # type: ignore[arg-type]
-            t = time.perf_counter()
-            res = walk(robot, gait, steps=args.steps, engine=eng)
-            dt = time.perf_counter() - t
-            s = eng.stats.summary()
+        res, s, dt = tracked_walk(robot, gait, ctl, config, args.steps)
         print(f"  {name:<28} walked {res.steps_taken}/{args.steps} (fall: {res.fall_reason}), speed "
               f"{res.mean_speed:.4f} m/s | RMS {s['rms'] * 1e3:.3f} mrad, max {s['max'] * 1e3:.2f} mrad | "
               f"saturation {s['saturation']} of {s['steps'] * robot.n_joints} joint-steps "
               f"({100 * s['saturation_fraction']:.3f} %) | {dt:.1f} s")
+
+
+def tracked_walk(robot: Robot, gait: Gait, ctl: object, config: SimConfig, steps: int
+                 ) -> tuple[WalkResult, dict[str, Any], float]:
+    """A walk through the feedback engine under one law: the result, its tracking summary and the wall time."""
+    with FeedbackEngine(robot, gait, ctl, config) as eng:  # type: ignore[arg-type]
+        t = time.perf_counter()
+        res = walk(robot, gait, steps=steps, engine=eng)
+        return res, eng.stats.summary(), time.perf_counter() - t  # type: ignore[attr-defined]
+
+
+def scan(args: argparse.Namespace) -> None:
+    """The gain scan of ``--scan``: one walk per (Λ, c), the PD and the PD-matched law as references."""
+    robot = load_robot(args.robot)
+    gait = load_gait(args.gait or REPO / "tests" / "data" / "exo_gait.json", robot)
+    config = SimConfig(n_threads=1)
+    print(f"gain scan: robot {robot.name}, gait {args.gait or 'tests/data/exo_gait.json'}, {args.steps}-step "
+          f"walks; load {os.getloadavg()[0]:.2f}; mujoco {mujoco.__version__}")
+    n = robot.n_joints
+    laws: list[tuple[str, object]] = [("PD (+ feedforward)", PDController()),
+                                      ("passivity, PD-matched (Λ = kp/kd, K_D = kd)",
+                                       PassivityController(PassivityGains.matching_pd(robot)))]
+    for lam in args.lam:
+        for c in args.c:
+            gains = PassivityGains((lam,) * n, tuple(float(c * v) for v in robot.kd))
+            laws.append((f"passivity Λ = {lam:g}/s, K_D = {c:g} kd", PassivityController(gains)))
+    for name, ctl in laws:
+        res, s, dt = tracked_walk(robot, gait, ctl, config, args.steps)
+        fp = fixed_point(robot, gait, ctl, config) if res.fall_reason is None else "—"
+        print(f"  {name:<44} walked {res.steps_taken:>3}/{args.steps} ({res.fall_reason or 'no fall'}) | RMS "
+              f"{s['rms'] * 1e3:7.3f} mrad, max {s['max'] * 1e3:7.2f} mrad | saturation "
+              f"{100 * s['saturation_fraction']:6.3f} % | fixed point: {fp} | {dt:.1f} s", flush=True)
+
+
+def fixed_point(robot: Robot, gait: Gait, ctl: object, config: SimConfig) -> str:
+    """Whether the step map under this law has a fixed point (the certificate's first need), and where."""
+    pmap = ReturnMap(robot, gait, CertifyConfig(), SimConfig(n_threads=1))
+    pmap.engine.close()
+    pmap.engine = FeedbackEngine(robot, gait, ctl, config)  # type: ignore[arg-type]
+    try:
+        with pmap:
+            fp = pmap.find_fixed_point()
+    except FixedPointFailure as e:
+        detail = str(e).rsplit("(", 1)[-1].rstrip(")") if e.status == "no_fixed_point" else f"step {e.steps}"
+        return f"none, {e.status} ({detail})"
+    return f"step {fp.steps}, residual {fp.residual:.1e}, ‖ω*‖ {np.linalg.norm(fp.omega):.3f} rad/s"
 
 
 if __name__ == "__main__":
