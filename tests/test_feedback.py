@@ -299,6 +299,45 @@ def test_pd_feedback_equals_rollout_with_inputs(exo, exo_gait):
         _assert_same(ref.step(q, v, "right"), fb.step(q, v, "right"))
 
 
+def test_sensor_noise_is_read_by_the_law(exo, exo_gait):
+    """Encoder noise: the servo PD of the rollout engine takes it as the exact control offset −(n_q + kd/kp n_v)
+    (bit-identical), the PD through the feedback engine reads it and matches (1e-9), and the passivity law is
+    evaluated at the noisy joint state — not at the true one, and not through the servo's offset."""
+    k, n, nu = 4, 300, exo.n_joints
+    rng = np.random.default_rng(8)
+    q, v = _start_states(exo_gait, k, 2)
+    noise = np.zeros((k, n, 2, nu))
+    noise[:, :, 0] = rng.normal(0.0, 0.004, (k, n, nu))
+    noise[:, :, 1] = rng.normal(0.0, 0.2, (k, n, nu))
+    noisy = StepInputs(sensor_noise=noise)
+    off = -(noise[:, :, 0] + (exo.kd / exo.kp) * noise[:, :, 1])
+    ref = StepEngine(exo, exo_gait)
+    a = ref.step(q, v, "right", inputs=noisy, record=True)
+    b = ref.step(q, v, "right", inputs=StepInputs(ctrl_offset=off), record=True)
+    _assert_same(a, b, tol=0.0)
+    assert np.abs(a.qvel - ref.step(q, v, "right").qvel).max() > 1e-4  # the noise does act
+    with FeedbackEngine(exo, exo_gait, PDController()) as fb:
+        _assert_same(a, fb.step(q, v, "right", inputs=noisy, record=True))
+        with pytest.raises(RobustGaitError, match=r"sensor_noise must be \(K=4, n, 2, 12\)"):
+            fb.step(q, v, "right", inputs=StepInputs(sensor_noise=noise[:, :, 0]))
+
+    class Recording(PassivityController):
+        def torque(self, kk, obs):
+            seen.append((kk, obs.qpos[:, self.qpos_idx].copy(), obs.qvel[:, self.dof_idx].copy()))
+            return super().torque(kk, obs)
+
+    seen: list = []
+    with FeedbackEngine(exo, exo_gait, Recording()) as fb:
+        c = fb.step(q, v, "right", inputs=noisy, record=True)
+    assert c.fall_reason == [None] * k
+    for kk, qa, _ in seen[1:20]:
+        # the state the law saw at physics step kk = the recorded true state of step kk + the noise
+        true = np.stack([t[kk - 1] for t in c.trajectory])[:, 1:1 + exo.model.nq][:, exo.qpos_idx]  # (time, qpos, …)
+        np.testing.assert_allclose(qa - true, noise[:, kk, 0], atol=1e-12)
+    kk, _, qd = seen[0]
+    np.testing.assert_allclose(qd - v[:, exo.dof_idx], noise[:, 0, 1], atol=1e-12)
+
+
 def test_pd_feedback_multicontact_domains(exo, exo_mc_gait):
     q, v = _start_states(exo_mc_gait, 3, 2)
     ref = StepEngine(exo, exo_mc_gait)

@@ -15,6 +15,7 @@ from robustgait.cli import main
 from robustgait.config import CertifyConfig, ReportConfig, ValidateConfig
 from robustgait.io.gaitfile import save_gait
 from robustgait.sim import StepEngine, StepInputs
+from robustgait.sim.engine import servo_noise_offset
 from robustgait.validate import (
     CertificateRef,
     Draws,
@@ -72,12 +73,15 @@ def test_draws_depend_on_seed_and_robot_only():
         ValidateConfig(push_phase=(0.5, 0.2))
 
 
-def test_noise_is_a_control_offset():
+def test_noise_is_encoder_noise_and_a_servo_control_offset():
     robot = load_robot("exo")
-    off = dist.noise_offsets(robot, np.array([0.0, 0.01]), 50.0, 400, seed=0, kind_step=0)
-    assert off.shape == (2, 400, robot.n_joints)
-    assert np.all(off[0] == 0.0)
-    # −(n_q + kd/kp · 50 n_q-scale n_v): per joint variance σ² (1 + (50 kd/kp)²)
+    noise = dist.noise_draws(robot, np.array([0.0, 0.01]), 50.0, 400, seed=0, kind_step=0)
+    assert noise.shape == (2, 400, 2, robot.n_joints)
+    assert np.all(noise[0] == 0.0)
+    np.testing.assert_allclose(noise[1, :, 0].std(), 0.01, rtol=0.1)  # n_q
+    np.testing.assert_allclose(noise[1, :, 1].std(), 0.5, rtol=0.1)  # n_v = 50 σ_q
+    # for the PD servos: −(n_q + kd/kp n_v), per joint variance σ² (1 + (50 kd/kp)²)
+    off = servo_noise_offset(robot, noise)
     expect = 0.01 * np.sqrt(1 + (50 * robot.kd / robot.kp) ** 2)
     np.testing.assert_allclose(off[1].std(axis=0), expect, rtol=0.15)
 
@@ -88,8 +92,8 @@ def test_noise_and_terrain_realizations_do_not_depend_on_the_gait():
     a study validated with one seed meet the same disturbances."""
     robot = load_robot("exo")
     sigma = np.array([0.005, 0.01, 0.02])
-    short = dist.noise_offsets(robot, sigma, 50.0, 300, seed=3, kind_step=1)
-    long = dist.noise_offsets(robot, sigma, 50.0, 420, seed=3, kind_step=1)
+    short = dist.noise_draws(robot, sigma, 50.0, 300, seed=3, kind_step=1)
+    long = dist.noise_draws(robot, sigma, 50.0, 420, seed=3, kind_step=1)
     np.testing.assert_array_equal(long[:, :300], short)
     near = dist.TerrainLayout(x0=-1.0, rough_from=0.1, y0=-1.0, tile=0.3, nx=8, ny=7)
     far = dist.TerrainLayout(x0=-1.2, rough_from=0.12, y0=-0.9, tile=0.3, nx=13, ny=7)

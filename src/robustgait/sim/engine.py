@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
@@ -94,12 +94,22 @@ class StepInputs:
     models: K compiled models with the robot model's size signature (e.g. copies with other masses,
     friction or terrain); ctrl_offset (K, n, nu): added to the gait's servo controls at physics steps
     0..n−1 of the step (none after n); base_wrench (K, n, 6): world-frame force [N] and torque [N m] on the
-    floating base at its centre of mass (MuJoCo's ``xfrc_applied``) at physics steps 0..n−1.
+    floating base at its centre of mass (MuJoCo's ``xfrc_applied``) at physics steps 0..n−1; sensor_noise
+    (K, n, 2, nu): encoder noise (n_q, n_v) [rad, rad/s] on the actuated joints' positions and velocities as the
+    tracking law reads them at physics steps 0..n−1 — the servo PD u = kp (c − q̃) − kd q̃̇ of this engine takes
+    it as the control offset −(n_q + (kd/kp) n_v) (exact), a state-feedback law evaluates at the noisy state.
     """
 
     models: Sequence[mujoco.MjModel] | None = None
     ctrl_offset: NDArray[np.float64] | None = None
     base_wrench: NDArray[np.float64] | None = None
+    sensor_noise: NDArray[np.float64] | None = None
+
+
+def servo_noise_offset(robot: Robot, noise: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Control offset (K, n, nu) of encoder noise (K, n, 2, nu) for joint PD servos: −(n_q + (kd/kp) n_v), the
+    exact change of u = kp (c − q̃) − kd q̃̇ with q̃ = q + n_q, q̃̇ = q̇ + n_v."""
+    return np.asarray(-(noise[:, :, 0] + (robot.kd / robot.kp) * noise[:, :, 1]))
 
 
 class StepEngine:
@@ -228,6 +238,23 @@ class StepEngine:
         for name, arr, width in (("ctrl_offset", inputs.ctrl_offset, m.nu), ("base_wrench", inputs.base_wrench, 6)):
             if arr is not None and (arr.ndim != 3 or arr.shape[0] != kk or arr.shape[2] != width):
                 raise RobustGaitError(f"{name} must be (K={kk}, n, {width}), got {arr.shape}")
+        noise = inputs.sensor_noise
+        if noise is not None and (noise.ndim != 4 or noise.shape[0] != kk or noise.shape[2:] != (2, m.nu)):
+            raise RobustGaitError(f"sensor_noise must be (K={kk}, n, 2, {m.nu}), got {noise.shape}")
+
+    def _engine_inputs(self, inputs: StepInputs) -> StepInputs:
+        """``inputs`` as this engine applies them: sensor noise folded into the control offset, as the servo PD
+        takes it (a feedback engine hands the noise to its law instead)."""
+        if inputs.sensor_noise is None:
+            return inputs
+        off = servo_noise_offset(self.robot, inputs.sensor_noise)
+        if inputs.ctrl_offset is not None:
+            n = max(off.shape[1], inputs.ctrl_offset.shape[1])
+            both = np.zeros((off.shape[0], n, off.shape[2]))
+            both[:, :off.shape[1]] += off
+            both[:, :inputs.ctrl_offset.shape[1]] += inputs.ctrl_offset
+            off = both
+        return replace(inputs, ctrl_offset=off, sensor_noise=None)
 
     def _rollout(self, active: NDArray[np.int64], current: NDArray[np.float64], ctrl: NDArray[np.float64],
                  k0: int, n: int, inputs: StepInputs | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -284,6 +311,7 @@ class StepEngine:
         kk = qpos.shape[0]
         if inputs is not None:
             self._check_inputs(inputs, kk)
+            inputs = self._engine_inputs(inputs)
         bad = ~(np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1))
         if not 0 <= domain < len(self.graph):
             raise RobustGaitError(f"the gait has {len(self.graph)} domains, no domain {domain}")

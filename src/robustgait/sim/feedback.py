@@ -332,6 +332,10 @@ class FeedbackEngine(StepEngine):
         self.stats.add(int(at.sum()), sat.sum(axis=0), sq.sum(axis=0), mx.max(axis=0, initial=0.0))
         return res
 
+    def _engine_inputs(self, inputs: StepInputs) -> StepInputs:
+        """The inputs as given: the law reads the sensor noise itself (:meth:`_closed_loop`)."""
+        return inputs
+
     def _rollout(self, active: NDArray[np.int64], current: NDArray[np.float64], ctrl: NDArray[np.float64],
                  k0: int, n: int, inputs: StepInputs | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """n physics steps of the closed loop from step k0 for the samples ``active`` (module docstring).
@@ -377,11 +381,21 @@ class FeedbackEngine(StepEngine):
         col = self.robot.base_body_id
         kp, kd, limit = robot.kp, self.damping, robot.torque_limit
         frozen_at = np.full(na, -1)
+        noise = inputs.sensor_noise if inputs is not None else None
         obs = Observation(qpos=qpos, qvel=qvel, samples=active, fields=fields)
         step_ids = ids
         for j in range(n):
             k = k0 + j
-            tau, e = ctl.torque(k, obs)
+            if noise is not None and k < noise.shape[1]:
+                # the law reads the encoders: its state is the noisy one, the servo conversion below the true one
+                nq, nv = noise[active, k, 0], noise[active, k, 1]
+                pq, pv = qpos.copy(), qvel.copy()
+                pq[:, robot.qpos_idx] += nq
+                pv[:, robot.dof_idx] += nv
+                seen = Observation(qpos=pq, qvel=pv, samples=active, fields=fields)
+            else:
+                seen = obs
+            tau, e = ctl.torque(k, seen)
             err[:, j] = e
             sat[:, j] = np.abs(tau) > limit
             exact = ctl.servo_control(k) if isinstance(ctl, PDController) else None

@@ -22,8 +22,9 @@ How each kind reaches MuJoCo (:class:`robustgait.sim.StepInputs`):
   c(t), the previous step's command tail for t < d. See ``docs/validation.md`` for why this and not
   MuJoCo's actuator ``delay``.
 * ``noise``: joint-encoder noise n_q ~ N(0, σ_q²) and velocity noise n_v ~ N(0, (ratio σ_q)²), i.i.d. per
-  physics step and joint. In the servo law u = kp (c − q̃) − kd q̃̇ with q̃ = q + n_q, q̃̇ = q̇ + n_v it is
-  exactly the control offset −(n_q + (kd/kp) n_v).
+  physics step and joint, read by the tracking law: in the servo law u = kp (c − q̃) − kd q̃̇ with q̃ = q + n_q,
+  q̃̇ = q̇ + n_v it is exactly the control offset −(n_q + (kd/kp) n_v); a state-feedback law (the passivity-based
+  one) is evaluated at the noisy joint state.
 * ``terrain``: the ground becomes boxes: flat under the start, then square tiles of ``terrain_tile``
   metres, each with a random height and slope, within ±A (A the trial's amplitude) — step changes between
   tiles and slopes on them. The contact sensors count contacts with any ground box (the world body), so
@@ -330,16 +331,17 @@ def latency_offsets(ctrl: FloatArray, prev_ctrl: FloatArray, delay_steps: NDArra
     return np.asarray(delayed - ctrl[None])
 
 
-def noise_offsets(robot: Robot, sigma_q: FloatArray, ratio: float, horizon: int, seed: int, kind_step: int
-                  ) -> FloatArray:
-    """Control offsets (K, H, nu) = −(n_q + (kd/kp) n_v) of encoder noise, from (seed, step) alone.
+def noise_draws(robot: Robot, sigma_q: FloatArray, ratio: float, horizon: int, seed: int, kind_step: int
+                ) -> FloatArray:
+    """Encoder noise (K, H, 2, nu): n_q ~ N(0, σ_q²) and n_v ~ N(0, (ratio σ_q)²) per trial, physics step and joint,
+    from (seed, step) alone — :attr:`~robustgait.sim.engine.StepInputs.sensor_noise`, which the PD servos take as
+    the control offset −(n_q + (kd/kp) n_v) and a state-feedback law reads with the joint state.
 
     The numbers are drawn time-major ((H, 2, K, nu): physics step first), so the noise of trial i at physics
     step j does not depend on the horizon H, which grows with the gait's step duration: gaits validated with
     one seed get the same noise sequence."""
     rng = np.random.default_rng((seed, KINDS.index("noise"), kind_step))
     k, nu = sigma_q.size, robot.n_joints
-    white = rng.standard_normal((horizon, 2, k, nu)).transpose(1, 2, 0, 3)  # (2, K, H, nu)
-    nq, nv = white[0], white[1]
-    s = sigma_q[:, None, None]
-    return np.asarray(-(s * nq + (robot.kd / robot.kp) * (ratio * s) * nv))
+    white = rng.standard_normal((horizon, 2, k, nu)).transpose(2, 0, 1, 3)  # (K, H, 2, nu)
+    scale = np.array([1.0, ratio])[None, None, :, None] * sigma_q[:, None, None, None]
+    return np.asarray(scale * white)

@@ -442,9 +442,9 @@ class Validator:
             return latency
         if kind == "noise":
             def noise(seg: Segment, idx: NDArray[np.int64]) -> StepInputs:
-                off = dist.noise_offsets(robot, draws.size, cfg.noise_v_ratio, eng.horizons[seg.domain], cfg.seed,
+                noise = dist.noise_draws(robot, draws.size, cfg.noise_v_ratio, eng.horizons[seg.domain], cfg.seed,
                                          seg.index)
-                return StepInputs(ctrl_offset=off[idx])
+                return StepInputs(sensor_noise=noise[idx])
             return noise
         raise RobustGaitError(f"unknown disturbance {kind!r}")
 
