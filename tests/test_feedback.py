@@ -338,6 +338,55 @@ def test_sensor_noise_is_read_by_the_law(exo, exo_gait):
     np.testing.assert_allclose(qd - v[:, exo.dof_idx], noise[:, 0, 1], atol=1e-12)
 
 
+def test_delay_line_of_a_central_law():
+    """The torque applied at step k is the one computed at k − d; before the step, the tail's (or the step's
+    first torque without one); the tail handed on holds the T torques before each sample's event."""
+    hist = np.arange(2 * 6 * 1, dtype=float).reshape(2, 6, 1)  # sample 0: 0..5, sample 1: 6..11
+    inp = StepInputs(delay_steps=np.array([2, 0]), torque_tail=np.array([[[-2.0], [-1.0]], [[-4.0], [-3.0]]]))
+    both = np.array([0, 1])
+    assert FeedbackEngine._delayed(hist, inp, both, 0)[:, 0].tolist() == [-2.0, 6.0]
+    assert FeedbackEngine._delayed(hist, inp, both, 1)[:, 0].tolist() == [-1.0, 7.0]
+    assert FeedbackEngine._delayed(hist, inp, both, 4)[:, 0].tolist() == [2.0, 10.0]
+    no_tail = StepInputs(delay_steps=np.array([2, 0]))
+    assert FeedbackEngine._delayed(hist, no_tail, both, 1)[:, 0].tolist() == [0.0, 7.0]
+    tail = FeedbackEngine._torque_tail(hist, inp, np.array([5, 1]))  # events after 5 and 1 physics steps
+    assert tail[:, :, 0].tolist() == [[3.0, 4.0], [-3.0, 6.0]]
+
+
+def test_latency_delays_the_passivity_law_and_not_the_pd_servo(exo, exo_gait):
+    k = 3
+    q, v = _start_states(exo_gait, k, 4)
+
+    class Recording(PassivityController):
+        def torque(self, kk, obs):
+            tau, e = super().torque(kk, obs)
+            # the central command: the law's torque + the drives' damping, per sample in the batch
+            computed.append((kk, obs.samples.copy(), tau + self.kd_s * obs.qvel[:, exo.dof_idx]))
+            return tau, e
+
+    computed: list = []
+    with FeedbackEngine(exo, exo_gait, Recording()) as fb:
+        assert fb.latency == "torque"
+        free = fb.step(q, v, "right")
+        zero = fb.step(q, v, "right", inputs=StepInputs(delay_steps=np.zeros(k, dtype=np.int64)))
+        _assert_same(free, zero, tol=1e-7)  # a zero delay is no delay (to the rounding of (τ + D q̇) − D q̇)
+        computed.clear()
+        late = fb.step(q, v, "right", inputs=StepInputs(delay_steps=np.array([0, 20, 40])))
+    assert np.abs(late.qvel[1] - free.qvel[1]).max() > 1e-3 and np.abs(late.qvel[0] - free.qvel[0]).max() < 1e-7
+    assert late.torque_tail is not None and late.torque_tail.shape == (k, 40, exo.n_joints)
+    hist = np.full((k, 2000, exo.n_joints), np.nan)
+    for kk, samples, cmd in computed:
+        hist[samples, kk] = cmd
+    for i in range(k):
+        np.testing.assert_array_equal(late.torque_tail[i], hist[i, late.control_steps[i] - 40:late.control_steps[i]])
+    with pytest.raises(RobustGaitError, match="delay_steps is the latency of a state-feedback law"):
+        StepEngine(exo, exo_gait).step(q, v, "right", inputs=StepInputs(delay_steps=np.zeros(k, dtype=np.int64)))
+    with FeedbackEngine(exo, exo_gait, PDController()) as fb:
+        assert fb.latency == "command"
+        with pytest.raises(RobustGaitError, match="delay_steps is the latency"):
+            fb.step(q, v, "right", inputs=StepInputs(delay_steps=np.zeros(k, dtype=np.int64)))
+
+
 def test_pd_feedback_multicontact_domains(exo, exo_mc_gait):
     q, v = _start_states(exo_mc_gait, 3, 2)
     ref = StepEngine(exo, exo_mc_gait)

@@ -12,7 +12,7 @@ import pytest
 from robustgait import RobustGaitError, load_robot
 from robustgait.certify import certify_gait
 from robustgait.cli import main
-from robustgait.config import CertifyConfig, ReportConfig, ValidateConfig
+from robustgait.config import CertifyConfig, ReportConfig, SimConfig, ValidateConfig
 from robustgait.io.gaitfile import save_gait
 from robustgait.sim import StepEngine, StepInputs
 from robustgait.sim.engine import servo_noise_offset
@@ -196,6 +196,20 @@ def test_every_kind_runs_and_summarizes(validator):
         assert s["trials"] == 6 and 0 <= s["success"]["k"] <= 6
         assert sum(b["n"] for b in s["binned"]) == 6
         json.dumps(res.to_dict(), allow_nan=False)
+
+
+def test_latency_under_the_passivity_law_delays_its_commands(exo, exo_gait, small_cert):
+    """Under a central state-feedback law latency delays the law's command (the engine's delay line, with the
+    commands carried from step to step), not the PD servos' reference: a zero delay walks like no delay, and the
+    PD's command-offset latency is not used."""
+    sim = SimConfig(controller="passivity")
+    with Validator(exo, exo_gait, ValidateConfig(trials=3, steps_after=2), certificate=small_cert, sim=sim) as v:
+        assert v.engine.latency == "torque"
+        res = v.run("latency", draws=Draws("latency", np.array([0.0, 0.0, 0.012]), {}))
+        assert res.success[:2].all() and np.array_equal(res.x_first[0], res.x_first[1])
+        free = v.run("push", draws=Draws("push", np.zeros(1), {"direction": np.zeros(1), "phase": np.zeros(1)}))
+        np.testing.assert_allclose(res.x_first[0], free.x_first[0], atol=1e-7)
+        assert not np.allclose(res.x_first[2], res.x_first[0], atol=1e-6, equal_nan=True)
 
 
 def test_flat_terrain_walks_and_non_foot_contact_with_terrain_is_a_fall(validator, exo, exo_gait):

@@ -97,13 +97,22 @@ class StepInputs:
     floating base at its centre of mass (MuJoCo's ``xfrc_applied``) at physics steps 0..n−1; sensor_noise
     (K, n, 2, nu): encoder noise (n_q, n_v) [rad, rad/s] on the actuated joints' positions and velocities as the
     tracking law reads them at physics steps 0..n−1 — the servo PD u = kp (c − q̃) − kd q̃̇ of this engine takes
-    it as the control offset −(n_q + (kd/kp) n_v) (exact), a state-feedback law evaluates at the noisy state.
+    it as the control offset −(n_q + (kd/kp) n_v) (exact), a state-feedback law evaluates at the noisy state;
+    delay_steps (K,): actuation latency of a state-feedback law computed centrally (an engine with
+    ``latency == "torque"``): the central command (the law's torque plus the drives' local damping D q̇) that
+    reaches the drives at physics step k is the one computed at k − d, before the step's start the one of
+    ``torque_tail`` (K, T, nu: the commands of the T physics steps before it, the latest last; without it the
+    delay line starts full of the step's first command); the drives' damping acts on the current velocity. The
+    servo PD takes latency as control offsets instead (``latency == "command"``: its reference is delayed, its
+    servo loop is not; :func:`robustgait.validate.disturbances.latency_offsets`).
     """
 
     models: Sequence[mujoco.MjModel] | None = None
     ctrl_offset: NDArray[np.float64] | None = None
     base_wrench: NDArray[np.float64] | None = None
     sensor_noise: NDArray[np.float64] | None = None
+    delay_steps: NDArray[np.int64] | None = None
+    torque_tail: NDArray[np.float64] | None = None
 
 
 def servo_noise_offset(robot: Robot, noise: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -119,6 +128,8 @@ class StepEngine:
     ``controller_note``: why it is not the one ``sim.controller`` asked for, if it is not ("" otherwise)."""
 
     controller_name = "pd"
+    # how actuation latency enters (StepInputs): "command" — the servos' reference is delayed (control offsets)
+    latency = "command"
 
     def __init__(self, robot: Robot, gait: Gait, config: SimConfig | None = None):
         gait.check_robot(robot)
@@ -241,10 +252,18 @@ class StepEngine:
         noise = inputs.sensor_noise
         if noise is not None and (noise.ndim != 4 or noise.shape[0] != kk or noise.shape[2:] != (2, m.nu)):
             raise RobustGaitError(f"sensor_noise must be (K={kk}, n, 2, {m.nu}), got {noise.shape}")
+        d, tail = inputs.delay_steps, inputs.torque_tail
+        if d is not None and (d.shape != (kk,) or not np.issubdtype(d.dtype, np.integer) or (d < 0).any()):
+            raise RobustGaitError(f"delay_steps must be (K={kk},) non-negative integers")
+        if tail is not None and (d is None or tail.ndim != 3 or tail.shape[0] != kk or tail.shape[2] != m.nu):
+            raise RobustGaitError(f"torque_tail must be (K={kk}, T, {m.nu}), with delay_steps")
 
     def _engine_inputs(self, inputs: StepInputs) -> StepInputs:
         """``inputs`` as this engine applies them: sensor noise folded into the control offset, as the servo PD
         takes it (a feedback engine hands the noise to its law instead)."""
+        if inputs.delay_steps is not None:
+            raise RobustGaitError("delay_steps is the latency of a state-feedback law (FeedbackEngine); the servo PD "
+                                  "takes latency as control offsets (validate.disturbances.latency_offsets)")
         if inputs.sensor_noise is None:
             return inputs
         off = servo_noise_offset(self.robot, inputs.sensor_noise)

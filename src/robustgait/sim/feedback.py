@@ -114,6 +114,8 @@ class FeedbackController:
     stage: int = STAGE_NONE
     fields: tuple[str, ...] = ()
     actuation: Literal["servo", "motor"] = "servo"
+    # actuation latency (StepInputs.delay_steps) delays the law's torque: a law computed centrally
+    latency: Literal["command", "torque"] = "torque"
 
     def servo_damping(self) -> Array | None:
         """With ``servo`` actuation: the damping D (m,) the servos integrate implicitly (the torque's −D q̇
@@ -147,6 +149,7 @@ class PDController(FeedbackController):
     (:func:`robustgait.sim.controller.step_controls`), which is bit-identical."""
 
     name = "pd"
+    latency = "command"  # joint servos: the delayed quantity is their reference, as in the rollout engine
 
     def __init__(self, *, feedforward: bool = True, servo_exact: bool = False,
                  actuation: Literal["servo", "motor"] = "servo"):
@@ -184,6 +187,10 @@ class FeedbackStepBatch(StepBatch):
     of squared tracking errors (q − y_d)² and ``error_max`` (K, m) the largest |q − y_d|."""
 
     control_steps: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    # with StepInputs.delay_steps: (K, T, m) the central commands (law torque + the drives' local damping D q̇)
+    # computed in the T = max delay physics steps before each sample's event (the next step's
+    # StepInputs.torque_tail); None otherwise
+    torque_tail: Array | None = None
     saturation: NDArray[np.int64] = field(default_factory=lambda: np.zeros((0, 0), dtype=np.int64))
     error_sq: Array = field(default_factory=lambda: np.zeros((0, 0)))
     error_max: Array = field(default_factory=lambda: np.zeros((0, 0)))
@@ -239,6 +246,7 @@ class FeedbackEngine(StepEngine):
         self.controller = controller if controller is not None else PDController(
             feedforward=self.config.feedforward)
         self.controller_name = self.controller.name
+        self.latency = self.controller.latency
         self.controller.setup(self)
         self.motor = self.controller.actuation == "motor"
         self.persistent = self.controller.stage > STAGE_NONE
@@ -312,6 +320,9 @@ class FeedbackEngine(StepEngine):
         m = self.controller.robot.n_joints
         ctx: dict[str, object] = {"chunks": []}
         self._step_ctx = ctx
+        delay = inputs.delay_steps if inputs is not None else None
+        if delay is not None and self.latency == "torque":
+            ctx["torques"] = np.zeros((kk, self.horizons[domain], m))
         try:
             out = super().step(qpos, qvel, stance, domain=domain, record=record, progress=progress,  # type: ignore[arg-type]
                                inputs=inputs)
@@ -328,13 +339,51 @@ class FeedbackEngine(StepEngine):
             e = np.where(valid[..., None], s_err, 0.0)
             sq[active] += (e * e).sum(axis=1)
             mx[active] = np.maximum(mx[active], np.abs(e).max(axis=1, initial=0.0))
-        res = FeedbackStepBatch(**vars(out), control_steps=at, saturation=sat, error_sq=sq, error_max=mx)
+        tail = None
+        if "torques" in ctx:
+            assert inputs is not None and inputs.delay_steps is not None
+            tail = self._torque_tail(ctx["torques"], inputs, at)  # type: ignore[arg-type]
+        res = FeedbackStepBatch(**vars(out), control_steps=at, saturation=sat, error_sq=sq, error_max=mx,
+                                torque_tail=tail)
         self.stats.add(int(at.sum()), sat.sum(axis=0), sq.sum(axis=0), mx.max(axis=0, initial=0.0))
         return res
 
     def _engine_inputs(self, inputs: StepInputs) -> StepInputs:
-        """The inputs as given: the law reads the sensor noise itself (:meth:`_closed_loop`)."""
+        """The inputs as given (the law reads the sensor noise itself, :meth:`_closed_loop`); for a law whose
+        latency is a servo command's (the PD), delay_steps is refused as by the rollout engine."""
+        if inputs.delay_steps is not None and self.latency != "torque":
+            return super()._engine_inputs(inputs)
         return inputs
+
+    @staticmethod
+    def _delayed(hist: Array, inputs: StepInputs, active: NDArray[np.int64], k: int) -> Array:
+        """The central commands (A, m) that reach the drives at physics step k under actuation latency: computed
+        ``delay_steps`` earlier — in this step (``hist``, (K, H, m)), or before it (``torque_tail``; without one,
+        this step's first)."""
+        assert inputs.delay_steps is not None
+        j = k - inputs.delay_steps[active]
+        out = hist[active, np.maximum(j, 0)]
+        tail = inputs.torque_tail
+        if tail is not None:
+            t = tail.shape[1] + j
+            rows = np.flatnonzero((j < 0) & (t >= 0))
+            out[rows] = tail[active[rows], t[rows]]
+        return out
+
+    @staticmethod
+    def _torque_tail(hist: Array, inputs: StepInputs, at: NDArray[np.int64]) -> Array:
+        """(K, T, m), T = the largest delay: the commands computed in the T physics steps before each sample's event,
+        reaching back into this step's own ``torque_tail`` (or its first torque) for an event before step T."""
+        assert inputs.delay_steps is not None
+        t = int(inputs.delay_steps.max(initial=0))
+        kk = hist.shape[0]
+        before = np.repeat(hist[:, :1], t, axis=1)
+        if inputs.torque_tail is not None and t:
+            have = min(t, inputs.torque_tail.shape[1])
+            before[:, t - have:] = inputs.torque_tail[:, inputs.torque_tail.shape[1] - have:]
+        both = np.concatenate([before, hist], axis=1)
+        rows = np.clip(at, 0, hist.shape[1])[:, None] + np.arange(t)[None, :]
+        return np.asarray(both[np.arange(kk)[:, None], rows])
 
     def _rollout(self, active: NDArray[np.int64], current: NDArray[np.float64], ctrl: NDArray[np.float64],
                  k0: int, n: int, inputs: StepInputs | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -382,6 +431,8 @@ class FeedbackEngine(StepEngine):
         kp, kd, limit = robot.kp, self.damping, robot.torque_limit
         frozen_at = np.full(na, -1)
         noise = inputs.sensor_noise if inputs is not None else None
+        hist = self._step_ctx.get("torques") if self._step_ctx is not None else None  # latency: computed torques
+        assert hist is None or isinstance(hist, np.ndarray)
         obs = Observation(qpos=qpos, qvel=qvel, samples=active, fields=fields)
         step_ids = ids
         for j in range(n):
@@ -396,6 +447,13 @@ class FeedbackEngine(StepEngine):
             else:
                 seen = obs
             tau, e = ctl.torque(k, seen)
+            if hist is not None:
+                # the central command (law + the drives' local damping D q̇) arrives late; the drives' damping
+                # acts on the current velocity, as the PD servos' own loop does under command latency
+                assert inputs is not None
+                local = self.damping * qvel[:, robot.dof_idx]
+                hist[active, k] = tau + local
+                tau = self._delayed(hist, inputs, active, k) - local
             err[:, j] = e
             sat[:, j] = np.abs(tau) > limit
             exact = ctl.servo_control(k) if isinstance(ctl, PDController) else None

@@ -244,8 +244,9 @@ class Segment:
     """One batched engine call of a trial: a domain of a step. ``step``: the trial's step (0-based); ``index``: the
     segment's index in the trial (for a flat-foot gait the step); ``stance``, ``domain``: what the engine runs;
     ``prev``: the (stance, domain) of the segment before it (the one that ended at the trial's start for the first);
-    for the samples being run, ``offset`` (physics steps from the start of this step to the start of this segment)
-    and ``prev_at`` (the physics step at which the previous segment's event happened, counted in that segment)."""
+    for the samples being run, ``offset`` (physics steps from the start of this step to the start of this segment),
+    ``prev_at`` (the physics step at which the previous segment's event happened, counted in that segment) and,
+    under a delayed state-feedback law, ``torque_tail`` (the torques it computed before this segment)."""
 
     step: int
     index: int
@@ -254,6 +255,7 @@ class Segment:
     prev: tuple[str, int]
     offset: NDArray[np.int64]
     prev_at: NDArray[np.int64]
+    torque_tail: FloatArray | None = None  # a delayed law's torques before the segment (FeedbackStepBatch)
 
 
 Inputs = Callable[[Segment, NDArray[np.int64]], "StepInputs | None"]
@@ -282,6 +284,7 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
     prev_at = np.full(k_all, first_at, dtype=np.int64)
     stance = next(iter(engine.gaits))
     prev: tuple[str, int] = (other_side(stance), 0)
+    tails: FloatArray | None = None
     physics = 0
     index = 0
     n_domains = len(engine.graph)
@@ -291,9 +294,18 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
             idx = np.flatnonzero(alive)
             if idx.size == 0:
                 break
-            seg = Segment(k, index, seg_stance, domain, prev, offset[idx], prev_at[idx])
+            seg = Segment(k, index, seg_stance, domain, prev, offset[idx], prev_at[idx],
+                          None if tails is None else tails[idx])
             b = engine.step(qpos[idx], qvel[idx], seg_stance, domain=domain, inputs=inputs(seg, idx))
             physics += b.physics_steps
+            tail = getattr(b, "torque_tail", None)
+            if tail is not None:  # as wide as the largest delay among idx: each trial reads its own delay's last
+                if tails is None or tails.shape[1] < tail.shape[1]:
+                    wider = np.zeros((k_all, *tail.shape[1:]))
+                    if tails is not None:
+                        wider[:, wider.shape[1] - tails.shape[1]:] = tails
+                    tails = wider
+                tails[idx, tails.shape[1] - tail.shape[1]:] = tail
             for j in np.flatnonzero(b.fell):
                 reasons[idx[j]] = b.fall_reason[j]
             fall_step[idx[b.fell]] = k + 1
@@ -437,6 +449,8 @@ class Validator:
             delay = np.round(draws.size / robot.dt).astype(np.int64)
 
             def latency(seg: Segment, idx: NDArray[np.int64]) -> StepInputs:
+                if eng.latency == "torque":  # a law computed centrally: its torque arrives late
+                    return StepInputs(delay_steps=delay[idx], torque_tail=seg.torque_tail)
                 return StepInputs(ctrl_offset=dist.latency_offsets(eng.controls[(seg.stance, seg.domain)],
                                                                    eng.controls[seg.prev], delay[idx], seg.prev_at))
             return latency
