@@ -21,7 +21,13 @@ stiffness (Λ = kp/kd, K_D = kd), and prints steps walked, tracking RMS / max an
 ``[controller.passivity]`` gains of a robot spec are chosen (docs/feedback.md).
 
     python benchmarks/bench_feedback.py --scan [--robot exo|SPEC.toml] [--gait FILE] [--lam 10 20 40]
-        [--c 1 2 3] [--steps 10]
+        [--c 1 2 3] [--steps 10] [--kinds latency,noise --trials 40]
+
+``--kinds`` adds, per law that walks, the validation's success and s₅₀ for those disturbance kinds. Latency check
+(``--delays``): one validation trial per command delay for the PD servos (the reference arrives late), the PD
+computed centrally (its stiffness term arrives late) and the passivity law (spec gains).
+
+    python benchmarks/bench_feedback.py --delays [0 1 2 3 5 8 12 20 40] [--robot …] [--gait …]
 """
 
 from __future__ import annotations
@@ -38,6 +44,7 @@ import numpy as np
 
 from bench_rollout import start_states  # the same K start states as the rollout benchmark
 from robustgait import CertifyConfig, SimConfig, StepEngine, load_gait, load_robot, walk
+from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.poincare import FixedPointFailure, ReturnMap
 from robustgait.robots import Robot
@@ -60,9 +67,17 @@ def main() -> None:
     ap.add_argument("--gait", default="", help="--scan: gait file (default: the robot's stored test gait)")
     ap.add_argument("--lam", type=float, nargs="+", default=[10.0, 20.0, 40.0], help="--scan: uniform Λ [1/s]")
     ap.add_argument("--c", type=float, nargs="+", default=[1.0, 2.0, 3.0], help="--scan: K_D = c · kd")
+    ap.add_argument("--kinds", default="", help="--scan: also validate each law that walks against these "
+                    "disturbance kinds (comma-separated, e.g. latency,noise): success and s50")
+    ap.add_argument("--trials", type=int, default=40, help="--scan --kinds: trials per kind (seed 0)")
+    ap.add_argument("--delays", type=float, nargs="*", default=None,
+                    help="latency check instead: these command delays [ms] under each way latency enters")
     args = ap.parse_args()
     if args.scan:
         scan(args)
+        return
+    if args.delays is not None:
+        delays(args)
         return
     robot = load_robot("exo")
     gait = load_gait(REPO / "tests" / "data" / "exo_gait.json", robot)
@@ -146,9 +161,39 @@ def scan(args: argparse.Namespace) -> None:
     for name, ctl in laws:
         res, s, dt = tracked_walk(robot, gait, ctl, config, args.steps)
         fp = fixed_point(robot, gait, ctl, config) if res.fall_reason is None else "—"
+        dist = disturbances(robot, gait, ctl, args) if res.fall_reason is None and args.kinds else ""
         print(f"  {name:<44} walked {res.steps_taken:>3}/{args.steps} ({res.fall_reason or 'no fall'}) | RMS "
               f"{s['rms'] * 1e3:7.3f} mrad, max {s['max'] * 1e3:7.2f} mrad | saturation "
-              f"{100 * s['saturation_fraction']:6.3f} % | fixed point: {fp} | {dt:.1f} s", flush=True)
+              f"{100 * s['saturation_fraction']:6.3f} % | fixed point: {fp}{dist} | {dt:.1f} s", flush=True)
+
+
+def disturbances(robot: Robot, gait: Gait, ctl: object, args: argparse.Namespace) -> str:
+    """Success and s50 of ``--kinds`` under this law (validate_gait, seed 0; a 10-sample uniform certificate: the
+    inside/outside check is not what is read here)."""
+    from dataclasses import replace
+
+    from robustgait.config import ValidateConfig
+    from robustgait.robots.spec import PassivitySpec
+    from robustgait.validate import validate_gait
+
+    if isinstance(ctl, PassivityController):
+        gains = ctl.gains or PassivityGains.from_robot(robot)
+        robot.spec = replace(robot.spec, passivity=PassivitySpec(gains.lam, gains.kd))
+        sim = SimConfig(controller="passivity", n_threads=1)
+    else:
+        sim = SimConfig(n_threads=1)
+    try:
+        v = validate_gait(robot, gait, ValidateConfig(trials=args.trials, seed=0), sim=sim,
+                          kinds=args.kinds.split(","), certify=CertifyConfig(method="uniform", n_samples=10))
+    except RobustGaitError as e:  # e.g. no fixed point to start the trials from
+        return f" | not validated: {str(e)[:60]}"
+    out = []
+    for k, kr in v.kinds.items():
+        rate, fit = kr.success_rate(), kr.critical()
+        scale = 1e3 if k in ("latency", "noise", "terrain") else 1.0
+        s50 = "—" if fit.s50 is None else f"{fit.s50 * scale:.3g}"
+        out.append(f"{k} {rate.k}/{rate.n}, s50 {s50}")
+    return " | " + "; ".join(out)
 
 
 def fixed_point(robot: Robot, gait: Gait, ctl: object, config: SimConfig) -> str:
@@ -163,6 +208,38 @@ def fixed_point(robot: Robot, gait: Gait, ctl: object, config: SimConfig) -> str
         detail = str(e).rsplit("(", 1)[-1].rstrip(")") if e.status == "no_fixed_point" else f"step {e.steps}"
         return f"none, {e.status} ({detail})"
     return f"step {fp.steps}, residual {fp.residual:.1e}, ‖ω*‖ {np.linalg.norm(fp.omega):.3f} rad/s"
+
+
+def delays(args: argparse.Namespace) -> None:
+    """``--delays``: one validation trial per delay (20 steps after), for the PD servos (command latency: the
+    reference arrives late, the servo loop does not), the same PD computed centrally (its stiffness term arrives
+    late, the drives' damping does not) and the passivity law (spec gains; the law + drive damping as central)."""
+    from robustgait.config import ValidateConfig
+    from robustgait.validate.disturbances import Draws
+    from robustgait.validate.run import Validator
+
+    robot = load_robot(args.robot)
+    gait = load_gait(args.gait or REPO / "tests" / "data" / "exo_gait.json", robot)
+    sizes = np.asarray(args.delays or [0, 1, 2, 3, 5, 8, 12, 20, 40], dtype=float) * 1e-3
+
+    class CentralPD(PDController):
+        latency = "torque"
+
+    print(f"latency check: robot {robot.name}, one trial per delay, 20 steps after; load {os.getloadavg()[0]:.2f}")
+    cases: list[tuple[str, str, object]] = [("PD servos (command latency)", "pd", None),
+                                            ("PD computed centrally", "pd", CentralPD()),
+                                            ("passivity (spec gains)", "passivity", None)]
+    for name, controller, law in cases:
+        sim = SimConfig(controller=controller, n_threads=1)
+        with Validator(robot, gait, ValidateConfig(trials=sizes.size, steps_after=20), sim=sim,
+                       certify=CertifyConfig(method="uniform", n_samples=10)) as v:
+            if law is not None:
+                v.engine.close()
+                v.engine = FeedbackEngine(robot, gait, law, sim)  # type: ignore[arg-type]
+            r = v.run("latency", draws=Draws("latency", sizes, {}))
+        cells = [f"{d * 1e3:g} ms " + ("walks" if ok else f"falls ({why}, step {st})")
+                 for d, ok, why, st in zip(sizes, r.success, r.fall_reason, r.fall_step, strict=True)]
+        print(f"  {name:<28} " + "; ".join(cells), flush=True)
 
 
 if __name__ == "__main__":
