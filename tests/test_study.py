@@ -379,6 +379,10 @@ def test_status_report_and_compare(tmp_path, reference_study):
     a, b = out["studies"]
     assert out["seeds"] == [1000, 1001] and a["r_star"] == b["r_star"] and out["winner"] is None
     assert a["steps_taken"] == 5 and len(a["certificates"]) == 2
+    # the text names the estimator in its own words: the reference study certifies with the uniform estimator
+    assert out["method"] == "uniform"
+    txt = cli("study", "compare", str(reference_study), str(reference_study), "--seeds", "1", "--samples", "10")
+    assert txt.returncode == 0 and "(uniform, N = 10)" in txt.stdout.splitlines()[0]
 
 
 @pytest.mark.slow

@@ -123,8 +123,12 @@ def _study_compare(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(res, allow_nan=False))
         return 0
-    print(f"best gaits re-certified with seeds {res['seeds'][0]}–{res['seeds'][-1]} (N = {res['n_samples']}), "
+    how = (f"uniform, N = {res['n_samples']}" if res["method"] == "uniform"
+           else f"sequential, ε = {res['epsilon']:g}")
+    print(f"best gaits re-certified with seeds {res['seeds'][0]}–{res['seeds'][-1]} ({how}), "
           f"walked {res['step_cap']} steps")
+    if res["note"]:
+        print(f"note: {res['note']}")
     for name, s in zip("AB", res["studies"], strict=True):
         params = ", ".join(f"{v:g}" for v in s["params"].values())
         print(f"{name} {s['directory']} ({s['learner']}, {s['metric']}): gait ({params}), {s['steps_taken']} steps, "

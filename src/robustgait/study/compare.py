@@ -66,7 +66,8 @@ def compare_studies(dir_a: str | Path, dir_b: str | Path, config: CompareConfig 
     ma, mb = studies[0]["r_star_mean"], studies[1]["r_star_mean"]
     same = (dataclasses.replace(setups[0].config.study_certify, seed=0), setups[0].config.sim) == (
         dataclasses.replace(setups[1].config.study_certify, seed=0), setups[1].config.sim)
-    return {"seeds": seed_list, "n_samples": certify.n_samples, "step_cap": cap, "unit": certify.unit,
+    return {"seeds": seed_list, "method": certify.method, "n_samples": certify.n_samples,
+            "epsilon": certify.sequential.epsilon, "step_cap": cap, "unit": certify.unit,
             "certificate": certify.space, "studies": studies,
             "winner": None if ma == mb else (0 if ma > mb else 1),
             "wins_per_seed": [int(np.sum(np.array(studies[0]["r_star"]) > np.array(studies[1]["r_star"]))),
