@@ -372,10 +372,12 @@ class FeedbackEngine(StepEngine):
 
     @staticmethod
     def _torque_tail(hist: Array, inputs: StepInputs, at: NDArray[np.int64]) -> Array:
-        """(K, T, m), T = the largest delay: the commands computed in the T physics steps before each sample's event,
-        reaching back into this step's own ``torque_tail`` (or its first torque) for an event before step T."""
+        """(K, T, m), T = the largest delay (or the given tail's width, if wider: a tail keeps its width from step to
+        step): the commands computed in the T physics steps before each sample's event, reaching back into this
+        step's own ``torque_tail`` (or its first torque) for an event before step T."""
         assert inputs.delay_steps is not None
-        t = int(inputs.delay_steps.max(initial=0))
+        given = 0 if inputs.torque_tail is None else inputs.torque_tail.shape[1]
+        t = max(int(inputs.delay_steps.max(initial=0)), given)
         kk = hist.shape[0]
         before = np.repeat(hist[:, :1], t, axis=1)
         if inputs.torque_tail is not None and t:

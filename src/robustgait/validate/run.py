@@ -299,13 +299,9 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
             b = engine.step(qpos[idx], qvel[idx], seg_stance, domain=domain, inputs=inputs(seg, idx))
             physics += b.physics_steps
             tail = getattr(b, "torque_tail", None)
-            if tail is not None:  # as wide as the largest delay among idx: each trial reads its own delay's last
-                if tails is None or tails.shape[1] < tail.shape[1]:
-                    wider = np.zeros((k_all, *tail.shape[1:]))
-                    if tails is not None:
-                        wider[:, wider.shape[1] - tails.shape[1]:] = tails
-                    tails = wider
-                tails[idx, tails.shape[1] - tail.shape[1]:] = tail
+            if tail is not None:  # the first segment runs every trial: its tail has the largest delay's width
+                tails = np.zeros((k_all, *tail.shape[1:])) if tails is None else tails
+                tails[idx] = tail
             for j in np.flatnonzero(b.fell):
                 reasons[idx[j]] = b.fall_reason[j]
             fall_step[idx[b.fell]] = k + 1
