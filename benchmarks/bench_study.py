@@ -1,13 +1,16 @@
-"""Paper-size studies on exo: ``--iterations`` × ``--batch`` (10 × 5) gaits, for the robustness and the
-stability metric, then ``study compare`` of the two best gaits.
+"""Paper-size studies: ``--iterations`` × ``--batch`` (10 × 5) gaits of ``--robot`` (exo; a spec path such as
+examples/atalante.toml) on ``--domains`` (flat; multicontact searches the spec's ``[action_space.multicontact]``),
+for the robustness and the stability metric, then ``study compare`` of the two best gaits.
 
 Per study it prints: wall time (goal ≤ 10 min on 2 cores), unique gaits, the learner's best after every
 iteration (r*, steps), the best gait's r* and steps, and the default gait's (``Config().params``) r* with
 the same estimator and seed (the study's), then both re-certified with ``--compare-seeds`` fresh seeds.
-Studies live in ``--out`` (default benchmarks/data/bench_study/<metric>); an existing one is resumed
+Studies live in ``--out`` (default benchmarks/data/bench_study/<metric>, or
+<robot>_<domains>_<metric> for another robot or domain graph); an existing one is resumed
 (the wall time is then that of the resumed part only, and is flagged), so a killed benchmark continues.
 
-    python benchmarks/bench_study.py [--iterations 10] [--batch 5] [--workers 2] [--method sequential] [--samples 200]
+    python benchmarks/bench_study.py [--robot exo] [--domains flat|multicontact] [--iterations 10] [--batch 5]
+        [--workers 2] [--method sequential] [--samples 200]
         [--learner polar] [--metrics robustness,stability] [--compare-seeds 5] [--out DIR]
 """
 
@@ -22,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from robustgait import load_gait, load_robot
-from robustgait.config import CertifyConfig, CompareConfig, Config, RunConfig, StudyConfig
+from robustgait.config import CertifyConfig, CompareConfig, Config, GenerationConfig, RunConfig, StudyConfig
 from robustgait.study.compare import compare_studies, recertify
 from robustgait.study.config import load_config
 from robustgait.study.evaluate import evaluate
@@ -37,8 +40,9 @@ def run_one(d: Path, metric: str, args: argparse.Namespace) -> dict:
     if not resumed:
         cfg = Config(study=StudyConfig(metric=metric, learner=args.learner, iterations=args.iterations,
                                        batch=args.batch, seed=args.seed),
-                     certify=CertifyConfig(method=args.method, n_samples=args.samples, seed=args.seed))
-        create_study(d, "exo", cfg)
+                     certify=CertifyConfig(method=args.method, n_samples=args.samples, seed=args.seed),
+                     generate=GenerationConfig(domains=args.domains))
+        create_study(d, args.robot, cfg)
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
     run_study(d, RunConfig(workers=args.workers))
@@ -50,6 +54,8 @@ def run_one(d: Path, metric: str, args: argparse.Namespace) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--robot", default="exo", help="shipped robot name or spec .toml path")
+    ap.add_argument("--domains", choices=("flat", "multicontact"), default="flat")
     ap.add_argument("--iterations", type=int, default=10)
     ap.add_argument("--batch", type=int, default=5)
     ap.add_argument("--workers", type=int, default=2)
@@ -63,10 +69,11 @@ def main() -> None:
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     print(f"machine: {os.cpu_count()} cores; load {os.getloadavg()}", flush=True)
-    runs = [run_one(args.out / m, m, args) for m in args.metrics.split(",")]
-    robot = load_robot("exo")
+    label = "" if (args.robot, args.domains) == ("exo", "flat") else f"{Path(args.robot).stem}_{args.domains}_"
+    runs = [run_one(args.out / f"{label}{m}", m, args) for m in args.metrics.split(",")]
+    robot = load_robot(args.robot)
     cfg0 = load_config(runs[0]["directory"]).config
-    default = evaluate(robot, cfg0.params, cfg0)  # the study's estimator and seed
+    default = evaluate(robot, cfg0.params, cfg0)  # the study's estimator, seed and domain graph
     fresh = [args.seed + 1000 + i for i in range(args.compare_seeds)]
     default_fresh = (recertify(robot, default.gait, cfg0.certify, fresh, cfg0.sim) if default.gait is not None
                      and default.status == "certified" else [])
