@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import sqlite3
 import subprocess
@@ -32,7 +33,7 @@ from robustgait.config import (
 from robustgait.io.robotfile import read_mjcf
 from robustgait.learn import ActionSpace
 from robustgait.robots import FallCriteria
-from robustgait.study.config import StudySetup, load_config, save_config
+from robustgait.study.config import StudySetup, environment_changes, load_config, load_environment, save_config
 from robustgait.study.evaluate import evaluate
 from robustgait.study.run import create_study, run_study
 from robustgait.study.status import study_status
@@ -73,6 +74,24 @@ def test_study_config_round_trip(tmp_path):
     (tmp_path / "study.json").write_text(json.dumps(raw))
     with pytest.raises(RobustGaitError, match=r"study.json: sim.step_cap: must satisfy 1 ≤ x ≤ 1000 \(got 0\)"):
         load_config(tmp_path)
+
+
+def test_study_json_records_the_library_versions_and_status_names_changes(tmp_path):
+    """A study on another install may be proposed other gaits: study.json records the versions that decide its
+    numbers and the status names those that changed (none for a study that predates the record)."""
+    import numpy
+
+    save_config(tmp_path, StudySetup("exo", TINY))
+    raw = json.loads((tmp_path / "study.json").read_text())
+    assert raw["environment"]["numpy"] == numpy.__version__ and set(raw["environment"]) >= {"botorch", "mujoco"}
+    assert load_environment(tmp_path) == raw["environment"] and environment_changes(raw["environment"]) == []
+    raw["environment"]["numpy"] = "0.0.1"
+    (tmp_path / "study.json").write_text(json.dumps(raw))
+    assert environment_changes(load_environment(tmp_path)) == [f"numpy 0.0.1 → {numpy.__version__}"]
+    del raw["environment"]
+    (tmp_path / "study.json").write_text(json.dumps(raw))
+    assert load_environment(tmp_path) is None and environment_changes(None) == []
+    assert load_config(tmp_path) == StudySetup("exo", TINY)
 
 
 def test_a_study_written_before_the_config_tree_still_loads(tmp_path):
@@ -362,6 +381,14 @@ def test_status_report_and_compare(tmp_path, reference_study):
     assert best["score"] <= observed
     text = cli("study", "status", str(reference_study))
     assert text.returncode == 0 and "best gait" in text.stdout
+    assert st["environment_changes"] == [] and "other library versions" not in text.stdout
+    moved = tmp_path / "moved"  # the same study opened on another install: the status says which versions differ
+    shutil.copytree(reference_study, moved)
+    raw = json.loads((moved / "study.json").read_text())
+    raw["environment"]["botorch"] = "0.0.1"
+    (moved / "study.json").write_text(json.dumps(raw))
+    text = cli("study", "status", str(moved))
+    assert text.returncode == 0 and "created with other library versions (botorch 0.0.1 → " in text.stdout
     again = cli("study", "run", str(reference_study), *CLI_TINY)
     assert again.returncode == 2 and "study resume" in again.stderr
 

@@ -54,6 +54,9 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
         params = ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
         print(f"best evaluated gait (trial {obs['trial']}; the best gait above is the learner's highest posterior "
               f"mean): {params}; {_name(st)} = {obs['r_star']:.4g} {st['unit']}, {obs['steps_taken']} steps")
+    if st["environment_changes"]:
+        print("created with other library versions (" + ", ".join(st["environment_changes"]) + "): the learner "
+              "may propose other gaits than it did, and `study resume` refuses a proposal that differs")
 
 
 def _run_interruptible(directory: str, run: RunConfig, args: argparse.Namespace) -> bool:

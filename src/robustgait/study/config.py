@@ -5,7 +5,9 @@ so a field added to any section is saved and restored without changes here."""
 from __future__ import annotations
 
 import dataclasses
+import platform
 from dataclasses import dataclass
+from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -23,6 +25,33 @@ FORMAT_VERSION = 3
 # fields added to the certificate since format 2, and what a format-2 study certified (the base angular velocity in
 # a ball, one step): a study resumed keeps its certificate whatever today's defaults are
 _CERTIFY_BEFORE_3 = {"state": "omega", "set": "ball", "horizon": 1, "disturbance": "state"}
+
+
+# the libraries whose versions decide a study's numbers: gait generation, simulation, certificate, learner
+ENVIRONMENT_PACKAGES = ("robustgait", "numpy", "scipy", "mujoco", "casadi", "adam-robotics", "torch", "gpytorch",
+                        "botorch", "optuna")
+
+
+def environment() -> dict[str, str]:
+    """Python's and :data:`ENVIRONMENT_PACKAGES`' versions ("not installed" for a missing one). Saved in
+    ``study.json``: the same study on another install evaluates the same gaits identically but its learner may
+    propose others (a fresh install of unpinned libraries did, from the 8th iteration of exo's 10 × 5 study)."""
+    out = {"python": platform.python_version()}
+    for name in ENVIRONMENT_PACKAGES:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "not installed"
+    return out
+
+
+def environment_changes(recorded: dict[str, str] | None) -> list[str]:
+    """``"name recorded → now"`` for each package whose version differs from the one ``recorded`` (empty when
+    nothing was recorded: a study written before the record existed)."""
+    if not recorded:
+        return []
+    now = environment()
+    return [f"{k} {v} → {now.get(k, 'not installed')}" for k, v in recorded.items() if now.get(k, v) != v]
 
 
 @dataclass(frozen=True)
@@ -47,7 +76,16 @@ class StudySetup:
 
 
 def save_config(directory: Path, setup: StudySetup) -> Path:
-    return write_json(directory / CONFIG_FILE, {"format_version": FORMAT_VERSION, **setup.to_dict()})
+    """``study.json``: the format version, the robot, the configuration and the :func:`environment`."""
+    return write_json(directory / CONFIG_FILE, {"format_version": FORMAT_VERSION, **setup.to_dict(),
+                                                "environment": environment()})
+
+
+def load_environment(directory: str | Path) -> dict[str, str] | None:
+    """The library versions a study was created with (None for a study written before they were recorded)."""
+    raw = read_json(Path(directory) / CONFIG_FILE, "study config")
+    env = raw.get("environment") if isinstance(raw, dict) else None
+    return {str(k): str(v) for k, v in env.items()} if isinstance(env, dict) else None
 
 
 def load_config(directory: str | Path) -> StudySetup:
