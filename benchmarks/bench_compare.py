@@ -10,8 +10,8 @@ one robot and measures, for each:
   certificate cannot certify a ball smaller than it);
 - a 50-step walk: mean speed against L/T, pelvis roll range, and the soles' pitch at touchdown (toe up, the
   heel strike of a multi-contact gait) and at lift-off (toe down, its toe-off), medians over steps 10–40, from
-  the MuJoCo contacts of the walked trajectory (not from the gait's design): a touchdown ends, a lift-off
-  starts, a flight of ≥ 50 ms without a contact force above 1 N;
+  the walked trajectory (not from the gait's design): a touchdown ends, a lift-off starts, a flight of ≥ 50 ms
+  without contact in the robot's sole contact sensors (those the simulator's touchdown guard reads);
 - tiles of one step and a video (``--gif-steps`` steps; skipped with ``--no-media``).
 
 Writes ``OUT/compare_<robot>.json``, the media as ``OUT/<robot>_best_{flat,multicontact}{_tiles.png,.gif}``, and
@@ -46,6 +46,7 @@ from robustgait.gait import Gait
 from robustgait.poincare import FixedPointFailure, ReturnMap
 from robustgait.report.tiles import render_tiles
 from robustgait.robots import Robot
+from robustgait.robots.model import CONTACT_SENSORS
 from robustgait.rotations import quat_to_mat
 from robustgait.study.compare import compare_studies
 from robustgait.study.config import load_config
@@ -74,28 +75,23 @@ def flights(contact: np.ndarray, min_len: int) -> list[tuple[int, int]]:  # type
 
 
 def foot_contacts(robot: Robot, trajectory: np.ndarray) -> dict[str, np.ndarray]:  # type: ignore[type-arg]
-    """Per side, (T,) bool: the foot (every geom of the sole's body) presses on the ground with > 1 N."""
-    m, d = robot.model, mujoco.MjData(robot.model)
-    bodies = {side: int(m.geom_bodyid[robot.sole_geom_id[side]]) for side in ("left", "right")}
-    out = {side: np.zeros(len(trajectory), bool) for side in bodies}
-    force = np.zeros(6)
+    """Per side, (T,) bool: the sole touches the floor — the robot's own sole contact sensors, which the
+    simulator's touchdown guard reads (:data:`robustgait.robots.model.CONTACT_SENSORS`)."""
+    m, d = robot.model, robot.new_data()
+    adr = {side: robot.sensor_adr[CONTACT_SENSORS[i]] for i, side in enumerate(("left", "right"))}
+    out = {side: np.zeros(len(trajectory), bool) for side in adr}
     for k, state in enumerate(trajectory):
         mujoco.mj_setState(m, d, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
         mujoco.mj_forward(m, d)
-        for i in range(d.ncon):
-            c = d.contact[i]
-            for side, b in bodies.items():
-                if b in (int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2])):
-                    mujoco.mj_contactForce(m, d, i, force)
-                    if force[0] > 1.0:
-                        out[side][k] = True
+        for side, a in adr.items():
+            out[side][k] = d.sensordata[a] > 0
     return out
 
 
 def sole_forward_axis(robot: Robot, gait: Gait) -> tuple[int, float]:
     """The sole geom's local axis that points forward (and its sign) in the gait's initial state: the axis most
     aligned with the base's heading (a sole geom's frame need not be the foot's: Atalante's length is its z)."""
-    m, d = robot.model, mujoco.MjData(robot.model)
+    m, d = robot.model, robot.new_data()
     assert gait.initial_state is not None
     d.qpos[:] = gait.initial_state.qpos
     mujoco.mj_kinematics(m, d)
@@ -106,13 +102,12 @@ def sole_forward_axis(robot: Robot, gait: Gait) -> tuple[int, float]:
     return i, float(np.sign(dots[i]))
 
 
-def sole_pitch(robot: Robot, trajectory: np.ndarray, k: int, side: str,  # type: ignore[type-arg]
+def sole_pitch(robot: Robot, d: mujoco.MjData, state: np.ndarray, side: str,  # type: ignore[type-arg]
                axis: tuple[int, float]) -> float:
-    """Toe-up pitch [deg] of a sole at trajectory sample k (positive: toe above heel); ``axis``: its forward
-    axis (:func:`sole_forward_axis`)."""
-    m, d = robot.model, mujoco.MjData(robot.model)
-    mujoco.mj_setState(m, d, trajectory[k], mujoco.mjtState.mjSTATE_FULLPHYSICS)
-    mujoco.mj_kinematics(m, d)
+    """Toe-up pitch [deg] of a sole in a full-physics ``state`` (positive: toe above heel; ``d``: scratch data);
+    ``axis``: its forward axis (:func:`sole_forward_axis`)."""
+    mujoco.mj_setState(robot.model, d, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    mujoco.mj_kinematics(robot.model, d)
     r = d.geom_xmat[robot.sole_geom_id[side]].reshape(3, 3)
     return float(np.degrees(np.arcsin(np.clip(axis[1] * r[2, axis[0]], -1.0, 1.0))))
 
@@ -134,18 +129,23 @@ def walk_figures(robot: Robot, gait: Gait, steps: int = 50) -> dict[str, Any]:
     sel = np.flatnonzero((tr[:, 0] >= t0) & (tr[:, 0] <= t1))
     contact = foot_contacts(robot, tr[sel])
     min_flight = round(MIN_FLIGHT / robot.dt)
-    axis = sole_forward_axis(robot, gait)
+    axis, d = sole_forward_axis(robot, gait), robot.new_data()
     touchdown, liftoff = [], []
     for side, c in contact.items():
         for first, last in flights(c, min_flight):
             if first > 0:
-                liftoff.append(-sole_pitch(robot, tr, int(sel[first - 1]), side, axis))
+                liftoff.append(-sole_pitch(robot, d, tr[sel[first - 1]], side, axis))
             if last + 1 < len(c):
-                touchdown.append(sole_pitch(robot, tr, int(sel[last + 1]), side, axis))
+                touchdown.append(sole_pitch(robot, d, tr[sel[last + 1]], side, axis))
     out["touchdown_toe_up"] = float(np.median(touchdown)) if touchdown else None
     out["liftoff_toe_down"] = float(np.median(liftoff)) if liftoff else None
     out["touchdowns"], out["liftoffs"] = len(touchdown), len(liftoff)
     return out
+
+
+def gait_figures(robot: Robot, gait: Gait) -> dict[str, Any]:
+    """:func:`walk_figures` and, under ``scatter``, :func:`orbit_scatter`."""
+    return walk_figures(robot, gait) | {"scatter": orbit_scatter(robot, gait)}
 
 
 def orbit_scatter(robot: Robot, gait: Gait, steps: int = 80, tail: int = 40) -> dict[str, float]:
@@ -203,7 +203,7 @@ def main() -> None:
         if args.redo_walk:  # the walk figures again (cheap), e.g. after a change of their definition
             for name, study in zip(record["gaits"], record["compare"]["studies"], strict=True):
                 robot, gait, _ = best_gait(Path(study["directory"]))
-                record["gaits"][name]["walk"] = walk_figures(robot, gait) | {"scatter": orbit_scatter(robot, gait)}
+                record["gaits"][name]["walk"] = gait_figures(robot, gait)
             args.table.write_text(json.dumps(record, indent=1, default=float))
         print_table(record)
         return
@@ -223,8 +223,7 @@ def main() -> None:
     for name, directory, r in (("flat", args.flat, cmp["studies"][0]), ("multicontact", args.mc, cmp["studies"][1])):
         robot, gait, best = best_gait(directory)
         t = time.perf_counter()
-        wf = walk_figures(robot, gait)
-        wf["scatter"] = orbit_scatter(robot, gait)
+        wf = gait_figures(robot, gait)
         print(f"{name}: walk figures {time.perf_counter() - t:.0f} s", flush=True)
         t = time.perf_counter()
         v = validate_gait(robot, gait, ValidateConfig(trials=args.trials), kinds=list(KINDS))

@@ -33,7 +33,7 @@ from robustgait.config import (
 from robustgait.io.robotfile import read_mjcf
 from robustgait.learn import ActionSpace
 from robustgait.robots import FallCriteria
-from robustgait.study.config import StudySetup, environment_changes, load_config, load_environment, save_config
+from robustgait.study.config import StudySetup, environment_changes, load_config, save_config
 from robustgait.study.evaluate import evaluate
 from robustgait.study.run import create_study, run_study
 from robustgait.study.status import study_status
@@ -84,13 +84,13 @@ def test_study_json_records_the_library_versions_and_status_names_changes(tmp_pa
     save_config(tmp_path, StudySetup("exo", TINY))
     raw = json.loads((tmp_path / "study.json").read_text())
     assert raw["environment"]["numpy"] == numpy.__version__ and set(raw["environment"]) >= {"botorch", "mujoco"}
-    assert load_environment(tmp_path) == raw["environment"] and environment_changes(raw["environment"]) == []
+    assert load_config(tmp_path).environment == raw["environment"] and environment_changes(raw["environment"]) == []
     raw["environment"]["numpy"] = "0.0.1"
     (tmp_path / "study.json").write_text(json.dumps(raw))
-    assert environment_changes(load_environment(tmp_path)) == [f"numpy 0.0.1 → {numpy.__version__}"]
+    assert environment_changes(load_config(tmp_path).environment) == [f"numpy 0.0.1 → {numpy.__version__}"]
     del raw["environment"]
     (tmp_path / "study.json").write_text(json.dumps(raw))
-    assert load_environment(tmp_path) is None and environment_changes(None) == []
+    assert load_config(tmp_path).environment is None and environment_changes(None) == []
     assert load_config(tmp_path) == StudySetup("exo", TINY)
 
 

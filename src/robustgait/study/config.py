@@ -58,10 +58,13 @@ def environment_changes(recorded: dict[str, str] | None) -> list[str]:
 class StudySetup:
     """A study's robot (a shipped robot name or the absolute path of a spec .toml) and its configuration: the
     study section (oracle, learner, budget, storage) and the sections every evaluation uses (``generate``,
-    ``sim``, ``certify``); the others are saved too, unused."""
+    ``sim``, ``certify``); the others are saved too, unused. ``environment``: the library versions recorded in
+    ``study.json`` when the study was created (None for a setup not read from a file, or a study that predates
+    the record); not part of the setup's identity."""
 
     robot: str
     config: Config
+    environment: dict[str, str] | None = dataclasses.field(default=None, compare=False)
 
     def action_space(self, robot: Robot | None = None) -> ActionSpace:
         """The grid this study searches: the robot spec's action space of the study's domain graph
@@ -76,16 +79,10 @@ class StudySetup:
 
 
 def save_config(directory: Path, setup: StudySetup) -> Path:
-    """``study.json``: the format version, the robot, the configuration and the :func:`environment`."""
+    """``study.json``: the format version, the robot, the configuration and today's :func:`environment` (the
+    study is being created)."""
     return write_json(directory / CONFIG_FILE, {"format_version": FORMAT_VERSION, **setup.to_dict(),
                                                 "environment": environment()})
-
-
-def load_environment(directory: str | Path) -> dict[str, str] | None:
-    """The library versions a study was created with (None for a study written before they were recorded)."""
-    raw = read_json(Path(directory) / CONFIG_FILE, "study config")
-    env = raw.get("environment") if isinstance(raw, dict) else None
-    return {str(k): str(v) for k, v in env.items()} if isinstance(env, dict) else None
 
 
 def load_config(directory: str | Path) -> StudySetup:
@@ -108,7 +105,9 @@ def load_config(directory: str | Path) -> StudySetup:
     if not (isinstance(raw, dict) and raw.get("format_version") == FORMAT_VERSION and isinstance(raw.get("robot"), str)
             and "config" in raw):
         raise input_error(path, f"unsupported study file (format_version {FORMAT_VERSION} expected)")
-    return StudySetup(raw["robot"], from_dict(Config, raw["config"], str(path), "json"))
+    env = raw.get("environment")
+    return StudySetup(raw["robot"], from_dict(Config, raw["config"], str(path), "json"),
+                      {str(k): str(v) for k, v in env.items()} if isinstance(env, dict) else None)
 
 
 def _from_v1(old: dict[str, Any]) -> dict[str, Any]:

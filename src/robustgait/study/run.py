@@ -40,7 +40,7 @@ from robustgait.learn.learners import History, Learner, iteration_seed, make_lea
 from robustgait.learn.oracle import Outcome, batch_comparisons, score
 from robustgait.learn.space import ActionSpace
 from robustgait.robots.spec import SHIPPED_DIR
-from robustgait.study.config import StudySetup, environment_changes, load_config, load_environment, save_config
+from robustgait.study.config import StudySetup, environment_changes, load_config, save_config
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.executors import Executor, WorkerSpec, make_executor
 from robustgait.study.storage import StudyStore, TrialRecord, default_url
@@ -237,7 +237,7 @@ class StudyRunner:
         stored = {r.slot: r.index for r in store.records() if r.iteration == k}
         for slot, index in stored.items():
             if slot >= cfg.batch or proposal[slot] != index:
-                changes = environment_changes(load_environment(self.directory))
+                changes = environment_changes(self.setup.environment)
                 raise RobustGaitError(f"{self.directory}: iteration {k} slot {slot} holds grid index {index} but "
                                       f"the learner reproduces {proposal[slot] if slot < cfg.batch else 'nothing'}"
                                       + (f" (created with other libraries: {', '.join(changes)})" if changes else ""))

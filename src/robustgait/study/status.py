@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from robustgait.study.config import environment_changes, load_config, load_environment
+from robustgait.study.config import environment_changes, load_config
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord
 
@@ -83,5 +83,5 @@ def study_status(directory: str | Path) -> dict[str, Any]:
             "unique_gaits": len({r.index for r in complete}),
             "best": _best_entry(best, by_number), "best_observed": _best_entry(observed, by_number),
             "iterations": per_iteration, "trials": [trial_summary(r) for r in sorted(records, key=lambda r: r.number)],
-            "config": setup.to_dict()["config"], "environment": (env := load_environment(d)),
-            "environment_changes": environment_changes(env)}
+            "config": setup.to_dict()["config"], "environment": setup.environment,
+            "environment_changes": environment_changes(setup.environment)}
