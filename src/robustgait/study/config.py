@@ -34,8 +34,8 @@ ENVIRONMENT_PACKAGES = ("robustgait", "numpy", "scipy", "mujoco", "casadi", "ada
 
 def environment() -> dict[str, str]:
     """Python's and :data:`ENVIRONMENT_PACKAGES`' versions ("not installed" for a missing one). Saved in
-    ``study.json``: the same study on another install evaluates the same gaits identically but its learner may
-    propose others (a fresh install of unpinned libraries did, from the 8th iteration of exo's 10 × 5 study)."""
+    ``study.json``: the same study on another install may depart (a fresh install of unpinned libraries made
+    exo's 10 × 5 study propose other gaits from its 8th iteration)."""
     out = {"python": platform.python_version()}
     for name in ENVIRONMENT_PACKAGES:
         try:
