@@ -1,7 +1,7 @@
 """Certificates r*: precision and cost of the estimators on real gaits, coverage of the confidence statement on
 maps with known answers, both barriers, and the sampler's speed against raw ``mujoco.rollout``.
 
-    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed|horizon|states|push] [options]
+    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed|horizon|states|push|push-gaits] [options]
 
 * ``seeds`` (issue 7 acceptance): the default ``exo`` gait (regenerated here with the API from the default
   ``GaitParams``, or ``--exo-gait FILE``; ``--step-length`` etc. change the parameters) and the Atalante FROST
@@ -26,6 +26,9 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
 * ``push`` (issue 18 item 7, J*'s cost): on the default exo gait, ``--seeds`` omega/ball certificates, then the
   push certificate J* for each ``--push-variants`` tuple (first round / exploration / exploration after a failed
   verification / steps after the push), same run: J*, samples, physics steps, wall and its ratio to omega/ball's.
+* ``push-gaits`` (issue 18 item 7 over many gaits; not part of ``all``): per gait of ``--gaits`` (a glob, e.g. the
+  gait files of studies; ``--limit`` of them evenly spaced), omega/ball, J* with whole verification batches
+  (``push.verify_chunk = 0``) and J* as today (chunked), one after the other in one worker: their wall-time ratios.
 """
 
 from __future__ import annotations
@@ -420,10 +423,70 @@ def cmd_push(args: argparse.Namespace) -> None:
               f"{wall.max():.1f}) | {wall.mean() / base:.2f} |", flush=True)
 
 
+def _push_gait(path: str) -> dict:
+    """omega/ball, then J* with whole verification batches, then J* with today's chunked ones: one gait, one
+    thread, one after the other (a worker of ``push-gaits``)."""
+    from robustgait.config.certify import PushConfig
+
+    exo = load_robot("exo")
+    gait = load_gait(path, exo)
+    sim = SimConfig(n_threads=1)
+    out: dict = {"gait": Path(path).parent.name}
+    for name, cfg in (("omega", CertifyConfig()), ("whole", CertifyConfig(disturbance="push",
+                                                                            push=PushConfig(verify_chunk=0))),
+                      ("chunked", CertifyConfig(disturbance="push"))):
+        t0 = time.perf_counter()
+        gc = certify_gait(exo, gait, cfg, sim)
+        if not gc.ok:
+            return {**out, "error": f"{name}: {gc.status}"}
+        out[name] = {"r_star": gc.r_star, "seconds": time.perf_counter() - t0, "physics": gc.physics_steps,
+                     "samples": gc.certificate.n_samples if gc.certificate else 0,
+                     "bound": gc.certificate.violation_bound if gc.certificate else 1.0}
+    return out
+
+
+def cmd_push_gaits(args: argparse.Namespace) -> None:
+    """J*'s cost over many gaits: per gait (``--gaits`` glob, one per directory name, ``--limit`` evenly spaced),
+    J* with whole and with chunked verification batches against omega/ball on the same gait, same worker."""
+    import glob
+    from concurrent.futures import ProcessPoolExecutor
+
+    from robustgait.study.executors import blas_threads
+
+    paths = {Path(p).parent.name: p for p in sorted(glob.glob(args.gaits))}
+    names = sorted(paths)
+    if args.limit and args.limit < len(names):
+        names = [names[i] for i in np.unique(np.round(np.linspace(0, len(names) - 1, args.limit)).astype(int))]
+    print(f"## push-gaits: {len(names)} gaits of {args.gaits}, {args.workers} workers, one rollout thread each; "
+          f"{load()}")
+    print("| gait | omega r* (s) | J* whole (samples, s, ratio) | J* chunked (samples, s, ratio) |")
+    print("|---|---|---|---|")
+    rows = []
+    with blas_threads(1), ProcessPoolExecutor(args.workers) as pool:
+        for r in pool.map(_push_gait, [paths[n] for n in names]):
+            if "error" in r:
+                print(f"| {r['gait']} | {r['error']} | | |", flush=True)
+                continue
+            rows.append(r)
+            o = r["omega"]
+            print(f"| {r['gait']} | {o['r_star']:.3f} ({o['seconds']:.1f}) | " + " | ".join(
+                f"{r[k]['r_star']:.2f} ({r[k]['samples']}, {r[k]['seconds']:.1f}, "
+                f"{r[k]['seconds'] / o['seconds']:.2f}×)" for k in ("whole", "chunked")) + " |", flush=True)
+    for k in ("whole", "chunked"):
+        ratio = np.array([r[k]["seconds"] / r["omega"]["seconds"] for r in rows])
+        phys = np.array([r[k]["physics"] / r["omega"]["physics"] for r in rows])
+        print(f"J* {k}: time over omega/ball median {np.median(ratio):.2f}× ({ratio.min():.2f}–{ratio.max():.2f}), "
+              f"≤ 2× on {int((ratio <= 2).sum())} of {ratio.size}; physics steps median {np.median(phys):.2f}×; "
+              f"samples median {np.median([r[k]['samples'] for r in rows]):.0f}")
+    dj = np.array([r["chunked"]["r_star"] - r["whole"]["r_star"] for r in rows])
+    print(f"J* chunked − whole: median {np.median(dj):+.2f} N s ({dj.min():+.2f} to {dj.max():+.2f}); {load()}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("part", nargs="?", default="all",
-                    choices=("all", "seeds", "coverage", "barrier", "speed", "horizon", "states", "push"))
+                    choices=("all", "seeds", "coverage", "barrier", "speed", "horizon", "states", "push",
+                             "push-gaits"))
     ap.add_argument("--seeds", type=int, default=10, help="seeds: seeds per gait and method (default 10)")
     ap.add_argument("--methods", default="uniform,sequential")
     ap.add_argument("--epsilon", type=float, default=0.02)
@@ -443,6 +506,9 @@ def main() -> None:
     ap.add_argument("--probe", type=int, default=400, help="horizon: states walked one step per gait (default 400)")
     ap.add_argument("--push-variants", default="100/200/100/3,100/100/50/3,50/100/50/3,100/200/100/2",
                     help="push: first-round/explore/explore-after-failure/steps tuples (the shipped one first)")
+    ap.add_argument("--gaits", default="", help="push-gaits: a glob of gait files (one per directory name)")
+    ap.add_argument("--limit", type=int, default=0, help="push-gaits: at most N gaits, evenly spaced by name")
+    ap.add_argument("--workers", type=int, default=2, help="push-gaits: worker processes")
     ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")
     args = ap.parse_args()
     if args.repeat < 2:
@@ -450,8 +516,9 @@ def main() -> None:
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; mujoco "
           f"{mujoco.__version__}; numpy {np.__version__}; {load()}")
     for part, fn in (("seeds", cmd_seeds), ("coverage", cmd_coverage), ("barrier", cmd_barrier), ("speed", cmd_speed),
-                     ("horizon", cmd_horizon), ("states", cmd_states), ("push", cmd_push)):
-        if args.part in ("all", part):
+                     ("horizon", cmd_horizon), ("states", cmd_states), ("push", cmd_push),
+                     ("push-gaits", cmd_push_gaits)):
+        if args.part == part or (args.part == "all" and part != "push-gaits"):
             fn(args)
 
 

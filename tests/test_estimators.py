@@ -218,6 +218,37 @@ def test_coverage_of_the_push_certificate() -> None:
     assert P.r_star <= np.median(js) <= 1.25 * P.r_star
 
 
+def test_chunked_verification_abandons_a_failing_batch_and_keeps_a_passing_one() -> None:
+    """verify_chunk: a batch that passes is the same batch, sample for sample; one that fails stops at the first
+    chunk holding a violation inside r̂ (so it holds fewer samples, all drawn from the same stream) — and the
+    statement still covers (the push coverage test runs with the push certificate's chunks)."""
+    P = PushThresholdMap(j0=20.0, a=0.3, b=0.4)
+    failed = 0
+    for seed in range(12):
+        whole = certify_map_sequential(P, np.zeros(2), CertifyConfig(seed=seed, r_max=60.0, disturbance="push",
+                                                                     push={"verify_chunk": 0}))
+        chunked = certify_map_sequential(P, np.zeros(2), CertifyConfig(seed=seed, r_max=60.0, disturbance="push",
+                                                                       push={"verify_chunk": 25}))
+        first = next(k for k, r in enumerate(whole.rounds) if r.kind == "verify")
+        w, c = whole.rounds[first], chunked.rounds[first]
+        assert whole.rounds[:first] == chunked.rounds[:first]  # the same rounds up to the first verification
+        ws = whole.samples[whole.sample_round == first]
+        cs = chunked.samples[chunked.sample_round == first]
+        np.testing.assert_array_equal(cs, ws[:len(cs)])  # a prefix of the same batch
+        if w.passed:
+            assert c.passed and c.n_samples == w.n_samples
+        else:
+            failed += 1
+            assert not c.passed
+            # a push sample violates iff it fell inside the disk verified: the chunk of the first such sample ends it
+            bad = np.flatnonzero(whole.fell[whole.sample_round == first] & (np.linalg.norm(ws, axis=1) < w.radius))
+            assert bad.size
+            assert c.n_samples == min(w.n_samples, 25 * (bad[0] // 25 + 1))
+        if whole.violation_bound < 1.0 and chunked.violation_bound < 1.0:
+            assert chunked.violation_bound <= 0.02 and whole.violation_bound <= 0.02
+    assert failed >= 2  # the fuzzy threshold makes some first verifications fail
+
+
 # ------------------------------------------------------------------------------ common random numbers
 
 

@@ -128,6 +128,17 @@ def test_a_study_with_the_first_push_steps_key_still_loads(tmp_path):
     assert load_config(tmp_path).config.certify.push.steps == 2
 
 
+def test_a_push_study_written_before_chunked_verification_keeps_whole_batches(tmp_path):
+    push = {"steps": 3, "first_round": 50, "explore": 100, "explore_after_failure": 50}
+    raw = {"format_version": 3, "robot": "exo", "config": {"certify": {"push": push}}}
+    (tmp_path / "study.json").write_text(json.dumps(raw))
+    assert load_config(tmp_path).config.certify.push.verify_chunk == 0  # as it was run
+    assert Config().certify.push.verify_chunk == 25 and Config().certify.sequential.verify_chunk == 0
+    chunked = {"certify": {"push": {**push, "verify_chunk": 5}}}
+    (tmp_path / "study.json").write_text(json.dumps({**raw, "config": chunked}))
+    assert load_config(tmp_path).config.certify.push.verify_chunk == 5
+
+
 def test_push_metric_certifies_pushes():
     c = Config(study=StudyConfig(metric="push"))
     assert c.study_certify.disturbance == "push" and c.study_certify.unit == "N s"

@@ -16,7 +16,9 @@
   3. verification attempt a = 1, 2, …: a fresh batch of n_a samples i.i.d. uniform in B(r̂_a), drawn after r̂_a
      is fixed, with n_a the least n such that (1 − ε)^n ≤ β_a = β / 2^a. If no sample of the batch violates
      the condition at r̂_a (r̂ is unchanged by the batch) the certificate is r* = r̂_a; otherwise r̂ shrinks,
-     ``explore_after_failure`` more exploration samples follow and attempt a + 1 is drawn. When the next
+     ``explore_after_failure`` more exploration samples follow and attempt a + 1 is drawn. With
+     ``verify_chunk`` > 0 the batch is evaluated in chunks and abandoned at the first chunk that shrinks r̂
+     (it cannot pass then); the whole batch is still drawn, so the streams stay aligned. When the next
      batch would exceed ``budget`` samples the estimator stops and says there is no statement.
 
 Guarantee of ``sequential``: P(a certificate is issued and the fraction of the volume of B(r*) where the
@@ -24,7 +26,8 @@ condition at radius r* fails exceeds ε) ≤ Σ_a β_a ≤ β, whatever the map 
 V(r) be that violating fraction and F_{a−1} everything drawn before batch a. r̂_a is F_{a−1}-measurable and
 batch a is i.i.d. uniform in B(r̂_a) independently of F_{a−1}, so on {V(r̂_a) > ε}, P(all n_a samples
 satisfy | F_{a−1}) ≤ (1 − ε)^{n_a} ≤ β_a. A certificate at attempt a needs that event; a union over a gives
-Σ β_a. Assumptions: the map is deterministic; the condition is evaluated exactly at the samples; the
+Σ β_a; a batch abandoned at its first violating chunk (``verify_chunk``) issues no certificate, so it changes nothing
+here. Assumptions: the map is deterministic; the condition is evaluated exactly at the samples; the
 pseudo-random streams stand in for independent uniforms. It says nothing about violating sets of volume
 fraction ≤ ε, and it is not a proof of invariance.
 
@@ -124,21 +127,33 @@ class _Pool:
     def used(self) -> int:
         return int(self.d.size)
 
-    def add(self, kind: str, radius: float, x0: FloatArray) -> None:
+    def add(self, kind: str, radius: float, x0: FloatArray, chunk: int = 0) -> None:
         """Evaluate the map on x0, add the samples as a round and recompute r̂. A ``verify`` round passes when
-        r̂ is unchanged: no sample of it violates the condition at r̂ (nor chains a violation down to it)."""
-        x1 = evaluate_map(self.P, x0)
-        d, p = distances(x0, x1, self.x_star)
-        self.x0.append(x0)
-        self.x1.append(x1)
-        self.d = np.concatenate([self.d, d])
-        self.p = np.concatenate([self.p, p])
-        self.s = np.concatenate([self.s, violation_end(d, p, self.alpha, self.barrier)])
-        self.round_of.append(np.full(d.size, len(self.rounds), dtype=np.int64))
+        r̂ is unchanged: no sample of it violates the condition at r̂ (nor chains a violation down to it).
+
+        ``chunk`` > 0 (verification only): evaluate x0 in chunks of that many samples, in order, and abandon the
+        rest of the batch at the first chunk that shrinks r̂ — the batch cannot pass then, and its remaining
+        samples would only be simulated to be discarded. The round holds the samples evaluated."""
         before = self.r_hat
-        self.r_hat = solve_radius(self.d, self.p, alpha=self.alpha, r_max=self.r_max, barrier=self.barrier).r_star
+        step = chunk if (kind == "verify" and chunk > 0) else x0.shape[0]
+        n_used = 0
+        for start in range(0, x0.shape[0], max(step, 1)):
+            part = x0[start:start + step]
+            x1 = evaluate_map(self.P, part)
+            d, p = distances(part, x1, self.x_star)
+            self.x0.append(part)
+            self.x1.append(x1)
+            self.d = np.concatenate([self.d, d])
+            self.p = np.concatenate([self.p, p])
+            self.s = np.concatenate([self.s, violation_end(d, p, self.alpha, self.barrier)])
+            self.round_of.append(np.full(d.size, len(self.rounds), dtype=np.int64))
+            n_used += d.size
+            self.r_hat = solve_radius(self.d, self.p, alpha=self.alpha, r_max=self.r_max,
+                                      barrier=self.barrier).r_star
+            if self.r_hat != before and kind == "verify":
+                break
         passed = self.r_hat == before if kind == "verify" else None
-        self.rounds.append(Round(kind, float(radius), int(d.size), self.used, float(self.r_hat), passed))
+        self.rounds.append(Round(kind, float(radius), int(n_used), self.used, float(self.r_hat), passed))
 
     def elites(self, k: int) -> FloatArray:
         """Unit directions (≤ k, n) of the samples violated somewhere (s > d, falls included) with d ≥ r̂,
@@ -180,7 +195,7 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
         n_a = verification_size(cfg.epsilon, b, attempt)
         if pool.used + n_a > cfg.budget:
             break
-        pool.add("verify", pool.r_hat, sample_ball(n_a, n, pool.r_hat, xs, verify_rng))
+        pool.add("verify", pool.r_hat, sample_ball(n_a, n, pool.r_hat, xs, verify_rng), cfg.verify_chunk)
         if pool.rounds[-1].passed:
             passed = True
             break

@@ -59,6 +59,9 @@ class SequentialConfig:
                                le=1000)] = 8
     min_depth: Annotated[Float, Doc("smallest relative depth 1 − d/r̂ of a local proposal (log-uniform depths)",
                                     gt=0.0, lt=1.0)] = 1e-3
+    verify_chunk: Annotated[Int, Doc("evaluate a verification batch in chunks of this many samples and abandon it at "
+                                     "the first chunk that shrinks r̂ (0: the whole batch at once)", ge=0,
+                                     le=10_000)] = 0
 
 
 @config
@@ -85,6 +88,9 @@ class PushConfig:
     explore: Annotated[Int, Doc("exploration pushes before the first verification", ge=0, le=100_000)] = 100
     explore_after_failure: Annotated[Int, Doc("exploration pushes before each further verification", ge=0,
                                               le=100_000)] = 50
+    verify_chunk: Annotated[Int, Doc("verification pushes simulated per chunk; a batch is abandoned at the first "
+                                     "chunk with a fall inside the disk verified (0: the whole batch at once)", ge=0,
+                                     le=10_000)] = 25
 
 
 @config
@@ -135,7 +141,7 @@ class CertifyConfig:
             return self.sequential
         p = self.push
         return dataclasses.replace(self.sequential, first_round=p.first_round, explore=p.explore,
-                                   explore_after_failure=p.explore_after_failure)
+                                   explore_after_failure=p.explore_after_failure, verify_chunk=p.verify_chunk)
 
     def __post_init__(self) -> None:
         if self.r_max is not None and self.r_max > R_MAX_LIMIT[self.space]:

@@ -102,6 +102,11 @@ def load_config(directory: str | Path) -> StudySetup:
         certify = {k: v for k, v in certify.items() if k != "push_steps"} | {
             "push": {**(certify.get("push") or {}), "steps": certify["push_steps"]}}
         raw = {**raw, "config": {**raw["config"], "certify": certify}}
+    certify = raw["config"].get("certify") if isinstance(raw, dict) and isinstance(raw.get("config"), dict) else None
+    push = certify.get("push") if isinstance(certify, dict) else None
+    if isinstance(certify, dict) and isinstance(push, dict) and "verify_chunk" not in push:
+        # written before chunked verification: its push certificates evaluated whole batches
+        raw = {**raw, "config": {**raw["config"], "certify": {**certify, "push": {**push, "verify_chunk": 0}}}}
     if not (isinstance(raw, dict) and raw.get("format_version") == FORMAT_VERSION and isinstance(raw.get("robot"), str)
             and "config" in raw):
         raise input_error(path, f"unsupported study file (format_version {FORMAT_VERSION} expected)")
