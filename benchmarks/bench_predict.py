@@ -7,7 +7,8 @@ their success, fall step and the full state at the first section after the push;
 (``--other-trials`` each); then every ``--configs`` certificate (r*, E*, cost) and its check — the pushes whose
 first post-push state lies in the certified set, in that certificate's own coordinates, and how many fell; with
 ``--push-cert``, J* and its check (pushes with |J| ≤ J* that fell). One JSON line per gait in ``--out``; a gait
-already there is not computed again (a killed run continues).
+already there is not computed again (a killed run continues). ``--kinds-only`` measures only the ``--kinds`` (a second
+run for more disturbance kinds, on all gaits or a ``--spread``), merged into the report with ``--merge``.
 
 ``--report`` reads the lines and prints, per choice: the median r*, Spearman ρ (p, n) of r* with push success and
 with push s₅₀, the certificate check pooled over gaits (falls inside / inside, 95 % Wilson interval), and for J*
@@ -15,7 +16,8 @@ its ρ with the s₅₀ of each other kind; plus the gaits' own step length as a
 
     python benchmarks/bench_predict.py [--studies DIR,DIR] [--configs omega/ball/1,velocity/ellipsoid/2,...]
         [--gaits 'GLOB'] [--push-cert] [--kinds latency,noise,mass,terrain] [--trials 200] [--other-trials 100]
-        [--workers 2] [--limit N] [--spread N] [--out FILE.jsonl] [--report]
+        [--workers 2] [--limit N] [--spread N] [--out FILE.jsonl] [--kinds-only] [--report] [--merge FILE.jsonl]
+        [--plot FILE.png]
 """
 
 from __future__ import annotations
@@ -102,7 +104,8 @@ def one_gait(task: dict[str, Any]) -> dict[str, Any]:
     ref = CertificateRef.of(gc0)
     nq = robot.model.nq
     first_push = None
-    for kind, trials in [("push", task["trials"])] + [(k, task["other_trials"]) for k in task["kinds"]]:
+    pushes = [] if task.get("kinds_only") else [("push", task["trials"])]
+    for kind, trials in pushes + [(k, task["other_trials"]) for k in task["kinds"]]:
         vcfg = ValidateConfig(trials=trials, seed=0)
         with Validator(robot, gait, vcfg, sim=sim, certificate=ref) as v:
             draws = dist.draw(kind, trials, vcfg, robot)
@@ -121,6 +124,9 @@ def one_gait(task: dict[str, Any]) -> dict[str, Any]:
             row["energy"] = [None if not math.isfinite(e) else float(e) for e in energy]
         out["kinds"][kind] = row
     out["seconds_validate"] = time.perf_counter() - t0
+    if task.get("kinds_only"):
+        out["seconds"] = out["seconds_validate"]
+        return out
     assert first_push is not None
     push_ok = np.array(out["kinds"]["push"]["ok"])
     reached = np.isfinite(first_push).all(axis=1)
@@ -143,7 +149,7 @@ def one_gait(task: dict[str, Any]) -> dict[str, Any]:
                         "volume_ratio": gc.volume_ratio, "excursion": gc.excursion,
                         "fallback": co.shape.fallback if cfg.set == "ellipsoid" else None})
         out["configs"][text] = row
-    if task["push_cert"]:
+    if task["want_push_cert"]:
         t1 = time.perf_counter()
         cfg = dataclasses.replace(base, disturbance="push")
         gc = certify_gait(robot, gait, cfg, sim)
@@ -172,11 +178,13 @@ def run(args: argparse.Namespace) -> None:
         old = [json.loads(line) for line in args.out.read_text().splitlines() if line.strip()]
         done = {r["label"] + "|" + r["study"] for r in old}
     todo = [g for g in gaits if g["label"] + "|" + g["study"] not in done]
-    print(f"{len(gaits)} gaits ({len(gaits) - len(todo)} already in {args.out}); configs {args.configs}; "
-          f"push certificate {args.push_cert}; kinds push + {args.kinds or 'none'}; {args.workers} workers; "
+    what = (f"kinds {args.kinds} only" if args.kinds_only else f"configs {args.configs}; push certificate "
+            f"{args.push_cert}; kinds push + {args.kinds or 'none'}")
+    print(f"{len(gaits)} gaits ({len(gaits) - len(todo)} already in {args.out}); {what}; {args.workers} workers; "
           f"load {os.getloadavg()[0]:.1f}", flush=True)
     tasks = [{**g, "configs": args.configs.split(","), "kinds": [k for k in args.kinds.split(",") if k],
-              "trials": args.trials, "other_trials": args.other_trials, "push_cert": args.push_cert}
+              "trials": args.trials, "other_trials": args.other_trials, "want_push_cert": args.push_cert,
+              "kinds_only": args.kinds_only}
              for g in todo]
     t0 = time.perf_counter()
     with blas_threads(1), ProcessPoolExecutor(args.workers) as pool, args.out.open("a") as f:
@@ -194,11 +202,27 @@ def run(args: argparse.Namespace) -> None:
                   + (f"  ERROR {res['error']}" if "error" in res else ""), flush=True)
 
 
-def report(path: Path) -> None:
+def read_rows(path: Path, merge: list[Path]) -> list[dict[str, Any]]:
+    """The gaits of ``path`` (errors left out), each with the kinds of the same gait in the ``merge`` files (runs
+    with ``--kinds-only``) added to its own."""
+    def lines(p: Path) -> list[dict[str, Any]]:
+        rows = [json.loads(line) for line in p.read_text().splitlines() if line.strip()]
+        return [r for r in rows if "error" not in r]
+
+    rows = lines(path)
+    extra: dict[str, dict[str, Any]] = {}
+    for p in merge:
+        for r in lines(p):
+            extra.setdefault(r["label"] + "|" + r["study"], {}).update(r["kinds"])
+    for r in rows:
+        r["kinds"] = {**extra.get(r["label"] + "|" + r["study"], {}), **r["kinds"]}
+    return rows
+
+
+def report(path: Path, plot: Path | None = None, merge: list[Path] | None = None) -> None:
     from robustgait.validate.stats import Rate, spearman
 
-    rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
-    rows = [r for r in rows if "error" not in r]
+    rows = read_rows(path, merge or [])
     commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip()
     print(f"{len(rows)} gaits from {path} (report {date.today()}, commit {commit}, {platform.machine()})")
@@ -237,7 +261,11 @@ def report(path: Path) -> None:
         print(f"| push J* [N s] | {np.median(j):.3g} | {cost:.1f} | {corr(j, success[idx], 'success')} | "
               f"{corr(j, s50[idx], 's50')} | {fell}/{inside} = {rate.rate:.3f} [{rate.low:.3f}, {rate.high:.3f}] |")
         kinds = sorted({k for r in have for k in r["kinds"] if k != "push"})
-        for k in kinds:
+        have_all = have
+        for k in kinds:  # a kind measured on part of the gaits (a --kinds-only run on a subset) is ranked there
+            have = [r for r in have_all if k in r["kinds"]]
+            idx = [rows.index(r) for r in have]
+            j = np.array([r["push_cert"]["j_star"] for r in have])
             ks = np.array([np.nan if r["kinds"][k]["s50"] is None else r["kinds"][k]["s50"] for r in have])
             ksucc = np.array([r["kinds"][k]["success"] for r in have])
             print(f"J* vs {k}: success {corr(j, ksucc, 'success')}, s₅₀ {corr(j, ks, 's50')}")
@@ -245,9 +273,136 @@ def report(path: Path) -> None:
                 x = np.array([r["configs"][name]["r_star"] for r in have if name in r["configs"]])
                 if x.size == len(have):
                     print(f"   r* {name} vs {k}: success {corr(x, ksucc, 'success')}, s₅₀ {corr(x, ks, 's50')}")
+    cost_ratios(rows, names)
     length = np.array([r["params"]["step_length"] for r in rows])
     print(f"\nbaseline: step length vs push success {corr(length, success, 'success')}, vs s₅₀ "
           f"{corr(length, s50, 's50')}")
+    print("beyond the step length (partial Spearman ρ with push s₅₀, step length held fixed):")
+    for name, _, x, _, _ in _choices(rows):
+        print(f"  {name}: {partial_spearman(x, s50, length)}")
+    target_reliability(rows)
+    if plot is not None:
+        print(f"figure: {plot_report(rows, s50, plot)}")
+
+
+def partial_spearman(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> str:
+    """ρ(x, y | z): the Pearson correlation of the ranks of x and y after a least-squares line in the ranks of z is
+    taken out of each, with its two-sided p-value (t with n − 3 degrees of freedom)."""
+    from scipy.stats import rankdata
+    from scipy.stats import t as student
+
+    m = np.isfinite(x) & np.isfinite(y) & np.isfinite(z)
+    n = int(m.sum())
+    if n < 4:
+        return f"undefined (n = {n})"
+    rx, ry, rz = (rankdata(v[m]) for v in (x, y, z))
+    design = np.column_stack([np.ones(n), rz])
+    ex = rx - design @ np.linalg.lstsq(design, rx, rcond=None)[0]
+    ey = ry - design @ np.linalg.lstsq(design, ry, rcond=None)[0]
+    rho = float(ex @ ey / math.sqrt((ex @ ex) * (ey @ ey)))
+    tt = rho * math.sqrt((n - 3) / max(1e-300, 1 - rho * rho))
+    p = float(2 * student.sf(abs(tt), n - 3))
+    return f"{rho:+.3f} (p {p:.2g}, n {n})"
+
+
+def cost_ratios(rows: list[dict[str, Any]], names: list[str]) -> None:
+    """Each choice's wall time over the first choice's on the same gait in the same worker (item 7's ratios)."""
+    if not names:
+        return
+    ref = names[0]
+    print(f"\ncost on the same gait, same run, over {ref}:")
+    for name in names[1:] + (["push J*"] if any("push_cert" in r for r in rows) else []):
+        have = [r for r in rows if ref in r["configs"] and (name in r["configs"] or name == "push J*")
+                and (name != "push J*" or "push_cert" in r)]
+        t = np.array([(r["push_cert"] if name == "push J*" else r["configs"][name])["seconds"] for r in have])
+        ratio = t / np.array([r["configs"][ref]["seconds"] for r in have])
+        print(f"  {name}: median {np.median(ratio):.2f}× ({ratio.min():.2f}–{ratio.max():.2f}), ≤ 2× on "
+              f"{int((ratio <= 2).sum())} of {ratio.size} gaits")
+
+
+def _choices(rows: list[dict[str, Any]]) -> list[tuple[str, str, np.ndarray, int, int]]:
+    """(name, unit, value per gait, falls inside, inside) of every certificate choice in the rows (all gaits)."""
+    out = []
+    for name in dict.fromkeys(c for r in rows for c in r["configs"]):
+        if all(name in r["configs"] for r in rows):
+            unit = "rad/s" if name.startswith("omega") else "√J"
+            out.append((name, unit, np.array([r["configs"][name]["r_star"] for r in rows]),
+                        sum(r["configs"][name].get("fell_inside", 0) for r in rows),
+                        sum(r["configs"][name].get("inside", 0) for r in rows)))
+    if all("push_cert" in r for r in rows):
+        out.append(("push J*", "N s", np.array([r["push_cert"]["j_star"] for r in rows]),
+                    sum(r["push_cert"]["fell_inside"] for r in rows), sum(r["push_cert"]["inside"] for r in rows)))
+    return out
+
+
+def plot_report(rows: list[dict[str, Any]], s50: np.ndarray, path: Path) -> Path:
+    """One panel per choice — its value against the gait's push s₅₀, with Spearman ρ — and one of the certificate
+    check: the share of pushes landing inside the certified set that fell, 95 % Wilson interval, against 5 %."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from robustgait.validate.stats import Rate, spearman
+
+    choices = _choices(rows)
+    fig, axes = plt.subplots(1, len(choices) + 1, figsize=(3.6 * (len(choices) + 1), 3.6))
+    for ax, (name, unit, x, _, _) in zip(axes, choices, strict=False):
+        m = np.isfinite(x) & np.isfinite(s50)
+        c = spearman(x[m], s50[m], name, "s50")
+        ax.scatter(x[m], s50[m], s=12, alpha=0.7)
+        ax.set_xlabel(f"{name} [{unit}]")
+        ax.set_ylabel("push s₅₀ [N s]")
+        ax.set_title(f"ρ {c.rho:+.2f} (p {c.p:.1g}, n {c.n})" if c.defined else "ρ undefined", fontsize=9)
+    ax = axes[-1]
+    for i, (_, _, _, fell, inside) in enumerate(choices):
+        rate = Rate.of(fell, inside)
+        ax.errorbar([i], [100 * rate.rate], yerr=[[100 * (rate.rate - rate.low)], [100 * (rate.high - rate.rate)]],
+                    fmt="o", capsize=4)
+    ax.axhline(5.0, color="red", lw=1, ls="--", label="goal: upper bound ≤ 5 %")
+    ax.set_xticks(range(len(choices)), [n for n, *_ in choices], rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel("falls among pushes inside [%]")
+    ax.set_title("certificate check (95 % Wilson)", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.suptitle(f"{len(rows)} gaits: which certificate predicts push robustness", fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def target_reliability(rows: list[dict[str, Any]]) -> None:
+    """How well can *anything* rank these gaits' push robustness, given the pushes measured? Split each gait's
+    pushes into two halves (even and odd trials: independent draws of one distribution, the same draws for
+    every gait), measure success and s₅₀ on each half, and correlate the halves across gaits. The Spearman–Brown
+    step-up 2ρ_h / (1 + ρ_h) estimates the reliability R of the full-size measure; a predictor's correlation
+    with the measured target cannot exceed about √R however well it predicts the true one (the attenuation
+    bound), so ρ ≥ 0.6 is out of reach when R < 0.36."""
+    from robustgait.validate.stats import logistic_fit, spearman
+
+    halves: list[dict[str, np.ndarray]] = []
+    for h in (0, 1):
+        succ, s50 = [], []
+        for r in rows:
+            size = np.asarray(r["kinds"]["push"]["size"], dtype=float)[h::2]
+            ok = np.asarray(r["kinds"]["push"]["ok"], dtype=bool)[h::2]
+            fit = logistic_fit(size, ok)
+            succ.append(ok.mean())
+            s50.append(fit.s50 if (fit.s50 is not None and fit.in_range) else np.nan)
+        halves.append({"success": np.array(succ), "s50": np.array(s50)})
+    print("\ntarget reliability (pushes split in even/odd halves, correlated across gaits):")
+    for what in ("success", "s50"):
+        a, b = halves[0][what], halves[1][what]
+        m = np.isfinite(a) & np.isfinite(b)
+        c = spearman(a[m], b[m], "half 1", "half 2")
+        if not c.defined or c.rho is None:
+            print(f"  push {what}: undefined ({c.reason})")
+            continue
+        rel = 2 * c.rho / (1 + c.rho) if c.rho > -1 else float("nan")
+        bound = math.sqrt(rel) if rel > 0 else 0.0
+        print(f"  push {what}: half vs half ρ {c.rho:+.3f} (p {c.p:.2g}, n {c.n}); Spearman–Brown reliability "
+              f"{rel:+.3f}; attenuation bound on any predictor's ρ ≈ {bound:.2f}")
 
 
 def main() -> None:
@@ -265,12 +420,15 @@ def main() -> None:
     ap.add_argument("--spread", type=int, default=None, help="N gaits evenly spaced in the studies' r*")
     ap.add_argument("--out", type=Path, default=REPO / "benchmarks" / "data" / "bench_predict.jsonl")
     ap.add_argument("--report", action="store_true")
+    ap.add_argument("--kinds-only", action="store_true",
+                    help="only the --kinds (no pushes, no certificates): a run whose --out is --merge'd into a report")
+    ap.add_argument("--merge", default="", help="with the report: JSONL files of --kinds-only runs (comma-separated)")
+    ap.add_argument("--plot", type=Path, help="with the report: a PNG of each choice against push s₅₀ and the check")
     args = ap.parse_args()
-    if args.report:
-        report(args.out)
-    else:
+    if not args.report:
         run(args)
-        report(args.out)
+    if not args.kinds_only:
+        report(args.out, args.plot, [Path(p) for p in args.merge.split(",") if p])
 
 
 if __name__ == "__main__":
