@@ -150,7 +150,7 @@ class _Pool:
             n_used += d.size
             self.r_hat = solve_radius(self.d, self.p, alpha=self.alpha, r_max=self.r_max,
                                       barrier=self.barrier).r_star
-            if self.r_hat != before and kind == "verify":
+            if self.r_hat != before:  # only a chunked verification has samples left to abandon
                 break
         passed = self.r_hat == before if kind == "verify" else None
         self.rounds.append(Round(kind, float(radius), int(n_used), self.used, float(self.r_hat), passed))

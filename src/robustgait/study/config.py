@@ -98,15 +98,13 @@ def load_config(directory: str | Path) -> StudySetup:
         raw = {**raw, "format_version": FORMAT_VERSION,
                "config": {**raw["config"], "certify": {**_CERTIFY_BEFORE_3, **certify}}}
     certify = raw["config"].get("certify") if isinstance(raw, dict) and isinstance(raw.get("config"), dict) else None
-    if isinstance(certify, dict) and "push_steps" in certify:  # format 3 as first written (284a6aa–2be8282)
-        certify = {k: v for k, v in certify.items() if k != "push_steps"} | {
-            "push": {**(certify.get("push") or {}), "steps": certify["push_steps"]}}
+    if isinstance(certify, dict) and ("push_steps" in certify or isinstance(certify.get("push"), dict)):
+        push = {**(certify.get("push") or {})}
+        if "push_steps" in certify:  # format 3 as first written (284a6aa–2be8282)
+            push["steps"] = certify["push_steps"]
+        push.setdefault("verify_chunk", 0)  # written before chunked verification: whole verification batches
+        certify = {k: v for k, v in certify.items() if k != "push_steps"} | {"push": push}
         raw = {**raw, "config": {**raw["config"], "certify": certify}}
-    certify = raw["config"].get("certify") if isinstance(raw, dict) and isinstance(raw.get("config"), dict) else None
-    push = certify.get("push") if isinstance(certify, dict) else None
-    if isinstance(certify, dict) and isinstance(push, dict) and "verify_chunk" not in push:
-        # written before chunked verification: its push certificates evaluated whole batches
-        raw = {**raw, "config": {**raw["config"], "certify": {**certify, "push": {**push, "verify_chunk": 0}}}}
     if not (isinstance(raw, dict) and raw.get("format_version") == FORMAT_VERSION and isinstance(raw.get("robot"), str)
             and "config" in raw):
         raise input_error(path, f"unsupported study file (format_version {FORMAT_VERSION} expected)")
