@@ -94,7 +94,7 @@ class RawRollout:
     def __init__(self, robot: Robot, gait: Gait, sim: SimConfig, n: int = 100, nstep: int = 500):
         self.robot, self.n, self.nstep = robot, n, nstep
         self.pool = rollout.Rollout(nthread=sim.threads)
-        with ReturnMap(robot, gait, CertifyConfig(), sim) as pmap:
+        with ReturnMap(robot, gait, CertifyConfig(disturbance="state"), sim) as pmap:
             fp = pmap.find_fixed_point()
             qpos, qvel = pmap.reconstruct(sample_ball(n, 3, 0.05, fp.omega, np.random.default_rng(0)))
             self.init = pmap.engine.full_states(qpos, qvel)
@@ -135,7 +135,7 @@ def cmd_seeds(args: argparse.Namespace) -> None:
     for gname, (robot, gait) in gaits(args).items():
         raw = RawRollout(robot, gait, sim)
         for method in args.methods.split(","):
-            cfg = CertifyConfig(method=method, sequential=SequentialConfig(epsilon=args.epsilon,  # type: ignore[arg-type]
+            cfg = CertifyConfig(method=method, disturbance="state", sequential=SequentialConfig(epsilon=args.epsilon,  # type: ignore[arg-type]
                                                                           budget=args.budget))
             gcs, speeds = [], []
             for seed in range(args.seeds):
@@ -191,7 +191,7 @@ def cmd_coverage(args: argparse.Namespace) -> None:
         fails = certified = 0
         rs, ns = [], []
         for seed in range(args.runs):
-            c = certify_map_sequential(P, xs, CertifyConfig(seed=seed, beta=beta, sequential=seq))
+            c = certify_map_sequential(P, xs, CertifyConfig(seed=seed, beta=beta, disturbance="state", sequential=seq))
             if c.violation_bound < 1.0:
                 certified += 1
                 fails += P.violating_fraction(c.r_star) > eps
@@ -221,7 +221,7 @@ def cmd_barrier(args: argparse.Namespace) -> None:
         for method, seeds in (("uniform", [0]), ("sequential", list(range(args.barrier_seeds)))):
             res = {}
             for barrier in ("ball", "paper"):
-                cfg = CertifyConfig(method=method, barrier=barrier)  # type: ignore[arg-type]
+                cfg = CertifyConfig(method=method, barrier=barrier, disturbance="state")  # type: ignore[arg-type]
                 res[barrier] = np.array([certify_gait(robot, gait, replace(cfg, seed=s), sim).r_star for s in seeds])
             cells = " | ".join(f"{v.mean():.4f} ({v.min():.4f}–{v.max():.4f})" for v in res.values())
             print(f"| {gname} | {method} | {len(seeds)} | {cells} |", flush=True)
@@ -255,8 +255,8 @@ def cmd_speed(args: argparse.Namespace) -> None:
     print(f"## speed: N = {n}, r_max = 2, alpha = 0.05, seed 0, heading frame, uniform; threads {threads}; {load()}")
 
     def config(kind: str, rec: str) -> CertifyConfig:
-        return CertifyConfig(method="uniform", n_samples=n, r_max=2.0, alpha=0.05, seed=0, map=kind,  # type: ignore[arg-type]
-                             reconstruction=rec)  # type: ignore[arg-type]
+        return CertifyConfig(method="uniform", disturbance="state", n_samples=n, r_max=2.0, alpha=0.05, seed=0,
+                             map=kind, reconstruction=rec)  # type: ignore[arg-type]
 
     certs = {combo: certify_gait(robot, gait, config(*combo), sim) for combo in COMBOS}
     for combo in COMBOS:
@@ -302,7 +302,7 @@ def thin_gaits(limit: float = 0.05) -> list[GaitParams]:
 
 def probe_events(robot: Robot, gait: Gait, sim: SimConfig, n: int, radius: float) -> str:
     """One step from n states uniform in B(radius) of the omega/ball/1 map: fall reasons and touchdown phases."""
-    cfg = CertifyConfig()
+    cfg = CertifyConfig(disturbance="state")
     with ReturnMap(robot, gait, cfg, sim) as pmap:
         try:
             fp = pmap.find_fixed_point()
@@ -355,7 +355,7 @@ def cmd_horizon(args: argparse.Namespace) -> None:
             continue
         cells = []
         for k in ks:
-            gc = certify_gait(exo, res.gait, CertifyConfig(horizon=k), sim)
+            gc = certify_gait(exo, res.gait, CertifyConfig(disturbance="state", horizon=k), sim)
             exc = gc.excursion
             ex = "" if not exc else " (" + ", ".join(f"{v:.2f}" for v in exc) + ")"
             n = gc.certificate.n_samples if gc.certificate else 0
@@ -372,7 +372,7 @@ def cmd_states(args: argparse.Namespace) -> None:
     exo = load_robot("exo")
     res = generate_gait(exo, GaitParams())
     assert res.gait is not None
-    choices = [CertifyConfig(state=s, set=k) for s in ("omega", "centroidal", "velocity")
+    choices = [CertifyConfig(disturbance="state", state=s, set=k) for s in ("omega", "centroidal", "velocity")
                for k in ("ball", "ellipsoid")] + [CertifyConfig(disturbance="push")]
     print(f"## states: default exo gait, {args.seeds} seeds each, sequential; {load()}")
     print("| certificate | r* mean (range) | E* [J] | samples | physics steps | wall: mean (range) | "
@@ -408,7 +408,7 @@ def cmd_push(args: argparse.Namespace) -> None:
     print("| certificate | J* or r* mean (range) | samples | physics steps | wall: mean (range) | "
           "ratio to omega/ball |")
     print("|---|---|---|---|---|---|")
-    cfgs = [("omega/ball", CertifyConfig())] + [
+    cfgs = [("omega/ball", CertifyConfig(disturbance="state"))] + [
         (f"push {f}/{e}/{a}/{k}", CertifyConfig(disturbance="push", push=PushConfig(
             first_round=f, explore=e, explore_after_failure=a, steps=k))) for f, e, a, k in variants]
     base = None
@@ -432,7 +432,7 @@ def _push_gait(path: str) -> dict:
     gait = load_gait(path, exo)
     sim = SimConfig(n_threads=1)
     out: dict = {"gait": Path(path).parent.name}
-    for name, cfg in (("omega", CertifyConfig()), ("whole", CertifyConfig(disturbance="push",
+    for name, cfg in (("omega", CertifyConfig(disturbance="state")), ("whole", CertifyConfig(disturbance="push",
                                                                             push=PushConfig(verify_chunk=0))),
                       ("chunked", CertifyConfig(disturbance="push"))):
         t0 = time.perf_counter()

@@ -153,7 +153,7 @@ def orbit_scatter(robot: Robot, gait: Gait, steps: int = 80, tail: int = 40) -> 
     reduced state over the last ``tail`` of ``steps`` iterates from the gait's start (median and max, rad/s).
     A certificate around a point cannot hold on a ball smaller than this scatter (docs/gaitgen.md)."""
     residuals: list[float] = []
-    cfg = CertifyConfig(fp_tol=1e-12, fp_min_steps=steps, fp_max_steps=steps)
+    cfg = CertifyConfig(disturbance="state", fp_tol=1e-12, fp_min_steps=steps, fp_max_steps=steps)
     with ReturnMap(robot, gait, cfg) as rm:
         try:
             rm.find_fixed_point(progress=lambda k, r: residuals.append(r))

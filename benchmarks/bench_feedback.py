@@ -184,7 +184,8 @@ def disturbances(robot: Robot, gait: Gait, ctl: object, args: argparse.Namespace
         sim = SimConfig(n_threads=1)
     try:
         v = validate_gait(robot, gait, ValidateConfig(trials=args.trials, seed=0), sim=sim,
-                          kinds=args.kinds.split(","), certify=CertifyConfig(method="uniform", n_samples=10))
+                          kinds=args.kinds.split(","),
+                          certify=CertifyConfig(method="uniform", disturbance="state", n_samples=10))
     except RobustGaitError as e:  # e.g. no fixed point to start the trials from
         return f" | not validated: {str(e)[:60]}"
     out = []
@@ -198,7 +199,7 @@ def disturbances(robot: Robot, gait: Gait, ctl: object, args: argparse.Namespace
 
 def fixed_point(robot: Robot, gait: Gait, ctl: object, config: SimConfig) -> str:
     """Whether the step map under this law has a fixed point (the certificate's first need), and where."""
-    pmap = ReturnMap(robot, gait, CertifyConfig(), SimConfig(n_threads=1))
+    pmap = ReturnMap(robot, gait, CertifyConfig(disturbance="state"), SimConfig(n_threads=1))
     pmap.engine.close()
     pmap.engine = FeedbackEngine(robot, gait, ctl, config)  # type: ignore[arg-type]
     try:
@@ -232,7 +233,7 @@ def delays(args: argparse.Namespace) -> None:
     for name, controller, law in cases:
         sim = SimConfig(controller=controller, n_threads=1)
         with Validator(robot, gait, ValidateConfig(trials=sizes.size, steps_after=20), sim=sim,
-                       certify=CertifyConfig(method="uniform", n_samples=10)) as v:
+                       certify=CertifyConfig(method="uniform", disturbance="state", n_samples=10)) as v:
             if law is not None:
                 v.engine.close()
                 v.engine = FeedbackEngine(robot, gait, law, sim)  # type: ignore[arg-type]

@@ -77,7 +77,7 @@ def walk_figures(robot: Robot, gait: Gait, samples: int) -> dict[str, object]:
     if len(gait.domains) > 1 and w.steps_taken >= 20:
         out["rolling"] = rolling(robot, gait, w.trajectory, w.events)
     if w.steps_taken == 50:
-        c = certify_gait(robot, gait, CertifyConfig(n_samples=samples, method="uniform"))
+        c = certify_gait(robot, gait, CertifyConfig(n_samples=samples, method="uniform", disturbance="state"))
         if c.fixed_point is not None:
             out["x_star"] = float(np.linalg.norm(c.fixed_point.omega))
         if c.ok:
@@ -128,7 +128,7 @@ def main() -> None:
         if not args.no_walk:
             print("default walk:", fmt_walk(walk_figures(robot, base.gait, args.samples)))
             if args.domains == "multicontact":
-                seq = certify_gait(robot, base.gait, CertifyConfig(method="sequential"))
+                seq = certify_gait(robot, base.gait, CertifyConfig(method="sequential", disturbance="state"))
                 print(f"default gait, sequential certificate: {seq.status}, r* = {seq.r_star:.4f} rad/s, "
                       f"{seq.to_dict().get('n_samples')} samples")
     if args.no_grid:

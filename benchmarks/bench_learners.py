@@ -30,7 +30,15 @@ from pathlib import Path
 import numpy as np
 
 from robustgait import load_robot
-from robustgait.config import CertifyConfig, Config, LearnerConfig, PreferenceModelConfig, SimConfig, to_dict
+from robustgait.config import (
+    CertifyConfig,
+    Config,
+    LearnerConfig,
+    PreferenceModelConfig,
+    SimConfig,
+    StudyConfig,
+    to_dict,
+)
 from robustgait.learn import ActionSpace, Outcome, make_learner, replay, score
 from robustgait.robots.spec import ACTION_FIELDS
 from robustgait.study.executors import LocalExecutor, WorkerSpec
@@ -85,7 +93,8 @@ def key(params: dict[str, float]) -> str:
 
 def evaluate_table(space: ActionSpace, path: Path, workers: int, method: str, samples: int,
                    step_cap: int) -> dict[str, dict]:
-    cfg = Config(sim=SimConfig(step_cap=step_cap), certify=CertifyConfig(method=method, n_samples=samples))  # type: ignore[arg-type]
+    cfg = Config(sim=SimConfig(step_cap=step_cap), study=StudyConfig(metric="robustness"),  # the table: r*
+                 certify=CertifyConfig(method=method, disturbance="state", n_samples=samples))  # type: ignore[arg-type]
     h = config_hash(cfg)
     rows = load_table(path, h)
     todo = [i for i in range(space.size) if key(space.value(i)) not in rows]

@@ -95,7 +95,7 @@ def one_gait(task: dict[str, Any]) -> dict[str, Any]:
     robot = load_robot("exo")
     gait = load_gait(task["gait"], robot)
     sim = SimConfig(n_threads=1)
-    base = CertifyConfig(**task.get("certify", {}))
+    base = CertifyConfig(**{"disturbance": "state", **task.get("certify", {})})
     gc0 = certify_gait(robot, gait, dataclasses.replace(base, method="uniform", n_samples=1), sim)
     if not gc0.ok or gc0.fixed_point is None:
         return {**task, "error": f"{gc0.status}: {gc0.reason}"}

@@ -67,8 +67,8 @@ def main() -> None:
     args = ap.parse_args()
     import ray
 
-    cfg = Config(study=StudyConfig(iterations=args.iterations, batch=args.batch),
-                 certify=CertifyConfig(method=args.method, n_samples=args.samples))
+    cfg = Config(study=StudyConfig(metric="robustness", iterations=args.iterations, batch=args.batch),
+                 certify=CertifyConfig(method=args.method, disturbance="state", n_samples=args.samples))
     machine = machine_ratio()
     print(f"machine: 1 vs 2 processes on pure CPU work: ratio {machine:.2f} (load {os.getloadavg()[0]:.1f})",
           flush=True)

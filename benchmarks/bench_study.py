@@ -1,17 +1,19 @@
 """Paper-size studies: ``--iterations`` × ``--batch`` (10 × 5) gaits of ``--robot`` (exo; a spec path such as
 examples/atalante.toml) on ``--domains`` (flat; multicontact searches the spec's ``[action_space.multicontact]``),
-for the robustness and the stability metric, then ``study compare`` of the two best gaits.
+for each of ``--metrics`` (default: push — the default study, ranked by J* — and the stability baseline; the paper's
+pair is ``--metrics robustness,stability``), then ``study compare`` of the two best gaits.
 
 Per study it prints: wall time (goal ≤ 10 min on 2 cores), unique gaits, the learner's best after every
-iteration (r*, steps), the best gait's r* and steps, and the default gait's (``Config().params``) r* with
-the same estimator and seed (the study's), then both re-certified with ``--compare-seeds`` fresh seeds.
+iteration (its certificate — J* or r*, the first study's — and steps), the best gait's certificate and steps, and
+the default gait's (``Config().params``) with the same estimator and seed (the first study's), then both
+re-certified with ``--compare-seeds`` fresh seeds.
 Studies live in ``--out`` (default benchmarks/data/bench_study/<metric>, or
 <robot>_<domains>_<metric> for another robot or domain graph); an existing one is resumed
 (the wall time is then that of the resumed part only, and is flagged), so a killed benchmark continues.
 
     python benchmarks/bench_study.py [--robot exo] [--domains flat|multicontact] [--iterations 10] [--batch 5]
         [--workers 2] [--method sequential] [--samples 200]
-        [--learner polar] [--metrics robustness,stability] [--compare-seeds 5] [--out DIR]
+        [--learner polar] [--metrics push,stability] [--compare-seeds 5] [--out DIR]
 """
 
 from __future__ import annotations
@@ -63,7 +65,7 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=200, help="uniform only")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--learner", default="polar")
-    ap.add_argument("--metrics", default="robustness,stability")
+    ap.add_argument("--metrics", default="push,stability")
     ap.add_argument("--compare-seeds", type=int, default=5)
     ap.add_argument("--out", type=Path, default=REPO / "benchmarks" / "data" / "bench_study")
     args = ap.parse_args()
@@ -75,8 +77,10 @@ def main() -> None:
     cfg0 = load_config(runs[0]["directory"]).config
     default = evaluate(robot, cfg0.params, cfg0)  # the study's estimator, seed and domain graph
     fresh = [args.seed + 1000 + i for i in range(args.compare_seeds)]
-    default_fresh = (recertify(robot, default.gait, cfg0.certify, fresh, cfg0.sim) if default.gait is not None
-                     and default.status == "certified" else [])
+    cert0 = cfg0.study_certify  # what the first study ranks by, for every gait below
+    name, unit = ("J*" if cert0.space == "push" else "r*"), cert0.unit
+    default_fresh = (recertify(robot, default.gait, cert0, fresh, cfg0.sim, cfg0.validate)
+                     if default.gait is not None and default.status == "certified" else [])
     for run in runs:
         st = run["status"]
         best = st["best"]
@@ -86,26 +90,26 @@ def main() -> None:
         for it in st["iterations"]:
             b = it["best"]
             if b:
-                print(f"  iteration {it['iteration'] + 1:2d}: best r* {b['r_star']:.4f}, {b['steps_taken']} steps, "
+                print(f"  iteration {it['iteration'] + 1:2d}: best {b['r_star']:.4f}, {b['steps_taken']} steps, "
                       f"{', '.join(f'{v:g}' for v in b['params'].values())}")
         if best:
             gait = load_gait(Path(run["directory"]) / best["gait_file"], robot)
-            r = np.array([c["r_star"] for c in recertify(robot, gait, cfg0.certify, fresh, cfg0.sim)])
-            print(f"  best gait: r* {best['r_star']:.4f} (study seed), {best['steps_taken']} steps; fresh seeds "
-                  f"{fresh[0]}–{fresh[-1]}: {r.mean():.4f} ± {r.std(ddof=1) if r.size > 1 else 0:.4f}")
+            r = np.array([c["r_star"] for c in recertify(robot, gait, cert0, fresh, cfg0.sim, cfg0.validate)])
+            print(f"  best gait: {best['r_star']:.4f} (study seed), {best['steps_taken']} steps; fresh seeds "
+                  f"{fresh[0]}–{fresh[-1]}: {name} {r.mean():.4f} ± {r.std(ddof=1) if r.size > 1 else 0:.4f} {unit}")
     rd = np.array([c["r_star"] for c in default_fresh]) if default_fresh else np.zeros(1)
     sd = rd.std(ddof=1) if rd.size > 1 else 0.0
-    print(f"\ndefault gait {cfg0.params.to_dict()}: {default.status}, {default.steps_taken} steps, r* "
+    print(f"\ndefault gait {cfg0.params.to_dict()}: {default.status}, {default.steps_taken} steps, {name} "
           f"{default.r_star:.4f} (study seed); fresh seeds: {rd.mean():.4f} ± {sd:.4f}")
     if len(runs) == 2:
         cmp = compare_studies(runs[0]["directory"], runs[1]["directory"],
                               CompareConfig(seeds=args.compare_seeds, seed_base=args.seed + 1000))
         print("\nstudy compare (A = " + runs[0]["metric"] + ", B = " + runs[1]["metric"] + "):")
-        for name, s in zip("AB", cmp["studies"], strict=True):
-            print(f"  {name}: {', '.join(f'{v:g}' for v in s['params'].values())}: r* {s['r_star_mean']:.4f} ± "
+        for ab, s in zip("AB", cmp["studies"], strict=True):
+            print(f"  {ab}: {', '.join(f'{v:g}' for v in s['params'].values())}: {name} {s['r_star_mean']:.4f} ± "
                   f"{s['r_star_sd']:.4f} [{', '.join(f'{v:.3f}' for v in s['r_star'])}], {s['steps_taken']} steps")
         w = cmp["winner"]
-        print("  higher mean r*: " + ("tie" if w is None else runs[w]["metric"]) +
+        print(f"  higher mean {name}: " + ("tie" if w is None else runs[w]["metric"]) +
               f" (per seed: {cmp['wins_per_seed'][0]} vs {cmp['wins_per_seed'][1]})")
         (args.out / "compare.json").write_text(json.dumps(cmp, indent=1))
     print(f"\nload average after: {os.getloadavg()}")

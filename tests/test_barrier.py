@@ -31,8 +31,8 @@ from robustgait.errors import RobustGaitError
 
 
 def uniform(**kw: object) -> CertifyConfig:
-    """The paper's estimator with these options."""
-    return CertifyConfig(method="uniform", **kw)  # type: ignore[arg-type]
+    """The paper's estimator with these options (a state certificate unless told)."""
+    return CertifyConfig(method="uniform", **{"disturbance": "state", **kw})  # type: ignore[arg-type]
 
 # ------------------------------------------------------------------------------ brute-force reference
 

@@ -15,7 +15,8 @@ from tests.conftest import EXO_GAIT, standing_gait
 
 
 def uniform(**kw):  # type: ignore[no-untyped-def]
-    return CertifyConfig(method="uniform", **kw)
+    """The paper's estimator (a state certificate unless told)."""
+    return CertifyConfig(method="uniform", **{"disturbance": "state", **kw})
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +31,8 @@ SMALL_SEQ = SequentialConfig(epsilon=0.2, first_round=16, round_size=16, explore
 
 @pytest.fixture(scope="module")
 def seq_cert(robot_gait):
-    return certify_gait(*robot_gait, CertifyConfig(method="sequential", r_max=1.0, seed=3, sequential=SMALL_SEQ))
+    return certify_gait(*robot_gait, CertifyConfig(method="sequential", disturbance="state", r_max=1.0, seed=3,
+                                                   sequential=SMALL_SEQ))
 
 
 def test_certificate_is_consistent(small_cert):
@@ -84,8 +86,8 @@ def test_paired_samples_across_gaits(robot_gait, seq_cert):
     # perturbations x − x* of round 1 and the verification's directions and radius fractions are the same
     robot, gait = robot_gait
     no_exploration = SequentialConfig(epsilon=0.2, first_round=16, explore=0, explore_after_failure=0, budget=60)
-    other = certify_gait(robot, gait.mirrored(robot), CertifyConfig(method="sequential", r_max=1.0, seed=3,
-                                                                     sequential=no_exploration))
+    other = certify_gait(robot, gait.mirrored(robot), CertifyConfig(method="sequential", disturbance="state",
+                                                                     r_max=1.0, seed=3, sequential=no_exploration))
     a, b = seq_cert.certificate, other.certificate
     assert not np.allclose(a.x_star, b.x_star)
     np.testing.assert_allclose(a.samples[:16] - a.x_star, b.samples[:16] - b.x_star, atol=1e-12)
@@ -145,8 +147,10 @@ def test_figures(tmp_path, small_cert, seq_cert):
 @pytest.mark.parametrize("kwargs, message", [
     ({"r_max": 0.0}, "r_max"), ({"r_max": -1.0}, "r_max"), ({"alpha": 0.0}, "alpha"), ({"alpha": 1.0}, "alpha"),
     ({"n_samples": 0}, "samples"), ({"seed": -1}, "seed"), ({"method": "grid"}, "method"),
-    ({"barrier": "hat"}, "barrier"), ({"method": "sequential", "sequential": SequentialConfig(budget=300)},
-                                      "budget: 300 samples cannot hold"),
+    ({"barrier": "hat"}, "barrier"),
+    ({"method": "sequential", "disturbance": "state", "sequential": SequentialConfig(budget=300)},
+     "budget: 300 samples cannot hold"),
+    ({"state": "velocity"}, "CertifyConfig.disturbance: a push certificate .J\\*. has no reduced state"),
 ])
 def test_bad_config(kwargs, message):
     with pytest.raises(RobustGaitError, match=message):
@@ -192,7 +196,7 @@ def test_cli_certify_gait_failure_is_a_result(capsys, tmp_path, extra, status, m
     out_json = tmp_path / "c.json"
     code, out, err = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--method", "uniform", "--samples", "4",
                           "-o", str(out_json), *extra)
-    assert code == 1 and err == "" and out.startswith(f"{status}: r* = 0") and message in out
+    assert code == 1 and err == "" and out.startswith(f"{status}: J* = 0") and message in out
     assert json.loads(out_json.read_text())["status"] == status
     code, out, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--json", *extra)
     assert code == 1 and json.loads(out)["status"] == status
@@ -201,11 +205,12 @@ def test_cli_certify_gait_failure_is_a_result(capsys, tmp_path, extra, status, m
 @pytest.mark.parametrize("extra, message", [
     (["--r-max", "0"], "argument --r-max: must satisfy 0 < x ≤ 10000 (got 0.0)"),
     (["--r-max", "-2"], "--r-max"), (["--alpha", "1.5"], "--alpha"),
-    (["--r-max", "50"], "argument --r-max: must satisfy 0 < x ≤ 10 rad/s when certifying omega (got 50)"),
+    (["--r-max", "50", "--state", "omega"],
+     "argument --r-max: must satisfy 0 < x ≤ 10 rad/s when certifying omega (got 50)"),
     (["--state", "momentum"], "argument --state: must be one of 'omega', 'centroidal', 'velocity' (got 'momentum')"),
     (["--set", "box"], "argument --set: must be one of 'ball', 'ellipsoid' (got 'box')"),
     (["--horizon", "0"], "argument --horizon: must satisfy 1 ≤ x ≤ 10 (got 0)"),
-    (["--disturbance", "kick"], "argument --disturbance: must be one of 'state', 'push' (got 'kick')"),
+    (["--disturbance", "kick"], "argument --disturbance: must be one of 'push', 'state' (got 'kick')"),
     (["--alpha", "0"], "--alpha"), (["--samples", "0"], "--samples"), (["--epsilon", "0"], "--epsilon"),
     (["--beta", "1"], "--beta"), (["--budget", "0"], "--budget"),
     (["--method", "grid"], "argument --method: must be one of 'sequential', 'uniform' (got 'grid')"),
@@ -256,7 +261,8 @@ def test_stored_gaits_keep_their_r_star_for_seed_0(request, name, method):
     robot = request.getfixturevalue("exo")
     gait = request.getfixturevalue("exo_gait" if name == "exo" else "exo_mc_gait")
     # the paper's certificate, named explicitly: the pins hold whatever the defaults become
-    gc = certify_gait(robot, gait, CertifyConfig(method=method, seed=0, state="omega", set="ball", horizon=1))
+    gc = certify_gait(robot, gait, CertifyConfig(method=method, seed=0, disturbance="state", state="omega", set="ball",
+                                                              horizon=1))
     assert gc.ok and gc.r_star == pytest.approx(PINNED[(name, method)], abs=1e-6)
 
 

@@ -26,6 +26,7 @@ from robustgait.config import (
     to_dict,
     with_overrides,
 )
+from robustgait.errors import RobustGaitError
 from tests.conftest import EXO_GAIT
 
 if sys.version_info >= (3, 11):
@@ -60,9 +61,13 @@ def test_errors_name_the_field_and_the_limit():
         (lambda: CertifyConfig(sequential={"budget": 0}), "CertifyConfig.sequential.budget: must satisfy 1 ≤ x ≤ "
                                                           "10000 (got 0)"),
         (lambda: SimConfig(chunk=3), "SimConfig.chunk: unknown key (known: switching, min_switch_tau"),
-        (lambda: CertifyConfig(sequential=SequentialConfig(budget=300)),
+        (lambda: CertifyConfig(disturbance="state", sequential=SequentialConfig(budget=300)),
          "CertifyConfig.sequential.budget: 300 samples cannot hold the first round (200) and one verification batch "
          "(183 for epsilon = 0.02, beta = 0.05)"),
+        (lambda: CertifyConfig(sequential=SequentialConfig(budget=200)),  # J*: the push certificate's first round
+         "CertifyConfig.sequential.budget: 200 samples cannot hold the first round (50) and one verification batch"),
+        (lambda: CertifyConfig(horizon=2), "CertifyConfig.disturbance: a push certificate (J*) has no reduced state, "
+                                           "set or horizon (got state omega, set ball, horizon 2)"),
     ]
     for make, message in cases:
         with pytest.raises(ConfigError) as err:
@@ -142,6 +147,33 @@ def test_flags_override_the_file_and_the_overrides(tmp_path, capsys):
     cfg = config_from(args)
     assert (cfg.certify.n_samples, cfg.certify.alpha, cfg.certify.sequential.spread) == (12, 0.3, 0.3)
     assert to_dict(cfg)["sim"] == to_dict(Config())["sim"]  # what the file does not set keeps its default
+
+
+def test_naming_a_state_field_asks_for_a_state_certificate(tmp_path):
+    """J* is the default; --state / --set / --horizon (or a file's [certify] state) without the disturbance in the
+    same source mean a state certificate and a study ranked by it; naming the disturbance or the metric wins."""
+    from robustgait.cli import build_parser
+    from robustgait.cli.options import config_from
+
+    def cfg(*argv: str) -> Config:
+        return config_from(build_parser().parse_args(["study", "run", "d", "--robot", "exo", *argv]))
+
+    assert (Config().certify.disturbance, Config().study.metric) == ("push", "push")
+    c = cfg("--state", "velocity")
+    assert (c.certify.disturbance, c.certify.state, c.study.metric) == ("state", "velocity", "robustness")
+    assert cfg("--horizon", "2", "--metric", "stability").study.metric == "stability"
+    assert cfg("--set", "ellipsoid").study_certify.set == "ellipsoid"
+    assert cfg("--override", "certify.state=centroidal").certify.disturbance == "state"
+    assert cfg("--method", "uniform").certify.disturbance == "push"  # not a state field
+    path = tmp_path / "c.toml"
+    path.write_text('[certify]\nstate = "centroidal"\n')
+    assert cfg("--config", str(path)).study_certify.state == "centroidal"
+    with pytest.raises(RobustGaitError, match="push ranks gaits by J"):  # both named: a conflict, refused
+        cfg("--state", "velocity", "--metric", "push")
+    with pytest.raises(RobustGaitError, match=r"a push certificate \(J\*\) has no reduced state"):
+        config_from(build_parser().parse_args(["certify", str(EXO_GAIT), "--robot", "exo", "--state", "velocity",
+                                               "--disturbance", "push"]))
+    assert with_overrides(Config(), {"certify": {"state": "velocity"}}).certify.disturbance == "state"
 
 
 @pytest.mark.parametrize("text, message", [

@@ -27,12 +27,12 @@ X_STAR = np.array([0.4, 0.2, 0.3])
 
 def seq(seed: int = 0, beta: float = 0.05, **sequential: object) -> CertifyConfig:
     """The sequential estimator with this seed, β and options."""
-    return CertifyConfig(method="sequential", seed=seed, beta=beta,
+    return CertifyConfig(method="sequential", seed=seed, beta=beta, disturbance="state",
                          sequential=SequentialConfig(**sequential))  # type: ignore[arg-type]
 
 
 def uniform(**kw: object) -> CertifyConfig:
-    return CertifyConfig(method="uniform", **kw)  # type: ignore[arg-type]
+    return CertifyConfig(method="uniform", **{"disturbance": "state", **kw})  # type: ignore[arg-type]
 
 
 def test_verification_sizes_spend_beta() -> None:

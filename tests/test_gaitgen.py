@@ -114,11 +114,13 @@ def _walks_like_an_exoskeleton(robot, gait, max_speed_error=0.03):
 @pytest.mark.slow
 def test_default_gait_walks_and_gets_a_certificate(exo, default):
     _walks_like_an_exoskeleton(exo, default.gait)
-    cert = certify_gait(exo, default.gait, CertifyConfig(method="uniform", n_samples=50))
+    cert = certify_gait(exo, default.gait, CertifyConfig(method="uniform", disturbance="state", n_samples=50))
     assert cert.ok and np.linalg.norm(cert.fixed_point.omega) <= 1.0 and cert.r_star > 0
     # the sequential estimator, small: ε = 0.2 (17 verification samples), 40 exploration samples
-    seq = certify_gait(exo, default.gait, CertifyConfig(method="sequential", sequential=SequentialConfig(
-        epsilon=0.2, first_round=50, round_size=20, explore=40, budget=300)))
+    seq = certify_gait(exo, default.gait, CertifyConfig(method="sequential", disturbance="state",
+                                                        sequential=SequentialConfig(epsilon=0.2, first_round=50,
+                                                                                    round_size=20, explore=40,
+                                                                                    budget=300)))
     c = seq.certificate
     assert seq.ok and c is not None and 0 < c.r_star <= cert.r_star  # round 1 is the uniform draw above
     assert c.rounds[0].r_hat == cert.r_star and c.n_inside >= 17
@@ -202,7 +204,7 @@ def test_atalante_generated_gait_walks(tmp_path, capsys):
     robot = load_robot(ATALANTE_SPEC)
     gait = load_gait(out, robot)
     _walks_like_an_exoskeleton(robot, gait)
-    cert = certify_gait(robot, gait, CertifyConfig(method="uniform", n_samples=20))
+    cert = certify_gait(robot, gait, CertifyConfig(method="uniform", disturbance="state", n_samples=20))
     assert np.linalg.norm(cert.fixed_point.omega) <= 1.0
 
 
@@ -220,7 +222,8 @@ def test_atalante_multicontact_gait_walks_and_is_certified():
     assert w.steps_taken == 50 and not w.fell
     assert all(abs(e.tau - 1.0) < 0.02 for e in w.events)  # no early heel strike
     assert w.mean_speed == pytest.approx(0.15 / 1.0, rel=0.05)
-    cert = certify_gait(robot, res.gait, CertifyConfig(method="uniform", n_samples=24, r_max=1.0, seed=3))
+    cert = certify_gait(robot, res.gait, CertifyConfig(method="uniform", disturbance="state", n_samples=24, r_max=1.0,
+                                                          seed=3))
     assert cert.ok, cert.reason
 
 

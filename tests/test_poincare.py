@@ -37,7 +37,7 @@ def test_horizon_maps_k_steps_and_a_fall_in_any_is_a_fall(step_map):
     fp = step_map.fixed_point
     x = fp.omega + np.array([[0.05, -0.03, 0.02], [4.0, 0.0, 0.0]])
     one = step_map(x)
-    with ReturnMap(step_map.robot, step_map.gait, CertifyConfig(horizon=3)) as p3:
+    with ReturnMap(step_map.robot, step_map.gait, CertifyConfig(disturbance="state", horizon=3)) as p3:
         p3.set_fixed_point(fp)
         three = p3(x)
         path = p3.last_path

@@ -69,7 +69,8 @@ def fixed_point(exo, exo_gait):
 
 
 def _state(name, exo, exo_gait, fp, **kw):
-    return ReducedState.at(name, exo, fp.qpos, fp.qvel, exo_gait.stance, CertifyConfig(**kw))
+    cfg = CertifyConfig(**{"disturbance": "state", **kw})
+    return ReducedState.at(name, exo, fp.qpos, fp.qvel, exo_gait.stance, cfg)
 
 
 def test_holonomic_reconstruction_is_the_least_joint_velocity_change(exo, exo_gait, fixed_point):

@@ -70,7 +70,7 @@ def test_fallback_and_volume_ratio() -> None:
 def test_an_ellipsoid_certifies_what_no_ball_can() -> None:
     """The ball's DTBF condition fails near x* along the stretched direction (‖A δ‖ > ‖δ‖): r* is tiny; in the
     Lyapunov ellipsoid's coordinates the same map contracts and the whole sampled ball is certified."""
-    cfg = CertifyConfig(r_max=1.0, sequential=SequentialConfig(budget=1500))
+    cfg = CertifyConfig(disturbance="state", r_max=1.0, sequential=SequentialConfig(budget=1500))
     ball = certify_map_sequential(linear, X_STAR, cfg)
     sh = Shape(lyapunov_shape(A))
     t = sh.transform

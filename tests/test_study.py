@@ -139,10 +139,15 @@ def test_a_push_study_written_before_chunked_verification_keeps_whole_batches(tm
     assert load_config(tmp_path).config.certify.push.verify_chunk == 5
 
 
-def test_push_metric_certifies_pushes():
+def test_push_metric_certifies_pushes_and_robustness_states():
     c = Config(study=StudyConfig(metric="push"))
     assert c.study_certify.disturbance == "push" and c.study_certify.unit == "N s"
-    assert Config().study_certify == Config().certify
+    assert Config().study_certify == Config().certify and Config().study.metric == "push"  # J*: the default
+    r = Config(study=StudyConfig(metric="robustness"))
+    assert r.study_certify.disturbance == "state" and r.study_certify.unit == "rad/s"
+    with pytest.raises(RobustGaitError, match=r"Config.study.metric: push ranks gaits by J\*, which has no reduced "
+                       r"state, set or horizon \(certify: state velocity"):
+        Config(certify=CertifyConfig(disturbance="state", state="velocity"))
 
 
 def test_studies_use_the_sequential_estimator_by_default():
@@ -150,7 +155,7 @@ def test_studies_use_the_sequential_estimator_by_default():
 
 
 def test_study_config_rejects_bad_values():
-    with pytest.raises(RobustGaitError, match=r"StudyConfig\.metric: must be one of 'robustness', 'stability', 'push'"):
+    with pytest.raises(RobustGaitError, match=r"StudyConfig\.metric: must be one of 'push', 'robustness', 'stability'"):
         StudyConfig(metric="speed")  # type: ignore[arg-type]
     with pytest.raises(RobustGaitError, match=r"batch: must satisfy 2 ≤ x ≤ 100 \(got 1\)"):
         StudyConfig(batch=1)

@@ -114,7 +114,7 @@ def test_latency_offsets_shift_the_command():
 
 @pytest.fixture(scope="module")
 def small_cert(exo, exo_gait):
-    return certify_gait(exo, exo_gait, CertifyConfig(method="uniform", n_samples=20))
+    return certify_gait(exo, exo_gait, CertifyConfig(method="uniform", disturbance="state", n_samples=20))
 
 
 @pytest.fixture(scope="module")
@@ -289,7 +289,7 @@ def test_gait_tiles_are_a_real_image(tmp_path, exo, exo_gait):
 # ---- multi-contact gaits: a step is the previous leg's double support, then single support to heel strike -----
 @pytest.fixture(scope="module")
 def mc_validator(exo, exo_mc_gait):
-    cert = certify_gait(exo, exo_mc_gait, CertifyConfig(method="uniform", n_samples=8))
+    cert = certify_gait(exo, exo_mc_gait, CertifyConfig(method="uniform", disturbance="state", n_samples=8))
     with Validator(exo, exo_mc_gait, ValidateConfig(trials=4, steps_after=2), certificate=cert) as v:
         yield v
 

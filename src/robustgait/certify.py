@@ -285,7 +285,7 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         if push:
             assert vcfg is not None
             coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
-            pushes = PushMap(pmap.engine, fp, gait.stance, vcfg, cfg.push.steps)
+            pushes = PushMap(pmap.engine, fp, vcfg, cfg.push.steps)
             cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}")
             steps = pushes.physics_steps
         else:

@@ -24,10 +24,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.config import ValidateConfig
-from robustgait.errors import RobustGaitError
+from robustgait.domains import step_segments
 from robustgait.poincare import FixedPoint
 from robustgait.rotations import quat_to_mat
-from robustgait.sim.engine import StepEngine, StepInputs
+from robustgait.sim.engine import StepEngine
+from robustgait.sim.trials import pushed_first_step, simulate_trials
 
 FloatArray = NDArray[np.float64]
 
@@ -60,16 +61,19 @@ def push_series(impulse: FloatArray, phase: FloatArray, heading: float, duration
 
 class PushMap:
     """J (N, 2) → (N, 2): (0, 0) if the pushed robot did not fall within the pushed step and ``steps`` more, NaN if
-    it fell (module docstring). ``engine``: the gait's engine; ``fp``: its fixed point (canonical stance
-    ``stance``)."""
+    it fell (module docstring). ``engine``: the gait's engine; ``fp``: its fixed point (a section state that starts a
+    step of the gait's stance). The walk is the validation's (:func:`robustgait.sim.trials.simulate_trials`): a
+    multi-contact step is the previous leg's rolling double support then the single support, and the push's window
+    spans the whole step, as ``validate --disturbance push``'s."""
 
-    def __init__(self, engine: StepEngine, fp: FixedPoint, stance: str, validate: ValidateConfig, steps: int):
-        if len(engine.graph) != 1:
-            raise RobustGaitError("a push certificate needs a one-domain (flat-foot) gait")
-        self.engine, self.fp, self.stance, self.steps = engine, fp, stance, steps
+    def __init__(self, engine: StepEngine, fp: FixedPoint, validate: ValidateConfig, steps: int):
+        self.engine, self.fp, self.steps = engine, fp, steps
         self.validate = validate
         r = quat_to_mat(fp.qpos[3:7])
         self.heading = float(math.atan2(r[1, 0], r[0, 0]))
+        self.step_duration = next(iter(engine.gaits.values())).step_duration
+        stance = next(iter(engine.gaits))
+        self.window = sum(engine.horizons[d] for _, d in step_segments(stance, len(engine.graph)))
         self.physics_steps = 0
         self.fall_step: list[NDArray[np.int64]] = []  # per call: the 1-based step each sample fell in (0: none)
 
@@ -78,23 +82,12 @@ class PushMap:
         n = j.shape[0]
         eng, cfg = self.engine, self.validate
         phase = push_phase(j, *cfg.push_phase)
-        wrench = push_series(j, phase, self.heading, cfg.push_duration, eng.period, eng.robot.dt, eng.horizon)
+        wrench = push_series(j, phase, self.heading, cfg.push_duration, self.step_duration, eng.robot.dt,
+                             self.window)
         qpos, qvel = np.tile(self.fp.qpos, (n, 1)), np.tile(self.fp.qvel, (n, 1))
-        alive = np.ones(n, dtype=bool)
-        fall_step = np.zeros(n, dtype=np.int64)
-        stance = self.stance
-        for k in range(1 + self.steps):
-            idx = np.flatnonzero(alive)
-            if idx.size == 0:
-                break
-            inputs = StepInputs(base_wrench=wrench[idx]) if k == 0 else None
-            b = eng.step(qpos[idx], qvel[idx], stance, inputs=inputs)
-            self.physics_steps += b.physics_steps
-            fall_step[idx[b.fell]] = k + 1
-            alive[idx[b.fell]] = False
-            ok = ~b.fell
-            qpos[idx[ok]], qvel[idx[ok]] = b.qpos[ok], b.qvel[ok]
-            stance = "left" if stance == "right" else "right"
+        alive, _, fall_step, _, physics = simulate_trials(eng, qpos, qvel, 1 + self.steps, 1,
+                                                          pushed_first_step(eng, wrench), first_at=0)
+        self.physics_steps += physics
         if progress is not None:
             progress(n)
         self.fall_step.append(fall_step)

@@ -101,7 +101,7 @@ def _study_status(args: argparse.Namespace) -> int:
         print(json.dumps(st, allow_nan=False))
         return 0
     print_summary(args.dir)
-    print(f"{'iteration':>9}  {'best r*':>8}  {'steps':>5}  best gait")
+    print(f"{'iteration':>9}  {'best ' + _name(st):>8}  {'steps':>5}  best gait")
     for it in st["iterations"]:
         b = it["best"]
         if b is None:
@@ -198,7 +198,8 @@ def _demo(args: argparse.Namespace) -> int:
     if not (d / "study.json").exists():
         create_study(d, DEMO_ROBOT, config)
         s = config.study
-        print(f"demo: a robustness study on the shipped exoskeleton ({s.iterations} iterations × {s.batch} gaits) "
+        what = {"push": "push robustness (J*)", "robustness": "robustness (r*)", "stability": "stability"}[s.metric]
+        print(f"demo: a study of {what} on the shipped exoskeleton ({s.iterations} iterations × {s.batch} gaits) "
               f"in {d}", flush=True)
     else:
         print(f"demo: resuming the study in {d}", flush=True)
@@ -248,6 +249,6 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     va.add_argument("--json", action="store_true", help="print one JSON object: the summary of each kind")
     va.add_argument("--quiet", action="store_true", help="no progress bar")
 
-    dm = command(sub, "demo", "the main job on shipped defaults: a small robustness study on exo + report", _demo,
-                 {"--workers": "run.workers"})
+    dm = command(sub, "demo", "the main job on shipped defaults: a small study of push robustness (J*) on exo + report",
+                 _demo, {"--workers": "run.workers"})
     dm.add_argument("--dir", default=DEMO_DIRECTORY, help=f"study directory (default ./{DEMO_DIRECTORY})")

@@ -46,8 +46,10 @@ def _validate(args: argparse.Namespace) -> int:
 
     name = "J*" if c.space == "push" else "r*"
     energy = "" if c.energy is None else f", E* = {c.energy:.4g} J"
+    kind = "disk of push impulses" if c.space == "push" else (f"{c.space} {c.set}, horizon {c.horizon}, {c.map} "
+                                                               "map")
     print(f"{robot.name}: {name} = {c.r_star:.4g} {R_MAX_UNIT[c.space]}{energy} ({'closed' if c.attained else 'open'} "
-          f"{c.space} {c.set}, horizon {c.horizon}, {c.map} map, certificate {c.source}); {cfg.trials} trials per "
+          f"{kind}, certificate {c.source}); {cfg.trials} trials per "
           f"kind, seed {cfg.seed}, success = no fall in {cfg.steps_after} steps after the first switching event")
     inside = "pushes |J| ≤ J* that fell" if c.space == "push" else "falls inside the set"
     print(f"{'kind':<9} {'success [95% CI]':<24} {'half fail at (± s.e.)':<30} {inside:<26} "

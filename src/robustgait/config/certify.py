@@ -15,7 +15,7 @@ Frame = Literal["heading", "world", "body"]
 Reconstruction = Literal["holonomic", "angular-only"]
 State = Literal["omega", "centroidal", "velocity"]
 CertifiedSet = Literal["ball", "ellipsoid"]
-CertifyDisturbance = Literal["state", "push"]
+CertifyDisturbance = Literal["push", "state"]
 
 # r_max when unset: the paper's 2 rad/s for ``omega``; for the energy states a ball of twice-kinetic-energy radius
 # (√J) and for pushes an impulse (N s) — both well beyond what the exo gaits absorb (docs/certificate.md)
@@ -111,8 +111,9 @@ class CertifyConfig:
     horizon: Annotated[Int, Doc("steps k between a sample and the iterate the DTBF condition is checked on (no fall "
                                 "within the k steps)", ge=1, le=10)] = 1
     disturbance: Annotated[CertifyDisturbance, Doc(
-        "what is certified: state (a ball of perturbed states, r*) or push (a disk of push impulses at the "
-        "validation's push duration and phases, J*)")] = "state"
+        "what is certified: push (a disk of push impulses at the validation's push duration and phases, J*: the "
+        "choice that ranks gaits by their push robustness, docs/validation.md) or state (a set of perturbed "
+        "states, r*; setting state, set or horizon without disturbance implies it)")] = "push"
     n_samples: Annotated[Int, Doc("uniform: number of sampled perturbations N", ge=1, le=10_000)] = 200
     r_max: Annotated[Float | None, Doc(
         "radius of the sampled ball (unset: 2 rad/s for omega, 10 √J for centroidal and velocity, 100 N s for push)",
@@ -144,6 +145,10 @@ class CertifyConfig:
                                    explore_after_failure=p.explore_after_failure, verify_chunk=p.verify_chunk)
 
     def __post_init__(self) -> None:
+        if self.disturbance == "push" and self.state_choice() != ("omega", "ball", 1):
+            raise FieldProblem("disturbance", "a push certificate (J*) has no reduced state, set or horizon (got "
+                               f"state {self.state}, set {self.set}, horizon {self.horizon}); for a certificate of "
+                               "states set disturbance = state")
         if self.r_max is not None and self.r_max > R_MAX_LIMIT[self.space]:
             raise FieldProblem("r_max", f"must satisfy 0 < x ≤ {R_MAX_LIMIT[self.space]:g} {R_MAX_UNIT[self.space]} "
                                f"when certifying {self.space} (got {self.r_max:g})")
@@ -153,6 +158,10 @@ class CertifyConfig:
             raise FieldProblem("sequential.budget", f"{seq.budget} samples cannot hold the first round "
                                f"({seq.first_round}) and one verification batch ({need - seq.first_round} for "
                                f"epsilon = {seq.epsilon:g}, beta = {self.beta:g})")
+
+    def state_choice(self) -> tuple[str, str, int]:
+        """(state, set, horizon): what a state certificate certifies."""
+        return self.state, self.set, self.horizon
 
     @property
     def space(self) -> str:

@@ -10,7 +10,7 @@ from typing import Annotated, Literal
 from robustgait.config.base import Bool, Doc, Float, Int, Str, config
 from robustgait.config.certify import SEED_LIMIT
 
-Metric = Literal["robustness", "stability", "push"]
+Metric = Literal["push", "robustness", "stability"]
 LearnerName = Literal["polar", "eubo", "random"]
 Hyperparameters = Literal["fixed", "fit"]
 ExecutorName = Literal["local", "ray"]
@@ -60,12 +60,13 @@ class LearnerConfig:
 
 @config
 class StudyConfig:
-    """A study: the preference oracle (``robustness``: r* among gaits that walk the step cap; ``push``: J* among
-    them; ``stability``: steps only), the learner, the budget (iterations × batch gaits), the learner's seed
-    (iteration k is seeded from (seed, k); the certificates' seed is ``certify.seed``), where it is stored."""
+    """A study: the preference oracle (``push``: J* among gaits that walk the step cap; ``robustness``: the state
+    certificate r* among them; ``stability``: steps only), the learner, the budget (iterations × batch gaits), the
+    learner's seed (iteration k is seeded from (seed, k); the certificates' seed is ``certify.seed``), where it is
+    stored."""
 
-    metric: Annotated[Metric, Doc("preference oracle: r* among gaits that walk the step cap (robustness), J* (push: "
-                                  "the push certificate), or steps only (stability)")] = "robustness"
+    metric: Annotated[Metric, Doc("preference oracle: J* (push: the push certificate) among gaits that walk the step "
+                                  "cap, r* (robustness: the state certificate), or steps only (stability)")] = "push"
     learner: Annotated[LearnerName, Doc("polar (Thompson sampling), eubo (qEUBO) or random")] = "polar"
     iterations: Annotated[Int, Doc("batches", ge=1, le=1000)] = 10
     batch: Annotated[Int, Doc("gaits per batch (a batch is ranked: at least 2)", ge=2, le=100)] = 5

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import matplotlib
@@ -80,6 +81,8 @@ def plot_certificate(cert: Certificate, path: str | Path, *, title: str = "", co
     sample's distance by round, r̂ against samples used.
     """
     check_output(path, "plot")
+    if coordinates is not None and coordinates.space == "push":
+        return _plot_push_certificate(cert, path, title)
     z = np.asarray(cert.samples)
     k = z.shape[1]
     zs = np.asarray(cert.x_star)
@@ -146,6 +149,53 @@ def plot_certificate(cert: Certificate, path: str | Path, *, title: str = "", co
     return _save(fig, path)
 
 
+def _plot_push_certificate(cert: Certificate, path: str | Path, title: str) -> Path:
+    """J* (``certify --disturbance push``): the sampled impulses in the heading frame (walked or fell) with the
+    certified disk; the fraction that fell per band of |J| (95 % Wilson intervals); the rounds and Ĵ."""
+    from robustgait.validate.stats import wilson_interval
+
+    j = np.asarray(cert.samples)
+    size = np.linalg.norm(j, axis=1)
+    fell = np.asarray(cert.fell, dtype=bool)
+    r = cert.r_star
+    fig = plt.figure(figsize=(14, 10))
+    ax = fig.add_subplot(2, 2, 1)
+    ax.scatter(j[~fell, 0], j[~fell, 1], s=9, c=COLORS["satisfies"], label=f"walked on ({int((~fell).sum())})")
+    ax.scatter(j[fell, 0], j[fell, 1], s=14, c=COLORS["fell"], marker="x", label=f"fell ({int(fell.sum())})")
+    t = np.linspace(0, 2 * np.pi, 200)
+    ax.plot(r * np.cos(t), r * np.sin(t), color="tab:blue", label=f"J* = {r:.3g} N s")
+    ax.plot(0, 0, "k+", ms=12)
+    lim = cert.r_max * 1.02
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
+    ax.set_aspect("equal")
+    ax.set_xlabel("J_x: forward (heading frame) [N s]")
+    ax.set_ylabel("J_y: to the left [N s]")
+    ax.legend(fontsize=8, loc="upper right")
+    ax.set_title("pushes sampled (the robot walks along +J_x)", fontsize=9)
+    ax = fig.add_subplot(2, 2, 2)
+    edges = np.linspace(0.0, cert.r_max, 11)
+    for lo, hi in itertools.pairwise(edges):
+        m = (size >= lo) & (size < hi)
+        if m.any():
+            k, n = int(fell[m].sum()), int(m.sum())
+            low, high = wilson_interval(k, n)
+            ax.bar((lo + hi) / 2, k / n, width=0.9 * (hi - lo), color="tab:red", alpha=0.35)
+            ax.errorbar((lo + hi) / 2, k / n, yerr=[[max(0.0, k / n - low)], [max(0.0, high - k / n)]], color="k",
+                        lw=0.8, capsize=2)
+            ax.text((lo + hi) / 2, high + 0.02, str(n), ha="center", fontsize=7)
+    ax.axvline(r, color="tab:blue", label=f"J* = {r:.3g} N s")
+    ax.axhline(cert.violation_bound, color="tab:blue", ls=":", lw=0.8,
+               label=f"certified bound {100 * cert.violation_bound:.3g} % below J*")
+    ax.set_ylim(0, 1.1)
+    ax.set_xlabel("|J| [N s]")
+    ax.set_ylabel("fraction that fell (number of pushes above)")
+    ax.legend(fontsize=8, loc="upper left")
+    _plot_rounds(cert, fig.add_subplot(2, 2, 3), fig.add_subplot(2, 2, 4), name="J")
+    fig.suptitle(title or f"Push certificate ({cert.method}): J* = {r:.4g} N s, N = {cert.n_samples}")
+    return _save(fig, path)
+
+
 def _plot_distances(cert: Certificate, ax: Axes) -> None:
     """Image distance p = ‖P(x) − x*‖ against the sample's d (falls on top), with the DTBF boundary at r*."""
     d = np.linalg.norm(np.asarray(cert.samples) - np.asarray(cert.x_star), axis=1)
@@ -169,8 +219,9 @@ def _plot_distances(cert: Certificate, ax: Axes) -> None:
 ROUND_COLORS = {"uniform": "tab:gray", "explore": "tab:purple", "verify": "tab:cyan"}
 
 
-def _plot_rounds(cert: Certificate, ax_d: Axes, ax_r: Axes) -> None:
-    """Distances by round (ax_d) and r̂ against samples used (ax_r)."""
+def _plot_rounds(cert: Certificate, ax_d: Axes, ax_r: Axes, name: str = "r") -> None:
+    """Distances by round (ax_d) and r̂ (``name`` r, or J for pushes) against samples used (ax_r)."""
+    hat, star = f"{name}\u0302", f"{name}*"
     d = np.linalg.norm(np.asarray(cert.samples) - np.asarray(cert.x_star), axis=1)
     idx = np.arange(d.size)
     which = cert.round_of_sample
@@ -183,7 +234,7 @@ def _plot_rounds(cert: Certificate, ax_d: Axes, ax_r: Axes) -> None:
     used = np.array([0] + [rd.samples_used for rd in cert.rounds])
     r_hat = np.array([cert.r_max] + [rd.r_hat for rd in cert.rounds])
     for ax in (ax_d, ax_r):
-        ax.step(used, r_hat, where="post", color="tab:blue", label="r̂ after each round")
+        ax.step(used, r_hat, where="post", color="tab:blue", label=f"{hat} after each round")
         ax.axhline(cert.r_star, color="tab:blue", ls=":", lw=0.8)
         ax.set_yscale("log")
         ax.set_xlabel("samples used")
@@ -191,13 +242,13 @@ def _plot_rounds(cert: Certificate, ax_d: Axes, ax_r: Axes) -> None:
         if rd.kind == "verify":
             ax_r.plot(rd.samples_used, rd.r_hat, "o" if rd.passed else "x", color="tab:green" if rd.passed
                       else "tab:red", ms=8, label=f"verification {'passed' if rd.passed else 'failed'}")
-    ax_d.set_ylabel("‖x_i − x*‖ (colour: round kind)")
+    ax_d.set_ylabel("|J_i| [N s] (colour: round kind)" if name == "J" else "‖x_i − x*‖ (colour: round kind)")
     ax_d.legend(fontsize=8, loc="upper right")
-    ax_r.set_ylabel("r̂")
+    ax_r.set_ylabel(hat)
     handles, labels = ax_r.get_legend_handles_labels()
     uniq = dict(zip(labels, handles, strict=True))
     ax_r.legend(uniq.values(), uniq.keys(), fontsize=8)
-    ax_r.set_title(f"{cert.method}: r* = {cert.r_star:.4g}, bound {100 * cert.violation_bound:.3g}% at "
+    ax_r.set_title(f"{cert.method}: {star} = {cert.r_star:.4g}, bound {100 * cert.violation_bound:.3g}% at "
                    f"{100 * cert.confidence:g}%", fontsize=9)
 
 

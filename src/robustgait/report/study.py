@@ -85,7 +85,7 @@ def plot_history(status: dict[str, Any], path: Path) -> Path:
     a2.plot([i for i, _ in observed], [b["steps_taken"] for _, b in observed], "--", color="0.4", lw=1.2)
     for name, c in OUTCOME_COLORS.items():
         a1.scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=name.replace("_", " "))
-    a1.set_ylabel(f"{'J*' if status.get('certificate') == 'push' else 'r*'} [{status.get('unit', 'rad/s')}]")
+    a1.set_ylabel(f"{cert_name(status)} [{status.get('unit', 'rad/s')}]")
     a1.legend(fontsize=8, loc="best")
     cap = status["config"]["sim"]["step_cap"]
     a2.axhline(cap, color="0.6", ls="--", lw=0.8)
@@ -96,9 +96,16 @@ def plot_history(status: dict[str, Any], path: Path) -> Path:
     return _save(fig, path)
 
 
+def cert_name(status: dict[str, Any]) -> str:
+    """J* (a push study's certificate) or r*."""
+    return "J*" if status.get("certificate") == "push" else "r*"
+
+
 def plot_explored(status: dict[str, Any], path: Path) -> Path:
-    """Every pair of parameters: the evaluated gaits coloured by outcome (marker size ∝ r*)."""
+    """Every pair of parameters: the evaluated gaits coloured by outcome (marker size ∝ r* or J*, the largest the
+    study's largest)."""
     trials = [t for t in status["trials"] if t["state"] == "COMPLETE" and t["reused_from"] is None]
+    top = max((float(t["r_star"] or 0) for t in trials), default=0.0) or 1.0
     names = list(trials[0]["params"]) if trials else []
     pairs = list(combinations(range(len(names)), 2))
     cols = min(3, max(1, len(pairs)))
@@ -109,7 +116,7 @@ def plot_explored(status: dict[str, Any], path: Path) -> Path:
         for t in trials:
             st = t["status"]
             ax.scatter(t["params"][names[i]], t["params"][names[j]], c=OUTCOME_COLORS.get(st, "k"),
-                       marker=OUTCOME_MARKERS.get(st, "o"), s=20 + 120 * float(t["r_star"] or 0), alpha=0.6)
+                       marker=OUTCOME_MARKERS.get(st, "o"), s=20 + 120 * float(t["r_star"] or 0) / top, alpha=0.6)
         if best is not None:
             ax.scatter(best["params"][names[i]], best["params"][names[j]], s=260, facecolors="none",
                        edgecolors="tab:blue", linewidths=2)
@@ -121,7 +128,7 @@ def plot_explored(status: dict[str, Any], path: Path) -> Path:
         axes.ravel()[0].scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=name.replace("_", " "))
     axes.ravel()[0].scatter([], [], s=120, facecolors="none", edgecolors="tab:blue", label="best")
     axes.ravel()[0].legend(fontsize=7)
-    fig.suptitle("Explored gait parameters (marker size ∝ r*)")
+    fig.suptitle(f"Explored gait parameters (marker size ∝ {cert_name(status)})")
     return _save(fig, path)
 
 
@@ -291,7 +298,7 @@ def _validation_parts(d: Path, status: dict[str, Any], out: Path, notes: list[st
             f"<p>{cfg['trials']} trials per gait, seed {cfg['seed']} (the same disturbances for every gait), success "
             f"= no fall in {cfg['steps_after']} steps after the first switching event; certified gaits start on "
             "their fixed point, the others from their initial state.</p>"
-            + _table(rows, ["gait", "study outcome", "r*", "steps", "success [95 % CI]",
+            + _table(rows, ["gait", "study outcome", cert_name(status), "steps", "success [95 % CI]",
                             f"half fail at ({s['size']})"]))
         if s["study"]["unique_gaits"] != status["unique_gaits"]:
             notes.append(f"The {kind} validation covers the {s['study']['unique_gaits']} unique gaits the study had "
@@ -315,6 +322,7 @@ def _certify_text(cfg: dict[str, Any]) -> str:
 def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
     best = status["best"]
     cfg = status["config"]
+    name = cert_name(status)
     summary = [["study", status["directory"]], ["robot", status["robot"]], ["metric", status["metric"]],
                ["learner", status["learner"]], ["seed", status["seed"]],
                ["budget", f"{cfg['study']['iterations']} iterations × {cfg['study']['batch']} gaits"],
@@ -323,13 +331,13 @@ def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
                ["certificate", _certify_text(cfg)]]
     if best is not None:
         summary += [["best gait (learner)", ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())],
-                    ["best r* / steps", f"{_fmt(best['r_star'], 4)} {status.get('unit', 'rad/s')} / "
+                    [f"best {name} / steps", f"{_fmt(best['r_star'], 4)} {status.get('unit', 'rad/s')} / "
                                         f"{best['steps_taken']}"],
                     ["best gait file", best["gait_file"] or "—"]]
     obs = status["best_observed"]
     if obs is not None and (best is None or obs["trial"] != best["trial"]):
         summary += [["best evaluated gait", ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
-                     + f": r* {_fmt(obs['r_star'], 4)} {status.get('unit', 'rad/s')}, {obs['steps_taken']} steps "
+                     + f": {name} {_fmt(obs['r_star'], 4)} {status.get('unit', 'rad/s')}, {obs['steps_taken']} steps "
                      f"(trial {obs['trial']}; the "
                      "learner's best is the highest posterior mean, from comparisons only)"]]
     it_rows = [[it["iteration"] + 1, _fmt(it["best"]["r_star"], 4) if it["best"] else "—",
@@ -351,8 +359,8 @@ th{{background:#eee}}.note{{color:#a60}}</style></head><body>
 {html.escape(status['robot'])}</h1>
 {_table(summary)}{note_html}
 {''.join(parts)}
-<h2>Iterations</h2>{_table(it_rows, ["iteration", "best r*", "best steps", "best gait params", "comparisons"])}
-<h2>Trials</h2>{_table(tr_rows, ["trial", "iteration", "state", "params", "outcome", "steps", "r*", "reason"])}
+<h2>Iterations</h2>{_table(it_rows, ["iteration", f"best {name}", "best steps", "best gait params", "comparisons"])}
+<h2>Trials</h2>{_table(tr_rows, ["trial", "iteration", "state", "params", "outcome", "steps", name, "reason"])}
 <p>Parameters in order: {html.escape(", ".join(best["params"]) if best else "")}. Generated by robustgait.</p>
 </body></html>
 """

@@ -187,6 +187,7 @@ class StudyRunner:
         self.directory = Path(directory)
         self.setup = load_config(self.directory)
         self.config = self.setup.config.study
+        self.name = "J*" if self.setup.config.study_certify.space == "push" else "r*"  # what the bar reports
         self.run_config = run or RunConfig()
         self.progress, self.verbose = progress, verbose
         self.robot = load_robot(self.setup.robot)
@@ -290,7 +291,7 @@ class StudyRunner:
         extra: dict[str, Any] = {"reused_from": reused_from} if reused_from is not None else {}
         store.complete(trial.number, result, value, extra)
         bar.update(1)
-        bar.set_postfix_str(f"iteration {trial.iteration + 1}/{self.config.iterations}, last r* "
+        bar.set_postfix_str(f"iteration {trial.iteration + 1}/{self.config.iterations}, last {self.name} "
                             f"{result['r_star']:.3f}, steps {result['steps_taken']}")
 
     def _close_iteration(self, store: StudyStore, k: int, bar: tqdm) -> None:
@@ -308,7 +309,7 @@ class StudyRunner:
                        "recommend_seconds": time.perf_counter() - t0})
         store.set_iteration(k, record)
         if rec_trial is not None and rec_trial.result is not None:
-            bar.set_postfix_str(f"iteration {k + 1}/{self.config.iterations} done, best r* "
+            bar.set_postfix_str(f"iteration {k + 1}/{self.config.iterations} done, best {self.name} "
                                 f"{rec_trial.result['r_star']:.3f}, steps {rec_trial.result['steps_taken']}")
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,15 +29,16 @@ from tqdm import tqdm
 from robustgait.certify import GaitCertificate, certify_gait
 from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, SimConfig, ValidateConfig, to_dict
 from robustgait.config.work import check_work
-from robustgait.domains import other_side, step_segments
+from robustgait.domains import step_segments
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.poincare import FixedPoint, ReturnMap
 from robustgait.reduced import ReducedState
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
-from robustgait.sim.engine import StepEngine, StepInputs
+from robustgait.sim.engine import StepInputs
 from robustgait.sim.factory import make_engine
+from robustgait.sim.trials import Inputs, Segment, pushed_first_step, simulate_trials
 from robustgait.validate import disturbances as dist
 from robustgait.validate.disturbances import SIZE_LABELS, Draws
 from robustgait.validate.stats import LogisticFit, Rate, binned_rates, logistic_fit
@@ -239,93 +240,6 @@ def _gait_info(gait: Gait) -> dict[str, Any]:
             "params": gait.params.to_dict() if gait.params is not None else None}
 
 
-@dataclass(frozen=True)
-class Segment:
-    """One batched engine call of a trial: a domain of a step. ``step``: the trial's step (0-based); ``index``: the
-    segment's index in the trial (for a flat-foot gait the step); ``stance``, ``domain``: what the engine runs;
-    ``prev``: the (stance, domain) of the segment before it (the one that ended at the trial's start for the first);
-    for the samples being run, ``offset`` (physics steps from the start of this step to the start of this segment),
-    ``prev_at`` (the physics step at which the previous segment's event happened, counted in that segment) and,
-    under a delayed state-feedback law, ``torque_tail`` (the torques it computed before this segment)."""
-
-    step: int
-    index: int
-    stance: str
-    domain: int
-    prev: tuple[str, int]
-    offset: NDArray[np.int64]
-    prev_at: NDArray[np.int64]
-    torque_tail: FloatArray | None = None  # a delayed law's torques before the segment (FeedbackStepBatch)
-
-
-Inputs = Callable[[Segment, NDArray[np.int64]], "StepInputs | None"]
-
-
-def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_steps: int, period: int,
-                    inputs: Inputs, *, first_at: int, progress: Callable[[int], None] | None = None
-                    ) -> tuple[NDArray[np.bool_], list[str | None], NDArray[np.int64], FloatArray, int]:
-    """Walk K trials from canonical section states (K, nq), (K, nv) for ``n_steps`` steps (stances alternate from
-    the gait's), each domain of a step one batched :meth:`StepEngine.step` on the trials still walking
-    (:func:`robustgait.domains.step_segments`: a multi-contact step is the previous leg's double support, then the
-    single support that ends at the next heel strike).
-
-    ``inputs(segment, idx)`` gives the per-sample inputs of a :class:`Segment` for the trials ``idx``
-    (``first_at``: the physics step of the event that ended the segment before the trials' start). Returns success
-    (K,), fall reasons, the 1-based step of each fall (0 = none), the full state (qpos, qvel) at the section after
-    ``period`` steps ((K, nq + nv); canonical stance; NaN if fell before) and the physics steps simulated.
-    """
-    robot = engine.robot
-    k_all = qpos.shape[0]
-    qpos, qvel = qpos.copy(), qvel.copy()
-    alive = np.ones(k_all, dtype=bool)
-    fall_step = np.zeros(k_all, dtype=np.int64)
-    reasons: list[str | None] = [None] * k_all
-    first = np.full((k_all, engine.nq + engine.nv), np.nan)
-    prev_at = np.full(k_all, first_at, dtype=np.int64)
-    stance = next(iter(engine.gaits))
-    prev: tuple[str, int] = (other_side(stance), 0)
-    tails: FloatArray | None = None
-    physics = 0
-    index = 0
-    n_domains = len(engine.graph)
-    for k in range(n_steps):
-        offset = np.zeros(k_all, dtype=np.int64)
-        for seg_stance, domain in step_segments(stance, n_domains):
-            idx = np.flatnonzero(alive)
-            if idx.size == 0:
-                break
-            seg = Segment(k, index, seg_stance, domain, prev, offset[idx], prev_at[idx],
-                          None if tails is None else tails[idx])
-            b = engine.step(qpos[idx], qvel[idx], seg_stance, domain=domain, inputs=inputs(seg, idx))
-            physics += b.physics_steps
-            tail = getattr(b, "torque_tail", None)
-            if tail is not None:  # the first segment runs every trial: its tail has the largest delay's width
-                tails = np.zeros((k_all, *tail.shape[1:])) if tails is None else tails
-                tails[idx] = tail
-            for j in np.flatnonzero(b.fell):
-                reasons[idx[j]] = b.fall_reason[j]
-            fall_step[idx[b.fell]] = k + 1
-            alive[idx[b.fell]] = False
-            ok = ~b.fell
-            qpos[idx[ok]], qvel[idx[ok]] = b.qpos[ok], b.qvel[ok]
-            at = np.round(b.duration[ok] / robot.dt).astype(np.int64)
-            prev_at[idx[ok]] = at
-            offset[idx[ok]] += at
-            prev = (seg_stance, domain)
-            index += 1
-        if k == period - 1:
-            ok_all = np.flatnonzero(alive)
-            if ok_all.size:
-                qp, qv = qpos[ok_all], qvel[ok_all]
-                if period % 2 == 1:  # the state starts a step of the other stance: write it for the canonical one
-                    qp, qv = robot.mirror_state(qp, qv)
-                first[ok_all] = np.hstack([qp, qv])
-        stance = other_side(stance)
-        if progress is not None:
-            progress(1)
-    return alive, reasons, fall_step, first, physics
-
-
 class Validator:
     """One gait on one robot, its certificate and fixed point: :meth:`run` a disturbance kind.
 
@@ -416,17 +330,7 @@ class Validator:
             wrench = dist.push_wrench(draws, cfg.push_duration, self.gait.step_duration, robot.dt,
                                       sum(self.segment_horizons))
 
-            def push(seg: Segment, idx: NDArray[np.int64]) -> StepInputs | None:
-                if seg.step != 0:
-                    return None
-                if not seg.offset.any():
-                    return StepInputs(base_wrench=wrench[idx])
-                h = eng.horizons[seg.domain]
-                cols = np.minimum(seg.offset[:, None] + np.arange(h)[None, :], wrench.shape[1] - 1)
-                w = wrench[idx[:, None], cols]
-                w[seg.offset[:, None] + np.arange(h)[None, :] >= wrench.shape[1]] = 0.0
-                return StepInputs(base_wrench=w)
-            return push
+            return pushed_first_step(eng, wrench)
         if kind in ("mass", "friction", "terrain", "slope"):
             if kind == "mass":
                 models = dist.mass_models(self._base_model(), robot, draws, cfg)
