@@ -27,7 +27,15 @@ from pathlib import Path
 import numpy as np
 
 from robustgait import load_gait, load_robot
-from robustgait.config import CertifyConfig, CompareConfig, Config, GenerationConfig, RunConfig, StudyConfig
+from robustgait.config import (
+    CertifyConfig,
+    CompareConfig,
+    Config,
+    GenerationConfig,
+    RunConfig,
+    StudyConfig,
+    radius_name,
+)
 from robustgait.study.compare import compare_studies, recertify
 from robustgait.study.config import load_config
 from robustgait.study.evaluate import evaluate
@@ -78,7 +86,7 @@ def main() -> None:
     default = evaluate(robot, cfg0.params, cfg0)  # the study's estimator, seed and domain graph
     fresh = [args.seed + 1000 + i for i in range(args.compare_seeds)]
     cert0 = cfg0.study_certify  # what the first study ranks by, for every gait below
-    name, unit = ("J*" if cert0.space == "push" else "r*"), cert0.unit
+    name, unit = radius_name(cert0.space), cert0.unit
     default_fresh = (recertify(robot, default.gait, cert0, fresh, cfg0.sim, cfg0.validate)
                      if default.gait is not None and default.status == "certified" else [])
     for run in runs:

@@ -179,7 +179,8 @@ def test_cli_certify_json(capsys, tmp_path):
 @pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_cli_certify_sequential(capsys, tmp_path):
     code, out, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--disturbance", "state", "--method",
-                        "sequential", "--epsilon", "0.5", "--budget", "210", "--barrier", "paper", "--json", "-o", str(tmp_path / "c.json"))
+                        "sequential", "--epsilon", "0.5", "--budget", "210", "--barrier", "paper", "--json", "-o",
+                        str(tmp_path / "c.json"))
     res = json.loads(out)
     assert code == 0 and res["method"] == "sequential" and res["barrier"] == "paper"
     assert res["n_samples"] <= 210 and res["rounds"][0]["kind"] == "uniform" and res["rounds"][0]["n_samples"] == 200

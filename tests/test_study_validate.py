@@ -274,7 +274,7 @@ def test_study_validate_on_a_study_run_end_to_end(tmp_path):
         assert c["n"] == a["n_validated"]
         if c["defined"]:
             assert -1 <= c["rho"] <= 1 and 0 <= c["p"] <= 1
-            x = [g["r_star" if c["x"] == "r*" else "steps_taken"] for g in a["gaits"]]
+            x = [g["r_star" if c["x"] in ("r*", "J*") else "steps_taken"] for g in a["gaits"]]
             from scipy.stats import spearmanr
 
             ref = spearmanr(x, [g["success"]["rate"] for g in a["gaits"]])

@@ -9,7 +9,7 @@ import sys
 
 from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
 from robustgait.cli.options import config_from, number_within, numbers_within, output_path
-from robustgait.config import CertifyConfig
+from robustgait.config import CertifyConfig, radius_name
 from robustgait.errors import RobustGaitError
 from robustgait.io.limits import BARRIER_R, X_STAR
 
@@ -43,7 +43,7 @@ def _certify(args: argparse.Namespace) -> int:
         gc = certify_gait(robot, gait, cfg, config.sim, validate=config.validate,
                           progress=not args.json and sys.stderr.isatty())
     c, fp, co = gc.certificate, gc.fixed_point, gc.coordinates
-    name = "J*" if cfg.disturbance == "push" else "r*"
+    name = radius_name(cfg.space)
     if args.plot is not None and c is not None:
         from robustgait.report import plot_certificate
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from robustgait.cli.common import ROBOT_HELP, command
 from robustgait.cli.options import FlagTable, config_from
-from robustgait.config import DEMO_DIRECTORY, DEMO_ROBOT, Config, RunConfig
+from robustgait.config import DEMO_DIRECTORY, DEMO_ROBOT, Config, RunConfig, radius_name
 from robustgait.errors import RobustGaitError
 
 RUN: FlagTable = {"--executor": "run.executor", "--workers": "run.workers", "--address": "run.address"}
@@ -33,7 +33,7 @@ def _check_executor(run: RunConfig) -> None:
 
 def _name(status: dict[str, object]) -> str:
     """r* or J* (a push study's certificate)."""
-    return "J*" if status.get("certificate") == "push" else "r*"
+    return radius_name(str(status.get("certificate")))
 
 
 def print_summary(directory: str | Path, seconds: float | None = None) -> None:
@@ -138,8 +138,8 @@ def _study_compare(args: argparse.Namespace) -> int:
               f"{_name(res)} = {s['r_star_mean']:.4g} ± {s['r_star_sd']:.4g} {res['unit']}  "
               f"[{', '.join(f'{r:.3f}' for r in s['r_star'])}] (study: {s['study_r_star']:.4f})")
     w = res["winner"]
-    print("equal mean r*" if w is None else f"higher mean r*: {'AB'[w]} (per seed: A wins {res['wins_per_seed'][0]}, "
-          f"B wins {res['wins_per_seed'][1]})")
+    print(f"equal mean {_name(res)}" if w is None else f"higher mean {_name(res)}: {'AB'[w]} (per seed: A wins "
+          f"{res['wins_per_seed'][0]}, B wins {res['wins_per_seed'][1]})")
     if res["note"]:
         print(f"note: {res['note']}")
     return 0
@@ -172,7 +172,8 @@ def _study_validate(args: argparse.Namespace) -> int:
               + (f" ({s['n_from_earlier_runs']} from an earlier run)" if s["n_from_earlier_runs"] else "")
               + (f"; skipped: {skipped}" if skipped else "") + f"; {cfg.trials} trials each, seed {cfg.seed}, "
               f"success = no fall in {cfg.steps_after} steps after the first switching event")
-        print(f"  {'gait':<26} {'study':<13} {'r*':>7} {'steps':>7}  {'success [95% CI]':<27} half fail at ({name})")
+        star = radius_name("push" if s["certify"].get("disturbance") == "push" else "state")
+        print(f"  {'gait':<26} {'study':<13} {star:>7} {'steps':>7}  {'success [95% CI]':<27} half fail at ({name})")
         for r in s["gaits"]:
             c = r["critical"]
             crit = (f"{c['s50']:.4g} ± {c['s50_se'] or 0:.2g} {unit}" if c["s50"] is not None else f"— ({c['note']})")

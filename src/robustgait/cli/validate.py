@@ -42,9 +42,9 @@ def _validate(args: argparse.Namespace) -> int:
         print(res.to_json(trials=False))
         return 0
     c = res.certificate
-    from robustgait.config.certify import R_MAX_UNIT
+    from robustgait.config.certify import R_MAX_UNIT, radius_name
 
-    name = "J*" if c.space == "push" else "r*"
+    name = radius_name(c.space)
     energy = "" if c.energy is None else f", E* = {c.energy:.4g} J"
     kind = "disk of push impulses" if c.space == "push" else (f"{c.space} {c.set}, horizon {c.horizon}, {c.map} "
                                                                "map")

@@ -55,6 +55,7 @@ from robustgait.config.certify import (
     Reconstruction,
     SequentialConfig,
     State,
+    radius_name,
     verification_beta,
     verification_size,
 )
@@ -238,6 +239,7 @@ __all__ = [
     "merge",
     "nest",
     "preset",
+    "radius_name",
     "to_dict",
     "to_markdown",
     "to_toml",

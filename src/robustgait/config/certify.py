@@ -21,6 +21,11 @@ CertifyDisturbance = Literal["push", "state"]
 # (√J) and for pushes an impulse (N s) — both well beyond what the exo gaits absorb (docs/certificate.md)
 DEFAULT_R_MAX = {"omega": 2.0, "centroidal": 10.0, "velocity": 10.0, "push": 100.0}
 R_MAX_UNIT = {"omega": "rad/s", "centroidal": "√J", "velocity": "√J", "push": "N s"}
+def radius_name(space: str) -> str:
+    """The certified radius's name: J* for pushes (``space`` push), r* for a set of states."""
+    return "J*" if space == "push" else "r*"
+
+
 R_MAX_LIMIT = {"omega": 10.0, "centroidal": 1000.0, "velocity": 1000.0, "push": 10_000.0}
 
 SEED_LIMIT = 2**63 - 1  # a seed fits a signed 64-bit integer (study storage)

@@ -27,7 +27,7 @@ import numpy as np
 from matplotlib.ticker import MaxNLocator
 
 from robustgait.barrier import Certificate, Round
-from robustgait.config import ReportConfig
+from robustgait.config import ReportConfig, radius_name
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_text
 from robustgait.io.schema import read_json
@@ -98,7 +98,7 @@ def plot_history(status: dict[str, Any], path: Path) -> Path:
 
 def cert_name(status: dict[str, Any]) -> str:
     """J* (a push study's certificate) or r*."""
-    return "J*" if status.get("certificate") == "push" else "r*"
+    return radius_name(str(status.get("certificate")))
 
 
 def plot_explored(status: dict[str, Any], path: Path) -> Path:
@@ -250,7 +250,7 @@ def write_study_report(directory: str | Path, config: ReportConfig | None = None
         raw = read_json(d / cert_file, "certificate file")
         cert = certificate_from_json(raw)
         coords = Coordinates.from_dict(raw["coordinates"]) if isinstance(raw.get("coordinates"), dict) else None
-        name = "J*" if raw.get("disturbance") == "push" else "r*"
+        name = radius_name("push" if raw.get("disturbance") == "push" else "state")
         what = f"{raw.get('state', 'omega')} {raw.get('set', 'ball')}" if name == "r*" else "pushes"
         p = plot_certificate(cert, out / "certificate.png", coordinates=coords,
                              title=f"best gait: {name} = {cert.r_star:.4g} {raw.get('unit', 'rad/s')} ({what})")

@@ -12,7 +12,7 @@ from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
 from scipy.special import expit
 
-from robustgait.config import R_MAX_UNIT, CertifyConfig
+from robustgait.config import R_MAX_UNIT, CertifyConfig, radius_name
 from robustgait.report.figures import _save, plt
 from robustgait.validate.stats import binned_rates, correlation_text
 
@@ -28,7 +28,7 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
     fig, axes = plt.subplots(len(kinds), 2, figsize=(11, 3.4 * len(kinds)), squeeze=False)
     ref = result.certificate
     r_star, cunit = ref.r_star, R_MAX_UNIT[ref.space]
-    star = "J*" if ref.space == "push" else "r*"
+    star = radius_name(ref.space)
     for row, kr in zip(axes, kinds, strict=True):
         name, unit = kr.size_label
         a1, a2 = row
@@ -93,7 +93,7 @@ def plot_study_validation(summary: dict[str, Any], path: str | Path) -> Path:
     norm = Normalize(vmin=0.0, vmax=float(cap))
     cmap = plt.get_cmap("viridis")
     cert = CertifyConfig(**{k: v for k, v in summary["certify"].items() if k in ("state", "disturbance")})
-    star = "J*" if cert.space == "push" else "r*"
+    star = radius_name(cert.space)
     panels = ((axes[0], "r_star", f"{star} ({cert.space}) [{cert.unit}]"),
               (axes[1], "steps_taken", f"steps taken in the study (cap {cap})"))
     for ax, key, label in panels:

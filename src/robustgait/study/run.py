@@ -31,7 +31,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from robustgait.config import Config, RunConfig, StudyConfig
+from robustgait.config import Config, RunConfig, StudyConfig, radius_name
 from robustgait.config.work import check_work
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_json
@@ -187,7 +187,7 @@ class StudyRunner:
         self.directory = Path(directory)
         self.setup = load_config(self.directory)
         self.config = self.setup.config.study
-        self.name = "J*" if self.setup.config.study_certify.space == "push" else "r*"  # what the bar reports
+        self.name = radius_name(self.setup.config.study_certify.space)  # what the bar reports
         self.run_config = run or RunConfig()
         self.progress, self.verbose = progress, verbose
         self.robot = load_robot(self.setup.robot)

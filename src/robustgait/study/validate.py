@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from robustgait.config import KINDS, CertifyConfig, SimConfig, ValidateConfig, to_dict
+from robustgait.config import KINDS, CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
@@ -366,9 +366,10 @@ def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim:
     r_star = np.array([r["r_star"] for r in rows], dtype=float)
     s50 = np.array([np.nan if r["critical"]["s50"] is None else r["critical"]["s50"] for r in rows], dtype=float)
     has = np.isfinite(s50)
+    star = radius_name(certify.space)  # the certificate the gaits carry
     correlations: dict[str, Correlation] = {
-        "r_star": spearman(r_star, success, "r*", y),
-        "r_star_critical": spearman(r_star[has], s50[has], "r*", f"{kind} s₅₀ (gaits with a fit)"),
+        "r_star": spearman(r_star, success, star, y),
+        "r_star_critical": spearman(r_star[has], s50[has], star, f"{kind} s₅₀ (gaits with a fit)"),
         "steps_taken": corr_steps}
     return {"format_version": FORMAT_VERSION, "kind": kind, "size": name, "unit": unit, "config": to_dict(config),
             "certify": to_dict(certify), "sim": to_dict(sim), "config_key": key,
