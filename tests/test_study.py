@@ -139,6 +139,17 @@ def test_a_push_study_written_before_chunked_verification_keeps_whole_batches(tm
     assert load_config(tmp_path).config.certify.push.verify_chunk == 5
 
 
+def test_a_push_study_with_a_state_choice_it_never_used_still_loads(tmp_path):
+    """Before J* and a state choice were exclusive, `study run --metric push --state velocity` was accepted (the state
+    ignored): such a study loads with the choice reset; a robustness study keeps the choice it certified."""
+    certify = {"disturbance": "state", "state": "velocity", "set": "ellipsoid", "horizon": 2}
+    for metric, state in (("push", "omega"), ("robustness", "velocity"), ("stability", "velocity")):
+        raw = {"format_version": 3, "robot": "exo", "config": {"study": {"metric": metric}, "certify": certify}}
+        (tmp_path / "study.json").write_text(json.dumps(raw))
+        cfg = load_config(tmp_path).config
+        assert cfg.certify.state == state and cfg.study_certify.space == ("push" if metric == "push" else "velocity")
+
+
 def test_push_metric_certifies_pushes_and_robustness_states():
     c = Config(study=StudyConfig(metric="push"))
     assert c.study_certify.disturbance == "push" and c.study_certify.unit == "N s"

@@ -270,6 +270,20 @@ def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_ce
     assert main(["validate", str(gait_path), "--robot", "exo", "--certificate", str(bad)]) == 2
 
 
+def test_a_push_certificate_with_an_unused_state_choice_still_loads(tmp_path, exo, exo_gait):
+    """Before J* and a state choice were exclusive, `certify --disturbance push --state velocity` wrote the unused
+    state into the certificate's config: it loads as the push certificate it is."""
+    gc = certify_gait(exo, exo_gait, CertifyConfig(disturbance="push", method="uniform", n_samples=4,
+                                                    push={"steps": 1}))
+    d = gc.to_dict()
+    d["config"] = {**d["config"], "state": "velocity", "set": "ellipsoid", "horizon": 2}
+    p = tmp_path / "push.json"
+    p.write_text(json.dumps(d))
+    ref = CertificateRef.load(p)
+    assert ref.space == "push" and ref.r_star == gc.r_star
+    assert ref.certify_config(CertifyConfig()).state_choice() == ("omega", "ball", 1)
+
+
 @pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_gait_tiles_are_a_real_image(tmp_path, exo, exo_gait):
     import imageio.v2 as imageio

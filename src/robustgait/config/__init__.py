@@ -44,6 +44,7 @@ from robustgait.config.base import (
 from robustgait.config.certify import (
     DEFAULT_R_MAX,
     R_MAX_UNIT,
+    STATE_CHOICE_DEFAULTS,
     Barrier,
     CertifiedSet,
     CertifyConfig,
@@ -90,7 +91,7 @@ class Config:
     report: ReportConfig = dataclasses.field(default_factory=ReportConfig)
 
     def __post_init__(self) -> None:
-        if self.study.metric == "push" and self.certify.state_choice() != ("omega", "ball", 1):
+        if self.study.metric == "push" and self.certify.state_choice() != tuple(STATE_CHOICE_DEFAULTS.values()):
             raise FieldProblem("study.metric", "push ranks gaits by J*, which has no reduced state, set or horizon "
                                f"(certify: state {self.certify.state}, set {self.certify.set}, horizon "
                                f"{self.certify.horizon}); to rank by a state certificate use metric = robustness")
@@ -196,6 +197,7 @@ __all__ = [
     "PRESETS",
     "R_MAX_UNIT",
     "STATE_CERTIFICATE_FIELDS",
+    "STATE_CHOICE_DEFAULTS",
     "Barrier",
     "CertifiedSet",
     "CertifyConfig",

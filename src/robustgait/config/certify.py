@@ -21,12 +21,15 @@ CertifyDisturbance = Literal["push", "state"]
 # (√J) and for pushes an impulse (N s) — both well beyond what the exo gaits absorb (docs/certificate.md)
 DEFAULT_R_MAX = {"omega": 2.0, "centroidal": 10.0, "velocity": 10.0, "push": 100.0}
 R_MAX_UNIT = {"omega": "rad/s", "centroidal": "√J", "velocity": "√J", "push": "N s"}
+R_MAX_LIMIT = {"omega": 10.0, "centroidal": 1000.0, "velocity": 1000.0, "push": 10_000.0}
+# a state certificate's choice when not set: the paper's; a push certificate has exactly these
+STATE_CHOICE_DEFAULTS: dict[str, str | int] = {"state": "omega", "set": "ball", "horizon": 1}
+
+
 def radius_name(space: str) -> str:
     """The certified radius's name: J* for pushes (``space`` push), r* for a set of states."""
     return "J*" if space == "push" else "r*"
 
-
-R_MAX_LIMIT = {"omega": 10.0, "centroidal": 1000.0, "velocity": 1000.0, "push": 10_000.0}
 
 SEED_LIMIT = 2**63 - 1  # a seed fits a signed 64-bit integer (study storage)
 
@@ -150,7 +153,7 @@ class CertifyConfig:
                                    explore_after_failure=p.explore_after_failure, verify_chunk=p.verify_chunk)
 
     def __post_init__(self) -> None:
-        if self.disturbance == "push" and self.state_choice() != ("omega", "ball", 1):
+        if self.disturbance == "push" and self.state_choice() != tuple(STATE_CHOICE_DEFAULTS.values()):
             raise FieldProblem("disturbance", "a push certificate (J*) has no reduced state, set or horizon (got "
                                f"state {self.state}, set {self.set}, horizon {self.horizon}); for a certificate of "
                                "states set disturbance = state")

@@ -50,12 +50,14 @@ class CertificateFile:
     def certify_config(self, src: str | Path) -> CertifyConfig:
         """The certificate's own options (a certificate of an older version: the fields it has; one written before
         states were a choice certified the base angular velocity in a ball, one step)."""
-        from robustgait.config import from_dict
+        from robustgait.config import STATE_CHOICE_DEFAULTS, from_dict
 
         keep = {k: v for k, v in self.config.items() if k in {f.name for f in dataclasses.fields(CertifyConfig)}}
         for k, v in (("state", "omega"), ("set", "ball"), ("horizon", 1), ("disturbance", "state")):
             keep.setdefault(k, v)
         keep.update({"map": self.map, "frame": self.frame, "reconstruction": self.reconstruction})
+        if keep["disturbance"] == "push":  # written before the two were exclusive, it may carry an unused choice
+            keep.update(STATE_CHOICE_DEFAULTS)
         cfg = from_dict(CertifyConfig, keep, f"{src}: config", "json")
         want = 2 if cfg.disturbance == "push" else {"omega": 3, "centroidal": 6}.get(cfg.state)
         if want is not None and len(self.x_star) != want:

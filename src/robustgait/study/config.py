@@ -11,7 +11,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from robustgait.config import Config, GenerationConfig, from_dict, to_dict
+from robustgait.config import STATE_CHOICE_DEFAULTS, Config, GenerationConfig, from_dict, to_dict
 from robustgait.errors import input_error
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
@@ -25,6 +25,21 @@ FORMAT_VERSION = 3
 # fields added to the certificate since format 2, and what a format-2 study certified (the base angular velocity in
 # a ball, one step): a study resumed keeps its certificate whatever today's defaults are
 _CERTIFY_BEFORE_3 = {"state": "omega", "set": "ball", "horizon": 1, "disturbance": "state"}
+
+
+def _without_unused_state_choice(raw: Any) -> Any:
+    """A study whose certificate is J* (metric push, or a push certificate) with the state choice reset to the
+    defaults: one written before the two were exclusive (2026-11-25) may carry a state, set or horizon it never
+    used — the push certificate ignored them — which now fails validation."""
+    cfg = raw.get("config") if isinstance(raw, dict) else None
+    if not isinstance(cfg, dict) or not isinstance(cfg.get("certify"), dict):
+        return raw
+    study = cfg.get("study")
+    metric = study.get("metric") if isinstance(study, dict) else None
+    computed = {"push": "push", "robustness": "state"}.get(str(metric), cfg["certify"].get("disturbance"))
+    if computed != "push":
+        return raw
+    return {**raw, "config": {**cfg, "certify": {**cfg["certify"], **STATE_CHOICE_DEFAULTS}}}
 
 
 # the libraries whose versions decide a study's numbers: gait generation, simulation, certificate, learner
@@ -105,6 +120,7 @@ def load_config(directory: str | Path) -> StudySetup:
         push.setdefault("verify_chunk", 0)  # written before chunked verification: whole verification batches
         certify = {k: v for k, v in certify.items() if k != "push_steps"} | {"push": push}
         raw = {**raw, "config": {**raw["config"], "certify": certify}}
+    raw = _without_unused_state_choice(raw)
     if not (isinstance(raw, dict) and raw.get("format_version") == FORMAT_VERSION and isinstance(raw.get("robot"), str)
             and "config" in raw):
         raise input_error(path, f"unsupported study file (format_version {FORMAT_VERSION} expected)")
