@@ -24,7 +24,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.config import ValidateConfig
-from robustgait.domains import step_segments
 from robustgait.poincare import FixedPoint
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import StepEngine
@@ -72,8 +71,7 @@ class PushMap:
         r = quat_to_mat(fp.qpos[3:7])
         self.heading = float(math.atan2(r[1, 0], r[0, 0]))
         self.step_duration = next(iter(engine.gaits.values())).step_duration
-        stance = next(iter(engine.gaits))
-        self.window = sum(engine.horizons[d] for _, d in step_segments(stance, len(engine.graph)))
+        self.window = sum(engine.horizons)  # a step runs each domain once (robustgait.domains.step_segments)
         self.physics_steps = 0
         self.fall_step: list[NDArray[np.int64]] = []  # per call: the 1-based step each sample fell in (0: none)
 

@@ -57,6 +57,7 @@ from robustgait.config.certify import (
     SequentialConfig,
     State,
     radius_name,
+    study_disturbance,
     verification_beta,
     verification_size,
 )
@@ -91,7 +92,7 @@ class Config:
     report: ReportConfig = dataclasses.field(default_factory=ReportConfig)
 
     def __post_init__(self) -> None:
-        if self.study.metric == "push" and self.certify.state_choice() != tuple(STATE_CHOICE_DEFAULTS.values()):
+        if self.study.metric == "push" and self.certify.chooses_a_state:
             raise FieldProblem("study.metric", "push ranks gaits by J*, which has no reduced state, set or horizon "
                                f"(certify: state {self.certify.state}, set {self.certify.set}, horizon "
                                f"{self.certify.horizon}); to rank by a state certificate use metric = robustness")
@@ -100,11 +101,9 @@ class Config:
     def study_certify(self) -> CertifyConfig:
         """The certificate a study's evaluation computes: ``certify``, of pushes (J*) for the ``push`` metric and of
         states (r*) for ``robustness``."""
-        if self.study.metric == "push":
-            return dataclasses.replace(self.certify, disturbance="push")
-        if self.study.metric == "robustness":
-            return dataclasses.replace(self.certify, disturbance="state")
-        return self.certify
+        disturbance = study_disturbance(self.study.metric, self.certify.disturbance)
+        return self.certify if disturbance == self.certify.disturbance else dataclasses.replace(
+            self.certify, disturbance=disturbance)
 
     @property
     def params(self) -> GaitParams:
@@ -242,6 +241,7 @@ __all__ = [
     "nest",
     "preset",
     "radius_name",
+    "study_disturbance",
     "to_dict",
     "to_markdown",
     "to_toml",

@@ -26,6 +26,14 @@ R_MAX_LIMIT = {"omega": 10.0, "centroidal": 1000.0, "velocity": 1000.0, "push": 
 STATE_CHOICE_DEFAULTS: dict[str, str | int] = {"state": "omega", "set": "ball", "horizon": 1}
 
 
+def study_disturbance(metric: str, disturbance: CertifyDisturbance) -> CertifyDisturbance:
+    """What a study's evaluation certifies: pushes for the ``push`` metric, states for ``robustness``, otherwise the
+    configured ``certify.disturbance`` (``stability`` ranks by steps and only reports the certificate)."""
+    if metric == "push":
+        return "push"
+    return "state" if metric == "robustness" else disturbance
+
+
 def radius_name(space: str) -> str:
     """The certified radius's name: J* for pushes (``space`` push), r* for a set of states."""
     return "J*" if space == "push" else "r*"
@@ -153,7 +161,7 @@ class CertifyConfig:
                                    explore_after_failure=p.explore_after_failure, verify_chunk=p.verify_chunk)
 
     def __post_init__(self) -> None:
-        if self.disturbance == "push" and self.state_choice() != tuple(STATE_CHOICE_DEFAULTS.values()):
+        if self.disturbance == "push" and self.chooses_a_state:
             raise FieldProblem("disturbance", "a push certificate (J*) has no reduced state, set or horizon (got "
                                f"state {self.state}, set {self.set}, horizon {self.horizon}); for a certificate of "
                                "states set disturbance = state")
@@ -170,6 +178,11 @@ class CertifyConfig:
     def state_choice(self) -> tuple[str, str, int]:
         """(state, set, horizon): what a state certificate certifies."""
         return self.state, self.set, self.horizon
+
+    @property
+    def chooses_a_state(self) -> bool:
+        """Whether state, set or horizon differ from :data:`STATE_CHOICE_DEFAULTS` (which a push certificate has)."""
+        return self.state_choice() != tuple(STATE_CHOICE_DEFAULTS.values())
 
     @property
     def space(self) -> str:

@@ -53,7 +53,7 @@ class CertificateFile:
         from robustgait.config import STATE_CHOICE_DEFAULTS, from_dict
 
         keep = {k: v for k, v in self.config.items() if k in {f.name for f in dataclasses.fields(CertifyConfig)}}
-        for k, v in (("state", "omega"), ("set", "ball"), ("horizon", 1), ("disturbance", "state")):
+        for k, v in {**STATE_CHOICE_DEFAULTS, "disturbance": "state"}.items():
             keep.setdefault(k, v)
         keep.update({"map": self.map, "frame": self.frame, "reconstruction": self.reconstruction})
         if keep["disturbance"] == "push":  # written before the two were exclusive, it may carry an unused choice

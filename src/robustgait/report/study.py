@@ -85,7 +85,7 @@ def plot_history(status: dict[str, Any], path: Path) -> Path:
     a2.plot([i for i, _ in observed], [b["steps_taken"] for _, b in observed], "--", color="0.4", lw=1.2)
     for name, c in OUTCOME_COLORS.items():
         a1.scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=name.replace("_", " "))
-    a1.set_ylabel(f"{cert_name(status)} [{status.get('unit', 'rad/s')}]")
+    a1.set_ylabel(f"{radius_name(status['certificate'])} [{status.get('unit', 'rad/s')}]")
     a1.legend(fontsize=8, loc="best")
     cap = status["config"]["sim"]["step_cap"]
     a2.axhline(cap, color="0.6", ls="--", lw=0.8)
@@ -94,11 +94,6 @@ def plot_history(status: dict[str, Any], path: Path) -> Path:
     a2.xaxis.set_major_locator(MaxNLocator(integer=True))
     fig.suptitle(f"{status['learner']} on {status['metric']}: best gait per iteration")
     return _save(fig, path)
-
-
-def cert_name(status: dict[str, Any]) -> str:
-    """J* (a push study's certificate) or r*."""
-    return radius_name(str(status.get("certificate")))
 
 
 def plot_explored(status: dict[str, Any], path: Path) -> Path:
@@ -128,7 +123,7 @@ def plot_explored(status: dict[str, Any], path: Path) -> Path:
         axes.ravel()[0].scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=name.replace("_", " "))
     axes.ravel()[0].scatter([], [], s=120, facecolors="none", edgecolors="tab:blue", label="best")
     axes.ravel()[0].legend(fontsize=7)
-    fig.suptitle(f"Explored gait parameters (marker size ∝ {cert_name(status)})")
+    fig.suptitle(f"Explored gait parameters (marker size ∝ {radius_name(status['certificate'])})")
     return _save(fig, path)
 
 
@@ -298,7 +293,7 @@ def _validation_parts(d: Path, status: dict[str, Any], out: Path, notes: list[st
             f"<p>{cfg['trials']} trials per gait, seed {cfg['seed']} (the same disturbances for every gait), success "
             f"= no fall in {cfg['steps_after']} steps after the first switching event; certified gaits start on "
             "their fixed point, the others from their initial state.</p>"
-            + _table(rows, ["gait", "study outcome", cert_name(status), "steps", "success [95 % CI]",
+            + _table(rows, ["gait", "study outcome", radius_name(status["certificate"]), "steps", "success [95 % CI]",
                             f"half fail at ({s['size']})"]))
         if s["study"]["unique_gaits"] != status["unique_gaits"]:
             notes.append(f"The {kind} validation covers the {s['study']['unique_gaits']} unique gaits the study had "
@@ -322,7 +317,7 @@ def _certify_text(cfg: dict[str, Any]) -> str:
 def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
     best = status["best"]
     cfg = status["config"]
-    name = cert_name(status)
+    name = radius_name(status["certificate"])
     summary = [["study", status["directory"]], ["robot", status["robot"]], ["metric", status["metric"]],
                ["learner", status["learner"]], ["seed", status["seed"]],
                ["budget", f"{cfg['study']['iterations']} iterations × {cfg['study']['batch']} gaits"],

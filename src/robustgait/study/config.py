@@ -11,7 +11,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from robustgait.config import STATE_CHOICE_DEFAULTS, Config, GenerationConfig, from_dict, to_dict
+from robustgait.config import STATE_CHOICE_DEFAULTS, Config, GenerationConfig, from_dict, study_disturbance, to_dict
 from robustgait.errors import input_error
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
@@ -24,7 +24,7 @@ CONFIG_FILE = "study.json"
 FORMAT_VERSION = 3
 # fields added to the certificate since format 2, and what a format-2 study certified (the base angular velocity in
 # a ball, one step): a study resumed keeps its certificate whatever today's defaults are
-_CERTIFY_BEFORE_3 = {"state": "omega", "set": "ball", "horizon": 1, "disturbance": "state"}
+_CERTIFY_BEFORE_3 = {**STATE_CHOICE_DEFAULTS, "disturbance": "state"}
 
 
 def _without_unused_state_choice(raw: Any) -> Any:
@@ -36,8 +36,7 @@ def _without_unused_state_choice(raw: Any) -> Any:
         return raw
     study = cfg.get("study")
     metric = study.get("metric") if isinstance(study, dict) else None
-    computed = {"push": "push", "robustness": "state"}.get(str(metric), cfg["certify"].get("disturbance"))
-    if computed != "push":
+    if study_disturbance(str(metric), cfg["certify"].get("disturbance")) != "push":
         return raw
     return {**raw, "config": {**cfg, "certify": {**cfg["certify"], **STATE_CHOICE_DEFAULTS}}}
 
