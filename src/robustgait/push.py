@@ -41,21 +41,25 @@ def push_phase(impulse: FloatArray, low: float, high: float) -> FloatArray:
     return np.asarray(low + u * (high - low))
 
 
+def wrench_window(force: FloatArray, start: NDArray[np.int64], width: int, horizon: int) -> FloatArray:
+    """Base wrench series (N, horizon, 6) [N, N m]: the horizontal world-frame force (N, 2) of push i over the
+    physics steps [start_i, start_i + width) (cut at the horizon), zero elsewhere. Shared by the push map and the
+    validation's pushes (:func:`robustgait.validate.disturbances.push_wrench`)."""
+    out = np.zeros((force.shape[0], horizon, 6))
+    for i in range(force.shape[0]):
+        a = min(int(start[i]), horizon)
+        out[i, a:a + width, :2] = force[i]
+    return out
+
+
 def push_series(impulse: FloatArray, phase: FloatArray, heading: float, duration: float, period: float, dt: float,
                 horizon: int) -> FloatArray:
     """Base wrench series (N, horizon, 6) [N, N m]: the force J/duration, J rotated from the heading frame into the
     world by the heading ψ, over round(duration/dt) physics steps from step round(φ·period/dt)."""
-    n = impulse.shape[0]
-    out = np.zeros((n, horizon, 6))
     width = max(1, round(duration / dt))
     c, s = math.cos(heading), math.sin(heading)
     world = np.stack([c * impulse[:, 0] - s * impulse[:, 1], s * impulse[:, 0] + c * impulse[:, 1]], axis=1)
-    force = world / (width * dt)
-    start = np.round(phase * period / dt).astype(int)
-    for i in range(n):
-        a = min(int(start[i]), horizon)
-        out[i, a:a + width, :2] = force[i]
-    return out
+    return wrench_window(world / (width * dt), np.round(phase * period / dt).astype(int), width, horizon)
 
 
 class PushMap:

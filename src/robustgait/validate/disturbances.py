@@ -49,6 +49,7 @@ from numpy.typing import NDArray
 
 from robustgait.config import KINDS, ValidateConfig
 from robustgait.errors import RobustGaitError
+from robustgait.push import wrench_window
 from robustgait.robots import Robot
 from robustgait.robots.model import CONTACT_SENSORS
 
@@ -102,17 +103,13 @@ def draw(kind: str, n: int, config: ValidateConfig, robot: Robot) -> Draws:
 def push_wrench(draws: Draws, duration: float, period: float, dt: float, horizon: int) -> FloatArray:
     """Base wrench series (N, horizon, 6) of pushes: force J/duration along the drawn direction over
     round(duration/dt) physics steps from step round(phase·period/dt)."""
-    n = draws.size.size
-    out = np.zeros((n, horizon, 6))
     width = max(1, round(duration / dt))
     force = draws.size / (width * dt)
-    start = np.round(draws.params["phase"] * period / dt).astype(int)
     th = draws.params["direction"]
-    for i in range(n):
-        s = min(start[i], horizon)
-        out[i, s:s + width, 0] = force[i] * math.cos(th[i])
-        out[i, s:s + width, 1] = force[i] * math.sin(th[i])
-    return out
+    start = np.round(draws.params["phase"] * period / dt).astype(int)
+    # math.cos/sin, as before the window was shared: the same forces to the last bit
+    xy = np.array([[f * math.cos(t), f * math.sin(t)] for f, t in zip(force, th, strict=True)]).reshape(-1, 2)
+    return wrench_window(xy, start, width, horizon)
 
 
 def physics_spec(robot: Robot) -> mujoco.MjSpec:
