@@ -27,8 +27,10 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
   push certificate J* for each ``--push-variants`` tuple (first round / exploration / exploration after a failed
   verification / steps after the push), same run: J*, samples, physics steps, wall and its ratio to omega/ball's.
 * ``push-gaits`` (issue 18 item 7 over many gaits; not part of ``all``): per gait of ``--gaits`` (a glob, e.g. the
-  gait files of studies; ``--limit`` of them evenly spaced), omega/ball, J* with whole verification batches
-  (``push.verify_chunk = 0``) and J* as today (chunked), one after the other in one worker: their wall-time ratios.
+  gait files of studies; ``--limit`` of them evenly spaced), omega/ball, then J* for each ``--gait-variants``
+  (default: whole verification batches, ``push.verify_chunk = 0``, and as shipped, chunked), one after the other in
+  one worker: their wall-time and physics-step ratios and verification attempts; then each variant's check against
+  the gaits' validation pushes in ``benchmarks/data/bench_predict_exo.jsonl`` (pushes ≤ J* that fell).
 """
 
 from __future__ import annotations
@@ -423,31 +425,72 @@ def cmd_push(args: argparse.Namespace) -> None:
               f"{wall.max():.1f}) | {wall.mean() / base:.2f} |", flush=True)
 
 
-def _push_gait(path: str) -> dict:
-    """omega/ball, then J* with whole verification batches, then J* with today's chunked ones: one gait, one
-    thread, one after the other (a worker of ``push-gaits``)."""
+def _variants(spec: str) -> list[tuple[str, int, int, int | None]]:
+    """``name:chunk/steps[/after],…`` → [(name, push.verify_chunk, push.steps, push.explore_after_failure or None
+    for the default)]."""
+    out = []
+    for item in spec.split(","):
+        name, _, rest = item.partition(":")
+        chunk, steps, *after = rest.split("/")
+        out.append((name, int(chunk), int(steps), int(after[0]) if after else None))
+    return out
+
+
+def _push_gait(job: tuple[str, str]) -> dict:
+    """omega/ball, then J* for each variant (``--gait-variants``): one gait, one thread, one after the other (a
+    worker of ``push-gaits``)."""
     from robustgait.config.certify import PushConfig
 
+    path, spec = job
     exo = load_robot("exo")
     gait = load_gait(path, exo)
     sim = SimConfig(n_threads=1)
     out: dict = {"gait": Path(path).parent.name}
-    for name, cfg in (("omega", CertifyConfig(disturbance="state")), ("whole", CertifyConfig(disturbance="push",
-                                                                            push=PushConfig(verify_chunk=0))),
-                      ("chunked", CertifyConfig(disturbance="push"))):
+    runs = [("omega", CertifyConfig(disturbance="state"))] + [
+        (name, CertifyConfig(disturbance="push", push=PushConfig(
+            verify_chunk=chunk, steps=steps,
+            explore_after_failure=PushConfig.explore_after_failure if after is None else after)))
+        for name, chunk, steps, after in _variants(spec)]
+    for name, cfg in runs:
         t0 = time.perf_counter()
         gc = certify_gait(exo, gait, cfg, sim)
         if not gc.ok:
             return {**out, "error": f"{name}: {gc.status}"}
         out[name] = {"r_star": gc.r_star, "seconds": time.perf_counter() - t0, "physics": gc.physics_steps,
                      "samples": gc.certificate.n_samples if gc.certificate else 0,
+                     "attempts": sum(r.kind == "verify" for r in gc.certificate.rounds) if gc.certificate else 0,
                      "bound": gc.certificate.violation_bound if gc.certificate else 1.0}
     return out
 
 
+def _validation_check(rows: list[dict], names: list[str]) -> None:
+    """For each variant, the validation pushes (``benchmarks/data/bench_predict_exo.jsonl``: 200 per gait, 20 steps
+    after) with |J| ≤ that gait's J* that fell, with a Wilson interval — J*'s own check against ε."""
+    table = REPO / "benchmarks" / "data" / "bench_predict_exo.jsonl"
+    pushes = {}
+    for line in table.read_text().splitlines():
+        rec = json.loads(line)
+        push = rec.get("kinds", {}).get("push")
+        if push:
+            pushes[rec["label"]] = (np.asarray(push["size"]), np.asarray(push["ok"], dtype=bool))
+    for k in names:
+        n = fell = 0
+        for r in rows:
+            if r["gait"] in pushes:
+                size, walked = pushes[r["gait"]]
+                inside = size <= r[k]["r_star"]
+                n += int(inside.sum())
+                fell += int((inside & ~walked).sum())
+        if n:
+            lo, hi = _wilson(fell, n)
+            print(f"check {k}: {fell} of {n} validation pushes with |J| ≤ J* fell, {100 * fell / n:.1f} % "
+                  f"[{100 * lo:.1f}, {100 * hi:.1f}] (95 % Wilson; ε = 2 %)")
+
+
 def cmd_push_gaits(args: argparse.Namespace) -> None:
     """J*'s cost over many gaits: per gait (``--gaits`` glob, one per directory name, ``--limit`` evenly spaced),
-    J* with whole and with chunked verification batches against omega/ball on the same gait, same worker."""
+    J* for each ``--gait-variants`` (verification chunk / steps after the push) against omega/ball on the same gait,
+    same worker; then each variant's check on the gaits' validation pushes."""
     import glob
     from concurrent.futures import ProcessPoolExecutor
 
@@ -457,29 +500,40 @@ def cmd_push_gaits(args: argparse.Namespace) -> None:
     names = sorted(paths)
     if args.limit and args.limit < len(names):
         names = [names[i] for i in np.unique(np.round(np.linspace(0, len(names) - 1, args.limit)).astype(int))]
+    variants = [v[0] for v in _variants(args.gait_variants)]
     print(f"## push-gaits: {len(names)} gaits of {args.gaits}, {args.workers} workers, one rollout thread each; "
-          f"{load()}")
-    print("| gait | omega r* (s) | J* whole (samples, s, ratio) | J* chunked (samples, s, ratio) |")
-    print("|---|---|---|---|")
+          f"variants {args.gait_variants} (name:verify_chunk/steps[/explore after a failure]); {load()}")
+    print("| gait | omega r* (s) | " + " | ".join(f"J* {k} (samples, attempts, s, ratio; physics ratio)"
+                                                for k in variants) + " |")
+    print("|---|---|" + "---|" * len(variants))
     rows = []
     with blas_threads(1), ProcessPoolExecutor(args.workers) as pool:
-        for r in pool.map(_push_gait, [paths[n] for n in names]):
+        for r in pool.map(_push_gait, [(paths[n], args.gait_variants) for n in names]):
             if "error" in r:
-                print(f"| {r['gait']} | {r['error']} | | |", flush=True)
+                print(f"| {r['gait']} | {r['error']} |" + " |" * len(variants), flush=True)
                 continue
             rows.append(r)
             o = r["omega"]
             print(f"| {r['gait']} | {o['r_star']:.3f} ({o['seconds']:.1f}) | " + " | ".join(
-                f"{r[k]['r_star']:.2f} ({r[k]['samples']}, {r[k]['seconds']:.1f}, "
-                f"{r[k]['seconds'] / o['seconds']:.2f}×)" for k in ("whole", "chunked")) + " |", flush=True)
-    for k in ("whole", "chunked"):
+                f"{r[k]['r_star']:.2f} ({r[k]['samples']}, {r[k]['attempts']}, {r[k]['seconds']:.1f}, "
+                f"{r[k]['seconds'] / o['seconds']:.2f}×; {r[k]['physics'] / o['physics']:.2f}×)"
+                for k in variants) + " |", flush=True)
+    if not rows:
+        return
+    for k in variants:
         ratio = np.array([r[k]["seconds"] / r["omega"]["seconds"] for r in rows])
         phys = np.array([r[k]["physics"] / r["omega"]["physics"] for r in rows])
+        attempts = np.array([r[k]["attempts"] for r in rows])
         print(f"J* {k}: time over omega/ball median {np.median(ratio):.2f}× ({ratio.min():.2f}–{ratio.max():.2f}), "
-              f"≤ 2× on {int((ratio <= 2).sum())} of {ratio.size}; physics steps median {np.median(phys):.2f}×; "
-              f"samples median {np.median([r[k]['samples'] for r in rows]):.0f}")
-    dj = np.array([r["chunked"]["r_star"] - r["whole"]["r_star"] for r in rows])
-    print(f"J* chunked − whole: median {np.median(dj):+.2f} N s ({dj.min():+.2f} to {dj.max():+.2f}); {load()}")
+              f"≤ 2× on {int((ratio <= 2).sum())} of {ratio.size}; physics steps median {np.median(phys):.2f}× "
+              f"(≤ 2× on {int((phys <= 2).sum())}); samples median {np.median([r[k]['samples'] for r in rows]):.0f}; "
+              f"verification attempts 1/2/3+: {int((attempts == 1).sum())}/{int((attempts == 2).sum())}/"
+              f"{int((attempts >= 3).sum())}")
+    for k in variants[1:]:
+        dj = np.array([r[k]["r_star"] - r[variants[0]]["r_star"] for r in rows])
+        print(f"J* {k} − {variants[0]}: median {np.median(dj):+.2f} N s ({dj.min():+.2f} to {dj.max():+.2f})")
+    _validation_check(rows, variants)
+    print(load())
 
 
 def main() -> None:
@@ -509,6 +563,9 @@ def main() -> None:
     ap.add_argument("--gaits", default="", help="push-gaits: a glob of gait files (one per directory name)")
     ap.add_argument("--limit", type=int, default=0, help="push-gaits: at most N gaits, evenly spaced by name")
     ap.add_argument("--workers", type=int, default=2, help="push-gaits: worker processes")
+    ap.add_argument("--gait-variants", default="whole:0/3,chunked:25/3",
+                    help="push-gaits: J* variants name:verify_chunk/steps[/explore_after_failure] (default "
+                         "whole:0/3,chunked:25/3)")
     ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")
     args = ap.parse_args()
     if args.repeat < 2:
