@@ -1,7 +1,8 @@
 """Certificates r*: precision and cost of the estimators on real gaits, coverage of the confidence statement on
 maps with known answers, both barriers, and the sampler's speed against raw ``mujoco.rollout``.
 
-    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed|horizon|states|push|push-gaits] [options]
+    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed|horizon|states|push|push-gaits|push-sweep]
+        [options]
 
 * ``seeds`` (issue 7 acceptance): the default ``exo`` gait (regenerated here with the API from the default
   ``GaitParams``, or ``--exo-gait FILE``; ``--step-length`` etc. change the parameters) and the Atalante FROST
@@ -31,6 +32,9 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
   (default: whole verification batches, ``push.verify_chunk = 0``, and as shipped, chunked), one after the other in
   one worker: their wall-time and physics-step ratios and verification attempts; then each variant's check against
   the gaits' validation pushes in ``benchmarks/data/bench_predict_exo.jsonl`` (pushes ≤ J* that fell).
+* ``push-sweep`` (not part of ``all``): where one exo gait's pushes fail (the default gait or ``--exo-gait``): its J*,
+  the falls the estimator met below ``--near`` × J* (direction, phase, step, reason), and grids of fall steps over
+  24 directions × 13 phases at ``--sweep`` × J*.
 """
 
 from __future__ import annotations
@@ -536,11 +540,55 @@ def cmd_push_gaits(args: argparse.Namespace) -> None:
     print(load())
 
 
+def cmd_push_sweep(args: argparse.Namespace) -> None:
+    """Where a gait's pushes fail: its J* (default certificate), the falls the estimator met below
+    ``--near`` × J* (impulse, direction, phase, fall step and reason), then pushes at fixed impulses
+    (``--sweep`` × J*) over 24 directions × 13 phases of the validation's range: a grid of fall steps."""
+    from robustgait.config import ValidateConfig
+    from robustgait.push import PushMap, push_phase
+
+    robot, gait = gaits(args)["exo"]
+    cfg = CertifyConfig()
+    vcfg = ValidateConfig()
+    with ReturnMap(robot, gait, cfg, SimConfig(n_threads=args.threads)) as pmap:
+        fp = pmap.find_fixed_point()
+        pm = PushMap(pmap.engine, fp, vcfg, cfg.push.steps)
+        t0 = time.perf_counter()
+        cert = certify_map_sequential(pm, np.zeros(2), cfg)
+        j_star = cert.r_star
+        d = np.linalg.norm(cert.samples, axis=1)
+        near = np.flatnonzero(cert.fell & (d < args.near * j_star))
+        print(f"## push-sweep: {args.exo_gait or 'the default exo gait'}: J* {j_star:.2f} N s "
+              f"({cert.n_samples} pushes, {sum(r.kind == 'verify' for r in cert.rounds)} verification attempts, "
+              f"{time.perf_counter() - t0:.1f} s); falls below {args.near} J*: {near.size}")
+        if near.size:
+            j = cert.samples[near]
+            phase = push_phase(j, *vcfg.push_phase)
+            _, reasons, steps = pm.walk(j, phase)
+            for k in np.argsort(d[near]):
+                print(f"  |J| {d[near][k]:6.2f} N s, direction {math.degrees(math.atan2(j[k, 1], j[k, 0])):5.0f}°, "
+                      f"phase {phase[k]:.2f}: fell in step {steps[k]} ({reasons[k]})")
+        directions = np.arange(-180, 180, 15)
+        phases = np.linspace(vcfg.push_phase[0], vcfg.push_phase[1], 13)
+        dd, pp = np.meshgrid(np.radians(directions), phases, indexing="ij")
+        for f in (float(x) for x in args.sweep.split(",")):
+            mag = f * j_star
+            j = mag * np.stack([np.cos(dd.ravel()), np.sin(dd.ravel())], axis=1)
+            alive, _, steps = pm.walk(j, pp.ravel())
+            grid = steps.reshape(dd.shape)
+            print(f"|J| = {f:g} J* = {mag:.2f} N s: {int((~alive).sum())} of {alive.size} pushes fall "
+                  f"({100 * (~alive).mean():.1f} %); rows: direction in the heading frame (0° forward, 90° left), "
+                  f"columns: phase {phases[0]:.2f} … {phases[-1]:.2f}; '.' walked, digit: the step it fell in")
+            for a, deg in enumerate(directions):
+                print(f"  {deg:5d}°  " + "".join("." if g == 0 else str(min(g, 9)) for g in grid[a]))
+    print(load())
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("part", nargs="?", default="all",
                     choices=("all", "seeds", "coverage", "barrier", "speed", "horizon", "states", "push",
-                             "push-gaits"))
+                             "push-gaits", "push-sweep"))
     ap.add_argument("--seeds", type=int, default=10, help="seeds: seeds per gait and method (default 10)")
     ap.add_argument("--methods", default="uniform,sequential")
     ap.add_argument("--epsilon", type=float, default=0.02)
@@ -566,6 +614,8 @@ def main() -> None:
     ap.add_argument("--gait-variants", default="whole:0/3,chunked:25/3",
                     help="push-gaits: J* variants name:verify_chunk/steps[/explore_after_failure] (default "
                          "whole:0/3,chunked:25/3)")
+    ap.add_argument("--near", type=float, default=1.2, help="push-sweep: list the falls below this × J* (1.2)")
+    ap.add_argument("--sweep", default="0.8,1.0,1.1", help="push-sweep: impulses of the grids, × J* (0.8,1.0,1.1)")
     ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")
     args = ap.parse_args()
     if args.repeat < 2:
@@ -574,8 +624,8 @@ def main() -> None:
           f"{mujoco.__version__}; numpy {np.__version__}; {load()}")
     for part, fn in (("seeds", cmd_seeds), ("coverage", cmd_coverage), ("barrier", cmd_barrier), ("speed", cmd_speed),
                      ("horizon", cmd_horizon), ("states", cmd_states), ("push", cmd_push),
-                     ("push-gaits", cmd_push_gaits)):
-        if args.part == part or (args.part == "all" and part != "push-gaits"):
+                     ("push-gaits", cmd_push_gaits), ("push-sweep", cmd_push_sweep)):
+        if args.part == part or (args.part == "all" and part not in ("push-gaits", "push-sweep")):
             fn(args)
 
 

@@ -13,6 +13,7 @@ from robustgait.poincare import ReturnMap
 from robustgait.push import PushMap, push_phase
 from robustgait.report import plot_certificate
 from robustgait.rotations import quat_to_mat
+from robustgait.sim.engine import FALL_REASONS
 from robustgait.validate import Validator
 from robustgait.validate.disturbances import Draws
 
@@ -47,6 +48,11 @@ def test_multicontact_zero_push_walks_and_the_push_map_is_the_validation_walk(mc
     falls = pm.fall_step[-1]
     assert np.all(np.isnan(out[falls > 0])) and np.all(out[falls == 0] == 0)
     assert falls[0] == 0 and falls[-1] > 0  # no push walks; 120 N s (≈ 1.7 m/s on 70 kg) falls
+    alive, reasons, steps = pm.walk(j, push_phase(j, 0.0, 0.6))  # the map is the walk at the hashed phases
+    np.testing.assert_array_equal(steps, falls)
+    assert np.array_equal(alive, falls == 0)
+    assert all((r is None) == ok for r, ok in zip(reasons, alive, strict=True))
+    assert all(r in FALL_REASONS for r, ok in zip(reasons, alive, strict=True) if not ok)
     r = quat_to_mat(fp.qpos[3:7])
     heading = math.atan2(r[1, 0], r[0, 0])
     draws = Draws("push", np.linalg.norm(j, axis=1),

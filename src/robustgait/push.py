@@ -79,20 +79,29 @@ class PushMap:
         self.physics_steps = 0
         self.fall_step: list[NDArray[np.int64]] = []  # per call: the 1-based step each sample fell in (0: none)
 
-    def __call__(self, impulse: FloatArray, progress: Callable[[int], None] | None = None) -> FloatArray:
+    def walk(self, impulse: FloatArray, phase: FloatArray) -> tuple[NDArray[np.bool_], list[str | None],
+                                                                   NDArray[np.int64]]:
+        """Push the robot with impulses J (N, 2) [N s, heading frame] starting at the phases φ (N,) of the step and
+        walk ``steps`` more: whether each walked, its fall reason and the 1-based step it fell in (0: none). The
+        map (:meth:`__call__`) is this walk at the phases of :func:`push_phase`; an explicit φ maps a gait's failing
+        set over direction and phase (``benchmarks/bench_certify.py push-sweep``)."""
         j = np.atleast_2d(np.asarray(impulse, dtype=float))
         n = j.shape[0]
         eng, cfg = self.engine, self.validate
-        phase = push_phase(j, *cfg.push_phase)
-        wrench = push_series(j, phase, self.heading, cfg.push_duration, self.step_duration, eng.robot.dt,
-                             self.window)
+        wrench = push_series(j, np.asarray(phase, dtype=float), self.heading, cfg.push_duration, self.step_duration,
+                             eng.robot.dt, self.window)
         qpos, qvel = np.tile(self.fp.qpos, (n, 1)), np.tile(self.fp.qvel, (n, 1))
-        alive, _, fall_step, _, physics = simulate_trials(eng, qpos, qvel, 1 + self.steps, 1,
-                                                          pushed_first_step(eng, wrench), first_at=0)
+        alive, reasons, fall_step, _, physics = simulate_trials(eng, qpos, qvel, 1 + self.steps, 1,
+                                                                pushed_first_step(eng, wrench), first_at=0)
         self.physics_steps += physics
+        return alive, reasons, fall_step
+
+    def __call__(self, impulse: FloatArray, progress: Callable[[int], None] | None = None) -> FloatArray:
+        j = np.atleast_2d(np.asarray(impulse, dtype=float))
+        alive, _, fall_step = self.walk(j, push_phase(j, *self.validate.push_phase))
         if progress is not None:
-            progress(n)
+            progress(j.shape[0])
         self.fall_step.append(fall_step)
-        out = np.zeros((n, 2))
+        out = np.zeros((j.shape[0], 2))
         out[~alive] = np.nan
         return out
