@@ -24,9 +24,10 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
   the samples whose image is farther from x̄* than they started against the τ of the others.
 * ``states`` (issue 18 item 7): on the default exo gait, ``--seeds`` sequential certificates of each state × set
   and the push certificate, one after the other in the same run: r*, E*, wall time and its ratio to ``omega``'s.
-* ``push`` (issue 18 item 7, J*'s cost): on the default exo gait, ``--seeds`` omega/ball certificates, then the
-  push certificate J* for each ``--push-variants`` tuple (first round / exploration / exploration after a failed
-  verification / steps after the push), same run: J*, samples, physics steps, wall and its ratio to omega/ball's.
+* ``push`` (issue 18 item 7, J*'s cost): on the default exo gait (or ``--exo-gait``), ``--seeds`` omega/ball
+  certificates, then the push certificate J* for each ``--push-variants`` tuple (first round / exploration /
+  exploration after a failed verification / steps after the push), same run: J*, samples, physics steps, wall and
+  its ratio to omega/ball's.
 * ``push-gaits`` (issue 18 item 7 over many gaits; not part of ``all``): per gait of ``--gaits`` (a glob, e.g. the
   gait files of studies; ``--limit`` of them evenly spaced), omega/ball, then J* for each ``--gait-variants``
   (default: whole verification batches, ``push.verify_chunk = 0``, and as shipped, chunked), one after the other in
@@ -400,17 +401,15 @@ def cmd_states(args: argparse.Namespace) -> None:
 
 
 def cmd_push(args: argparse.Namespace) -> None:
-    """J*'s cost against the omega/ball certificate on the same gait, same run, per push round sizes and steps."""
+    """J*'s cost against the omega/ball certificate on the same gait (the default exo gait or ``--exo-gait``), same
+    run, per push round sizes and steps; J*'s spread over ``--seeds``."""
     from robustgait.config.certify import PushConfig
-    from robustgait.gaitgen import generate_gait
 
     sim = SimConfig(n_threads=args.threads)
-    exo = load_robot("exo")
-    res = generate_gait(exo, GaitParams())
-    assert res.gait is not None
+    exo, gait = gaits(args)["exo"]
     variants = [tuple(int(v) for v in t.split("/")) for t in args.push_variants.split(",")]
-    print(f"## push: default exo gait, {args.seeds} seeds each, sequential; J* per (first round / exploration / "
-          f"exploration after a failure / steps after the push) against omega/ball; {load()}")
+    print(f"## push: {args.exo_gait or 'default exo gait'}, {args.seeds} seeds each, sequential; J* per (first round / "
+          f"exploration / exploration after a failure / steps after the push) against omega/ball; {load()}")
     print("| certificate | J* or r* mean (range) | samples | physics steps | wall: mean (range) | "
           "ratio to omega/ball |")
     print("|---|---|---|---|---|---|")
@@ -419,7 +418,7 @@ def cmd_push(args: argparse.Namespace) -> None:
             first_round=f, explore=e, explore_after_failure=a, steps=k))) for f, e, a, k in variants]
     base = None
     for name, cfg in cfgs:
-        gcs = [certify_gait(exo, res.gait, replace(cfg, seed=s), sim) for s in range(args.seeds)]
+        gcs = [certify_gait(exo, gait, replace(cfg, seed=s), sim) for s in range(args.seeds)]
         r = np.array([g.r_star for g in gcs])
         wall = np.array([g.seconds["total"] for g in gcs])
         base = wall.mean() if base is None else base
