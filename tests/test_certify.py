@@ -318,8 +318,26 @@ def test_push_certificate(exo, exo_gait):
     d = np.linalg.norm(c.samples, axis=1)
     assert np.all(np.isnan(c.images[c.fell])) and np.all(c.images[~c.fell] == 0)
     assert c.r_star == pytest.approx(d[c.fell].min() if c.fell.any() else 100.0)
-    assert "N s" in gc.statement() and "pushes" in gc.statement()
+    text = gc.statement()
+    assert "N s" in text and "pushes" in text and "union bound over the 13 possible choices of J*" in text
+    assert f"the {c.n_inside} with |J|" in text and "ball" not in text and "r*" not in text
     assert gc.to_dict()["push"]["duration"] == 0.1
+
+
+def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_gait):
+    """The statement of a sequential J* names its passing batch (size and attempt, from the rounds) in pushes and
+    the disk, not the state certificate's ball and r*."""
+    gc = certify_gait(exo, exo_gait, CertifyConfig(
+        disturbance="push", seed=3, push={"steps": 1, "first_round": 8, "explore": 8, "explore_after_failure": 8},
+        sequential=SequentialConfig(epsilon=0.2, budget=400)))
+    c = gc.certificate
+    verify = [r for r in c.rounds if r.kind == "verify"]
+    assert gc.ok and c.method == "sequential" and verify[-1].passed and c.violation_bound <= 0.2
+    text = gc.statement()
+    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed all walked "
+            f"(verification attempt {len(verify)}:") in text
+    assert f"none of the {c.n_samples} pushes of its {len(c.rounds)} rounds" in text
+    assert "ball" not in text and "r*" not in text
 
 
 def test_cli_validate_refuses_a_certificate_of_another_state(capsys, tmp_path):

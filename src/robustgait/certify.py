@@ -100,10 +100,20 @@ class GaitCertificate:
         if cfg.disturbance != "push" or c.vacuous or c.budget_exhausted:
             return c.statement()
         v = self.validate or ValidateConfig()
+        inside = "≤" if c.attained else "<"
+        if c.method == "sequential":
+            verify = [r for r in c.rounds if r.kind == "verify"]
+            n_a, attempt = verify[-1].n_samples, len(verify)
+            basis = (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed all walked "
+                     f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}), and none of the "
+                     f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* fell")
+        else:
+            basis = (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
+                     f"with |J| {inside} J* all walked (union bound over the {c.n_samples + 1} possible choices of J*)")
         return (f"With confidence {100.0 * c.confidence:g}%, at most {100.0 * c.violation_bound:.3g}% of the pushes "
-                f"with impulse |J| ≤ J* = {c.r_star:.4g} N s (uniform in that disk; {v.push_duration:g} s long, "
+                f"with impulse |J| {inside} J* = {c.r_star:.4g} N s (uniform in that disk; {v.push_duration:g} s long, "
                 f"starting at a phase in [{v.push_phase[0]:g}, {v.push_phase[1]:g}] of the step) make the robot fall "
-                f"within that step and {cfg.push.steps} more: {c.basis}.")
+                f"within that step and {cfg.push.steps} more: {basis}.")
 
     def to_dict(self, *, samples: bool = True) -> dict[str, Any]:
         """JSON-ready; everything but ``seconds`` is deterministic for a given seed."""
