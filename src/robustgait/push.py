@@ -27,7 +27,7 @@ from robustgait.config import ValidateConfig
 from robustgait.poincare import FixedPoint
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import StepEngine
-from robustgait.sim.trials import pushed_first_step, simulate_trials
+from robustgait.sim.trials import pushed_first_step, simulate_trials, wrench_window
 
 FloatArray = NDArray[np.float64]
 
@@ -39,17 +39,6 @@ def push_phase(impulse: FloatArray, low: float, high: float) -> FloatArray:
     u = np.array([int.from_bytes(hashlib.blake2b(row.tobytes(), digest_size=8).digest(), "little") / 2.0**64
                   for row in j])
     return np.asarray(low + u * (high - low))
-
-
-def wrench_window(force: FloatArray, start: NDArray[np.int64], width: int, horizon: int) -> FloatArray:
-    """Base wrench series (N, horizon, 6) [N, N m]: the horizontal world-frame force (N, 2) of push i over the
-    physics steps [start_i, start_i + width) (cut at the horizon), zero elsewhere. Shared by the push map and the
-    validation's pushes (:func:`robustgait.validate.disturbances.push_wrench`)."""
-    out = np.zeros((force.shape[0], horizon, 6))
-    for i in range(force.shape[0]):
-        a = min(int(start[i]), horizon)
-        out[i, a:a + width, :2] = force[i]
-    return out
 
 
 def push_series(impulse: FloatArray, phase: FloatArray, heading: float, duration: float, period: float, dt: float,

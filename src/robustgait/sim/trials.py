@@ -103,6 +103,18 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
     return alive, reasons, fall_step, first, physics
 
 
+def wrench_window(force: FloatArray, start: NDArray[np.int64], width: int, horizon: int) -> FloatArray:
+    """Base wrench series (N, horizon, 6) [N, N m]: the horizontal world-frame force (N, 2) of push i over the
+    physics steps [start_i, start_i + width) (cut at the horizon), zero elsewhere. Shared by the push map
+    (:func:`robustgait.push.push_series`) and the validation's pushes
+    (:func:`robustgait.validate.disturbances.push_wrench`)."""
+    out = np.zeros((force.shape[0], horizon, 6))
+    for i in range(force.shape[0]):
+        a = min(int(start[i]), horizon)
+        out[i, a:a + width, :2] = force[i]
+    return out
+
+
 def pushed_first_step(engine: StepEngine, wrench: FloatArray) -> Inputs:
     """Inputs that apply a base wrench series (K, H, 6) over the first step of each trial, counted from the trial's
     start across the step's segments (a multi-contact step starts in the previous leg's rolling double support, so

@@ -49,9 +49,9 @@ from numpy.typing import NDArray
 
 from robustgait.config import KINDS, ValidateConfig
 from robustgait.errors import RobustGaitError
-from robustgait.push import wrench_window
 from robustgait.robots import Robot
 from robustgait.robots.model import CONTACT_SENSORS
+from robustgait.sim.trials import wrench_window
 
 # name and unit of the size axis of each kind
 SIZE_LABELS = {
