@@ -26,15 +26,17 @@ from typing import Any, Literal
 
 from robustgait.errors import RobustGaitError, input_error
 
-OutputKind = Literal["json", "csv", "plot", "video", "html"]
+OutputKind = Literal["json", "csv", "plot", "video", "html", "toml"]
 FORMATS: dict[str, tuple[str, ...]] = {
     "json": (".json",),
     "csv": (".csv",),
     "plot": (".png", ".pdf", ".svg"),
     "video": (".mp4", ".gif"),
     "html": (".html",),
+    "toml": (".toml",),
 }
-_LABELS = {"json": "JSON output", "csv": "CSV output", "plot": "plot", "video": "video", "html": "HTML report"}
+_LABELS = {"json": "JSON output", "csv": "CSV output", "plot": "plot", "video": "video", "html": "HTML report",
+           "toml": "spec TOML"}
 FORBIDDEN_ROOTS = (Path("/proc"), Path("/sys"), Path("/dev"))
 _TMP_PREFIX = ".robustgait-"
 
