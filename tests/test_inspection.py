@@ -455,6 +455,21 @@ def test_init_and_check_on_booster_t1(tmp_path: Path, capsys: pytest.CaptureFixt
     assert code == 0 and "t1: all 5 checks passed" in out
 
 
+@needs_t1
+def test_init_on_booster_t1_as_the_menagerie_has_it(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The Menagerie's t1.xml has unnamed foot boxes and no floor (our copy names them and adds one)."""
+    xml = T1.read_text().replace(' name="left_foot_box"', "").replace(' name="right_foot_box"', "")
+    xml = xml.replace('<geom name="floor" type="plane" size="0 0 0.05" rgba="0.8 0.8 0.8 1"/>', "")
+    assert 'type="plane"' not in xml and 'name="left_foot_box"' not in xml
+    spec = tmp_path / "t1.toml"
+    code, out, err = run(capsys, "robot", "init", write(tmp_path, xml, "t1.xml"), "-o", spec)
+    raw = tomllib.loads(spec.read_text())
+    assert code == 0, err
+    assert raw["legs"]["left"] == {"sole_body": "left_foot_link"} and raw["add_floor"] is True
+    code, out, _ = run(capsys, "robot", "check", spec)
+    assert code == 0 and "t1: all 5 checks passed" in out
+
+
 # ----------------------------------------------------------------------------------------------- bad input
 BAD_MODELS = {
     "no free joint": (lambda: biped_xml(freejoint=False, keyframe=False), "no free joint"),
