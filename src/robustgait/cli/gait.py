@@ -62,7 +62,7 @@ def _generate(args: argparse.Namespace) -> int:
               f"({res.solve_seconds / max(res.iterations, 1) * 1e3:.0f} ms/iteration), ∫‖u‖²dt = {res.objective:.4g}")
         print(f"physics check passed: dynamics residual {c.dynamics_residual:.1e} (MuJoCo), periodicity "
               f"{c.periodicity:.1e}, min normal force {c.min_normal_force:.0f} N, friction |f_t|/f_z ≤ "
-              f"{c.friction_ratio:.2f}, CoP margin {c.cop_margin * 1e3:.1f} mm")
+              f"{c.friction_ratio:.2f}, {c.cop_text()}")
         print(f"wrote {args.output}")
     return 0
 
