@@ -104,16 +104,21 @@ class GaitCertificate:
         if c.method == "sequential":
             verify = [r for r in c.rounds if r.kind == "verify"]
             n_a, attempt = verify[-1].n_samples, len(verify)
-            basis = (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed all walked "
+            basis = (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed all recovered "
                      f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}), and none of the "
-                     f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* fell")
+                     f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* failed")
         else:
             basis = (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
-                     f"with |J| {inside} J* all walked (union bound over the {c.n_samples + 1} possible choices of J*)")
+                     f"with |J| {inside} J* all recovered (union bound over the {c.n_samples + 1} possible choices of "
+                     "J*)")
+        p = cfg.push
+        fail = ("make the robot fall within that step and {k} more" if not p.recovery else
+                "make the robot fall within that step and {k} more, or leave it off its orbit at their end (base "
+                f"velocity farther than {p.recovery_radius:g} in Froude units, or {p.recovery_scatter:g}× its "
+                "undisturbed scatter, from x*'s)").format(k=p.steps)
         return (f"With confidence {100.0 * c.confidence:g}%, at most {100.0 * c.violation_bound:.3g}% of the pushes "
                 f"with impulse |J| {inside} J* = {c.r_star:.4g} N s (uniform in that disk; {v.push_duration:g} s long, "
-                f"starting at a phase in [{v.push_phase[0]:g}, {v.push_phase[1]:g}] of the step) make the robot fall "
-                f"within that step and {cfg.push.steps} more: {basis}.")
+                f"starting at a phase in [{v.push_phase[0]:g}, {v.push_phase[1]:g}] of the step) {fail}: {basis}.")
 
     def to_dict(self, *, samples: bool = True) -> dict[str, Any]:
         """JSON-ready; everything but ``seconds`` is deterministic for a given seed."""
@@ -295,7 +300,7 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         if push:
             assert vcfg is not None
             coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
-            pushes = PushMap(pmap.engine, fp, vcfg, cfg.push.steps)
+            pushes = PushMap(pmap.engine, fp, vcfg, cfg.push)
             cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}")
             steps = pushes.physics_steps
         else:
