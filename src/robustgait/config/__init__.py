@@ -61,7 +61,15 @@ from robustgait.config.certify import (
     verification_beta,
     verification_size,
 )
-from robustgait.config.gait import DEFAULT_STEP_DURATION, DomainGraph, GaitParams, GenerationConfig, Stance
+from robustgait.config.gait import (
+    DEFAULT_STEP_DURATION,
+    GAIT_FORMATS,
+    DomainGraph,
+    GaitFormat,
+    GaitParams,
+    GenerationConfig,
+    Stance,
+)
 from robustgait.config.sim import Controller, SimConfig, Switching
 from robustgait.config.study import (
     CompareConfig,
@@ -192,6 +200,7 @@ __all__ = [
     "DEFAULT_STEP_DURATION",
     "DEMO_DIRECTORY",
     "DEMO_ROBOT",
+    "GAIT_FORMATS",
     "KINDS",
     "PRESETS",
     "R_MAX_UNIT",
@@ -212,6 +221,7 @@ __all__ = [
     "EllipsoidConfig",
     "FieldInfo",
     "Frame",
+    "GaitFormat",
     "GaitParams",
     "GenerationConfig",
     "LearnerConfig",

@@ -10,6 +10,9 @@ from robustgait.config.base import Doc, FieldProblem, Float, Int, Str, config
 
 DomainGraph = Literal["flat", "multicontact"]
 Stance = Literal["left", "right"]
+# The file formats a gait is written in (``gait convert --to``): robustgait's JSON, a FROST/ambersim YAML.
+GaitFormat = Literal["json", "frost"]
+GAIT_FORMATS: tuple[GaitFormat, ...] = ("json", "frost")
 
 # The step duration of each domain graph when none is given [s]: multi-contact gaits of 0.7 s solve but do not
 # walk on exo (the 0.14 s of rolling is too fast for the simulator's soft contacts; measured, docs/gaitgen.md),
