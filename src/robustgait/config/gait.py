@@ -49,6 +49,12 @@ class GaitParams:
             raise ValueError("step_duration is not set: use GaitParams.resolved(domains)")
         return self.step_duration
 
+    def domain_durations(self, domains: str) -> list[float]:
+        """Duration of each domain of a step [s]: T (flat), or T (1 − ρ) single and T ρ rolling double support
+        (multi-contact)."""
+        t = self.resolved(domains).duration
+        return [t] if domains == "flat" else [t * (1 - self.rolling_fraction), t * self.rolling_fraction]
+
     def to_dict(self) -> dict[str, float]:
         """The five values (resolved parameters only: a gait file stores its actual step duration)."""
         return {"step_length": self.step_length, "step_duration": self.duration, "step_width": self.step_width,
