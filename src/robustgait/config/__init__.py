@@ -64,11 +64,14 @@ from robustgait.config.certify import (
 from robustgait.config.gait import (
     DEFAULT_STEP_DURATION,
     GAIT_FORMATS,
+    ROBOT_SCALED,
     DomainGraph,
     GaitFormat,
     GaitParams,
     GenerationConfig,
+    RobotScale,
     Stance,
+    relative_generation_defaults,
 )
 from robustgait.config.sim import Controller, SimConfig, Switching
 from robustgait.config.study import (
@@ -125,6 +128,8 @@ class Config:
             "gait.step_duration": f"not set: {DEFAULT_STEP_DURATION[d]:g} s, the default of {d} gaits",
             "certify.r_max": "not set: " + ", ".join(f"{v:g} {R_MAX_UNIT[k]} ({k})" for k, v in DEFAULT_R_MAX.items()),
             "generate.ds_free_joints": "not set: picked from the joint axes",
+            **{f"generate.{k}": "not set: the robot spec's [generation] value, else relative to the robot (its help)"
+               for k in ROBOT_SCALED},
             "study.storage": "not set: a SQLite file in the study directory",
             "run.workers": f"not set: min(cores, 2) = {default_workers()} here",
             "run.address": "not set: start a local Ray",
@@ -203,6 +208,7 @@ __all__ = [
     "GAIT_FORMATS",
     "KINDS",
     "PRESETS",
+    "ROBOT_SCALED",
     "R_MAX_UNIT",
     "STATE_CERTIFICATE_FIELDS",
     "STATE_CHOICE_DEFAULTS",
@@ -232,6 +238,7 @@ __all__ = [
     "PreferenceModelConfig",
     "Reconstruction",
     "ReportConfig",
+    "RobotScale",
     "RunConfig",
     "SequentialConfig",
     "SimConfig",
@@ -251,6 +258,7 @@ __all__ = [
     "nest",
     "preset",
     "radius_name",
+    "relative_generation_defaults",
     "study_disturbance",
     "to_dict",
     "to_markdown",
