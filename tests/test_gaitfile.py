@@ -191,3 +191,22 @@ def test_a_line_break_in_a_name_stays_in_the_comment(tmp_path, exo):
     save_frost_yaml(g, tmp_path / "f.yaml")
     raw = yaml.safe_load((tmp_path / "f.yaml").read_text())
     assert raw["step_dur"] == 0.7 and "coeff_b" not in raw
+
+
+def test_a_robot_with_held_joints(tmp_path):
+    """startingPos/startingVel carry every joint (held ones too, MJCF order); the importer takes the held angles
+    from the robot spec, so the gait reads back whole."""
+    from robustgait import load_robot
+    from tests.test_robots_any import biped_spec, biped_xml
+
+    robot = load_robot(biped_spec(tmp_path, xml=biped_xml()))
+    held = tuple((h.name, h.angle) for h in robot.spec.held)
+    g = dataclasses.replace(standing_gait(robot), held=held)
+    save_frost_yaml(g, tmp_path / "b.yaml")
+    raw = yaml.safe_load((tmp_path / "b.yaml").read_text())
+    assert len(raw["coeff_jt"]) == 10 * 8 and len(raw["startingPos"]) == 12
+    back = load_gait(tmp_path / "b.yaml", robot)
+    assert_same_gait(g, back)
+    assert back.held == held == (("left_shoulder", 0.3), ("right_shoulder", 0.3))
+    with pytest.raises(Exception, match=r"startingPos: has 12 values, expected 10 \(one per joint\)"):
+        import_frost_yaml(tmp_path / "b.yaml")  # without the robot nothing says two joints are held

@@ -198,7 +198,8 @@ def import_frost_yaml(path: str | Path, robot: Robot | None = None, stance: str 
     ``coeff_jt`` (m·8 numbers) → β = reshape (m, 8) in Fortran order; ``step_dur`` → T; ``ffPos`` (base
     position + quaternion w, x, y, z, normalized), ``startingPos`` (m) → qpos; ``ffVel`` (6: base linear
     velocity in the world frame, angular velocity in the body frame, as ambersim fed MuJoCo's ``qvel``),
-    ``startingVel`` (m) → qvel (all four or none). The coefficients are for ``stance`` (AMBER's Atalante gaits:
+    ``startingVel`` (m) → qvel (all four or none; a ``robot`` that holds joints: its every joint in the MJCF's order,
+    and the gait holds them at the spec's angles). The coefficients are for ``stance`` (AMBER's Atalante gaits:
     right). ``inputparams`` and the base Bézier ``coeff_b`` are kept in ``meta``. robustgait's own keys
     ``ff_tau`` (K phases) and ``ff_torque`` (K rows of m torques), written by :func:`save_frost_yaml`, are the
     domain's feedforward torques (both or none).
@@ -218,12 +219,14 @@ def import_frost_yaml(path: str | Path, robot: Robot | None = None, stance: str 
         m = n // N_COEF
     beta = np.array(f.coeff_jt, dtype=np.float64).reshape(m, N_COEF, order="F")
     _step_duration(f.step_dur, path, "step_dur")
+    held = tuple((h.name, h.angle) for h in robot.spec.held) if robot is not None else ()
     state = None
     if _all_or_none(f, FROST_STATE_KEYS, path, "the initial state"):
         assert f.ffPos is not None and f.startingPos is not None and f.ffVel is not None and f.startingVel is not None
         for key, values in (("startingPos", f.startingPos), ("startingVel", f.startingVel)):
-            if len(values) != m:
-                raise field_error(path, key, f"has {len(values)} values, expected {m} (one per joint)")
+            if len(values) != m + len(held):
+                raise field_error(path, key, f"has {len(values)} values, expected {m + len(held)} (one per joint"
+                                  + (f", {len(held)} of them held" if held else "") + ")")
         qpos = _unit_quaternion(np.array(f.ffPos + f.startingPos, dtype=np.float64), path, "ffPos")
         state = State(qpos, np.array(f.ffVel + f.startingVel, dtype=np.float64))
     ff_tau = ff_torque = None
@@ -239,7 +242,7 @@ def import_frost_yaml(path: str | Path, robot: Robot | None = None, stance: str 
     return Gait(robot=robot.name if robot is not None else "unknown", domain_graph="flat", stance=stance,
                 joints=robot.spec.joints if robot is not None else (),
                 domains=(Domain("single_support", float(f.step_dur), beta, ff_tau, ff_torque),),
-                initial_state=state, meta=meta)
+                initial_state=state, meta=meta, held=held)
 
 
 def load_gait(path: str | Path, robot: Robot | None = None) -> Gait:
@@ -304,9 +307,10 @@ def frost_yaml_dict(gait: Gait, src: str | Path = "<gait>") -> dict[str, Any]:
     """The FROST/ambersim mapping of ``gait``, the inverse of :func:`import_frost_yaml` (``docs/gaits.md``).
 
     ``coeff_jt`` = β (m, 8) raveled in Fortran order (FROST's ``OutputParams(:)``); ``step_dur`` = T; the
-    initial state as ``ffPos`` (qpos[:7]), ``startingPos`` (qpos[7:]), ``ffVel`` (qvel[:6]), ``startingVel``
-    (qvel[6:]); FROST's ``coeff_b`` and ``inputparams`` kept in ``meta`` by the importer; the feedforward as
-    robustgait's ``ff_tau`` (K) and ``ff_torque`` (K, m). A gait the layout cannot hold is refused, one line:
+    initial state as ``ffPos`` (qpos[:7]), ``startingPos`` (qpos[7:], every joint: held ones too, whose angles the
+    importer takes from the robot spec), ``ffVel`` (qvel[:6]), ``startingVel`` (qvel[6:]); FROST's ``coeff_b`` and
+    ``inputparams`` kept in ``meta`` by the importer; the feedforward as robustgait's ``ff_tau`` (K) and
+    ``ff_torque`` (K, m). A gait the layout cannot hold is refused, one line:
     more than one domain (a multi-contact gait: ambersim's file is one domain), or a left stance (the importer
     reads the coefficients as right-stance). Params, the solver report, the other meta, the pre-impact state
     and the joint names are not written: none of them is needed to walk the gait.
