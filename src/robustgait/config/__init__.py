@@ -64,8 +64,10 @@ from robustgait.config.certify import (
 )
 from robustgait.config.gait import (
     DEFAULT_STEP_DURATION,
+    GAIT_FORMATS,
     ROBOT_SCALED,
     DomainGraph,
+    GaitFormat,
     GaitParams,
     GenerationConfig,
     RobotScale,
@@ -204,6 +206,7 @@ __all__ = [
     "DEFAULT_STEP_DURATION",
     "DEMO_DIRECTORY",
     "DEMO_ROBOT",
+    "GAIT_FORMATS",
     "KINDS",
     "PRESETS",
     "ROBOT_SCALED",
@@ -225,6 +228,7 @@ __all__ = [
     "EllipsoidConfig",
     "FieldInfo",
     "Frame",
+    "GaitFormat",
     "GaitParams",
     "GenerationConfig",
     "LearnerConfig",

@@ -26,9 +26,9 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from robustgait.certify import GaitCertificate, certify_gait
+from robustgait.certify import GaitCertificate, certify_gait, certify_steps
 from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, PushConfig, SimConfig, ValidateConfig, to_dict
-from robustgait.config.work import check_work
+from robustgait.config.work import Work, check_work
 from robustgait.domains import step_segments
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
@@ -37,7 +37,7 @@ from robustgait.recovery import OrbitBand
 from robustgait.reduced import ReducedState
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
-from robustgait.sim.engine import StepInputs
+from robustgait.sim.engine import StepInputs, step_physics_steps
 from robustgait.sim.factory import make_engine
 from robustgait.sim.trials import Inputs, Segment, orbit_band, pushed_first_step, simulate_trials
 from robustgait.validate import disturbances as dist
@@ -427,12 +427,27 @@ class Validator:
         return self._band if isinstance(self._band, OrbitBand) else None
 
 
-def check_validate_work(robot: Robot, gait: Gait, config: ValidateConfig, sim: SimConfig, what: str = "") -> int:
-    """Bound one disturbance kind's work (one batch of trials, each 1 (or 2, stride map) + ``steps_after``
-    steps) before it starts (:func:`robustgait.config.work.check_work`)."""
-    return check_work(config.trials * (2 + config.steps_after), gait.step_duration * sim.max_step_tau, robot.dt,
-                      f"{what}validate.trials {config.trials} × (validate.steps_after {config.steps_after} + 1) per "
-                      "kind")
+def validate_steps(config: ValidateConfig, kinds: int, certify: CertifyConfig, graph: str, certifying: bool) -> int:
+    """The most steps a validation simulates: the certificate when it computes one (:func:`certify_steps`), or else
+    the search for the fixed point (a multi-contact gait's walk to its first heel strike, then up to
+    ``certify.fp_max_steps`` steps); the undisturbed first step; and per disturbance kind ``trials`` trials of
+    period + ``steps_after`` steps (period 2 at most: the stride map)."""
+    setup = certify_steps(certify, graph) if certifying else (0 if graph == "flat" else 1) + certify.fp_max_steps
+    return setup + 1 + kinds * config.trials * (2 + config.steps_after)
+
+
+def check_validate_work(robot: Robot, gait: Gait, config: ValidateConfig, sim: SimConfig, *, kinds: int = 1,
+                        certify: CertifyConfig | None = None, certifying: bool = False, what: str = "") -> int:
+    """Bound a validation of ``kinds`` disturbance kinds before it starts (:mod:`robustgait.config.work`):
+    :func:`validate_steps`, each step up to the gait's :func:`~robustgait.sim.engine.step_horizons`, against what
+    the default validation of as many kinds (and the default certificate, when ``certifying``) needs here."""
+    graph, cert = gait.domain_graph, certify or CertifyConfig()
+    work = Work(validate_steps(config, kinds, cert, graph, certifying), step_physics_steps(gait, robot.dt, sim))
+    defaults = Work(validate_steps(ValidateConfig(), kinds, CertifyConfig(), graph, certifying),
+                    step_physics_steps(gait, robot.dt, SimConfig()))
+    return check_work(work, defaults, robot.dt, f"{what}validate.trials {config.trials} × (validate.steps_after "
+                      f"{config.steps_after} + 2) steps × {kinds} disturbance kind{'s' if kinds > 1 else ''}"
+                      + (" + the certificate" if certifying else ""))
 
 
 def validate_gait(robot: Robot, gait: Gait, config: ValidateConfig | None = None, *,
@@ -452,7 +467,7 @@ def validate_gait(robot: Robot, gait: Gait, config: ValidateConfig | None = None
     for k in kinds:
         if k not in KINDS:
             raise RobustGaitError(f"unknown disturbance {k!r} (choose from {', '.join(KINDS)} or all)")
-    check_validate_work(robot, gait, config, sim)
+    check_validate_work(robot, gait, config, sim, kinds=len(kinds), certify=certify, certifying=certificate is None)
     t0 = time.perf_counter()
     with Validator(robot, gait, config, certify=certify, sim=sim, certificate=certificate, progress=progress) as v:
         result = ValidationResult(robot=robot.name, gait=_gait_info(gait), certificate=v.certificate,
