@@ -47,6 +47,11 @@ FEET = {
     "box_and_cylinder": ('<geom class="foot" type="box" size="0.1 0.05 0.01" pos="0.03 0 -0.05"/>'
                          '<geom type="cylinder" size="0.03 0.02" pos="0 0 0"/>'),
     "mesh": '<geom type="mesh" mesh="footmesh"/>',
+    # a toe on its own hinge, its box level with the foot's
+    "toe": ('<geom name="{s}_sole" type="box" size="0.06 0.05 0.01" pos="-0.01 0 -0.05"/>'
+            '<body name="{s}_toe" pos="0.05 0 0"><joint name="{s}_toe" axis="0 1 0" range="-0.5 0.5"/>'
+            '<inertial pos="0.03 0 -0.05" mass="0.1" diaginertia="0.0001 0.0001 0.0001"/>'
+            '<geom type="box" size="0.04 0.05 0.01" pos="0.04 0 -0.05"/></body>'),
     "none": "",
 }
 
@@ -329,13 +334,12 @@ def test_init_writes_a_spec_that_loads_and_passes_check(tmp_path: Path, capsys: 
     assert raw["mirror"]["held"]["waist_yaw"] == ["waist_yaw", -1]
     assert raw["posture"]["left_knee"] == 0.6 and raw["legs"]["left"] == {"sole_geom": "left_sole"}
     # every value line carries a comment (but table headers and the names' closing brackets)
+    # (a table's values that share one comment line above them: held angles, posture, mirror, action spaces)
+    shared = {*raw["joints"]["held"], *raw["posture"], *raw["mirror"].get("held", {}), "joint_perm", "joint_sign",
+              *raw["action_space"]["multicontact"], "name", "description"}
     for line in text.splitlines():
         if "=" in line and not line.startswith("#") and not line.endswith("= ["):
-            assert "#" in line or line.split("=")[0].strip() in raw["joints"]["held"] or (
-                line.split("=")[0].strip() in raw["posture"] or line.split("=")[0].strip() in (
-                    "name", "description", "pelvis_roll", "pelvis_yaw", "pelvis_pitch", "swing_tilt", "swing_yaw",
-                    "joint_perm", "joint_sign", "step_length", "step_duration", "step_width", "step_height",
-                    "rolling_fraction") or line.split("=")[0].strip() in raw["mirror"].get("held", {})), line
+            assert "#" in line or line.split("=")[0].strip() in shared, line
     robot = load_robot(spec)
     assert robot.n_joints == 12 and len(robot.spec.held) == 6
     results = run_checks(robot, RobotConfig())
@@ -477,6 +481,7 @@ BAD_MODELS = {
     "no collision geom": (lambda: biped_xml(collide=False), "no sole found"),
     "no foot geom": (lambda: biped_xml(foot="none"), "no area to stand on"),
     "mesh sole": (lambda: biped_xml(foot="mesh"), "is a mesh"),
+    "two-body foot": (lambda: biped_xml(foot="toe", keyframe=False), "foot stands on 2 bodies"),
     # the right shin 3 cm shorter: the feet still stand level within the tolerance, the mirror cannot be right
     "asymmetric": (lambda: biped_xml(right_short=0.03), "the mirror does not reflect the model"),
     "unparsable": (lambda: "<mujoco><worldbody><body></mujoco>", "could not parse"),

@@ -258,6 +258,19 @@ def collides(m: mujoco.MjModel, g1: int, g2: int) -> bool:
     return bool((m.geom_contype[g1] & m.geom_conaffinity[g2]) or (m.geom_contype[g2] & m.geom_conaffinity[g1]))
 
 
+def _one_foot_body(robot: RobotModel, d: mujoco.MjData, leg: Leg, top: int, tol: float) -> None:
+    """Refuse a foot that stands on two bodies (a toe on its own joint): the loader's sole is one body's geoms, and
+    a contact of any other body with the floor is a fall."""
+    m = robot.model
+    others = [b for b, geoms in robot_collision_geoms(robot).items() if b in robot.subtree(top) and b != leg.foot
+              and min(geom_bottom(m, d, g) for g in geoms) <= leg.sole.bottom + tol]
+    if others:
+        names = ", ".join(f"'{robot.body_name(b)}'" for b in [leg.foot, *others])
+        raise input_error(robot.path, f"the {leg.side} foot stands on {len(others) + 1} bodies ({names}) in the "
+                          "posture: robustgait's sole is the geoms of one body, any other body on the floor is a "
+                          "fall (merge them, or lift the others' geoms)")
+
+
 def find_legs(robot: RobotModel, foot_level: float, sole_tolerance: float) -> Legs:
     """Feet, leg chains and soles of the robot in its posture (module docstring)."""
     src = robot.path
@@ -271,6 +284,7 @@ def find_legs(robot: RobotModel, foot_level: float, sole_tolerance: float) -> Le
             raise input_error(src, f"the {side} foot '{robot.body_name(foot)}' has no joint between it and "
                               f"'{robot.body_name(branch)}', where the legs branch")
         legs[side] = Leg(side, joints, find_sole(robot, d, foot, side, sole_tolerance))
+        _one_foot_body(robot, d, legs[side], int(robot.model.jnt_bodyid[joints[0]]), sole_tolerance)
     if len(legs["left"].joints) != len(legs["right"].joints):
         raise input_error(src, f"the legs differ: {len(legs['left'].joints)} joints on the left, "
                           f"{len(legs['right'].joints)} on the right")

@@ -197,6 +197,9 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     gains = {j: pd_gains(loads[j], float(torque[j].value or 0.0), config.bandwidth, config.damping_ratio,
                          config.tracking_error, timestep, integrator) for j in robot.joints}
     gains, radius = coupled_gains(robot, qpos, gains, timestep, integrator)
+    if robot.model.neq:
+        notes.append(f"the model has {robot.model.neq} equality constraint{'s' if robot.model.neq > 1 else ''} "
+                     "(closed linkages?): robustgait's servos drive every joint on its own; check that they agree")
     if asymmetry > 0.0:
         notes.append(f"the posture was not left/right symmetric: made symmetric (largest change {asymmetry:.3g} rad)")
     size = RobotSize(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,

@@ -219,12 +219,13 @@ def _scaled(draft: Draft) -> list[str]:
         "(< 1: stable)",
         "", "[gait_quality]",
         "# angles: robustgait's defaults (no scale); rates ∝ √(g/l), heights ∝ h (robot.scale)",
-        f"pelvis_roll = {num(q.pelvis_roll)}", f"pelvis_yaw = {num(q.pelvis_yaw)}",
-        f"pelvis_pitch = [{num(q.pelvis_pitch[0])}, {num(q.pelvis_pitch[1])}]",
+        f"pelvis_roll = {num(q.pelvis_roll)}  # default (GaitQuality)",
+        f"pelvis_yaw = {num(q.pelvis_yaw)}  # default",
+        f"pelvis_pitch = [{num(q.pelvis_pitch[0])}, {num(q.pelvis_pitch[1])}]  # default",
         f"pelvis_height = [{num(s.pelvis_height[0], 3)}, {num(s.pelvis_height[1], 3)}]  # "
         f"[{rules.pelvis_height[0]:g}, {rules.pelvis_height[1]:g}] × h",
         f"pelvis_angular_velocity = {num(s.angular_velocity, 3)}  # {rules.angular_velocity:g} × {rate}",
-        f"swing_tilt = {num(q.swing_tilt)}", f"swing_yaw = {num(q.swing_yaw)}",
+        f"swing_tilt = {num(q.swing_tilt)}  # default", f"swing_yaw = {num(q.swing_yaw)}  # default",
         f"joint_velocity = {num(s.joint_velocity, 3)}  # {rules.joint_velocity:g} × {rate}",
         "", "[action_space]",
         "# studies search this grid, [low, high, step]: [low, high] = multiples of the [gait] default, a nice step "
