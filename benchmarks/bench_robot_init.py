@@ -12,7 +12,7 @@ with the written spec — its [gait] default and the corners of its action space
 walked ``--steps`` steps: steps walked, tracking RMS and max, saturation.
 
     python benchmarks/bench_robot_init.py rules
-    python benchmarks/bench_robot_init.py t1 [--steps 50] [--out DIR]
+    python benchmarks/bench_robot_init.py t1 [--steps 50] [--out DIR] [--tracking-error 0.1 --default-only]
 """
 
 from __future__ import annotations
@@ -137,8 +137,9 @@ def t1(args: argparse.Namespace) -> None:
 
     out = Path(args.out or tempfile.mkdtemp(prefix="t1-"))
     spec = out / "t1.toml"
-    secs, text = cli("robot", "init", str(T1), "-o", str(spec))
-    print(f"$ robustgait robot init {T1.name} -o {spec.name}   ({secs:.2f} s)\n{text}")
+    extra = ["--tracking-error", str(args.tracking_error)] if args.tracking_error else []
+    secs, text = cli("robot", "init", str(T1), "-o", str(spec), *extra)
+    print(f"$ robustgait robot init {T1.name} -o {spec.name} {' '.join(extra)}  ({secs:.2f} s)\n{text}")
     secs, text = cli("robot", "check", str(spec))
     print(f"$ robustgait robot check {spec.name}   ({secs:.2f} s)\n{text}")
     robot = load_robot(spec)
@@ -148,7 +149,7 @@ def t1(args: argparse.Namespace) -> None:
     space = robot.spec.action_space or {}
     base = robot.default_params
     gaits = [("default", base)]
-    for lk in ("low", "high"):
+    for lk in (() if args.default_only else ("low", "high")):
         for dk in ("low", "high"):
             gaits.append((f"length {lk}, duration {dk}", GaitParams(
                 step_length=getattr(space["step_length"], lk), step_duration=getattr(space["step_duration"], dk),
@@ -175,6 +176,8 @@ def main() -> None:
     t = sub.add_parser("t1")
     t.add_argument("--steps", type=int, default=50)
     t.add_argument("--out", help="directory of the written spec (default: a temporary one)")
+    t.add_argument("--tracking-error", type=float, help="robot init's --tracking-error (default: the config's)")
+    t.add_argument("--default-only", action="store_true", help="walk the spec's default gait only")
     t.set_defaults(func=t1)
     args = p.parse_args()
     args.func(args)

@@ -347,7 +347,7 @@ def test_init_writes_a_spec_that_loads_and_passes_check(tmp_path: Path, capsys: 
     code, out, _ = run(capsys, "robot", "check", spec, "--json")
     report = json.loads(out)
     assert code == 0 and report["passed"] and [c["name"] for c in report["checks"]] == [
-        "mirror", "soles", "torques", "stand", "tracking"]
+        "mirror", "soles", "torques", "stiffness", "stand", "tracking"]
 
 
 def test_an_asymmetric_keyframe_is_made_symmetric(tmp_path: Path) -> None:
@@ -374,7 +374,16 @@ def test_a_broken_mirror_fails_check(tmp_path: Path, capsys: pytest.CaptureFixtu
                                     "joint_sign = [-1, 1, 1, -1, 1, -1, -1, 1, 1, -1, 1, -1]")
     spec.write_text(text)
     code, out, _ = run(capsys, "robot", "check", spec)
-    assert code == 1 and "mirror: FAIL" in out and "1 of 5 checks failed (mirror)" in out
+    assert code == 1 and "mirror: FAIL" in out and "1 of 6 checks failed (mirror)" in out
+
+
+def test_a_servo_weaker_than_gravity_fails_stiffness(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """kp capped at τ_max / 1 rad: the stance ankle is softer than the robot tipping over it (m g h)."""
+    spec = tmp_path / "spec.toml"
+    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, "--tracking-error", "1")
+    robot = load_robot(spec)
+    result = next(r for r in run_checks(robot, RobotConfig()) if r.name == "stiffness")
+    assert not result.passed and result.values["ratio"] < 1 and "ankle" in result.line
 
 
 def test_soft_gains_fail_stand_and_tracking(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -456,7 +465,7 @@ def test_init_and_check_on_booster_t1(tmp_path: Path, capsys: pytest.CaptureFixt
     assert all(0 < kp <= 50 * limits[n] for n, kp in zip(j["names"], j["kp"], strict=True))
     assert raw["legs"]["left"] == {"sole_geom": "left_foot_box"} and raw["floor_geom"] == "floor"
     code, out, _ = run(capsys, "robot", "check", spec)
-    assert code == 0 and "t1: all 5 checks passed" in out
+    assert code == 0 and "t1: all 6 checks passed" in out
 
 
 @needs_t1
@@ -471,7 +480,7 @@ def test_init_on_booster_t1_as_the_menagerie_has_it(tmp_path: Path, capsys: pyte
     assert code == 0, err
     assert raw["legs"]["left"] == {"sole_body": "left_foot_link"} and raw["add_floor"] is True
     code, out, _ = run(capsys, "robot", "check", spec)
-    assert code == 0 and "t1: all 5 checks passed" in out
+    assert code == 0 and "t1: all 6 checks passed" in out
 
 
 # ----------------------------------------------------------------------------------------------- bad input

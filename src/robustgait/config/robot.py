@@ -61,6 +61,8 @@ class ScaleRules:
 class RobotCheckConfig:
     """Thresholds of ``robot check`` (:mod:`robustgait.inspection.check`): a check fails beyond them."""
 
+    stance_stiffness: Annotated[Float, Doc("least ratio of a stance-chain servo's kp to gravity's tipping stiffness "
+                                           "about its joint, on one foot", ge=1.0, le=100.0)] = 2.0
     stand_time: Annotated[Float, Doc("how long the posture stands under its servos", unit="s", gt=0.0,
                                      le=60.0)] = 2.0
     stand_drop: Annotated[Float, Doc("largest drop of the base while standing ÷ the standing height", gt=0.0,
@@ -101,8 +103,9 @@ class RobotConfig:
     tracking_error: Annotated[Float, Doc("kp ≤ torque limit ÷ this error: a larger error saturates anyway",
                                          unit="rad", gt=0.0, le=1.0)] = 0.02
     torque_limit_factor: Annotated[Float, Doc("a joint without a torque limit in the model gets this multiple of "
-                                              "its largest static torque (single support) or of its subtree's "
-                                              "weight × COM distance", ge=1.0, le=100.0)] = 2.0
+                                              "the largest static torque it holds (on one foot, the weight at a "
+                                              "sole's corner, its subtree's weight × COM distance)", ge=1.0,
+                                              le=100.0)] = 2.0
     foot_level: Annotated[Float, Doc("the two feet's lowest points agree within this fraction of the standing "
                                         "height (else one leg)", gt=0.0, le=1.0)] = 0.1
     sole_tolerance: Annotated[Float, Doc("a foot's collision geoms within this height of its lowest point form the "

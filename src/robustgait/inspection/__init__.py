@@ -9,7 +9,8 @@ module          owns
 ``mirror``      the left/right relabeling from names and joint axes, verified by reflecting the model
 ``gains``       PD gains from each joint's reflected inertia, their torque cap and discrete-time stability
 ``scale``       the robot's gait parameters, bounds and margins scaled by its leg length and mass
-``writer``      the commented spec TOML
+``draft``       everything a spec drafted from a model says (robot init), gathered from the modules above
+``writer``      the commented spec TOML and robot init's summary
 ``check``       the checks of a spec: mirror, standing, soles, tracking, torque limits
 =============== ==========================================================================================
 """

@@ -5,6 +5,8 @@ its thresholds in :class:`robustgait.config.RobotCheckConfig` (``docs/robots.md`
 * :func:`check_soles` — in the posture both soles are flat (normal vs vertical) and at one height;
 * :func:`check_torques` — the torque limits hold the posture: the static torques of double support (the weight
   split to need the least of each limit) within a margin of the limits;
+* :func:`check_stiffness` — on one foot, each servo of the stance chain is stiffer than gravity's tipping stiffness
+  about its joint (an inverted pendulum about the ankle: m g h) by a margin;
 * :func:`check_stand` — the posture stands under the servos: free base on the floor for a while; the base's
   drop, tilt and the soles' slide, no fall (the spec's fall criteria), both soles in contact at the end;
 * :func:`check_tracking` — the gains track: the robot hanging (base fixed, contacts off), every planned joint
@@ -22,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.config import RobotCheckConfig, RobotConfig
-from robustgait.inspection.gains import static_torques
+from robustgait.inspection.gains import static_torques, tipping_stiffness
 from robustgait.inspection.mirror import fk_residual, mirror_from_names
 from robustgait.inspection.model import RobotModel, geom_bottom
 from robustgait.robots import Robot
@@ -87,7 +89,7 @@ def check_mirror(robot: Robot, config: RobotConfig) -> CheckResult:
     res = fk_residual(rm, mirror, config.mirror_samples, config.seed)
     ok = res.position <= config.mirror_tolerance and res.angle <= config.mirror_angle_tolerance
     where = "" if ok else f" (worst body '{rm.body_name(res.body)}')"
-    return CheckResult("mirror", ok, f"mirror: {'ok' if ok else 'FAIL'}: forward kinematics of the relabeled "
+    return CheckResult("mirror", bool(ok), f"mirror: {'ok' if ok else 'FAIL'}: forward kinematics of the relabeled "
                        f"configuration vs the reflected one over {res.samples} random configurations: largest residual "
                        f"{res.position:.2g} m, {res.angle:.2g} rad (tolerance {config.mirror_tolerance:g} m, "
                        f"{config.mirror_angle_tolerance:g} rad){where}",
@@ -102,7 +104,7 @@ def check_soles(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     tilt = {s: f[0] for s, f in faces.items()}
     gap = abs(faces["left"][1] - faces["right"][1])
     ok = max(tilt.values()) <= config.sole_tilt and gap <= config.sole_gap
-    return CheckResult("soles", ok, f"soles: {'ok' if ok else 'FAIL'}: in the posture the soles tilt "
+    return CheckResult("soles", bool(ok), f"soles: {'ok' if ok else 'FAIL'}: in the posture the soles tilt "
                        f"{tilt['left']:.3g} (left) and {tilt['right']:.3g} rad (right) from level (at most "
                        f"{config.sole_tilt:g}), their heights differ by {1e3 * gap:.3g} mm (at most "
                        f"{1e3 * config.sole_gap:g})", {"tilt": max(tilt.values()), "gap": gap})
@@ -124,10 +126,36 @@ def check_torques(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     ratio = np.abs(tau[dofs]) / robot.servo_limit
     k = int(np.argmax(ratio))
     ok = float(ratio[k]) <= config.torque_margin
-    return CheckResult("torques", ok, f"torques: {'ok' if ok else 'FAIL'}: holding the posture on both feet needs "
+    return CheckResult("torques", bool(ok),
+                       f"torques: {'ok' if ok else 'FAIL'}: holding the posture on both feet needs "
                        f"at most {100 * ratio[k]:.3g} % of a torque limit ({names[k]}: {abs(tau[dofs[k]]):.3g} of "
                        f"{robot.servo_limit[k]:.3g} N m; at most {100 * config.torque_margin:g} %)",
                        {"ratio": float(ratio[k])})
+
+
+def check_stiffness(robot: Robot, config: RobotCheckConfig) -> CheckResult:
+    """On either foot alone, every servo of the stance chain (the joints from the base down to that foot, planned or
+    held) is stiffer than gravity's tipping stiffness about its joint by ``stance_stiffness``
+    (:func:`robustgait.inspection.gains.tipping_stiffness`): else single support yields and tips over."""
+    rm = inspected(robot)
+    m = robot.model
+    q = standing_qpos(robot, rm)
+    kp = dict(zip([*robot.spec.joints, *robot.spec.held_names], robot.servo_kp, strict=True))
+    worst = (np.inf, "", 0.0, 0.0)
+    for side in SIDES:
+        foot = int(m.geom_bodyid[robot.sole_geom_id[side]])
+        chain = [j for b in [foot, *rm.ancestors(foot)] for j in rm.body_joints(b) if j in rm.joints]
+        for j, k in tipping_stiffness(rm, q, foot, chain).items():
+            name = rm.joint_name(j)
+            if k > 0 and kp[name] / k < worst[0]:
+                worst = (kp[name] / k, name, kp[name], k)
+    ratio, name, gain, k = worst
+    ok = ratio >= config.stance_stiffness
+    what = (f"at least {ratio:.3g} × gravity's tipping stiffness about their joints ({name}: kp {gain:.4g} vs "
+            f"{k:.4g} N m/rad" if name else "unopposed by gravity (no joint tips the robot over")
+    return CheckResult("stiffness", bool(ok),
+                       f"stiffness: {'ok' if ok else 'FAIL'}: on one foot the servos are {what}; "
+                       f"at least {config.stance_stiffness:g} ×)", {"ratio": float(ratio)})
 
 
 def check_stand(robot: Robot, config: RobotCheckConfig) -> CheckResult:
@@ -168,7 +196,8 @@ def check_stand(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     ok = (not fell and touching and drop <= config.stand_drop and tilt <= config.stand_tilt
           and slip <= config.stand_slip * length)
     what = (f"FELL ({fell})" if fell else ("ok" if ok else "FAIL"))
-    return CheckResult("stand", ok, f"stand: {what}: {config.stand_time:g} s on the floor under the servos: the base "
+    return CheckResult("stand", bool(ok),
+                       f"stand: {what}: {config.stand_time:g} s on the floor under the servos: the base "
                        f"dropped {100 * drop:.3g} % of its height (at most {100 * config.stand_drop:g} %), tilted "
                        f"{tilt:.3g} rad (at most {config.stand_tilt:g}), a sole slid {1e3 * slip:.3g} mm (at most "
                        f"{1e3 * config.stand_slip * length:.3g}); soles touching at the end: "
@@ -229,7 +258,7 @@ def check_tracking(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     k = int(np.argmax(rms))
     s = int(np.argmax(frac))
     ok = float(rms[k]) <= config.track_rms and float(frac[s]) <= config.track_saturation
-    return CheckResult("tracking", ok, f"tracking: {'ok' if ok else 'FAIL'}: hanging, each planned joint follows "
+    return CheckResult("tracking", bool(ok), f"tracking: {'ok' if ok else 'FAIL'}: hanging, each planned joint follows "
                        f"{a:g} rad at {config.track_frequency:g} Hz (PD, no feedforward): error RMS at most "
                        f"{100 * rms[k]:.3g} % of the amplitude ({names[k]}; at most {100 * config.track_rms:g} %), "
                        f"at its torque limit at most {100 * frac[s]:.3g} % of the time ({names[s]}; at most "
@@ -239,5 +268,5 @@ def check_tracking(robot: Robot, config: RobotCheckConfig) -> CheckResult:
 def run_checks(robot: Robot, config: RobotConfig) -> list[CheckResult]:
     """Every check of the module docstring, in order."""
     c = config.check
-    return [check_mirror(robot, config), check_soles(robot, c), check_torques(robot, c), check_stand(robot, c),
-            check_tracking(robot, c)]
+    return [check_mirror(robot, config), check_soles(robot, c), check_torques(robot, c), check_stiffness(robot, c),
+            check_stand(robot, c), check_tracking(robot, c)]

@@ -26,6 +26,7 @@ from robustgait.inspection.discover import (
     collides,
     find_floor,
     find_legs,
+    footprint_points,
     torque_limits,
 )
 from robustgait.inspection.gains import (
@@ -102,6 +103,19 @@ def _check_sides(robot: RobotModel, legs: Legs, mirror: Mirror) -> None:
                                   f"'{robot.base_name}' (left is +y): is the base's x axis forward?")
 
 
+def _floor_collides(robot: RobotModel, floor: Floor, legs: Legs) -> None:
+    """Refuse a floor plane that no sole geom can touch (MuJoCo's contype/conaffinity filter)."""
+    if floor.add:
+        return
+    m = robot.model
+    g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, floor.name) if floor.name else next(
+        g for g in robot.body_geoms(0) if int(m.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_PLANE))
+    for side in SIDES:
+        if not any(collides(m, g, s) for s in legs[side].sole.geoms):
+            raise input_error(robot.path, f"the floor '{floor.name or 'unnamed plane'}' does not collide with the "
+                              f"{side} sole's geoms (contype/conaffinity): the robot would fall through it")
+
+
 def symmetric_angles(robot: RobotModel, mirror: Mirror) -> tuple[dict[int, float], float]:
     """The posture made left/right symmetric — a_j = (q_j + s_j q_partner) / 2, clipped to the joint's range — and
     the largest change [rad] (a keyframe of a walking robot is usually symmetric: 0)."""
@@ -142,8 +156,10 @@ def symmetric_loads(loads: dict[int, JointLoad], torque: dict[int, TorqueLimit],
         p = loads[mirror.partner[j]]
         out_loads[j] = JointLoad((load.swing + p.swing) / 2, (load.stance + p.stance) / 2, load.stance_side)
         mine, theirs = torque[j], torque[mirror.partner[j]]
-        out_torque[j] = mine if (mine.value or 0.0) <= (theirs.value or 0.0) else TorqueLimit(
-            theirs.value, f"{theirs.source} of its mirror joint (the smaller of the pair)")
+        if (theirs.value or 0.0) < (mine.value or 0.0) * (1 - 1e-6):
+            out_torque[j] = TorqueLimit(theirs.value, f"{theirs.source} of its mirror joint (the smaller of the pair)")
+        else:
+            out_torque[j] = mine
     return out_loads, out_torque
 
 
@@ -151,16 +167,13 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     """Read a robot's MJCF or URDF and draft its spec (module docstring)."""
     robot = open_model(path, config.keyframe)
     src = robot.path
-    legs = find_legs(robot, config.foot_level, config.sole_tolerance)
-    floor = find_floor(robot)
-    if not floor.add:
-        g = mujoco.mj_name2id(robot.model, mujoco.mjtObj.mjOBJ_GEOM, floor.name) if floor.name else next(
-            g for g in robot.body_geoms(0) if int(robot.model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_PLANE))
-        for side in SIDES:
-            if not any(collides(robot.model, g, s) for s in legs[side].sole.geoms):
-                raise input_error(src, f"the floor '{floor.name or 'unnamed plane'}' does not collide with the {side} "
-                                  "sole's geoms (contype/conaffinity): the robot would fall through it")
+    find_legs(robot, config.foot_level, config.sole_tolerance)  # one leg, no sole ...: said before the mirror
     mirror = find_mirror(robot, config.mirror_tolerance)
+    robot.angles, asymmetry = symmetric_angles(robot, mirror)
+    angles = robot.angles
+    legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the symmetric posture
+    floor = find_floor(robot)
+    _floor_collides(robot, floor, legs)
     _check_sides(robot, legs, mirror)
     residual = fk_residual(robot, mirror, config.mirror_samples, config.seed)
     if residual.position > config.mirror_tolerance or residual.angle > config.mirror_angle_tolerance:
@@ -171,8 +184,6 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     if config.plan == "all":
         planned = planned + tuple(j for j in robot.joints if j not in legs.joints)
     held = tuple(j for j in robot.joints if j not in planned)
-    angles, asymmetry = symmetric_angles(robot, mirror)
-    robot.angles = angles
     height = floor.height + legs.standing_height
     qpos = robot.qpos(height=height)
     feet = {side: legs[side].foot for side in SIDES}
@@ -180,13 +191,16 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     notes = []
     missing = [j for j, t in torque.items() if t.value is None]
     if missing:
-        estimates = estimated_torque_limits(robot, qpos, list(feet.values()), missing, config.torque_limit_factor)
+        d = robot.kinematics(qpos)
+        corners = {legs[s].foot: np.vstack([footprint_points(robot.model, d, g) for g in legs[s].sole.geoms])
+                   for s in SIDES}
+        estimates = estimated_torque_limits(robot, qpos, corners, missing, config.torque_limit_factor)
         for j in missing:
-            torque[j] = TorqueLimit(estimates[j], f"estimated: {config.torque_limit_factor:g} × its largest static "
-                                    "torque (no limit in the model)")
+            torque[j] = TorqueLimit(estimates[j], f"estimated: {config.torque_limit_factor:g} × the largest static "
+                                    "torque it holds (no limit in the model)")
         notes.append(f"{len(missing)} joint{'s have' if len(missing) > 1 else ' has'} no torque limit in the model: "
-                     f"estimated ({config.torque_limit_factor:g} × the static torque): give the real limits "
-                     "(actuatorfrcrange) and run robot init again")
+                     f"estimated ({config.torque_limit_factor:g} × the largest static torque it holds, the weight "
+                     "at a sole's corner included): give the real limits (actuatorfrcrange) and run robot init again")
     loads, torque = symmetric_loads(joint_loads(robot, qpos, feet), torque, mirror)
     integrator = INTEGRATOR_NAMES.get(int(robot.model.opt.integrator), "euler")
     if integrator == "euler":

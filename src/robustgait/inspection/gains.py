@@ -189,18 +189,54 @@ def static_torques(robot: RobotModel, qpos: NDArray[np.float64], feet: list[int]
     return out
 
 
-def estimated_torque_limits(robot: RobotModel, qpos: NDArray[np.float64], feet: list[int], joints: list[int],
-                            factor: float) -> dict[int, float]:
-    """For joints whose model gives no torque limit: ``factor`` × the larger of the joint's static torque standing
-    on either foot alone at ``qpos`` and the bound m_s |g| ‖c_s − p‖ on the gravity torque of the subtree it
-    moves (mass m_s, centre of mass c_s, joint anchor p) in any posture [N m]."""
+def estimated_torque_limits(robot: RobotModel, qpos: NDArray[np.float64], soles: dict[int, NDArray[np.float64]],
+                            joints: list[int], factor: float) -> dict[int, float]:
+    """For joints whose model gives no torque limit: ``factor`` × the largest of (a) the joint's static torque
+    standing on either foot alone at ``qpos``; (b) the torque that holds the robot's weight W = m |g| pressing at a
+    corner of a sole, a_j · ((c − p_j) × W ẑ) over the corners c of the feet below the joint (what a stance joint
+    must resist before the foot tips instead); (c) the bound m_s |g| ‖c_s − p_j‖ on the gravity torque of the
+    subtree it moves (mass m_s, centre of mass c_s, anchor p_j) in any posture [N m]. ``soles``: foot body → its
+    sole's corner points (k, 3), world frame at ``qpos``."""
     m = robot.model
     d = robot.kinematics(qpos)
-    single = [np.abs(static_torques(robot, qpos, [f])) for f in feet]
+    single = [np.abs(static_torques(robot, qpos, [f])) for f in soles]
     g = float(np.linalg.norm(m.opt.gravity))
+    weight = np.array([0.0, 0.0, robot.mass * g])
     out = {}
     for j in joints:
         body, dof = int(m.jnt_bodyid[j]), int(m.jnt_dofadr[j])
-        subtree = float(m.body_subtreemass[body]) * g * float(np.linalg.norm(d.subtree_com[body] - d.xanchor[j]))
-        out[j] = factor * max(subtree, *(float(s[dof]) for s in single))
+        a, p = d.xaxis[j], d.xanchor[j]
+        subtree = float(m.body_subtreemass[body]) * g * float(np.linalg.norm(d.subtree_com[body] - p))
+        corner = max((abs(float(a @ np.cross(c - p, weight))) for f, pts in soles.items()
+                      if body == f or body in robot.ancestors(f) for c in pts), default=0.0)
+        out[j] = factor * max(subtree, corner, *(float(s[dof]) for s in single))
+    return out
+
+
+def tipping_stiffness(robot: RobotModel, qpos: NDArray[np.float64], foot: int, joints: list[int],
+                      delta: float = 1e-4) -> dict[int, float]:
+    """Gravity's tipping stiffness about each joint of the stance chain, standing on ``foot`` alone [N m/rad]:
+    k_j = −∂τ_j/∂q_j, τ the static torque that holds the robot (:func:`static_torques`), each joint turned with
+    the foot kept in place (the base moved by the inverse of the foot's displacement). k_j > 0: gravity pulls the
+    robot further the way the joint turned (an inverted pendulum about the ankle: k = m g h); a servo holds the
+    posture only if kp_j > k_j (the other joints held rigid)."""
+    m = robot.model
+    d0 = robot.kinematics(qpos)
+    p0, r0 = d0.xpos[foot].copy(), d0.xmat[foot].reshape(3, 3).copy()
+    adr = int(m.jnt_qposadr[int(m.body_jntadr[robot.base])])
+    out = {}
+    for j in joints:
+        tau = []
+        for step in (delta, -delta):
+            q = qpos.copy()
+            q[m.jnt_qposadr[j]] += step
+            d = robot.kinematics(q)
+            turn = r0 @ d.xmat[foot].reshape(3, 3).T  # undoes the foot's rotation
+            base_r = turn @ d.xmat[robot.base].reshape(3, 3)
+            q[adr:adr + 3] = p0 + turn @ (d.xpos[robot.base] - d.xpos[foot])
+            quat = np.zeros(4)
+            mujoco.mju_mat2Quat(quat, base_r.ravel())
+            q[adr + 3:adr + 7] = quat
+            tau.append(static_torques(robot, q, [foot])[int(m.jnt_dofadr[j])])
+        out[j] = -(tau[0] - tau[1]) / (2 * delta)
     return out

@@ -13,6 +13,7 @@ import numpy as np
 
 from robustgait.inspection.discover import SIDES, Sole
 from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
+from robustgait.inspection.model import GEOM_TYPES
 from robustgait.inspection.scale import GAIT_AXES, sig
 from robustgait.robots.spec import FallCriteria, GaitQuality
 
@@ -75,8 +76,6 @@ def _sole_lines(draft: Draft, side: str, sole: Sole) -> list[str]:
 
 
 def _geom_type(draft: Draft, g: int) -> str:
-    from robustgait.inspection.model import GEOM_TYPES
-
     return GEOM_TYPES[int(draft.robot.model.geom_type[g])]
 
 
