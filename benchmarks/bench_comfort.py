@@ -113,11 +113,15 @@ def filtering(steps: int) -> None:
 
 def impact() -> None:
     """The impact force (largest per-touchdown peak of the landing sole's normal force) for growing windows after
-    touchdown: the window must hold the peak, and a longer one must find nothing larger."""
-    windows = (0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2)
+    touchdown: the window must hold the peak, and a longer one must find nothing larger. Also exo's multi-contact
+    gait (tests/data/exo_multicontact_gait.json), whose touchdown is the heel strike."""
+    windows = (0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.3)
     print("| gait | " + " | ".join(f"{1e3 * w:g} ms" for w in windows) + " |")
     print("|---|" + "---|" * len(windows))
-    for name, robot, gait in gaits():
+    exo = load_robot("exo")
+    multicontact = ("exo, multi-contact gait", exo, load_gait(REPO / "tests" / "data" / "exo_multicontact_gait.json",
+                                                               exo))
+    for name, robot, gait in [*gaits(), multicontact]:
         cells = []
         for w in windows:
             c = walk(robot, gait, SimConfig(step_cap=30), comfort=ComfortConfig(impact_window=w)).comfort
