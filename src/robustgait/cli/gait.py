@@ -7,6 +7,7 @@ import json
 
 from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
 from robustgait.cli.options import config_from, output_path
+from robustgait.config import Config
 from robustgait.errors import RobustGaitError
 
 GENERATE = {"--domains": "generate.domains", "--step-length": "gait.step_length",
@@ -33,9 +34,9 @@ def _generate(args: argparse.Namespace) -> int:
     from robustgait.io.gaitfile import load_gait, save_gait
     from robustgait.io.robotfile import load_robot
 
-    config = config_from(args)
-    params = config.params
     robot = load_robot(args.robot)
+    config = config_from(args, Config(gait=robot.default_params))  # the spec's [gait] under file and flags
+    params = config.params
     warm = load_gait(args.warm_start, robot) if args.warm_start else None
     live = not args.json
     if live:

@@ -63,7 +63,16 @@ from robustgait.config.certify import (
     verification_size,
 )
 from robustgait.config.comfort import ComfortConfig
-from robustgait.config.gait import DEFAULT_STEP_DURATION, DomainGraph, GaitParams, GenerationConfig, Stance
+from robustgait.config.gait import (
+    DEFAULT_STEP_DURATION,
+    ROBOT_SCALED,
+    DomainGraph,
+    GaitParams,
+    GenerationConfig,
+    RobotScale,
+    Stance,
+    relative_generation_defaults,
+)
 from robustgait.config.sim import Controller, SimConfig, Switching
 from robustgait.config.study import (
     CompareConfig,
@@ -120,6 +129,8 @@ class Config:
             "gait.step_duration": f"not set: {DEFAULT_STEP_DURATION[d]:g} s, the default of {d} gaits",
             "certify.r_max": "not set: " + ", ".join(f"{v:g} {R_MAX_UNIT[k]} ({k})" for k, v in DEFAULT_R_MAX.items()),
             "generate.ds_free_joints": "not set: picked from the joint axes",
+            **{f"generate.{k}": "not set: the robot spec's [generation] value, else relative to the robot (its help)"
+               for k in ROBOT_SCALED},
             "study.storage": "not set: a SQLite file in the study directory",
             "run.workers": f"not set: min(cores, 2) = {default_workers()} here",
             "run.address": "not set: start a local Ray",
@@ -197,6 +208,7 @@ __all__ = [
     "DEMO_ROBOT",
     "KINDS",
     "PRESETS",
+    "ROBOT_SCALED",
     "R_MAX_UNIT",
     "STATE_CERTIFICATE_FIELDS",
     "STATE_CHOICE_DEFAULTS",
@@ -226,6 +238,7 @@ __all__ = [
     "PreferenceModelConfig",
     "Reconstruction",
     "ReportConfig",
+    "RobotScale",
     "RunConfig",
     "SequentialConfig",
     "SimConfig",
@@ -245,6 +258,7 @@ __all__ = [
     "nest",
     "preset",
     "radius_name",
+    "relative_generation_defaults",
     "study_disturbance",
     "to_dict",
     "to_markdown",

@@ -82,7 +82,7 @@ def _wrench_figures(c: Contact, lam: FloatArray, prob: GaitProblem) -> tuple[flo
     cfg = prob.config
     fz = float(lam[2])
     friction = float(np.max(np.abs(lam[:2])) / fz)
-    ax, ay = prob.half_length - cfg.cop_margin, prob.half_width - cfg.cop_margin
+    ax, ay = prob.half_length - cfg.scaled("cop_margin"), prob.half_width - cfg.scaled("cop_margin")
     if c.kind == "flat":
         margin = min(ax - abs(-lam[4] / fz), ay - abs(lam[3] / fz))
     else:
@@ -124,7 +124,7 @@ def check_solution(dyn: Dynamics, prob: GaitProblem, params: GaitParams, states:
                 orient = (rot[1, 0], rot[2, 0], rot[2, 1]) if c.kind == "flat" else (rot[0, 1], rot[2, 1])
                 drift = max(drift, float(np.linalg.norm(point - target)), float(np.max(np.abs(orient))))
                 fz, fr, cm = _wrench_figures(c, ns.lam[i][j:j + c.n_rows], prob)
-                floor = cfg.min_normal_force if c.kind == "flat" else cfg.min_line_force
+                floor = cfg.scaled("min_normal_force") if c.kind == "flat" else cfg.scaled("min_line_force")
                 fz_min, friction, cop_margin = min(fz_min, fz), max(friction, fr), min(cop_margin, cm)
                 force_short = max(force_short, floor - fz)
                 j += c.n_rows

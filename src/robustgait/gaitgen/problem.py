@@ -200,9 +200,10 @@ def wrench_rows(c: Contact, lam: cs.SX, config: GenerationConfig, half_length: f
     runs along world y), |n_z| ≤ μ_t f_z. Returns (name, expr, lower, upper) rows.
     """
     mu, mut = config.friction, config.torsional_friction
-    ax, ay = half_length - config.cop_margin, half_width - config.cop_margin
+    ax, ay = half_length - config.scaled("cop_margin"), half_width - config.scaled("cop_margin")
     f = lam[:3]
-    rows = [("normal_force", f[2], config.min_normal_force if c.kind == "flat" else config.min_line_force, cs.inf),
+    least = config.scaled("min_normal_force") if c.kind == "flat" else config.scaled("min_line_force")
+    rows = [("normal_force", f[2], least, cs.inf),
             ("friction", cs.vertcat(f[0] - mu * f[2], -f[0] - mu * f[2], f[1] - mu * f[2], -f[1] - mu * f[2]),
              -cs.inf, 0.0)]
     if c.kind == "flat":
@@ -238,8 +239,10 @@ class GaitProblem:
     essential constraints. See the module docstring for the formulation."""
 
     def __init__(self, dyn: Dynamics, config: GenerationConfig):
-        self.dyn, self.config = dyn, config
         robot = dyn.robot
+        # robot-scaled options resolved (idempotent: GaitGenerator passes them resolved)
+        config = config.for_robot(robot.scale, robot.spec.generation)
+        self.dyn, self.config = dyn, config
         self.graph = graph = domain_graph(config.domains)
         self.quality = gait_quality(robot)
         self.m = m = robot.n_joints
@@ -425,7 +428,7 @@ class GaitProblem:
                                                 quality.swing_toe_down_until, i / (n - 1))) if multi else -tilt
             add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [pitch_lo, -tilt], [pitch_hi, tilt])
             add("swing_yaw", Hsw[1, 0], -math.sin(quality.swing_yaw), math.sin(quality.swing_yaw))
-            add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.foot_gap), 0.0, cs.inf)
+            add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.scaled("foot_gap")), 0.0, cs.inf)
         if i == (n - 1) // 2:
             add("step_height", psw[2] - h, 0.0, 0.0)
         if i == n - 1:
@@ -443,8 +446,9 @@ class GaitProblem:
                 Jsw = jac[(sw, "heel")](H, s)
                 ang = (Jsw[3:, :] @ nu)[[0, 2]]
             vsw = Jsw[:3, :] @ nu
-            add("impact_velocity", vsw[2], *config.impact_velocity)
-            add("impact_tangential", vsw[:2], -config.max_impact_tangential, config.max_impact_tangential)
+            add("impact_velocity", vsw[2], *config.scaled("impact_velocity"))
+            tangential = config.scaled("max_impact_tangential")
+            add("impact_tangential", vsw[:2], -tangential, tangential)
             add("impact_angular", ang, -config.max_impact_angular, config.max_impact_angular)
 
     def _bounds(self) -> tuple[FloatArray, FloatArray]:

@@ -71,6 +71,7 @@ class GaitFile:
     params: GaitParams | None = None
     solver: dict[str, Any] | None = None
     meta: dict[str, Any] = dataclasses.field(default_factory=dict)
+    held: dict[Name, Annotated[Float, L.POSTURE]] = dataclasses.field(default_factory=dict)
 
 
 @table(extra="ignore")
@@ -99,15 +100,17 @@ def _unit_quaternion(qpos: NDArray[np.float64], src: str | Path, field: str) -> 
     return qpos
 
 
-def _state(s: StateFile | None, m: int, src: str | Path, field: str) -> State | None:
+def _state(s: StateFile | None, m: int, src: str | Path, field: str, held: int = 0) -> State | None:
+    """A state of m planned and ``held`` held joints."""
     if s is None:
         return None
-    if len(s.qpos) != 7 + m:
-        raise field_error(src, f"{field}.qpos", f"has {len(s.qpos)} values, expected {7 + m} "
-                          f"(base position 3 + quaternion 4 + {m} joints)")
-    if len(s.qvel) != 6 + m:
-        raise field_error(src, f"{field}.qvel", f"has {len(s.qvel)} values, expected {6 + m} "
-                          f"(base linear 3 + angular 3 + {m} joints)")
+    joints = f"{m} joints" + (f" + {held} held" if held else "")
+    if len(s.qpos) != 7 + m + held:
+        raise field_error(src, f"{field}.qpos", f"has {len(s.qpos)} values, expected {7 + m + held} "
+                          f"(base position 3 + quaternion 4 + {joints})")
+    if len(s.qvel) != 6 + m + held:
+        raise field_error(src, f"{field}.qvel", f"has {len(s.qvel)} values, expected {6 + m + held} "
+                          f"(base linear 3 + angular 3 + {joints})")
     qpos = _unit_quaternion(np.array(s.qpos, dtype=np.float64), src, f"{field}.qpos")
     return State(qpos, np.array(s.qvel, dtype=np.float64))
 
@@ -150,10 +153,15 @@ def gait_from_dict(raw: Any, src: str | Path = "<gait>") -> Gait:
     params = g.params
     if params is not None and params.step_duration is None:  # the gait's own duration
         params = dataclasses.replace(params, step_duration=sum(d.duration for d in g.domains))
+    for name in g.held:
+        if name in g.joints:
+            raise field_error(src, f"held.{name}", "is also a planned joint (joints)")
+    h = len(g.held)
     return Gait(robot=g.robot, domain_graph=g.domain_graph, stance=g.stance, joints=tuple(g.joints),
-                domains=tuple(domains), initial_state=_state(g.initial_state, m, src, "initial_state"),
-                pre_impact_state=_state(g.pre_impact_state, m, src, "pre_impact_state"), params=params,
-                solver=dict(g.solver) if g.solver is not None else None, meta=dict(g.meta))
+                domains=tuple(domains), initial_state=_state(g.initial_state, m, src, "initial_state", h),
+                pre_impact_state=_state(g.pre_impact_state, m, src, "pre_impact_state", h), params=params,
+                solver=dict(g.solver) if g.solver is not None else None, meta=dict(g.meta),
+                held=tuple((k, float(v)) for k, v in g.held.items()))
 
 
 def read_gait_json(path: str | Path) -> Gait:

@@ -122,7 +122,7 @@ class StepInputs:
 def servo_noise_offset(robot: Robot, noise: NDArray[np.float64]) -> NDArray[np.float64]:
     """Control offset (K, n, nu) of encoder noise (K, n, 2, nu) for joint PD servos: −(n_q + (kd/kp) n_v), the
     exact change of u = kp (c − q̃) − kd q̃̇ with q̃ = q + n_q, q̃̇ = q̇ + n_v."""
-    return np.asarray(-(noise[:, :, 0] + (robot.kd / robot.kp) * noise[:, :, 1]))
+    return np.asarray(-(noise[:, :, 0] + (robot.servo_kd / robot.servo_kp) * noise[:, :, 1]))
 
 
 class StepEngine:
