@@ -238,7 +238,7 @@ def test_a_urdf_gets_a_floating_base(tmp_path: Path) -> None:
                  ("ankle_roll", "1 0 0", "0 0 -0.02")]
         for j, axis, xyz in chain:
             link = f"{s}_{j}_link"
-            geom = (f'<collision><origin xyz="0.02 0 -0.03"/><geometry><box size="0.16 0.08 0.02"/></geometry>'
+            geom = ('<collision><origin xyz="0.02 0 -0.03"/><geometry><box size="0.16 0.08 0.02"/></geometry>'
                     "</collision>" if j == "ankle_roll" else "")
             links.append(f'<link name="{link}"><inertial><mass value="0.5"/><inertia ixx="0.001" iyy="0.001" '
                          f'izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial>{geom}</link>')
