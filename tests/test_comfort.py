@@ -24,6 +24,8 @@ from robustgait.sim.comfort import (
     peak,
     pelvis_acceleration,
     rms,
+    sole_contact_geoms,
+    sole_normal_force,
 )
 
 DT = 1e-3
@@ -178,6 +180,48 @@ def test_recorded_controls_replay_the_recorded_states(exo, exo_gait, controller)
     assert no.controls == [] and no.trajectory == []
 
 
+def test_the_soles_carry_the_weight_over_a_step(exo, exo_gait):
+    """Over one step of the periodic walk (touchdown to touchdown, the impact included) the mean of the two soles'
+    normal forces, replayed state by state with the recorded controls, is the robot's weight m g: the vertical
+    momentum of a periodic step does not change (flat floor: normal = vertical)."""
+    ev = walk(exo, exo_gait, SimConfig(step_cap=10)).events[-1]
+    stance = "left" if ev.stance == "right" else "right"
+    qpos, qvel = np.array(ev.qpos)[None], np.array(ev.qvel)[None]
+    with StepEngine(exo, exo_gait) as eng:
+        batch = eng.step(qpos, qvel, stance, record=True)
+        start = eng.full_states(qpos, qvel)[0]
+    states = np.vstack([start[None], batch.trajectory[0][:-1]])
+    m, d = exo.model, mujoco.MjData(exo.model)
+    total = []
+    for s, c in zip(states, batch.controls[0], strict=True):
+        mujoco.mj_setState(m, d, s, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        d.ctrl[:] = c
+        mujoco.mj_forward(m, d)
+        d.qacc_warmstart[:] = d.qacc
+        total.append(sum(sole_normal_force(m, d, sole_contact_geoms(exo, side), exo.floor_geom_id)
+                         for side in ("left", "right")))
+    assert np.mean(total) == pytest.approx(exo.mass * 9.81, rel=0.005)
+    assert max(total) > 3 * exo.mass * 9.81  # the touchdown's impact is in it
+
+
+def test_a_virtual_soles_contacts_are_its_foot_bodys(tmp_path):
+    """A sole named by a foot body and a geom class (sphere feet, a virtual box): its contacts are those of every geom
+    of the foot body, as its contact sensor counts them; a sole box: that geom."""
+    from robustgait import load_robot
+    from tests.test_robots_any import biped_spec, biped_xml
+
+    legs = '[legs.left]\nsole_body = "left_foot"\nsole_class = "foot"\n[legs.right]\nsole_body = "right_foot"\n'
+    robot = load_robot(biped_spec(tmp_path, xml=biped_xml(spheres=True), legs=legs))
+    m = robot.model
+    for side in ("left", "right"):
+        geoms = sole_contact_geoms(robot, side)
+        spheres = {g for g in geoms if m.geom_type[g] == int(mujoco.mjtGeom.mjGEOM_SPHERE)}
+        assert len(spheres) == 4 and robot.sole_geom_id[side] in geoms and len(geoms) == 5
+    (tmp_path / "box").mkdir()
+    box = load_robot(biped_spec(tmp_path / "box", xml=biped_xml()))
+    assert sole_contact_geoms(box, "left") == {box.sole_geom_id["left"]}
+
+
 @pytest.fixture(scope="module")
 def exo_walk(exo, exo_gait):  # type: ignore[no-untyped-def]
     return walk(exo, exo_gait, SimConfig(step_cap=30), comfort=ComfortConfig())
@@ -198,7 +242,7 @@ def test_exo_gait_comfort_invariants(exo, exo_gait, exo_walk):
             r, pk = getattr(c, f"pelvis_{kind}_{ax}_rms"), getattr(c, f"pelvis_{kind}_{ax}_peak")
             assert 0 < r < pk
     assert 0.5 < c.pelvis_acc_vertical_rms < 5 and c.pelvis_acc_vertical_peak < 3 * 9.81  # no free fall, no crash
-    limits = dict(zip(exo.spec.joints, exo.torque_limit, strict=True))
+    limits = dict(zip((*exo.spec.joints, *exo.spec.held_names), exo.servo_limit, strict=True))
     assert 0 < c.torque_rms <= c.torque_peak <= max(limits.values())
     assert all(c.torque_rms_joint[j] <= c.torque_peak_joint[j] <= limits[j] + 1e-9 for j in limits)
     assert c.cost_of_transport is not None and 0 < c.cost_of_transport < 5
@@ -234,7 +278,7 @@ def test_multicontact_and_passivity_walks_have_comfort(exo, exo_gait, exo_mc_gai
     assert mc is not None and mc.steps == 4 and mc.touchdowns == 4 and mc.impact_force is not None
     assert mc.impact_force >= exo.mass * 9.81
     pas = walk(exo, exo_gait, SimConfig(step_cap=8, controller="passivity"), comfort=cfg).comfort
-    assert pas is not None and pas.steps == 4 and 0 < pas.torque_rms <= pas.torque_peak <= exo.torque_limit.max()
+    assert pas is not None and pas.steps == 4 and 0 < pas.torque_rms <= pas.torque_peak <= exo.servo_limit.max()
 
 
 def test_report_figure_and_table_of_a_studys_comfort(tmp_path, exo_walk):

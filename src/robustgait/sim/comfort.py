@@ -40,7 +40,7 @@ FIGURES: dict[str, tuple[str, str]] = {
        for s in ("rms", "peak") for a in AXES},
     **{f"pelvis_jerk_{a}_{s}": ("m/s³", f"{a} pelvis jerk, {s.upper()} (of the low-passed acceleration)")
        for s in ("rms", "peak") for a in AXES},
-    "torque_rms": ("N m", "joint torque RMS over the actuated joints and the measured physics steps"),
+    "torque_rms": ("N m", "joint torque RMS over the servoed joints (planned and held) and the measured physics steps"),
     "torque_peak": ("N m", "largest |joint torque|"),
     "cost_of_transport": ("1", "mechanical cost of transport Σ|τ·q̇| dt / (m g d)"),
     "impact_force": ("N", "largest peak normal force of a landing sole after touchdown"),
@@ -59,7 +59,7 @@ class Comfort:
     ``first_step``/``steps``: the measured steps (1-based first, count); ``duration`` [s] their time;
     ``touchdowns``: touchdowns whose impact was measured. ``cost_of_transport`` is None when the pelvis did not move
     forward; the impact and touchdown figures are None when no touchdown's window lies within the walk.
-    ``torque_rms_joint``/``torque_peak_joint``: per actuated joint [N m]."""
+    ``torque_rms_joint``/``torque_peak_joint``: per servoed joint [N m] (the planned joints, then the held ones)."""
 
     first_step: int
     steps: int
@@ -222,14 +222,15 @@ def actuator_torque(model: mujoco.MjModel, states: FloatArray, controls: FloatAr
 
 def cost_of_transport(torque: FloatArray, joint_velocity: FloatArray, dt: float, mass: float, gravity: float,
                       distance: float) -> float | None:
-    """Mechanical cost of transport [1]: the absolute mechanical work of the actuated joints per weight and distance,
+    """Mechanical cost of transport [1]: the absolute mechanical work of the servoed joints per weight and distance,
 
         CoT = Σ_k Σ_j |τ_jk q̇_jk| Δt / (m g d)
 
-    over physics steps k and joints j — no energy recovered from one joint to another or from one instant to
-    another (Collins et al., Science 2005, "mechanical cost of transport"). τ (n, m) [N m], q̇ (n, m) [rad/s] the
-    joint velocity over each physics step ((q_{k+1} − q_k)/Δt, so that τ q̇ Δt is the step's work), m [kg] the whole
-    robot with its passenger, g [m/s²], d [m] the forward distance. None when d ≤ 0 (no forward progress)."""
+    over physics steps k and servoed joints j (planned and held) — no energy recovered from one joint to another or
+    from one instant to another (Collins et al., Science 2005, "mechanical cost of transport"). τ (n, m) [N m],
+    q̇ (n, m) [rad/s] the joint velocity over each physics step ((q_{k+1} − q_k)/Δt, so that τ q̇ Δt is the step's
+    work), m [kg] the whole robot with its passenger, g [m/s²], d [m] the forward distance. None when d ≤ 0 (no
+    forward progress)."""
     if distance <= 0.0:
         return None
     work = float(np.sum(np.abs(np.asarray(torque) * np.asarray(joint_velocity)))) * dt
@@ -242,26 +243,38 @@ def excursion(angle: FloatArray, steps: list[tuple[int, int]]) -> float:
     return max((float(np.ptp(angle[a:b + 1])) for a, b in steps), default=0.0)
 
 
-def sole_normal_force(model: mujoco.MjModel, data: mujoco.MjData, sole: int, floor: int) -> float:
-    """Normal force [N] between a sole geom and the floor geom in ``data`` (after a forward pass): Σ of the normal
-    components of ``mj_contactForce`` over the contacts between the two (pushing apart: ≥ 0)."""
+def sole_contact_geoms(robot: Robot, side: str) -> frozenset[int]:
+    """The geoms whose floor contacts are a sole's: those its contact sensor counts — the sole box, or every geom of
+    the foot body of a virtual sole over spheres or capsules (:class:`robustgait.robots.soles.Sole`)."""
+    kind, name = robot.soles[side].sensor
+    m = robot.model
+    if kind == mujoco.mjtObj.mjOBJ_BODY:
+        return frozenset(int(g) for g in np.flatnonzero(m.geom_bodyid == m.body(name).id))
+    return frozenset({int(m.geom(name).id)})
+
+
+def sole_normal_force(model: mujoco.MjModel, data: mujoco.MjData, sole: frozenset[int], floor: int) -> float:
+    """Normal force [N] between a sole's geoms and the floor geom in ``data`` (after a forward pass): Σ of the normal
+    components of ``mj_contactForce`` over the contacts between them (pushing apart: ≥ 0)."""
     total = 0.0
     f = np.zeros(6)
     for i in range(data.ncon):
         c = data.contact[i]
-        if {int(c.geom1), int(c.geom2)} == {sole, floor} and c.efc_address >= 0:
+        g1, g2 = int(c.geom1), int(c.geom2)
+        if ((g1 in sole and g2 == floor) or (g2 in sole and g1 == floor)) and c.efc_address >= 0:
             mujoco.mj_contactForce(model, data, i, f)
             total += float(f[0])
     return total
 
 
 def touchdown_impact(model: mujoco.MjModel, states: FloatArray, controls: FloatArray, row: int, window: int,
-                     sole: int, floor: int) -> tuple[float, FloatArray]:
+                     sole: frozenset[int], sole_box: int, floor: int) -> tuple[float, FloatArray]:
     """One touchdown: the landing sole's peak normal force [N] over the ``window`` physics steps that start from the
     pre-impact state (``states[row]``: the first state in which the sole touches the floor; docs/simulation.md) —
     each replayed by MuJoCo's forward pass at its state with the controls of its physics step, the solver warm-started
-    from the previous one as ``mj_step`` does — and the sole's velocity (3,) [m/s, world frame] at that state
-    (``mj_objectVelocity`` of the sole geom's centre)."""
+    from the previous one as ``mj_step`` does — over the sole's contact geoms ``sole`` (:func:`sole_contact_geoms`), and
+    the sole's velocity (3,) [m/s, world frame] at that state (``mj_objectVelocity`` of the centre of ``sole_box``, the
+    sole box geom, real or virtual)."""
     data = mujoco.MjData(model)
     velocity = np.zeros(6)
     top = 0.0
@@ -271,7 +284,7 @@ def touchdown_impact(model: mujoco.MjModel, states: FloatArray, controls: FloatA
         mujoco.mj_forward(model, data)
         data.qacc_warmstart[:] = data.qacc
         if r == row:
-            mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_GEOM, sole, velocity, 0)
+            mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_GEOM, sole_box, velocity, 0)
         top = max(top, sole_normal_force(model, data, sole, floor))
     return top, velocity[3:].copy()
 
@@ -352,7 +365,7 @@ def measure(robot: Robot, model: mujoco.MjModel, recording: ComfortRecorder, hea
     jrk = jerk(acc, dt)
     acc, jrk = acc[a:b], jrk[a:b]  # physics steps a … b − 1: the measured steps
     torque = actuator_torque(model, states[a:b], controls[a:b])
-    q = states[a:b + 1, 1 + robot.qpos_idx]
+    q = states[a:b + 1, 1 + model.jnt_qposadr[model.actuator_trnid[:, 0]]]  # each servo's joint
     duration = (b - a) * dt
     distance = float(np.dot(states[b, 1:3] - states[a, 1:3], heading))
     mass = robot.mass
@@ -362,12 +375,12 @@ def measure(robot: Robot, model: mujoco.MjModel, recording: ComfortRecorder, hea
     for s in steps:
         row, side = recording.touchdowns[s]
         if row + window <= controls.shape[0]:
-            f, v = touchdown_impact(model, states, controls, row, window, robot.sole_geom_id[side],
-                                    robot.floor_geom_id)
+            f, v = touchdown_impact(model, states, controls, row, window, sole_contact_geoms(robot, side),
+                                    robot.sole_geom_id[side], robot.floor_geom_id)
             impacts.append(f)
             velocities.append(v)
     acc_rms, acc_peak, jerk_rms, jerk_peak = rms(acc), peak(acc), rms(jrk), peak(jrk)
-    joints = robot.spec.joints
+    joints = (*robot.spec.joints, *robot.spec.held_names)  # the servos' order (robots.model.build_mjspec)
     joint_rms, joint_peak = rms(torque), peak(torque)
     vel = np.asarray(velocities).reshape(-1, 3)
     figures: dict[str, Any] = {
