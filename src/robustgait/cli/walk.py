@@ -17,7 +17,7 @@ def _walk(args: argparse.Namespace) -> int:
 
     config, robot, gait = inputs(args)
     with about(args.gait):
-        result = walk(robot, gait, config.sim, video=args.video)
+        result = walk(robot, gait, config.sim, video=args.video, comfort=config.comfort)
     if args.log is not None:
         xs = canonical_reduced_events(robot, gait, result.events, config.certify.frame)
         write_csv(args.log, ["wx", "wy", "wz"], xs.tolist())
@@ -33,6 +33,11 @@ def _walk(args: argparse.Namespace) -> int:
               f"{1e3 * tr['max']:.3g} mrad; torque saturation {tr['saturation']} joint-steps "
               f"({100 * tr['saturation_fraction']:.3g} %)"
               + (f"  ({result.controller_note})" if result.controller_note else ""))
+        if result.comfort is not None:
+            print("\n".join(result.comfort.text()))
+        else:
+            print(f"comfort: not measured (the walk completed no step from step {config.comfort.skip_steps + 1} on: "
+                  "comfort.skip_steps)")
         for what, out in (("video", args.video), ("reduced-state log", args.log)):
             if out is not None:
                 print(f"{what}: {out}")

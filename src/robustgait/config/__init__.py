@@ -11,6 +11,7 @@ section     class                   used by
 gait        :class:`GaitParams`     ``gait generate`` (the four essential constraints)
 generate    :class:`GenerationConfig` gait generation (HZD problem options), studies
 sim         :class:`SimConfig`      every simulation: walk, certify, validate, studies
+comfort     :class:`ComfortConfig`  the comfort figures of a walk: walk, studies (saved with the study)
 certify     :class:`CertifyConfig`  certify, validate, studies, compare
 validate    :class:`ValidateConfig` validate, study validate
 study       :class:`StudyConfig`    study run (saved with the study)
@@ -63,6 +64,7 @@ from robustgait.config.certify import (
     verification_beta,
     verification_size,
 )
+from robustgait.config.comfort import ComfortConfig
 from robustgait.config.gait import (
     DEFAULT_STEP_DURATION,
     GAIT_FORMATS,
@@ -98,6 +100,7 @@ class Config:
     gait: GaitParams = dataclasses.field(default_factory=GaitParams)
     generate: GenerationConfig = dataclasses.field(default_factory=GenerationConfig)
     sim: SimConfig = dataclasses.field(default_factory=SimConfig)
+    comfort: ComfortConfig = dataclasses.field(default_factory=ComfortConfig)
     certify: CertifyConfig = dataclasses.field(default_factory=CertifyConfig)
     validate: ValidateConfig = dataclasses.field(default_factory=ValidateConfig)
     study: StudyConfig = dataclasses.field(default_factory=StudyConfig)
@@ -222,6 +225,7 @@ __all__ = [
     "CertifiedSet",
     "CertifyConfig",
     "CertifyDisturbance",
+    "ComfortConfig",
     "CompareConfig",
     "Config",
     "ConfigError",
