@@ -18,6 +18,7 @@ study       :class:`StudyConfig`    study run (saved with the study)
 run         :class:`RunConfig`      study run / resume, demo (how, not what: not saved)
 compare     :class:`CompareConfig`  study compare
 report      :class:`ReportConfig`   study report, gait tiles
+robot       :class:`RobotConfig`    robot init, robot check (with ``scale`` and ``check``)
 =========== ======================= =============================================================
 """
 
@@ -76,6 +77,7 @@ from robustgait.config.gait import (
     Stance,
     relative_generation_defaults,
 )
+from robustgait.config.robot import Plan, RobotCheckConfig, RobotConfig, ScaleRules
 from robustgait.config.sim import Controller, SimConfig, Switching
 from robustgait.config.study import (
     CompareConfig,
@@ -105,6 +107,7 @@ class Config:
     run: RunConfig = dataclasses.field(default_factory=RunConfig)
     compare: CompareConfig = dataclasses.field(default_factory=CompareConfig)
     report: ReportConfig = dataclasses.field(default_factory=ReportConfig)
+    robot: RobotConfig = dataclasses.field(default_factory=RobotConfig)
 
     def __post_init__(self) -> None:
         if self.study.metric == "push" and self.certify.chooses_a_state:
@@ -138,6 +141,8 @@ class Config:
             "run.workers": f"not set: min(cores, 2) = {default_workers()} here",
             "run.address": "not set: start a local Ray",
             "compare.samples": "not set: study A's",
+            "robot.name": "not set: the model's name, lower case",
+            "robot.keyframe": "not set: the model's first keyframe (none: every joint at 0 clipped to its range)",
         }
 
     def show(self, header: str = "") -> str:
@@ -240,12 +245,16 @@ __all__ = [
     "MapKind",
     "Method",
     "Metric",
+    "Plan",
     "PreferenceModelConfig",
     "PushConfig",
     "Reconstruction",
     "ReportConfig",
+    "RobotCheckConfig",
+    "RobotConfig",
     "RobotScale",
     "RunConfig",
+    "ScaleRules",
     "SequentialConfig",
     "SimConfig",
     "Stance",
