@@ -22,6 +22,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -146,14 +147,21 @@ class PDGains:
     ratio: float
 
 
-def pd_gains(load: JointLoad, torque_limit: float, bandwidth: float, damping_ratio: float, tracking_error: float,
-             dt: float, integrator: str) -> PDGains:
-    """The gain rule of the module docstring for one joint (``bandwidth`` [Hz], ``tracking_error`` [rad])."""
+def servo_gains(load: JointLoad, torque_limit: float, bandwidth: float, damping_ratio: float,
+                tracking_error: float) -> tuple[float, float, str]:
+    """kp = min(I_st ω², τ_max / e) and kd = 2 ζ √(kp I_sw) (module docstring) before the discrete stability
+    check, and which bound set kp (``bandwidth`` or ``torque``)."""
     omega = 2.0 * np.pi * bandwidth
     kp_band = load.stance * omega**2
     kp_cap = torque_limit / tracking_error
     kp, bound = (kp_band, "bandwidth") if kp_band <= kp_cap else (kp_cap, "torque")
-    kd = 2.0 * damping_ratio * np.sqrt(kp * load.swing)
+    return float(kp), float(2.0 * damping_ratio * np.sqrt(kp * load.swing)), bound
+
+
+def pd_gains(load: JointLoad, torque_limit: float, bandwidth: float, damping_ratio: float, tracking_error: float,
+             dt: float, integrator: str) -> PDGains:
+    """The gain rule of the module docstring for one joint (``bandwidth`` [Hz], ``tracking_error`` [rad])."""
+    kp, kd, bound = servo_gains(load, torque_limit, bandwidth, damping_ratio, tracking_error)
     radius = spectral_radius(kp, kd, load.swing, dt, integrator)
     for _ in range(200):  # 0.8^200 ≈ 1e-20: every servo contracts well before (ω h → 0)
         if radius < STABLE_RADIUS:
@@ -162,6 +170,26 @@ def pd_gains(load: JointLoad, torque_limit: float, bandwidth: float, damping_rat
         radius = spectral_radius(kp, kd, load.swing, dt, integrator)
     return PDGains(float(kp), float(kd), bound, radius, float(np.sqrt(kp / load.swing) / (2 * np.pi)),
                    float(kd / (2 * np.sqrt(kp * load.swing))))
+
+
+def nice_floor(x: float) -> float:
+    """The largest of 1, 2 and 5 × 10^k not above ``x`` (> 0)."""
+    k = math.floor(math.log10(x))
+    return max(f * 10.0**e for e in (k - 1, k) for f in (1.0, 2.0, 5.0) if f * 10.0**e <= x * (1 + 1e-12))
+
+
+def servo_timestep(model_dt: float, frequency: float, steps: float) -> float:
+    """The physics step [s]: the model's ``model_dt``, at most ``nice_floor(1 / (steps f))`` where ``f`` [Hz] is
+    the fastest servo's natural frequency √(kp / I_sw) / 2π on its swing inertia — at least ``steps`` steps per
+    period of the fastest motion the servos make.
+
+    Why: the servos are integrated (implicitly damped) at the step h; at ω h = 2π / steps their discrete response
+    departs from the continuous one by O((ω h)²), and the switching events (touchdowns) are found on the step grid,
+    so their timing error — and the scatter of the step map's iterates it causes — is O(h). exo runs at 1 ms with
+    its fastest servo (ankle, 67 Hz) 15 steps per period; Booster T1's model asks for 2 ms with its ankle at
+    57 Hz (8.7 steps): its switching-event sequences were noisy and its period-two orbits' amplitude halved from
+    1 ms to 0.5 ms (docs/robots.md, "Walking the grid"). ``robot.servo_steps`` = 12 keeps exo at 1 ms."""
+    return min(model_dt, nice_floor(1.0 / (steps * frequency)))
 
 
 def static_torques(robot: RobotModel, qpos: NDArray[np.float64], feet: list[int],
