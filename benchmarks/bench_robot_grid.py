@@ -12,8 +12,13 @@ evenly spaced in grid order (all of them when the grid is smaller), each
   (:func:`robustgait.poincare.canonical_reduced_events`, base angular velocity in the heading frame): over the last
   ``--window`` (20) iterates, r1 = max ‖x_{k+1} − x_k‖ and r2 = max ‖x_{k+2} − x_k‖. ``p1``: r1 < tol (a fixed
   point of the step map); ``p2``: r2 < tol ≤ r1 (a period-two orbit: left and right steps alternate, a fixed point
-  of the stride map); ``wander``: neither; ``fell``; ``nosolve``. ``trend``: min(r1, r2) over the windows that end
-  at each third of the walk (decreasing: a slowly converging orbit; flat: one that does not settle).
+  of the stride map); ``grid``: neither, but min(r1, r2) < tol + 2 × the event grid's floor (below); ``wander``:
+  none of these; ``fell``; ``nosolve``. The floor: the largest change of the reduced state over the one physics
+  step before each of the last ``--window`` touchdowns — touchdowns are found on the physics-step grid, so an
+  iterate is defined only to within it, and the walk may cycle through neighbouring grid offsets (Booster T1 at
+  1 ms: period-four orbits, r4 = 0, r1 ≈ 0.026 rad/s, for 200 steps, then another such cycle). ``trend``:
+  min(r1, r2) over the windows that end at each third of the walk (decreasing: a slowly converging orbit; flat:
+  one that does not settle).
 
 The tolerance is exo's certificate's (5e-3 rad/s on the base angular velocity, ``certify.tol``) scaled with the
 rates, by √(g/l) relative to exo's leg length 0.93 m (T1, l = 0.558 m: 6.45e-3 rad/s); ``--tol`` sets it.
@@ -39,6 +44,7 @@ import argparse
 import dataclasses
 import json
 import math
+import sys
 import tempfile
 import time
 from collections import Counter
@@ -127,9 +133,26 @@ def worst_joints(robot: Any, tracking: dict[str, Any]) -> dict[str, Any]:
     return {"sat_joint": names[i], "sat_joint_fraction": float(sat[i]), "max_joint": names[k]}
 
 
+def grid_floor(robot: Any, trajectory: np.ndarray, events: list[Any], window: int) -> float:
+    """The largest change of the reduced state over the one physics step before each of the last ``window``
+    touchdowns, ‖x(t_e) − x(t_e − h)‖ [rad/s]: touchdowns are found on the physics-step grid, so an iterate is
+    only defined to within it, and two iterates whose touchdowns fall one step apart differ by about that much
+    (mirroring flips signs of components only: the norm needs no canonical stance)."""
+    from robustgait.reduced import reduce_state
+
+    nq = robot.model.nq
+    times = trajectory[:, 0]
+    out = 0.0
+    for e in events[-window:]:
+        k = int(np.argmin(np.abs(times - e.time)))
+        rows = trajectory[[k - 1, k]]
+        x = reduce_state(rows[:, 1:1 + nq], rows[:, 1 + nq:1 + nq + robot.model.nv], "heading")
+        out = max(out, float(np.linalg.norm(x[1] - x[0])))
+    return out
+
+
 def point(index: int, steps: int, window: int, tol: float) -> dict[str, Any]:
     """One grid point: solve, walk, orbit (module docstring)."""
-    import robustgait.sim.walk as walk_module
     from robustgait import walk
     from robustgait.config import SimConfig
     from robustgait.learn.space import ActionSpace
@@ -146,8 +169,9 @@ def point(index: int, steps: int, window: int, tol: float) -> dict[str, Any]:
         out.update(outcome="nosolve", reason=res.reason[:200])
         return out
     t1 = time.perf_counter()
-    setattr(walk_module, "TrackingStats", per_joint_stats())  # noqa: B010 (the benchmark's per-joint counts)
-    w = walk(robot, res.gait, SimConfig(step_cap=steps))
+    # the module (robustgait.sim.walk the attribute is the function): the benchmark's per-joint counts
+    setattr(sys.modules[walk.__module__], "TrackingStats", per_joint_stats())  # noqa: B010
+    w = walk(robot, res.gait, SimConfig(step_cap=steps), keep_trajectory=True)
     out.update(steps=w.steps_taken, fall=w.fall_reason, walk_seconds=round(time.perf_counter() - t1, 2),
                rms=w.tracking.get("rms"), max=w.tracking.get("max"),
                saturation=w.tracking.get("saturation_fraction"), speed=w.mean_speed,
@@ -157,9 +181,13 @@ def point(index: int, steps: int, window: int, tol: float) -> dict[str, Any]:
         return out
     x = canonical_reduced_events(robot, res.gait, w.events, "heading")
     kind, r1, r2 = orbit(x, window, tol)
+    assert w.trajectory is not None
+    floor = grid_floor(robot, w.trajectory, w.events, window)
+    if kind == "wander" and min(r1, r2) < tol + 2 * floor:
+        kind = "grid"
     # min(r1, r2) over the windows ending at each third of the walk: falling = converging slowly, flat = not
     trend = [min(orbit(x[:n], window, tol)[1:]) for n in (len(x) // 3, 2 * len(x) // 3, len(x))]
-    out.update(outcome=kind, r1=r1, r2=r2, trend=trend, x_last=[round(float(v), 5) for v in x[-1]])
+    out.update(outcome=kind, r1=r1, r2=r2, floor=floor, trend=trend, x_last=[round(float(v), 5) for v in x[-1]])
     return out
 
 
@@ -223,19 +251,20 @@ def summary(head: dict[str, Any], rows: list[dict[str, Any]], foot: dict[str, An
     c = Counter(r["outcome"] for r in rows)
     n = len(rows)
     solved = n - c["nosolve"]
-    walked = c["p1"] + c["p2"] + c["wander"]
+    walked = c["p1"] + c["p2"] + c["grid"] + c["wander"]
     settled = c["p1"] + c["p2"]
     sat = [r["saturation"] for r in rows if r.get("saturation") is not None]
     return (f"| {head.get('robot')} | {head.get('timestep')} | {n} of {head.get('grid')} | {pct(solved, n)} | "
-            f"{pct(walked, n)} | {pct(settled, n)} | {c['p1']} / {c['p2']} | {c['wander']} | {c['fell']} | "
+            f"{pct(walked, n)} | {pct(settled, n)} | {c['p1']} / {c['p2']} | {pct(settled + c['grid'], n)} | "
+            f"{c['wander']} | {c['fell']} | "
             f"{head.get('tol', float('nan')):.3g} | {np.median(sat) * 100 if sat else float('nan'):.2f} % | "
             f"{foot.get('seconds', float('nan')):.0f} |")
 
 
 def report(args: argparse.Namespace) -> None:
-    print("| robot | dt [s] | points | solve | walk 300 | settled | p1 / p2 | wander | fell | tol [rad/s] | "
-          "median sat. | seconds |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| robot | dt [s] | points | solve | walked all steps | settled | p1 / p2 | settled or grid | wander | "
+          "fell | tol [rad/s] | median sat. | seconds |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     loaded = [load(p) for p in args.files]
     for head, rows, foot in loaded:
         print(summary(head, rows, foot))
@@ -243,19 +272,20 @@ def report(args: argparse.Namespace) -> None:
         return
     for (head, rows, _), path in zip(loaded, args.files, strict=True):
         print(f"\n{head.get('robot')} ({path}; options {head.get('robot_options')}):\n")
-        print("| # | L [m] | T [s] | W [m] | h [m] | outcome | steps | fall | r1 / r2 [rad/s] | RMS [mrad] | sat. | "
-              "solve [s] |")
-        print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+        print("| # | L [m] | T [s] | W [m] | h [m] | outcome | steps | fall | r1 / r2 [rad/s] | floor | RMS [mrad] | "
+              "sat. (most: joint, its steps) | solve [s] |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
         for r in rows:
             orbit_r = f"{r['r1']:.2g} / {r['r2']:.2g}" if "r1" in r else ""
+            floor = f"{r['floor']:.2g}" if "floor" in r else ""
             rms = f"{r['rms'] * 1e3:.1f}" if r.get("rms") is not None else ""
             sat = f"{r['saturation'] * 100:.2f} %" if r.get("saturation") is not None else ""
             if r.get("sat_joint_fraction"):
                 sat += f" ({r['sat_joint']} {r['sat_joint_fraction'] * 100:.1f} %)"
             fall = r.get("fall") or (r.get("status") if r["outcome"] == "nosolve" else "")
             print(f"| {r['index']} | {r['step_length']:g} | {r['step_duration']:g} | {r['step_width']:g} | "
-                  f"{r['step_height']:g} | {r['outcome']} | {r.get('steps', '')} | {fall} | {orbit_r} | {rms} | "
-                  f"{sat} | {r['solve_seconds']} |")
+                  f"{r['step_height']:g} | {r['outcome']} | {r.get('steps', '')} | {fall} | {orbit_r} | {floor} | "
+                  f"{rms} | {sat} | {r['solve_seconds']} |")
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -51,6 +51,8 @@ class ScaleRules:
         "pelvis height band above the stance sole ÷ the standing height")] = (0.87, 1.03)
     fall_height: Annotated[Float, Doc("fall when the base is lower than this fraction of the standing height",
                                       gt=0.0, le=1.0)] = 0.65
+    timestep: Annotated[Float, Doc("largest physics step ÷ √(l/g) (the model's step is lowered to a nice value below "
+                                   "it; exo: 1 ms of 0.308 s)", gt=0.0, le=0.1)] = 0.0035
     pelvis_roll: Annotated[Float, Doc("gait-quality bound on the pelvis roll relative to the stance sole (an angle: "
                                       "no scale; exo's)", unit="rad", gt=0.0, le=1.0)] = 0.05
     pelvis_yaw: Annotated[Float, Doc("gait-quality bound on the pelvis yaw (exo's)", unit="rad", gt=0.0,

@@ -216,7 +216,9 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     servo_frequency = max(math.sqrt(servo_gains(loads[j], float(torque[j].value or 0.0), config.bandwidth,
                                                  config.damping_ratio, config.tracking_error)[0] / loads[j].swing)
                           for j in robot.joints) / (2 * math.pi)
-    timestep = servo_timestep(float(robot.model.opt.timestep), servo_frequency, config.servo_steps)
+    gravity = float(np.linalg.norm(robot.model.opt.gravity))
+    timestep = servo_timestep(float(robot.model.opt.timestep), servo_frequency, config.servo_steps,
+                              math.sqrt(legs.leg_length / gravity), config.scale.timestep)
     gains = {j: pd_gains(loads[j], float(torque[j].value or 0.0), config.bandwidth, config.damping_ratio,
                          config.tracking_error, timestep, integrator) for j in robot.joints}
     gains, radius = coupled_gains(robot, qpos, gains, timestep, integrator)
@@ -226,7 +228,7 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     if asymmetry > 0.0:
         notes.append(f"the posture was not left/right symmetric: made symmetric (largest change {asymmetry:.3g} rad)")
     size = RobotSize(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,
-                     gravity=float(np.linalg.norm(robot.model.opt.gravity)), hip_spacing=legs.hip_spacing,
+                     gravity=gravity, hip_spacing=legs.hip_spacing,
                      sole_length=legs.left.sole.length, sole_width=legs.left.sole.width)
     return Draft(robot=robot, config=config, name=config.name or spec_name(robot), legs=legs, floor=floor,
                  mirror=mirror, residual=residual, planned=planned, held=held, angles=angles, asymmetry=asymmetry,

@@ -178,18 +178,22 @@ def nice_floor(x: float) -> float:
     return max(f * 10.0**e for e in (k - 1, k) for f in (1.0, 2.0, 5.0) if f * 10.0**e <= x * (1 + 1e-12))
 
 
-def servo_timestep(model_dt: float, frequency: float, steps: float) -> float:
-    """The physics step [s]: the model's ``model_dt``, at most ``nice_floor(1 / (steps f))`` where ``f`` [Hz] is
-    the fastest servo's natural frequency √(kp / I_sw) / 2π on its swing inertia — at least ``steps`` steps per
-    period of the fastest motion the servos make.
+def servo_timestep(model_dt: float, frequency: float, steps: float, time_scale: float, fraction: float) -> float:
+    """The physics step [s]: the model's ``model_dt``, lowered to ``nice_floor`` of the smaller of
 
-    Why: the servos are integrated (implicitly damped) at the step h; at ω h = 2π / steps their discrete response
-    departs from the continuous one by O((ω h)²), and the switching events (touchdowns) are found on the step grid,
-    so their timing error — and the scatter of the step map's iterates it causes — is O(h). exo runs at 1 ms with
-    its fastest servo (ankle, 67 Hz) 15 steps per period; Booster T1's model asks for 2 ms with its ankle at
-    57 Hz (8.7 steps): its switching-event sequences were noisy and its period-two orbits' amplitude halved from
-    1 ms to 0.5 ms (docs/robots.md, "Walking the grid"). ``robot.servo_steps`` = 12 keeps exo at 1 ms."""
-    return min(model_dt, nice_floor(1.0 / (steps * frequency)))
+    * 1 / (``steps`` f), ``f`` [Hz] the fastest servo's natural frequency √(kp / I_sw) / 2π on its swing inertia:
+      at least ``steps`` steps per period of the fastest motion the servos make (their discrete response departs
+      from the continuous one by O((ω h)²));
+    * ``fraction`` × √(l/g) (``time_scale``): the step at the same fraction of the robot's time scale as exo's
+      1 ms of its 0.31 s. Touchdowns are found on the step grid, so an iterate of the step map is known to within
+      one step of its motion, |ẋ| h; the rates x scale with √(g/l) and their changes |ẋ| with g/l (dynamic
+      similarity), so the grid's resolution relative to the rates is the same for walkers at equal h / √(l/g).
+
+    exo: fastest servo 67 Hz (15 steps per period at 1 ms) and 0.0035 × 0.308 s = 1.08 ms: its 1 ms. Booster T1:
+    its model's 2 ms gives its 57 Hz ankles 8.7 steps, and 0.0035 × 0.238 s = 0.83 ms: 0.5 ms. Measured on T1's grid
+    (docs/robots.md, "Walking the grid"): at 2 ms its switching events were noisy; at 1 ms its walks cycled through
+    neighbouring touchdown grid offsets (period-four orbits, r1 ≈ 0.026 rad/s); at 0.5 ms more of them settle."""
+    return min(model_dt, nice_floor(min(1.0 / (steps * frequency), fraction * time_scale)))
 
 
 def static_torques(robot: RobotModel, qpos: NDArray[np.float64], feet: list[int],

@@ -198,12 +198,13 @@ def _mirror(draft: Draft) -> list[str]:
 
 def _timestep_comment(draft: Draft) -> str:
     model = float(draft.robot.model.opt.timestep)
-    steps = draft.config.servo_steps
+    size, c = draft.size, draft.config
+    rules = (f"at least {c.servo_steps:g} steps per period of the fastest servo ({draft.servo_frequency:.3g} Hz on "
+             f"its swing inertia; robot.servo_steps) and at most {c.scale.timestep:g} × √(l/g) = "
+             f"{c.scale.timestep * math.sqrt(size.leg_length / size.gravity) * 1e3:.3g} ms (robot.scale.timestep)")
     if draft.timestep >= model:
-        return (f"the model's <option>: at least {steps:g} steps per period of the fastest servo "
-                f"({draft.servo_frequency:.3g} Hz; robot.servo_steps)")
-    return (f"the model's {model:g} s lowered to give at least {steps:g} steps per period of the fastest servo "
-            f"({draft.servo_frequency:.3g} Hz on its swing inertia; robot.servo_steps)")
+        return f"the model's <option>: {rules}"
+    return f"the model's {model:g} s lowered to a nice value: {rules}"
 
 
 def _scaled(draft: Draft) -> list[str]:
