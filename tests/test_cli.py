@@ -42,6 +42,13 @@ def test_walk_json(capsys, gait_robot):
     assert res["steps_taken"] == 5 and res["fell"] is False and res["fall_reason"] is None
     assert (0.08 < res["mean_speed"] < 0.2 if name == "atalante" else abs(res["mean_speed"] - 0.15 / 0.7) < 0.01)
     assert len(res["events"]) == 5
+    assert res["orbit"]["converged"] is False and res["orbit"]["residuals"]["steps"] == 4  # 5 events: too few
+
+
+def test_walk_reports_the_orbit_of_its_switching_events(capsys):
+    code, out, _ = run(capsys, "walk", str(EXO_GAIT), "--robot", "exo", "--steps", "20")
+    assert code == 0 and "orbit of the switching events: converged at step 17 (10 iterates within 0.01" in out
+    assert "; ρ = 0.79" in out
 
 
 def test_gait_convert_round_trip(tmp_path, capsys, gait_robot):

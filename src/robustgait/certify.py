@@ -23,13 +23,15 @@ from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, to_dict
 from robustgait.config.work import check_work
 from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
+from robustgait.orbit import OrbitReport
 from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap
 from robustgait.push import PushMap
-from robustgait.reduced import Coordinates
+from robustgait.reduced import Coordinates, section_dimension
 from robustgait.robots import Robot
 from robustgait.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
 
-STATUSES = ("ok", "fell_before_fixed_point", "no_fixed_point", "unstable_fixed_point")
+STATUSES = ("ok", "fell_before_fixed_point", "no_stable_orbit", "period_two_orbit", "unstable_orbit",
+            "unstable_fixed_point")
 
 
 @dataclass
@@ -37,9 +39,13 @@ class GaitCertificate:
     """A gait's certificate.
 
     status: one of :data:`STATUSES` — ``ok``; ``fell_before_fixed_point`` (the gait fell while its fixed point
-    was searched); ``no_fixed_point`` (no iterate converged within ``fp_max_steps``); ``unstable_fixed_point``
-    (the reduced map falls from x̄* itself within the horizon: through the reconstruction x̄* is not on a walking
-    orbit). reason: one line (empty if ok). steps_walked: steps of the fixed-point search (completed before a fall).
+    was searched); ``no_stable_orbit`` (no window of ``fp_window`` iterates settled within ``fp_tol`` in
+    ``fp_max_steps``); ``period_two_orbit`` (none did, but iterates two apart settled: certify the stride map);
+    ``unstable_orbit`` (the orbit settled, but the linearized map at x* has spectral radius ρ ≥ ``fp_rho_max``);
+    ``unstable_fixed_point`` (the reduced map falls from x̄* itself within the horizon: through the reconstruction x̄*
+    is not on a walking orbit). reason: one line (empty if ok). steps_walked: steps of the fixed-point search
+    (completed before a fall). orbit: what the fixed-point search saw (:class:`robustgait.orbit.OrbitReport`: the
+    window, ρ and the eigenvalue moduli, Newton's residuals; None if the gait fell before its first iterate).
     certificate (the barrier :class:`Certificate` in the certificate's coordinates: r*, samples, images, margins,
     rounds, statement), coordinates (z = T x̄ of the reduced state, the shape of the set; :class:`Coordinates`),
     fixed_point and map_residual ‖P(x̄*) − x̄*‖ (certificate coordinates, one map) are None where the search did not
@@ -65,6 +71,8 @@ class GaitCertificate:
     validate: ValidateConfig | None = None  # push certificates: the push duration and phases used
     controller: str = "pd"  # the tracking law that ran (sim.controller, unless the note says why not)
     controller_note: str = ""
+    orbit: OrbitReport | None = None
+    fixed_point_physics_steps: int = 0  # simulated by the fixed-point search (its iterates, Newton, ρ)
 
     @property
     def ok(self) -> bool:
@@ -135,6 +143,7 @@ class GaitCertificate:
             "fixed_point_residual": None if fp is None else fp.residual,
             "fixed_point_steps": None if fp is None else fp.steps,
             "map_residual": self.map_residual,
+            "orbit": None if self.orbit is None else self.orbit.to_dict(),
             "map": cfg.map,
             "reconstruction": cfg.reconstruction,
             "frame": cfg.frame,
@@ -160,7 +169,8 @@ class GaitCertificate:
                            "statement": self.ball.statement(), "volume_ratio": self.volume_ratio}
         if self.excursion is not None:
             out["excursion"] = self.excursion
-        out.update({"physics_steps": self.physics_steps, "config": to_dict(cfg), "sim": to_dict(self.sim),
+        out.update({"physics_steps": self.physics_steps, "fixed_point_physics_steps": self.fixed_point_physics_steps,
+                    "config": to_dict(cfg), "sim": to_dict(self.sim),
                     "seconds": self.seconds})
         if self.validate is not None:
             out["push"] = {"duration": self.validate.push_duration, "phase": list(self.validate.push_phase)}
@@ -185,15 +195,18 @@ def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: boo
 
 def check_certify_work(robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig) -> int:
     """Bound a certificate's simulation before it starts (:func:`robustgait.config.work.check_work`): the
-    fixed-point steps, then per sample (N, or the sequential budget, plus the ellipsoid's fit and, with
-    ``compare_ball``, the ball's samples) and for the map at x* the steps of :attr:`CertifyConfig.steps_per_sample`,
-    each of up to the gait's step duration × ``max_step_tau``."""
-    per_map = 2 if config.map == "stride" else 1
+    fixed-point steps (with its Newton iterations and ρ: :meth:`CertifyConfig.fixed_point_evaluations`), then per
+    sample (N, or the sequential budget, plus the ellipsoid's fit and, with ``compare_ball``, the ball's samples) and
+    for the map at x* the steps of :attr:`CertifyConfig.steps_per_sample`, each of up to the gait's step duration ×
+    ``max_step_tau``."""
     what = "sequential.budget" if config.method == "sequential" else "n_samples"
-    return check_work(per_map * config.fp_max_steps + config.steps_per_sample * (config.samples_planned + 1),
+    fixed = config.period * config.fixed_point_evaluations(section_dimension(robot))
+    extra = fixed - config.period * (config.fp_max_steps // config.period)
+    return check_work(fixed + config.steps_per_sample * (config.samples_planned + 1),
                       gait.step_duration * sim.max_step_tau, robot.dt,
                       f"certify.fp_max_steps {config.fp_max_steps} + certify.{what} {config.samples_planned} × "
-                      f"{config.steps_per_sample} steps")
+                      f"{config.steps_per_sample} steps + {extra} steps of the fixed point's Newton iterations and ρ "
+                      "(fp_newton_iterations, fp_rho_max)")
 
 
 class _Paths:
@@ -261,12 +274,14 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
     t0 = time.perf_counter()
 
     def failed(status: str, reason: str, steps: int, fp: FixedPoint | None = None,
-               map_residual: float | None = None) -> GaitCertificate:
+               map_residual: float | None = None, orbit: OrbitReport | None = None) -> GaitCertificate:
         t = time.perf_counter() - t0
         return GaitCertificate(status=status, certificate=None, fixed_point=fp, map_residual=map_residual,
                                config=cfg, sim=sim, robot=robot.name, physics_steps=0, steps_walked=steps,
                                reason=reason, validate=vcfg, controller=pmap.engine.controller_name,
                                controller_note=pmap.engine.controller_note,
+                               orbit=orbit if orbit is not None or fp is None else fp.orbit,
+                               fixed_point_physics_steps=pmap.physics_steps,
                                seconds={"fixed_point": t, "sampling": 0.0, "total": t, "sim_steps_per_s": 0.0})
 
     with ReturnMap(robot, gait, cfg, sim) as pmap:
@@ -278,8 +293,9 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
             try:
                 fp = pmap.find_fixed_point(progress=on_step)
             except FixedPointFailure as exc:
-                return failed(exc.status, str(exc), exc.steps)
+                return failed(exc.status, str(exc), exc.steps, exc.fixed_point, orbit=exc.orbit)
         t1 = time.perf_counter()
+        fp_steps = pmap.physics_steps
         coords = Coordinates.of(pmap.reduced)
         image = coords.to_z(pmap(pmap.reduced.x_star[None]))[0]
         first = coords.to_z(pmap.last_path[0])[0] if pmap.last_path is not None else image
@@ -316,5 +332,6 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
                            sim=sim, robot=robot.name, physics_steps=steps, steps_walked=fp.steps,
                            coordinates=coords, ball=ball, excursion=excursion, validate=vcfg,
                            controller=pmap.engine.controller_name, controller_note=pmap.engine.controller_note,
+                           orbit=fp.orbit, fixed_point_physics_steps=fp_steps,
                            seconds={"fixed_point": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,
                                     "sim_steps_per_s": steps / max(t3 - t2, 1e-9)})

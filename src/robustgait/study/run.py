@@ -39,6 +39,7 @@ from robustgait.io.robotfile import load_robot
 from robustgait.learn.learners import History, Learner, iteration_seed, make_learner
 from robustgait.learn.oracle import Outcome, batch_comparisons, score
 from robustgait.learn.space import ActionSpace
+from robustgait.reduced import section_dimension
 from robustgait.robots.spec import SHIPPED_DIR
 from robustgait.study.config import StudySetup, environment_changes, load_config, save_config
 from robustgait.study.evaluate import Evaluation
@@ -125,7 +126,7 @@ def create_study(directory: str | Path, robot: str, config: Config | None = None
     space = setup.action_space(loaded)
     if study.batch > space.size:
         raise RobustGaitError(f"a batch of {study.batch} gaits does not fit in an action space of {space.size}")
-    check_evaluation_work(setup.config, space, loaded.dt)
+    check_evaluation_work(setup.config, space, loaded.dt, section_dimension(loaded))
     d.mkdir(parents=True, exist_ok=True)
     with study_lock(d):
         store = StudyStore(storage_url(d, setup), study.study_name, space, create=True,
@@ -135,12 +136,12 @@ def create_study(directory: str | Path, robot: str, config: Config | None = None
     return d
 
 
-def check_evaluation_work(config: Config, space: ActionSpace, timestep: float) -> None:
+def check_evaluation_work(config: Config, space: ActionSpace, timestep: float, dim: int) -> None:
     """Bound one evaluation's simulation like ``walk``/``certify`` bound theirs (:func:`check_work`): the walk to
-    the step cap plus the certificate (fixed-point steps + samples + 1, twice for the stride map), each step up to
-    the longest step duration of the action space × ``max_step_tau``."""
+    the step cap plus the certificate (the fixed point's map evaluations on a section of ``dim`` coordinates + samples
+    + 1, twice for the stride map), each step up to the longest step duration of the action space × ``max_step_tau``."""
     cert, sim = config.certify, config.sim
-    steps = sim.step_cap + (cert.fp_max_steps + cert.samples_planned + 1) * (2 if cert.map == "stride" else 1)
+    steps = sim.step_cap + cert.period * (cert.fixed_point_evaluations(dim) + cert.samples_planned + 1)
     longest = max(space.values[space.names.index("step_duration")]) if "step_duration" in space.names else 0.0
     check_work(steps, longest * sim.max_step_tau, timestep,
                "study: one evaluation (sim.step_cap, certify.n_samples or certify.sequential.budget)")
@@ -151,7 +152,15 @@ def open_store(directory: Path, setup: StudySetup, space: ActionSpace) -> StudyS
 
 
 def outcome_of(result: dict[str, Any]) -> Outcome:
-    return Outcome(int(result["steps_taken"]), int(result["step_cap"]), float(result["r_star"]))
+    """The oracle's view of a stored evaluation summary (certified: its ``status``)."""
+    return Outcome(int(result["steps_taken"]), int(result["step_cap"]), float(result["r_star"]),
+                   result.get("status") == "certified")
+
+
+def study_score(config: StudyConfig, result: dict[str, Any]) -> float:
+    """The study's oracle score of a stored evaluation summary — recomputed from it whenever a study is resumed (the
+    history the learner reproduces), with the study's own ``uncertified_penalty``."""
+    return score(config.metric, outcome_of(result), config.uncertified_penalty)
 
 
 def completed_batches(records: list[TrialRecord]) -> dict[int, list[TrialRecord]]:
@@ -174,7 +183,7 @@ def history_before(k: int, batches: dict[int, list[TrialRecord]], config: StudyC
         batch = batches.get(i, [])
         if len(batch) != config.batch:
             raise RobustGaitError(f"iteration {i} has {len(batch)} of {config.batch} trials complete")
-        ranked.append([(r.index, score(config.metric, outcome_of(r.result or {}))) for r in batch])
+        ranked.append([(r.index, study_score(config, r.result or {})) for r in batch])
     return History.from_batches(ranked)
 
 
@@ -287,7 +296,7 @@ class StudyRunner:
 
     def _complete(self, store: StudyStore, trial: TrialRecord, result: dict[str, Any], bar: tqdm,
                   reused_from: int | None = None) -> None:
-        value = score(self.config.metric, outcome_of(result))
+        value = study_score(self.config, result)
         extra: dict[str, Any] = {"reused_from": reused_from} if reused_from is not None else {}
         store.complete(trial.number, result, value, extra)
         bar.update(1)
@@ -298,7 +307,7 @@ class StudyRunner:
         """Comparisons of the ranked batch and the learner's recommendation after it."""
         batches = completed_batches(store.records())
         batch = batches[k]
-        scores = [score(self.config.metric, outcome_of(r.result or {})) for r in batch]
+        scores = [study_score(self.config, r.result or {}) for r in batch]
         t0 = time.perf_counter()
         rec = self.learner.recommend(history_before(k + 1, batches, self.config), k)
         rec_trial = next((r for i in sorted(batches) for r in batches[i] if r.index == rec), None)

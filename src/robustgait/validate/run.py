@@ -28,6 +28,7 @@ from tqdm import tqdm
 
 from robustgait.certify import GaitCertificate, certify_gait
 from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, SimConfig, ValidateConfig, to_dict
+from robustgait.config.certify import fixed_point_options
 from robustgait.config.work import check_work
 from robustgait.domains import step_segments
 from robustgait.errors import RobustGaitError
@@ -52,7 +53,8 @@ class CertificateRef:
     (open set), the centre z* = T x̄* and the transform T (z = T x̄, :class:`robustgait.reduced.Coordinates`) of its
     coordinates, the space certified (omega, centroidal, velocity, or push: then r* is J* [N s] and the check is on
     the pushes' impulses), the set and horizon, E* [J] for an energy state, the map, frame, reconstruction, the
-    fixed-point search options, and where it came from ("computed" or a file path)."""
+    fixed-point search options (every ``fp_*`` field: :func:`robustgait.config.certify.fixed_point_options`), and where
+    it came from ("computed" or a file path)."""
 
     r_star: float
     attained: bool
@@ -65,9 +67,7 @@ class CertificateRef:
     map: MapKind
     frame: Frame
     reconstruction: str
-    fp_tol: float
-    fp_min_steps: int
-    fp_max_steps: int
+    fixed_point: tuple[tuple[str, Any], ...]
     source: str
 
     @staticmethod
@@ -77,8 +77,8 @@ class CertificateRef:
             raise RobustGaitError(f"the gait has no certificate to validate against ({gc.status}: {gc.reason})")
         return CertificateRef(float(c.r_star), bool(c.attained), tuple(float(v) for v in c.x_star),
                               tuple(tuple(float(v) for v in row) for row in co.transform), cfg.space, cfg.set,
-                              cfg.horizon, gc.energy, cfg.map, cfg.frame, cfg.reconstruction, cfg.fp_tol,
-                              cfg.min_steps, cfg.fp_max_steps, "computed")
+                              cfg.horizon, gc.energy, cfg.map, cfg.frame, cfg.reconstruction,
+                              tuple(fixed_point_options(cfg).items()), "computed")
 
     @staticmethod
     def load(path: str | Path) -> CertificateRef:
@@ -90,8 +90,8 @@ class CertificateRef:
         k = len(c.x_star)
         t = c.transform(path) or np.eye(k).tolist()
         return CertificateRef(c.r_star, c.attained, tuple(c.x_star), tuple(tuple(row) for row in t), cfg.space,
-                              cfg.set, cfg.horizon, c.energy, cfg.map, cfg.frame, cfg.reconstruction, cfg.fp_tol,
-                              cfg.min_steps, cfg.fp_max_steps, str(path))
+                              cfg.set, cfg.horizon, c.energy, cfg.map, cfg.frame, cfg.reconstruction,
+                              tuple(fixed_point_options(cfg).items()), str(path))
 
     def certify_config(self, base: CertifyConfig) -> CertifyConfig:
         """``base`` with this certificate's state, set, horizon, map, frame, reconstruction and fixed-point search."""
@@ -100,8 +100,7 @@ class CertificateRef:
         kw: dict[str, Any] = {"disturbance": "push"} if self.space == "push" else {"state": self.space,
                                                                                   "disturbance": "state"}
         kw.update(set=self.set, reconstruction=self.reconstruction)
-        return replace(base, horizon=self.horizon, map=self.map, frame=self.frame, fp_tol=self.fp_tol,
-                       fp_min_steps=self.fp_min_steps, fp_max_steps=self.fp_max_steps, **kw)
+        return replace(base, horizon=self.horizon, map=self.map, frame=self.frame, **dict(self.fixed_point), **kw)
 
     def check_matches(self, config: CertifyConfig) -> None:
         """Refuse a certificate of another space, set or horizon than ``config`` asks for (one line)."""
