@@ -113,7 +113,7 @@ def test_exo_spec_has_gait_quality_action_space_and_posture():
     ("[gait_quality]\nroll = 0.1\n", r"gait_quality.roll: unknown key \(known: pelvis_roll, "),
     ("[gait_quality]\njoint_velocity = [1, 2]\n", "gait_quality.joint_velocity: must be one number or a list of 12"),
     ("[action_space]\nstep_length = [0.1, 0.2, 0.05]\n", "action_space.step_duration: required, but missing"),
-    ("[posture]\nleft_elbow = 0.2\n", "posture.left_elbow: not an actuated joint"),
+    ("[posture]\nleft_elbow = 0.2\n", "posture.left_elbow: not a planned joint"),
     ("[action_space.multicontact]\nstep_length = [0.1, 0.2, 0.02]\nstep_duration = [0.8, 1.1, 0.1]\n"
      "step_width = [0.22, 0.28, 0.02]\nstep_height = [0.04, 0.1, 0.02]\nrolling_fraction = [0.01, 0.2, 0.05]\n",
      r"action_space.multicontact.rolling_fraction: .* must lie within the bounds of GaitParams.rolling_fraction"),

@@ -4,7 +4,9 @@ A :class:`Gait` holds, per domain, the Bézier coefficients β ∈ R^{m×8} of t
 trajectory y_d(τ) and the domain duration T (phase τ = (t − t₀)/T), written for one stance leg. The other
 leg's step uses the relabeled coefficients (:meth:`Gait.mirrored`). States are stored in MuJoCo's
 convention: ``qpos`` = [base position (world), base quaternion (w, x, y, z), joints in the MJCF's order];
-``qvel`` = [base linear velocity (world), base angular velocity (body frame), joints].
+``qvel`` = [base linear velocity (world), base angular velocity (body frame), joints] — every joint of the model:
+the planned ones (the outputs) and those a robot holds at an angle (``held``: their names and angles, in the
+robot spec's order; their states are at those angles, at rest).
 
 Files are read and written by :mod:`robustgait.io.gaitfile`: ``.json`` is our format (``schema_version``
 :data:`SCHEMA_VERSION`, exact round trip), ``.yaml``/``.yml`` a FROST/ambersim gait. The parameters a gait was
@@ -31,7 +33,8 @@ BEZIER_DEGREE = 7
 
 @dataclass(frozen=True)
 class State:
-    """A full MuJoCo state: qpos (7 + m) and qvel (6 + m), MuJoCo's conventions (module docstring)."""
+    """A full MuJoCo state: qpos (7 + m + h) and qvel (6 + m + h), MuJoCo's conventions (module docstring; m planned
+    and h held joints)."""
 
     qpos: NDArray[np.float64]
     qvel: NDArray[np.float64]
@@ -72,6 +75,7 @@ class Gait:
     params: GaitParams | None = None
     solver: dict[str, Any] | None = None
     meta: dict[str, Any] = field(default_factory=dict)
+    held: tuple[tuple[str, float], ...] = ()
 
     @property
     def n_outputs(self) -> int:
@@ -94,7 +98,7 @@ class Gait:
             "params": self.params.to_dict() if self.params else None,
             "solver": self.solver,
             "meta": self.meta,
-        }
+        } | ({"held": dict(self.held)} if self.held else {})
 
     def check_robot(self, robot: Robot) -> None:
         """Raise if this gait cannot drive ``robot`` (output count, joint names, initial state size)."""
@@ -105,6 +109,11 @@ class Gait:
             bad = [j for j in self.joints if j not in robot.spec.joints]
             what = f"unknown joint name '{bad[0]}'" if bad else "joint order differs from the robot spec"
             raise RobustGaitError(f"joints: {what} (gait for robot '{self.robot}', robot '{robot.name}')")
+        held = tuple((h.name, h.angle) for h in robot.spec.held)
+        if self.held != held:
+            names = ", ".join(f"{n} = {a:g}" for n, a in self.held) or "none"
+            raise RobustGaitError(f"held: the gait holds {names}, robot '{robot.name}' holds "
+                                  f"{', '.join(f'{n} = {a:g}' for n, a in held) or 'none'} (joints.held)")
         for key, s in (("initial_state", self.initial_state), ("pre_impact_state", self.pre_impact_state)):
             if s is not None and (s.qpos.shape != (robot.model.nq,) or s.qvel.shape != (robot.model.nv,)):
                 raise RobustGaitError(f"{key}: sizes ({s.qpos.size}, {s.qvel.size}), robot '{robot.name}' "

@@ -117,7 +117,17 @@ class PushConfig:
     depend on it; ε, β, the budget and the rest are ``sequential``'s). Push duration and phases are the validation's
     (``validate.push_duration``, ``validate.push_phase``)."""
 
-    steps: Annotated[Int, Doc("steps after the pushed one within which a fall is a failure", ge=1, le=100)] = 3
+    steps: Annotated[Int, Doc("steps after the pushed one within which a fall, or not being back near the orbit at "
+                              "their end, is a failure", ge=1, le=100)] = 3
+    recovery: Annotated[Bool, Doc("a pushed walk must also end those steps back near its orbit (recovery_radius); "
+                                  "false: a fall is the only failure")] = True
+    recovery_radius: Annotated[Float, Doc(
+        "the orbit's neighbourhood: distance from x* in the base's Froude-scaled velocity (v/√(g l), ω/√(g/l), "
+        "heading frame; docs/certificate.md, Recovery)", ge=0.0, le=100.0)] = 0.3
+    recovery_scatter: Annotated[Float, Doc("the recovery radius is at least this multiple of the undisturbed orbit's "
+                                           "own scatter about x*", ge=0.0, le=1000.0)] = 3.0
+    recovery_band_steps: Annotated[Int, Doc("undisturbed steps from x* whose scatter sets that floor", ge=1,
+                                            le=1000)] = 10
     first_round: Annotated[Int, Doc("round 1: uniform pushes in the disk of radius r_max", ge=1, le=10_000)] = 50
     explore: Annotated[Int, Doc("exploration pushes before the first verification", ge=0, le=100_000)] = 100
     explore_after_failure: Annotated[Int, Doc("exploration pushes before each further verification", ge=0,
@@ -243,12 +253,14 @@ class CertifyConfig:
         """Steps of one iterate of the map: 1 (step map) or 2 (stride map)."""
         return 2 if self.map == "stride" else 1
 
-    def fixed_point_evaluations(self, dim: int) -> int:
-        """Most map evaluations of the fixed-point search on a section of ``dim`` coordinates: the iterates, then per
-        Newton iteration a finite-difference batch (2 dim + 1) and its damped steps, then the Jacobian at x*."""
+    def fixed_point_steps(self, dim: int) -> int:
+        """Most steps the fixed-point search simulates on a section of ``dim`` coordinates: ``fp_max_steps`` steps of
+        iterates, then per Newton iteration a finite-difference batch (2 dim + 1 maps) and its damped steps, then the
+        Jacobian at x* and the image recorded for the touchdown's flow (2 dim + 2 maps), a map being :attr:`period`
+        steps."""
         fd = 2 * dim + 1
-        rho = fd + 1 if self.fp_rho_max is not None else 0  # + the image recorded for the touchdown's flow
-        return self.fp_max_steps // self.period + self.fp_newton_iterations * (fd + len(NEWTON_DAMPING)) + rho
+        rho = fd + 1 if self.fp_rho_max is not None else 0
+        return self.fp_max_steps + self.period * (self.fp_newton_iterations * (fd + len(NEWTON_DAMPING)) + rho)
 
     @property
     def min_steps(self) -> int:

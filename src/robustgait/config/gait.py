@@ -4,12 +4,17 @@ optimization, :mod:`robustgait.gaitgen`)."""
 from __future__ import annotations
 
 import dataclasses
-from typing import Annotated, Literal
+import math
+from collections.abc import Mapping
+from typing import Annotated, Any, Literal
 
 from robustgait.config.base import Doc, FieldProblem, Float, Int, Str, config
 
 DomainGraph = Literal["flat", "multicontact"]
 Stance = Literal["left", "right"]
+# The file formats a gait is written in (``gait convert --to``): robustgait's JSON, a FROST/ambersim YAML.
+GaitFormat = Literal["json", "frost"]
+GAIT_FORMATS: tuple[GaitFormat, ...] = ("json", "frost")
 
 # The step duration of each domain graph when none is given [s]: multi-contact gaits of 0.7 s solve but do not
 # walk on exo (the 0.14 s of rolling is too fast for the simulator's soft contacts; measured, docs/gaitgen.md),
@@ -46,6 +51,12 @@ class GaitParams:
             raise ValueError("step_duration is not set: use GaitParams.resolved(domains)")
         return self.step_duration
 
+    def domain_durations(self, domains: str) -> list[float]:
+        """Duration of each domain of a step [s]: T (flat), or T (1 − ρ) single and T ρ rolling double support
+        (multi-contact)."""
+        t = self.resolved(domains).duration
+        return [t] if domains == "flat" else [t * (1 - self.rolling_fraction), t * self.rolling_fraction]
+
     def to_dict(self) -> dict[str, float]:
         """The five values (resolved parameters only: a gait file stores its actual step duration)."""
         return {"step_length": self.step_length, "step_duration": self.duration, "step_width": self.step_width,
@@ -72,28 +83,35 @@ class GenerationConfig:
     friction: Annotated[Float, Doc("μ of the friction pyramid (below the simulator's 1.0 for margin)", gt=0.0,
                                    le=2.0)] = 0.6
     torsional_friction: Annotated[Float, Doc("torsional friction coefficient μ_t", unit="m", ge=0.0, le=1.0)] = 0.02
-    min_normal_force: Annotated[Float, Doc("least normal force of a flat stance sole", unit="N", ge=0.0,
-                                           le=1e5)] = 50.0
-    cop_margin: Annotated[Float, Doc("centre of pressure margin inside the sole edges", unit="m", ge=0.0,
-                                     le=0.2)] = 0.02
-    impact_velocity: Annotated[tuple[Velocity, Velocity], Doc(
-        "[low, high] vertical velocity of the swing sole at the guard", unit="m/s")] = (-0.4, -0.05)
-    max_impact_tangential: Annotated[Float, Doc("bound on the swing sole's horizontal velocity at the guard",
-                                                unit="m/s", ge=0.0, le=10.0)] = 0.15
+    min_normal_force: Annotated[Float | None, Doc(
+        "least normal force of a flat stance sole; not set: the robot spec's [generation] value, else 4 % of the "
+        "robot's weight", unit="N", ge=0.0, le=1e5)] = None
+    cop_margin: Annotated[Float | None, Doc(
+        "centre of pressure margin inside the sole edges; not set: the robot spec's [generation] value, else a third "
+        "of the sole's half-width", unit="m", ge=0.0, le=0.2)] = None
+    impact_velocity: Annotated[tuple[Velocity, Velocity] | None, Doc(
+        "[low, high] vertical velocity of the swing sole at the guard; not set: the robot spec's [generation] value, "
+        "else [-0.13, -0.017] √(g l) (l: leg length)", unit="m/s")] = None
+    max_impact_tangential: Annotated[Float | None, Doc(
+        "bound on the swing sole's horizontal velocity at the guard; not set: the robot spec's [generation] value, "
+        "else 0.05 √(g l)", unit="m/s", ge=0.0, le=10.0)] = None
     max_impact_angular: Annotated[Float, Doc("bound on each component of the swing sole's angular velocity at the "
                                              "guard", unit="rad/s", ge=0.0, le=50.0)] = 0.5
     flat_approach: Annotated[Float, Doc("every corner of the swing sole stays this fraction of the sole centre's "
                                         "height above the ground (touchdown is not a corner grazing early)",
                                         ge=0.0, le=1.0)] = 0.5
-    foot_gap: Annotated[Float, Doc("lateral clearance between the soles' edges", unit="m", ge=0.0, le=1.0)] = 0.02
+    foot_gap: Annotated[Float | None, Doc(
+        "lateral clearance between the soles' edges; not set: the robot spec's [generation] value, else a third of "
+        "the sole's half-width", unit="m", ge=0.0, le=1.0)] = None
     heel_strike_pitch: Annotated[tuple[Pitch, Pitch], Doc(
         "multi-contact: [min, max] toe-up pitch of the swing sole when its heel strikes", unit="rad")] = (0.2, 0.35)
     toe_off_pitch: Annotated[tuple[Pitch, Pitch], Doc(
         "multi-contact: [min, max] toe-down pitch of the stance sole at toe-off", unit="rad")] = (0.2, 0.6)
     foot_flat_rate: Annotated[Float, Doc("multi-contact: bound on the front sole's pitch rate when it lands flat",
                                          unit="rad/s", gt=0.0, le=50.0)] = 1.0
-    min_line_force: Annotated[Float, Doc("multi-contact: least normal force of each line contact", unit="N",
-                                         ge=0.0, le=1e5)] = 150.0
+    min_line_force: Annotated[Float | None, Doc(
+        "multi-contact: least normal force of each line contact; not set: the robot spec's [generation] value, "
+        "else 12 % of the robot's weight", unit="N", ge=0.0, le=1e5)] = None
     ds_free_joints: Annotated[tuple[Str, ...] | None, Doc(
         "multi-contact: the 4 swing-leg joints that are not outputs in double support; not set: picked from the "
         "joint axes")] = None
@@ -104,6 +122,73 @@ class GenerationConfig:
         if self.nodes % 2 == 0:
             raise FieldProblem("nodes", f"must be odd (τ = ½ is a node), got {self.nodes}")
         for name in ("impact_velocity", "heel_strike_pitch", "toe_off_pitch"):
-            lo, hi = getattr(self, name)
-            if lo > hi:
-                raise FieldProblem(name, f"must be [low, high] with low ≤ high, got [{lo:g}, {hi:g}]")
+            band = getattr(self, name)
+            if band is not None and band[0] > band[1]:
+                raise FieldProblem(name, f"must be [low, high] with low ≤ high, got [{band[0]:g}, {band[1]:g}]")
+
+    def for_robot(self, scale: RobotScale, spec: Mapping[str, Any] | None = None) -> GenerationConfig:
+        """These options with every robot-scaled field (:data:`ROBOT_SCALED`) set: the value given here, else the
+        robot spec's ``[generation]`` value (``spec``), else the rule of :func:`relative_generation_defaults`."""
+        rules = relative_generation_defaults(scale)
+        spec = spec or {}
+        given = {k: getattr(self, k) for k in ROBOT_SCALED}
+        return dataclasses.replace(self, **{k: v if v is not None else spec.get(k, rules[k]) for k, v in given.items()})
+
+    def scaled(self, name: str) -> Any:
+        """A robot-scaled field's value, which must be set (:meth:`for_robot` sets them)."""
+        value = getattr(self, name)
+        if value is None:
+            raise ValueError(f"generate.{name} is not set: resolve the options with GenerationConfig.for_robot")
+        return value
+
+
+ROBOT_SCALED = ("min_normal_force", "min_line_force", "cop_margin", "foot_gap", "impact_velocity",
+                "max_impact_tangential")
+"""The generation options whose defaults scale with the robot (:meth:`GenerationConfig.for_robot`)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotScale:
+    """What robot-relative defaults scale with: mass [kg], |g| [m/s²], leg length l [m] (hip joint to sole centre in
+    the zero posture), and the sole's half-length and half-width [m]."""
+
+    mass: float
+    gravity: float
+    leg_length: float
+    sole_half_length: float
+    sole_half_width: float
+
+    @property
+    def weight(self) -> float:
+        return self.mass * self.gravity
+
+    @property
+    def speed(self) -> float:
+        """√(g l) [m/s]: the leg's pendulum speed, the scale of walking velocities (Froude scaling)."""
+        return math.sqrt(self.gravity * self.leg_length)
+
+
+# Fractions of the robot-relative rules, chosen to reproduce the values exo was tuned with (126 kg, l = 0.921 m,
+# sole half-width 0.06 m: 50 N, 150 N, 0.02 m, 0.02 m, [-0.4, -0.05] m/s, 0.15 m/s) to within 3 %
+NORMAL_FORCE_FRACTION = 0.04
+LINE_FORCE_FRACTION = 0.12
+SOLE_MARGIN_FRACTION = 1.0 / 3.0
+IMPACT_VELOCITY_FROUDE = (-0.13, -0.017)
+IMPACT_TANGENTIAL_FROUDE = 0.05
+# a robot spec's gait_quality.pelvis_angular_velocity when it sets none: × √(g / l) (1.5 rad/s at exo's 0.92 m leg,
+# the fixed default of before; 1.9 rad/s on a 0.55 m leg)
+PELVIS_RATE_FROUDE = 0.44
+
+
+def relative_generation_defaults(scale: RobotScale) -> dict[str, Any]:
+    """The robot-relative defaults of :data:`ROBOT_SCALED`: normal forces as fractions of the weight m g (flat sole
+    4 %, each line contact 12 %), the CoP margin and the feet's clearance a third of the sole's half-width, the
+    swing sole's landing velocity bounds as multiples of √(g l) (Froude scaling: dynamically similar walkers of
+    different sizes land at the same fraction of their pendulum speed)."""
+    v = scale.speed
+    return {"min_normal_force": NORMAL_FORCE_FRACTION * scale.weight,
+            "min_line_force": LINE_FORCE_FRACTION * scale.weight,
+            "cop_margin": SOLE_MARGIN_FRACTION * scale.sole_half_width,
+            "foot_gap": SOLE_MARGIN_FRACTION * scale.sole_half_width,
+            "impact_velocity": (IMPACT_VELOCITY_FROUDE[0] * v, IMPACT_VELOCITY_FROUDE[1] * v),
+            "max_impact_tangential": IMPACT_TANGENTIAL_FROUDE * v}

@@ -49,6 +49,7 @@ from numpy.typing import NDArray
 
 from robustgait.bezier import bernstein_basis, bezier_derivative_coeffs
 from robustgait.config import GenerationConfig
+from robustgait.config.gait import PELVIS_RATE_FROUDE
 from robustgait.domains import Contact, domain_graph, other_side
 from robustgait.dynamics import Dynamics, foot_frame, impact_residual
 from robustgait.errors import RobustGaitError
@@ -200,9 +201,10 @@ def wrench_rows(c: Contact, lam: cs.SX, config: GenerationConfig, half_length: f
     runs along world y), |n_z| ≤ μ_t f_z. Returns (name, expr, lower, upper) rows.
     """
     mu, mut = config.friction, config.torsional_friction
-    ax, ay = half_length - config.cop_margin, half_width - config.cop_margin
+    ax, ay = half_length - config.scaled("cop_margin"), half_width - config.scaled("cop_margin")
     f = lam[:3]
-    rows = [("normal_force", f[2], config.min_normal_force if c.kind == "flat" else config.min_line_force, cs.inf),
+    least = config.scaled("min_normal_force") if c.kind == "flat" else config.scaled("min_line_force")
+    rows = [("normal_force", f[2], least, cs.inf),
             ("friction", cs.vertcat(f[0] - mu * f[2], -f[0] - mu * f[2], f[1] - mu * f[2], -f[1] - mu * f[2]),
              -cs.inf, 0.0)]
     if c.kind == "flat":
@@ -228,9 +230,15 @@ def impulse_rows(contacts: tuple[Contact, ...], imp: cs.SX, mu: float) -> cs.SX:
 
 
 def gait_quality(robot: Robot) -> GaitQuality:
-    """The robot spec's gait-quality bounds, with a joint-speed bound of 10 rad/s per joint when it sets none."""
+    """The robot spec's gait-quality bounds, with a joint-speed bound of 10 rad/s per joint and a pelvis rate bound of
+    :data:`~robustgait.config.gait.PELVIS_RATE_FROUDE` √(g / l) when it sets none."""
     q = robot.spec.gait_quality
-    return q if q.joint_velocity else replace(q, joint_velocity=(10.0,) * robot.n_joints)
+    if not q.joint_velocity:
+        q = replace(q, joint_velocity=(10.0,) * robot.n_joints)
+    if q.pelvis_angular_velocity is None:
+        s = robot.scale
+        q = replace(q, pelvis_angular_velocity=PELVIS_RATE_FROUDE * math.sqrt(s.gravity / s.leg_length))
+    return q
 
 
 class GaitProblem:
@@ -238,8 +246,10 @@ class GaitProblem:
     essential constraints. See the module docstring for the formulation."""
 
     def __init__(self, dyn: Dynamics, config: GenerationConfig):
-        self.dyn, self.config = dyn, config
         robot = dyn.robot
+        # robot-scaled options resolved (idempotent: GaitGenerator passes them resolved)
+        config = config.for_robot(robot.scale, robot.spec.generation)
+        self.dyn, self.config = dyn, config
         self.graph = graph = domain_graph(config.domains)
         self.quality = gait_quality(robot)
         self.m = m = robot.n_joints
@@ -425,7 +435,7 @@ class GaitProblem:
                                                 quality.swing_toe_down_until, i / (n - 1))) if multi else -tilt
             add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [pitch_lo, -tilt], [pitch_hi, tilt])
             add("swing_yaw", Hsw[1, 0], -math.sin(quality.swing_yaw), math.sin(quality.swing_yaw))
-            add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.foot_gap), 0.0, cs.inf)
+            add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.scaled("foot_gap")), 0.0, cs.inf)
         if i == (n - 1) // 2:
             add("step_height", psw[2] - h, 0.0, 0.0)
         if i == n - 1:
@@ -443,8 +453,9 @@ class GaitProblem:
                 Jsw = jac[(sw, "heel")](H, s)
                 ang = (Jsw[3:, :] @ nu)[[0, 2]]
             vsw = Jsw[:3, :] @ nu
-            add("impact_velocity", vsw[2], *config.impact_velocity)
-            add("impact_tangential", vsw[:2], -config.max_impact_tangential, config.max_impact_tangential)
+            add("impact_velocity", vsw[2], *config.scaled("impact_velocity"))
+            tangential = config.scaled("max_impact_tangential")
+            add("impact_tangential", vsw[:2], -tangential, tangential)
             add("impact_angular", ang, -config.max_impact_angular, config.max_impact_angular)
 
     def _bounds(self) -> tuple[FloatArray, FloatArray]:
@@ -470,7 +481,9 @@ class GaitProblem:
                 z = node["p"].start + 2
                 lo[z], hi[z] = q.pelvis_height
                 w = slice(node["vb"].start + 3, node["vb"].stop)
-                lo[w], hi[w] = -q.pelvis_angular_velocity, q.pelvis_angular_velocity
+                rate = q.pelvis_angular_velocity
+                assert rate is not None  # gait_quality() sets it
+                lo[w], hi[w] = -rate, rate
                 a = slice(node["ab"].start, node["ab"].start + 3)
                 lo[a], hi[a] = -q.pelvis_acceleration, q.pelvis_acceleration
                 lo[node["sd"]], hi[node["sd"]] = -jv, jv

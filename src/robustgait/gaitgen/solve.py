@@ -7,7 +7,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import casadi as cs
-import mujoco
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
@@ -64,11 +63,8 @@ def joint_trajectories(beta: FloatArray, taus: FloatArray, duration: float
 
 
 def domain_durations(prob: GaitProblem, params: GaitParams) -> list[float]:
-    """Duration of each domain: T (flat), or T (1 − ρ) single and T ρ double support (multi-contact)."""
-    t = params.resolved(prob.graph.name).duration
-    if len(prob.graph) == 1:
-        return [t]
-    return [t * (1 - params.rolling_fraction), t * params.rolling_fraction]
+    """Duration of each domain of the problem's graph (:meth:`GaitParams.domain_durations`)."""
+    return params.domain_durations(prob.graph.name)
 
 
 def _contact_targets(prob: GaitProblem, params: GaitParams, d: int) -> list[tuple[Contact, FloatArray]]:
@@ -242,9 +238,11 @@ class GaitGenerator:
 
     def __init__(self, robot: Robot, config: GenerationConfig | None = None, *, verbose: bool = False):
         self.robot = robot
-        self.config = cfg = config or GenerationConfig()
+        # the options that scale with the robot: set in config, else the spec's [generation], else relative
+        self.config = cfg = (config or GenerationConfig()).for_robot(robot.scale, robot.spec.generation)
         t0 = time.perf_counter()
-        self.dyn = Dynamics(robot)
+        # the NLP plans the planned joints only: held joints are welded at their angles (Robot.planned)
+        self.dyn = Dynamics(robot.planned)
         self.problem = prob = GaitProblem(self.dyn, cfg)
         nlp = {"x": prob.x, "p": prob.p, "f": prob.cost, "g": prob.g}
         opts = {"ipopt.max_iter": cfg.max_iter, "ipopt.tol": cfg.tol, "ipopt.constr_viol_tol": 1e-9,
@@ -299,29 +297,18 @@ class GaitGenerator:
     def precheck(self, params: GaitParams) -> str | None:
         """A readable reason why ``params`` cannot be walked by this robot, or None (IPOPT decides the rest)."""
         prob, cfg = self.problem, self.config
-        min_width = 2 * prob.half_width + cfg.foot_gap
+        min_width = 2 * prob.half_width + cfg.scaled("foot_gap")
         if params.step_width < min_width:
             return (f"step width {params.step_width:g} m makes the feet collide: the soles are "
-                    f"{2 * prob.half_width:.3f} m wide and need a {cfg.foot_gap:g} m gap (width ≥ {min_width:.3f} m)")
-        reach = self.leg_length()
+                    f"{2 * prob.half_width:.3f} m wide and need a {cfg.scaled('foot_gap'):g} m gap (width ≥ "
+                    f"{min_width:.3f} m)")
+        reach = self.robot.leg_length
         if np.hypot(params.step_length, params.step_width) > 1.2 * reach:
             return (f"a step of {params.step_length:g} m × {params.step_width:g} m is beyond the leg reach "
                     f"(leg length {reach:.3f} m)")
         if params.step_height > 0.5 * reach:
             return f"swing height {params.step_height:g} m is beyond half the leg length ({reach:.3f} m)"
         return None
-
-    def leg_length(self) -> float:
-        """Hip-to-sole distance [m] in the zero posture: from the joint of the base's child on the stance
-        sole's kinematic chain to the sole geom's centre."""
-        m, robot = self.robot.model, self.robot
-        d = mujoco.MjData(m)
-        mujoco.mj_kinematics(m, d)
-        body = int(m.geom_bodyid[robot.sole_geom_id[self.problem.stance]])
-        while int(m.body_parentid[body]) != robot.base_body_id:
-            body = int(m.body_parentid[body])
-        hip = d.xanchor[int(m.body_jntadr[body])]
-        return float(np.linalg.norm(hip - d.geom_xpos[robot.sole_geom_id[self.problem.stance]]))
 
     def solve(self, params: GaitParams, warm_start: Gait | None = None) -> GaitGenResult:
         """Solve for one set of essential constraints; never raises on infeasible input or solver failure:
@@ -360,8 +347,10 @@ class GaitGenerator:
               res: GaitGenResult) -> Gait:
         robot, prob = self.robot, self.problem
         first, section = states[0], states[0]
-        q0, v0 = to_mujoco_state(robot, first.H[0], first.s[0], first.vb[0], first.sd[0])
-        q1, v1 = to_mujoco_state(robot, section.H[-1], section.s[-1], section.vb[-1], section.sd[-1])
+        # states of the planned model, written for the robot's (held joints at their angles, at rest)
+        q0, v0 = robot.expand_state(*to_mujoco_state(robot.planned, first.H[0], first.s[0], first.vb[0], first.sd[0]))
+        q1, v1 = robot.expand_state(*to_mujoco_state(robot.planned, section.H[-1], section.s[-1], section.vb[-1],
+                                                     section.sd[-1]))
         solver = {"status": res.status, "iterations": res.iterations, "solve_seconds": res.solve_seconds,
                   "build_seconds": self.build_seconds, "objective": res.objective,
                   "nodes": sum(len(ns.s) for ns in states), "variables": self.n_variables,
@@ -378,7 +367,8 @@ class GaitGenerator:
                                                                   prob.domain_taus, states, strict=True))
         return Gait(robot=robot.name, domain_graph=prob.graph.name, stance=prob.stance, joints=robot.spec.joints,
                     domains=domains, initial_state=State(q0, v0), pre_impact_state=State(q1, v1), params=params,
-                    solver=solver, meta={"source": f"robustgait gaitgen ({prob.graph.name} HZD)"})
+                    solver=solver, meta={"source": f"robustgait gaitgen ({prob.graph.name} HZD)"},
+                    held=tuple((h.name, h.angle) for h in robot.spec.held))
 
 
 def generate_gait(robot: Robot, params: GaitParams | None = None, config: GenerationConfig | None = None, *,

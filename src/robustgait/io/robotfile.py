@@ -12,19 +12,22 @@ from typing import Annotated, Any
 
 import annotated_types as at
 import mujoco
-from pydantic import Field, StringConstraints
+from pydantic import Field, StringConstraints, ValidationError
 
-from robustgait.config import field_at
-from robustgait.config.base import Doc, Float, Int, Str
+from robustgait.config import ROBOT_SCALED, GaitParams, GenerationConfig, field_at
+from robustgait.config.base import Doc, Float, Int, Str, explain, validator
+from robustgait.config.gait import GAIT_PARAM_NAMES
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io import limits as L
 from robustgait.io.schema import field_error, read_toml, table, validate
 from robustgait.robots.model import INTEGRATORS, Robot
 from robustgait.robots.spec import (
     ACTION_FIELDS,
+    ADDED_FLOOR,
     SHIPPED_DIR,
     FallCriteria,
     GaitQuality,
+    HeldJoint,
     Integrator,
     LegSpec,
     ParamRange,
@@ -48,17 +51,26 @@ def _joints(item: Any) -> Any:
     return Annotated[list[item], at.MinLen(1), at.MaxLen(L.MAX_JOINTS)]
 
 
+HeldServo = Annotated[tuple[Annotated[Float, L.KP], Annotated[Float, L.KD], Annotated[Float, L.TORQUE_LIMIT]],
+                      Doc("[kp, kd, torque_limit]")]
+
+
 @table
 class JointsTable:
     names: _joints(Name)  # type: ignore[valid-type]
     kp: _joints(Annotated[Float, L.KP])  # type: ignore[valid-type]
     kd: _joints(Annotated[Float, L.KD])  # type: ignore[valid-type]
     torque_limit: _joints(Annotated[Float, L.TORQUE_LIMIT])  # type: ignore[valid-type]
+    held: dict[Name, Annotated[Float, L.POSTURE]] = dataclasses.field(default_factory=dict)
+    held_servo: dict[Name, HeldServo] = dataclasses.field(default_factory=dict)
 
 
 @table
 class LegTable:
-    sole_geom: Name
+    sole_geom: Name | None = None
+    sole_geoms: Annotated[list[Name], at.MinLen(1), at.MaxLen(64)] | None = None
+    sole_body: Name | None = None
+    sole_class: Name | None = None
 
 
 @table
@@ -73,6 +85,8 @@ class MirrorTable:
     joint_sign: _joints(Sign)  # type: ignore[valid-type]
     base_sign: Annotated[tuple[Sign, Sign, Sign, Sign, Sign, Sign], Doc("(x, y, z, roll, pitch, yaw)")] = (
         1.0, -1.0, 1.0, -1.0, 1.0, -1.0)
+    held: dict[Name, Annotated[tuple[Name, Sign], Doc("[mirror joint, sign]")]] = dataclasses.field(
+        default_factory=dict)
 
 
 @table
@@ -93,7 +107,7 @@ class GaitQualityTable:
     pelvis_yaw: QualityAngle = GaitQuality.pelvis_yaw
     pelvis_pitch: Annotated[tuple[BandEnd, BandEnd], Doc("[low, high]")] = GaitQuality.pelvis_pitch
     pelvis_height: Annotated[tuple[HeightBandEnd, HeightBandEnd], Doc("[low, high]")] = GaitQuality.pelvis_height
-    pelvis_angular_velocity: Annotated[Float, L.QUALITY_ANGULAR_VELOCITY] = GaitQuality.pelvis_angular_velocity
+    pelvis_angular_velocity: Annotated[Float, L.QUALITY_ANGULAR_VELOCITY] | None = None
     swing_tilt: QualityAngle = GaitQuality.swing_tilt
     swing_yaw: QualityAngle = GaitQuality.swing_yaw
     swing_toe_down_until: Annotated[Float, Doc(unit="phase", ge=0.0, le=1.0)] = GaitQuality.swing_toe_down_until
@@ -138,7 +152,6 @@ class SpecFile:
     name: Name
     mjcf: Name
     base_body: Name
-    floor_geom: Name
     joints: JointsTable
     legs: LegsTable
     mirror: MirrorTable
@@ -149,6 +162,10 @@ class SpecFile:
     action_space: ActionSpaceTable | None = None
     posture: dict[Name, Annotated[Float, L.POSTURE]] = dataclasses.field(default_factory=dict)
     controller: ControllerTable | None = None
+    floor_geom: Name | None = None
+    add_floor: Annotated[bool, Field(strict=True)] = False
+    generation: dict[Name, Any] = dataclasses.field(default_factory=dict)
+    gait: dict[Name, Any] = dataclasses.field(default_factory=dict)
 
 
 def _band(src: Path, key: str, band: tuple[float, float]) -> tuple[float, float]:
@@ -181,6 +198,71 @@ def _action_space(t: ActionAxesTable, src: Path,
                               f"limit of {L.MAX_GRID_POINTS} per axis (use a larger step)")
         out[key] = ParamRange(lo, hi, step)
     return out
+
+
+def _section(raw: dict[str, Any], schema: type, path: Path, table_name: str,
+             allowed: tuple[str, ...]) -> dict[str, Any]:
+    """A spec table of config fields (``[generation]``, ``[gait]``): only the ``allowed`` keys, each validated by the
+    config section ``schema`` (its limits and types); returns the given values, validated."""
+    for key in raw:
+        if key not in allowed:
+            raise field_error(path, f"{table_name}.{key}",
+                              f"not a field of [{table_name}] (one of: {', '.join(allowed)})")
+    try:
+        obj = validator(schema)(raw)
+    except ValidationError as exc:
+        raise field_error(path, table_name, explain(exc, schema, fmt="toml")) from None
+    return {k: getattr(obj, k) for k in raw}
+
+
+def _legs(s: SpecFile, path: Path) -> dict[str, LegSpec]:
+    out = {}
+    for side in ("left", "right"):
+        t: LegTable = getattr(s.legs, side)
+        given = [k for k in ("sole_geom", "sole_geoms", "sole_body") if getattr(t, k) is not None]
+        if len(given) != 1:
+            raise field_error(path, f"legs.{side}", "name the sole with exactly one of sole_geom, sole_geoms or "
+                              f"sole_body (got {', '.join(given) or 'none'})")
+        if t.sole_class is not None and t.sole_body is None:
+            raise field_error(path, f"legs.{side}.sole_class", "selects geoms of sole_body: set sole_body too")
+        out[side] = LegSpec(sole_geom=t.sole_geom, sole_geoms=tuple(t.sole_geoms or ()), sole_body=t.sole_body,
+                            sole_class=t.sole_class)
+    return out
+
+
+def _held(s: SpecFile, path: Path, planned: tuple[str, ...]) -> tuple[HeldJoint, ...]:
+    """The held joints with their servos and mirror partners; the held posture must be mirror-consistent."""
+    held, servo, mirror = s.joints.held, s.joints.held_servo, s.mirror.held
+    out = []
+    for name, angle in held.items():
+        if name in planned:
+            raise field_error(path, f"joints.held.{name}", "is also in joints.names: a joint is planned or held")
+        if name not in servo:
+            raise field_error(path, f"joints.held_servo.{name}", "missing: each held joint needs [kp, kd, "
+                              "torque_limit] for its servo")
+        if name not in mirror:
+            raise field_error(path, f"mirror.held.{name}", "missing: each held joint needs [mirror joint, sign]")
+        partner, sign = mirror[name]
+        if partner not in held:
+            raise field_error(path, f"mirror.held.{name}", f"its mirror joint '{partner}' is not a held joint")
+        if abs(sign) != 1.0:
+            raise field_error(path, f"mirror.held.{name}", "mirror signs must be +1 or -1")
+        if abs(angle - sign * held[partner]) > 1e-9:
+            raise field_error(path, f"joints.held.{name}", f"the held posture is not left/right symmetric: {angle:g} "
+                              f"but its mirror {partner} × {sign:+g} is {sign * held[partner]:g} (the periodic gait "
+                              "relabels one step into the next)")
+        kp, kd, limit = servo[name]
+        out.append(HeldJoint(name, float(angle), float(kp), float(kd), float(limit), partner, float(sign)))
+    for table_name, keys in (("joints.held_servo", servo), ("mirror.held", mirror)):
+        for name in keys:
+            if name not in held:
+                raise field_error(path, f"{table_name}.{name}", "not a held joint (joints.held)")
+    for h in out:
+        back = mirror[h.mirror]
+        if back[0] != h.name or back[1] != h.sign:
+            raise field_error(path, f"mirror.held.{h.name}", f"is not an involution: {h.name} → {h.mirror} but "
+                              f"{h.mirror} → {back[0]} (sign {back[1]:+g})")
+    return tuple(out)
 
 
 def _check_per_joint(path: Path, key: str, values: list[float], n: int) -> None:
@@ -231,7 +313,10 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
         joint_velocity=joint_velocity)
     for key in s.posture:
         if key not in names:
-            raise field_error(path, f"posture.{key}", "not an actuated joint (joints.names)")
+            raise field_error(path, f"posture.{key}", "not a planned joint (joints.names)")
+    if s.add_floor and s.floor_geom is not None and s.floor_geom != ADDED_FLOOR:
+        raise field_error(path, "add_floor", f"adds a floor named {ADDED_FLOOR}: floor_geom must be unset or that name "
+                          f"(got '{s.floor_geom}')")
     passivity = None
     if s.controller is not None and s.controller.passivity is not None:
         pt = s.controller.passivity
@@ -247,7 +332,7 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
         kp=tuple(s.joints.kp),
         kd=tuple(s.joints.kd),
         torque_limit=tuple(s.joints.torque_limit),
-        legs={"left": LegSpec(s.legs.left.sole_geom), "right": LegSpec(s.legs.right.sole_geom)},
+        legs=_legs(s, path),
         mirror_perm=tuple(s.mirror.joint_perm),
         mirror_sign=tuple(float(v) for v in s.mirror.joint_sign),
         base_mirror_sign=base_sign,
@@ -263,6 +348,10 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
                                    else None),
         posture=tuple(float(s.posture.get(j, 0.0)) for j in names),
         passivity=passivity,
+        add_floor=s.add_floor,
+        held=_held(s, path, names),
+        generation=_section(s.generation, GenerationConfig, path, "generation", ROBOT_SCALED),
+        gait=_section(s.gait, GaitParams, path, "gait", GAIT_PARAM_NAMES),
     )
 
 
@@ -273,14 +362,27 @@ def read_spec(path: str | Path) -> RobotSpec:
 
 
 def read_mjcf(spec: RobotSpec) -> mujoco.MjSpec:
-    """The robot's MJCF file parsed by MuJoCo (one-line errors for a missing or unparsable file)."""
+    """The robot's MJCF (or URDF) file parsed by MuJoCo (one-line errors for a missing or unparsable file). A URDF
+    cannot express a floating base: its base body gets a free joint (:func:`parse_model`)."""
     src = spec.source or spec.mjcf
     if not spec.mjcf.is_file():
         raise input_error(src, f"MJCF file not found: {spec.mjcf}")
+    return parse_model(spec.mjcf, spec.base_body)
+
+
+def parse_model(path: Path, base_body: str | None = None) -> mujoco.MjSpec:
+    """An MJCF or URDF file parsed by MuJoCo. A URDF (``.urdf``) attaches its root link to the world; with
+    ``base_body`` given and jointless, that body gets a free joint, the floating base URDF cannot express."""
+    kind = "URDF" if path.suffix.lower() == ".urdf" else "MJCF"
     try:
-        return mujoco.MjSpec.from_file(str(spec.mjcf))
+        mjs = mujoco.MjSpec.from_file(str(path))
     except ValueError as exc:
-        raise input_error(spec.mjcf, f"MuJoCo could not parse the MJCF: {exc}") from None
+        raise input_error(path, f"MuJoCo could not parse the {kind}: {' '.join(str(exc).split())}") from None
+    if kind == "URDF" and base_body is not None:
+        body = mjs.body(base_body)
+        if body is not None and not body.joints:
+            body.add_freejoint()
+    return mjs
 
 
 def shipped_robots() -> list[str]:

@@ -16,14 +16,18 @@ The MJCF is read by :mod:`robustgait.io.robotfile` (``load_robot``), which hands
 
 from __future__ import annotations
 
+import dataclasses
 from functools import cached_property
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.config import GaitParams, RobotScale
 from robustgait.errors import input_error
-from robustgait.robots.spec import RobotSpec
+from robustgait.robots.held import weld_joints
+from robustgait.robots.soles import Sole, resolve_floor, resolve_soles
+from robustgait.robots.spec import SIDES, RobotSpec
 
 INTEGRATORS = {
     "euler": mujoco.mjtIntegrator.mjINT_EULER,
@@ -35,9 +39,9 @@ INTEGRATORS = {
 CONTACT_SENSORS = ("robustgait_contact_left", "robustgait_contact_right", "robustgait_contact_floor")
 
 
-def _add_contact_sensor(spec: mujoco.MjSpec, name: str, geom: str, ref: str | None) -> None:
-    sensor = spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_CONTACT,
-                             objtype=mujoco.mjtObj.mjOBJ_GEOM, objname=geom)
+def _add_contact_sensor(spec: mujoco.MjSpec, name: str, obj: tuple[mujoco.mjtObj, str], ref: str | None) -> None:
+    """A sensor counting the contacts of ``obj`` (a geom, or a body's geoms) with the geom ``ref`` (any if None)."""
+    sensor = spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_CONTACT, objtype=obj[0], objname=obj[1])
     if ref is not None:
         sensor.reftype = mujoco.mjtObj.mjOBJ_GEOM
         sensor.refname = ref
@@ -45,29 +49,41 @@ def _add_contact_sensor(spec: mujoco.MjSpec, name: str, geom: str, ref: str | No
     sensor.intprm = [1 << int(mujoco.mjtConDataField.mjCONDATA_FOUND), 0, 1]
 
 
-def build_mjspec(spec: RobotSpec, mjs: mujoco.MjSpec) -> mujoco.MjSpec:
-    """The robot's parsed MJCF ``mjs`` (edited in place and returned) with our actuators and sensors, after
-    checking that the spec's names exist in it."""
+def resolve_model(spec: RobotSpec, mjs: mujoco.MjSpec) -> tuple[dict[str, Sole], str]:
+    """Check the spec's names against the parsed MJCF ``mjs`` and resolve its soles and floor in it (edited in place;
+    :mod:`robustgait.robots.soles`: virtual soles, an added or named floor). Returns the soles by side and the
+    floor geom's name."""
     src = spec.source or spec.mjcf
     joint_names = {j.name for j in mjs.joints}
-    geom_names = {g.name for g in mjs.geoms}
-    for j in spec.joints:
+    for j in (*spec.joints, *spec.held_names):
         if j not in joint_names:
-            raise input_error(src, f"unknown joint name '{j}' (not in {spec.mjcf.name})")
-    for side, leg in spec.legs.items():
-        if leg.sole_geom not in geom_names:
-            raise input_error(src, f"unknown geom name '{leg.sole_geom}' for the {side} sole")
-    if spec.floor_geom not in geom_names:
-        raise input_error(src, f"unknown geom name '{spec.floor_geom}' for the floor")
+            what = "held joint" if j in spec.held_names else "joint"
+            raise input_error(src, f"unknown {what} name '{j}' (not in {spec.mjcf.name})")
     if spec.base_body not in {b.name for b in mjs.bodies}:
         raise input_error(src, f"unknown body name '{spec.base_body}' for the floating base")
+    try:
+        model = mjs.compile()  # as parsed, to place the soles (and number the elements)
+    except ValueError as exc:
+        raise input_error(spec.mjcf, f"MuJoCo could not compile the model: {exc}") from None
+    geoms = {g.id: g for g in mjs.geoms}
+    soles = resolve_soles(spec, mjs, model)
+    floor = resolve_floor(spec, mjs, [geoms[g] for s in soles.values() for g in s.geoms])
+    return soles, floor
+
+
+def build_mjspec(spec: RobotSpec, mjs: mujoco.MjSpec, soles: dict[str, Sole], floor: str) -> mujoco.MjSpec:
+    """``mjs`` (resolved by :func:`resolve_model`; edited in place and returned) with our actuators — one servo per
+    planned joint (output order), then per held joint — and our contact sensors, and the spec's simulation
+    options; the MJCF's own actuators, sensors and keyframes are removed."""
     for act in list(mjs.actuators):
         mjs.delete(act)
     for sensor in list(mjs.sensors):
         mjs.delete(sensor)
     for key in list(mjs.keys):
         mjs.delete(key)
-    for j, kp, kd, tmax in zip(spec.joints, spec.kp, spec.kd, spec.torque_limit, strict=True):
+    servos = [*zip(spec.joints, spec.kp, spec.kd, spec.torque_limit, strict=True),
+              *((h.name, h.kp, h.kd, h.torque_limit) for h in spec.held)]
+    for j, kp, kd, tmax in servos:
         act = mjs.add_actuator(name=f"robustgait_{j}", target=j, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
         act.biastype = mujoco.mjtBias.mjBIAS_AFFINE
@@ -76,9 +92,9 @@ def build_mjspec(spec: RobotSpec, mjs: mujoco.MjSpec) -> mujoco.MjSpec:
         act.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
         act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
         act.forcerange = [-tmax, tmax]
-    _add_contact_sensor(mjs, CONTACT_SENSORS[0], spec.legs["left"].sole_geom, spec.floor_geom)
-    _add_contact_sensor(mjs, CONTACT_SENSORS[1], spec.legs["right"].sole_geom, spec.floor_geom)
-    _add_contact_sensor(mjs, CONTACT_SENSORS[2], spec.floor_geom, None)
+    for name, side in zip(CONTACT_SENSORS[:2], SIDES, strict=True):
+        _add_contact_sensor(mjs, name, soles[side].sensor, floor)
+    _add_contact_sensor(mjs, CONTACT_SENSORS[2], (mujoco.mjtObj.mjOBJ_GEOM, floor), None)
     if spec.timestep is not None:
         mjs.option.timestep = spec.timestep
     if spec.integrator is not None:
@@ -88,11 +104,20 @@ def build_mjspec(spec: RobotSpec, mjs: mujoco.MjSpec) -> mujoco.MjSpec:
 
 class Robot:
     """A loaded robot: its spec, the compiled MuJoCo model and the index maps the pipeline uses. ``mjcf``: the
-    robot's MJCF as parsed by MuJoCo (:func:`robustgait.io.robotfile.read_mjcf`); it is edited in place."""
+    robot's MJCF as parsed by MuJoCo (:func:`robustgait.io.robotfile.read_mjcf`); it is edited in place.
 
-    def __init__(self, spec: RobotSpec, mjcf: mujoco.MjSpec):
+    Joints: the planned ones (``spec.joints``, output order: ``qpos_idx``, ``dof_idx``, ``kp`` …) and the held ones
+    (``spec.held``: ``held_qpos_idx``, ``held_dof_idx``, ``held_angle``). Servos (``model.nu`` of them): the planned
+    joints', then the held joints' (``servo_kp``, ``servo_kd``, ``servo_limit``). ``planned``: the robot with its held
+    joints welded (gait generation's model); ``resolved``: the soles and floor when ``mjcf`` is already resolved
+    (:func:`resolve_model`), as for ``planned``."""
+
+    def __init__(self, spec: RobotSpec, mjcf: mujoco.MjSpec,
+                 resolved: tuple[dict[str, Sole], str] | None = None):
         self.spec = spec
-        mjs = build_mjspec(spec, mjcf)
+        self.soles, self.floor_name = resolved if resolved is not None else resolve_model(spec, mjcf)
+        self._resolved = mjcf.copy()
+        mjs = build_mjspec(spec, mjcf, self.soles, self.floor_name)
         self._mjspec = mjs.copy()
         try:
             self.model: mujoco.MjModel = mjs.compile()
@@ -106,22 +131,92 @@ class Robot:
         if jnt != 0:
             raise input_error(spec.source, "the free joint of the base must be the model's first joint")
         ids = [m.joint(j).id for j in spec.joints]
-        for j, i in zip(spec.joints, ids, strict=True):
+        held = [m.joint(h.name).id for h in spec.held]
+        for j, i in zip((*spec.joints, *spec.held_names), ids + held, strict=True):
             if int(m.jnt_type[i]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
                 raise input_error(spec.source, f"joint '{j}' is not a hinge or slide joint")
-        if m.nq != 7 + len(ids) or m.nv != 6 + len(ids):
-            raise input_error(spec.source, f"the model has {m.nv - 6} joints besides the base but the spec "
-                              f"actuates {len(ids)}: every non-base joint must be actuated")
+        n = len(ids) + len(held)
+        if m.nq != 7 + n or m.nv != 6 + n:
+            names = {m.joint(i).name for i in range(1, m.njnt)} - {*spec.joints, *spec.held_names}
+            raise input_error(spec.source, f"the model has {m.njnt - 1} joints besides the base but the spec plans "
+                              f"{len(ids)} and holds {len(held)}: every non-base joint must be in joints.names or "
+                              f"joints.held (missing: {', '.join(sorted(names)) or 'none'})")
         self.qpos_idx: NDArray[np.int64] = np.array([m.jnt_qposadr[i] for i in ids], dtype=np.int64)
         self.dof_idx: NDArray[np.int64] = np.array([m.jnt_dofadr[i] for i in ids], dtype=np.int64)
+        self.held_qpos_idx: NDArray[np.int64] = np.array([m.jnt_qposadr[i] for i in held], dtype=np.int64)
+        self.held_dof_idx: NDArray[np.int64] = np.array([m.jnt_dofadr[i] for i in held], dtype=np.int64)
+        self.held_angle = np.array([h.angle for h in spec.held], dtype=float)
+        order = {h.name: k for k, h in enumerate(spec.held)}
+        self._held_perm = [order[h.mirror] for h in spec.held]
+        self._held_sign = np.array([h.sign for h in spec.held], dtype=float)
         self.base_body_id = int(base.id)
-        self.sole_geom_id = {s: m.geom(leg.sole_geom).id for s, leg in spec.legs.items()}
-        self.floor_geom_id = m.geom(spec.floor_geom).id
+        self.sole_geom_id = {side: m.geom(sole.geom).id for side, sole in self.soles.items()}
+        self.floor_geom_id = m.geom(self.floor_name).id
         self.sensor_adr = {name: int(m.sensor(name).adr[0]) for name in CONTACT_SENSORS}
         self.kp = np.asarray(spec.kp)
         self.kd = np.asarray(spec.kd)
         self.torque_limit = np.asarray(spec.torque_limit)
+        self.servo_kp = np.concatenate([self.kp, [h.kp for h in spec.held]])
+        self.servo_kd = np.concatenate([self.kd, [h.kd for h in spec.held]])
+        self.servo_limit = np.concatenate([self.torque_limit, [h.torque_limit for h in spec.held]])
         self.joint_range = np.array([m.jnt_range[i] if m.jnt_limited[i] else (-np.inf, np.inf) for i in ids])
+
+    @cached_property
+    def planned(self) -> Robot:
+        """The robot whose model has the held joints welded at their angles (:func:`robustgait.robots.held.
+        weld_joints`): what gait generation plans with; the robot itself when it holds no joint."""
+        if not self.spec.held:
+            return self
+        mjs = self._resolved.copy()
+        weld_joints(mjs, mjs.compile(), self.spec.held, self.spec.source)
+        return Robot(dataclasses.replace(self.spec, held=()), mjs, resolved=(self.soles, self.floor_name))
+
+    def expand_state(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64]
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """A state of :attr:`planned`'s model (..., 7 + m), (..., 6 + m) as this model's: the base and planned joints
+        copied, the held joints at their angles and at rest."""
+        plan = self.planned
+        qp = np.zeros((*np.shape(qpos)[:-1], self.model.nq))
+        qv = np.zeros((*np.shape(qvel)[:-1], self.model.nv))
+        qp[..., :7], qv[..., :6] = np.asarray(qpos)[..., :7], np.asarray(qvel)[..., :6]
+        qp[..., self.qpos_idx] = np.asarray(qpos)[..., plan.qpos_idx]
+        qv[..., self.dof_idx] = np.asarray(qvel)[..., plan.dof_idx]
+        qp[..., self.held_qpos_idx] = self.held_angle
+        return qp, qv
+
+    def servo_controls(self, planned: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Servo controls (..., nu) from the planned joints' controls (..., m): the held joints' servos get their
+        angles."""
+        c = np.asarray(planned, dtype=float)
+        if not self.spec.held:
+            return c
+        return np.concatenate([c, np.broadcast_to(self.held_angle, (*c.shape[:-1], self.held_angle.size))], axis=-1)
+
+    @cached_property
+    def leg_length(self) -> float:
+        """Hip-to-sole distance [m] in the zero posture: from the joint of the base's child on the right sole's
+        kinematic chain to the sole box's centre."""
+        m = self.model
+        d = mujoco.MjData(m)
+        mujoco.mj_kinematics(m, d)
+        body = int(m.geom_bodyid[self.sole_geom_id["right"]])
+        while int(m.body_parentid[body]) != self.base_body_id:
+            body = int(m.body_parentid[body])
+        hip = d.xanchor[int(m.body_jntadr[body])]
+        return float(np.linalg.norm(hip - d.geom_xpos[self.sole_geom_id["right"]]))
+
+    @property
+    def default_params(self) -> GaitParams:
+        """The robot's default gait parameters: the spec's ``[gait]`` over the configuration's defaults."""
+        return GaitParams(**self.spec.gait)
+
+    @cached_property
+    def scale(self) -> RobotScale:
+        """What robot-relative defaults scale with (:class:`robustgait.config.RobotScale`)."""
+        size = np.sort(self.model.geom_size[self.sole_geom_id["right"]])
+        return RobotScale(mass=self.mass, gravity=float(np.linalg.norm(self.model.opt.gravity)),
+                          leg_length=self.leg_length, sole_half_length=float(size[2]),
+                          sole_half_width=float(size[1]))
 
     @property
     def name(self) -> str:
@@ -156,7 +251,7 @@ class Robot:
         """The state relabeled for the other stance: a reflection S of the base about the sagittal plane.
 
         Base position p → S p, orientation R → S R S, linear velocity v → S v, angular velocity (world or
-        body frame alike) ω → det(S) S ω; joints permuted and signed. qpos (..., nq), qvel (..., nv).
+        body frame alike) ω → det(S) S ω; planned and held joints permuted and signed. qpos (..., nq), qvel (..., nv).
         """
         s = np.asarray(self.spec.base_mirror_sign[:3])
         qp = np.array(qpos, dtype=float)
@@ -168,6 +263,9 @@ class Robot:
         qv[..., 3:6] *= np.prod(s) * s
         qp[..., self.qpos_idx] = self.mirror_joints(np.asarray(qpos)[..., self.qpos_idx])
         qv[..., self.dof_idx] = self.mirror_joints(np.asarray(qvel)[..., self.dof_idx])
+        if self.spec.held:
+            qp[..., self.held_qpos_idx] = np.asarray(qpos)[..., self.held_qpos_idx[self._held_perm]] * self._held_sign
+            qv[..., self.held_dof_idx] = np.asarray(qvel)[..., self.held_dof_idx[self._held_perm]] * self._held_sign
         return qp, qv
 
     def __repr__(self) -> str:

@@ -20,9 +20,25 @@ Integrator = Literal["euler", "implicitfast", "implicit", "rk4"]
 
 @dataclass(frozen=True)
 class LegSpec:
-    """One leg: the collision geom of its sole (a box whose bottom face is the sole)."""
+    """One leg's sole, named in exactly one way: ``sole_geom`` (one box geom whose bottom face is the sole),
+    ``sole_geoms`` (a set of sphere, capsule or box geoms of one body) or ``sole_body`` (every colliding geom of
+    that body; with ``sole_class`` only those of that default class). Names in the MJCF are not required for the
+    last. A sole that is not one box is represented by a virtual box spanning its lowest points
+    (:func:`robustgait.robots.soles.resolve_sole`)."""
 
-    sole_geom: str
+    sole_geom: str | None = None
+    sole_geoms: tuple[str, ...] = ()
+    sole_body: str | None = None
+    sole_class: str | None = None
+
+    def describe(self) -> str:
+        """How the sole is named, for messages: ``geom 'x'``, ``geoms 'a', 'b'``, ``body 'b' (class 'c')``."""
+        if self.sole_geom is not None:
+            return f"geom '{self.sole_geom}'"
+        if self.sole_geoms:
+            return "geoms " + ", ".join(f"'{g}'" for g in self.sole_geoms)
+        cls = f" (class '{self.sole_class}')" if self.sole_class is not None else ""
+        return f"body '{self.sole_body}'{cls}"
 
 
 @dataclass(frozen=True)
@@ -42,7 +58,9 @@ class GaitQuality:
 
     pelvis_roll, pelvis_yaw [rad]: |φ|, |ψ| ≤ bound. pelvis_pitch [rad]: (low, high) band.
     pelvis_height [m]: (low, high) band of the base origin above the stance sole.
-    pelvis_angular_velocity [rad/s]: each component of the base's angular velocity (world axes) ≤ bound.
+    pelvis_angular_velocity [rad/s]: each component of the base's angular velocity (world axes) ≤ bound; None (not
+    in the spec): relative to the robot, :data:`robustgait.config.gait.PELVIS_RATE_FROUDE` √(g / l) (1.5 rad/s on a
+    leg of 0.92 m like exo's; larger on a smaller robot, whose motions are faster).
     pelvis_acceleration [m/s²]: each component of the pelvis origin's linear acceleration ≤ bound (what the
     passenger feels; unbounded by default).
     swing_tilt [rad]: swing sole roll and pitch ≤ bound (kept nearly parallel to the ground).
@@ -57,7 +75,7 @@ class GaitQuality:
     pelvis_yaw: float = 0.1
     pelvis_pitch: tuple[float, float] = (-0.1, 0.2)
     pelvis_height: tuple[float, float] = (0.0, math.inf)
-    pelvis_angular_velocity: float = 1.5
+    pelvis_angular_velocity: float | None = None
     pelvis_acceleration: float = math.inf
     swing_tilt: float = 0.15
     swing_yaw: float = 0.15
@@ -89,13 +107,33 @@ class PassivitySpec:
 
 
 @dataclass(frozen=True)
+class HeldJoint:
+    """A joint the gait does not plan (``[joints.held]``): held by its servo (gains ``kp``, ``kd``, clamp
+    ``torque_limit``) at ``angle`` [rad or m] in simulation, welded at that angle in the optimization's model.
+    ``mirror``: the held joint it becomes under the left/right relabeling, with ``sign``."""
+
+    name: str
+    angle: float
+    kp: float
+    kd: float
+    torque_limit: float
+    mirror: str
+    sign: float
+
+
+@dataclass(frozen=True)
 class RobotSpec:
-    """Everything the pipeline needs to know about a robot beyond its MJCF."""
+    """Everything the pipeline needs to know about a robot beyond its MJCF.
+
+    ``floor_geom`` None: the world's only plane geom; ``add_floor``: the MJCF has none and a plane
+    (:data:`ADDED_FLOOR`) is added at load. ``held``: joints held at an angle (:class:`HeldJoint`).
+    ``generation``, ``gait``: the robot's own defaults of gait-generation options and gait parameters (the spec's
+    ``[generation]`` and ``[gait]`` tables; what is not there resolves as in :mod:`robustgait.config`)."""
 
     name: str
     mjcf: Path
     base_body: str
-    floor_geom: str
+    floor_geom: str | None
     joints: tuple[str, ...]
     kp: tuple[float, ...]
     kd: tuple[float, ...]
@@ -114,10 +152,22 @@ class RobotSpec:
     multicontact_action_space: dict[str, ParamRange] | None = None
     posture: tuple[float, ...] = ()
     passivity: PassivitySpec | None = None
+    add_floor: bool = False
+    held: tuple[HeldJoint, ...] = ()
+    generation: dict[str, float] = field(default_factory=dict)
+    gait: dict[str, float] = field(default_factory=dict)
 
     @property
     def n_joints(self) -> int:
         return len(self.joints)
+
+    @property
+    def held_names(self) -> tuple[str, ...]:
+        return tuple(h.name for h in self.held)
+
+
+ADDED_FLOOR = "robustgait_floor"
+"""Name of the floor plane added at load (``add_floor = true``) or given to the MJCF's unnamed plane."""
 
 
 ACTION_FIELDS = ("step_length", "step_duration", "step_width", "step_height")

@@ -53,17 +53,18 @@ def feedforward_torque(gait: Gait, tau: NDArray[np.float64], domain: int = 0) ->
 
 def step_controls(robot: Robot, gait: Gait, n_steps: int, *, feedforward: bool = True,
                   domain: int = 0) -> NDArray[np.float64]:
-    """Servo controls c_k (n_steps, m) for physics steps k = 0..n_steps−1 of a domain that starts at τ = 0.
+    """Servo controls c_k (n_steps, nu) for physics steps k = 0..n_steps−1 of a domain that starts at τ = 0.
 
-    c_k = y_d(τ_k) + (kd ẏ_d(τ_k) + u_ff(τ_k)) / kp with τ_k = k Δt / T_d (module docstring). ``gait`` must be
-    written for the stance of this step (use :meth:`Gait.mirrored` for the other leg).
+    c_k = y_d(τ_k) + (kd ẏ_d(τ_k) + u_ff(τ_k)) / kp with τ_k = k Δt / T_d (module docstring) for the planned joints;
+    a held joint's servo holds its angle (:meth:`Robot.servo_controls`). ``gait`` must be written for the stance of
+    this step (use :meth:`Gait.mirrored` for the other leg).
     """
     if not 0 <= domain < len(gait.domains):
         raise RobustGaitError(f"the gait has {len(gait.domains)} domains, no domain {domain}")
     tau = np.arange(n_steps, dtype=np.float64) * (robot.dt / gait.domains[domain].duration)
     y, dy = desired_outputs(gait, tau, domain)
     u = feedforward_torque(gait, tau, domain) if feedforward else 0.0
-    return np.asarray(y + (robot.kd * dy + u) / robot.kp)
+    return robot.servo_controls(y + (robot.kd * dy + u) / robot.kp)
 
 
 @dataclass

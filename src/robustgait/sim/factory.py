@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 from robustgait.config import SimConfig
+from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine
@@ -29,6 +30,9 @@ def make_engine(robot: Robot, gait: Gait, config: SimConfig | None = None) -> St
         engine = StepEngine(robot, gait, config)
         engine.controller_note = MULTICONTACT_NOTE
         return engine
+    if robot.spec.held:
+        raise RobustGaitError(f"the passivity-based law plans every joint, and {robot.name} holds "
+                              f"{len(robot.spec.held)} ([joints.held]): use sim.controller pd")
     from robustgait.sim.feedback import FeedbackEngine
     from robustgait.sim.passivity import PassivityController, PassivityGains
 

@@ -338,7 +338,7 @@ def noise_draws(robot: Robot, sigma_q: FloatArray, ratio: float, horizon: int, s
     step j does not depend on the horizon H, which grows with the gait's step duration: gaits validated with
     one seed get the same noise sequence."""
     rng = np.random.default_rng((seed, KINDS.index("noise"), kind_step))
-    k, nu = sigma_q.size, robot.n_joints
+    k, nu = sigma_q.size, robot.model.nu  # every servo: planned and held joints
     white = rng.standard_normal((horizon, 2, k, nu)).transpose(2, 0, 1, 3)  # (K, H, 2, nu)
     scale = np.array([1.0, ratio])[None, None, :, None] * sigma_q[:, None, None, None]
     return np.asarray(scale * white)
