@@ -626,8 +626,8 @@ def main() -> None:
     ap.add_argument("--fd-steps", default="1e-7,1e-6,1e-5", help="orbit: finite-difference steps compared")
     ap.add_argument("--extra", action="append", default=[], help="orbit: more gaits, ROBOT=FILE (repeatable)")
     ap.add_argument("--orbit-parts", default="rules,fd,survey",
-                    help="orbit: rules (with the finite-difference check and the survey after them), or fd and/or "
-                         "survey alone")
+                    help="orbit: rules (with the finite-difference check and the survey after them), or any of fd, "
+                         "survey and windows alone")
     ap.add_argument("--survey", action="append", default=[],
                     help="orbit: gaits of the survey (the shipped search only), ROBOT=FILE (repeatable)")
     ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")

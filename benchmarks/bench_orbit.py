@@ -13,9 +13,12 @@ Printed: status, the step the orbit settled at, the window residual, Newton's re
 time) and ρ at a fixed touchdown step, the top eigenvalue moduli, the fixed-point stage's physics steps and seconds, J*
 and the move of x* from the ``before`` x* (section coordinates; ω*). Then, at the settled iterate of the default rule,
 the finite-difference check of ρ: ρ for each ``--fd-steps`` (robust central differences) and for forward differences,
-and the growth of 8 random perturbations of x* over 8 steps of the map at amplitudes 1e-6 and 1e-4 — the empirical
-rate (‖δ_8‖ / ‖δ_0‖)^(1/8), median over the 8 — against ρ. Last, a survey of ``--survey ROBOT=FILE`` gaits: the
-shipped search alone (status, settled step, ρ, moduli, cost; no J*).
+the growth of a perturbation along the top eigenvector and of 8 random ones over 8 steps of the map at amplitudes
+1e-6 and 1e-4 — the empirical rates (‖δ_8‖ / ‖δ_0‖)^(1/8) and, for the random ones, (‖δ_8‖ / ‖δ_4‖)^(1/4) — against
+ρ, and how far 300 iterates of the map from x* wander (steps 100–300, from their mean). Last, a survey of
+``--survey ROBOT=FILE`` gaits: the shipped search alone (status, settled step, ρ, moduli, cost; no J*). ``windows``
+(``--orbit-parts windows``): for the standard and survey gaits, where windows of several lengths and tolerances first
+hold on 150 iterates, and the share of later windows that keep holding.
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ from robustgait.certify import GaitCertificate, certify_gait
 from robustgait.config import CertifyConfig, SimConfig
 from robustgait.config.certify import LEGACY_FIXED_POINT
 from robustgait.gait import Gait
-from robustgait.orbit import fd_jacobian, spectral_radius
+from robustgait.orbit import fd_jacobian, settled_at, spectral_radius, window_residual
 from robustgait.poincare import FixedPointFailure, ReturnMap
 from robustgait.reduced import section_coordinates
 from robustgait.robots import Robot
@@ -86,9 +89,15 @@ def _row(name: str, rule: str, gc: GaitCertificate, base: GaitCertificate | None
             f"{gc.fixed_point_physics_steps / 1e3:.0f} k | {gc.seconds['fixed_point']:.2f} s | {j} | {move} |")
 
 
+def _spread(xs: np.ndarray) -> float:
+    """The largest distance of finite iterates (K, d) from their mean."""
+    ok = xs[np.isfinite(xs).all(axis=1)]
+    return float(np.linalg.norm(ok - ok.mean(axis=0), axis=1).max()) if len(ok) else float("nan")
+
+
 def _fd_check(robot: Robot, gait: Gait, sim: SimConfig, steps: list[float]) -> list[str]:
-    """ρ at the settled iterate for several finite-difference steps, forward differences, and the growth of random
-    perturbations over 8 steps of the map."""
+    """ρ at the settled iterate for several finite-difference steps, forward differences, the growth of perturbations
+    over 8 steps of the map, and how far 300 iterates from x* wander."""
     cfg = CertifyConfig(fp_rho_max=None)
     with ReturnMap(robot, gait, cfg, sim) as pmap:
         try:
@@ -127,6 +136,12 @@ def _fd_check(robot: Robot, gait: Gait, sim: SimConfig, steps: list[float]) -> l
             lines.append(f"  perturbation of {amp:g} along the top eigenvector: × {r[8, 0] / amp:.3g} in 8 steps (rate "
                          f"{(r[8, 0] / amp) ** (1 / 8):.3f}); 8 random ones: × {np.median(r[8, 1:]) / amp:.3g} "
                          f"(median; rate over steps 4–8 {late:.3f})")
+        xs = [x]
+        for _ in range(300):
+            xs.append(F(xs[-1][None])[0])
+        tail = np.array(xs[100:])
+        lines.append(f"  300 iterates of the map from x*: steps 100–300 within {_spread(tail):.2g} of their mean"
+                     + ("" if np.isfinite(tail).all() else " (it fell)"))
     return lines
 
 
@@ -139,6 +154,8 @@ def cmd_orbit(args: argparse.Namespace) -> None:
             print("\n".join(_fd_check(robot, gait, sim, [float(v) for v in args.fd_steps.split(",")])))
         if "survey" in parts:
             _survey(args, sim)
+        if "windows" in parts:
+            _windows(args, sim)
         return
     print("| gait | rule | status | settled at step | window residual | Newton ‖P(x) − x‖ | ρ (fixed touchdown) | "
           "top moduli | fixed-point physics steps | fixed-point seconds | J* [N s] | x* move from before: section "
@@ -159,6 +176,30 @@ def cmd_orbit(args: argparse.Namespace) -> None:
         print(f"{name}: finite-difference check of ρ at the settled iterate")
         print("\n".join(lines))
     _survey(args, sim)
+
+
+def _windows(args: argparse.Namespace, sim: SimConfig, steps: int = 150) -> None:
+    """The window's length and tolerance: per gait (the standard ones and ``--survey``), ``steps`` iterates of the step
+    map from its start in section coordinates, the step at which a window of W iterates first holds within tol for
+    several (W, tol), and the share of the windows of 20 that hold over steps 40–``steps`` (a settled orbit keeps
+    them, a scattered one passes one by luck)."""
+    combos = ((10, 1e-2), (20, 5e-3), (20, 1e-2), (20, 2e-2), (30, 1e-2))
+    print(f"\n| gait | {' | '.join(f'W {w}, tol {t:g}' for w, t in combos)} | windows of 20 within 0.01 that hold, "
+          f"steps 40–{steps} | spread of steps 40–{steps} |\n|" + "---|" * (len(combos) + 3))
+    for name, (robot, gait) in (orbit_gaits(args) | named_gaits(args.survey)).items():
+        with ReturnMap(robot, gait, CertifyConfig(), sim) as pmap:
+            q, v = pmap.initial_section()
+            xs = [section_coordinates(q, v, gait.step_duration)[0]]
+            for _ in range(steps):
+                q, v, reason = pmap._advance(q, v)
+                if reason[0] is not None:
+                    break
+                xs.append(section_coordinates(q, v, gait.step_duration)[0])
+        a = np.array(xs)
+        cells = [str(settled_at(a, w, t, min_index=10)) for w, t in combos]
+        held = np.mean([window_residual(a[:k + 1], 20) <= 1e-2 for k in range(40, len(a))])
+        print(f"| {name} | {' | '.join(c.replace('None', 'never') for c in cells)} | {held:.0%} | "
+              f"{_spread(a[40:]):.2g} |", flush=True)
 
 
 def _survey(args: argparse.Namespace, sim: SimConfig) -> None:

@@ -216,8 +216,8 @@ def test_cli_certify_reports_the_orbit(capsys):
                         "--json")
     res = json.loads(out)
     o = res["orbit"]
-    assert code == 0 and o["converged"] and o["settled_at_step"] == res["fixed_point_steps"] == 17
-    assert 0.7 < o["rho"] < 0.9 and len(o["moduli"]) == 33 and o["window"] == 10 and o["tol"] == 0.01
+    assert code == 0 and o["converged"] and o["settled_at_step"] == res["fixed_point_steps"] == 27
+    assert 0.7 < o["rho"] < 0.9 and len(o["moduli"]) == 33 and o["window"] == 20 and o["tol"] == 0.01
     assert res["fixed_point_residual"] == o["map_residual"] and res["fixed_point_physics_steps"] > 67 * 600
     code, out, err = _cli(capsys, "certify", str(EXO_MC_GAIT), "--robot", "exo", "--method", "uniform", "--samples",
                           "4")
@@ -274,6 +274,8 @@ def test_cli_walk_log_then_barrier_eval(capsys, tmp_path):
 # Measured on main 63fee94 and again after the configuration tree (3ee64ad): identical to the last digit.
 PINNED = {("exo", "uniform"): 0.48816619978446785, ("exo", "sequential"): 0.35440094083257295,
           ("exo-multicontact", "uniform"): 0.9984739342663146, ("exo-multicontact", "sequential"): 0.0608276374489585}
+# the same certificates at the shipped fixed point (the orbit check, 2026-11-25): the flat-foot gait's
+PINNED_NOW = {"uniform": 0.48816619978446785, "sequential": 0.34506779411032074}
 
 
 @pytest.mark.parametrize("name, method", [
@@ -288,11 +290,13 @@ def test_stored_gaits_keep_their_r_star_for_seed_0(request, name, method):
     gc = certify_gait(robot, gait, CertifyConfig(method=method, seed=0, disturbance="state", state="omega", set="ball",
                                                  horizon=1, **{**LEGACY_FIXED_POINT, "fp_tol": 5e-3}))
     assert gc.ok and gc.r_star == pytest.approx(PINNED[(name, method)], abs=1e-6)
-    # the shipped search: the flat-foot gait's x* moves to the settled iterate (step 17 instead of 10), its r* for seed
-    # 0 does not (the same sample bounds it); the multi-contact gait's orbit never settles, so it has no certificate
+    # the shipped search: the flat-foot gait's x* moves to the settled iterate (step 27 instead of 10); its uniform r*
+    # for seed 0 does not move (the same sample bounds it), the sequential one by −2.6 % (0.35440 → 0.34507, within its
+    # range over seeds 0–9, 0.3441–0.3596); the multi-contact gait's orbit never settles, so it has no certificate
     now = certify_gait(robot, gait, CertifyConfig(method=method, seed=0, disturbance="state"))
     if name == "exo":
-        assert now.ok and now.fixed_point.steps == 17 and now.r_star == pytest.approx(gc.r_star, abs=1e-6)
+        assert now.ok and now.fixed_point.steps == 27
+        assert now.r_star == pytest.approx(PINNED_NOW[method], abs=1e-6)
     else:
         assert now.status == "no_stable_orbit" and now.r_star == 0
 

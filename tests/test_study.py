@@ -182,7 +182,7 @@ def test_a_study_written_before_the_orbit_check_resumes_with_the_rules_it_ran_wi
     assert now.comparisons == ((0, 1), (0, 2), (1, 2))  # what today's rule would have recomputed
     save_config(tmp_path, StudySetup("exo", TINY))  # a study created now keeps today's rules
     new = load_config(tmp_path).config
-    assert new.study.uncertified_penalty == 0.5 and new.certify.fp_window == 10 and new.certify.fp_rho_max == 1.0
+    assert new.study.uncertified_penalty == 0.5 and new.certify.fp_window == 20 and new.certify.fp_rho_max == 1.0
 
 
 def test_push_metric_certifies_pushes_and_robustness_states():

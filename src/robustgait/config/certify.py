@@ -174,7 +174,7 @@ class CertifyConfig:
                                  le=1.0)] = 1e-2
     fp_window: Annotated[Int, Doc("fixed point: iterates before the newest that must lie within fp_tol of it (1: "
                                   "the one before, the rule before 2026-11-25; longer than fp_max_steps: never "
-                                  "settles)", ge=1, le=100)] = 10
+                                  "settles)", ge=1, le=100)] = 20
     fp_metric: Annotated[OrbitMetric, Doc(
         "fixed point: distance of two iterates in section coordinates (the canonical state without base x, y and "
         "yaw, positions divided by the step duration) or omega (the base angular velocity in frame)")] = "section"
