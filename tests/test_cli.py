@@ -43,6 +43,13 @@ def test_walk_json(capsys, gait_robot):
     assert (0.08 < res["mean_speed"] < 0.2 if name == "atalante" else abs(res["mean_speed"] - 0.15 / 0.7) < 0.01)
     assert len(res["events"]) == 5
     assert res["orbit"]["converged"] is False and res["orbit"]["residuals"]["steps"] == 4  # 5 events: too few
+    assert res["comfort"] is None  # 5 steps end before the first measured one (comfort.skip_steps = 5)
+    code, out, _ = run(capsys, "walk", gait, "--robot", robot, "--steps", "5", "--json", "--override",
+                       "comfort.skip_steps=2")
+    c = json.loads(out)["comfort"]
+    assert code == 0 and c["first_step"] == 3 and c["steps"] == 3 and c["speed"] > 0 and c["impact_force_ratio"] > 1
+    code, out, _ = run(capsys, "walk", gait, "--robot", robot, "--steps", "4", "--override", "comfort.skip_steps=1")
+    assert code == 0 and "comfort over steps 2–4" in out and "pelvis acceleration RMS/peak" in out
 
 
 def test_walk_reports_the_orbit_of_its_switching_events(capsys):

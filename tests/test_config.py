@@ -178,7 +178,7 @@ def test_naming_a_state_field_asks_for_a_state_certificate(tmp_path):
 
 @pytest.mark.parametrize("text, message", [
     ("[certify]\nalpah = 0.1\n", "certify.alpah: unknown key (known: method, state, set, horizon, disturbance,"),
-    ("[cerify]\nalpha = 0.1\n", "cerify: unknown key (known: gait, generate, sim, certify, validate"),
+    ("[cerify]\nalpha = 0.1\n", "cerify: unknown key (known: gait, generate, sim, comfort, certify, validate"),
     ('[certify]\nalpha = "0.1"\n', "certify.alpha: expected a number, got a string ('0.1'): a quoted number is text"),
     ("[certify]\nn_samples = 1.5\n", "certify.n_samples: expected an integer, got a number (1.5)"),
     ("[certify]\nalpha = 1.5\n", "certify.alpha: must satisfy 0 < x < 1 (got 1.5)"),

@@ -21,6 +21,7 @@ import pytest
 from robustgait import GaitParams, Robot, RobustGaitError, load_robot
 from robustgait.config import (
     CertifyConfig,
+    ComfortConfig,
     Config,
     GenerationConfig,
     LearnerConfig,
@@ -40,11 +41,12 @@ from robustgait.study.status import study_status
 from robustgait.study.storage import StudyStore, default_url
 
 REPO = Path(__file__).resolve().parents[1]
-# a study's evaluations walk 5 steps and certify with 10 uniform samples; 2 iterations × 3 gaits
+# a study's evaluations walk 5 steps (comfort measured on steps 2–4) and certify with 10 uniform samples; 2 iterations
+# × 3 gaits
 TINY = Config(study=StudyConfig(iterations=2, batch=3, seed=0), sim=SimConfig(step_cap=5),
-              certify=CertifyConfig(method="uniform", n_samples=10))
+              certify=CertifyConfig(method="uniform", n_samples=10), comfort=ComfortConfig(skip_steps=1, steps=3))
 CLI_TINY = ["--robot", "exo", "--iterations", "2", "--batch", "3", "--method", "uniform", "--samples", "10", "--steps",
-            "5", "--seed", "0"]
+            "5", "--seed", "0", "--override", "comfort.skip_steps=1", "--override", "comfort.steps=3"]
 
 
 def cli(*args: str, **kw) -> subprocess.CompletedProcess:  # type: ignore[no-untyped-def, type-arg]
@@ -249,6 +251,31 @@ def test_storage_contract_round_trip(tmp_path):
     assert s.best_trial.params == space.value(17) and s.best_value == 5.25
 
 
+def test_a_study_evaluated_before_comfort_figures_still_reads(tmp_path):
+    """A trial whose stored evaluation has no comfort figures (robustgait before them): status gives None, the
+    evaluation loads, the report's comfort section has nothing to show."""
+    from robustgait.report.comfort import comfort_rows, measured_trials
+    from robustgait.study.evaluate import Evaluation
+    from robustgait.study.run import open_store
+
+    d = tmp_path / "s"
+    create_study(d, "exo", TINY)
+    setup = load_config(d)
+    store = open_store(d, setup, setup.action_space())
+    store.enqueue(0, 0, 17)
+    a = store.start()
+    assert a is not None
+    old = {"params": TINY.params.to_dict(), "status": "fell", "reason": "fell in step 3 (tilt)", "step_cap": 5,
+           "steps_taken": 2, "fell": True, "fall_reason": "tilt", "mean_speed": 0.1, "r_star": 0.0, "generation": {},
+           "certificate": None, "seconds": {}}
+    store.complete(a.number, old, 2.0, {})
+    store.close()
+    st = study_status(d)
+    assert st["trials"][0]["comfort"] is None and st["trials"][0]["status"] == "fell"
+    assert Evaluation.from_dict({**old, "gait": None}).comfort is None
+    assert measured_trials(st) == [] and comfort_rows(st)[1] == []
+
+
 def test_create_study_refuses_existing_and_bad_robot(tmp_path, capsys):
     (tmp_path / "full").mkdir()
     (tmp_path / "full" / "x.txt").write_text("x")
@@ -338,6 +365,8 @@ def test_evaluate_never_raises_and_records_stages(exo_generator):
     robot, gen = exo_generator
     good = evaluate(robot, GaitParams(), TINY, generator=gen)
     assert good.status == "certified" and good.steps_taken == 5 and not good.fell and good.r_star > 0
+    assert good.comfort is not None and good.comfort["first_step"] == 2 and good.comfort["steps"] == 3
+    assert good.summary()["comfort"] == good.comfort
     assert good.certificate is not None and good.certificate["r_star"] == good.r_star
     assert set(good.seconds) >= {"generate", "walk", "certify", "total"} and good.gait is not None
     assert "build" not in good.seconds  # the generator was given
@@ -437,6 +466,9 @@ def test_status_report_and_compare(tmp_path, reference_study):
     assert st["trials_done"] == st["trials_planned"] == 6 and st["state"] == "complete"
     assert set(st["best"]) >= {"params", "r_star", "steps_taken", "gait_file"}
     assert len(st["trials"]) == 6 and all({"params", "r_star", "steps_taken", "status"} <= set(t) for t in st["trials"])
+    walked = [t for t in st["trials"] if t["status"] in ("certified", "not_certified")]
+    assert walked and all(t["comfort"]["steps"] == 3 and t["comfort"]["speed"] > 0 for t in walked)
+    assert st["best"]["comfort"] is not None and st["best"]["comfort"]["cost_of_transport"] > 0
     best = st["best"]
     assert best["steps_taken"] == 5 and (reference_study / best["gait_file"]).is_file()
     observed = max(t["score"] for t in st["trials"])
@@ -459,7 +491,8 @@ def test_status_report_and_compare(tmp_path, reference_study):
     assert rep.returncode == 0, rep.stderr
     page = html.read_text()
     assert page.count("data:image/png;base64,") >= 3 and "<img src=\"report/" not in page
-    for png in ("history.png", "explored.png", "posterior.png"):
+    assert "What the passenger feels" in page and "cost of transport" in page
+    for png in ("history.png", "explored.png", "posterior.png", "comfort.png"):
         assert (html.parent / png).stat().st_size > 10_000
 
     cmp = cli("study", "compare", str(reference_study), str(reference_study), "--seeds", "2", "--samples", "10",

@@ -6,6 +6,7 @@ Public API (everything else is reachable from the submodules)::
     robot = robustgait.load_robot("exo")                 # or a spec .toml path
     gait = robustgait.load_gait("gait.json", robot)      # or a FROST/ambersim .yaml
     result = robustgait.walk(robot, gait)                # SimConfig: switching, step cap, ...
+    result = robustgait.walk(robot, gait, comfort=robustgait.ComfortConfig())   # result.comfort: the passenger
     cert = robustgait.certify_gait(robot, gait)          # cert.status, cert.r_star, cert.statement()
     cert = robustgait.certify_gait(robot, gait, robustgait.CertifyConfig(method="uniform"))  # the paper's
     res = robustgait.validate_gait(robot, gait)          # disturbed walks, certificate check
@@ -30,6 +31,7 @@ if TYPE_CHECKING:
     from robustgait.certify import GaitCertificate, certify_gait
     from robustgait.config import (
         CertifyConfig,
+        ComfortConfig,
         Config,
         GaitParams,
         GenerationConfig,
@@ -45,7 +47,7 @@ if TYPE_CHECKING:
     from robustgait.io.gaitfile import load_gait, save_gait
     from robustgait.io.robotfile import load_robot
     from robustgait.robots import Robot
-    from robustgait.sim import StepEngine, WalkResult, walk
+    from robustgait.sim import Comfort, StepEngine, WalkResult, walk
     from robustgait.study import create_study, evaluate, run_study, study_status
     from robustgait.validate import ValidationResult, validate_gait
 
@@ -54,8 +56,8 @@ __version__ = "0.1.0"
 _EXPORTS = {
     **dict.fromkeys(("Certificate", "certify_map", "invariant_radius"), "barrier"),
     **dict.fromkeys(("GaitCertificate", "certify_gait"), "certify"),
-    **dict.fromkeys(("CertifyConfig", "Config", "GaitParams", "GenerationConfig", "SequentialConfig", "SimConfig",
-                     "StudyConfig", "ValidateConfig"), "config"),
+    **dict.fromkeys(("CertifyConfig", "ComfortConfig", "Config", "GaitParams", "GenerationConfig", "SequentialConfig",
+                     "SimConfig", "StudyConfig", "ValidateConfig"), "config"),
     "RobustGaitError": "errors",
     "certify_map_sequential": "estimators",
     "Gait": "gait",
@@ -63,7 +65,7 @@ _EXPORTS = {
     **dict.fromkeys(("load_gait", "save_gait"), "io.gaitfile"),
     "load_robot": "io.robotfile",
     "Robot": "robots",
-    **dict.fromkeys(("StepEngine", "WalkResult", "walk"), "sim"),
+    **dict.fromkeys(("Comfort", "StepEngine", "WalkResult", "walk"), "sim"),
     **dict.fromkeys(("create_study", "evaluate", "run_study", "study_status"), "study"),
     **dict.fromkeys(("ValidationResult", "validate_gait"), "validate"),
 }
@@ -78,6 +80,8 @@ def __getattr__(name: str) -> Any:
 __all__ = [
     "Certificate",
     "CertifyConfig",
+    "Comfort",
+    "ComfortConfig",
     "Config",
     "Gait",
     "GaitCertificate",

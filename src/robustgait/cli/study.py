@@ -49,6 +49,12 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
         params = ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())
         print(f"best gait (trial {best['trial']}): {params}; {_name(st)} = {best['r_star']:.4g} {st['unit']}, "
               f"{best['steps_taken']} steps; {best['gait_file'] or 'no gait file'}")
+        c = best.get("comfort")
+        if c:
+            cot = "—" if c["cost_of_transport"] is None else f"{c['cost_of_transport']:.3g}"
+            print(f"  comfort: speed {c['speed']:.3f} m/s, pelvis acceleration RMS vertical "
+                  f"{c['pelvis_acc_vertical_rms']:.3g} / lateral {c['pelvis_acc_lateral_rms']:.3g} m/s², cost of "
+                  f"transport {cot} (docs/comfort.md)")
     obs = st["best_observed"]
     if obs is not None and (best is None or obs["score"] != best["score"]):
         params = ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())

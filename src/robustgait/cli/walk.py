@@ -18,7 +18,7 @@ def _walk(args: argparse.Namespace) -> int:
 
     config, robot, gait = inputs(args)
     with about(args.gait):
-        result = walk(robot, gait, config.sim, video=args.video, certify=config.certify)
+        result = walk(robot, gait, config.sim, video=args.video, comfort=config.comfort, certify=config.certify)
         orbit = walk_stability(robot, gait, result, config.certify, config.sim)
     if args.log is not None:
         xs = canonical_reduced_events(robot, gait, result.events, config.certify.frame)
@@ -39,6 +39,11 @@ def _walk(args: argparse.Namespace) -> int:
               + (f"  ({result.controller_note})" if result.controller_note else ""))
         if orbit is not None:
             print(f"orbit of the switching events: {orbit.describe()}")
+        if result.comfort is not None:
+            print("\n".join(result.comfort.text()))
+        else:
+            print(f"comfort: not measured (the walk completed no step from step {config.comfort.skip_steps + 1} on: "
+                  "comfort.skip_steps)")
         for what, out in (("video", args.video), ("reduced-state log", args.log)):
             if out is not None:
                 print(f"{what}: {out}")

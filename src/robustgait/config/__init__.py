@@ -11,12 +11,14 @@ section     class                   used by
 gait        :class:`GaitParams`     ``gait generate`` (the four essential constraints)
 generate    :class:`GenerationConfig` gait generation (HZD problem options), studies
 sim         :class:`SimConfig`      every simulation: walk, certify, validate, studies
+comfort     :class:`ComfortConfig`  the comfort figures of a walk: walk, studies (saved with the study)
 certify     :class:`CertifyConfig`  certify, validate, studies, compare
 validate    :class:`ValidateConfig` validate, study validate
 study       :class:`StudyConfig`    study run (saved with the study)
 run         :class:`RunConfig`      study run / resume, demo (how, not what: not saved)
 compare     :class:`CompareConfig`  study compare
 report      :class:`ReportConfig`   study report, gait tiles
+robot       :class:`RobotConfig`    robot init, robot check (with ``scale`` and ``check``)
 =========== ======================= =============================================================
 """
 
@@ -62,6 +64,7 @@ from robustgait.config.certify import (
     verification_beta,
     verification_size,
 )
+from robustgait.config.comfort import ComfortConfig
 from robustgait.config.gait import (
     DEFAULT_STEP_DURATION,
     GAIT_FORMATS,
@@ -74,6 +77,7 @@ from robustgait.config.gait import (
     Stance,
     relative_generation_defaults,
 )
+from robustgait.config.robot import Plan, RobotCheckConfig, RobotConfig, ScaleRules
 from robustgait.config.sim import Controller, SimConfig, Switching
 from robustgait.config.study import (
     CompareConfig,
@@ -96,12 +100,14 @@ class Config:
     gait: GaitParams = dataclasses.field(default_factory=GaitParams)
     generate: GenerationConfig = dataclasses.field(default_factory=GenerationConfig)
     sim: SimConfig = dataclasses.field(default_factory=SimConfig)
+    comfort: ComfortConfig = dataclasses.field(default_factory=ComfortConfig)
     certify: CertifyConfig = dataclasses.field(default_factory=CertifyConfig)
     validate: ValidateConfig = dataclasses.field(default_factory=ValidateConfig)
     study: StudyConfig = dataclasses.field(default_factory=StudyConfig)
     run: RunConfig = dataclasses.field(default_factory=RunConfig)
     compare: CompareConfig = dataclasses.field(default_factory=CompareConfig)
     report: ReportConfig = dataclasses.field(default_factory=ReportConfig)
+    robot: RobotConfig = dataclasses.field(default_factory=RobotConfig)
 
     def __post_init__(self) -> None:
         if self.study.metric == "push" and self.certify.chooses_a_state:
@@ -135,6 +141,8 @@ class Config:
             "run.workers": f"not set: min(cores, 2) = {default_workers()} here",
             "run.address": "not set: start a local Ray",
             "compare.samples": "not set: study A's",
+            "robot.name": "not set: the model's name, lower case",
+            "robot.keyframe": "not set: the model's first keyframe (none: every joint at 0 clipped to its range)",
         }
 
     def show(self, header: str = "") -> str:
@@ -217,6 +225,7 @@ __all__ = [
     "CertifiedSet",
     "CertifyConfig",
     "CertifyDisturbance",
+    "ComfortConfig",
     "CompareConfig",
     "Config",
     "ConfigError",
@@ -236,12 +245,16 @@ __all__ = [
     "MapKind",
     "Method",
     "Metric",
+    "Plan",
     "PreferenceModelConfig",
     "PushConfig",
     "Reconstruction",
     "ReportConfig",
+    "RobotCheckConfig",
+    "RobotConfig",
     "RobotScale",
     "RunConfig",
+    "ScaleRules",
     "SequentialConfig",
     "SimConfig",
     "Stance",

@@ -4,9 +4,10 @@ embedded) plus the PNG files, in ``DIR/report/``.
 Figures: the best r* and steps per iteration (the learner's recommendation after each iteration, and every
 evaluated gait), the explored parameters coloured by outcome, the posterior mean of the preference model
 over two parameters (the others at the best gait's values), the best gait's invariant set
-(:func:`plot_certificate`), when ``robustgait study validate`` has results, the success of every gait under
-the same disturbances against r* and steps taken (:func:`plot_study_validation`), and a short video of the
-best gait walking (:func:`render_video`).
+(:func:`plot_certificate`), the certificate against the comfort figures of every evaluated gait
+(:func:`robustgait.report.comfort.plot_comfort`, with their table), when ``robustgait study validate`` has results,
+the success of every gait under the same disturbances against r* and steps taken (:func:`plot_study_validation`),
+and a short video of the best gait walking (:func:`render_video`).
 """
 
 from __future__ import annotations
@@ -253,6 +254,7 @@ def write_study_report(directory: str | Path, config: ReportConfig | None = None
                      f"<p>{html.escape(str(raw.get('statement') or cert.statement()))}</p>")
     else:
         notes.append("The best gait has no certificate (no gait walked the step cap and was certified).")
+    parts += _comfort_parts(status, out, notes)
     parts += _validation_parts(d, status, out, notes)
     if video and best is not None and best.get("gait_file"):
         try:
@@ -263,6 +265,24 @@ def write_study_report(directory: str | Path, config: ReportConfig | None = None
         except RobustGaitError as exc:
             notes.append(f"No video: {exc}")
     return write_text(out / "index.html", _page(status, parts, notes), "html")
+
+
+def _comfort_parts(status: dict[str, Any], out: Path, notes: list[str]) -> list[str]:
+    """What the passenger feels on each evaluated gait (``docs/comfort.md``): the figure and the table; a note when no
+    gait has comfort figures (a study evaluated before they existed, or no gait walked past the skipped steps)."""
+    from robustgait.report.comfort import comfort_rows, measured_trials, plot_comfort
+
+    if not measured_trials(status):
+        notes.append("No comfort figures: no evaluated gait has them (evaluated before robustgait measured them, or "
+                     "no gait walked past comfort.skip_steps).")
+        return []
+    header, rows = comfort_rows(status)
+    c = status["config"]["comfort"]
+    return [f"<h2>What the passenger feels</h2>{_img(plot_comfort(status, out / 'comfort.png'))}"
+            f"<p>Steps {c['skip_steps'] + 1}–{c['skip_steps'] + c['steps']} of each gait's walk; pelvis acceleration "
+            f"low-passed at {c['cutoff']:g} Hz (gravity excluded); impact: the landing sole's peak normal force within "
+            f"{1e3 * c['impact_window']:g} ms of touchdown; definitions in docs/comfort.md.</p>"
+            + _table(rows, header)]
 
 
 def _validation_parts(d: Path, status: dict[str, Any], out: Path, notes: list[str]) -> list[str]:

@@ -74,7 +74,10 @@ class StepBatch:
     qpos (K, nq), qvel (K, nv): state at the switching event (NaN rows for falls); fell (K,);
     fall_reason: one of :data:`FALL_REASONS` or None per sample; duration (K,): seconds from the step start
     to the event; tau (K,): the phase at the event; physics_steps: steps simulated over all samples;
-    trajectory: with ``record=True``, per sample the (n_k, nstate) full-physics states of the step.
+    trajectory: with ``record=True``, per sample the (n_k, nstate) full-physics states of the step;
+    controls: with ``record=True``, per sample the (n_k, nu) controls (MuJoCo's ``ctrl``) of the physics steps
+    that produced them — row j was applied from the state before trajectory row j (the start state for j = 0)
+    and, with the actuators of :attr:`StepEngine.physics_model`, gives the torques the step applied.
     """
 
     qpos: NDArray[np.float64]
@@ -85,6 +88,7 @@ class StepBatch:
     tau: NDArray[np.float64]
     physics_steps: int
     trajectory: list[NDArray[np.float64]] = field(default_factory=list)
+    controls: list[NDArray[np.float64]] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -180,6 +184,12 @@ class StepEngine:
         self._sens = {s: adr[CONTACT_SENSORS[i]] for i, s in enumerate(("left", "right"))}
         self._sens_floor = adr[CONTACT_SENSORS[2]]
         self._cos_max_tilt = math.cos(robot.spec.fall.max_tilt)
+
+    @property
+    def physics_model(self) -> mujoco.MjModel:
+        """The model this engine steps (the robot's; a feedback engine's may have other actuator parameters): with a
+        recorded step's controls, its actuators give the applied torques."""
+        return self.robot.model
 
     def close(self) -> None:
         if self._pool is not None:
@@ -289,12 +299,14 @@ class StepEngine:
         return replace(inputs, ctrl_offset=off, sensor_noise=None)
 
     def _rollout(self, active: NDArray[np.int64], current: NDArray[np.float64], ctrl: NDArray[np.float64],
-                 k0: int, n: int, inputs: StepInputs | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """One chunk of n physics steps from step k0 for the samples ``active`` (see :class:`StepInputs`)."""
+                 k0: int, n: int, inputs: StepInputs | None
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """One chunk of n physics steps from step k0 for the samples ``active`` (see :class:`StepInputs`): states
+        and sensors (A, n, ·), and the controls applied ((A or 1, n, nu): one series shared by all, or per sample)."""
         assert self._pool is not None
         if inputs is None:
-            return self._pool.rollout(self.robot.model, self._datas, current[active], ctrl[None, k0:k0 + n],
-                                      nstep=n)
+            c = ctrl[None, k0:k0 + n]
+            return (*self._pool.rollout(self.robot.model, self._datas, current[active], c, nstep=n), c)
         m = self.robot.model
         c = ctrl[None, k0:k0 + n]
         off = inputs.ctrl_offset
@@ -302,6 +314,7 @@ class StepEngine:
             c = np.repeat(c, active.size, axis=0)
             w = min(n, off.shape[1] - k0)
             c[:, :w] += off[active, k0:k0 + w]
+        applied = c
         spec = _CTRL
         wr = inputs.base_wrench
         if wr is not None and k0 < wr.shape[1] and np.any(wr[active, k0:k0 + n]):
@@ -320,7 +333,7 @@ class StepEngine:
                 if sig not in self._other_datas:
                     self._other_datas[sig] = [mujoco.MjData(models[0]) for _ in range(self.config.threads)]
                 datas = self._other_datas[sig]
-        return self._pool.rollout(models, datas, current[active], c, control_spec=spec, nstep=n)
+        return (*self._pool.rollout(models, datas, current[active], c, control_spec=spec, nstep=n), applied)
 
     def step(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64], stance: str, *, domain: int = 0,
              record: bool = False, progress: Callable[[int], None] | None = None,
@@ -356,6 +369,7 @@ class StepEngine:
         code[bad] = 1 + FALL_REASONS.index("diverged")
         active = np.flatnonzero(~bad)
         traj: list[list[NDArray[np.float64]]] = [[] for _ in range(kk)]
+        ctrls: list[list[NDArray[np.float64]]] = [[] for _ in range(kk)]
         physics = 0
         k0 = 0
         if progress is not None and bad.any():
@@ -363,7 +377,7 @@ class StepEngine:
         while active.size and k0 < horizon:
             n = min(self.config.chunk_steps, horizon - k0)
             with quiet_mujoco():
-                st, sens = self._rollout(active, current, ctrl, k0, n, inputs)
+                st, sens, applied = self._rollout(active, current, ctrl, k0, n, inputs)
             physics += active.size * n
             first, first_code = self._scan(st, sens, k0, stance, domain)
             done = first >= 0
@@ -374,7 +388,9 @@ class StepEngine:
             end = np.where((first_code == 0) & (self.config.switching == "impact"), first - 1, first)
             if record:
                 for j, i in enumerate(active):
+                    c = applied[j if applied.shape[0] > 1 else 0]
                     traj[i].append(st[j, :end[j] + 1] if done[j] else st[j])
+                    ctrls[i].append(c[:end[j] + 1] if done[j] else c)
             idx = active[done]
             ends = end[done]
             out_state[idx] = np.where((ends >= 0)[:, None], st[done, np.maximum(ends, 0)], current[idx])
@@ -396,4 +412,5 @@ class StepEngine:
             duration=np.asarray(at * self.robot.dt, dtype=np.float64), tau=at / self.domain_steps[domain],
             physics_steps=physics,
             trajectory=[np.concatenate(t) if t else np.empty((0, self.nstate)) for t in traj] if record else [],
+            controls=[np.concatenate(c) if c else np.empty((0, self.robot.model.nu)) for c in ctrls] if record else [],
         )

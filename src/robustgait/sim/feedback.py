@@ -387,8 +387,14 @@ class FeedbackEngine(StepEngine):
         rows = np.clip(at, 0, hist.shape[1])[:, None] + np.arange(t)[None, :]
         return np.asarray(both[np.arange(kk)[:, None], rows])
 
+    @property
+    def physics_model(self) -> mujoco.MjModel:
+        """The model the closed loop steps (:func:`actuated_model`: the servo damping or torque motors of the law)."""
+        return self._model
+
     def _rollout(self, active: NDArray[np.int64], current: NDArray[np.float64], ctrl: NDArray[np.float64],
-                 k0: int, n: int, inputs: StepInputs | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+                 k0: int, n: int, inputs: StepInputs | None
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """n physics steps of the closed loop from step k0 for the samples ``active`` (module docstring).
 
         The controller's NumPy runs with one BLAS thread: its products are small, and a multi-threaded BLAS
@@ -397,7 +403,8 @@ class FeedbackEngine(StepEngine):
             return self._closed_loop(active, current, k0, n, inputs)
 
     def _closed_loop(self, active: NDArray[np.int64], current: NDArray[np.float64], k0: int, n: int,
-                     inputs: StepInputs | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+                     inputs: StepInputs | None
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         robot, ctl = self.robot, self.controller
         na = active.size
         models: Sequence[mujoco.MjModel] | None = None
@@ -425,6 +432,7 @@ class FeedbackEngine(StepEngine):
         nu = robot.model.nu
         st = np.empty((na, n, self.nstate))
         sens = np.empty((na, n, robot.model.nsensordata))
+        ctrls = np.zeros((na, n, robot.model.nu))  # the controls written, as StepEngine._rollout returns them
         sat = np.zeros((na, n, nu), dtype=bool)
         err = np.zeros((na, n, nu))
         off = inputs.ctrl_offset if inputs is not None else None
@@ -468,6 +476,7 @@ class FeedbackEngine(StepEngine):
             if off is not None and k < off.shape[1]:
                 c = c + (kp * off[active, k] if self.motor else off[active, k])
             ctrl_b[:] = c
+            ctrls[:, j] = c
             if wr is not None:
                 xfrc[:, col] = wr[active, k] if k < wr.shape[1] else 0.0
             if stage > STAGE_NONE:
@@ -490,4 +499,4 @@ class FeedbackEngine(StepEngine):
             sens[r, frozen_at[r] + 1:] = sens[r, frozen_at[r]]
         assert self._step_ctx is not None
         self._step_ctx["chunks"].append((active.copy(), k0, sat, err))  # type: ignore[attr-defined]
-        return st, sens
+        return st, sens, ctrls

@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config import CertifyConfig, SimConfig
+from robustgait.config import CertifyConfig, ComfortConfig, SimConfig
 from robustgait.config.work import MAX_GIF_FRAMES, MAX_VIDEO_PHYSICS_STEPS, Work, check_gif, check_work
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import Gait
@@ -24,6 +24,7 @@ from robustgait.orbit import OrbitReport, search_report
 from robustgait.reduced import reduce_state, section_coordinates
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
+from robustgait.sim.comfort import Comfort, ComfortRecorder, measure
 from robustgait.sim.controller import TrackingStats, pd_tracking
 from robustgait.sim.engine import StepEngine, step_physics_steps
 from robustgait.sim.factory import make_engine
@@ -52,8 +53,10 @@ class WalkResult:
     time; ``min_base_height`` [m] over the whole walk; one :class:`SwitchEvent` per completed step; the tracking
     ``controller`` that ran (and ``controller_note``: why not the one asked for, if so) and its ``tracking`` over
     every physics step: RMS and largest |q − y_d| [rad] and the torque saturation (joint-steps whose commanded
-    torque exceeded the limit, and their fraction; :class:`~robustgait.sim.controller.TrackingStats`); ``orbit``:
-    whether the switching events, written for the gait's stance, settled on an orbit (:func:`walk_orbit`)."""
+    torque exceeded the limit, and their fraction; :class:`~robustgait.sim.controller.TrackingStats`); ``comfort``:
+    what a passenger feels (:class:`~robustgait.sim.comfort.Comfort`) when the walk was asked for it and completed a
+    measured step, else None; ``orbit``: whether the switching events, written for the gait's stance, settled on an
+    orbit (:func:`walk_orbit`)."""
 
     steps_taken: int
     fell: bool
@@ -67,6 +70,7 @@ class WalkResult:
     controller: str = "pd"
     controller_note: str = ""
     tracking: dict[str, float] = field(default_factory=dict)
+    comfort: Comfort | None = None
     trajectory: NDArray[np.float64] | None = field(default=None, repr=False)
     orbit: OrbitReport | None = None
 
@@ -132,7 +136,8 @@ def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, vid
 
 def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: int | None = None,
          keep_trajectory: bool = False, video: str | Path | None = None,
-         engine: StepEngine | None = None, certify: CertifyConfig | None = None) -> WalkResult:
+         engine: StepEngine | None = None, comfort: ComfortConfig | None = None,
+         certify: CertifyConfig | None = None) -> WalkResult:
     """Walk ``gait`` from its initial state for up to ``steps`` steps (default ``config.step_cap``), switching
     stance at each event.
 
@@ -145,6 +150,9 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     rendered after the walk by :func:`render_video`). The work is bounded before anything runs
     (:func:`check_walk_work`; a video's stricter limits, the output path checked). ``orbit`` of the result:
     :func:`walk_orbit` with the fixed-point options of ``certify``.
+
+    ``comfort``: measure what a passenger feels over the steps it names (:mod:`robustgait.sim.comfort`,
+    ``WalkResult.comfort``); None: not measured.
     """
     config = config or SimConfig()
     steps = config.step_cap if steps is None else steps
@@ -155,6 +163,7 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     check_walk_work(robot, gait, config, steps, video)
     if video is not None:
         keep_trajectory = True
+    recorder = ComfortRecorder(comfort, robot.dt) if comfort is not None else None
     own = engine is None
     eng = engine or make_engine(robot, gait, config)
     stats = TrackingStats()
@@ -176,6 +185,8 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
                 batch = eng.step(qpos, qvel, stance, domain=d, record=True)
                 tr = batch.trajectory[0]
                 _track(stats, eng, batch, start_state, tr, stance, d)
+                if recorder is not None:
+                    recorder.add(i + 1, d, stance, start_state, tr, batch.controls[0])
                 if tr.size:
                     min_z = min(min_z, float(np.nanmin(tr[:, 3])))
                     if keep_trajectory:
@@ -197,6 +208,8 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
                 break
             assert section is not None
             events.append(section)
+            if recorder is not None:
+                recorder.end_step(i + 1)
             stance = "left" if stance == "right" else "right"
         disp = float(np.dot(last[:2] - start[:2], heading))
         result = WalkResult(
@@ -205,6 +218,7 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
             switching=eng.config.switching, events=events,
             trajectory=np.concatenate(chunks) if keep_trajectory and chunks else None,
             controller=eng.controller_name, controller_note=eng.controller_note, tracking=stats.summary(),
+            comfort=measure(robot, eng.physics_model, recorder, heading) if recorder is not None else None,
             orbit=walk_orbit(robot, gait, events, certify))
     finally:
         if own:

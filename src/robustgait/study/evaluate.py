@@ -1,4 +1,5 @@
-"""One evaluation of the loop (``docs/studies.md``): gait parameters → generate (HZD) → walk to the step cap → certify.
+"""One evaluation of the loop (``docs/studies.md``): gait parameters → generate (HZD) → walk to the step cap (with its
+comfort figures, ``docs/comfort.md``) → certify.
 
 :func:`evaluate` never raises for a bad gait: a failed generation, a fall at step k, a gait without a
 fixed point are outcomes with a status and a reason. Gait generation starts cold (from the spec's
@@ -39,8 +40,9 @@ class Evaluation:
     starts with it — the oracles rank it below every certified gait);
     reason: why, in one line ('' when certified). generation: :meth:`GaitGenResult.summary`. r_star: 0
     unless certified. certificate: :meth:`GaitCertificate.to_dict` with the samples (None unless
-    certified). seconds: per stage (generate, walk, certify; build when :func:`evaluate` built the generator
-    itself; total).
+    certified). comfort: what a passenger feels on the walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`,
+    ``config.comfort``; None when the walk completed no measured step or the gait was not generated). seconds: per
+    stage (generate, walk, certify; build when :func:`evaluate` built the generator itself; total).
     """
 
     params: GaitParams
@@ -54,6 +56,7 @@ class Evaluation:
     r_star: float = 0.0
     generation: dict[str, Any] = field(default_factory=dict)
     certificate: dict[str, Any] | None = None
+    comfort: dict[str, Any] | None = None
     gait: Gait | None = None
     seconds: dict[str, float] = field(default_factory=dict)
 
@@ -72,7 +75,7 @@ class Evaluation:
         return {"params": self.params.to_dict(), "status": self.status, "reason": self.reason,
                 "step_cap": self.step_cap, "steps_taken": self.steps_taken, "fell": self.fell,
                 "fall_reason": self.fall_reason, "mean_speed": self.mean_speed, "r_star": self.r_star,
-                "generation": self.generation, "certificate": self.certificate_summary(),
+                "generation": self.generation, "certificate": self.certificate_summary(), "comfort": self.comfort,
                 "seconds": self.seconds}
 
     def to_dict(self) -> dict[str, Any]:
@@ -85,8 +88,8 @@ class Evaluation:
         return cls(params=GaitParams(**d["params"]), status=d["status"], reason=d["reason"], step_cap=d["step_cap"],
                    steps_taken=d["steps_taken"], fell=d["fell"], fall_reason=d["fall_reason"],
                    mean_speed=d["mean_speed"], r_star=d["r_star"], generation=d["generation"],
-                   certificate=d["certificate"], gait=gait_from_dict(d["gait"]) if d.get("gait") else None,
-                   seconds=d["seconds"])
+                   certificate=d["certificate"], comfort=d.get("comfort"),  # absent: evaluated before comfort
+                   gait=gait_from_dict(d["gait"]) if d.get("gait") else None, seconds=d["seconds"])
 
 
 def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
@@ -112,11 +115,12 @@ def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
         return ev
     ev.gait = res.gait
     try:
-        w = walk(robot, res.gait, cfg.sim)
+        w = walk(robot, res.gait, cfg.sim, comfort=cfg.comfort)
     except RobustGaitError as exc:  # e.g. the generated gait has no initial state to start from
         ev.status, ev.reason, ev.fell = "fell", f"walk failed: {exc}", True
     else:
         ev.steps_taken, ev.fell, ev.fall_reason, ev.mean_speed = w.steps_taken, w.fell, w.fall_reason, w.mean_speed
+        ev.comfort = w.comfort.to_dict() if w.comfort is not None else None
         if w.steps_taken < cap:
             ev.status, ev.reason = "fell", f"fell in step {w.steps_taken + 1} ({w.fall_reason})"
     t_walk = time.perf_counter()

@@ -11,8 +11,9 @@ from robustgait.study.config import environment_changes, load_config
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord
 
+# comfort: the walk's comfort figures (robustgait.sim.comfort.Comfort.to_dict; None for a study evaluated before them)
 _TRIAL_KEYS = ("status", "reason", "steps_taken", "step_cap", "fell", "fall_reason", "mean_speed", "r_star",
-               "gait_file", "certificate_file", "seconds")
+               "comfort", "gait_file", "certificate_file", "seconds")
 
 
 def trial_summary(r: TrialRecord) -> dict[str, Any]:
@@ -34,15 +35,16 @@ def _best_entry(r: TrialRecord | None, records: dict[int, TrialRecord]) -> dict[
     s = trial_summary(r)
     return {"trial": r.number, "iteration": r.iteration, "params": r.params, "grid_index": r.index,
             "r_star": s["r_star"], "steps_taken": s["steps_taken"], "status": s["status"], "score": r.value,
-            "gait_file": (src.result or {}).get("gait_file"),
+            "comfort": s["comfort"], "gait_file": (src.result or {}).get("gait_file"),
             "certificate_file": (src.result or {}).get("certificate_file")}
 
 
 def study_status(directory: str | Path) -> dict[str, Any]:
     """JSON-ready: ``trials_done``, ``trials_planned``, ``state`` (complete | running | stopped),
     ``best`` (the learner's recommendation after the last finished iteration: trial, params, r_star,
-    steps_taken, gait file), ``best_observed`` (the evaluated gait with the highest oracle score), one
-    record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs)."""
+    steps_taken, comfort, gait file), ``best_observed`` (the evaluated gait with the highest oracle score), one
+    record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs), each with its
+    ``comfort`` figures (``docs/comfort.md``; None when not measured or evaluated before they existed)."""
     d = Path(directory)
     setup = load_config(d)
     cfg = setup.config.study

@@ -207,16 +207,18 @@ def _validate_one(task: _Task) -> dict[str, Any]:
 @contextlib.contextmanager
 def _results(tasks: list[_Task], workers: int) -> Iterator[Iterator[dict[str, Any]]]:
     """Yield the tasks' results as they finish: in this process (``workers`` = 1; the rollout uses every
-    core) or in ``workers`` spawned processes with cores // workers rollout threads each."""
+    core) or in ``workers`` spawned processes with cores // workers rollout threads each, which die with this one
+    however it ends (:func:`robustgait.study.executors.die_with_parent`)."""
     if workers <= 1 or len(tasks) <= 1:
         yield (_validate_one(t) for t in tasks)
         return
-    from robustgait.study.executors import blas_threads
+    from robustgait.study.executors import blas_threads, die_with_parent
 
     n = min(workers, len(tasks))
     threads = max(1, (os.cpu_count() or 1) // n)
     with blas_threads(1):
-        pool = ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"))
+        pool = ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"),
+                                   initializer=die_with_parent)
     ok = False
     try:
         futures: list[Future[dict[str, Any]]] = [
