@@ -171,7 +171,15 @@ def open_store(directory: Path, setup: StudySetup, space: ActionSpace) -> StudyS
 
 
 def outcome_of(result: dict[str, Any]) -> Outcome:
-    return Outcome(int(result["steps_taken"]), int(result["step_cap"]), float(result["r_star"]))
+    """The oracle's view of a stored evaluation summary (certified: its ``status``)."""
+    return Outcome(int(result["steps_taken"]), int(result["step_cap"]), float(result["r_star"]),
+                   result.get("status") == "certified")
+
+
+def study_score(config: StudyConfig, result: dict[str, Any]) -> float:
+    """The study's oracle score of a stored evaluation summary — recomputed from it whenever a study is resumed (the
+    history the learner reproduces), with the study's own ``uncertified_penalty``."""
+    return score(config.metric, outcome_of(result), config.uncertified_penalty)
 
 
 def completed_batches(records: list[TrialRecord]) -> dict[int, list[TrialRecord]]:
@@ -194,7 +202,7 @@ def history_before(k: int, batches: dict[int, list[TrialRecord]], config: StudyC
         batch = batches.get(i, [])
         if len(batch) != config.batch:
             raise RobustGaitError(f"iteration {i} has {len(batch)} of {config.batch} trials complete")
-        ranked.append([(r.index, score(config.metric, outcome_of(r.result or {}))) for r in batch])
+        ranked.append([(r.index, study_score(config, r.result or {})) for r in batch])
     return History.from_batches(ranked)
 
 
@@ -307,7 +315,7 @@ class StudyRunner:
 
     def _complete(self, store: StudyStore, trial: TrialRecord, result: dict[str, Any], bar: tqdm,
                   reused_from: int | None = None) -> None:
-        value = score(self.config.metric, outcome_of(result))
+        value = study_score(self.config, result)
         extra: dict[str, Any] = {"reused_from": reused_from} if reused_from is not None else {}
         store.complete(trial.number, result, value, extra)
         bar.update(1)
@@ -318,7 +326,7 @@ class StudyRunner:
         """Comparisons of the ranked batch and the learner's recommendation after it."""
         batches = completed_batches(store.records())
         batch = batches[k]
-        scores = [score(self.config.metric, outcome_of(r.result or {})) for r in batch]
+        scores = [study_score(self.config, r.result or {}) for r in batch]
         t0 = time.perf_counter()
         rec = self.learner.recommend(history_before(k + 1, batches, self.config), k)
         rec_trial = next((r for i in sorted(batches) for r in batches[i] if r.index == rec), None)
