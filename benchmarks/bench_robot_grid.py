@@ -18,7 +18,8 @@ evenly spaced in grid order (all of them when the grid is smaller), each
   iterate is defined only to within it, and the walk may cycle through neighbouring grid offsets (Booster T1 at
   1 ms: period-four orbits, r4 = 0, r1 ≈ 0.026 rad/s, for 200 steps, then another such cycle). ``trend``:
   min(r1, r2) over the windows that end at each third of the walk (decreasing: a slowly converging orbit; flat:
-  one that does not settle).
+  one that does not settle). ``certify_orbit``: the walk's own verdict (:func:`robustgait.sim.walk.walk_orbit`,
+  the certificate's ``fp_*`` options: section coordinates, the first window of 20 within ``fp_tol``).
 
 The tolerance is exo's certificate's (5e-3 rad/s on the base angular velocity, ``certify.tol``) scaled with the
 rates, by √(g/l) relative to exo's leg length 0.93 m (T1, l = 0.558 m: 6.45e-3 rad/s); ``--tol`` sets it.
@@ -187,6 +188,9 @@ def point(index: int, steps: int, window: int, tol: float) -> dict[str, Any]:
         kind = "grid"
     # min(r1, r2) over the windows ending at each third of the walk: falling = converging slowly, flat = not
     trend = [min(orbit(x[:n], window, tol)[1:]) for n in (len(x) // 3, 2 * len(x) // 3, len(x))]
+    if w.orbit is not None:  # the product's verdict (certify.fp_*: section coordinates, first settled window)
+        out["certify_orbit"] = ("settled" if w.orbit.converged else "period_two" if w.orbit.period_two
+                                else "none")
     out.update(outcome=kind, r1=r1, r2=r2, floor=floor, trend=trend, x_last=[round(float(v), 5) for v in x[-1]])
     return out
 
