@@ -20,10 +20,17 @@ from robustgait.errors import RobustGaitError
 from robustgait.inspection.check import run_checks
 from robustgait.inspection.discover import find_legs, torque_limits
 from robustgait.inspection.draft import draft_spec
-from robustgait.inspection.gains import joint_loads, pd_gains, spectral_radius, static_torques
+from robustgait.inspection.gains import (
+    joint_loads,
+    nice_floor,
+    pd_gains,
+    servo_timestep,
+    spectral_radius,
+    static_torques,
+)
 from robustgait.inspection.mirror import Mirror, find_mirror, fk_residual, name_partner
 from robustgait.inspection.model import open_model
-from robustgait.inspection.scale import RobotSize, nice_step, scale
+from robustgait.inspection.scale import RobotSize, axis_range, nice_step, scale
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -276,6 +283,21 @@ def test_spectral_radius_of_the_discrete_servo() -> None:
     assert g.bound == "stability" and g.radius < 1
 
 
+def test_the_timestep_resolves_the_fastest_servo(tmp_path: Path) -> None:
+    assert [nice_floor(x) for x in (0.0014, 0.001, 0.00099, 0.0049, 0.07)] == [0.001, 0.001, 0.0005, 0.002, 0.05]
+    # at least `steps` physics steps per period of the fastest servo, at most a fraction of √(l/g), never above the
+    # model's step
+    assert servo_timestep(0.002, 57.3, 12.0, 1.0, 1.0) == 0.001  # Booster T1's ankle (model: 2 ms)
+    assert servo_timestep(0.002, 57.3, 12.0, 0.238, 0.0035) == 0.0005  # ... and its leg: 0.83 ms
+    assert servo_timestep(0.001, 66.7, 12.0, 0.308, 0.0035) == 0.001  # exo's ankle (rule gains) and leg: 1.08 ms
+    assert servo_timestep(0.0005, 10.0, 12.0, 1.0, 0.0035) == 0.0005
+    d = draft_spec(write(tmp_path, biped_xml()), RobotConfig())
+    f = max(g.frequency for g in d.gains.values())
+    assert d.timestep <= float(d.robot.model.opt.timestep) and d.timestep * f <= 1 / d.config.servo_steps + 1e-12
+    assert d.timestep <= d.config.scale.timestep * np.sqrt(d.size.leg_length / d.size.gravity)
+    assert d.servo_frequency >= f * (1 - 1e-9)  # measured before any lowering for stability
+
+
 def test_static_torques_balance_gravity(tmp_path: Path) -> None:
     r = open_model(write(tmp_path, biped_xml()))
     legs = find_legs(r, 0.1, 0.005)
@@ -310,9 +332,21 @@ def test_the_rules_give_back_exos_spec() -> None:
     assert s.joint_velocity == pytest.approx(q["joint_velocity"], rel=0.03)
     assert s.pelvis_height == pytest.approx(tuple(q["pelvis_height"]), rel=0.03)
     assert s.fall_height == pytest.approx(spec["fall"]["min_base_height"], rel=0.03)
+    rules = ScaleRules()  # the gait-quality angles are exo's (scale-free)
+    for k in ("pelvis_roll", "pelvis_yaw", "swing_tilt", "swing_yaw"):
+        assert getattr(rules, k) == q[k], k
+    assert rules.pelvis_pitch == tuple(q["pelvis_pitch"])
     assert s.gait == pytest.approx({"step_length": 0.15, "step_duration": 0.7, "step_width": 0.25,
                                     "step_height": 0.07}, rel=0.03)
     assert [nice_step(x) for x in (0.019, 0.11, 0.0024, 3.3)] == [0.02, 0.1, 0.0025, 2.5]
+
+
+def test_a_grid_stops_at_the_grid_point_nearest_its_high_multiple() -> None:
+    # Booster T1's durations: 0.86–1.57 × 0.548 s = 0.47–0.86 s; the nice step 0.1 (not 0.078) must not stretch the
+    # five steps to 1.0 s: the grid stops at 0.9 s, the grid point nearest 0.86 s
+    assert axis_range("step_duration", 0.548, (0.86, 1.57, 5)) == (0.5, 0.9, 0.1)
+    assert axis_range("step_duration", 0.708, (0.86, 1.57, 5)) == (0.6, 1.1, 0.1)  # exo's: all five steps
+    assert axis_range("step_length", 0.1, (1.0, 1.05, 4))[1] > 0.1  # at least one step
 
 
 # ----------------------------------------------------------------------------------------------- robot init / check
@@ -464,6 +498,10 @@ def test_init_and_check_on_booster_t1(tmp_path: Path, capsys: pytest.CaptureFixt
     limits = dict(zip(j["names"], j["torque_limit"], strict=True))
     assert all(0 < kp <= 50 * limits[n] for n, kp in zip(j["names"], j["kp"], strict=True))
     assert raw["legs"]["left"] == {"sole_geom": "left_foot_box"} and raw["floor_geom"] == "floor"
+    # its model asks for 2 ms; its ankle servos (57 Hz on the swing inertia) need 1 ms, its leg 0.83 ms (exo's 1 ms
+    # of √(l/g)): 0.5 ms (docs/robots.md)
+    assert raw["sim"]["timestep"] == 0.0005
+    assert raw["gait_quality"]["pelvis_roll"] == 0.05 and raw["gait_quality"]["pelvis_pitch"] == [-0.05, 0.15]
     code, out, _ = run(capsys, "robot", "check", spec)
     assert code == 0 and "t1: all 6 checks passed" in out
 

@@ -16,9 +16,11 @@ from robustgait.config.base import Doc, FieldProblem, Float, Int, Str, config
 Plan = Literal["legs", "all"]
 Factor = Annotated[Float, Doc(gt=0.0, le=100.0)]
 Fraction = Annotated[Float, Doc(gt=0.0, le=1.0)]
+Angle = Annotated[Float, Doc(ge=-1.0, le=1.0)]
 GridPoints = Annotated[Int, Doc(ge=1, le=20)]
 AxisRule = Annotated[tuple[Factor, Factor, GridPoints], Doc(
-    "[low, high] as multiples of the default, and the number of grid steps between them")]
+    "[low, high] as multiples of the default, and the most grid steps between them (the grid stops at the "
+    "grid point nearest high × default)")]
 
 
 @config
@@ -49,6 +51,18 @@ class ScaleRules:
         "pelvis height band above the stance sole ÷ the standing height")] = (0.87, 1.03)
     fall_height: Annotated[Float, Doc("fall when the base is lower than this fraction of the standing height",
                                       gt=0.0, le=1.0)] = 0.65
+    timestep: Annotated[Float, Doc("largest physics step ÷ √(l/g) (the model's step is lowered to a nice value below "
+                                   "it; exo: 1 ms of 0.308 s)", gt=0.0, le=0.1)] = 0.0035
+    pelvis_roll: Annotated[Float, Doc("gait-quality bound on the pelvis roll relative to the stance sole (an angle: "
+                                      "no scale; exo's)", unit="rad", gt=0.0, le=1.0)] = 0.05
+    pelvis_yaw: Annotated[Float, Doc("gait-quality bound on the pelvis yaw (exo's)", unit="rad", gt=0.0,
+                                     le=1.0)] = 0.08
+    pelvis_pitch: Annotated[tuple[Angle, Angle], Doc("gait-quality band of the pelvis pitch (exo's)",
+                                                     unit="rad")] = (-0.05, 0.15)
+    swing_tilt: Annotated[Float, Doc("gait-quality bound on the swing sole's roll and pitch (exo's)", unit="rad",
+                                     gt=0.0, le=1.0)] = 0.05
+    swing_yaw: Annotated[Float, Doc("gait-quality bound on the swing sole's yaw (exo's)", unit="rad", gt=0.0,
+                                    le=1.0)] = 0.05
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -102,6 +116,9 @@ class RobotConfig:
                                         gt=0.0, le=10.0)] = 1.0
     tracking_error: Annotated[Float, Doc("kp ≤ torque limit ÷ this error: a larger error saturates anyway",
                                          unit="rad", gt=0.0, le=1.0)] = 0.02
+    servo_steps: Annotated[Float, Doc("least physics steps per natural period of the fastest servo (on its swing "
+                                      "inertia): the spec's timestep is the model's, lowered to a nice value that "
+                                      "gives this many (exo: 15 at 1 ms)", ge=2.0, le=1000.0)] = 12.0
     torque_limit_factor: Annotated[Float, Doc("a joint without a torque limit in the model gets this multiple of "
                                               "the largest static torque it holds (on one foot, the weight at a "
                                               "sole's corner, its subtree's weight × COM distance)", ge=1.0,

@@ -9,6 +9,7 @@ mirror that does not reflect the model, a leg whose joints' names say the other 
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -38,6 +39,8 @@ from robustgait.inspection.gains import (
     joint_loads,
     mass_matrix,
     pd_gains,
+    servo_gains,
+    servo_timestep,
 )
 from robustgait.inspection.mirror import Mirror, Residual, find_mirror, fk_residual, name_partner
 from robustgait.inspection.model import RobotModel, clip_to_range, open_model
@@ -54,7 +57,9 @@ class Draft:
     order (the left leg's from the branch down, then the right leg's, then — ``--plan all`` — the others in model
     order); ``held``: the others. ``angles``: every joint's posture angle, made left/right symmetric
     (``asymmetry``: the largest change that took [rad]). ``torque``: each joint's limit and its source (estimated
-    where the model has none). ``height``: the base's height above the floor standing in the posture [m].
+    where the model has none). ``timestep``: the spec's physics step (:func:`servo_timestep`; ``servo_frequency``
+    [Hz]: the fastest servo's natural frequency on its swing inertia, before any lowering for stability).
+    ``height``: the base's height above the floor standing in the posture [m].
     ``radius``: the spectral radius of one physics step of all the servos together (base held; < 1: they
     contract)."""
 
@@ -75,6 +80,7 @@ class Draft:
     size: RobotSize
     scaled: Scaled
     timestep: float
+    servo_frequency: float
     integrator: str
     radius: float
     height: float
@@ -207,7 +213,12 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
         integrator = "implicitfast"
         notes.append("the model integrates with Euler, whose explicit servo damping limits the gains: the spec "
                      "sets implicitfast (the servos' damping integrated implicitly)")
-    timestep = float(robot.model.opt.timestep)
+    servo_frequency = max(math.sqrt(servo_gains(loads[j], float(torque[j].value or 0.0), config.bandwidth,
+                                                 config.damping_ratio, config.tracking_error)[0] / loads[j].swing)
+                          for j in robot.joints) / (2 * math.pi)
+    gravity = float(np.linalg.norm(robot.model.opt.gravity))
+    timestep = servo_timestep(float(robot.model.opt.timestep), servo_frequency, config.servo_steps,
+                              math.sqrt(legs.leg_length / gravity), config.scale.timestep)
     gains = {j: pd_gains(loads[j], float(torque[j].value or 0.0), config.bandwidth, config.damping_ratio,
                          config.tracking_error, timestep, integrator) for j in robot.joints}
     gains, radius = coupled_gains(robot, qpos, gains, timestep, integrator)
@@ -217,9 +228,10 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     if asymmetry > 0.0:
         notes.append(f"the posture was not left/right symmetric: made symmetric (largest change {asymmetry:.3g} rad)")
     size = RobotSize(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,
-                     gravity=float(np.linalg.norm(robot.model.opt.gravity)), hip_spacing=legs.hip_spacing,
+                     gravity=gravity, hip_spacing=legs.hip_spacing,
                      sole_length=legs.left.sole.length, sole_width=legs.left.sole.width)
     return Draft(robot=robot, config=config, name=config.name or spec_name(robot), legs=legs, floor=floor,
                  mirror=mirror, residual=residual, planned=planned, held=held, angles=angles, asymmetry=asymmetry,
                  torque=torque, loads=loads, gains=gains, size=size, scaled=scale(size, config.scale),
-                 timestep=timestep, integrator=integrator, radius=radius, height=height, notes=notes)
+                 timestep=timestep, servo_frequency=servo_frequency, integrator=integrator, radius=radius,
+                 height=height, notes=notes)

@@ -22,6 +22,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -146,14 +147,21 @@ class PDGains:
     ratio: float
 
 
-def pd_gains(load: JointLoad, torque_limit: float, bandwidth: float, damping_ratio: float, tracking_error: float,
-             dt: float, integrator: str) -> PDGains:
-    """The gain rule of the module docstring for one joint (``bandwidth`` [Hz], ``tracking_error`` [rad])."""
+def servo_gains(load: JointLoad, torque_limit: float, bandwidth: float, damping_ratio: float,
+                tracking_error: float) -> tuple[float, float, str]:
+    """kp = min(I_st ω², τ_max / e) and kd = 2 ζ √(kp I_sw) (module docstring) before the discrete stability
+    check, and which bound set kp (``bandwidth`` or ``torque``)."""
     omega = 2.0 * np.pi * bandwidth
     kp_band = load.stance * omega**2
     kp_cap = torque_limit / tracking_error
     kp, bound = (kp_band, "bandwidth") if kp_band <= kp_cap else (kp_cap, "torque")
-    kd = 2.0 * damping_ratio * np.sqrt(kp * load.swing)
+    return float(kp), float(2.0 * damping_ratio * np.sqrt(kp * load.swing)), bound
+
+
+def pd_gains(load: JointLoad, torque_limit: float, bandwidth: float, damping_ratio: float, tracking_error: float,
+             dt: float, integrator: str) -> PDGains:
+    """The gain rule of the module docstring for one joint (``bandwidth`` [Hz], ``tracking_error`` [rad])."""
+    kp, kd, bound = servo_gains(load, torque_limit, bandwidth, damping_ratio, tracking_error)
     radius = spectral_radius(kp, kd, load.swing, dt, integrator)
     for _ in range(200):  # 0.8^200 ≈ 1e-20: every servo contracts well before (ω h → 0)
         if radius < STABLE_RADIUS:
@@ -162,6 +170,30 @@ def pd_gains(load: JointLoad, torque_limit: float, bandwidth: float, damping_rat
         radius = spectral_radius(kp, kd, load.swing, dt, integrator)
     return PDGains(float(kp), float(kd), bound, radius, float(np.sqrt(kp / load.swing) / (2 * np.pi)),
                    float(kd / (2 * np.sqrt(kp * load.swing))))
+
+
+def nice_floor(x: float) -> float:
+    """The largest of 1, 2 and 5 × 10^k not above ``x`` (> 0)."""
+    k = math.floor(math.log10(x))
+    return max(f * 10.0**e for e in (k - 1, k) for f in (1.0, 2.0, 5.0) if f * 10.0**e <= x * (1 + 1e-12))
+
+
+def servo_timestep(model_dt: float, frequency: float, steps: float, time_scale: float, fraction: float) -> float:
+    """The physics step [s]: the model's ``model_dt``, lowered to ``nice_floor`` of the smaller of
+
+    * 1 / (``steps`` f), ``f`` [Hz] the fastest servo's natural frequency √(kp / I_sw) / 2π on its swing inertia:
+      at least ``steps`` steps per period of the fastest motion the servos make (their discrete response departs
+      from the continuous one by O((ω h)²));
+    * ``fraction`` × √(l/g) (``time_scale``): the step at the same fraction of the robot's time scale as exo's
+      1 ms of its 0.31 s. Touchdowns are found on the step grid, so an iterate of the step map is known to within
+      one step of its motion, |ẋ| h; the rates x scale with √(g/l) and their changes |ẋ| with g/l (dynamic
+      similarity), so the grid's resolution relative to the rates is the same for walkers at equal h / √(l/g).
+
+    exo: fastest servo 67 Hz (15 steps per period at 1 ms) and 0.0035 × 0.308 s = 1.08 ms: its 1 ms. Booster T1:
+    its model's 2 ms gives its 57 Hz ankles 8.7 steps, and 0.0035 × 0.238 s = 0.83 ms: 0.5 ms. Measured on T1's grid
+    (docs/robots.md, "Walking the grid"): at 2 ms its switching events were noisy; at 1 ms its walks cycled through
+    neighbouring touchdown grid offsets (period-four orbits, r1 ≈ 0.026 rad/s); at 0.5 ms more of them settle."""
+    return min(model_dt, nice_floor(min(1.0 / (steps * frequency), fraction * time_scale)))
 
 
 def static_torques(robot: RobotModel, qpos: NDArray[np.float64], feet: list[int],

@@ -99,9 +99,14 @@ def nice_step(x: float) -> float:
 
 
 def axis_range(axis: str, default: float, rule: tuple[float, float, int]) -> tuple[float, float, float]:
-    """An action-space axis [low, high, step]: ``rule`` = (low, high) multiples of ``default`` and the number of
-    grid steps; the step rounded to a nice number, low to a multiple of it, both ends within the GaitParams
-    bounds of ``axis``."""
+    """An action-space axis [low, high, step]: ``rule`` = (low, high) multiples of ``default`` and the most grid
+    steps; the step rounded to a nice number, low to a multiple of it, both ends within the GaitParams bounds of
+    ``axis``.
+
+    The grid stops at the grid point nearest high × default, with at most ``points`` steps: a nice step larger
+    than (high − low) default / points must not stretch the range past the multiples, which were calibrated on
+    exo's grid. (Stretched, Booster T1's step durations reached 1.0 s = 4.2 √(l/g), past the 3.6 √(l/g) that
+    exo's grid ends at; the rule's 1.57 × its default is 0.86 s: its grid now ends at 0.9 s.)"""
     lo_f, hi_f, points = rule
     lo, hi = default * lo_f, default * hi_f
     step = nice_step((hi - lo) / max(points, 1))
@@ -109,7 +114,8 @@ def axis_range(axis: str, default: float, rule: tuple[float, float, int]) -> tup
     low_bound = doc.low if doc.low is not None else 0.0
     high_bound = doc.high if doc.high is not None else math.inf
     lo = max(round(round(lo / step) * step, 9), math.ceil(low_bound / step - 1e-9) * step)
-    hi = min(round(lo + points * step, 9), math.floor(high_bound / step + 1e-9) * step)
+    steps = min(points, max(1, round((hi - lo) / step)))
+    hi = min(round(lo + steps * step, 9), math.floor(high_bound / step + 1e-9) * step)
     return round(lo, 9), round(hi, 9), step
 
 

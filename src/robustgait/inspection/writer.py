@@ -15,7 +15,7 @@ from robustgait.inspection.discover import SIDES, Sole
 from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
 from robustgait.inspection.model import GEOM_TYPES
 from robustgait.inspection.scale import GAIT_AXES, sig
-from robustgait.robots.spec import FallCriteria, GaitQuality
+from robustgait.robots.spec import FallCriteria
 
 BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
 
@@ -196,9 +196,19 @@ def _mirror(draft: Draft) -> list[str]:
     return lines
 
 
+def _timestep_comment(draft: Draft) -> str:
+    model = float(draft.robot.model.opt.timestep)
+    size, c = draft.size, draft.config
+    rules = (f"at least {c.servo_steps:g} steps per period of the fastest servo ({draft.servo_frequency:.3g} Hz on "
+             f"its swing inertia; robot.servo_steps) and at most {c.scale.timestep:g} × √(l/g) = "
+             f"{c.scale.timestep * math.sqrt(size.leg_length / size.gravity) * 1e3:.3g} ms (robot.scale.timestep)")
+    if draft.timestep >= model:
+        return f"the model's <option>: {rules}"
+    return f"the model's {model:g} s lowered to a nice value: {rules}"
+
+
 def _scaled(draft: Draft) -> list[str]:
     s, size, rules = draft.scaled, draft.size, draft.config.scale
-    q = GaitQuality()
     rate = f"√(g/l) = {math.sqrt(size.gravity / size.leg_length):.3g}/s"
 
     def axis(v: tuple[float, float, float]) -> str:
@@ -210,21 +220,23 @@ def _scaled(draft: Draft) -> list[str]:
         "fall_height)",
         f"max_tilt = {num(FallCriteria.max_tilt)}  # robustgait's default (an angle: no scale)",
         "", "[sim]",
-        f"timestep = {num(draft.timestep)}  # the model's <option>",
+        f"timestep = {num(draft.timestep)}  # " + _timestep_comment(draft),
         f"integrator = {text(draft.integrator)}  # "
         + ("the model's <option>" if INTEGRATOR_NAMES.get(int(draft.robot.model.opt.integrator)) == draft.integrator
            else "the model's is euler: implicitfast integrates the servos' damping implicitly")
         + f"; one step of all the servos on the mass matrix (base held) has spectral radius {draft.radius:.6f} "
         "(< 1: stable)",
         "", "[gait_quality]",
-        "# angles: robustgait's defaults (no scale); rates ∝ √(g/l), heights ∝ h (robot.scale)",
-        f"pelvis_roll = {num(q.pelvis_roll)}  # default (GaitQuality)",
-        f"pelvis_yaw = {num(q.pelvis_yaw)}  # default",
-        f"pelvis_pitch = [{num(q.pelvis_pitch[0])}, {num(q.pelvis_pitch[1])}]  # default",
+        "# angles: exo's hand-tuned bounds (an angle has no scale); rates ∝ √(g/l), heights ∝ h (robot.scale)",
+        f"pelvis_roll = {num(rules.pelvis_roll)}  # exo's (robot.scale.pelvis_roll)",
+        f"pelvis_yaw = {num(rules.pelvis_yaw)}  # exo's (robot.scale.pelvis_yaw)",
+        f"pelvis_pitch = [{num(rules.pelvis_pitch[0])}, {num(rules.pelvis_pitch[1])}]  # exo's "
+        "(robot.scale.pelvis_pitch)",
         f"pelvis_height = [{num(s.pelvis_height[0], 3)}, {num(s.pelvis_height[1], 3)}]  # "
         f"[{rules.pelvis_height[0]:g}, {rules.pelvis_height[1]:g}] × h",
         f"pelvis_angular_velocity = {num(s.angular_velocity, 3)}  # {rules.angular_velocity:g} × {rate}",
-        f"swing_tilt = {num(q.swing_tilt)}  # default", f"swing_yaw = {num(q.swing_yaw)}  # default",
+        f"swing_tilt = {num(rules.swing_tilt)}  # exo's (robot.scale.swing_tilt)",
+        f"swing_yaw = {num(rules.swing_yaw)}  # exo's (robot.scale.swing_yaw)",
         f"joint_velocity = {num(s.joint_velocity, 3)}  # {rules.joint_velocity:g} × {rate}",
         "", "[action_space]",
         "# studies search this grid, [low, high, step]: [low, high] = multiples of the [gait] default, a nice step "
