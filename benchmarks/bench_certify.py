@@ -551,7 +551,7 @@ def cmd_push_sweep(args: argparse.Namespace) -> None:
     vcfg = ValidateConfig()
     with ReturnMap(robot, gait, cfg, SimConfig(n_threads=args.threads)) as pmap:
         fp = pmap.find_fixed_point()
-        pm = PushMap(pmap.engine, fp, vcfg, cfg.push.steps)
+        pm = PushMap(pmap.engine, fp, vcfg, cfg.push)
         t0 = time.perf_counter()
         cert = certify_map_sequential(pm, np.zeros(2), cfg)
         j_star = cert.r_star
@@ -563,7 +563,7 @@ def cmd_push_sweep(args: argparse.Namespace) -> None:
         if near.size:
             j = cert.samples[near]
             phase = push_phase(j, *vcfg.push_phase)
-            _, reasons, steps = pm.walk(j, phase)
+            _, reasons, steps, _ = pm.walk(j, phase)
             for k in np.argsort(d[near]):
                 print(f"  |J| {d[near][k]:6.2f} N s, direction {math.degrees(math.atan2(j[k, 1], j[k, 0])):5.0f}°, "
                       f"phase {phase[k]:.2f}: fell in step {steps[k]} ({reasons[k]})")
@@ -573,7 +573,7 @@ def cmd_push_sweep(args: argparse.Namespace) -> None:
         for f in (float(x) for x in args.sweep.split(",")):
             mag = f * j_star
             j = mag * np.stack([np.cos(dd.ravel()), np.sin(dd.ravel())], axis=1)
-            alive, _, steps = pm.walk(j, pp.ravel())
+            alive, _, steps, _ = pm.walk(j, pp.ravel())
             grid = steps.reshape(dd.shape)
             print(f"|J| = {f:g} J* = {mag:.2f} N s: {int((~alive).sum())} of {alive.size} pushes fall "
                   f"({100 * (~alive).mean():.1f} %); rows: direction in the heading frame (0° forward, 90° left), "

@@ -311,7 +311,9 @@ def test_horizon_certificate_reports_its_excursion(exo, exo_gait):
 
 
 def test_push_certificate(exo, exo_gait):
-    gc = certify_gait(exo, exo_gait, uniform(disturbance="push", n_samples=12, seed=1, push={"steps": 1}))
+    # falls only (push.recovery false): the image of a push is then its fall (recovery: test_push.py)
+    gc = certify_gait(exo, exo_gait, uniform(disturbance="push", n_samples=12, seed=1,
+                                             push={"steps": 1, "recovery": False}))
     c = gc.certificate
     assert gc.ok and c.samples.shape == (12, 2) and c.r_max == 100.0 and gc.config.unit == "N s"
     # the image of a push is the origin (absorbed) or a fall: J* is the smallest impulse that fell (or r_max)
@@ -334,9 +336,12 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
     verify = [r for r in c.rounds if r.kind == "verify"]
     assert gc.ok and c.method == "sequential" and verify[-1].passed and c.violation_bound <= 0.2
     text = gc.statement()
-    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed all walked "
-            f"(verification attempt {len(verify)}:") in text
+    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed all "
+            f"recovered (verification attempt {len(verify)}:") in text
     assert f"none of the {c.n_samples} pushes of its {len(c.rounds)} rounds" in text
+    # what a failure is: a fall within the pushed step and push.steps more, or off the orbit at their end
+    assert "make the robot fall within that step and 1 more, or leave it off its orbit at their end" in text
+    assert "farther than 0.3 in Froude units" in text
     assert "ball" not in text and "r*" not in text
 
 

@@ -160,7 +160,7 @@ def test_interrupt_and_closed_stdout_are_one_line_or_silent(monkeypatch, capsys)
 # Options that are inputs or outputs of a command, not configuration: file paths, printing, the robot.
 IO_OPTIONS = {"-h", "--help", "--json", "--plot", "-o", "--output", "--video", "--log", "--config", "--override",
               "--robot", "--certificate", "--warm-start", "--verbose", "--quiet", "--mirror", "--check", "--columns",
-              "--x-star", "--r", "--dir", "--preset", "--markdown"}
+              "--x-star", "--r", "--dir", "--preset", "--markdown", "--to"}
 
 
 def _subparsers(parser, path=()):  # type: ignore[no-untyped-def]

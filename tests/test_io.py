@@ -275,13 +275,13 @@ def test_total_work_is_bounded_before_simulating(tmp_path, gait_file):
     assert code == 2
     one_error_line(err, f"{slow}: 1000 steps (sim.step_cap) with a video: 1000 simulated steps of up to 15 s",
                    "over the limit of 2e+06")
-    code, _, err = cli("certify", gait_file(), "--robot", "exo", "--method", "uniform", "--samples", "10000", "--map",
-                       "stride")
+    code, _, err = cli("certify", gait_file(), "--robot", "exo", "--override", "certify.push.steps=100")
     assert code == 2
-    one_error_line(err, "certify.fp_max_steps 100 + certify.n_samples 10000", "over the limit of 2e+07")
-    code, _, err = cli("walk", gait_file(), "--robot", "exo", "--steps", "100", "--video", tmp_path / "v.gif")
+    one_error_line(err, "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303111 simulated "
+                   "steps of up to 1.05 s", "over the limit of 5.1e+07 (4 × the 1.3e+07 the defaults need here)")
+    code, _, err = cli("walk", gait_file(), "--robot", "exo", "--steps", "200", "--video", tmp_path / "v.gif")
     assert code == 2
-    one_error_line(err, "v.gif: this walk could last 105 s, 3150 frames at 30 fps: a .gif holds at most 1800")
+    one_error_line(err, "v.gif: this walk could last 210 s, 6300 frames at 30 fps: a .gif holds at most 3600")
     assert time.perf_counter() - t0 < 5 and not (tmp_path / "v.mp4").exists()
 
 

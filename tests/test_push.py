@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from robustgait.certify import certify_gait
-from robustgait.config import CertifyConfig, ValidateConfig
+from robustgait.config import CertifyConfig, PushConfig, ValidateConfig
 from robustgait.poincare import ReturnMap
 from robustgait.push import PushMap, push_phase
 from robustgait.report import plot_certificate
@@ -23,7 +23,8 @@ def mc_pushes(exo, exo_mc_gait):  # type: ignore[no-untyped-def]
     cfg = CertifyConfig(disturbance="push")
     with ReturnMap(exo, exo_mc_gait, cfg) as pmap:
         fp = pmap.find_fixed_point()
-        yield PushMap(pmap.engine, fp, ValidateConfig(), 3), fp
+        # falls only: the map is then the validation's walk to the letter (recovery: its own test)
+        yield PushMap(pmap.engine, fp, ValidateConfig(), PushConfig(recovery=False)), fp
 
 
 def test_push_phase_is_a_function_of_the_impulse_uniform_over_the_range():
@@ -48,7 +49,8 @@ def test_multicontact_zero_push_walks_and_the_push_map_is_the_validation_walk(mc
     falls = pm.fall_step[-1]
     assert np.all(np.isnan(out[falls > 0])) and np.all(out[falls == 0] == 0)
     assert falls[0] == 0 and falls[-1] > 0  # no push walks; 120 N s (≈ 1.7 m/s on 70 kg) falls
-    alive, reasons, steps = pm.walk(j, push_phase(j, 0.0, 0.6))  # the map is the walk at the hashed phases
+    alive, reasons, steps, distance = pm.walk(j, push_phase(j, 0.0, 0.6))  # the map is the walk at the hashed phases
+    assert np.array_equal(np.isnan(distance), ~alive) and np.all(distance[alive] == 0)  # no band: 0
     np.testing.assert_array_equal(steps, falls)
     assert np.array_equal(alive, falls == 0)
     assert all((r is None) == ok for r, ok in zip(reasons, alive, strict=True))

@@ -20,7 +20,7 @@ from tqdm import tqdm
 
 from robustgait.barrier import Certificate, certify_map, evaluate_map, sample_ball
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, to_dict
-from robustgait.config.work import check_work
+from robustgait.config.work import Work, check_work
 from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
 from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap
@@ -28,6 +28,7 @@ from robustgait.push import PushMap
 from robustgait.reduced import Coordinates
 from robustgait.robots import Robot
 from robustgait.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
+from robustgait.sim.engine import step_physics_steps
 
 STATUSES = ("ok", "fell_before_fixed_point", "no_fixed_point", "unstable_fixed_point")
 
@@ -104,16 +105,21 @@ class GaitCertificate:
         if c.method == "sequential":
             verify = [r for r in c.rounds if r.kind == "verify"]
             n_a, attempt = verify[-1].n_samples, len(verify)
-            basis = (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed all walked "
+            basis = (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed all recovered "
                      f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}), and none of the "
-                     f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* fell")
+                     f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* failed")
         else:
             basis = (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
-                     f"with |J| {inside} J* all walked (union bound over the {c.n_samples + 1} possible choices of J*)")
+                     f"with |J| {inside} J* all recovered (union bound over the {c.n_samples + 1} possible choices of "
+                     "J*)")
+        p = cfg.push
+        fail = ("make the robot fall within that step and {k} more" if not p.recovery else
+                "make the robot fall within that step and {k} more, or leave it off its orbit at their end (base "
+                f"velocity farther than {p.recovery_radius:g} in Froude units, or {p.recovery_scatter:g}× its "
+                "undisturbed scatter, from x*'s)").format(k=p.steps)
         return (f"With confidence {100.0 * c.confidence:g}%, at most {100.0 * c.violation_bound:.3g}% of the pushes "
                 f"with impulse |J| {inside} J* = {c.r_star:.4g} N s (uniform in that disk; {v.push_duration:g} s long, "
-                f"starting at a phase in [{v.push_phase[0]:g}, {v.push_phase[1]:g}] of the step) make the robot fall "
-                f"within that step and {cfg.push.steps} more: {basis}.")
+                f"starting at a phase in [{v.push_phase[0]:g}, {v.push_phase[1]:g}] of the step) {fail}: {basis}.")
 
     def to_dict(self, *, samples: bool = True) -> dict[str, Any]:
         """JSON-ready; everything but ``seconds`` is deterministic for a given seed."""
@@ -183,17 +189,28 @@ def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: boo
         return certify_map_sequential(counted, x_star, cfg)
 
 
+def certify_steps(config: CertifyConfig, graph: str) -> int:
+    """The most steps a certificate simulates: a multi-contact gait's walk to its first heel strike (one step at
+    most), up to ``fp_max_steps`` steps of the map to its fixed point, the map at x* (``horizon`` steps, × 2 for the
+    stride map), and :attr:`~CertifyConfig.steps_per_sample` for each of :attr:`~CertifyConfig.samples_planned`
+    (a push: the pushed step and ``push.steps`` more; with recovery, the undisturbed walk that measures the orbit's
+    scatter first)."""
+    start = 0 if graph == "flat" else 1
+    period = 2 if config.map == "stride" else 1
+    band = config.push.recovery_band_steps if config.disturbance == "push" and config.push.recovery else 0
+    return (start + config.fp_max_steps + config.horizon * period + band
+            + config.samples_planned * config.steps_per_sample)
+
+
 def check_certify_work(robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig) -> int:
-    """Bound a certificate's simulation before it starts (:func:`robustgait.config.work.check_work`): the
-    fixed-point steps, then per sample (N, or the sequential budget, plus the ellipsoid's fit and, with
-    ``compare_ball``, the ball's samples) and for the map at x* the steps of :attr:`CertifyConfig.steps_per_sample`,
-    each of up to the gait's step duration × ``max_step_tau``."""
-    per_map = 2 if config.map == "stride" else 1
-    what = "sequential.budget" if config.method == "sequential" else "n_samples"
-    return check_work(per_map * config.fp_max_steps + config.steps_per_sample * (config.samples_planned + 1),
-                      gait.step_duration * sim.max_step_tau, robot.dt,
-                      f"certify.fp_max_steps {config.fp_max_steps} + certify.{what} {config.samples_planned} × "
-                      f"{config.steps_per_sample} steps")
+    """Bound a certificate's simulation before it starts (:mod:`robustgait.config.work`): :func:`certify_steps`,
+    each of up to the gait's :func:`~robustgait.sim.engine.step_horizons`, against what the default certificate
+    needs on this robot and gait."""
+    graph, samples = gait.domain_graph, "sequential.budget" if config.method == "sequential" else "n_samples"
+    return check_work(Work(certify_steps(config, graph), step_physics_steps(gait, robot.dt, sim)),
+                      Work(certify_steps(CertifyConfig(), graph), step_physics_steps(gait, robot.dt, SimConfig())),
+                      robot.dt, f"certify.fp_max_steps {config.fp_max_steps} + certify.{samples} "
+                      f"{config.samples_planned} × {config.steps_per_sample} steps")
 
 
 class _Paths:
@@ -295,7 +312,7 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         if push:
             assert vcfg is not None
             coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
-            pushes = PushMap(pmap.engine, fp, vcfg, cfg.push.steps)
+            pushes = PushMap(pmap.engine, fp, vcfg, cfg.push)
             cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}")
             steps = pushes.physics_steps
         else:

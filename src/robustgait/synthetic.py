@@ -12,11 +12,14 @@ either barrier). Only the volume fraction of the violating set in a ball matters
 * :class:`PushThresholdMap` — a 2-D impulse disk whose pushes fail beyond a threshold that depends on the push's
   direction and on its hashed phase (:func:`robustgait.push.push_phase`): the push certificate's J* (true J* and
   violating fraction of every disk known by quadrature).
+* :class:`DivergingPush` — pushes that walk a few steps and fall later beyond a known critical impulse: the push
+  certificate's recovery criterion (:mod:`robustgait.recovery`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -159,3 +162,45 @@ class PushThresholdMap:
         out = np.zeros_like(j)
         out[falls] = np.nan
         return out
+
+
+@dataclass(frozen=True)
+class DivergingPush:
+    """A push model with late falls and a known answer, for the push certificate's recovery criterion
+    (:mod:`robustgait.recovery`). A push of impulse |J| leaves the walker at distance d₁ = |J| / mass from its orbit
+    after the pushed step; each further step maps d ↦ a d + b d² (a < 1: small deviations die out; the unstable
+    point d_u = (1 − a) / b separates the pushes that recover from those that diverge); the walker falls in the first
+    step whose d exceeds ``d_fall``. Pushes just above the true critical impulse J_u = mass · d_u walk several steps
+    before they fall: a certificate that only asks "no fall within k steps" certifies some of them."""
+
+    mass: float = 10.0
+    a: float = 0.6
+    b: float = 0.4
+    d_fall: float = 3.0
+
+    @property
+    def critical(self) -> float:
+        """J_u [N s]: every push above it eventually falls, every push below it recovers."""
+        return self.mass * (1.0 - self.a) / self.b
+
+    def walk(self, impulse: ArrayLike, steps: int) -> tuple[NDArray[np.int64], FloatArray]:
+        """Impulses J (N, 2) walked the pushed step and ``steps`` more: the 1-based step each fell in (0: none) and
+        its distance d at the end (NaN if it fell)."""
+        d = np.linalg.norm(np.atleast_2d(np.asarray(impulse, dtype=float)), axis=1) / self.mass
+        fall = np.zeros(d.size, dtype=np.int64)
+        for k in range(1, steps + 2):
+            if k > 1:  # a fallen walker's d stops (and cannot overflow)
+                d = np.where(fall == 0, self.a * d + self.b * d * d, d)
+            fall[(fall == 0) & (d > self.d_fall)] = k
+        return fall, np.where(fall == 0, d, np.nan)
+
+    def map(self, steps: int, radius: float | None) -> Callable[[FloatArray, object], FloatArray]:
+        """The push map of :class:`robustgait.push.PushMap` on this model: (0, 0) for a push that neither falls within
+        the pushed step and ``steps`` more nor ends farther than ``radius`` from the orbit (None: falls only)."""
+        def P(j: FloatArray, progress: object = None) -> FloatArray:
+            fall, d = self.walk(j, steps)
+            failed = (fall > 0) if radius is None else (fall > 0) | ~(np.nan_to_num(d, nan=np.inf) <= radius)
+            out = np.zeros((np.atleast_2d(j).shape[0], 2))
+            out[failed] = np.nan
+            return out
+        return P

@@ -7,7 +7,7 @@ import json
 
 from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
 from robustgait.cli.options import config_from, output_path
-from robustgait.config import Config
+from robustgait.config import GAIT_FORMATS, Config
 from robustgait.errors import RobustGaitError
 
 GENERATE = {"--domains": "generate.domains", "--step-length": "gait.step_length",
@@ -17,15 +17,17 @@ GENERATE = {"--domains": "generate.domains", "--step-length": "gait.step_length"
 
 
 def _convert(args: argparse.Namespace) -> int:
-    from robustgait.io.gaitfile import load_gait, save_gait
+    from robustgait.io.gaitfile import gait_format, load_gait, save_gait
     from robustgait.io.robotfile import load_robot
 
+    fmt = gait_format(args.output, args.to)
     robot = load_robot(args.robot)
     gait = load_gait(args.gait, robot)
     if args.mirror:
         gait = gait.mirrored(robot)
-    save_gait(gait, args.output)
-    print(f"wrote {args.output} ({gait.stance} stance, {gait.n_outputs} outputs, T = {gait.step_duration} s)")
+    save_gait(gait, args.output, fmt, src=args.gait)
+    what = "FROST/ambersim YAML" if fmt == "frost" else "robustgait JSON"
+    print(f"wrote {args.output} ({what}: {gait.stance} stance, {gait.n_outputs} outputs, T = {gait.step_duration} s)")
     return 0
 
 
@@ -62,7 +64,7 @@ def _generate(args: argparse.Namespace) -> int:
               f"({res.solve_seconds / max(res.iterations, 1) * 1e3:.0f} ms/iteration), ∫‖u‖²dt = {res.objective:.4g}")
         print(f"physics check passed: dynamics residual {c.dynamics_residual:.1e} (MuJoCo), periodicity "
               f"{c.periodicity:.1e}, min normal force {c.min_normal_force:.0f} N, friction |f_t|/f_z ≤ "
-              f"{c.friction_ratio:.2f}, CoP margin {c.cop_margin * 1e3:.1f} mm")
+              f"{c.friction_ratio:.2f}, {c.cop_text()}")
         print(f"wrote {args.output}")
     return 0
 
@@ -81,10 +83,14 @@ def _tiles(args: argparse.Namespace) -> int:
 def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     g = sub.add_parser("gait", help="gait files: convert, generate (HZD), tiles")
     gsub = g.add_subparsers(dest="gait_command", required=True, parser_class=type(g))
-    gc = command(gsub, "convert", "read a gait (either format) and write robustgait JSON", _convert)
+    gc = command(gsub, "convert", "read a gait (either format) and write it as robustgait JSON or FROST/ambersim "
+                 "YAML", _convert)
     gc.add_argument("gait", help=GAIT_HELP)
     gc.add_argument("--robot", required=True, help=ROBOT_HELP)
-    gc.add_argument("-o", "--output", required=True, type=output_path("json"), help="output gait .json")
+    gc.add_argument("-o", "--output", required=True, type=output_path("gait"),
+                    help="output gait: .json (robustgait) or .yaml/.yml (FROST/ambersim)")
+    gc.add_argument("--to", choices=GAIT_FORMATS,
+                    help="output format (default: the output's suffix picks it; a contradicting suffix is refused)")
     gc.add_argument("--mirror", action="store_true", help="relabel for the other stance leg")
 
     gg = command(gsub, "generate", "HZD trajectory optimization of a gait (CasADi + IPOPT): flat-foot or "

@@ -51,7 +51,7 @@ def _validate(args: argparse.Namespace) -> int:
     print(f"{robot.name}: {name} = {c.r_star:.4g} {R_MAX_UNIT[c.space]}{energy} ({'closed' if c.attained else 'open'} "
           f"{kind}, certificate {c.source}); {cfg.trials} trials per "
           f"kind, seed {cfg.seed}, success = no fall in {cfg.steps_after} steps after the first switching event")
-    inside = "pushes |J| ≤ J* that fell" if c.space == "push" else "falls inside the set"
+    inside = f"|J| ≤ J*: fell in {cfg.steps_after} steps" if c.space == "push" else "falls inside the set"
     print(f"{'kind':<9} {'success [95% CI]':<24} {'half fail at (± s.e.)':<30} {inside:<26} "
           f"{'falls outside':<24} {'fell before event':>17}")
     for kind, kr in res.kinds.items():
@@ -64,6 +64,11 @@ def _validate(args: argparse.Namespace) -> int:
             crit = f"— ({fit.note})"
         print(f"{kind:<9} {rate_text(sr):<24} {crit:<30} {rate_text(chk['inside']):<26} "
               f"{rate_text(chk['outside']):<24} {chk['fell_before_event']:>17}")
+        if "inside_at_horizon" in chk and kr.horizon is not None:
+            print(f"          the certificate's own promise at its horizon (the pushed step and {kr.horizon - 1} "
+                  f"more: no fall, back near the orbit), pushes |J| ≤ J* that failed it: "
+                  f"{rate_text(chk['inside_at_horizon'])}; at the user's horizon, {cfg.steps_after} steps: fell "
+                  f"{rate_text(chk['inside'])}")
         q = kr.summary()["energy"]
         if q is not None:
             line = (f"          kinetic energy added at the first section: median {q['median']:.3g} J "

@@ -99,7 +99,17 @@ class PushConfig:
     depend on it; ε, β, the budget and the rest are ``sequential``'s). Push duration and phases are the validation's
     (``validate.push_duration``, ``validate.push_phase``)."""
 
-    steps: Annotated[Int, Doc("steps after the pushed one within which a fall is a failure", ge=1, le=100)] = 3
+    steps: Annotated[Int, Doc("steps after the pushed one within which a fall, or not being back near the orbit at "
+                              "their end, is a failure", ge=1, le=100)] = 3
+    recovery: Annotated[Bool, Doc("a pushed walk must also end those steps back near its orbit (recovery_radius); "
+                                  "false: a fall is the only failure")] = True
+    recovery_radius: Annotated[Float, Doc(
+        "the orbit's neighbourhood: distance from x* in the base's Froude-scaled velocity (v/√(g l), ω/√(g/l), "
+        "heading frame; docs/certificate.md, Recovery)", ge=0.0, le=100.0)] = 0.3
+    recovery_scatter: Annotated[Float, Doc("the recovery radius is at least this multiple of the undisturbed orbit's "
+                                           "own scatter about x*", ge=0.0, le=1000.0)] = 3.0
+    recovery_band_steps: Annotated[Int, Doc("undisturbed steps from x* whose scatter sets that floor", ge=1,
+                                            le=1000)] = 10
     first_round: Annotated[Int, Doc("round 1: uniform pushes in the disk of radius r_max", ge=1, le=10_000)] = 50
     explore: Annotated[Int, Doc("exploration pushes before the first verification", ge=0, le=100_000)] = 100
     explore_after_failure: Annotated[Int, Doc("exploration pushes before each further verification", ge=0,

@@ -12,6 +12,9 @@ from robustgait.config.base import Doc, FieldProblem, Float, Int, Str, config
 
 DomainGraph = Literal["flat", "multicontact"]
 Stance = Literal["left", "right"]
+# The file formats a gait is written in (``gait convert --to``): robustgait's JSON, a FROST/ambersim YAML.
+GaitFormat = Literal["json", "frost"]
+GAIT_FORMATS: tuple[GaitFormat, ...] = ("json", "frost")
 
 # The step duration of each domain graph when none is given [s]: multi-contact gaits of 0.7 s solve but do not
 # walk on exo (the 0.14 s of rolling is too fast for the simulator's soft contacts; measured, docs/gaitgen.md),
@@ -47,6 +50,12 @@ class GaitParams:
         if self.step_duration is None:
             raise ValueError("step_duration is not set: use GaitParams.resolved(domains)")
         return self.step_duration
+
+    def domain_durations(self, domains: str) -> list[float]:
+        """Duration of each domain of a step [s]: T (flat), or T (1 − ρ) single and T ρ rolling double support
+        (multi-contact)."""
+        t = self.resolved(domains).duration
+        return [t] if domains == "flat" else [t * (1 - self.rolling_fraction), t * self.rolling_fraction]
 
     def to_dict(self) -> dict[str, float]:
         """The five values (resolved parameters only: a gait file stores its actual step duration)."""

@@ -1,36 +1,92 @@
-"""Bounds on the work of one command: each option is within its limits, but their product can still be hours.
+"""Bounds on the work of one command, checked before any of it: each option is within its limits, but their
+product can still be hours.
 
-A walk or certificate within every option's limits can combine a 10 s gait, a 1e-4 s timestep and 1000 steps
-(1.5e8 physics steps): the product is bounded too, before any work starts. 2e7 physics steps are ~3–7 min batched
-(certify, 2 cores) and ~30 min for one walk; the defaults (0.7 s exo gait, 1 ms) use 1e5–1e6.
+Work is counted as the command's worst case, :class:`Work`: the steps it may simulate (every sample surviving
+every step) × the physics steps one step may take, the engine's horizons at the robot's timestep — single
+support to τ = ``sim.max_step_tau`` (a later touchdown is a fall), a multi-contact step's rolling double support
+to τ = 1 (:func:`robustgait.sim.engine.step_horizons`). Two bounds, in units that do not depend on how long the
+robot's steps are:
+
+* **One step** may take at most :data:`MAX_STEP_PHYSICS_STEPS` = 30 000 physics steps: a 2 s step to τ = 1.5 at
+  1e-4 s (exo's and Atalante's steps need 1 050–1 800 at 1 ms). This refuses a resolution no gait needs — a
+  1e-5 s timestep, a 10 s gait at 1e-4 s, ``max_step_tau`` 10 on a 5 s gait — whatever the counts.
+* **The command** may take at most :data:`WORK_HEADROOM` = 4 × what its default settings take on the same robot
+  and gait (the same steps, default ``max_step_tau``), or :data:`MAX_PHYSICS_STEPS` = 2e7 physics steps if that
+  is more. Counted in simulated steps this does not depend on the robot: the default push certificate simulates
+  12 111 steps (100 fixed-point steps, the map at x*, 10 undisturbed steps of the recovery band, 3 000 pushes ×
+  4 steps) on any robot, and a request may
+  simulate 4 × that — the largest sample budget (10 000 pushes) is 3.3 ×. So the defaults pass on every robot
+  and domain graph. The fixed 2e7 of before refused the default certificate of a study on Atalante's 1.2 s
+  multi-contact steps (12 102 steps × 1 710 = 2.07e7 physics steps), and as a constant it would have to be raised
+  again for every longer gait. A setting that multiplies the steps beyond that — ``certify.push.steps`` 100
+  (25 ×), ``validate --trials 10000 --steps-after 1000`` — is refused before any work. The 2e7 floor keeps
+  everything that passed before passing: 2e7 physics steps are ~3–7 min batched (certify, 2 cores) and ~30 min
+  for one walk. The defaults' worst cases: ``docs/inputs.md`` (``benchmarks/bench_work.py``).
+
+Memory, not time, bounds a video: every state of the walk is kept for the renderer, and an animated .gif keeps
+every frame until it is written; those limits are absolute.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from robustgait.errors import RobustGaitError
 
 MAX_PHYSICS_STEPS = 20_000_000
+WORK_HEADROOM = 4
+MAX_STEP_PHYSICS_STEPS = 30_000
 # A walk with a video keeps every physics step's state (~40 floats for exo) for the renderer: 2e6 steps are
-# ~0.6 GB and ~30 min of motion at 1 ms (the defaults: 50 steps, 3.5e4 physics steps).
+# ~0.6 GB and ~30 min of motion at 1 ms (the defaults: 50 steps, 5e4–9e4 physics steps).
 MAX_VIDEO_PHYSICS_STEPS = 2_000_000
-# An animated .gif keeps every frame in memory until written (320×240, ~77 kB each): 1800 frames are 60 s at
-# 30 fps, ~140 MB; the default walk (50 steps of a 0.7 s gait) is ~1100 frames. Longer videos: .mp4.
-MAX_GIF_FRAMES = 1800
+# An animated .gif keeps every frame in memory until written (320×240 palette images, 77 kB each: 3600 frames,
+# 2 min at 30 fps, are 280 MB). The default walk (50 steps, each to its worst case) is up to 1575 frames on exo's
+# 0.7 s gait and 2565 on Atalante's longest multi-contact steps (1.2 s: 1710 physics steps each). Longer: .mp4.
+MAX_GIF_FRAMES = 3600
 
 
-def check_work(gait_steps: int, longest_step: float, timestep: float, what: str,
-               limit: int = MAX_PHYSICS_STEPS) -> int:
-    """Raise a one-line error if ``gait_steps`` simulated steps, each at most ``longest_step`` [s] long (a step's
-    duration × ``SimConfig.max_step_tau``), could take more than ``limit`` physics steps of ``timestep`` [s];
-    return that worst-case count. ``what`` names the settings that asked for the work."""
-    worst = int(gait_steps * math.ceil(longest_step / timestep))
+@dataclass(frozen=True)
+class Work:
+    """A command's worst case: ``steps`` simulated steps, each of up to ``step_physics`` physics steps."""
+
+    steps: int
+    step_physics: int
+
+    @property
+    def physics_steps(self) -> int:
+        return self.steps * self.step_physics
+
+
+def work_limit(defaults: Work) -> int:
+    """The most physics steps a command may take: :data:`WORK_HEADROOM` × its defaults' worst case on the same
+    robot and gait, or :data:`MAX_PHYSICS_STEPS` if that is more (module docstring)."""
+    return max(MAX_PHYSICS_STEPS, WORK_HEADROOM * defaults.physics_steps)
+
+
+def check_work(work: Work, defaults: Work | None, timestep: float, what: str, limit: int | None = None) -> int:
+    """Raise a one-line error if one of ``work``'s steps could take more than :data:`MAX_STEP_PHYSICS_STEPS`
+    physics steps of ``timestep`` [s], or all of them more than ``limit`` (default :func:`work_limit` of the
+    command's ``defaults``); return the worst-case count. ``what`` names the settings that asked for the work."""
+    seconds = work.step_physics * timestep
+    if work.step_physics > MAX_STEP_PHYSICS_STEPS:
+        raise RobustGaitError(
+            f"{what}: one simulated step may last {seconds:g} s, {work.step_physics} physics steps at a {timestep:g} "
+            f"s timestep, over the limit of {MAX_STEP_PHYSICS_STEPS} per step (use a larger sim.timestep, a shorter "
+            "gait or a smaller sim.max_step_tau)")
+    if limit is None:
+        assert defaults is not None
+        limit = work_limit(defaults)
+        basis = (f" ({WORK_HEADROOM} × the {defaults.physics_steps:.2g} the defaults need here)"
+                 if limit > MAX_PHYSICS_STEPS else "")
+    else:
+        basis = ""
+    worst = work.physics_steps
     if worst > limit:
         raise RobustGaitError(
-            f"{what}: {gait_steps} simulated steps of up to {longest_step:g} s at a {timestep:g} s timestep are up "
-            f"to {worst:.2g} physics steps, over the limit of {limit:.0e} (ask for fewer steps or samples, or use "
-            "a larger sim.timestep)")
+            f"{what}: {work.steps} simulated steps of up to {seconds:g} s at a {timestep:g} s timestep are up to "
+            f"{worst:.2g} physics steps, over the limit of {limit:.2g}{basis} (ask for fewer steps or samples, or "
+            "use a larger sim.timestep)")
     return worst
 
 

@@ -33,6 +33,7 @@ PERIODICITY_TOL = 1e-6
 LENGTH_TOL = 1e-3
 TIME_TOL = 1e-3
 FORCE_TOL = 1e-6  # [N] slack on the wrench inequalities (IPOPT's bound relaxation)
+COP_ON_BOUND = 5e-5  # [m] a centre of pressure within 0.05 mm of its bound is on it (what "0.0 mm" printed meant)
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,7 @@ class PhysicsCheck:
     min_normal_force: float
     friction_ratio: float
     cop_margin: float
+    cop_bound: float
     step_length_error: float
     step_width_error: float
     step_height_error: float
@@ -57,6 +59,19 @@ class PhysicsCheck:
 
     def to_dict(self) -> dict[str, object]:
         return asdict(self)
+
+    @property
+    def on_cop_bound(self) -> bool:
+        """The centre of pressure reaches the generation's bound (``generate.cop_margin`` inside the sole edges) at
+        some node: the slack ``cop_margin`` is below :data:`COP_ON_BOUND` — the gait sits on that constraint."""
+        return self.cop_margin < COP_ON_BOUND
+
+    def cop_text(self) -> str:
+        """The centre of pressure's least distance to the sole edges against its bound, in mm, e.g. ``CoP ≥ 29.2 mm
+        inside the sole edges (bound 16.7 mm)``, or ``… 16.7 mm …: on its bound``."""
+        edge = (self.cop_bound + self.cop_margin) * 1e3
+        text = f"CoP ≥ {edge:.1f} mm inside the sole edges (bound {self.cop_bound * 1e3:.1f} mm"
+        return text + ("): on its bound" if self.on_cop_bound else f", slack {self.cop_margin * 1e3:.1f} mm)")
 
 
 def _sole_jacobian(m: mujoco.MjModel, d: mujoco.MjData, geom: int, point: FloatArray) -> FloatArray:
@@ -178,7 +193,8 @@ def check_solution(dyn: Dynamics, prob: GaitProblem, params: GaitParams, states:
             failures.append(f"{key.replace('_', ' ')} {err:.2e} > {tol:g}")
     return PhysicsCheck(dynamics_residual=dyn_res, stance_drift=drift, impact_residual=impact_res,
                         periodicity=periodicity, min_normal_force=float(fz_min), friction_ratio=friction,
-                        cop_margin=cop_margin, **{k: float(v) for k, v in errs.items()}, passed=not failures,
+                        cop_margin=cop_margin, cop_bound=float(cfg.scaled("cop_margin")),
+                        **{k: float(v) for k, v in errs.items()}, passed=not failures,
                         failures=tuple(failures))
 
 

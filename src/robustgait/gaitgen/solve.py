@@ -63,11 +63,8 @@ def joint_trajectories(beta: FloatArray, taus: FloatArray, duration: float
 
 
 def domain_durations(prob: GaitProblem, params: GaitParams) -> list[float]:
-    """Duration of each domain: T (flat), or T (1 − ρ) single and T ρ double support (multi-contact)."""
-    t = params.resolved(prob.graph.name).duration
-    if len(prob.graph) == 1:
-        return [t]
-    return [t * (1 - params.rolling_fraction), t * params.rolling_fraction]
+    """Duration of each domain of the problem's graph (:meth:`GaitParams.domain_durations`)."""
+    return params.domain_durations(prob.graph.name)
 
 
 def _contact_targets(prob: GaitProblem, params: GaitParams, d: int) -> list[tuple[Contact, FloatArray]]:

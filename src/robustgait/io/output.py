@@ -26,15 +26,17 @@ from typing import Any, Literal
 
 from robustgait.errors import RobustGaitError, input_error
 
-OutputKind = Literal["json", "csv", "plot", "video", "html"]
+OutputKind = Literal["json", "gait", "csv", "plot", "video", "html"]
 FORMATS: dict[str, tuple[str, ...]] = {
     "json": (".json",),
+    "gait": (".json", ".yaml", ".yml"),
     "csv": (".csv",),
     "plot": (".png", ".pdf", ".svg"),
     "video": (".mp4", ".gif"),
     "html": (".html",),
 }
-_LABELS = {"json": "JSON output", "csv": "CSV output", "plot": "plot", "video": "video", "html": "HTML report"}
+_LABELS = {"json": "JSON output", "gait": "gait file", "csv": "CSV output", "plot": "plot", "video": "video",
+           "html": "HTML report"}
 FORBIDDEN_ROOTS = (Path("/proc"), Path("/sys"), Path("/dev"))
 _TMP_PREFIX = ".robustgait-"
 

@@ -125,6 +125,25 @@ def servo_noise_offset(robot: Robot, noise: NDArray[np.float64]) -> NDArray[np.f
     return np.asarray(-(noise[:, :, 0] + (robot.servo_kd / robot.servo_kp) * noise[:, :, 1]))
 
 
+def step_horizons(durations: Sequence[float], graph: str, timestep: float, config: SimConfig) -> list[int]:
+    """The most physics steps each domain of a step may last before it is a fall: round(τ_end T_d / Δt), with
+    τ_end = ``max_step_tau`` for a domain ended by touchdown or heel strike (τ = 1 with ``time`` switching) and
+    τ_end = 1 for the rolling double support, which ends at foot-flat or at τ = 1 at the latest (past its end its
+    references would keep rolling the feet: the tangent continuation that helps a late touchdown). Their sum is
+    the worst case of one step, what :mod:`robustgait.config.work` bounds."""
+    g = domain_graph(graph)
+    if len(durations) != len(g):
+        raise RobustGaitError(f"a {graph} gait has {len(g)} domains, this one {len(durations)}")
+    tau_end = 1.0 if config.switching == "time" else config.max_step_tau
+    return [round((tau_end if spec.guard == "touchdown" else 1.0) * (d / timestep))
+            for spec, d in zip(g.domains, durations, strict=True)]
+
+
+def step_physics_steps(gait: Gait, timestep: float, config: SimConfig) -> int:
+    """The most physics steps one step of ``gait`` may take (its domains' :func:`step_horizons`)."""
+    return sum(step_horizons([d.duration for d in gait.domains], gait.domain_graph, timestep, config))
+
+
 class StepEngine:
     """One gait on one robot, both stances; call :meth:`step` with batches of states.
 
@@ -141,18 +160,12 @@ class StepEngine:
         self.robot = robot
         self.config = config or SimConfig()
         self.graph = domain_graph(gait.domain_graph)
-        if len(gait.domains) != len(self.graph):
-            raise RobustGaitError(f"a {gait.domain_graph} gait has {len(self.graph)} domains, this one "
-                                  f"{len(gait.domains)}")
+        self.horizons = step_horizons([dom.duration for dom in gait.domains], gait.domain_graph, robot.dt,
+                                      self.config)
         self.gaits = {gait.stance: gait, ("left" if gait.stance == "right" else "right"): gait.mirrored(robot)}
         m = robot.model
-        tau_end = 1.0 if self.config.switching == "time" else self.config.max_step_tau
         # per domain: physics steps per unit of phase, and the most a domain may last before it is a fall
         self.domain_steps = [dom.duration / robot.dt for dom in gait.domains]
-        # a double support ends at foot-flat or at τ = 1 at the latest: past its end its references would keep
-        # rolling the feet (the tangent continuation that helps a late touchdown)
-        self.horizons = [round((tau_end if spec.guard == "touchdown" else 1.0) * n)
-                         for spec, n in zip(self.graph.domains, self.domain_steps, strict=True)]
         self.period = gait.domains[0].duration
         self.steps_per_period = self.domain_steps[0]
         self.horizon = self.horizons[0]

@@ -10,7 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.config import PushConfig
 from robustgait.domains import other_side, step_segments
+from robustgait.recovery import OrbitBand
 from robustgait.sim.engine import StepEngine, StepInputs
 
 FloatArray = NDArray[np.float64]
@@ -39,7 +41,8 @@ Inputs = Callable[[Segment, NDArray[np.int64]], "StepInputs | None"]
 
 
 def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_steps: int, period: int,
-                    inputs: Inputs, *, first_at: int, progress: Callable[[int], None] | None = None
+                    inputs: Inputs, *, first_at: int, progress: Callable[[int], None] | None = None,
+                    sections: FloatArray | None = None
                     ) -> tuple[NDArray[np.bool_], list[str | None], NDArray[np.int64], FloatArray, int]:
     """Walk K trials from canonical section states (K, nq), (K, nv) for ``n_steps`` steps (stances alternate from
     the gait's), each domain of a step one batched :meth:`StepEngine.step` on the trials still walking
@@ -50,6 +53,8 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
     (``first_at``: the physics step of the event that ended the segment before the trials' start). Returns success
     (K,), fall reasons, the 1-based step of each fall (0 = none), the full state (qpos, qvel) at the section after
     ``period`` steps ((K, nq + nv); canonical stance; NaN if fell before) and the physics steps simulated.
+    ``sections`` (K, n_steps, nq + nv), if given, is filled with the state at the section after every step, written
+    for the canonical stance (NaN from a fall on).
     """
     robot = engine.robot
     k_all = qpos.shape[0]
@@ -90,13 +95,17 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
             offset[idx[ok]] += at
             prev = (seg_stance, domain)
             index += 1
-        if k == period - 1:
+        if k == period - 1 or sections is not None:
             ok_all = np.flatnonzero(alive)
             if ok_all.size:
                 qp, qv = qpos[ok_all], qvel[ok_all]
-                if period % 2 == 1:  # the state starts a step of the other stance: write it for the canonical one
+                if k % 2 == 0:  # the state starts a step of the other stance: write it for the canonical one
                     qp, qv = robot.mirror_state(qp, qv)
-                first[ok_all] = np.hstack([qp, qv])
+                if k == period - 1:
+                    first[ok_all] = np.hstack([qp, qv])
+                if sections is not None:
+                    sections[:, k] = np.nan
+                    sections[ok_all, k] = np.hstack([qp, qv])
         stance = other_side(stance)
         if progress is not None:
             progress(1)
@@ -132,3 +141,15 @@ def pushed_first_step(engine: StepEngine, wrench: FloatArray) -> Inputs:
         w[at >= wrench.shape[1]] = 0.0  # past the first step's window: no push
         return StepInputs(base_wrench=w)
     return push
+
+
+def orbit_band(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, push: PushConfig) -> OrbitBand | None:
+    """The neighbourhood a pushed walk must return to (:class:`robustgait.recovery.OrbitBand`), from
+    ``push.recovery_band_steps`` undisturbed steps from x* = (``qpos`` (nq,), ``qvel`` (nv,)), a section state of
+    the gait's stance (None without ``push.recovery``)."""
+    if not push.recovery:
+        return None
+    k = push.recovery_band_steps
+    sections = np.full((1, k, engine.nq + engine.nv), np.nan)
+    simulate_trials(engine, qpos[None], qvel[None], k, 1, lambda seg, idx: None, first_at=0, sections=sections)
+    return OrbitBand.of(engine.robot, (qpos, qvel), sections[0], push.recovery_radius, push.recovery_scatter)

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.config import ComfortConfig, SimConfig
-from robustgait.config.work import MAX_GIF_FRAMES, MAX_VIDEO_PHYSICS_STEPS, check_gif, check_work
+from robustgait.config.work import MAX_GIF_FRAMES, MAX_VIDEO_PHYSICS_STEPS, Work, check_gif, check_work
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import Gait
 from robustgait.io.output import atomic_output, check_output
@@ -24,7 +24,7 @@ from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.comfort import Comfort, ComfortRecorder, measure
 from robustgait.sim.controller import TrackingStats, pd_tracking
-from robustgait.sim.engine import StepEngine
+from robustgait.sim.engine import StepEngine, step_physics_steps
 from robustgait.sim.factory import make_engine
 
 
@@ -85,6 +85,23 @@ def _heading(qpos: NDArray[np.float64]) -> NDArray[np.float64]:
     return fwd / max(float(np.linalg.norm(fwd)), 1e-12)
 
 
+def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, video: str | Path | None = None) -> Work:
+    """Bound a walk of ``steps`` steps before it starts (:mod:`robustgait.config.work`): each step up to its
+    :func:`~robustgait.sim.engine.step_horizons`; with a ``video`` (its path checked first), every state is kept:
+    the absolute :data:`~robustgait.config.work.MAX_VIDEO_PHYSICS_STEPS` (and a .gif's frames,
+    :data:`~robustgait.config.work.MAX_GIF_FRAMES`)."""
+    work = Work(steps, step_physics_steps(gait, robot.dt, config))
+    if video is not None:
+        check_output(video, "video")
+        check_work(work, None, robot.dt, f"{steps} steps (sim.step_cap) with a video", MAX_VIDEO_PHYSICS_STEPS)
+        if Path(video).suffix.lower() == ".gif":
+            check_gif(work.physics_steps * robot.dt, str(video))
+    else:
+        defaults = Work(SimConfig().step_cap, step_physics_steps(gait, robot.dt, SimConfig()))
+        check_work(work, defaults, robot.dt, f"{steps} steps (sim.step_cap)")
+    return work
+
+
 def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: int | None = None,
          keep_trajectory: bool = False, video: str | Path | None = None,
          engine: StepEngine | None = None, comfort: ComfortConfig | None = None) -> WalkResult:
@@ -98,7 +115,7 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     The trajectory (every physics step's full state, (n, nstate), MuJoCo's ``mjSTATE_FULLPHYSICS`` layout,
     time continuing across steps) is kept when ``keep_trajectory`` or ``video`` (an ``.mp4`` or ``.gif`` path,
     rendered after the walk by :func:`render_video`). The work is bounded before anything runs
-    (:func:`robustgait.config.work.check_work`; a video's stricter limits, the output path checked).
+    (:func:`check_walk_work`; a video's stricter limits, the output path checked).
 
     ``comfort``: measure what a passenger feels over the steps it names (:mod:`robustgait.sim.comfort`,
     ``WalkResult.comfort``); None: not measured.
@@ -109,15 +126,9 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
         raise RobustGaitError(f"steps must be ≥ 1, got {steps}")
     if gait.initial_state is None:
         raise RobustGaitError("the gait has no initial state to start walking from")
-    longest = gait.step_duration * config.max_step_tau
+    check_walk_work(robot, gait, config, steps, video)
     if video is not None:
-        check_output(video, "video")
-        check_work(steps, longest, robot.dt, f"{steps} steps (sim.step_cap) with a video", MAX_VIDEO_PHYSICS_STEPS)
-        if Path(video).suffix.lower() == ".gif":
-            check_gif(steps * longest, str(video))
         keep_trajectory = True
-    else:
-        check_work(steps, longest, robot.dt, f"{steps} steps (sim.step_cap)")
     recorder = ComfortRecorder(comfort, robot.dt) if comfort is not None else None
     own = engine is None
     eng = engine or make_engine(robot, gait, config)

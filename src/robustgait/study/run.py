@@ -29,17 +29,21 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from tqdm import tqdm
 
-from robustgait.config import Config, RunConfig, StudyConfig, radius_name
-from robustgait.config.work import check_work
+from robustgait.certify import check_certify_work
+from robustgait.config import Config, GaitParams, RunConfig, StudyConfig, radius_name
 from robustgait.errors import RobustGaitError, input_error
+from robustgait.gait import BEZIER_DEGREE, Domain, Gait
 from robustgait.io.output import write_json
 from robustgait.io.robotfile import load_robot
 from robustgait.learn.learners import History, Learner, iteration_seed, make_learner
 from robustgait.learn.oracle import Outcome, batch_comparisons, score
 from robustgait.learn.space import ActionSpace
+from robustgait.robots import Robot
 from robustgait.robots.spec import SHIPPED_DIR
+from robustgait.sim.walk import check_walk_work
 from robustgait.study.config import StudySetup, environment_changes, load_config, save_config
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.executors import Executor, WorkerSpec, make_executor
@@ -125,7 +129,7 @@ def create_study(directory: str | Path, robot: str, config: Config | None = None
     space = setup.action_space(loaded)
     if study.batch > space.size:
         raise RobustGaitError(f"a batch of {study.batch} gaits does not fit in an action space of {space.size}")
-    check_evaluation_work(setup.config, space, loaded.dt)
+    check_evaluation_work(setup.config, loaded, space)
     d.mkdir(parents=True, exist_ok=True)
     with study_lock(d):
         store = StudyStore(storage_url(d, setup), study.study_name, space, create=True,
@@ -135,15 +139,31 @@ def create_study(directory: str | Path, robot: str, config: Config | None = None
     return d
 
 
-def check_evaluation_work(config: Config, space: ActionSpace, timestep: float) -> None:
-    """Bound one evaluation's simulation like ``walk``/``certify`` bound theirs (:func:`check_work`): the walk to
-    the step cap plus the certificate (fixed-point steps + samples + 1, twice for the stride map), each step up to
-    the longest step duration of the action space × ``max_step_tau``."""
-    cert, sim = config.certify, config.sim
-    steps = sim.step_cap + (cert.fp_max_steps + cert.samples_planned + 1) * (2 if cert.map == "stride" else 1)
-    longest = max(space.values[space.names.index("step_duration")]) if "step_duration" in space.names else 0.0
-    check_work(steps, longest * sim.max_step_tau, timestep,
-               "study: one evaluation (sim.step_cap, certify.n_samples or certify.sequential.budget)")
+def longest_gaits(robot: Robot, config: Config, space: ActionSpace) -> list[Gait]:
+    """Stand-ins for the longest-stepping gaits a study may generate on ``robot``: the action space's longest step
+    duration (or the configured one) with each rolling fraction it searches, smallest first (the longest single
+    support); their domain durations, zero outputs — all that the work checks of an evaluation look at."""
+    graph = config.generate.domains
+
+    def axis(name: str) -> tuple[float, ...]:
+        return space.values[space.names.index(name)] if name in space.names else (getattr(config.params, name),)
+
+    longest, beta = max(axis("step_duration")), np.zeros((robot.n_joints, BEZIER_DEGREE + 1))
+    return [Gait(robot.name, graph, "right", robot.spec.joints,
+                 tuple(Domain(f"domain{i}", d, beta) for i, d in enumerate(
+                     GaitParams(step_duration=longest, rolling_fraction=rho).domain_durations(graph))))
+            for rho in axis("rolling_fraction")]
+
+
+def check_evaluation_work(config: Config, robot: Robot, space: ActionSpace) -> None:
+    """Refuse, before the study starts, what one evaluation would refuse later: the work checks of its walk (to the
+    step cap) and of its certificate (:mod:`robustgait.config.work`) on each of the :func:`longest_gaits`."""
+    for gait in longest_gaits(robot, config, space):
+        try:
+            check_walk_work(robot, gait, config.sim, config.sim.step_cap)
+            check_certify_work(robot, gait, config.study_certify, config.sim)
+        except RobustGaitError as exc:
+            raise RobustGaitError(f"study: one evaluation of a {gait.step_duration:g} s gait: {exc}") from None
 
 
 def open_store(directory: Path, setup: StudySetup, space: ActionSpace) -> StudyStore:

@@ -278,7 +278,8 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None,
     robot = load_robot(setup.robot)
     for g in runnable:  # bound the work before any of it (as `robustgait validate` does)
         assert g.gait_file is not None
-        check_validate_work(robot, load_gait(d / g.gait_file, robot), cfg, sim, f"{d / g.gait_file}: ")
+        check_validate_work(robot, load_gait(d / g.gait_file, robot), cfg, sim, kinds=len(kinds), certify=certify,
+                            certifying=recertify and g.certificate_file is not None, what=f"{d / g.gait_file}: ")
     keys = {k: config_key(cfg, certify, sim, k) for k in kinds}
     files = {g.label: _files_key(d, g) for g in runnable}
     results: dict[str, dict[str, dict[str, Any]]] = {g.label: {} for g in runnable}

@@ -26,19 +26,20 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from robustgait.certify import GaitCertificate, certify_gait
-from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, SimConfig, ValidateConfig, to_dict
-from robustgait.config.work import check_work
+from robustgait.certify import GaitCertificate, certify_gait, certify_steps
+from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, PushConfig, SimConfig, ValidateConfig, to_dict
+from robustgait.config.work import Work, check_work
 from robustgait.domains import step_segments
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.poincare import FixedPoint, ReturnMap
+from robustgait.recovery import OrbitBand
 from robustgait.reduced import ReducedState
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
-from robustgait.sim.engine import StepInputs
+from robustgait.sim.engine import StepInputs, step_physics_steps
 from robustgait.sim.factory import make_engine
-from robustgait.sim.trials import Inputs, Segment, pushed_first_step, simulate_trials
+from robustgait.sim.trials import Inputs, Segment, orbit_band, pushed_first_step, simulate_trials
 from robustgait.validate import disturbances as dist
 from robustgait.validate.disturbances import SIZE_LABELS, Draws
 from robustgait.validate.stats import LogisticFit, Rate, binned_rates, logistic_fit
@@ -69,6 +70,7 @@ class CertificateRef:
     fp_min_steps: int
     fp_max_steps: int
     source: str
+    push: PushConfig | None = None  # a push certificate's pushed walk: its steps and recovery
 
     @staticmethod
     def of(gc: GaitCertificate) -> CertificateRef:
@@ -78,7 +80,8 @@ class CertificateRef:
         return CertificateRef(float(c.r_star), bool(c.attained), tuple(float(v) for v in c.x_star),
                               tuple(tuple(float(v) for v in row) for row in co.transform), cfg.space, cfg.set,
                               cfg.horizon, gc.energy, cfg.map, cfg.frame, cfg.reconstruction, cfg.fp_tol,
-                              cfg.min_steps, cfg.fp_max_steps, "computed")
+                              cfg.min_steps, cfg.fp_max_steps, "computed",
+                              cfg.push if cfg.disturbance == "push" else None)
 
     @staticmethod
     def load(path: str | Path) -> CertificateRef:
@@ -91,7 +94,8 @@ class CertificateRef:
         t = c.transform(path) or np.eye(k).tolist()
         return CertificateRef(c.r_star, c.attained, tuple(c.x_star), tuple(tuple(row) for row in t), cfg.space,
                               cfg.set, cfg.horizon, c.energy, cfg.map, cfg.frame, cfg.reconstruction, cfg.fp_tol,
-                              cfg.min_steps, cfg.fp_max_steps, str(path))
+                              cfg.min_steps, cfg.fp_max_steps, str(path),
+                              cfg.push if cfg.disturbance == "push" else None)
 
     def certify_config(self, base: CertifyConfig) -> CertifyConfig:
         """``base`` with this certificate's state, set, horizon, map, frame, reconstruction and fixed-point search."""
@@ -100,6 +104,8 @@ class CertificateRef:
         kw: dict[str, Any] = {"disturbance": "push"} if self.space == "push" else {"state": self.space,
                                                                                   "disturbance": "state"}
         kw.update(set=self.set, reconstruction=self.reconstruction)
+        if self.push is not None:
+            kw["push"] = self.push
         return replace(base, horizon=self.horizon, map=self.map, frame=self.frame, fp_tol=self.fp_tol,
                        fp_min_steps=self.fp_min_steps, fp_max_steps=self.fp_max_steps, **kw)
 
@@ -137,6 +143,10 @@ class KindResult:
     seconds: float
     energy: FloatArray | None = None  # (N,) kinetic energy the disturbance added at the first section [J]
     energy_star: float | None = None  # E* of the certificate [J] (energy states)
+    # a push certificate's own criterion at its horizon (the pushed step and push.steps more): (N,) whether each
+    # trial failed it (fell by then, or off the orbit's neighbourhood at its end), and that horizon in steps
+    horizon_failed: NDArray[np.bool_] | None = None
+    horizon: int | None = None
 
     @property
     def size_label(self) -> tuple[str, str]:
@@ -164,6 +174,8 @@ class KindResult:
             with np.errstate(invalid="ignore"):
                 low = np.isfinite(self.energy) & (self.energy <= self.energy_star)
             check["energy_below_star"] = Rate.of(int((fell & low).sum()), int(low.sum()))
+        if self.horizon_failed is not None:
+            check["inside_at_horizon"] = Rate.of(int((self.horizon_failed & self.inside).sum()), int(self.inside.sum()))
         return check
 
     def summary(self) -> dict[str, Any]:
@@ -180,6 +192,7 @@ class KindResult:
             "binned": binned_rates(self.size, self.success),
             "certificate_check": {k: v.to_dict() if isinstance(v, Rate) else v for k, v in check.items()},
             "energy": None if self.energy is None else _quartiles(self.energy), "energy_star": self.energy_star,
+            "horizon": self.horizon,
             "fall_reasons": reasons, "physics_steps": self.physics_steps, "seconds": self.seconds,
         }
 
@@ -306,6 +319,7 @@ class Validator:
         self.nominal_at = round(float(nominal.duration[0]) / robot.dt)
         self.step_length = float(np.linalg.norm(q[0, :2] - fp.qpos[:2]))
         self._physics_model: Any = None
+        self._band: OrbitBand | bool | None = False  # not computed yet
         self.seconds_setup = time.perf_counter() - t0
 
     def close(self) -> None:
@@ -370,11 +384,23 @@ class Validator:
         n = d.size.size
         fp = self.fixed_point
         n_steps = self.period + cfg.steps_after
+        ref, nq = self.certificate, self.robot.model.nq
+        horizon = 1 + ref.push.steps if ref.push is not None and kind == "push" else None
+        sections = (np.full((n, n_steps, nq + self.robot.model.nv), np.nan)
+                    if horizon is not None and horizon <= n_steps else None)
         with tqdm(total=n_steps, desc=f"validate {kind}", unit="step", disable=not self.progress, leave=False) as bar:
             ok, reasons, fall_step, first, physics = simulate_trials(
                 self.engine, np.tile(fp.qpos, (n, 1)), np.tile(fp.qvel, (n, 1)), n_steps, self.period,
-                self.inputs_for(kind, d), first_at=self.nominal_at, progress=bar.update)
-        ref, nq = self.certificate, self.robot.model.nq
+                self.inputs_for(kind, d), first_at=self.nominal_at, progress=bar.update, sections=sections)
+        horizon_failed = None
+        if sections is not None and horizon is not None:
+            # the certificate's own criterion at its horizon: fell by then, or off the orbit's neighbourhood
+            horizon_failed = (fall_step > 0) & (fall_step <= horizon)
+            band = self.band()
+            if band is not None:
+                end = sections[:, horizon - 1]
+                standing = ~horizon_failed
+                horizon_failed[standing] = ~band.inside(end[standing, :nq], end[standing, nq:])
         reached = np.isfinite(first).all(axis=1)
         energy = np.full(n, np.nan)
         x1 = np.full((n, self.reduced.dim), np.nan)
@@ -390,15 +416,38 @@ class Validator:
         return KindResult(kind=kind, size=d.size, params=d.params, success=ok, fall_reason=reasons,
                           fall_step=fall_step, x_first=x1, distance=dist_, inside=ref.inside(dist_),
                           physics_steps=physics, seconds=time.perf_counter() - t0, energy=energy,
-                          energy_star=ref.energy)
+                          energy_star=ref.energy, horizon_failed=horizon_failed,
+                          horizon=horizon if horizon_failed is not None else None)
+
+    def band(self) -> OrbitBand | None:
+        """The orbit's neighbourhood of a push certificate's recovery criterion (None without one), computed once."""
+        if self._band is False:
+            push, fp = self.certificate.push, self.fixed_point
+            self._band = orbit_band(self.engine, fp.qpos, fp.qvel, push) if push is not None else None
+        return self._band if isinstance(self._band, OrbitBand) else None
 
 
-def check_validate_work(robot: Robot, gait: Gait, config: ValidateConfig, sim: SimConfig, what: str = "") -> int:
-    """Bound one disturbance kind's work (one batch of trials, each 1 (or 2, stride map) + ``steps_after``
-    steps) before it starts (:func:`robustgait.config.work.check_work`)."""
-    return check_work(config.trials * (2 + config.steps_after), gait.step_duration * sim.max_step_tau, robot.dt,
-                      f"{what}validate.trials {config.trials} × (validate.steps_after {config.steps_after} + 1) per "
-                      "kind")
+def validate_steps(config: ValidateConfig, kinds: int, certify: CertifyConfig, graph: str, certifying: bool) -> int:
+    """The most steps a validation simulates: the certificate when it computes one (:func:`certify_steps`), or else
+    the search for the fixed point (a multi-contact gait's walk to its first heel strike, then up to
+    ``certify.fp_max_steps`` steps); the undisturbed first step; and per disturbance kind ``trials`` trials of
+    period + ``steps_after`` steps (period 2 at most: the stride map)."""
+    setup = certify_steps(certify, graph) if certifying else (0 if graph == "flat" else 1) + certify.fp_max_steps
+    return setup + 1 + kinds * config.trials * (2 + config.steps_after)
+
+
+def check_validate_work(robot: Robot, gait: Gait, config: ValidateConfig, sim: SimConfig, *, kinds: int = 1,
+                        certify: CertifyConfig | None = None, certifying: bool = False, what: str = "") -> int:
+    """Bound a validation of ``kinds`` disturbance kinds before it starts (:mod:`robustgait.config.work`):
+    :func:`validate_steps`, each step up to the gait's :func:`~robustgait.sim.engine.step_horizons`, against what
+    the default validation of as many kinds (and the default certificate, when ``certifying``) needs here."""
+    graph, cert = gait.domain_graph, certify or CertifyConfig()
+    work = Work(validate_steps(config, kinds, cert, graph, certifying), step_physics_steps(gait, robot.dt, sim))
+    defaults = Work(validate_steps(ValidateConfig(), kinds, CertifyConfig(), graph, certifying),
+                    step_physics_steps(gait, robot.dt, SimConfig()))
+    return check_work(work, defaults, robot.dt, f"{what}validate.trials {config.trials} × (validate.steps_after "
+                      f"{config.steps_after} + 2) steps × {kinds} disturbance kind{'s' if kinds > 1 else ''}"
+                      + (" + the certificate" if certifying else ""))
 
 
 def validate_gait(robot: Robot, gait: Gait, config: ValidateConfig | None = None, *,
@@ -418,7 +467,7 @@ def validate_gait(robot: Robot, gait: Gait, config: ValidateConfig | None = None
     for k in kinds:
         if k not in KINDS:
             raise RobustGaitError(f"unknown disturbance {k!r} (choose from {', '.join(KINDS)} or all)")
-    check_validate_work(robot, gait, config, sim)
+    check_validate_work(robot, gait, config, sim, kinds=len(kinds), certify=certify, certifying=certificate is None)
     t0 = time.perf_counter()
     with Validator(robot, gait, config, certify=certify, sim=sim, certificate=certificate, progress=progress) as v:
         result = ValidationResult(robot=robot.name, gait=_gait_info(gait), certificate=v.certificate,
