@@ -32,6 +32,7 @@ from robustgait.io.robotfile import load_robot
 from robustgait.learn.space import ActionSpace
 from robustgait.study.evaluate import Evaluation, certify_evaluation, generate_and_walk
 from robustgait.study.executors import Executor
+from robustgait.study.run import params_label
 
 _WORKER: dict[str, Any] = {}
 
@@ -56,16 +57,50 @@ class EvaluationCache:
         self._generator: Any = None
         self.computed = {"walk": 0, "certify": 0, "seconds_walk": 0.0, "seconds_certify": 0.0}
 
-    def index_of(self, params: dict[str, float]) -> int:
-        return self.space.index(params)
+    @staticmethod
+    def key(params: dict[str, float]) -> str:
+        """A gait's file name: its parameters (``L0.12_T0.8_W0.24_H0.06``; off-grid gaits too, such as the default)."""
+        return params_label({k: v for k, v in params.items() if k != "rolling_fraction"})
 
-    def walked(self, index: int) -> dict[str, Any] | None:
-        p = self.dir / f"{index}.walk.json"
+    def params(self, index: int) -> dict[str, float]:
+        return self.space.value(index)
+
+    def walked(self, params: dict[str, float]) -> dict[str, Any] | None:
+        p = self.dir / f"{self.key(params)}.walk.json"
         return json.loads(p.read_text()) if p.is_file() else None
 
-    def full(self, index: int) -> dict[str, Any] | None:
-        p = self.dir / f"{index}.json"
+    def full(self, params: dict[str, float]) -> dict[str, Any] | None:
+        p = self.dir / f"{self.key(params)}.json"
         return json.loads(p.read_text()) if p.is_file() else None
+
+    def import_study(self, directory: str | Path) -> int:
+        """Store the evaluations of a study run with this configuration (its database's results with its gait and
+        certificate files: what the evaluation returned); returns how many were new."""
+        from robustgait.study.config import load_config
+        from robustgait.study.run import open_store
+
+        d = Path(directory)
+        setup = load_config(d)
+        if cache_key(setup.robot, setup.config) != self.dir.name:
+            raise ValueError(f"{d} was evaluated with another configuration")
+        store = open_store(d, setup, setup.action_space())
+        try:
+            records = [r for r in store.records() if r.state == "COMPLETE" and r.reused_from is None]
+        finally:
+            store.close()
+        new = 0
+        for r in records:
+            if self.full(r.params) is not None or r.result is None:
+                continue
+            res = dict(r.result)
+            res["gait"] = json.loads((d / res["gait_file"]).read_text()) if res.get("gait_file") else None
+            res["certificate"] = (json.loads((d / res["certificate_file"]).read_text())
+                                  if res.get("certificate_file") else None)
+            for k in ("gait_file", "certificate_file", "worker"):
+                res.pop(k, None)
+            write_json(self.dir / f"{self.key(r.params)}.json", res)
+            new += 1
+        return new
 
     def generator(self) -> Any:
         if self._generator is None:
@@ -74,27 +109,26 @@ class EvaluationCache:
             self._generator = GaitGenerator(self.robot, self.config.generate)
         return self._generator
 
-    def walk_stage(self, index: int) -> dict[str, Any]:
-        got = self.walked(index)
+    def walk_stage(self, params: dict[str, float]) -> dict[str, Any]:
+        got = self.walked(params)
         if got is None:
             t0 = time.perf_counter()
-            ev = generate_and_walk(self.robot, GaitParams(**self.space.value(index)), self.config,
-                                   generator=self.generator())
+            ev = generate_and_walk(self.robot, GaitParams(**params), self.config, generator=self.generator())
             got = ev.to_dict()
-            write_json(self.dir / f"{index}.walk.json", got)
+            write_json(self.dir / f"{self.key(params)}.walk.json", got)
             self.computed["walk"] += 1
             self.computed["seconds_walk"] += time.perf_counter() - t0
         return got
 
-    def evaluation(self, index: int) -> dict[str, Any]:
-        """The whole evaluation of grid gait ``index`` (computed and stored when missing)."""
-        got = self.full(index)
+    def evaluation(self, params: dict[str, float]) -> dict[str, Any]:
+        """The whole evaluation of the gait of ``params`` (computed and stored when missing)."""
+        got = self.full(params)
         if got is None:
-            first = self.walk_stage(index)
+            first = self.walk_stage(params)
             t0 = time.perf_counter()
             ev = certify_evaluation(self.robot, Evaluation.from_dict(first), self.config)
             got = ev.to_dict()
-            write_json(self.dir / f"{index}.json", got)
+            write_json(self.dir / f"{self.key(params)}.json", got)
             self.computed["certify"] += 1
             self.computed["seconds_certify"] += time.perf_counter() - t0
         return got
@@ -115,7 +149,7 @@ class CachedExecutor(Executor):
 
     def next_result(self) -> tuple[int, dict[str, Any]]:
         key, params = self.queue.popleft()
-        out = dict(self.cache.evaluation(self.cache.index_of(params)))
+        out = dict(self.cache.evaluation(params))
         out["worker"] = {"pid": os.getpid(), "host": os.uname().nodename, "cache": str(self.cache.dir)}
         return key, out
 
@@ -131,14 +165,15 @@ def _init(root: str, robot: str, config: dict[str, Any]) -> None:
 
 def _walk_one(index: int) -> tuple[int, float]:
     t0 = time.perf_counter()
-    _WORKER["cache"].walk_stage(index)
+    cache = _WORKER["cache"]
+    cache.walk_stage(cache.params(index))
     return index, time.perf_counter() - t0
 
 
 def precompute_walks(root: str | Path, robot: str, config: Config, workers: int = 2) -> dict[str, float]:
     """The first stage of every grid gait not cached yet, on ``workers`` processes; returns counts and seconds."""
     cache = EvaluationCache(root, robot, config)
-    todo = [i for i in range(cache.space.size) if cache.walked(i) is None]
+    todo = [i for i in range(cache.space.size) if cache.walked(cache.params(i)) is None]
     t0 = time.perf_counter()
     cpu = 0.0
     ctx = multiprocessing.get_context("spawn")
