@@ -17,15 +17,14 @@ from pathlib import Path
 
 import pytest
 
-from robustgait.config import Config, PersonConfig, StudyConfig
+from robustgait.config import Config, PersonConfig, StudyConfig, WebConfig
 from robustgait.errors import RobustGaitError
+from robustgait.study.config import load_config
 from robustgait.study.person import FLOOR_ATTR, pending_record, record_answer
 from robustgait.study.ranking import requirements
 from robustgait.study.run import completed_batches, create_study, open_store
-from robustgait.study.config import load_config
 from robustgait.web.answers import parse_answer
 from robustgait.web.server import PageServer, PersonPage
-from robustgait.config import WebConfig
 
 REPO = Path(__file__).resolve().parents[1]
 COMFORT = {"speed": 0.2, "cadence": 86.0, "pelvis_acc_vertical_rms": 1.4, "pelvis_acc_lateral_rms": 1.3,
@@ -189,7 +188,7 @@ def test_a_stale_batch_is_refused(served):
 
 
 def test_not_json_is_refused(served):
-    page, server = served
+    _page, server = served
     req = urllib.request.Request(server.url + "api/answer", data=b"{ranking", method="POST")
     with pytest.raises(urllib.error.HTTPError) as exc:
         urllib.request.urlopen(req, timeout=10)

@@ -28,8 +28,8 @@ TINY = ["--iterations", "2", "--batch", "2", "--method", "uniform", "--samples",
         "--override", "comfort.skip_steps=1", "--override", "comfort.steps=3", "--override", "web.linger=2",
         "--floor", "0", "--port", "0", "--workers", "1", "--quiet"]
 
-pytestmark = [pytest.mark.slow,
-              pytest.mark.skipif(not Path(CHROMIUM).is_file(), reason="no /usr/bin/chromium (apt-get install chromium)")]
+pytestmark = [pytest.mark.slow, pytest.mark.skipif(not Path(CHROMIUM).is_file(),
+                                                   reason="no /usr/bin/chromium (apt-get install chromium)")]
 
 
 def start(*args: str) -> tuple[subprocess.Popen, str]:  # type: ignore[type-arg]
