@@ -3,7 +3,7 @@ seed 0), unconstrained and with ``--require speed>=0.2``; per study its wall tim
 speed and comfort figures, how many evaluated gaits met the requirement, and its Pareto front (J*, speed, vertical
 pelvis acceleration RMS). Studies in ``--out`` (resumed when they exist).
 
-    python benchmarks/bench_require.py [--out DIR] [--require speed>=0.2] [--workers 2]
+    python benchmarks/bench_require.py [--out DIR] [--require speed>=0.2] [--workers 2] [--only unconstrained|required]
 """
 
 from __future__ import annotations
@@ -47,9 +47,11 @@ def main() -> None:
     ap.add_argument("--out", default="benchmarks/data/bench_require")
     ap.add_argument("--require", default="speed>=0.2")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--only", choices=("unconstrained", "required"), default=None, help="run one of the two studies")
     args = ap.parse_args()
     out = Path(args.out)
-    res = [one(out / "unconstrained", (), args.workers), one(out / "required", (args.require,), args.workers)]
+    studies = {"unconstrained": (), "required": (args.require,)}
+    res = [one(out / name, req, args.workers) for name, req in studies.items() if args.only in (None, name)]
     print(json.dumps(res, indent=1))
 
 

@@ -238,3 +238,22 @@ def test_serve_refuses_a_study_that_is_not_ranked_by_a_person(tmp_path):
     create_study(d, "exo", Config(study=StudyConfig(iterations=1, batch=2)))
     with pytest.raises(RobustGaitError, match="only a study with --metric person"):
         PersonPage(d)
+
+
+def test_status_and_report_show_the_answers(served, capsys):
+    from robustgait.cli.study import print_summary
+    from robustgait.config import ReportConfig
+    from robustgait.report.study import write_study_report
+    from robustgait.study.status import study_status
+
+    page, server = served
+    print_summary(page.directory)
+    assert "person: robustness floor J* ≥ 10 N s; 0 batches answered; batch 1 waits for an answer" in \
+        capsys.readouterr().out
+    assert call(server.url + "api/answer", {"iteration": 0, "ranking": [[1], [0]], "labels": {"0": "good"}})[0] == 200
+    st = study_status(page.directory)
+    assert st["person"]["pending"] is None and st["person"]["floor"]["value"] == 10.0
+    assert [a["ranks"] for a in st["person"]["answers"]] == [[1, 0, None]]
+    html = write_study_report(page.directory, ReportConfig(video=False)).read_text()
+    assert "The person&#x27;s answers" in html or "The person's answers" in html
+    assert "<td>1</td><td>B (0.1, 1.1, 0.22, 0.04) ≻ A (0.1, 0.6, 0.22, 0.1)</td><td>A: good</td><td>1</td>" in html

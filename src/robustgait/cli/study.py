@@ -61,6 +61,13 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
         params = ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
         print(f"best evaluated gait (trial {obs['trial']}; the best gait above is the learner's highest posterior "
               f"mean): {params}; {_name(st)} = {obs['r_star']:.4g} {st['unit']}, {obs['steps_taken']} steps")
+    person = st.get("person")
+    if person:  # docs/person.md
+        floor = person["floor"]
+        shown = "" if floor is None else f"robustness floor {_name(st)} ≥ {floor['value']:.4g} {st['unit']}; "
+        waiting = "" if person["pending"] is None else f"; batch {person['pending'] + 1} waits for an answer " \
+            f"(robustgait study serve {directory})"
+        print(f"  person: {shown}{len(person['answers'])} batches answered{waiting}")
     if st["environment_changes"]:
         print("created with other library versions (" + ", ".join(st["environment_changes"]) + "): the learner "
               "may propose other gaits than it did, and `study resume` refuses a proposal that differs")
