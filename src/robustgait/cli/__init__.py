@@ -1,5 +1,6 @@
 """The ``robustgait`` command: it parses arguments and calls the API, nothing else. One module per verb group:
-:mod:`~robustgait.cli.info` (robots, config show), :mod:`~robustgait.cli.walk` (walk),
+:mod:`~robustgait.cli.info` (robots, config show), :mod:`~robustgait.cli.robot` (robot init / check),
+:mod:`~robustgait.cli.walk` (walk),
 :mod:`~robustgait.cli.certify` (certify, barrier-eval), :mod:`~robustgait.cli.gait` (gait convert / generate /
 tiles), :mod:`~robustgait.cli.validate` (validate), :mod:`~robustgait.cli.study` (study …, demo). Every option's
 default, choices, limits and help come from the configuration (:mod:`robustgait.cli.options`).
@@ -25,12 +26,12 @@ class Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from robustgait.cli import certify, gait, info, study, validate, walk
+    from robustgait.cli import certify, gait, info, robot, study, validate, walk
 
     p = Parser(prog="robustgait", description="Synthesize and certify robust walking gaits. Every option is a "
                "field of the configuration: `robustgait config show` prints it, --config FILE.toml reads it.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (info, walk, certify, gait, validate, study):
+    for module in (info, robot, walk, certify, gait, validate, study):
         module.add_parsers(sub)
     return p
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -38,15 +39,6 @@ def serve(directory: str, run: RunConfig, config: Config, args: argparse.Namespa
     return True
 
 
-def _study_serve(args: argparse.Namespace) -> int:
-    from robustgait.cli.study import print_summary
-
-    if not serve(args.dir, config_from(args).run, config_from(args), args):
-        return 130
-    print_summary(args.dir)
-    return 0
-
-
 def _study_pareto(args: argparse.Namespace) -> int:
     from robustgait.study.pareto import study_pareto
 
@@ -65,9 +57,10 @@ def _study_pareto(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_parsers(ssub: argparse._SubParsersAction[argparse.ArgumentParser], run_flags: FlagTable) -> None:
+def add_parsers(ssub: argparse._SubParsersAction[argparse.ArgumentParser], run_flags: FlagTable,
+                study_serve: Callable[[argparse.Namespace], int]) -> None:
     sv = command(ssub, "serve", "serve the page of a person study (--metric person) and run it: each batch waits for "
-                 "the person's ranking", _study_serve, {**run_flags, **WEB})
+                 "the person's ranking", study_serve, {**run_flags, **WEB})
     sv.add_argument("dir", help="study directory")
     sv.add_argument("--quiet", action="store_true", help="no progress bar")
     sv.add_argument("--verbose", action="store_true", help="print IPOPT's iteration log of every gait")

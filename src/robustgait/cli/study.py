@@ -122,6 +122,16 @@ def _study_resume(args: argparse.Namespace) -> int:
     return 0
 
 
+def _study_serve(args: argparse.Namespace) -> int:
+    from robustgait.cli.person import serve
+
+    config = config_from(args)
+    if not serve(args.dir, config.run, config, args):
+        return 130
+    print_summary(args.dir)
+    return 0
+
+
 def _study_status(args: argparse.Namespace) -> int:
     from robustgait.study.status import study_status
 
@@ -281,7 +291,7 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     va.add_argument("dir", help="study directory")
     va.add_argument("--json", action="store_true", help="print one JSON object: the summary of each kind")
     va.add_argument("--quiet", action="store_true", help="no progress bar")
-    person.add_parsers(ssub, RUN)
+    person.add_parsers(ssub, RUN, _study_serve)
 
     dm = command(sub, "demo", "the main job on shipped defaults: a small study of push robustness (J*) on exo + report",
                  _demo, {"--workers": "run.workers"})

@@ -20,6 +20,7 @@ web         :class:`WebConfig`      the page of a person study (where: not saved
 run         :class:`RunConfig`      study run / resume, demo (how, not what: not saved)
 compare     :class:`CompareConfig`  study compare
 report      :class:`ReportConfig`   study report, gait tiles
+robot       :class:`RobotConfig`    robot init, robot check (with ``scale`` and ``check``)
 =========== ======================= =============================================================
 """
 
@@ -79,6 +80,7 @@ from robustgait.config.gait import (
     relative_generation_defaults,
 )
 from robustgait.config.person import PersonConfig, SimulatedPersonConfig, WebConfig, parse_requirement
+from robustgait.config.robot import Plan, RobotCheckConfig, RobotConfig, ScaleRules
 from robustgait.config.sim import Controller, SimConfig, Switching
 from robustgait.config.study import (
     PERSON_METRICS,
@@ -111,6 +113,7 @@ class Config:
     run: RunConfig = dataclasses.field(default_factory=RunConfig)
     compare: CompareConfig = dataclasses.field(default_factory=CompareConfig)
     report: ReportConfig = dataclasses.field(default_factory=ReportConfig)
+    robot: RobotConfig = dataclasses.field(default_factory=RobotConfig)
 
     def __post_init__(self) -> None:
         if self.study.metric == "push" and self.certify.chooses_a_state:
@@ -146,6 +149,8 @@ class Config:
             "run.workers": f"not set: min(cores, 2) = {default_workers()} here",
             "run.address": "not set: start a local Ray",
             "compare.samples": "not set: study A's",
+            "robot.name": "not set: the model's name, lower case",
+            "robot.keyframe": "not set: the model's first keyframe (none: every joint at 0 clipped to its range)",
         }
 
     def show(self, header: str = "") -> str:
@@ -250,12 +255,16 @@ __all__ = [
     "Method",
     "Metric",
     "PersonConfig",
+    "Plan",
     "PreferenceModelConfig",
     "PushConfig",
     "Reconstruction",
     "ReportConfig",
+    "RobotCheckConfig",
+    "RobotConfig",
     "RobotScale",
     "RunConfig",
+    "ScaleRules",
     "SequentialConfig",
     "SimConfig",
     "SimulatedPersonConfig",

@@ -49,6 +49,7 @@ from numpy.typing import NDArray
 
 from robustgait.bezier import bernstein_basis, bezier_derivative_coeffs
 from robustgait.config import GenerationConfig
+from robustgait.config.gait import PELVIS_RATE_FROUDE
 from robustgait.domains import Contact, domain_graph, other_side
 from robustgait.dynamics import Dynamics, foot_frame, impact_residual
 from robustgait.errors import RobustGaitError
@@ -229,9 +230,15 @@ def impulse_rows(contacts: tuple[Contact, ...], imp: cs.SX, mu: float) -> cs.SX:
 
 
 def gait_quality(robot: Robot) -> GaitQuality:
-    """The robot spec's gait-quality bounds, with a joint-speed bound of 10 rad/s per joint when it sets none."""
+    """The robot spec's gait-quality bounds, with a joint-speed bound of 10 rad/s per joint and a pelvis rate bound of
+    :data:`~robustgait.config.gait.PELVIS_RATE_FROUDE` √(g / l) when it sets none."""
     q = robot.spec.gait_quality
-    return q if q.joint_velocity else replace(q, joint_velocity=(10.0,) * robot.n_joints)
+    if not q.joint_velocity:
+        q = replace(q, joint_velocity=(10.0,) * robot.n_joints)
+    if q.pelvis_angular_velocity is None:
+        s = robot.scale
+        q = replace(q, pelvis_angular_velocity=PELVIS_RATE_FROUDE * math.sqrt(s.gravity / s.leg_length))
+    return q
 
 
 class GaitProblem:
@@ -474,7 +481,9 @@ class GaitProblem:
                 z = node["p"].start + 2
                 lo[z], hi[z] = q.pelvis_height
                 w = slice(node["vb"].start + 3, node["vb"].stop)
-                lo[w], hi[w] = -q.pelvis_angular_velocity, q.pelvis_angular_velocity
+                rate = q.pelvis_angular_velocity
+                assert rate is not None  # gait_quality() sets it
+                lo[w], hi[w] = -rate, rate
                 a = slice(node["ab"].start, node["ab"].start + 3)
                 lo[a], hi[a] = -q.pelvis_acceleration, q.pelvis_acceleration
                 lo[node["sd"]], hi[node["sd"]] = -jv, jv

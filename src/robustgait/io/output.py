@@ -26,7 +26,7 @@ from typing import Any, Literal
 
 from robustgait.errors import RobustGaitError, input_error
 
-OutputKind = Literal["json", "gait", "csv", "plot", "video", "html"]
+OutputKind = Literal["json", "gait", "csv", "plot", "video", "html", "toml"]
 FORMATS: dict[str, tuple[str, ...]] = {
     "json": (".json",),
     "gait": (".json", ".yaml", ".yml"),
@@ -34,9 +34,10 @@ FORMATS: dict[str, tuple[str, ...]] = {
     "plot": (".png", ".pdf", ".svg"),
     "video": (".mp4", ".gif"),
     "html": (".html",),
+    "toml": (".toml",),
 }
 _LABELS = {"json": "JSON output", "gait": "gait file", "csv": "CSV output", "plot": "plot", "video": "video",
-           "html": "HTML report"}
+           "html": "HTML report", "toml": "spec TOML"}
 FORBIDDEN_ROOTS = (Path("/proc"), Path("/sys"), Path("/dev"))
 _TMP_PREFIX = ".robustgait-"
 

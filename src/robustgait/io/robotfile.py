@@ -107,7 +107,7 @@ class GaitQualityTable:
     pelvis_yaw: QualityAngle = GaitQuality.pelvis_yaw
     pelvis_pitch: Annotated[tuple[BandEnd, BandEnd], Doc("[low, high]")] = GaitQuality.pelvis_pitch
     pelvis_height: Annotated[tuple[HeightBandEnd, HeightBandEnd], Doc("[low, high]")] = GaitQuality.pelvis_height
-    pelvis_angular_velocity: Annotated[Float, L.QUALITY_ANGULAR_VELOCITY] = GaitQuality.pelvis_angular_velocity
+    pelvis_angular_velocity: Annotated[Float, L.QUALITY_ANGULAR_VELOCITY] | None = None
     swing_tilt: QualityAngle = GaitQuality.swing_tilt
     swing_yaw: QualityAngle = GaitQuality.swing_yaw
     swing_toe_down_until: Annotated[Float, Doc(unit="phase", ge=0.0, le=1.0)] = GaitQuality.swing_toe_down_until

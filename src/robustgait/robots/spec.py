@@ -58,7 +58,9 @@ class GaitQuality:
 
     pelvis_roll, pelvis_yaw [rad]: |φ|, |ψ| ≤ bound. pelvis_pitch [rad]: (low, high) band.
     pelvis_height [m]: (low, high) band of the base origin above the stance sole.
-    pelvis_angular_velocity [rad/s]: each component of the base's angular velocity (world axes) ≤ bound.
+    pelvis_angular_velocity [rad/s]: each component of the base's angular velocity (world axes) ≤ bound; None (not
+    in the spec): relative to the robot, :data:`robustgait.config.gait.PELVIS_RATE_FROUDE` √(g / l) (1.5 rad/s on a
+    leg of 0.92 m like exo's; larger on a smaller robot, whose motions are faster).
     pelvis_acceleration [m/s²]: each component of the pelvis origin's linear acceleration ≤ bound (what the
     passenger feels; unbounded by default).
     swing_tilt [rad]: swing sole roll and pitch ≤ bound (kept nearly parallel to the ground).
@@ -73,7 +75,7 @@ class GaitQuality:
     pelvis_yaw: float = 0.1
     pelvis_pitch: tuple[float, float] = (-0.1, 0.2)
     pelvis_height: tuple[float, float] = (0.0, math.inf)
-    pelvis_angular_velocity: float = 1.5
+    pelvis_angular_velocity: float | None = None
     pelvis_acceleration: float = math.inf
     swing_tilt: float = 0.15
     swing_yaw: float = 0.15

@@ -1,0 +1,121 @@
+"""Options of robot inspection (:mod:`robustgait.inspection`): how ``robot init`` reads a model and makes its gains,
+the constants of the rules that scale a spec's gait values with the robot (leg length l, standing height h, the
+model's gravity g), and the thresholds of ``robot check``. (The generation options that scale with the robot —
+normal forces, margins — have their rules in :func:`robustgait.config.relative_generation_defaults`.)
+
+The scaling constants are calibrated on the shipped exo (l = 0.93 m, h = 0.92 m, 126 kg), so that the rules give
+back its hand-written spec; ``docs/robots.md`` compares what they give for exo and Atalante with their specs."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Annotated, Literal
+
+from robustgait.config.base import Doc, FieldProblem, Float, Int, Str, config
+
+Plan = Literal["legs", "all"]
+Factor = Annotated[Float, Doc(gt=0.0, le=100.0)]
+Fraction = Annotated[Float, Doc(gt=0.0, le=1.0)]
+GridPoints = Annotated[Int, Doc(ge=1, le=20)]
+AxisRule = Annotated[tuple[Factor, Factor, GridPoints], Doc(
+    "[low, high] as multiples of the default, and the number of grid steps between them")]
+
+
+@config
+class ScaleRules:
+    """The constants of the rules that scale a written spec with the robot (:mod:`robustgait.inspection.scale`)."""
+
+    step_length: Annotated[Float, Doc("default step length ÷ leg length", gt=0.0, le=2.0)] = 0.16
+    step_duration: Annotated[Float, Doc("default flat-foot step duration ÷ √(l/g)", gt=0.0, le=20.0)] = 2.3
+    step_duration_multicontact: Annotated[Float, Doc("default multi-contact step duration ÷ √(l/g)", gt=0.0,
+                                                     le=20.0)] = 2.9
+    step_height: Annotated[Float, Doc("default swing-sole clearance ÷ leg length", gt=0.0, le=1.0)] = 0.075
+    step_width_gap: Annotated[Float, Doc("least step width: sole width + this multiple of the feet's clearance "
+                                         "generate.foot_gap (the default step width is the hip spacing, at least "
+                                         "this)", ge=0.0, le=10.0)] = 2.0
+    action_step_length: AxisRule = (0.67, 1.47, 6)
+    action_step_duration: AxisRule = (0.86, 1.57, 5)
+    action_step_width: AxisRule = (0.88, 1.2, 4)
+    action_step_height: AxisRule = (0.57, 1.43, 3)
+    multicontact_step_length: AxisRule = (0.67, 1.33, 5)
+    multicontact_step_duration: AxisRule = (0.89, 1.22, 3)
+    multicontact_step_width: AxisRule = (0.88, 1.12, 3)
+    multicontact_step_height: AxisRule = (0.57, 1.43, 3)
+    rolling_fraction: Annotated[tuple[Fraction, Fraction, Fraction], Doc(
+        "multi-contact action space of the rolling fraction: [low, high, step]")] = (0.15, 0.25, 0.05)
+    angular_velocity: Annotated[Float, Doc("pelvis angular velocity bound ÷ √(g/l)", gt=0.0, le=10.0)] = 0.15
+    joint_velocity: Annotated[Float, Doc("joint velocity bound ÷ √(g/l)", gt=0.0, le=100.0)] = 1.23
+    pelvis_height: Annotated[tuple[Factor, Factor], Doc(
+        "pelvis height band above the stance sole ÷ the standing height")] = (0.87, 1.03)
+    fall_height: Annotated[Float, Doc("fall when the base is lower than this fraction of the standing height",
+                                      gt=0.0, le=1.0)] = 0.65
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, tuple) and len(v) >= 2 and v[0] >= v[1]:
+                raise FieldProblem(f.name, f"must be [low, high, ...] with low < high, got {list(v)}")
+
+
+@config
+class RobotCheckConfig:
+    """Thresholds of ``robot check`` (:mod:`robustgait.inspection.check`): a check fails beyond them."""
+
+    stance_stiffness: Annotated[Float, Doc("least ratio of a stance-chain servo's kp to gravity's tipping stiffness "
+                                           "about its joint, on one foot", ge=1.0, le=100.0)] = 2.0
+    stand_time: Annotated[Float, Doc("how long the posture stands under its servos", unit="s", gt=0.0,
+                                     le=60.0)] = 2.0
+    stand_drop: Annotated[Float, Doc("largest drop of the base while standing ÷ the standing height", gt=0.0,
+                                     le=1.0)] = 0.05
+    stand_tilt: Annotated[Float, Doc("largest tilt of the base from vertical while standing", unit="rad", gt=0.0,
+                                     le=1.5)] = 0.1
+    stand_slip: Annotated[Float, Doc("largest horizontal slide of a sole while standing ÷ the sole's length",
+                                     gt=0.0, le=1.0)] = 0.1
+    sole_tilt: Annotated[Float, Doc("largest angle between a sole's normal and vertical in the posture", unit="rad",
+                                    gt=0.0, le=1.5)] = 0.035
+    sole_gap: Annotated[Float, Doc("largest height difference of the two soles in the posture", unit="m", ge=0.0,
+                                   le=0.1)] = 0.002
+    track_amplitude: Annotated[Float, Doc("amplitude of the test sinusoid of every planned joint (robot hanging)",
+                                          unit="rad", gt=0.0, le=1.0)] = 0.1
+    track_frequency: Annotated[Float, Doc("frequency of the test sinusoid", unit="Hz", gt=0.0, le=50.0)] = 1.5
+    track_time: Annotated[Float, Doc("duration of the tracking test (the first period is not scored)", unit="s",
+                                     gt=0.0, le=60.0)] = 3.0
+    track_rms: Annotated[Float, Doc("largest tracking error RMS of a joint ÷ the amplitude", gt=0.0, le=1.0)] = 0.2
+    track_saturation: Annotated[Float, Doc("largest fraction of a joint's physics steps at its torque limit",
+                                           gt=0.0, le=1.0)] = 0.05
+    torque_margin: Annotated[Float, Doc("largest static torque ÷ torque limit that holds the posture (double "
+                                        "support)", gt=0.0, le=1.0)] = 0.5
+
+
+@config
+class RobotConfig:
+    """How ``robot init`` makes a spec from a model (docs/robots.md, "Your robot"): which joints the gait plans,
+    the standing posture, PD gains from each joint's reflected inertia, tolerances of the discovery."""
+
+    name: Annotated[Str | None, Doc("the written spec's name; not set: the model's name, lower case")] = None
+    plan: Annotated[Plan, Doc("joints the gait plans: legs (the others are held at the posture) or all")] = "legs"
+    keyframe: Annotated[Str | None, Doc("the model's keyframe of the standing posture; not set: its first (none: "
+                                        "every joint at 0 clipped to its range)")] = None
+    bandwidth: Annotated[Float, Doc("servo bandwidth f: kp = I_stance (2π f)² before the torque cap", unit="Hz",
+                                    gt=0.0, le=100.0)] = 5.0
+    damping_ratio: Annotated[Float, Doc("damping ratio ζ of a servo on its swing inertia: kd = 2 ζ √(kp I_swing)",
+                                        gt=0.0, le=10.0)] = 1.0
+    tracking_error: Annotated[Float, Doc("kp ≤ torque limit ÷ this error: a larger error saturates anyway",
+                                         unit="rad", gt=0.0, le=1.0)] = 0.02
+    torque_limit_factor: Annotated[Float, Doc("a joint without a torque limit in the model gets this multiple of "
+                                              "the largest static torque it holds (on one foot, the weight at a "
+                                              "sole's corner, its subtree's weight × COM distance)", ge=1.0,
+                                              le=100.0)] = 2.0
+    foot_level: Annotated[Float, Doc("the two feet's lowest points agree within this fraction of the standing "
+                                        "height (else one leg)", gt=0.0, le=1.0)] = 0.1
+    sole_tolerance: Annotated[Float, Doc("a foot's collision geoms within this height of its lowest point form the "
+                                         "sole", unit="m", gt=0.0, le=0.05)] = 0.005
+    mirror_tolerance: Annotated[Float, Doc("largest mirror residual: position error of a body", unit="m", gt=0.0,
+                                           le=0.1)] = 1e-3
+    mirror_angle_tolerance: Annotated[Float, Doc("largest mirror residual: orientation error of a body", unit="rad",
+                                                 gt=0.0, le=0.5)] = 1e-3
+    mirror_samples: Annotated[Int, Doc("random configurations of the mirror's forward-kinematics check", ge=1,
+                                       le=10_000)] = 20
+    seed: Annotated[Int, Doc("seed of the mirror check's configurations", ge=0, le=2**63 - 1)] = 0
+    scale: ScaleRules = dataclasses.field(default_factory=ScaleRules)
+    check: RobotCheckConfig = dataclasses.field(default_factory=RobotCheckConfig)

@@ -1,0 +1,225 @@
+"""A spec drafted from a robot's model (``robustgait robot init``): discovery, mirror, posture, torque limits,
+gains and scaled values, gathered in a :class:`Draft` that :mod:`.writer` renders as a commented TOML.
+
+Every refusal is a one-line :class:`~robustgait.errors.RobustGaitError` raised before anything is written: no
+free joint (a URDF gets one), one leg, no sole, a sole that is not a box or a set of spheres/capsules/boxes, a
+mirror that does not reflect the model, a leg whose joints' names say the other side.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from robustgait.config import RobotConfig
+from robustgait.errors import input_error
+from robustgait.inspection.discover import (
+    SIDES,
+    Floor,
+    Legs,
+    TorqueLimit,
+    collides,
+    find_floor,
+    find_legs,
+    footprint_points,
+    torque_limits,
+)
+from robustgait.inspection.gains import (
+    STABLE_RADIUS,
+    JointLoad,
+    PDGains,
+    coupled_radius,
+    estimated_torque_limits,
+    joint_loads,
+    mass_matrix,
+    pd_gains,
+)
+from robustgait.inspection.mirror import Mirror, Residual, find_mirror, fk_residual, name_partner
+from robustgait.inspection.model import RobotModel, clip_to_range, open_model
+from robustgait.inspection.scale import RobotSize, Scaled, scale
+
+INTEGRATOR_NAMES = {int(mujoco.mjtIntegrator.mjINT_EULER): "euler",
+                    int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST): "implicitfast",
+                    int(mujoco.mjtIntegrator.mjINT_IMPLICIT): "implicit", int(mujoco.mjtIntegrator.mjINT_RK4): "rk4"}
+
+
+@dataclass
+class Draft:
+    """Everything a written spec says (see :func:`draft_spec`). ``planned``: the joints the gait plans, in output
+    order (the left leg's from the branch down, then the right leg's, then — ``--plan all`` — the others in model
+    order); ``held``: the others. ``angles``: every joint's posture angle, made left/right symmetric
+    (``asymmetry``: the largest change that took [rad]). ``torque``: each joint's limit and its source (estimated
+    where the model has none). ``height``: the base's height above the floor standing in the posture [m].
+    ``radius``: the spectral radius of one physics step of all the servos together (base held; < 1: they
+    contract)."""
+
+    robot: RobotModel
+    config: RobotConfig
+    name: str
+    legs: Legs
+    floor: Floor
+    mirror: Mirror
+    residual: Residual
+    planned: tuple[int, ...]
+    held: tuple[int, ...]
+    angles: dict[int, float]
+    asymmetry: float
+    torque: dict[int, TorqueLimit]
+    loads: dict[int, JointLoad]
+    gains: dict[int, PDGains]
+    size: RobotSize
+    scaled: Scaled
+    timestep: float
+    integrator: str
+    radius: float
+    height: float
+    notes: list[str] = field(default_factory=list)
+
+
+def spec_name(robot: RobotModel) -> str:
+    """The spec's default name: the model's name (else its file's), lower case, spaces as underscores."""
+    text = str(robot.mjspec.modelname or "") or robot.path.stem
+    return "_".join(text.lower().split()) or "robot"
+
+
+def _check_sides(robot: RobotModel, legs: Legs, mirror: Mirror) -> None:
+    """Each leg joint's partner is in the other leg, and no leg joint's name says the other side."""
+    names = [robot.joint_name(j) for j in robot.joints]
+    for side, other in zip(SIDES, reversed(SIDES), strict=True):
+        for j in legs[side].joints:
+            if mirror.partner[j] not in legs[other].joints:
+                raise input_error(robot.path, f"the mirror does not reflect the model: the {side} leg's joint "
+                                  f"'{robot.joint_name(j)}' maps to '{robot.joint_name(mirror.partner[j])}', not a "
+                                  f"joint of the {other} leg")
+            said = name_partner(robot.joint_name(j), names)
+            if said is not None and said[1] != side:
+                raise input_error(robot.path, f"joint '{robot.joint_name(j)}' is named for the {said[1]} side but its "
+                                  f"leg stands at y {'>' if side == 'left' else '<'} 0 in the base frame of "
+                                  f"'{robot.base_name}' (left is +y): is the base's x axis forward?")
+
+
+def _floor_collides(robot: RobotModel, floor: Floor, legs: Legs) -> None:
+    """Refuse a floor plane that no sole geom can touch (MuJoCo's contype/conaffinity filter)."""
+    if floor.add:
+        return
+    m = robot.model
+    g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, floor.name) if floor.name else next(
+        g for g in robot.body_geoms(0) if int(m.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_PLANE))
+    for side in SIDES:
+        if not any(collides(m, g, s) for s in legs[side].sole.geoms):
+            raise input_error(robot.path, f"the floor '{floor.name or 'unnamed plane'}' does not collide with the "
+                              f"{side} sole's geoms (contype/conaffinity): the robot would fall through it")
+
+
+def symmetric_angles(robot: RobotModel, mirror: Mirror) -> tuple[dict[int, float], float]:
+    """The posture made left/right symmetric — a_j = (q_j + s_j q_partner) / 2, clipped to the joint's range — and
+    the largest change [rad] (a keyframe of a walking robot is usually symmetric: 0)."""
+    q = robot.angles
+    out = {j: clip_to_range(robot.model, j, (q[j] + mirror.sign[j] * q[mirror.partner[j]]) / 2) for j in q}
+    return out, max((abs(out[j] - q[j]) for j in q), default=0.0)
+
+
+def coupled_gains(robot: RobotModel, qpos: NDArray[np.float64], gains: dict[int, PDGains], dt: float,
+                  integrator: str) -> tuple[dict[int, PDGains], float]:
+    """The gains with every servo acting together on the joint-space mass matrix at ``qpos`` (base held):
+    all lowered by the same factor until that system contracts (:func:`coupled_radius`); and its radius."""
+    m = robot.model
+    dofs = [int(m.jnt_dofadr[j]) for j in robot.joints]
+    _, full = mass_matrix(robot, qpos)
+    mass = full[np.ix_(dofs, dofs)]
+    kp = np.array([gains[j].kp for j in robot.joints])
+    kd = np.array([gains[j].kd for j in robot.joints])
+    factor = 1.0
+    radius = coupled_radius(mass, kp, kd, dt, integrator)
+    for _ in range(200):
+        if radius < STABLE_RADIUS:
+            break
+        factor *= 0.8
+        radius = coupled_radius(mass, factor * kp, factor * kd, dt, integrator)
+    if factor == 1.0:
+        return gains, radius
+    return {j: dataclasses.replace(g, kp=factor * g.kp, kd=factor * g.kd, bound="stability")
+            for j, g in gains.items()}, radius
+
+
+def symmetric_loads(loads: dict[int, JointLoad], torque: dict[int, TorqueLimit], mirror: Mirror
+                    ) -> tuple[dict[int, JointLoad], dict[int, TorqueLimit]]:
+    """The loads averaged over each left/right pair and the smaller torque limit of the pair, so that partners get
+    the same servo (a model's two sides may differ slightly: Booster T1's shanks weigh 1.73 and 1.79 kg)."""
+    out_loads, out_torque = {}, {}
+    for j, load in loads.items():
+        p = loads[mirror.partner[j]]
+        out_loads[j] = JointLoad((load.swing + p.swing) / 2, (load.stance + p.stance) / 2, load.stance_side)
+        mine, theirs = torque[j], torque[mirror.partner[j]]
+        if (theirs.value or 0.0) < (mine.value or 0.0) * (1 - 1e-6):
+            out_torque[j] = TorqueLimit(theirs.value, f"{theirs.source} of its mirror joint (the smaller of the pair)")
+        else:
+            out_torque[j] = mine
+    return out_loads, out_torque
+
+
+def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
+    """Read a robot's MJCF or URDF and draft its spec (module docstring)."""
+    robot = open_model(path, config.keyframe)
+    src = robot.path
+    find_legs(robot, config.foot_level, config.sole_tolerance)  # one leg, no sole ...: said before the mirror
+    mirror = find_mirror(robot, config.mirror_tolerance)
+    robot.angles, asymmetry = symmetric_angles(robot, mirror)
+    angles = robot.angles
+    legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the symmetric posture
+    floor = find_floor(robot)
+    _floor_collides(robot, floor, legs)
+    _check_sides(robot, legs, mirror)
+    residual = fk_residual(robot, mirror, config.mirror_samples, config.seed)
+    if residual.position > config.mirror_tolerance or residual.angle > config.mirror_angle_tolerance:
+        raise input_error(src, f"the mirror does not reflect the model: body '{robot.body_name(residual.body)}' is "
+                          f"{residual.position:.3g} m and {residual.angle:.3g} rad from the reflection of its partner "
+                          f"(tolerance {config.mirror_tolerance:g} m, {config.mirror_angle_tolerance:g} rad)")
+    planned = legs.joints
+    if config.plan == "all":
+        planned = planned + tuple(j for j in robot.joints if j not in legs.joints)
+    held = tuple(j for j in robot.joints if j not in planned)
+    height = floor.height + legs.standing_height
+    qpos = robot.qpos(height=height)
+    feet = {side: legs[side].foot for side in SIDES}
+    torque = torque_limits(robot)
+    notes = []
+    missing = [j for j, t in torque.items() if t.value is None]
+    if missing:
+        d = robot.kinematics(qpos)
+        corners = {legs[s].foot: np.vstack([footprint_points(robot.model, d, g) for g in legs[s].sole.geoms])
+                   for s in SIDES}
+        estimates = estimated_torque_limits(robot, qpos, corners, missing, config.torque_limit_factor)
+        for j in missing:
+            torque[j] = TorqueLimit(estimates[j], f"estimated: {config.torque_limit_factor:g} × the largest static "
+                                    "torque it holds (no limit in the model)")
+        notes.append(f"{len(missing)} joint{'s have' if len(missing) > 1 else ' has'} no torque limit in the model: "
+                     f"estimated ({config.torque_limit_factor:g} × the largest static torque it holds, the weight "
+                     "at a sole's corner included): give the real limits (actuatorfrcrange) and run robot init again")
+    loads, torque = symmetric_loads(joint_loads(robot, qpos, feet), torque, mirror)
+    integrator = INTEGRATOR_NAMES.get(int(robot.model.opt.integrator), "euler")
+    if integrator == "euler":
+        integrator = "implicitfast"
+        notes.append("the model integrates with Euler, whose explicit servo damping limits the gains: the spec "
+                     "sets implicitfast (the servos' damping integrated implicitly)")
+    timestep = float(robot.model.opt.timestep)
+    gains = {j: pd_gains(loads[j], float(torque[j].value or 0.0), config.bandwidth, config.damping_ratio,
+                         config.tracking_error, timestep, integrator) for j in robot.joints}
+    gains, radius = coupled_gains(robot, qpos, gains, timestep, integrator)
+    if robot.model.neq:
+        notes.append(f"the model has {robot.model.neq} equality constraint{'s' if robot.model.neq > 1 else ''} "
+                     "(closed linkages?): robustgait's servos drive every joint on its own; check that they agree")
+    if asymmetry > 0.0:
+        notes.append(f"the posture was not left/right symmetric: made symmetric (largest change {asymmetry:.3g} rad)")
+    size = RobotSize(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,
+                     gravity=float(np.linalg.norm(robot.model.opt.gravity)), hip_spacing=legs.hip_spacing,
+                     sole_length=legs.left.sole.length, sole_width=legs.left.sole.width)
+    return Draft(robot=robot, config=config, name=config.name or spec_name(robot), legs=legs, floor=floor,
+                 mirror=mirror, residual=residual, planned=planned, held=held, angles=angles, asymmetry=asymmetry,
+                 torque=torque, loads=loads, gains=gains, size=size, scaled=scale(size, config.scale),
+                 timestep=timestep, integrator=integrator, radius=radius, height=height, notes=notes)

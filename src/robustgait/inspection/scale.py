@@ -1,0 +1,153 @@
+"""A robot's gait values scaled by its size (``docs/robots.md``, "Your robot"): the rules that `robot init` writes
+the ``[gait]``, ``[action_space]``, ``[gait_quality]``, ``[generation]`` and ``[fall]`` values with.
+
+Lengths scale with the leg length l (dynamic similarity of walking: Alexander, *Principles of Animal Locomotion*,
+2003, ch. 4 — walkers of different sizes move alike at equal Froude number v²/(g l)), times with √(l/g), speeds and
+rates with √(g/l), heights with the standing height h. The constants are :class:`robustgait.config.ScaleRules`
+(calibrated on exo). The generation options that scale with the robot (normal forces ∝ m g, the centre-of-pressure
+margin and the feet's clearance ∝ the sole's width) are the loader's rules,
+:func:`robustgait.config.relative_generation_defaults`, written out.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from robustgait.config import GaitParams, RobotScale, ScaleRules, field_at, relative_generation_defaults
+
+# the [generation] keys a written spec carries (the landing-velocity bounds are left to the loader's rules, which
+# use its own leg length)
+GENERATION_KEYS = ("min_normal_force", "min_line_force", "cop_margin", "foot_gap")
+GAIT_AXES = ("step_length", "step_duration", "step_width", "step_height")
+
+
+@dataclass(frozen=True)
+class RobotSize:
+    """What the rules scale with: ``leg_length`` l [m] (first leg joint above the sole, straight legs),
+    ``standing_height`` h [m] (base above the soles in the posture), ``mass`` [kg], ``gravity`` |g| [m/s²],
+    ``hip_spacing`` [m] (lateral distance of the legs' first joints), ``sole_length`` and ``sole_width`` [m]."""
+
+    leg_length: float
+    standing_height: float
+    mass: float
+    gravity: float
+    hip_spacing: float
+    sole_length: float
+    sole_width: float
+
+    @property
+    def robot_scale(self) -> RobotScale:
+        """The loader's :class:`robustgait.config.RobotScale` of this size."""
+        return RobotScale(mass=self.mass, gravity=self.gravity, leg_length=self.leg_length,
+                          sole_half_length=self.sole_length / 2, sole_half_width=self.sole_width / 2)
+
+
+def step_length(size: RobotSize, rules: ScaleRules) -> float:
+    """Default step length = c · l [m]."""
+    return rules.step_length * size.leg_length
+
+
+def step_duration(size: RobotSize, rules: ScaleRules, multicontact: bool = False) -> float:
+    """Default step duration = c · √(l/g) [s] (flat-foot or multi-contact constant)."""
+    c = rules.step_duration_multicontact if multicontact else rules.step_duration
+    return c * math.sqrt(size.leg_length / size.gravity)
+
+
+def step_width(size: RobotSize, rules: ScaleRules) -> float:
+    """Default step width = the hip spacing (feet under the hips), at least sole width + c · the feet's clearance
+    (``generate.foot_gap``'s robot-relative rule) [m]."""
+    gap = float(relative_generation_defaults(size.robot_scale)["foot_gap"])
+    return max(size.hip_spacing, size.sole_width + rules.step_width_gap * gap)
+
+
+def step_height(size: RobotSize, rules: ScaleRules) -> float:
+    """Default swing-sole clearance = c · l [m]."""
+    return rules.step_height * size.leg_length
+
+
+def angular_velocity_bound(size: RobotSize, rules: ScaleRules) -> float:
+    """Bound on each component of the pelvis angular velocity = c · √(g/l) [rad/s]."""
+    return rules.angular_velocity * math.sqrt(size.gravity / size.leg_length)
+
+
+def joint_velocity_bound(size: RobotSize, rules: ScaleRules) -> float:
+    """Bound on each joint's speed = c · √(g/l) [rad/s]."""
+    return rules.joint_velocity * math.sqrt(size.gravity / size.leg_length)
+
+
+def pelvis_height_band(size: RobotSize, rules: ScaleRules) -> tuple[float, float]:
+    """Band of the pelvis origin above the stance sole = (c_low, c_high) · h [m]."""
+    return rules.pelvis_height[0] * size.standing_height, rules.pelvis_height[1] * size.standing_height
+
+
+def fall_height(size: RobotSize, rules: ScaleRules) -> float:
+    """Fall criterion: the base lower than c · h [m] (above the floor)."""
+    return rules.fall_height * size.standing_height
+
+
+def generation(size: RobotSize) -> dict[str, float]:
+    """The spec's ``[generation]`` values (:data:`GENERATION_KEYS`): the loader's robot-relative rules."""
+    rules = relative_generation_defaults(size.robot_scale)
+    return {k: float(rules[k]) for k in GENERATION_KEYS}
+
+
+def nice_step(x: float) -> float:
+    """The grid step nearest ``x`` among 1, 2, 2.5 and 5 × 10^k."""
+    k = math.floor(math.log10(x))
+    return min((f * 10.0**k for f in (1.0, 2.0, 2.5, 5.0, 10.0)), key=lambda s: abs(math.log(s / x)))
+
+
+def axis_range(axis: str, default: float, rule: tuple[float, float, int]) -> tuple[float, float, float]:
+    """An action-space axis [low, high, step]: ``rule`` = (low, high) multiples of ``default`` and the number of
+    grid steps; the step rounded to a nice number, low to a multiple of it, both ends within the GaitParams
+    bounds of ``axis``."""
+    lo_f, hi_f, points = rule
+    lo, hi = default * lo_f, default * hi_f
+    step = nice_step((hi - lo) / max(points, 1))
+    doc = field_at(GaitParams, axis).doc
+    low_bound = doc.low if doc.low is not None else 0.0
+    high_bound = doc.high if doc.high is not None else math.inf
+    lo = max(round(round(lo / step) * step, 9), math.ceil(low_bound / step - 1e-9) * step)
+    hi = min(round(lo + points * step, 9), math.floor(high_bound / step + 1e-9) * step)
+    return round(lo, 9), round(hi, 9), step
+
+
+@dataclass(frozen=True)
+class Scaled:
+    """Every scaled value of a spec (see the functions above): the default gait, the action spaces, the
+    gait-quality bands and bounds, the generation margins and forces, the fall height."""
+
+    gait: dict[str, float]
+    action_space: dict[str, tuple[float, float, float]]
+    multicontact_action_space: dict[str, tuple[float, float, float]]
+    angular_velocity: float
+    joint_velocity: float
+    pelvis_height: tuple[float, float]
+    fall_height: float
+    generation: dict[str, float]
+
+
+def sig(x: float, digits: int = 3) -> float:
+    """``x`` rounded to ``digits`` significant digits (what a spec file shows)."""
+    if x == 0.0 or not math.isfinite(x):
+        return x
+    return round(x, digits - 1 - math.floor(math.log10(abs(x))))
+
+
+def scale(size: RobotSize, rules: ScaleRules) -> Scaled:
+    """All the rules applied to a robot (values rounded to 3 significant digits)."""
+    gait = {"step_length": sig(step_length(size, rules)), "step_duration": sig(step_duration(size, rules)),
+            "step_width": sig(step_width(size, rules)), "step_height": sig(step_height(size, rules))}
+    mc_gait = {**gait, "step_duration": sig(step_duration(size, rules, multicontact=True))}
+    flat = {a: axis_range(a, gait[a], getattr(rules, f"action_{a}")) for a in GAIT_AXES}
+    mc = {a: axis_range(a, mc_gait[a], getattr(rules, f"multicontact_{a}")) for a in GAIT_AXES}
+    mc["rolling_fraction"] = rules.rolling_fraction
+    band = pelvis_height_band(size, rules)
+    return Scaled(
+        gait=gait, action_space=flat, multicontact_action_space=mc,
+        angular_velocity=sig(angular_velocity_bound(size, rules)),
+        joint_velocity=sig(joint_velocity_bound(size, rules)),
+        pelvis_height=(sig(band[0]), sig(band[1])),
+        fall_height=sig(fall_height(size, rules)),
+        generation={k: sig(v) for k, v in generation(size).items()})

@@ -1,0 +1,321 @@
+"""The spec TOML of a :class:`~robustgait.inspection.draft.Draft` (the format of ``docs/robots.md``), every value
+with a comment saying where it came from, and the summary ``robot init`` prints."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+
+from robustgait.inspection.discover import SIDES, Sole
+from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
+from robustgait.inspection.model import GEOM_TYPES
+from robustgait.inspection.scale import GAIT_AXES, sig
+from robustgait.robots.spec import FallCriteria, GaitQuality
+
+BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def num(x: float, digits: int = 4) -> str:
+    """A number as the spec shows it: ``digits`` significant digits, a TOML float."""
+    return repr(float(sig(float(x), digits)))
+
+
+def angle(x: float) -> str:
+    """An angle [rad] to 1e-6 (symmetric: angle(−x) is −angle(x), as the loader's mirror check needs)."""
+    return repr(round(float(x), 6) + 0.0)
+
+
+def key(name: str) -> str:
+    return name if BARE_KEY.match(name) else json.dumps(name)
+
+
+def text(s: str) -> str:
+    return json.dumps(s, ensure_ascii=False)
+
+
+def _rows(items: list[tuple[str, str]], indent: str = "  ") -> list[str]:
+    """Array items one per line, each with its comment, the comments aligned."""
+    width = max(len(v) for v, _ in items) + 1
+    return [f"{indent}{(v + ','):<{width}}  # {c}" for v, c in items]
+
+
+def _range_text(draft: Draft, j: int) -> str:
+    m = draft.robot.model
+    if not m.jnt_limited[j]:
+        return "unlimited"
+    lo, hi = m.jnt_range[j]
+    return f"range [{lo:.3g}, {hi:.3g}]"
+
+
+def _sole_lines(draft: Draft, side: str, sole: Sole) -> list[str]:
+    r = draft.robot
+    body = r.body_name(sole.body)
+    shape = f"{sole.length:.3g} × {sole.width:.3g} m"
+    kinds = sorted({_geom_type(draft, g) for g in sole.geoms})
+    what = f"{len(sole.geoms)} {'/'.join(kinds)} geom{'s' if len(sole.geoms) > 1 else ''} of body '{body}'"
+    lines = [f"[legs.{side}]"]
+    if sole.kind == "geom":
+        lines.append(f"sole_geom = {text(r.geom_name(sole.geoms[0]))}  # the foot's lowest collision geom: a box, "
+                     f"sole {shape}")
+    elif sole.kind == "geoms":
+        names = ", ".join(text(r.geom_name(g)) for g in sole.geoms)
+        lines.append(f"sole_geoms = [{names}]  # the foot's lowest collision geoms ({what}): a virtual sole "
+                     f"{shape}")
+    else:
+        lines.append(f"sole_body = {text(body)}  # the foot's lowest collision geoms are unnamed ({what}): a "
+                     f"virtual sole {shape}")
+        if sole.sole_class is not None:
+            lines.append(f"sole_class = {text(sole.sole_class)}  # just the sole's geoms: the body's other "
+                         "collision geoms are of other classes")
+    return lines
+
+
+def _geom_type(draft: Draft, g: int) -> str:
+    return GEOM_TYPES[int(draft.robot.model.geom_type[g])]
+
+
+def _header(draft: Draft, spec_path: Path) -> list[str]:
+    r, legs = draft.robot, draft.legs
+    rel = os.path.relpath(r.path.resolve(), spec_path.resolve().parent)
+    key_text = f"keyframe '{r.keyframe}'" if r.keyframe is not None else "no keyframe: every joint at 0 (clipped)"
+    lines = [
+        f"# Robot spec written by `robustgait robot init {r.path.name}` (docs/robots.md, \"Your robot\").",
+        "# Every value says where it came from; check the robot with `robustgait robot check` on this file.",
+        f"# Model: {r.model.nbody - 1} bodies, {len(r.joints)} joints besides the base, {r.mass:.3g} kg; standing "
+        f"posture: {key_text}.",
+        f"# Sizes the rules scale with: leg length l = {legs.leg_length:.3g} m (first leg joint above the sole, "
+        f"straight legs), standing height h = {legs.standing_height:.3g} m,",
+        f"# hip spacing {legs.hip_spacing:.3g} m, sole {legs.left.sole.length:.3g} × {legs.left.sole.width:.3g} m, "
+        f"g = {draft.size.gravity:.3g} m/s².",
+    ]
+    lines += [f"# NOTE: {n}" for n in draft.notes]
+    lines += [
+        f"name = {text(draft.name)}",
+        f"description = {text(f'{r.mjspec.modelname or r.path.stem} ({r.path.name}), spec by robustgait robot init')}",
+        f"mjcf = {text(rel)}  # the model file, relative to this spec"
+        + ("; a URDF's base gets its free joint at load" if r.kind == "urdf" else ""),
+        f"base_body = {text(r.base_name)}  # the body with the free joint"
+        + (" (the URDF's root link)" if r.kind == "urdf" else ""),
+    ]
+    f = draft.floor
+    if f.add:
+        lines.append("add_floor = true  # the model has no plane in its world body: the loader adds robustgait_floor")
+    elif f.name is not None:
+        lines.append(f"floor_geom = {text(f.name)}  # the plane geom of the world body")
+    else:
+        lines.append("# floor: the world body's only plane, unnamed (the loader names it robustgait_floor)")
+    return lines
+
+
+def _joints(draft: Draft) -> list[str]:
+    r, c = draft.robot, draft.config
+    branch = r.body_name(draft.legs.branch)
+    what = ("the two legs, from where their chains branch ('" + branch + "') down to the feet, left (y > 0) first"
+            if c.plan == "legs" else "every joint: the legs first (left, then right), then the others")
+    names = [(text(r.joint_name(j)), f"{_range_text(draft, j)}" + (f", {d}" if (d := _leg_of(draft, j)) else ""))
+             for j in draft.planned]
+    kp = [(num(draft.gains[j].kp), _kp_comment(draft, j)) for j in draft.planned]
+    kd = [(num(draft.gains[j].kd), _kd_comment(draft, j)) for j in draft.planned]
+    tl = [(num(draft.torque[j].value or 0.0), f"{r.joint_name(j)}: {draft.torque[j].source}") for j in draft.planned]
+    return [
+        "",
+        "[joints]",
+        f"# planned (--plan {c.plan}): {what}",
+        "names = [", *_rows(names), "]",
+        f"# kp = I_stance (2π × {c.bandwidth:g} Hz)², at most τ_max / {c.tracking_error:g} rad (robot.bandwidth, "
+        "robot.tracking_error); I_stance: the robot's inertia about the joint with its foot welded [kg m²]",
+        "kp = [", *_rows(kp), "]",
+        f"# kd = 2 × {c.damping_ratio:g} × √(kp I_swing) (robot.damping_ratio); I_swing: the mass matrix's diagonal "
+        f"[kg m²]; the servos contract at the {draft.timestep:g} s step ({draft.integrator}, see [sim])",
+        "kd = [", *_rows(kd), "]",
+        "torque_limit = [", *_rows(tl), "]",
+    ]
+
+
+def _leg_of(draft: Draft, j: int) -> str:
+    for side in SIDES:
+        if j in draft.legs[side].joints:
+            return f"{side} leg"
+    return ""
+
+
+def _kp_comment(draft: Draft, j: int) -> str:
+    g, load = draft.gains[j], draft.loads[j]
+    bound = {"bandwidth": "I_stance ω²", "torque": "capped: τ_max / tracking error",
+             "stability": "lowered to contract at the timestep"}[g.bound]
+    return f"{draft.robot.joint_name(j)}: I_stance {load.stance:.3g}, {bound}"
+
+
+def _kd_comment(draft: Draft, j: int) -> str:
+    g, load = draft.gains[j], draft.loads[j]
+    return (f"{draft.robot.joint_name(j)}: I_swing {load.swing:.3g}, swing natural frequency {g.frequency:.3g} Hz, "
+            f"ζ {g.ratio:.2g}")
+
+
+def _held(draft: Draft) -> list[str]:
+    if not draft.held:
+        return []
+    r = draft.robot
+    src = f"keyframe '{r.keyframe}'" if r.keyframe is not None else "0 clipped to the range (no keyframe)"
+    sym = " made left/right symmetric" if draft.asymmetry > 0 else ""
+    lines = ["", "[joints.held]", f"# joints the gait does not plan, held by their servo at the posture's angle "
+             f"[rad] ({src}{sym})"]
+    lines += [f"{key(r.joint_name(j))} = {angle(draft.angles[j])}" for j in draft.held]
+    lines += ["", "[joints.held_servo]", "# [kp, kd, torque_limit] by the rule of [joints]; the torque limit's source "
+              "in the comment"]
+    for j in draft.held:
+        g = draft.gains[j]
+        lines.append(f"{key(r.joint_name(j))} = [{num(g.kp)}, {num(g.kd)}, {num(draft.torque[j].value or 0.0)}]"
+                     f"  # {draft.torque[j].source}")
+    return lines
+
+
+def _mirror(draft: Draft) -> list[str]:
+    r, c, res = draft.robot, draft.config, draft.residual
+    index = {j: i for i, j in enumerate(draft.planned)}
+    perm = [index[draft.mirror.partner[j]] for j in draft.planned]
+    sign = [int(draft.mirror.sign[j]) for j in draft.planned]
+    lines = ["", "[mirror]",
+             "# the other stance's joints: partners by left/right names and mirrored anchors, signs from the joint "
+             "axes (a hinge's axis a reflects to −S a, S = diag(1, −1, 1))",
+             f"# verified: forward kinematics of the relabeled configuration puts every body at its partner's "
+             f"reflection over {res.samples} random configurations,",
+             f"# largest residual {res.position:.2g} m and {res.angle:.2g} rad (tolerance {c.mirror_tolerance:g} m, "
+             f"{c.mirror_angle_tolerance:g} rad)",
+             f"joint_perm = {perm}", f"joint_sign = {sign}",
+             "base_sign = [1, -1, 1, -1, 1, -1]  # (x, y, z, roll, pitch, yaw): reflection about the base's x–z plane"]
+    if draft.held:
+        lines += ["", "[mirror.held]", "# each held joint: [the held joint it becomes, sign] (verified as above)"]
+        lines += [f"{key(r.joint_name(j))} = [{text(r.joint_name(draft.mirror.partner[j]))}, "
+                  f"{int(draft.mirror.sign[j])}]" for j in draft.held]
+    return lines
+
+
+def _scaled(draft: Draft) -> list[str]:
+    s, size, rules = draft.scaled, draft.size, draft.config.scale
+    q = GaitQuality()
+    rate = f"√(g/l) = {math.sqrt(size.gravity / size.leg_length):.3g}/s"
+
+    def axis(v: tuple[float, float, float]) -> str:
+        return f"[{num(v[0], 3)}, {num(v[1], 3)}, {num(v[2], 3)}]"
+
+    lines = [
+        "", "[fall]",
+        f"min_base_height = {num(s.fall_height, 3)}  # {rules.fall_height:g} × the standing height h (robot.scale."
+        "fall_height)",
+        f"max_tilt = {num(FallCriteria.max_tilt)}  # robustgait's default (an angle: no scale)",
+        "", "[sim]",
+        f"timestep = {num(draft.timestep)}  # the model's <option>",
+        f"integrator = {text(draft.integrator)}  # "
+        + ("the model's <option>" if INTEGRATOR_NAMES.get(int(draft.robot.model.opt.integrator)) == draft.integrator
+           else "the model's is euler: implicitfast integrates the servos' damping implicitly")
+        + f"; one step of all the servos on the mass matrix (base held) has spectral radius {draft.radius:.6f} "
+        "(< 1: stable)",
+        "", "[gait_quality]",
+        "# angles: robustgait's defaults (no scale); rates ∝ √(g/l), heights ∝ h (robot.scale)",
+        f"pelvis_roll = {num(q.pelvis_roll)}  # default (GaitQuality)",
+        f"pelvis_yaw = {num(q.pelvis_yaw)}  # default",
+        f"pelvis_pitch = [{num(q.pelvis_pitch[0])}, {num(q.pelvis_pitch[1])}]  # default",
+        f"pelvis_height = [{num(s.pelvis_height[0], 3)}, {num(s.pelvis_height[1], 3)}]  # "
+        f"[{rules.pelvis_height[0]:g}, {rules.pelvis_height[1]:g}] × h",
+        f"pelvis_angular_velocity = {num(s.angular_velocity, 3)}  # {rules.angular_velocity:g} × {rate}",
+        f"swing_tilt = {num(q.swing_tilt)}  # default", f"swing_yaw = {num(q.swing_yaw)}  # default",
+        f"joint_velocity = {num(s.joint_velocity, 3)}  # {rules.joint_velocity:g} × {rate}",
+        "", "[action_space]",
+        "# studies search this grid, [low, high, step]: [low, high] = multiples of the [gait] default, a nice step "
+        "(robot.scale.action_*)",
+        *(f"{a} = {axis(s.action_space[a])}" for a in GAIT_AXES),
+        "", "[action_space.multicontact]",
+        "# multi-contact studies (robot.scale.multicontact_*, rolling_fraction)",
+        *(f"{a} = {axis(v)}" for a, v in s.multicontact_action_space.items()),
+    ]
+    return lines
+
+
+def _posture(draft: Draft) -> list[str]:
+    r = draft.robot
+    src = f"keyframe '{r.keyframe}'" if r.keyframe is not None else "every joint at 0 clipped to its range"
+    lines = ["", "[posture]", f"# cold-start posture of gait generation [rad]: the {src}"
+             + (" made left/right symmetric" if draft.asymmetry > 0 else "")]
+    lines += [f"{key(r.joint_name(j))} = {angle(draft.angles[j])}" for j in draft.planned]
+    return lines
+
+
+def _generation(draft: Draft) -> list[str]:
+    s, size = draft.scaled, draft.size
+    weight = size.mass * size.gravity
+    g = s.generation
+    return [
+        "", "[generation]",
+        "# the loader's robot-relative rules written out (config.relative_generation_defaults; docs/robots.md)",
+        f"min_normal_force = {num(g['min_normal_force'], 3)}  # {g['min_normal_force'] / weight:.0%} of the weight "
+        f"m g = {weight:.4g} N",
+        f"min_line_force = {num(g['min_line_force'], 3)}  # {g['min_line_force'] / weight:.0%} of the weight",
+        f"cop_margin = {num(g['cop_margin'], 3)}  # {g['cop_margin'] / (size.sole_width / 2):.2g} × the sole's "
+        f"half-width {size.sole_width / 2:.3g} m",
+        f"foot_gap = {num(g['foot_gap'], 3)}  # {g['foot_gap'] / (size.sole_width / 2):.2g} × the sole's half-width",
+    ]
+
+
+def _gait(draft: Draft) -> list[str]:
+    s, size, rules = draft.scaled, draft.size, draft.config.scale
+    t = math.sqrt(size.leg_length / size.gravity)
+    width_rule = (f"the hip spacing {size.hip_spacing:.3g} m" if s.gait["step_width"] == sig(size.hip_spacing)
+                  else f"sole width + {rules.step_width_gap:g} × foot_gap (wider than the hips)")
+    return [
+        "", "[gait]",
+        "# the robot's default gait (what `gait generate` uses without flags), scaled with the leg length l",
+        f"step_length = {num(s.gait['step_length'], 3)}  # {rules.step_length:g} × l",
+        f"step_duration = {num(s.gait['step_duration'], 3)}  # {rules.step_duration:g} × √(l/g) = "
+        f"{rules.step_duration:g} × {t:.3g} s (flat-foot; multi-contact: {rules.step_duration_multicontact:g} × "
+        "√(l/g))",
+        f"step_width = {num(s.gait['step_width'], 3)}  # {width_rule}",
+        f"step_height = {num(s.gait['step_height'], 3)}  # {rules.step_height:g} × l",
+    ]
+
+
+def render(draft: Draft, spec_path: str | Path) -> str:
+    """The spec TOML (``spec_path``: where it will be written; the model's path is written relative to it)."""
+    p = Path(spec_path)
+    lines = [*_header(draft, p), *_joints(draft), *_held(draft)]
+    for side in SIDES:
+        lines += ["", *_sole_lines(draft, side, draft.legs[side].sole)]
+    lines += [*_mirror(draft), *_scaled(draft), *_posture(draft), *_generation(draft), *_gait(draft)]
+    return "\n".join(lines) + "\n"
+
+
+def summary(draft: Draft, spec_path: str | Path) -> list[str]:
+    """What ``robot init`` prints: what it found and decided, one fact per line."""
+    r, legs, res = draft.robot, draft.legs, draft.residual
+    out = [f"{r.path.name}: {len(r.joints)} joints besides the base '{r.base_name}', {r.mass:.3g} kg; posture: "
+           + (f"keyframe '{r.keyframe}'" if r.keyframe else "no keyframe (joints at 0)")
+           + f", standing height {legs.standing_height:.3g} m"]
+    for side in SIDES:
+        leg = legs[side]
+        sole = leg.sole
+        how = {"geom": f"box '{r.geom_name(sole.geoms[0])}'", "geoms": f"{len(sole.geoms)} named geoms",
+               "body": f"{len(sole.geoms)} unnamed geoms of '{r.body_name(sole.body)}'"
+               + (f" (class '{sole.sole_class}')" if sole.sole_class else "")}[sole.kind]
+        out.append(f"{side} leg: {len(leg.joints)} joints {r.joint_name(leg.joints[0])} … "
+                   f"{r.joint_name(leg.joints[-1])}; sole {how}, {sole.length:.3g} × {sole.width:.3g} m")
+    floor = ("added (add_floor)" if draft.floor.add else f"'{draft.floor.name}'" if draft.floor.name
+             else "the world's unnamed plane")
+    out.append(f"floor: {floor}; planned {len(draft.planned)} joints, held {len(draft.held)}")
+    out.append(f"mirror: verified on {res.samples} random configurations, largest residual {res.position:.2g} m, "
+               f"{res.angle:.2g} rad")
+    kp = np.array([draft.gains[j].kp for j in draft.planned])
+    bounds = [draft.gains[j].bound for j in draft.planned]
+    out.append(f"gains ({draft.config.bandwidth:g} Hz, ζ {draft.config.damping_ratio:g}, cap τ_max / "
+               f"{draft.config.tracking_error:g} rad): kp {kp.min():.4g}–{kp.max():.4g} N m/rad; "
+               f"{bounds.count('torque')} of {len(bounds)} planned joints capped by their torque limit"
+               + (f", {bounds.count('stability')} lowered for stability" if "stability" in bounds else ""))
+    g = draft.scaled.gait
+    out.append("default gait: " + ", ".join(f"{k} {v:g}" for k, v in g.items()))
+    out += [f"note: {n}" for n in draft.notes]
+    out.append(f"wrote {spec_path}; check it: robustgait robot check {spec_path}")
+    return out

@@ -1,0 +1,534 @@
+"""Robot inspection (robustgait.inspection, `robot init` / `robot check`): discovery of legs, soles, floor and
+mirror on synthetic bipeds written here (MJCF and URDF) and on exo, Booster T1 when ../shared/robots is beside the
+repository; the gain rule's inertias against rigid-body sums; the scaling rules against exo's spec; bad input."""
+
+from __future__ import annotations
+
+import json
+import sys
+import textwrap
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from robustgait import load_robot
+from robustgait.cli import main
+from robustgait.config import RobotConfig, ScaleRules
+from robustgait.errors import RobustGaitError
+from robustgait.inspection.check import run_checks
+from robustgait.inspection.discover import find_legs, torque_limits
+from robustgait.inspection.draft import draft_spec
+from robustgait.inspection.gains import joint_loads, pd_gains, spectral_radius, static_torques
+from robustgait.inspection.mirror import Mirror, find_mirror, fk_residual, name_partner
+from robustgait.inspection.model import open_model
+from robustgait.inspection.scale import RobotSize, nice_step, scale
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on 3.10 only
+    import tomli as tomllib
+
+REPO = Path(__file__).resolve().parents[1]
+T1 = REPO.parent / "shared" / "robots" / "booster_t1" / "t1.xml"
+EXO_XML = REPO / "src" / "robustgait" / "robots" / "exo" / "exo.xml"
+needs_t1 = pytest.mark.skipif(not T1.is_file(), reason="../shared/robots/booster_t1 (Booster T1) is not beside the "
+                              "repository")
+
+FEET = {
+    "box": '<geom name="{s}_sole" type="box" size="0.1 0.05 0.01" pos="0.03 0 -0.05"/>',
+    "unnamed_box": '<geom type="box" size="0.1 0.05 0.01" pos="0.03 0 -0.05"/>',
+    "spheres": "".join(f'<geom class="foot" type="sphere" size="0.01" pos="{x} {y} -0.05"/>'
+                       for x in (-0.06, 0.12) for y in (-0.04, 0.04)),
+    "capsules": "".join(f'<geom class="foot" type="capsule" size="0.01" fromto="-0.06 {y} -0.05 0.12 {y} -0.05"/>'
+                        for y in (-0.04, 0.04)),
+    # a box sole and a higher cylinder (an ankle guard) of another class: the sole is the box's class
+    "box_and_cylinder": ('<geom class="foot" type="box" size="0.1 0.05 0.01" pos="0.03 0 -0.05"/>'
+                         '<geom type="cylinder" size="0.03 0.02" pos="0 0 0"/>'),
+    "mesh": '<geom type="mesh" mesh="footmesh"/>',
+    # a toe on its own hinge, its box level with the foot's
+    "toe": ('<geom name="{s}_sole" type="box" size="0.06 0.05 0.01" pos="-0.01 0 -0.05"/>'
+            '<body name="{s}_toe" pos="0.05 0 0"><joint name="{s}_toe" axis="0 1 0" range="-0.5 0.5"/>'
+            '<inertial pos="0.03 0 -0.05" mass="0.1" diaginertia="0.0001 0.0001 0.0001"/>'
+            '<geom type="box" size="0.04 0.05 0.01" pos="0.04 0 -0.05"/></body>'),
+    "none": "",
+}
+
+
+def body(name: str, joint: str, axis: str, limits: str, mass: float, com: str, inertia: str, inner: str = "",
+         pos: str = "0 0 0", extra: str = "") -> str:
+    """One MJCF body on one hinge: its inertial, then ``inner`` (geoms, child bodies)."""
+    return (f'<body name="{name}" pos="{pos}"><joint name="{joint}" axis="{axis}" range="{limits}" {extra}/>'
+            f'<inertial pos="{com}" mass="{mass}" diaginertia="{inertia}"/>{inner}</body>')
+
+
+def leg(s: str, y: float, foot: str, roll_axis: str, short: float = 0.0) -> str:
+    """A 6-joint leg (hip yaw, roll, pitch, knee, ankle pitch, roll) hanging from the waist at lateral offset y."""
+    def frc(limit: int) -> str:
+        return f'actuatorfrcrange="-{limit} {limit}"'
+
+    foot_body = body(f"{s}_foot", f"{s}_ankle_roll", "1 0 0", "-0.5 0.5", 0.8, "0.02 0 -0.03", "0.002 0.004 0.004",
+                     FEET[foot].format(s=s), extra=frc(40))
+    ankle = body(f"{s}_ankle", f"{s}_ankle_pitch", "0 1 0", "-1 1", 0.2, "0 0 0", "0.0002 0.0002 0.0002", foot_body,
+                 pos="0 0 -0.3", extra=frc(50))
+    shin = body(f"{s}_shin", f"{s}_knee", "0 1 0", "0 2.2", 2.0, "0 0 -0.15", "0.02 0.02 0.002",
+                '<geom type="capsule" fromto="0 0 -0.02 0 0 -0.26" size="0.035"/>' + ankle, pos=f"0 0 {-0.3 + short}",
+                extra=frc(100))
+    thigh = body(f"{s}_thigh", f"{s}_hip_pitch", "0 1 0", "-1.5 1.5", 3.0, "0 0 -0.15", "0.03 0.03 0.004",
+                 '<geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.04"/>' + shin,
+                 extra=frc(80) + ' armature="0.01"')
+    hip2 = body(f"{s}_hip2", f"{s}_hip_roll", roll_axis, "-0.5 0.5", 0.5, "0 0 0", "0.001 0.001 0.001", thigh,
+                extra=frc(80))
+    return body(f"{s}_hip", f"{s}_hip_yaw", "0 0 1", "-0.5 0.5", 1.0, "0 0 0", "0.002 0.002 0.002", hip2,
+                pos=f"0 {y} -0.05", extra=frc(60))
+
+
+def arm(s: str, y: float) -> str:
+    forearm = body(f"{s}_forearm", f"{s}_elbow", "0 1 0", "-2 0", 0.6, "0 0 -0.1", "0.002 0.002 0.0005",
+                   '<geom type="capsule" fromto="0 0 0 0 0 -0.2" size="0.025"/>', pos="0 0 -0.25")
+    return body(f"{s}_upper_arm", f"{s}_shoulder", "0 1 0", "-2 2", 1.0, "0 0 -0.12", "0.005 0.005 0.001",
+                '<geom type="capsule" fromto="0 0 0 0 0 -0.24" size="0.03"/>' + forearm, pos=f"0 {y} 0.25")
+
+
+def biped_xml(*, foot: str = "box", floor: bool = True, keyframe: bool = True, freejoint: bool = True,
+              legs: tuple[str, ...] = ("left", "right"), right_short: float = 0.0, waist: float = 0.0,
+              collide: bool = True) -> str:
+    """A 20 kg humanoid: torso with a head (neck yaw) and two 2-joint arms, a waist (yaw) carrying two 6-joint legs.
+    The right hip roll's axis points the other way (-x), as some models have it. Torque limits: the legs' from
+    actuatorfrcrange, the arms' and neck's from motors' ctrlrange, the waist's from a position actuator's
+    forcerange × gear."""
+    sides = {"left": 0.09, "right": -0.09}
+    axes = {"left": "1 0 0", "right": "-1 0 0"}
+    legs_xml = "".join(leg(s, sides[s], foot, axes[s], right_short if s == "right" else 0.0) for s in legs)
+    key = (f'<keyframe><key name="stand" qpos="0 0 0.9 1 0 0 0  0  0.3 -0.5 0.3 -0.5  {waist}  '
+           '0 0 -0.3 0.6 -0.3 0  0 0 -0.3 0.6 -0.3 0"/></keyframe>') if keyframe and len(legs) == 2 else ""
+    return textwrap.dedent(f"""\
+        <mujoco model="Test Biped">
+          <compiler angle="radian" autolimits="true"/>
+          <option timestep="0.002" integrator="implicitfast"/>
+          <asset><mesh name="footmesh" vertex="-0.08 -0.05 -0.06 0.12 -0.05 -0.06 0.12 0.05 -0.06 -0.08 0.05 -0.06
+                                              0 0 -0.01"/></asset>
+          <default>{'' if collide else '<geom contype="0" conaffinity="0"/>'}
+            <default class="foot"><geom friction="1 0.005 0.0001"/></default></default>
+          <worldbody>
+            {'<geom name="ground" type="plane" size="0 0 0.05"/>' if floor else ''}
+            <body name="torso" pos="0 0 0.9">
+              {'<freejoint name="root"/>' if freejoint else ''}
+              <inertial pos="0 0 0.15" mass="8.0" diaginertia="0.15 0.12 0.08"/>
+              <geom type="box" size="0.08 0.12 0.15" pos="0 0 0.15"/>
+              {body("head", "neck_yaw", "0 0 1", "-1 1", 1.0, "0 0 0.08", "0.004 0.004 0.004",
+                    '<geom type="sphere" size="0.08" pos="0 0 0.08"/>', pos="0 0 0.32")}
+              {arm("left", 0.15)}{arm("right", -0.15)}
+              {body("waist", "waist_yaw", "0 0 1", "-1 1", 2.0, "0 0 0", "0.01 0.01 0.01", legs_xml,
+                    pos="0 0 -0.05")}
+            </body>
+          </worldbody>
+          <actuator>
+            <motor joint="neck_yaw" ctrlrange="-5 5"/>
+            <motor joint="left_shoulder" ctrlrange="-20 20"/>
+            <motor joint="right_shoulder" ctrlrange="-20 20"/>
+            <motor joint="left_elbow" ctrlrange="-10 10" gear="2"/>
+            <motor joint="right_elbow" ctrlrange="-10 10" gear="2"/>
+            <position joint="waist_yaw" kp="100" forcerange="-30 30"/>
+          </actuator>
+          {key}
+        </mujoco>""")
+
+
+def write(tmp_path: Path, text: str, name: str = "biped.xml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str | Path) -> tuple[int, str, str]:
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+LEFT_LEG = ["left_hip_yaw", "left_hip_roll", "left_hip_pitch", "left_knee", "left_ankle_pitch", "left_ankle_roll"]
+
+
+# ----------------------------------------------------------------------------------------------- discovery
+def test_the_biped_is_discovered(tmp_path: Path) -> None:
+    r = open_model(write(tmp_path, biped_xml()))
+    legs = find_legs(r, 0.1, 0.005)
+    assert [r.joint_name(j) for j in legs.left.joints] == LEFT_LEG
+    assert [r.joint_name(j) for j in legs.right.joints] == [n.replace("left", "right") for n in LEFT_LEG]
+    assert r.body_name(legs.branch) == "waist" and r.keyframe == "stand"
+    sole = legs.left.sole
+    assert sole.kind == "geom" and r.geom_name(sole.geoms[0]) == "left_sole"
+    assert sole.length == pytest.approx(0.2) and sole.width == pytest.approx(0.1)
+    # crouched keyframe: the base stands lower than with straight legs (0.05 + 0.05 + 0.6 + 0.06 = 0.76 m)
+    assert legs.leg_length == pytest.approx(0.66) and 0.6 < legs.standing_height < 0.76
+    assert legs.hip_spacing == pytest.approx(0.18)
+
+
+def test_torque_limits_say_where_they_came_from(tmp_path: Path) -> None:
+    r = open_model(write(tmp_path, biped_xml()))
+    t = {r.joint_name(j): v for j, v in torque_limits(r).items()}
+    assert (t["left_knee"].value, t["left_knee"].source) == (100.0, "its actuatorfrcrange")
+    assert t["left_shoulder"].value == 20.0 and "ctrlrange" in t["left_shoulder"].source
+    assert t["left_elbow"].value == 20.0 and "gear" in t["left_elbow"].source  # 10 × gear 2
+    assert t["waist_yaw"].value == 30.0 and "forcerange" in t["waist_yaw"].source
+
+
+@pytest.mark.parametrize(("foot", "kind", "count", "sole_class"), [
+    ("spheres", "body", 4, None), ("capsules", "body", 2, None), ("unnamed_box", "body", 1, None),
+    ("box_and_cylinder", "body", 1, "foot")])
+def test_soles_of_sets_and_unnamed_geoms_load_as_virtual_soles(tmp_path: Path, foot: str, kind: str, count: int,
+                                                               sole_class: str | None) -> None:
+    path = write(tmp_path, biped_xml(foot=foot))
+    d = draft_spec(path, RobotConfig())
+    sole = d.legs.left.sole
+    assert (sole.kind, len(sole.geoms), sole.sole_class) == (kind, count, sole_class)
+    assert sole.length == pytest.approx(0.18 if foot in ("spheres", "capsules") else 0.2)
+    spec = tmp_path / "spec.toml"
+    assert main(["robot", "init", str(path), "-o", str(spec)]) == 0
+    robot = load_robot(spec)
+    g = robot.sole_geom_id["left"]
+    # the loader's sole box spans the same footprint
+    assert 2 * max(robot.model.geom_size[g][:2]) == pytest.approx(sole.length, abs=1e-9)
+
+
+def test_name_partners() -> None:
+    names = ["Left_Hip_Pitch", "Right_Hip_Pitch", "LL_HR", "LR_HR", "leg_left_1_joint", "leg_right_1_joint",
+             "l_hip", "r_hip", "AL1", "AR1", "waist"]
+    assert name_partner("Left_Hip_Pitch", names) == ("Right_Hip_Pitch", "left")
+    assert name_partner("LR_HR", names) == ("LL_HR", "right")
+    assert name_partner("leg_left_1_joint", names) == ("leg_right_1_joint", "left")
+    assert name_partner("r_hip", names) == ("l_hip", "right")
+    assert name_partner("AL1", names) == ("AR1", "left")
+    assert name_partner("waist", names) is None
+
+
+def test_mirror_signs_follow_the_axes_and_reflect_the_model(tmp_path: Path) -> None:
+    r = open_model(write(tmp_path, biped_xml()))
+    mirror = find_mirror(r, 1e-3)
+    sign = {r.joint_name(j): mirror.sign[j] for j in r.joints}
+    partner = {r.joint_name(j): r.joint_name(k) for j, k in mirror.partner.items()}
+    # yaw: a z axis reflects to −S z = −z, the partner's axis is +z: −1; the right roll axis is −x = −S x: +1
+    assert sign["left_hip_yaw"] == -1 and sign["left_hip_roll"] == 1 and sign["left_hip_pitch"] == 1
+    assert sign["waist_yaw"] == -1 and partner["waist_yaw"] == "waist_yaw" and sign["left_shoulder"] == 1
+    assert partner["left_knee"] == "right_knee" and partner["right_elbow"] == "left_elbow"
+    res = fk_residual(r, mirror, 10, 0)
+    assert res.position < 1e-12 and res.angle < 1e-6
+    # a wrong sign moves bodies far from their partners' reflections
+    knee = next(j for j in r.joints if r.joint_name(j) == "left_knee")
+    bad = Mirror(mirror.partner, {**mirror.sign, knee: -1.0, mirror.partner[knee]: -1.0}, mirror.body_partner)
+    assert fk_residual(r, bad, 10, 0).position > 0.05
+
+
+# ----------------------------------------------------------------------------------------------- gains
+def test_stance_inertia_is_the_robot_about_the_ankle(tmp_path: Path) -> None:
+    """With the left foot welded and every other joint held, the left ankle roll turns the rest of the robot as one
+    rigid body about its axis: I = Σ (aᵀ I_b a + m_b |a × (c_b − p)|²) over the bodies above it, plus armature."""
+    r = open_model(write(tmp_path, biped_xml()))
+    legs = find_legs(r, 0.1, 0.005)
+    q = r.qpos(height=legs.standing_height)
+    loads = joint_loads(r, q, {"left": legs.left.foot, "right": legs.right.foot})
+    m = r.model
+    d = r.kinematics(q)
+    j = next(j for j in r.joints if r.joint_name(j) == "left_ankle_roll")
+    a, p = d.xaxis[j], d.xanchor[j]
+    foot = legs.left.foot
+    rigid = 0.0
+    for b in range(1, m.nbody):
+        if b == foot:
+            continue
+        rot = d.ximat[b].reshape(3, 3)
+        inertia = rot @ np.diag(m.body_inertia[b]) @ rot.T
+        arm_ = np.cross(a, d.xipos[b] - p)
+        rigid += float(a @ inertia @ a + m.body_mass[b] * arm_ @ arm_)
+    assert loads[j].stance == pytest.approx(rigid + m.dof_armature[m.jnt_dofadr[j]], rel=1e-9)
+    # the swing value is the mass matrix's diagonal: the foot alone (its inertia about the roll axis)
+    assert loads[j].swing < 0.01 * loads[j].stance
+
+
+def test_pd_gains_respect_the_cap_and_the_timestep(tmp_path: Path) -> None:
+    d = draft_spec(write(tmp_path, biped_xml()), RobotConfig())
+    c = d.config
+    for j in d.robot.joints:
+        g, load, tau = d.gains[j], d.loads[j], d.torque[j].value or 0.0
+        assert 0 < g.kp <= tau / c.tracking_error * (1 + 1e-12) and g.kd > 0
+        assert g.kp == pytest.approx(min(load.stance * (2 * np.pi * c.bandwidth) ** 2, tau / c.tracking_error))
+        assert g.kd == pytest.approx(2 * c.damping_ratio * np.sqrt(g.kp * load.swing)) and g.radius < 1
+    # partners get the same servo
+    for j, k in d.mirror.partner.items():
+        assert (d.gains[j].kp, d.gains[j].kd) == (d.gains[k].kp, d.gains[k].kd)
+
+
+def test_spectral_radius_of_the_discrete_servo() -> None:
+    # semi-implicit Euler: stable while h kd / I < 2 and (h ω)² < 4 − 2 h kd / I
+    assert spectral_radius(100.0, 1.0, 1.0, 0.01, "euler") < 1
+    assert spectral_radius(100.0, 250.0, 1.0, 0.01, "euler") > 1
+    assert spectral_radius(1e6, 10.0, 1.0, 0.01, "euler") > 1
+    # implicit damping: any damping contracts
+    assert spectral_radius(100.0, 1e5, 1.0, 0.01, "implicitfast") < 1
+    # continuous decay e^{-ζω h} for the critically damped servo at a small step
+    assert spectral_radius(100.0, 20.0, 1.0, 1e-4, "rk4") == pytest.approx(np.exp(-10 * 1e-4), rel=1e-3)
+    # a servo that would not contract at its step is lowered until it does
+    from robustgait.inspection.gains import JointLoad
+
+    g = pd_gains(JointLoad(1e-4, 1.0, "left"), 1e4, 50.0, 1.0, 0.01, 0.002, "euler")
+    assert g.bound == "stability" and g.radius < 1
+
+
+def test_static_torques_balance_gravity(tmp_path: Path) -> None:
+    r = open_model(write(tmp_path, biped_xml()))
+    legs = find_legs(r, 0.1, 0.005)
+    q = r.qpos(height=legs.standing_height)
+    one = static_torques(r, q, [legs.left.foot])
+    m = r.model
+    d = r.kinematics(q)
+    # standing on the left foot, the left leg carries everything but itself below the joint: the knee's torque is
+    # the weight above it times its lever arm — checked through the virtual-work identity g = Jᵀ w + τ
+    jac = np.zeros((6, m.nv))
+    mujoco.mj_jacBody(m, d, jac[:3], jac[3:], legs.left.foot)
+    w = np.linalg.lstsq(jac[:, :6].T, d.qfrc_bias[:6], rcond=None)[0]
+    assert np.allclose(one, np.r_[np.zeros(6), (d.qfrc_bias - jac.T @ w)[6:]], atol=1e-9)
+    both = static_torques(r, q, [legs.left.foot, legs.right.foot])
+    knee = m.jnt_dofadr[next(j for j in r.joints if r.joint_name(j) == "left_knee")]
+    assert abs(both[knee]) < abs(one[knee])  # two feet share the weight
+
+
+# ----------------------------------------------------------------------------------------------- scaling
+def test_the_rules_give_back_exos_spec() -> None:
+    size = RobotSize(leg_length=0.93, standing_height=0.921, mass=126.0, gravity=9.81, hip_spacing=0.25,
+                     sole_length=0.27, sole_width=0.12)
+    s = scale(size, ScaleRules())
+    spec = tomllib.loads((REPO / "src" / "robustgait" / "robots" / "exo" / "spec.toml").read_text())
+    for axis, value in spec["action_space"].items():
+        if axis != "multicontact":
+            assert s.action_space[axis] == pytest.approx(tuple(value)), axis
+    for axis, value in spec["action_space"]["multicontact"].items():
+        assert s.multicontact_action_space[axis] == pytest.approx(tuple(value)), axis
+    q = spec["gait_quality"]
+    assert s.angular_velocity == pytest.approx(q["pelvis_angular_velocity"], rel=0.03)
+    assert s.joint_velocity == pytest.approx(q["joint_velocity"], rel=0.03)
+    assert s.pelvis_height == pytest.approx(tuple(q["pelvis_height"]), rel=0.03)
+    assert s.fall_height == pytest.approx(spec["fall"]["min_base_height"], rel=0.03)
+    assert s.gait == pytest.approx({"step_length": 0.15, "step_duration": 0.7, "step_width": 0.25,
+                                    "step_height": 0.07}, rel=0.03)
+    assert [nice_step(x) for x in (0.019, 0.11, 0.0024, 3.3)] == [0.02, 0.1, 0.0025, 2.5]
+
+
+# ----------------------------------------------------------------------------------------------- robot init / check
+def test_init_writes_a_spec_that_loads_and_passes_check(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    model = write(tmp_path, biped_xml())
+    spec = tmp_path / "out" / "biped.toml"
+    spec.parent.mkdir()
+    code, out, err = run(capsys, "robot", "init", model, "-o", spec)
+    assert code == 0 and err == "" and "mirror: verified" in out and f"wrote {spec}" in out
+    text = spec.read_text()
+    raw = tomllib.loads(text)
+    assert raw["mjcf"] == "../biped.xml" and raw["floor_geom"] == "ground" and raw["name"] == "test_biped"
+    assert raw["joints"]["names"][:6] == LEFT_LEG
+    assert set(raw["joints"]["held"]) == {"neck_yaw", "left_shoulder", "left_elbow", "right_shoulder",
+                                          "right_elbow", "waist_yaw"}
+    assert raw["joints"]["held"]["left_shoulder"] == 0.3 and raw["joints"]["held"]["right_elbow"] == -0.5
+    assert raw["mirror"]["joint_perm"] == [6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]
+    assert raw["mirror"]["joint_sign"] == [-1, 1, 1, 1, 1, -1] * 2
+    assert raw["mirror"]["held"]["waist_yaw"] == ["waist_yaw", -1]
+    assert raw["posture"]["left_knee"] == 0.6 and raw["legs"]["left"] == {"sole_geom": "left_sole"}
+    # every value line carries a comment (but table headers and the names' closing brackets)
+    # (a table's values that share one comment line above them: held angles, posture, mirror, action spaces)
+    shared = {*raw["joints"]["held"], *raw["posture"], *raw["mirror"].get("held", {}), "joint_perm", "joint_sign",
+              *raw["action_space"]["multicontact"], "name", "description"}
+    for line in text.splitlines():
+        if "=" in line and not line.startswith("#") and not line.endswith("= ["):
+            assert "#" in line or line.split("=")[0].strip() in shared, line
+    robot = load_robot(spec)
+    assert robot.n_joints == 12 and len(robot.spec.held) == 6
+    results = run_checks(robot, RobotConfig())
+    assert all(r.passed for r in results), [r.line for r in results]
+    code, out, _ = run(capsys, "robot", "check", spec, "--json")
+    report = json.loads(out)
+    assert code == 0 and report["passed"] and [c["name"] for c in report["checks"]] == [
+        "mirror", "soles", "torques", "stiffness", "stand", "tracking"]
+
+
+def test_an_asymmetric_keyframe_is_made_symmetric(tmp_path: Path) -> None:
+    d = draft_spec(write(tmp_path, biped_xml(waist=0.1)), RobotConfig())
+    waist = next(j for j in d.robot.joints if d.robot.joint_name(j) == "waist_yaw")
+    assert d.angles[waist] == 0.0 and d.asymmetry == pytest.approx(0.1) and "made symmetric" in d.notes[-1]
+
+
+def test_plan_all_plans_every_joint(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    spec = tmp_path / "all.toml"
+    code, _, _ = run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, "--plan", "all",
+                     "--bandwidth", "3")
+    raw = tomllib.loads(spec.read_text())
+    assert code == 0 and len(raw["joints"]["names"]) == 18 and "held" not in raw["joints"]
+    perm = raw["mirror"]["joint_perm"]
+    assert sorted(perm) == list(range(18)) and all(perm[perm[i]] == i for i in range(18))
+    assert "(2π × 3 Hz)²" in spec.read_text()
+
+
+def test_a_broken_mirror_fails_check(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    spec = tmp_path / "spec.toml"
+    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec)
+    text = spec.read_text().replace("joint_sign = [-1, 1, 1, 1, 1, -1, -1, 1, 1, 1, 1, -1]",
+                                    "joint_sign = [-1, 1, 1, -1, 1, -1, -1, 1, 1, -1, 1, -1]")
+    spec.write_text(text)
+    code, out, _ = run(capsys, "robot", "check", spec)
+    assert code == 1 and "mirror: FAIL" in out and "1 of 6 checks failed (mirror)" in out
+
+
+def test_a_servo_weaker_than_gravity_fails_stiffness(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """kp capped at τ_max / 1 rad: the stance ankle is softer than the robot tipping over it (m g h)."""
+    spec = tmp_path / "spec.toml"
+    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, "--tracking-error", "1")
+    robot = load_robot(spec)
+    result = next(r for r in run_checks(robot, RobotConfig()) if r.name == "stiffness")
+    assert not result.passed and result.values["ratio"] < 1 and "ankle" in result.line
+
+
+def test_soft_gains_fail_stand_and_tracking(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    spec = tmp_path / "spec.toml"
+    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, "--bandwidth", "0.2",
+        "--damping-ratio", "0.2")
+    code, out, _ = run(capsys, "robot", "check", spec)
+    lines = {line.split(":")[0]: line for line in out.splitlines()}
+    assert code == 1 and "FAIL" in lines["tracking"] and ("FELL" in lines["stand"] or "FAIL" in lines["stand"])
+
+
+URDF_LEG = [("hip_yaw", "0 0 1", "0 {y} -0.05"), ("hip_roll", "1 0 0", "0 0 0"), ("hip_pitch", "0 1 0", "0 0 0"),
+            ("knee", "0 1 0", "0 0 -0.3"), ("ankle_pitch", "0 1 0", "0 0 -0.3"), ("ankle_roll", "1 0 0", "0 0 0")]
+
+
+def biped_urdf() -> str:
+    """The synthetic biped as a URDF: a pelvis and two 6-joint legs with box feet (collision names kept)."""
+    inertia = '<inertia ixx="{i}" iyy="{i}" izz="{i}" ixy="0" ixz="0" iyz="0"/>'
+    links = [f'<link name="pelvis"><inertial><mass value="10"/>{inertia.format(i=0.1)}</inertial>'
+             '<collision><origin xyz="0 0 0.1"/><geometry><box size="0.2 0.3 0.2"/></geometry></collision></link>']
+    joints = []
+    for s, y in (("left", 0.09), ("right", -0.09)):
+        parent = "pelvis"
+        for j, axis, xyz in URDF_LEG:
+            link = f"{s}_{j}_link"
+            sole = (f'<collision name="{s}_sole"><origin xyz="0.03 0 -0.05"/><geometry><box size="0.2 0.1 0.02"/>'
+                    "</geometry></collision>" if j == "ankle_roll" else "")
+            mass = {"hip_pitch": 3.0, "knee": 2.0, "ankle_roll": 0.8}.get(j, 0.5)
+            links.append(f'<link name="{link}"><inertial><origin xyz="0 0 {-0.15 if mass > 1 else 0}"/>'
+                         f'<mass value="{mass}"/>{inertia.format(i=0.01)}</inertial>{sole}</link>')
+            joints.append(f'<joint name="{s}_{j}" type="revolute"><parent link="{parent}"/><child link="{link}"/>'
+                          f'<origin xyz="{xyz.format(y=y)}"/><axis xyz="{axis}"/>'
+                          f'<limit lower="-1" upper="{2.2 if j == "knee" else 1}" effort="80" velocity="10"/></joint>')
+            parent = link
+    return f'<robot name="urdf_biped">{"".join(links)}{"".join(joints)}</robot>'
+
+
+def test_init_on_a_urdf(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    model = write(tmp_path, biped_urdf(), "biped.urdf")
+    spec = tmp_path / "spec.toml"
+    code, _, err = run(capsys, "robot", "init", model, "-o", spec)
+    assert code == 0, err
+    raw = tomllib.loads(spec.read_text())
+    assert raw["base_body"] == "pelvis" and raw["mjcf"] == "biped.urdf" and raw["add_floor"] is True
+    assert raw["legs"]["left"] == {"sole_geom": "left_sole"} and len(raw["joints"]["names"]) == 12
+    assert raw["joints"]["torque_limit"] == [80.0] * 12 and "held" not in raw["joints"]
+    assert raw["mirror"]["joint_sign"] == [-1, -1, 1, 1, 1, -1] * 2
+    robot = load_robot(spec)
+    results = run_checks(robot, RobotConfig())
+    assert all(r.passed for r in results), [r.line for r in results]
+
+
+def test_init_on_exo_finds_its_spec(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    spec = tmp_path / "exo.toml"
+    code, out, _ = run(capsys, "robot", "init", EXO_XML, "-o", spec)
+    raw = tomllib.loads(spec.read_text())
+    shipped = tomllib.loads(EXO_XML.with_name("spec.toml").read_text())
+    assert code == 0 and "no torque limit in the model: estimated" in out
+    for k in ("names",):
+        assert raw["joints"][k] == shipped["joints"][k]
+    assert raw["mirror"] == {**shipped["mirror"]}
+    assert raw["legs"] == shipped["legs"] and raw["base_body"] == "pelvis" and raw["floor_geom"] == "floor"
+    assert all(r.passed for r in run_checks(load_robot(spec), RobotConfig()))
+
+
+@needs_t1
+def test_init_and_check_on_booster_t1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    spec = tmp_path / "t1.toml"
+    code, out, _ = run(capsys, "robot", "init", T1, "-o", spec)
+    assert code == 0
+    raw = tomllib.loads(spec.read_text())
+    j = raw["joints"]
+    assert j["names"][:6] == ["Left_Hip_Pitch", "Left_Hip_Roll", "Left_Hip_Yaw", "Left_Knee_Pitch",
+                              "Left_Ankle_Pitch", "Left_Ankle_Roll"]
+    assert len(j["held"]) == 11 and j["held"]["Left_Shoulder_Roll"] == -1.4 and j["held"]["Waist"] == 0.0
+    assert raw["mirror"]["joint_sign"] == [1, -1, -1, 1, 1, -1] * 2
+    assert raw["mirror"]["held"]["Left_Elbow_Yaw"] == ["Right_Elbow_Yaw", -1]
+    limits = dict(zip(j["names"], j["torque_limit"], strict=True))
+    assert all(0 < kp <= 50 * limits[n] for n, kp in zip(j["names"], j["kp"], strict=True))
+    assert raw["legs"]["left"] == {"sole_geom": "left_foot_box"} and raw["floor_geom"] == "floor"
+    code, out, _ = run(capsys, "robot", "check", spec)
+    assert code == 0 and "t1: all 6 checks passed" in out
+
+
+@needs_t1
+def test_init_on_booster_t1_as_the_menagerie_has_it(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The Menagerie's t1.xml has unnamed foot boxes and no floor (our copy names them and adds one)."""
+    xml = T1.read_text().replace(' name="left_foot_box"', "").replace(' name="right_foot_box"', "")
+    xml = xml.replace('<geom name="floor" type="plane" size="0 0 0.05" rgba="0.8 0.8 0.8 1"/>', "")
+    assert 'type="plane"' not in xml and 'name="left_foot_box"' not in xml
+    spec = tmp_path / "t1.toml"
+    code, out, err = run(capsys, "robot", "init", write(tmp_path, xml, "t1.xml"), "-o", spec)
+    raw = tomllib.loads(spec.read_text())
+    assert code == 0, err
+    assert raw["legs"]["left"] == {"sole_body": "left_foot_link"} and raw["add_floor"] is True
+    code, out, _ = run(capsys, "robot", "check", spec)
+    assert code == 0 and "t1: all 6 checks passed" in out
+
+
+# ----------------------------------------------------------------------------------------------- bad input
+BAD_MODELS = {
+    "no free joint": (lambda: biped_xml(freejoint=False, keyframe=False), "no free joint"),
+    "one leg": (lambda: biped_xml(legs=("left",)), "one leg"),
+    "no collision geom": (lambda: biped_xml(collide=False), "no sole found"),
+    "no foot geom": (lambda: biped_xml(foot="none"), "no area to stand on"),
+    "mesh sole": (lambda: biped_xml(foot="mesh"), "is a mesh"),
+    "two-body foot": (lambda: biped_xml(foot="toe", keyframe=False), "foot stands on 2 bodies"),
+    # the right shin 3 cm shorter: the feet still stand level within the tolerance, the mirror cannot be right
+    "asymmetric": (lambda: biped_xml(right_short=0.03), "the mirror does not reflect the model"),
+    "unparsable": (lambda: "<mujoco><worldbody><body></mujoco>", "could not parse"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_MODELS))
+def test_bad_models_are_refused_in_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str], case: str) -> None:
+    make, message = BAD_MODELS[case]
+    spec = tmp_path / "spec.toml"
+    code, out, err = run(capsys, "robot", "init", write(tmp_path, make()), "-o", spec)
+    assert code == 2 and out == "" and err.count("\n") == 1 and err.startswith("robustgait: error: ")
+    assert message in err and not spec.exists() and list(tmp_path.iterdir()) == [tmp_path / "biped.xml"]
+
+
+def test_bad_paths_are_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    model = write(tmp_path, biped_xml())
+    cases = [(("robot", "init", tmp_path / "missing.xml", "-o", tmp_path / "a.toml"), "not found"),
+             (("robot", "init", tmp_path / "model.obj", "-o", tmp_path / "a.toml"), "unknown robot model format"),
+             (("robot", "init", tmp_path, "-o", tmp_path / "a.toml"), "unknown robot model format"),
+             (("robot", "init", model, "-o", tmp_path), "is a directory"),
+             (("robot", "init", model, "-o", tmp_path / "a.json"), "expected .toml"),
+             (("robot", "init", model, "-o", tmp_path / "a.toml", "--keyframe", "sit"), "no keyframe named 'sit'"),
+             (("robot", "check", tmp_path / "missing.toml"), "missing.toml")]
+    for argv, message in cases:
+        code, _, err = run(capsys, *argv)
+        assert code == 2 and err.count("\n") == 1 and message in err, (argv, err)
+    assert not (tmp_path / "a.toml").exists()
+
+
+def test_check_refuses_a_held_joint_that_does_not_exist(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    spec = tmp_path / "spec.toml"
+    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec)
+    spec.write_text(spec.read_text().replace("neck_yaw", "neck_roll"))
+    code, out, err = run(capsys, "robot", "check", spec)
+    assert code == 2 and out == "" and "unknown held joint name 'neck_roll'" in err
+
+
+def test_draft_errors_are_input_errors(tmp_path: Path) -> None:
+    with pytest.raises(RobustGaitError, match="no free joint"):
+        draft_spec(write(tmp_path, biped_xml(freejoint=False, keyframe=False)), RobotConfig())
