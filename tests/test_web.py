@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import socket
 import subprocess
 import sys
@@ -64,9 +65,15 @@ def pending_study(d: Path, r_stars: tuple[float, ...] = (20.0, 15.0, 5.0), floor
     return d
 
 
+@pytest.fixture(scope="module")
+def template(tmp_path_factory):  # type: ignore[no-untyped-def]
+    return pending_study(tmp_path_factory.mktemp("template") / "study")
+
+
 @pytest.fixture
-def served(tmp_path):  # type: ignore[no-untyped-def]
-    page = PersonPage(pending_study(tmp_path / "study"))
+def served(tmp_path, template):  # type: ignore[no-untyped-def]
+    """A copy of the pending study (its own database), served on a free port."""
+    page = PersonPage(shutil.copytree(template, tmp_path / "study"))
     page.ready = 0  # the videos of batch 0 are "rendered": the page shows it
     server = PageServer(page, WebConfig(port=0)).start()
     yield page, server
@@ -195,8 +202,8 @@ def test_not_json_is_refused(served):
     assert exc.value.code == 400 and "not JSON" in json.loads(exc.value.read())["error"]
 
 
-def test_record_answer_checks_the_pending_batch(tmp_path):
-    d = pending_study(tmp_path / "s")
+def test_record_answer_checks_the_pending_batch(tmp_path, template):
+    d = shutil.copytree(template, tmp_path / "s")
     setup = load_config(d)
     store = open_store(d, setup, setup.action_space())
     try:
