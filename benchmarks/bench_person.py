@@ -117,7 +117,8 @@ def main() -> None:
     # score every study against what is known now (the cache only grows)
     gaits = known(cache)
     jstar = study_status(args.jstar_study)["best"]["params"] if args.jstar_study else None
-    rows = [json.loads(x) for x in results.read_text().splitlines()]
+    # one row per (person, learner): several processes may share the results file (learners run side by side)
+    rows = list({(r["person"], r["learner"]): r for r in map(json.loads, results.read_text().splitlines())}.values())
     table: dict[str, list[dict[str, Any]]] = {}
     for r in rows:
         person = SimulatedPerson.from_config(SimulatedPersonConfig(seed=r["person"]))

@@ -23,7 +23,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.study.config import load_config
 from robustgait.study.person import FLOOR_ATTR, pending_record, record_answer
 from robustgait.study.ranking import requirements
-from robustgait.study.run import completed_batches, create_study, open_store
+from robustgait.study.run import completed_batches, create_study, gait_label, open_store
 from robustgait.web.answers import parse_answer
 from robustgait.web.server import PageServer, PersonPage
 
@@ -127,7 +127,15 @@ def test_the_pending_batch_shows_only_gaits_above_the_floor(served):
     assert [g["name"] for g in st["batch"]] == ["A", "B"]  # C (J* 5 < floor 10) is not shown
     assert st["hidden"] == [{"slot": 2, "name": "C", "why": "certified 5 N s, below the floor 10 N s"}]
     assert st["batch"][0]["r_star"] == 20.0 and st["batch"][0]["figures"][0]["name"] == "speed"
-    assert st["batch"][0]["video"] == f"/{page.token}/video/0/0.mp4"
+    assert st["batch"][0]["video"] is None  # not rendered (the fixture renders none)
+    video = page.directory / "gaits" / gait_label(page.space, 3) / "person.mp4"
+    video.parent.mkdir(parents=True)
+    video.write_bytes(bytes(range(256)) * 8)
+    st = call(server.url + "api/state")[1]
+    assert st["batch"][0]["video"] == f"/{page.token}/video/0/0.mp4"  # type: ignore[index]
+    req = urllib.request.Request(server.url + "video/0/0.mp4", headers={"Range": "bytes=100-199"})
+    with urllib.request.urlopen(req, timeout=10) as r:  # browsers loop and seek videos with Range requests
+        assert r.status == 206 and r.headers["Content-Type"] == "video/mp4" and r.read() == video.read_bytes()[100:200]
     assert call(server.url + "video/0/2.mp4")[0] == 404  # a hidden gait has no video
 
 

@@ -66,6 +66,7 @@ class PersonPage:
         self.ready: int | None = None  # the pending iteration whose videos are rendered
         self.running = False  # a study runner in this process drives the study
         self.errors: list[str] = []
+        self.video_errors: dict[tuple[int, int], str] = {}
         self._robot: Any = None
 
     # ---- the study's side --------------------------------------------------------------------------------
@@ -102,7 +103,12 @@ class PersonPage:
             if gait_file is None:
                 raise RobustGaitError(f"trial {r.number}: a shown gait without a gait file")
             gait = load_gait(self.directory / gait_file, self._robot)
-            render_person_video(self._robot, gait, path, cfg.person.video_steps, cfg.comfort, cfg.sim)
+            try:
+                render_person_video(self._robot, gait, path, cfg.person.video_steps, cfg.comfort, cfg.sim)
+            except Exception as exc:  # no offscreen GL, a gait that falls in the video's walk: shown without video
+                self.video_errors[(k, r.slot)] = f"{type(exc).__name__}: {exc}"
+                LOG.warning("iteration %d, gait %s: no video (%s)", k + 1, gait_names(r.slot + 1)[-1],
+                            self.video_errors[(k, r.slot)])
 
     def _source(self, r: TrialRecord) -> TrialRecord:
         if r.reused_from is None:
@@ -161,7 +167,8 @@ class PersonPage:
         names = gait_names(len(batch))
         shown = rec["pending"]["shown"]
         cards = [{**self._gait_view(r, blind=blind), "name": names[r.slot],
-                  "video": f"/{self.token}/video/{k}/{r.slot}.mp4"} for r in batch if r.slot in shown]
+                  "video": f"/{self.token}/video/{k}/{r.slot}.mp4" if self.video_path(r).is_file() else None,
+                  "no_video": self.video_errors.get((k, r.slot))} for r in batch if r.slot in shown]
         hidden = [{"slot": int(s), "name": names[int(s)], "why": None if blind else why}
                   for s, why in rec["pending"]["hidden"].items()]
         return cards, hidden
