@@ -30,10 +30,16 @@ def one(d: Path, require: tuple[str, ...], workers: int) -> dict:  # type: ignor
     wall = time.perf_counter() - t0
     st = study_status(d)
     best = st["best"]
+    import optuna
+
+    trials = optuna.load_study(study_name="robustgait", storage=f"sqlite:///{d / 'study.db'}").get_trials()
+    span = (max(t.datetime_complete for t in trials if t.datetime_complete) -
+            min(t.datetime_start for t in trials if t.datetime_start)).total_seconds()
     done = [t for t in st["trials"] if t["state"] == "COMPLETE" and t["reused_from"] is None]
     meets = [t for t in done if t["score"] is not None and t["score"] > -1e6]
     front = pareto(st, "pelvis_acc_vertical_rms")
-    return {"directory": str(d), "require": list(require), "wall": wall, "load": [load0, os.getloadavg()[0]],
+    return {"directory": str(d), "require": list(require), "wall": wall, "first_start_to_last_complete": span,
+            "load": [load0, os.getloadavg()[0]],
             "unique": len(done), "meet_requirements": len(meets),
             "certified": sum(t["status"] == "certified" for t in done),
             "best": {"params": best["params"], "r_star": best["r_star"],
