@@ -57,7 +57,7 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
                   f"{c['pelvis_acc_vertical_rms']:.3g} / lateral {c['pelvis_acc_lateral_rms']:.3g} m/s², cost of "
                   f"transport {cot} (docs/comfort.md)")
     obs = st["best_observed"]
-    if obs is not None and (best is None or obs["score"] != best["score"]):
+    if obs is not None and not st.get("person") and (best is None or obs["score"] != best["score"]):
         params = ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
         print(f"best evaluated gait (trial {obs['trial']}; the best gait above is the learner's highest posterior "
               f"mean): {params}; {_name(st)} = {obs['r_star']:.4g} {st['unit']}, {obs['steps_taken']} steps")

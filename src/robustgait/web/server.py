@@ -54,7 +54,7 @@ class PersonPage:
     def __init__(self, directory: str | Path, token: str | None = None):
         self.directory = Path(directory)
         self.setup = load_config(self.directory)
-        if not self.setup.config.study.asks_a_person or self.setup.config.study.metric != "person":
+        if self.setup.config.study.metric != "person":
             raise input_error(self.directory, f"study.metric is {self.setup.config.study.metric}: only a study with "
                               "--metric person is ranked on the page")
         self.space = self.setup.action_space()
@@ -145,7 +145,7 @@ class PersonPage:
         if phase == "waiting" and k is not None:
             out["batch"], out["hidden"] = self._batch(k, batches.get(k, []), iterations[k], blind)
         last = iterations[finished[-1]].get("recommended_trial") if finished else None
-        if last is not None and last in by_number:
+        if last is not None and last in by_number and (complete or not blind):  # blind: only at the end
             out["recommendation"] = self._gait_view(by_number[last], blind=False)
         if complete:
             self.final_seen.set()
