@@ -272,3 +272,15 @@ def test_status_and_report_show_the_answers(served, capsys):
     html = write_study_report(page.directory, ReportConfig(video=False)).read_text()
     assert "The person&#x27;s answers" in html or "The person's answers" in html
     assert "<td>1</td><td>B (0.1, 1.1, 0.22, 0.04) ≻ A (0.1, 0.6, 0.22, 0.1)</td><td>A: good</td><td>1</td>" in html
+
+
+def test_blind_mode_hides_the_figures(served):
+    from dataclasses import replace
+
+    page, server = served
+    cfg = page.setup.config
+    page.setup = replace(page.setup, config=replace(cfg, person=replace(cfg.person, blind=True)))
+    st = call(server.url + "api/state")[1]
+    assert st["blind"] is True  # type: ignore[index]
+    assert [set(g) for g in st["batch"]] == [{"slot", "iteration", "name", "video", "no_video"}] * 2  # type: ignore[index]
+    assert st["hidden"] == [{"slot": 2, "name": "C", "why": None}]  # type: ignore[index]
