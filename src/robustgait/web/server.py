@@ -91,6 +91,7 @@ class PersonPage:
             rec = self.store.iterations().get(k, {})
             batch = completed_batches(self.store.records()).get(k, [])
         cfg = self.setup.config
+        t0, rendered = time.perf_counter(), 0
         for r in batch:
             if r.slot not in rec.get("pending", {}).get("shown", []):
                 continue
@@ -105,10 +106,13 @@ class PersonPage:
             gait = load_gait(self.directory / gait_file, self._robot)
             try:
                 render_person_video(self._robot, gait, path, cfg.person.video_steps, cfg.comfort, cfg.sim)
+                rendered += 1
             except Exception as exc:  # no offscreen GL, a gait that falls in the video's walk: shown without video
                 self.video_errors[(k, r.slot)] = f"{type(exc).__name__}: {exc}"
                 LOG.warning("iteration %d, gait %s: no video (%s)", k + 1, gait_names(r.slot + 1)[-1],
                             self.video_errors[(k, r.slot)])
+        if rendered:
+            LOG.info("iteration %d: %d videos rendered in %.1f s", k + 1, rendered, time.perf_counter() - t0)
 
     def _source(self, r: TrialRecord) -> TrialRecord:
         if r.reused_from is None:
