@@ -1,8 +1,8 @@
 """Certificates r*: precision and cost of the estimators on real gaits, coverage of the confidence statement on
 maps with known answers, both barriers, and the sampler's speed against raw ``mujoco.rollout``.
 
-    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed|horizon|states|push|push-gaits|push-sweep]
-        [options]
+    python benchmarks/bench_certify.py [all|seeds|coverage|barrier|speed|horizon|states|push|push-gaits|push-sweep|
+        orbit] [options]
 
 * ``seeds`` (issue 7 acceptance): the default ``exo`` gait (regenerated here with the API from the default
   ``GaitParams``, or ``--exo-gait FILE``; ``--step-length`` etc. change the parameters) and the Atalante FROST
@@ -36,6 +36,11 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
 * ``push-sweep`` (not part of ``all``): where one exo gait's pushes fail (the default gait or ``--exo-gait``): its J*,
   the falls the estimator met below ``--near`` × J* (direction, phase, step, reason), and grids of fall steps over
   24 directions × 13 phases at ``--sweep`` × J*.
+* ``orbit`` (issue 28 item 3; not part of ``all``): the fixed point's orbit check on the default exo, multi-contact
+  exo and Atalante FROST gaits (and ``--extra ROBOT=FILE``): the rule before it, the window, the window with
+  ``--newton`` Newton iterations — status, ρ, eigenvalue moduli, cost, J* with ``--seed`` and the move of x* — and
+  the finite-difference check of ρ (``--fd-steps``, forward differences, growth of random perturbations); then the
+  shipped search alone on ``--survey ROBOT=FILE`` gaits; :mod:`bench_orbit`.
 """
 
 from __future__ import annotations
@@ -53,6 +58,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+from bench_orbit import cmd_orbit  # the orbit check's measurement (its own module: this one is long enough)
 from robustgait import load_gait, load_robot
 from robustgait.barrier import distances, sample_ball, solve_radius
 from robustgait.certify import GaitCertificate, certify_gait
@@ -587,7 +593,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("part", nargs="?", default="all",
                     choices=("all", "seeds", "coverage", "barrier", "speed", "horizon", "states", "push",
-                             "push-gaits", "push-sweep"))
+                             "push-gaits", "push-sweep", "orbit"))
     ap.add_argument("--seeds", type=int, default=10, help="seeds: seeds per gait and method (default 10)")
     ap.add_argument("--methods", default="uniform,sequential")
     ap.add_argument("--epsilon", type=float, default=0.02)
@@ -615,6 +621,15 @@ def main() -> None:
                          "whole:0/3,chunked:25/3)")
     ap.add_argument("--near", type=float, default=1.2, help="push-sweep: list the falls below this × J* (1.2)")
     ap.add_argument("--sweep", default="0.8,1.0,1.1", help="push-sweep: impulses of the grids, × J* (0.8,1.0,1.1)")
+    ap.add_argument("--seed", type=int, default=0, help="orbit: the certificates' seed (0)")
+    ap.add_argument("--newton", type=int, default=5, help="orbit: Newton iterations of window+newton (5)")
+    ap.add_argument("--fd-steps", default="1e-7,1e-6,1e-5", help="orbit: finite-difference steps compared")
+    ap.add_argument("--extra", action="append", default=[], help="orbit: more gaits, ROBOT=FILE (repeatable)")
+    ap.add_argument("--orbit-parts", default="rules,fd,survey",
+                    help="orbit: rules (with the finite-difference check and the survey after them), or any of fd, "
+                         "survey and windows alone")
+    ap.add_argument("--survey", action="append", default=[],
+                    help="orbit: gaits of the survey (the shipped search only), ROBOT=FILE (repeatable)")
     ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")
     args = ap.parse_args()
     if args.repeat < 2:
@@ -623,8 +638,8 @@ def main() -> None:
           f"{mujoco.__version__}; numpy {np.__version__}; {load()}")
     for part, fn in (("seeds", cmd_seeds), ("coverage", cmd_coverage), ("barrier", cmd_barrier), ("speed", cmd_speed),
                      ("horizon", cmd_horizon), ("states", cmd_states), ("push", cmd_push),
-                     ("push-gaits", cmd_push_gaits), ("push-sweep", cmd_push_sweep)):
-        if args.part == part or (args.part == "all" and part not in ("push-gaits", "push-sweep")):
+                     ("push-gaits", cmd_push_gaits), ("push-sweep", cmd_push_sweep), ("orbit", cmd_orbit)):
+        if args.part == part or (args.part == "all" and part not in ("push-gaits", "push-sweep", "orbit")):
             fn(args)
 
 

@@ -206,7 +206,7 @@ def fixed_point(robot: Robot, gait: Gait, ctl: object, config: SimConfig) -> str
         with pmap:
             fp = pmap.find_fixed_point()
     except FixedPointFailure as e:
-        detail = str(e).rsplit("(", 1)[-1].rstrip(")") if e.status == "no_fixed_point" else f"step {e.steps}"
+        detail = str(e).rsplit("(", 1)[-1].rstrip(")") if e.status == "no_stable_orbit" else f"step {e.steps}"
         return f"none, {e.status} ({detail})"
     return f"step {fp.steps}, residual {fp.residual:.1e}, ‖ω*‖ {np.linalg.norm(fp.omega):.3f} rad/s"
 

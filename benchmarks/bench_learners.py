@@ -173,7 +173,8 @@ def main() -> None:
     print(f"coarse grid: {space.describe()} = {space.size} gaits; load {os.getloadavg()}", flush=True)
     rows = evaluate_table(space, args.table, args.workers, args.method, args.samples, args.steps)
     table = [rows[key(space.value(i))] for i in range(space.size)]
-    scores = np.array([score("robustness", Outcome(r["steps_taken"], r["step_cap"], r["r_star"])) for r in table])
+    scores = np.array([score("robustness", Outcome(r["steps_taken"], r["step_cap"], r["r_star"],
+                                                   r["status"] == "certified")) for r in table])
     r_true = np.array([r["r_star"] for r in table])
     steps = np.array([r["steps_taken"] for r in table])
     rank = np.array([1 + int(np.sum(scores > s)) for s in scores])  # ties share the better rank

@@ -26,6 +26,7 @@ from robustgait.config import KINDS, CertifyConfig, Config, SimConfig, ValidateC
 from robustgait.config.work import Work, work_limit
 from robustgait.gait import Gait
 from robustgait.learn.space import ActionSpace
+from robustgait.reduced import section_dimension
 from robustgait.robots import Robot
 from robustgait.sim.engine import step_physics_steps
 from robustgait.sim.walk import check_walk_work
@@ -44,7 +45,7 @@ def defaults_of(*argv: str, base: Config | None = None) -> Config:
 
 
 def rows(name: str, spec: str, robot: Robot, graph: str, gait: Gait, source: str) -> list[str]:
-    dt, sim = robot.dt, SimConfig()
+    dt, sim, dim = robot.dt, SimConfig(), section_dimension(robot)
     step = step_physics_steps(gait, dt, sim)
     out = []
 
@@ -56,12 +57,12 @@ def rows(name: str, spec: str, robot: Robot, graph: str, gait: Gait, source: str
     w = Work(sim.step_cap, step)
     row("walk", w, w, check_walk_work(robot, gait, sim, sim.step_cap).physics_steps)
     c = defaults_of("certify", "g.json", "--robot", spec).certify
-    w = Work(certify_steps(c, graph), step)
+    w = Work(certify_steps(c, graph, dim), step)
     row("certify (J*)", w, w, check_certify_work(robot, gait, c, sim))
     for kinds, label in ((1, "validate (one kind, certifying)"),
                          (len(KINDS), f"validate --disturbance all ({len(KINDS)})")):
         v = dataclasses.replace(ValidateConfig(), disturbance="push" if kinds == 1 else "all")
-        w = Work(validate_steps(v, kinds, CertifyConfig(), graph, True), step)
+        w = Work(validate_steps(v, kinds, CertifyConfig(), graph, True, dim), step)
         row(label, w, w, check_validate_work(robot, gait, v, sim, kinds=kinds, certifying=True))
     if source == "longest":
         for label, cfg in (("study run: evaluation", defaults_of("study", "run", "d", "--robot", spec, "--domains",
@@ -69,8 +70,8 @@ def rows(name: str, spec: str, robot: Robot, graph: str, gait: Gait, source: str
                            ("demo: evaluation", defaults_of("demo", "--override", f"generate.domains={graph}",
                                                             base=preset("demo")))):
             check_evaluation_work(cfg, robot, ActionSpace.from_robot(robot, graph))  # its walk's and certificate's
-            w = Work(certify_steps(cfg.study_certify, graph), step)
-            row(f"{label}'s certificate", w, Work(certify_steps(Config().study_certify, graph), step),
+            w = Work(certify_steps(cfg.study_certify, graph, dim), step)
+            row(f"{label}'s certificate", w, Work(certify_steps(Config().study_certify, graph, dim), step),
                 check_certify_work(robot, gait, cfg.study_certify, cfg.sim))
     return out
 

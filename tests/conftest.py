@@ -70,6 +70,19 @@ def flat_robot_gait(request):  # type: ignore[no-untyped-def]
     return request.getfixturevalue("atalante"), request.getfixturevalue("atalante_gait")
 
 
+def search_options(gait) -> dict:  # type: ignore[no-untyped-def, type-arg]
+    """The fixed-point options a test of the map's or the certificate's mechanics searches a stored gait with: the
+    shipped search for the flat-foot exo gait; for the two stored gaits the shipped search refuses — the multi-contact
+    exo gait (its orbit never settles: no_stable_orbit) and Atalante's FROST gait (it settles on an unstable orbit, ρ
+    1.1–1.2: unstable_orbit; docs/certificate.md "Fixed point") — the rule before the orbit check, which found them a
+    fixed point. The refusals themselves: test_poincare.py, test_certify.py."""
+    from robustgait.config.certify import LEGACY_FIXED_POINT
+
+    if gait.robot == "exo" and gait.domain_graph == "flat":
+        return {}
+    return {**LEGACY_FIXED_POINT, "fp_tol": 5e-3}
+
+
 def write_frost_yaml(gait, path, *, inputparams=None):  # type: ignore[no-untyped-def]
     """Write a one-domain gait as a FROST/ambersim YAML (``coeff_jt`` in Fortran order, ``step_dur``, the initial
     state as ``ffPos``/``startingPos``/``ffVel``/``startingVel``): a FROST file for any robot, for the importer's

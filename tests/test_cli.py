@@ -42,6 +42,7 @@ def test_walk_json(capsys, gait_robot):
     assert res["steps_taken"] == 5 and res["fell"] is False and res["fall_reason"] is None
     assert (0.08 < res["mean_speed"] < 0.2 if name == "atalante" else abs(res["mean_speed"] - 0.15 / 0.7) < 0.01)
     assert len(res["events"]) == 5
+    assert res["orbit"]["converged"] is False and res["orbit"]["residuals"]["steps"] == 4  # 5 events: too few
     assert res["comfort"] is None  # 5 steps end before the first measured one (comfort.skip_steps = 5)
     code, out, _ = run(capsys, "walk", gait, "--robot", robot, "--steps", "5", "--json", "--override",
                        "comfort.skip_steps=2")
@@ -49,6 +50,12 @@ def test_walk_json(capsys, gait_robot):
     assert code == 0 and c["first_step"] == 3 and c["steps"] == 3 and c["speed"] > 0 and c["impact_force_ratio"] > 1
     code, out, _ = run(capsys, "walk", gait, "--robot", robot, "--steps", "4", "--override", "comfort.skip_steps=1")
     assert code == 0 and "comfort over steps 2–4" in out and "pelvis acceleration RMS/peak" in out
+
+
+def test_walk_reports_the_orbit_of_its_switching_events(capsys):
+    code, out, _ = run(capsys, "walk", str(EXO_GAIT), "--robot", "exo", "--steps", "30")
+    assert code == 0 and "orbit of the switching events: converged at step 27 (20 iterates within 0.01" in out
+    assert "; ρ = 0.79" in out
 
 
 def test_gait_convert_round_trip(tmp_path, capsys, gait_robot):

@@ -277,7 +277,7 @@ def test_total_work_is_bounded_before_simulating(tmp_path, gait_file):
                    "over the limit of 2e+06")
     code, _, err = cli("certify", gait_file(), "--robot", "exo", "--override", "certify.push.steps=100")
     assert code == 2
-    one_error_line(err, "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303111 simulated "
+    one_error_line(err, "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303179 simulated "
                    "steps of up to 1.05 s", "over the limit of 5.1e+07 (4 × the 1.3e+07 the defaults need here)")
     code, _, err = cli("walk", gait_file(), "--robot", "exo", "--steps", "200", "--video", tmp_path / "v.gif")
     assert code == 2

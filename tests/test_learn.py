@@ -97,6 +97,22 @@ def test_robustness_oracle_rules():
     assert ranked == [1, 3, 4, 0, 2]
 
 
+@pytest.mark.parametrize("metric", ["robustness", "push"])
+def test_a_gait_that_walked_the_cap_without_a_certificate_ranks_below_every_certified_one(metric):
+    """Walked the cap, no certificate (its orbit did not settle, is unstable, …): cap − ½, strictly below a certified
+    gait of r* = 0 (before, tied with it: cap) and above every faller; certified scores are unchanged."""
+    cap = 50
+    uncertified = Outcome(cap, cap, 0.0, certified=False)
+    certified_zero, certified = Outcome(cap, cap, 0.0), Outcome(cap, cap, 1.3)
+    assert score(metric, uncertified) == cap - 0.5 and score(metric, certified_zero) == cap
+    assert score(metric, certified) == cap + 1.3  # as before
+    assert prefer(metric, certified_zero, uncertified) == 1 and prefer(metric, uncertified, Outcome(cap - 1, cap)) == 1
+    assert score(metric, uncertified, penalty=0.0) == score(metric, certified_zero)  # a study created before
+    assert prefer(metric, Outcome(cap, cap, 0.0, False), uncertified) == 0  # two without: no comparison
+    assert score(metric, Outcome(12, cap, 0.0, certified=False)) == 12  # a faller's flag does not count
+    assert score("stability", uncertified) == cap
+
+
 def test_stability_oracle_counts_steps_only():
     assert prefer("stability", Outcome(50, 50, 0.1), Outcome(50, 50, 1.5)) == 0
     assert prefer("stability", Outcome(12, 50), Outcome(11, 50, 0.0)) == 1

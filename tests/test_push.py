@@ -16,11 +16,12 @@ from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import FALL_REASONS
 from robustgait.validate import Validator
 from robustgait.validate.disturbances import Draws
+from tests.conftest import search_options
 
 
 @pytest.fixture(scope="module")
 def mc_pushes(exo, exo_mc_gait):  # type: ignore[no-untyped-def]
-    cfg = CertifyConfig(disturbance="push")
+    cfg = CertifyConfig(disturbance="push", **search_options(exo_mc_gait))
     with ReturnMap(exo, exo_mc_gait, cfg) as pmap:
         fp = pmap.find_fixed_point()
         # falls only: the map is then the validation's walk to the letter (recovery: its own test)
@@ -62,7 +63,8 @@ def test_multicontact_zero_push_walks_and_the_push_map_is_the_validation_walk(mc
     ds = exo_mc_gait.domains[1].duration / exo_mc_gait.step_duration
     assert draws.params["phase"].min() < ds < draws.params["phase"].max()  # pushes start in both domains
     with Validator(exo, exo_mc_gait, ValidateConfig(trials=6, steps_after=3),
-                   certificate=certify_gait(exo, exo_mc_gait, CertifyConfig(method="uniform", n_samples=2)),
+                   certificate=certify_gait(exo, exo_mc_gait, CertifyConfig(method="uniform", n_samples=2,
+                                                                            **search_options(exo_mc_gait))),
                    start=fp) as v:
         res = v.run("push", draws=draws)
     np.testing.assert_array_equal(res.fall_step, falls)
@@ -70,7 +72,7 @@ def test_multicontact_zero_push_walks_and_the_push_map_is_the_validation_walk(mc
 
 def test_multicontact_push_certificate(exo, exo_mc_gait, tmp_path):
     gc = certify_gait(exo, exo_mc_gait, CertifyConfig(disturbance="push", method="uniform", n_samples=10, seed=2,
-                                                      push={"steps": 1}))
+                                                      push={"steps": 1}, **search_options(exo_mc_gait)))
     c = gc.certificate
     assert gc.ok and c.samples.shape == (10, 2) and gc.config.unit == "N s"
     d = np.linalg.norm(c.samples, axis=1)

@@ -270,14 +270,17 @@ def test_study_validate_on_a_study_run_end_to_end(tmp_path):
     a = json.loads(two.stdout)["push"]
     st = json.loads(cli("study", "status", str(d), "--json").stdout)
     assert a["n_validated"] + len(a["skipped"]) == st["unique_gaits"] and a["n_validated"] >= 1
-    for c in a["correlations"].values():
-        assert c["n"] == a["n_validated"]
+    for key, c in a["correlations"].items():
+        # r* against the success rate of every validated gait; r_star_critical against s₅₀ of the gaits with a fit
+        fitted = [g for g in a["gaits"] if key != "r_star_critical" or g["critical"]["s50"] is not None]
+        assert c["n"] == len(fitted) and (key == "r_star_critical" or c["n"] == a["n_validated"])
         if c["defined"]:
             assert -1 <= c["rho"] <= 1 and 0 <= c["p"] <= 1
-            x = [g["r_star" if c["x"] in ("r*", "J*") else "steps_taken"] for g in a["gaits"]]
+            x = [g["r_star" if c["x"] in ("r*", "J*") else "steps_taken"] for g in fitted]
             from scipy.stats import spearmanr
 
-            ref = spearmanr(x, [g["success"]["rate"] for g in a["gaits"]])
+            y = [g["critical"]["s50"] if key == "r_star_critical" else g["success"]["rate"] for g in fitted]
+            ref = spearmanr(x, y)
             assert math.isclose(c["rho"], ref.statistic) and math.isclose(c["p"], ref.pvalue)
         else:
             assert c["rho"] is None and c["reason"]

@@ -25,6 +25,7 @@ from robustgait.validate import (
     wilson_interval,
 )
 from robustgait.validate import disturbances as dist
+from tests.conftest import search_options
 
 
 def test_wilson_interval_known_values():
@@ -303,7 +304,8 @@ def test_gait_tiles_are_a_real_image(tmp_path, exo, exo_gait):
 # ---- multi-contact gaits: a step is the previous leg's double support, then single support to heel strike -----
 @pytest.fixture(scope="module")
 def mc_validator(exo, exo_mc_gait):
-    cert = certify_gait(exo, exo_mc_gait, CertifyConfig(method="uniform", disturbance="state", n_samples=8))
+    cert = certify_gait(exo, exo_mc_gait, CertifyConfig(method="uniform", disturbance="state", n_samples=8,
+                                                        **search_options(exo_mc_gait)))
     with Validator(exo, exo_mc_gait, ValidateConfig(trials=4, steps_after=2), certificate=cert) as v:
         yield v
 

@@ -18,6 +18,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.io.gaitfile import save_gait
 from robustgait.learn.space import ActionSpace
+from robustgait.reduced import section_dimension
 from robustgait.sim.engine import step_physics_steps
 from robustgait.sim.walk import check_walk_work
 from robustgait.study.run import check_evaluation_work, longest_gaits
@@ -70,8 +71,10 @@ def test_certify_defaults_pass(case):
     c = defaults_of("certify", "g.json", "--robot", SPEC[name])
     assert c.certify.disturbance == "push"
     worst = check_certify_work(robot, gait, c.certify, c.sim)
-    # 100 fixed-point steps, the map at x*, 3000 pushes of 1 + 3 steps (+ a multi-contact gait's first heel strike)
-    assert worst == (12_111 + (gait.domain_graph == "multicontact")) * step_physics_steps(gait, robot.dt, c.sim)
+    # 100 fixed-point steps and its Jacobian's 2d + 2 = 68 (d = 33 on exo and Atalante), the map at x*, 10 steps of
+    # the recovery band, 3000 pushes of 1 + 3 steps (+ a multi-contact gait's first heel strike)
+    assert section_dimension(robot) == 33
+    assert worst == (12_179 + (gait.domain_graph == "multicontact")) * step_physics_steps(gait, robot.dt, c.sim)
 
 
 @pytest.mark.parametrize("kind", [*KINDS, "all"])
@@ -111,7 +114,7 @@ def test_study_and_demo_defaults_pass(request, name, graph):
         check_certify_work(robot, gait, c.study_certify, c.sim)
 
 
-@pytest.mark.parametrize("override", [  # on both sides of the limit: 4 × the default 12 111 steps of 1.5 T at most
+@pytest.mark.parametrize("override", [  # on both sides of the limit: 4 × the default 12 179 steps of 1.5 T at most
     [], ["certify.sequential.budget=10000"], ["certify.push.steps=15"], ["certify.push.steps=16"],
     ["sim.step_cap=1000"], ["sim.max_step_tau=6"], ["sim.max_step_tau=6.1"], ["certify.disturbance=state"],
     ["certify.method=uniform", "certify.n_samples=10000", "certify.push.steps=4"],
@@ -146,11 +149,11 @@ def test_the_study_refuses_what_its_evaluation_would(exo, graph, override):
 def test_the_limit_is_relative_to_the_defaults(exo, exo_gait):
     """Within 4 × the defaults' work (or 2e7) passes, beyond is refused, on the same robot and gait."""
     step = step_physics_steps(exo_gait, exo.dt, SimConfig())
-    defaults = Work(certify_steps(CertifyConfig(), "flat"), step)
-    assert defaults.steps == 12_111 and work_limit(defaults) == 4 * 12_111 * 1050 > MAX_PHYSICS_STEPS
-    assert check_work(Work(4 * 12_111, step), defaults, exo.dt, "x") == 4 * 12_111 * 1050
-    with pytest.raises(RobustGaitError, match=r"^x: 48445 simulated steps .* over the limit of 5.1e\+07 \(4 × the "):
-        check_work(Work(4 * 12_111 + 1, step), defaults, exo.dt, "x")
+    defaults = Work(certify_steps(CertifyConfig(), "flat", section_dimension(exo)), step)
+    assert defaults.steps == 12_179 and work_limit(defaults) == 4 * 12_179 * 1050 > MAX_PHYSICS_STEPS
+    assert check_work(Work(4 * 12_179, step), defaults, exo.dt, "x") == 4 * 12_179 * 1050
+    with pytest.raises(RobustGaitError, match=r"^x: 48717 simulated steps .* over the limit of 5.1e\+07 \(4 × the "):
+        check_work(Work(4 * 12_179 + 1, step), defaults, exo.dt, "x")
     small = Work(10, step)  # a small job on a robot whose defaults are small: the 2e7 floor
     assert work_limit(small) == MAX_PHYSICS_STEPS and check_work(Work(19_000, step), small, exo.dt, "x")
 
@@ -170,7 +173,7 @@ def test_a_mistaken_timestep_is_refused(exo, exo_gait, monkeypatch):
 
 @pytest.mark.parametrize("argv, message", [
     (["certify", "{g}", "--robot", "exo", "--override", "certify.push.steps=100"],
-     "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303111 simulated steps"),
+     "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303179 simulated steps"),
     (["validate", "{g}", "--robot", "exo", "--trials", "10000", "--steps-after", "1000", "--disturbance", "all"],
      f"validate.trials 10000 × (validate.steps_after 1000 + 2) steps × {len(KINDS)} disturbance kinds + the "
      "certificate"),

@@ -23,14 +23,16 @@ from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, to_dict
 from robustgait.config.work import Work, check_work
 from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
+from robustgait.orbit import OrbitReport
 from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap
 from robustgait.push import PushMap
-from robustgait.reduced import Coordinates
+from robustgait.reduced import Coordinates, section_dimension
 from robustgait.robots import Robot
 from robustgait.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
 from robustgait.sim.engine import step_physics_steps
 
-STATUSES = ("ok", "fell_before_fixed_point", "no_fixed_point", "unstable_fixed_point")
+STATUSES = ("ok", "fell_before_fixed_point", "no_stable_orbit", "period_two_orbit", "unstable_orbit",
+            "unstable_fixed_point")
 
 
 @dataclass
@@ -38,9 +40,13 @@ class GaitCertificate:
     """A gait's certificate.
 
     status: one of :data:`STATUSES` — ``ok``; ``fell_before_fixed_point`` (the gait fell while its fixed point
-    was searched); ``no_fixed_point`` (no iterate converged within ``fp_max_steps``); ``unstable_fixed_point``
-    (the reduced map falls from x̄* itself within the horizon: through the reconstruction x̄* is not on a walking
-    orbit). reason: one line (empty if ok). steps_walked: steps of the fixed-point search (completed before a fall).
+    was searched); ``no_stable_orbit`` (no window of ``fp_window`` iterates settled within ``fp_tol`` in
+    ``fp_max_steps``); ``period_two_orbit`` (none did, but iterates two apart settled: certify the stride map);
+    ``unstable_orbit`` (the orbit settled, but the linearized map at x* has spectral radius ρ ≥ ``fp_rho_max``);
+    ``unstable_fixed_point`` (the reduced map falls from x̄* itself within the horizon: through the reconstruction x̄*
+    is not on a walking orbit). reason: one line (empty if ok). steps_walked: steps of the fixed-point search
+    (completed before a fall). orbit: what the fixed-point search saw (:class:`robustgait.orbit.OrbitReport`: the
+    window, ρ and the eigenvalue moduli, Newton's residuals; None if the gait fell before its first iterate).
     certificate (the barrier :class:`Certificate` in the certificate's coordinates: r*, samples, images, margins,
     rounds, statement), coordinates (z = T x̄ of the reduced state, the shape of the set; :class:`Coordinates`),
     fixed_point and map_residual ‖P(x̄*) − x̄*‖ (certificate coordinates, one map) are None where the search did not
@@ -66,6 +72,8 @@ class GaitCertificate:
     validate: ValidateConfig | None = None  # push certificates: the push duration and phases used
     controller: str = "pd"  # the tracking law that ran (sim.controller, unless the note says why not)
     controller_note: str = ""
+    orbit: OrbitReport | None = None
+    fixed_point_physics_steps: int = 0  # simulated by the fixed-point search (its iterates, Newton, ρ)
 
     @property
     def ok(self) -> bool:
@@ -141,6 +149,7 @@ class GaitCertificate:
             "fixed_point_residual": None if fp is None else fp.residual,
             "fixed_point_steps": None if fp is None else fp.steps,
             "map_residual": self.map_residual,
+            "orbit": None if self.orbit is None else self.orbit.to_dict(),
             "map": cfg.map,
             "reconstruction": cfg.reconstruction,
             "frame": cfg.frame,
@@ -166,7 +175,8 @@ class GaitCertificate:
                            "statement": self.ball.statement(), "volume_ratio": self.volume_ratio}
         if self.excursion is not None:
             out["excursion"] = self.excursion
-        out.update({"physics_steps": self.physics_steps, "config": to_dict(cfg), "sim": to_dict(self.sim),
+        out.update({"physics_steps": self.physics_steps, "fixed_point_physics_steps": self.fixed_point_physics_steps,
+                    "config": to_dict(cfg), "sim": to_dict(self.sim),
                     "seconds": self.seconds})
         if self.validate is not None:
             out["push"] = {"duration": self.validate.push_duration, "phase": list(self.validate.push_phase)}
@@ -189,16 +199,16 @@ def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: boo
         return certify_map_sequential(counted, x_star, cfg)
 
 
-def certify_steps(config: CertifyConfig, graph: str) -> int:
+def certify_steps(config: CertifyConfig, graph: str, dim: int) -> int:
     """The most steps a certificate simulates: a multi-contact gait's walk to its first heel strike (one step at
-    most), up to ``fp_max_steps`` steps of the map to its fixed point, the map at x* (``horizon`` steps, × 2 for the
+    most), the fixed-point search on a section of ``dim`` coordinates (:meth:`CertifyConfig.fixed_point_steps`: up to
+    ``fp_max_steps`` steps of the map, its Newton iterations and ρ), the map at x* (``horizon`` steps, × 2 for the
     stride map), and :attr:`~CertifyConfig.steps_per_sample` for each of :attr:`~CertifyConfig.samples_planned`
     (a push: the pushed step and ``push.steps`` more; with recovery, the undisturbed walk that measures the orbit's
     scatter first)."""
     start = 0 if graph == "flat" else 1
-    period = 2 if config.map == "stride" else 1
     band = config.push.recovery_band_steps if config.disturbance == "push" and config.push.recovery else 0
-    return (start + config.fp_max_steps + config.horizon * period + band
+    return (start + config.fixed_point_steps(dim) + config.horizon * config.period + band
             + config.samples_planned * config.steps_per_sample)
 
 
@@ -207,8 +217,9 @@ def check_certify_work(robot: Robot, gait: Gait, config: CertifyConfig, sim: Sim
     each of up to the gait's :func:`~robustgait.sim.engine.step_horizons`, against what the default certificate
     needs on this robot and gait."""
     graph, samples = gait.domain_graph, "sequential.budget" if config.method == "sequential" else "n_samples"
-    return check_work(Work(certify_steps(config, graph), step_physics_steps(gait, robot.dt, sim)),
-                      Work(certify_steps(CertifyConfig(), graph), step_physics_steps(gait, robot.dt, SimConfig())),
+    dim = section_dimension(robot)
+    return check_work(Work(certify_steps(config, graph, dim), step_physics_steps(gait, robot.dt, sim)),
+                      Work(certify_steps(CertifyConfig(), graph, dim), step_physics_steps(gait, robot.dt, SimConfig())),
                       robot.dt, f"certify.fp_max_steps {config.fp_max_steps} + certify.{samples} "
                       f"{config.samples_planned} × {config.steps_per_sample} steps")
 
@@ -278,12 +289,14 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
     t0 = time.perf_counter()
 
     def failed(status: str, reason: str, steps: int, fp: FixedPoint | None = None,
-               map_residual: float | None = None) -> GaitCertificate:
+               map_residual: float | None = None, orbit: OrbitReport | None = None) -> GaitCertificate:
         t = time.perf_counter() - t0
         return GaitCertificate(status=status, certificate=None, fixed_point=fp, map_residual=map_residual,
                                config=cfg, sim=sim, robot=robot.name, physics_steps=0, steps_walked=steps,
                                reason=reason, validate=vcfg, controller=pmap.engine.controller_name,
                                controller_note=pmap.engine.controller_note,
+                               orbit=orbit if orbit is not None or fp is None else fp.orbit,
+                               fixed_point_physics_steps=pmap.physics_steps,
                                seconds={"fixed_point": t, "sampling": 0.0, "total": t, "sim_steps_per_s": 0.0})
 
     with ReturnMap(robot, gait, cfg, sim) as pmap:
@@ -295,8 +308,9 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
             try:
                 fp = pmap.find_fixed_point(progress=on_step)
             except FixedPointFailure as exc:
-                return failed(exc.status, str(exc), exc.steps)
+                return failed(exc.status, str(exc), exc.steps, exc.fixed_point, orbit=exc.orbit)
         t1 = time.perf_counter()
+        fp_steps = pmap.physics_steps
         coords = Coordinates.of(pmap.reduced)
         image = coords.to_z(pmap(pmap.reduced.x_star[None]))[0]
         first = coords.to_z(pmap.last_path[0])[0] if pmap.last_path is not None else image
@@ -333,5 +347,6 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
                            sim=sim, robot=robot.name, physics_steps=steps, steps_walked=fp.steps,
                            coordinates=coords, ball=ball, excursion=excursion, validate=vcfg,
                            controller=pmap.engine.controller_name, controller_note=pmap.engine.controller_note,
+                           orbit=fp.orbit, fixed_point_physics_steps=fp_steps,
                            seconds={"fixed_point": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,
                                     "sim_steps_per_s": steps / max(t3 - t2, 1e-9)})

@@ -7,9 +7,13 @@ so a symmetric gait has a period-1 fixed point of the **step map** P: S → S (o
 **stride map** is two steps, no mirroring. With a horizon k the map certified is P^k: k maps on full states, a
 fall in any of them a fall.
 
-The fixed point x* is searched on full states and converged in the paper's reduced state, the base angular
-velocity ω in the ``heading`` frame (:func:`robustgait.reduced.reduce_state`); the certificate's reduced state
-(Φ, ι and metric of ``certify.state``: :class:`robustgait.reduced.ReducedState`) is set up at it. Frames of ω:
+The fixed point x* (:meth:`ReturnMap.find_fixed_point`, ``docs/certificate.md`` "Fixed point") is searched on full
+states in **section coordinates** (:func:`robustgait.reduced.section_coordinates`: the canonical state without the
+base's x, y and yaw, under which the map is equivariant): iterate until a window of ``fp_window`` iterates lies within
+``fp_tol``, optionally refine by damped Newton on P(x) = x, then the spectral radius ρ of the linearized map
+(:mod:`robustgait.orbit`); a gait whose orbit does not settle, settles with period two, or whose ρ ≥ ``fp_rho_max``
+has no fixed point to certify. The certificate's reduced state (Φ, ι and metric of ``certify.state``:
+:class:`robustgait.reduced.ReducedState`) is set up at x*. Frames of the base angular velocity ω:
 
 * ``heading`` (default): ω in the world frame rotated by the base's yaw, R_z(ψ)ᵀ ω. Equals the world frame
   for a robot heading along +x, and is invariant to the slow heading drift of a real walk — which the
@@ -22,20 +26,36 @@ velocity ω in the ``heading`` frame (:func:`robustgait.reduced.reduce_state`); 
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.config import CertifyConfig, Frame, SimConfig
+from robustgait.config.certify import NEWTON_DAMPING
 from robustgait.domains import step_segments
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.reduced import ReducedState, reduce_state
+from robustgait.orbit import (
+    BatchMap,
+    Jacobian,
+    OrbitReport,
+    fd_jacobian,
+    flow_projection,
+    newton,
+    orbit_status,
+    search_report,
+    spectral_radius,
+    window_residual,
+)
+from robustgait.reduced import ReducedState, reduce_state, section_coordinates, section_state
 from robustgait.robots import Robot
 from robustgait.sim.factory import make_engine
-from robustgait.sim.walk import SwitchEvent
+from robustgait.sim.walk import SwitchEvent, WalkResult, canonical_event_states
 
 FloatArray = NDArray[np.float64]
 
@@ -43,30 +63,51 @@ FloatArray = NDArray[np.float64]
 def canonical_reduced_events(robot: Robot, gait: Gait, events: list[SwitchEvent], frame: Frame) -> FloatArray:
     """Reduced states (len(events), 3) of a walk's switching events, each written for the gait's own stance
     (events that start a step of the other stance are mirrored) — the sequence the step map acts on."""
-    rows = []
-    for e in events:
-        qpos, qvel = np.asarray(e.qpos)[None], np.asarray(e.qvel)[None]
-        if e.stance == gait.stance:  # the step that ended was canonical: the next one is not
-            qpos, qvel = robot.mirror_state(qpos, qvel)
-        rows.append(reduce_state(qpos, qvel, frame)[0])
-    return np.array(rows).reshape(-1, 3)
+    qpos, qvel = canonical_event_states(robot, gait, events)
+    return reduce_state(qpos, qvel, frame).reshape(-1, 3)
+
+
+def walk_stability(robot: Robot, gait: Gait, result: WalkResult, certify: CertifyConfig | None = None,
+                   sim: SimConfig | None = None) -> OrbitReport | None:
+    """A walk's orbit (:attr:`WalkResult.orbit`) with the spectral radius ρ of the step map at the event where it
+    settled (:meth:`ReturnMap.stability`: one batch of 2d + 1 one-step simulations and one more), when it settled
+    and ``certify.fp_rho_max`` is set; otherwise the orbit as it is."""
+    c = certify or CertifyConfig()
+    orbit = result.orbit
+    if orbit is None or orbit.settled is None or c.fp_rho_max is None:
+        return orbit
+    qpos, qvel = canonical_event_states(robot, gait, result.events[orbit.settled - 1:orbit.settled])
+    with ReturnMap(robot, gait, dataclasses.replace(c, map="step", horizon=1), sim) as pmap:
+        x = section_coordinates(qpos, qvel, gait.step_duration)[0]
+        try:
+            st = pmap.stability(x, qpos[0])
+        except RobustGaitError:  # a neighbour within the finite-difference step falls: no linearization
+            return orbit
+    return dataclasses.replace(orbit, map_residual=st.map_residual, rho=st.rho, moduli=st.moduli,
+                               rho_fixed_event=st.rho_fixed_event, one_sided=st.one_sided)
 
 
 class FixedPointFailure(RobustGaitError):
     """The fixed-point search failed — a property of the gait, not bad input: ``status`` is
-    ``fell_before_fixed_point`` or ``no_fixed_point``; ``steps`` the steps walked (completed) before it ended."""
+    ``fell_before_fixed_point``, ``no_stable_orbit``, ``period_two_orbit`` or ``unstable_orbit``; ``steps`` the steps
+    walked (completed) before it ended; ``orbit`` what the search saw (:class:`robustgait.orbit.OrbitReport`, None if
+    the gait fell before its first iterate); ``fixed_point`` the x* refused (``unstable_orbit``)."""
 
-    def __init__(self, status: str, steps: int, message: str):
+    def __init__(self, status: str, steps: int, message: str, orbit: OrbitReport | None = None,
+                 fixed_point: FixedPoint | None = None):
         super().__init__(message)
         self.status = status
         self.steps = steps
+        self.orbit = orbit
+        self.fixed_point = fixed_point
 
 
 @dataclass(frozen=True)
 class FixedPoint:
     """x* of the chosen map: its full canonical state (qpos, qvel), its base angular velocity ω* (3,) in the search's
-    frame, the residual ‖ω_k − ω_{k−1}‖ of the map's iterates where it was taken, the steps walked, and all
-    residuals."""
+    frame, its residual (‖P(x*) − x*‖ in section coordinates when the search computed it — with Newton or ρ —, else the
+    window residual of ``fp_metric``), the steps walked until the orbit settled, the successive residuals of the
+    iterates, and the search's :class:`~robustgait.orbit.OrbitReport` (None for a start that is not a search's)."""
 
     qpos: FloatArray
     qvel: FloatArray
@@ -74,6 +115,20 @@ class FixedPoint:
     residual: float
     steps: int
     residuals: tuple[float, ...]
+    orbit: OrbitReport | None = None
+
+
+@dataclass(frozen=True)
+class Stability:
+    """The linearized map at x* (:meth:`ReturnMap.stability`): ρ and the eigenvalue moduli (largest first) with the
+    touchdown found in continuous time, ρ with it at a fixed physics step, ‖P(x*) − x*‖ (section coordinates), and
+    the Jacobian columns taken one-sided."""
+
+    rho: float
+    moduli: tuple[float, ...]
+    rho_fixed_event: float
+    map_residual: float
+    one_sided: int
 
 
 class ReturnMap:
@@ -113,38 +168,175 @@ class ReturnMap:
         return 1 if self.kind == "step" else 2
 
     def find_fixed_point(self, progress: Callable[[int, float], None] | None = None) -> FixedPoint:
-        """Iterate the map on full states from the gait's initial state until the reduced state converges:
-        x* = the first iterate after ``min_steps`` steps with ‖x̄_k − x̄_{k−1}‖ < tol (the config's ``fp_tol``,
-        ``min_steps``, ``fp_max_steps``).
+        """Iterate the map on full states from the gait's initial state until its orbit settles — the first iterate
+        x_k after ``fp_min_steps`` steps whose window of ``fp_window`` iterates all lie within ``fp_tol`` of it
+        (:func:`robustgait.orbit.window_residual` in ``fp_metric``) —, refine x* by damped Newton on P(x) = x in
+        section coordinates (``fp_newton_iterations``; x* stays x_k unless Newton converges), then take the spectral
+        radius ρ of the linearized map at x* (:meth:`stability`) unless ``fp_rho_max`` is not set.
 
-        Iterating the map itself (canonical stance, then mirror) rather than walking on alternating legs
-        makes x̄* a fixed point of exactly the map that is certified, also for a robot whose MJCF is not
-        perfectly left/right symmetric. Raises :class:`FixedPointFailure` (a RobustGaitError) if the gait falls
-        first or no iterate within ``max_steps`` steps converges (with the residuals seen).
-        ``progress(step, residual)`` after each.
+        Iterating the map itself (canonical stance, then mirror) rather than walking on alternating legs makes x* a
+        fixed point of exactly the map that is certified, also for a robot whose MJCF is not perfectly left/right
+        symmetric. Raises :class:`FixedPointFailure` (a RobustGaitError) — ``fell_before_fixed_point``;
+        ``no_stable_orbit`` (no window within ``fp_max_steps``); ``period_two_orbit`` (none, but iterates two apart
+        settled); ``unstable_orbit`` (ρ ≥ ``fp_rho_max``) — with what the search saw. ``progress(step, residual)``
+        after each iterate (the successive residual in ``fp_metric``).
         """
-        tol, min_steps, max_steps = self.config.fp_tol, self.config.min_steps, self.config.fp_max_steps
+        cfg = self.config
         qpos, qvel = self.initial_section()
-        prev = reduce_state(qpos, qvel, self.frame)[0]
-        residuals: list[float] = []
-        for k in range(self.period, max_steps + 1, self.period):
+        xs = [self._metric(qpos, qvel)]
+
+        def report() -> OrbitReport:
+            return search_report(xs, metric=cfg.fp_metric, window=cfg.fp_window, tol=cfg.fp_tol,
+                                 min_index=math.ceil(cfg.min_steps / self.period), period=self.period)
+
+        for k in range(self.period, cfg.fp_max_steps + 1, self.period):
             qpos, qvel, reason = self._advance(qpos, qvel)
             if reason[0] is not None:
                 raise FixedPointFailure("fell_before_fixed_point", k - self.period,
                                         f"the gait fell within step {k} ({reason[0]}) before a fixed point was "
-                                        "reached")
-            x = reduce_state(qpos, qvel, self.frame)[0]
-            residuals.append(float(np.linalg.norm(x - prev)))
-            prev = x
+                                        "reached", report() if len(xs) > 1 else None)
+            xs.append(self._metric(qpos, qvel))
             if progress is not None:
-                progress(k, residuals[-1])
-            if k >= min_steps and residuals[-1] < tol:
-                return self.set_fixed_point(FixedPoint(qpos[0].copy(), qvel[0].copy(), x.copy(), residuals[-1], k,
-                                                       tuple(residuals)))
-        raise FixedPointFailure("no_fixed_point", len(residuals) * self.period,
-                                f"no fixed point within {max_steps} steps: the {self.kind}-map residual "
-                                f"‖x̄_k+1 − x̄_k‖ stayed above tol = {tol:g} (smallest {min(residuals):.3g}, last "
-                                f"{residuals[-1]:.3g})")
+                progress(k, float(np.linalg.norm(xs[-1] - xs[-2])))
+            if k >= cfg.min_steps and window_residual(xs, cfg.fp_window) <= cfg.fp_tol:
+                return self.set_fixed_point(self._refine(qpos, qvel, report()))
+        orbit = report()
+        status = orbit_status(orbit, None)
+        what = (f"the {self.kind}-map iterates settled on no window of {cfg.fp_window} within fp_tol = "
+                f"{cfg.fp_tol:g} ({cfg.fp_metric} coordinates) in {orbit.steps} steps: smallest successive residual "
+                f"{min(orbit.residuals):.3g}, last window {orbit.window_residual:.3g}")
+        if status == "period_two_orbit":
+            hint = "; certify the stride map instead (--map stride)" if self.kind == "step" else ""
+            raise FixedPointFailure("period_two_orbit", orbit.steps, f"a period-two orbit: {what}, but iterates two "
+                                    f"apart settled (window residual {window_residual(xs, cfg.fp_window, 2):.3g})"
+                                    + hint, orbit)
+        raise FixedPointFailure("no_stable_orbit", orbit.steps, f"no stable orbit: {what}", orbit)
+
+    def _metric(self, qpos: FloatArray, qvel: FloatArray) -> FloatArray:
+        """The coordinates the search's window measures (``fp_metric``) of one state (1, nq), (1, nv)."""
+        if self.config.fp_metric == "omega":
+            return reduce_state(qpos, qvel, self.frame)[0]
+        return section_coordinates(qpos, qvel, self.gait.step_duration)[0]
+
+    def section_map(self, reference: FloatArray) -> BatchMap:
+        """P in section coordinates, x_S ↦ x_S(P(x)) (N, d) → (N, d), NaN rows for falls; the states rebuilt with the
+        base's x, y and yaw of ``reference`` (a qpos: the map is equivariant under them, yaw up to the friction
+        pyramid)."""
+        t = self.gait.step_duration
+
+        def F(xs: FloatArray) -> FloatArray:
+            qpos, qvel = section_state(xs, reference, t)
+            qpos, qvel, _ = self._advance(qpos, qvel)
+            return section_coordinates(qpos, qvel, t)
+        return F
+
+    def _refine(self, qpos: FloatArray, qvel: FloatArray, orbit: OrbitReport) -> FixedPoint:
+        """x* from the settled iterate (1, nq), (1, nv): Newton (if asked and it converges), then ρ (if asked)."""
+        cfg = self.config
+        t = self.gait.step_duration
+        ref = qpos[0].copy()
+        F = self.section_map(ref)
+        x = section_coordinates(qpos, qvel, t)[0]
+        jac: Jacobian | None = None
+        if cfg.fp_newton_iterations > 0:
+            nr = newton(F, x, step=cfg.fp_fd_step, jump=cfg.fp_fd_jump, tol=cfg.fp_newton_tol,
+                        iterations=cfg.fp_newton_iterations, damping=NEWTON_DAMPING)
+            orbit = dataclasses.replace(orbit, newton=nr.residuals, newton_converged=nr.converged)
+            if nr.converged:
+                x, jac = nr.x, nr.jacobian
+                qpos, qvel = section_state(x[None], ref, t)
+            else:
+                jac = nr.first
+        residual = orbit.window_residual
+        if cfg.fp_rho_max is not None:
+            try:
+                st = self.stability(x, ref, jac)
+            except RobustGaitError as exc:  # a neighbour of x* within the finite-difference step falls
+                raise FixedPointFailure("unstable_orbit", orbit.steps, f"no linearization at x*: {exc}",
+                                        orbit) from None
+            orbit = dataclasses.replace(orbit, map_residual=st.map_residual, rho=st.rho, moduli=st.moduli,
+                                        rho_fixed_event=st.rho_fixed_event, one_sided=st.one_sided)
+            residual = st.map_residual
+        elif orbit.newton:
+            residual = orbit.newton[-1] if orbit.newton_converged else orbit.newton[0]
+        fp = FixedPoint(qpos[0].copy(), qvel[0].copy(), reduce_state(qpos, qvel, self.frame)[0], residual,
+                        orbit.steps, orbit.residuals, orbit)
+        if orbit_status(orbit, cfg.fp_rho_max) == "unstable_orbit":
+            assert orbit.rho is not None and cfg.fp_rho_max is not None
+            raise FixedPointFailure("unstable_orbit", orbit.steps, f"an unstable orbit: the {self.kind} map settled at "
+                                    f"step {orbit.settled}, but its linearization at x* has spectral radius ρ = "
+                                    f"{orbit.rho:.3g} ≥ fp_rho_max = {cfg.fp_rho_max:g} (eigenvalue moduli "
+                                    f"{' '.join(f'{m:.3g}' for m in orbit.moduli[:4])} …)", orbit, fp)
+        return fp
+
+    def stability(self, x: FloatArray, reference: FloatArray, jacobian: Jacobian | None = None) -> Stability:
+        """The linearized map at x (section coordinates, states rebuilt with ``reference``'s x, y and yaw): J by
+        finite differences (``jacobian`` if given, else ONE batch of 2d + 1 states, :func:`robustgait.orbit.fd_jacobian`
+        with ``fp_fd_step``, ``fp_fd_jump``), then, for impact switching, Π J with the touchdown found in continuous
+        time (:meth:`touchdown_projection`): ρ and the eigenvalue moduli of Π J, and ρ of J (touchdown at a fixed
+        physics step). Raises :class:`RobustGaitError` if the map falls on both sides of a coordinate."""
+        cfg = self.config
+        j = jacobian or fd_jacobian(self.section_map(reference), x, cfg.fp_fd_step, cfg.fp_fd_jump)
+        rho_fixed, _ = spectral_radius(j.matrix)
+        proj = self.touchdown_projection(x, reference)
+        rho, moduli = spectral_radius(j.matrix if proj is None else proj @ j.matrix)
+        return Stability(rho, tuple(float(m) for m in moduli), rho_fixed, float(np.linalg.norm(j.value - x)),
+                         len(j.one_sided))
+
+    def touchdown_projection(self, x: FloatArray, reference: FloatArray) -> FloatArray | None:
+        """Π (d, d) of :func:`robustgait.orbit.flow_projection` at the image of x (section coordinates): the flow f
+        there by a backward difference over the last physics step, (x_S(end) − x_S(one step before)) / Δt, and the
+        gradient of the guard — the signed distance of the landing sole (the gait's stance sole in canonical
+        coordinates) to the floor, ``mj_geomDistance`` — by central differences in the position coordinates. None for
+        time switching (the event time does not depend on the state) or a flow tangent to the guard."""
+        if self.engine.config.switching != "impact":
+            return None
+        t = self.gait.step_duration
+        qpos, qvel = section_state(x[None], reference, t)
+        states = self._image_and_before(qpos, qvel)
+        if states is None:
+            return None
+        ends = section_coordinates(*states, t)
+        flow = (ends[1] - ends[0]) / self.robot.dt
+        return flow_projection(flow, self._guard_gradient(ends[1], states[0][1]))
+
+    def _image_and_before(self, qpos: FloatArray, qvel: FloatArray) -> tuple[FloatArray, FloatArray] | None:
+        """The map's image of one state and the state one physics step before it, canonical: (2, nq), (2, nv); None
+        if it falls."""
+        phases = self._phases()
+        start = self.engine.full_states(qpos, qvel)[0]
+        for j, (stance, d) in enumerate(phases):
+            last = j == len(phases) - 1
+            if last:
+                start = self.engine.full_states(qpos, qvel)[0]
+            b = self.engine.step(qpos, qvel, stance, domain=d, record=last)
+            self.physics_steps += b.physics_steps
+            if b.fell[0]:
+                return None
+            qpos, qvel = b.qpos, b.qvel
+        tr = b.trajectory[0]
+        before = tr[-2] if len(tr) >= 2 else start
+        nq, nv = self.engine.nq, self.engine.nv
+        q = np.vstack([before[1:1 + nq], qpos[0]])
+        v = np.vstack([before[1 + nq:1 + nq + nv], qvel[0]])
+        return self.robot.mirror_state(q, v) if self.kind == "step" else (q, v)
+
+    def _guard_gradient(self, x: FloatArray, reference: FloatArray) -> FloatArray:
+        """∇g (d,) at x (section coordinates): g = the signed distance of the gait's stance sole to the floor."""
+        m, t, h = self.robot.model, self.gait.step_duration, self.config.fp_fd_step
+        data = mujoco.MjData(m)
+        sole, floor = self.robot.sole_geom_id[self.stance], self.robot.floor_geom_id
+        n_pos = self.engine.nq - 4
+        e = np.eye(x.shape[0])[:n_pos] * h
+        qpos, _ = section_state(np.vstack([x + e, x - e]), reference, t)
+        dist = np.empty(len(qpos))
+        for i, q in enumerate(qpos):
+            data.qpos[:] = q
+            mujoco.mj_kinematics(m, data)
+            dist[i] = mujoco.mj_geomDistance(m, data, sole, floor, 1.0, None)
+        grad = np.zeros(x.shape[0])
+        grad[:n_pos] = (dist[:n_pos] - dist[n_pos:]) / (2 * h)
+        return grad
 
     def initial_section(self) -> tuple[FloatArray, FloatArray]:
         """The gait's initial state as a canonical section state (1, nq), (1, nv): itself for a flat-foot gait; a
@@ -185,12 +377,15 @@ class ReturnMap:
         A canonical state lies on the section at the end of a single support of the other leg, so the step
         map simulates the rest of that step (multi-contact: its double support) and the gait's own stance's
         single support, then mirrors; the stride map goes on through the other leg's step instead."""
-        n = len(self.engine.graph)
+        qpos, qvel, reasons = self._run(qpos, qvel, self._phases(), progress)
         if self.kind == "step":
-            qpos, qvel, reasons = self._run(qpos, qvel, step_segments(self.stance, n), progress)
-            mq, mv = self.robot.mirror_state(qpos, qvel)
-            return mq, mv, reasons
-        return self._run(qpos, qvel, step_segments(self.stance, n) + step_segments(self.other, n), progress)
+            qpos, qvel = self.robot.mirror_state(qpos, qvel)
+        return qpos, qvel, reasons
+
+    def _phases(self) -> list[tuple[str, int]]:
+        """(stance, domain) of one map in simulation order: a step, or a stride."""
+        n = len(self.engine.graph)
+        return step_segments(self.stance, n) + (step_segments(self.other, n) if self.kind == "stride" else [])
 
     def set_fixed_point(self, fp: FixedPoint) -> FixedPoint:
         """Use ``fp`` as x* (e.g. found earlier by this map) and set the reduced state up at it."""

@@ -81,6 +81,54 @@ def heading_velocity(qpos: FloatArray, qvel: FloatArray) -> FloatArray:
     return out
 
 
+def section_dimension(robot: Robot) -> int:
+    """d = nq + nv − 4: the number of section coordinates (:func:`section_coordinates`) of the robot's states."""
+    return int(robot.model.nq + robot.model.nv - 4)
+
+
+def section_coordinates(qpos: FloatArray, qvel: FloatArray, duration: float) -> FloatArray:
+    """x_S (K, nq + nv − 4) of states qpos (K, nq), qvel (K, nv): the full state without the base's x, y and yaw ψ —
+    (z, φ, θ, q_j) / T, then (v_h, ω_h, q̇_j): base height, roll φ and pitch θ (R = R_z(ψ) R_y(θ) R_x(φ)) and the
+    joint positions divided by the step duration T, so that every coordinate is a rate (m/s or rad/s); the base's
+    linear and angular velocity in the heading frame (world axes turned by ψ); the joint velocities.
+
+    The coordinates of the return map's fixed point (``docs/certificate.md``, "Fixed point"): the physics does not
+    depend on x and y at all, and on ψ only through MuJoCo's pyramidal friction cone, whose facets are fixed in the
+    world (an elliptic cone: none; measured in ``tests/test_poincare.py``)."""
+    qpos, qvel = np.atleast_2d(qpos), np.atleast_2d(qvel)
+    r = quat_to_mat(qpos[:, 3:7])
+    roll = np.arctan2(r[:, 2, 1], r[:, 2, 2])
+    pitch = -np.arcsin(np.clip(r[:, 2, 0], -1.0, 1.0))
+    rz = heading_rotation(qpos)
+    lin = np.einsum("kij,kj->ki", rz, qvel[:, 0:3])
+    ang = np.einsum("kij,kj->ki", rz @ r, qvel[:, 3:6])
+    pos = np.column_stack([qpos[:, 2], roll, pitch, qpos[:, 7:]])
+    return np.column_stack([pos / duration, lin, ang, qvel[:, 6:]])
+
+
+def section_state(xs: FloatArray, reference: FloatArray, duration: float) -> tuple[FloatArray, FloatArray]:
+    """The states (K, nq), (K, nv) of section coordinates xs (K, nq + nv − 4) (:func:`section_coordinates`, whose
+    inverse it is), with the base's x, y and yaw of ``reference`` (a qpos (nq,) or (K, nq))."""
+    xs = np.atleast_2d(np.asarray(xs, dtype=float))
+    k = xs.shape[0]
+    ref = np.broadcast_to(np.asarray(reference, dtype=float), (k, np.shape(reference)[-1]))
+    nq = ref.shape[1]
+    pos, vel = xs[:, :nq - 4] * duration, xs[:, nq - 4:]
+    rz = heading_rotation(ref)  # R_z(ψ)ᵀ of the reference's yaw
+    psi = np.arctan2(rz[:, 0, 1], rz[:, 0, 0])
+    c, s = np.cos(0.5 * pos[:, 1]), np.sin(0.5 * pos[:, 1])  # roll
+    cp, sp = np.cos(0.5 * pos[:, 2]), np.sin(0.5 * pos[:, 2])  # pitch
+    cy, sy = np.cos(0.5 * psi), np.sin(0.5 * psi)
+    w, x, y, z = cp * c, cp * s, sp * c, -sp * s  # q_y(θ) q_x(φ)
+    quat = np.column_stack([cy * w - sy * z, cy * x - sy * y, cy * y + sy * x, cy * z + sy * w])  # q_z(ψ) q_y q_x
+    qpos = np.column_stack([ref[:, 0:2], pos[:, 0], quat, pos[:, 3:]])
+    r = quat_to_mat(quat)
+    world = np.transpose(rz, (0, 2, 1))  # R_z(ψ): heading frame → world
+    lin = np.einsum("kij,kj->ki", world, vel[:, 0:3])
+    ang = np.einsum("kji,kj->ki", r, np.einsum("kij,kj->ki", world, vel[:, 3:6]))  # Rᵀ R_z(ψ) ω_h
+    return qpos, np.column_stack([lin, ang, vel[:, 6:]])
+
+
 def stance_jacobian(robot: Robot, qpos: FloatArray, stance: str) -> FloatArray:
     """J_s (6, nv): the stance sole geom's (translational; rotational) Jacobian in MuJoCo's velocities."""
     m = robot.model

@@ -14,6 +14,13 @@ either barrier). Only the volume fraction of the violating set in a ball matters
   violating fraction of every disk known by quadrature).
 * :class:`DivergingPush` — pushes that walk a few steps and fall later beyond a known critical impulse: the push
   certificate's recovery criterion (:mod:`robustgait.recovery`).
+
+Maps with known orbits, for the fixed point's orbit check (:mod:`robustgait.orbit`):
+
+* :class:`LinearMap` — x* + A (x − x*) with a chosen spectrum (ρ known), optionally with a staircase of jumps along
+  its first coordinate (piecewise smooth, as the simulated map is where a touchdown crosses a physics step).
+* :class:`QuadraticMap` — the logistic map on one coordinate, contracting on the others: converging (r < 3),
+  period two (3 < r < 1 + √6) or chaotic, wandering past an unstable x* (r = 3.9).
 """
 
 from __future__ import annotations
@@ -162,6 +169,95 @@ class PushThresholdMap:
         out = np.zeros_like(j)
         out[falls] = np.nan
         return out
+
+
+@dataclass(frozen=True)
+class LinearMap:
+    """F(x) = x* + A (x − x*) + (β + s ⌊(x_0 − x*_0)/w + ½⌋) e_0 on (N, d): linear with A's spectrum (ρ = :attr:`rho`),
+    plus, for ``jump`` s ≠ 0, a staircase along the first coordinate — F jumps by s whenever x_0 crosses a boundary at
+    x*_0 ± w/2, ± 3w/2, … (``width`` w), and is linear between them. x* is the fixed point for ``bias`` β = 0; with
+    β ≠ 0 and A = a I the linear piece k has its fixed point at x*_0 + (β + s k)/(1 − a) — when that lies outside every
+    piece, F jumps across the diagonal and has no fixed point at all."""
+
+    a: FloatArray
+    x_star: FloatArray
+    jump: float = 0.0
+    width: float = 1.0
+    bias: float = 0.0
+
+    @classmethod
+    def with_spectrum(cls, eigenvalues: ArrayLike, x_star: ArrayLike, skew: float = 0.0, seed: int = 0,
+                      jump: float = 0.0, width: float = 1.0, bias: float = 0.0) -> LinearMap:
+        """A = V diag(λ) V⁻¹ with V = I + skew · G (G standard normal from ``seed``): the eigenvalues λ (real), normal
+        for skew 0, ever less so as skew grows."""
+        lam = np.asarray(eigenvalues, dtype=np.float64)
+        v = np.eye(lam.size) + skew * np.random.default_rng(seed).standard_normal((lam.size, lam.size))
+        a = v @ np.diag(lam) @ np.linalg.inv(v)
+        return cls(a, np.asarray(x_star, dtype=np.float64), jump, width, bias)
+
+    @property
+    def rho(self) -> float:
+        return float(np.max(np.abs(np.linalg.eigvals(self.a))))
+
+    def __call__(self, x: ArrayLike) -> FloatArray:
+        dx = np.atleast_2d(np.asarray(x, dtype=np.float64)) - self.x_star
+        out = self.x_star + dx @ self.a.T
+        out[:, 0] += self.bias + self.jump * np.floor(dx[:, 0] / self.width + 0.5)
+        return np.asarray(out, dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class QuadraticMap:
+    """x_0 ↦ r x_0 (1 − x_0) (the logistic map), x_i ↦ ``gain`` x_i for i ≥ 1, on (N, ``dim``): smooth, with the fixed
+    point x* = (1 − 1/r, 0, …) of eigenvalues 2 − r and ``gain`` (ρ = :attr:`rho`). r < 3: the iterates converge to
+    x*; 3 < r < 1 + √6: to the period-two orbit :attr:`period_two` (P∘P has fixed points there, P none: x* repels);
+    r = 3.9: chaotic — the iterates wander over (0, 1), now and then passing near the repelling x* (|2 − r| = 1.9)
+    and leaving it."""
+
+    r: float
+    dim: int = 3
+    gain: float = 0.5
+
+    @property
+    def x_star(self) -> FloatArray:
+        out = np.zeros(self.dim)
+        out[0] = 1.0 - 1.0 / self.r
+        return out
+
+    @property
+    def rho(self) -> float:
+        return max(abs(2.0 - self.r), abs(self.gain))
+
+    @property
+    def period_two(self) -> tuple[float, float]:
+        """The period-two points p± = (r + 1 ± √((r + 1)(r − 3))) / 2r of the first coordinate (r > 3)."""
+        if self.r <= 3.0:
+            raise RobustGaitError(f"the logistic map has no period-two orbit for r = {self.r} ≤ 3")
+        root = math.sqrt((self.r + 1.0) * (self.r - 3.0))
+        return (self.r + 1.0 - root) / (2.0 * self.r), (self.r + 1.0 + root) / (2.0 * self.r)
+
+    def preimage(self, y: float, steps: int) -> float:
+        """An x_0 whose ``steps``-th iterate is y (first coordinate): the inverse branches x = (1 ± √(1 − 4y/r))/2
+        alternated (y ≤ r/4)."""
+        x = y
+        for k in range(steps):
+            root = math.sqrt(max(0.0, 1.0 - 4.0 * x / self.r))
+            x = 0.5 * (1.0 + root if k % 2 else 1.0 - root)
+        return x
+
+    def __call__(self, x: ArrayLike) -> FloatArray:
+        x = np.atleast_2d(np.asarray(x, dtype=np.float64))
+        out = self.gain * x
+        out[:, 0] = self.r * x[:, 0] * (1.0 - x[:, 0])
+        return np.asarray(out, dtype=np.float64)
+
+
+def iterates(F: Callable[[FloatArray], FloatArray], x0: ArrayLike, n: int) -> FloatArray:
+    """x_0, F(x_0), …, F^n(x_0) (n + 1, d) of a batched map."""
+    xs = [np.asarray(x0, dtype=np.float64)]
+    for _ in range(n):
+        xs.append(np.asarray(F(xs[-1][None]), dtype=np.float64)[0])
+    return np.array(xs)
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,8 @@ CERTIFY = {"--state": "certify.state", "--set": "certify.set", "--horizon": "cer
            "--r-max": "certify.r_max", "--alpha": "certify.alpha", "--seed": "certify.seed", "--map": "certify.map",
            "--reconstruction": "certify.reconstruction", "--frame": "certify.frame",
            "--switching": "sim.switching", "--controller": "sim.controller", "--fp-tol": "certify.fp_tol",
-           "--fp-max-steps": "certify.fp_max_steps"}
+           "--fp-window": "certify.fp_window", "--fp-max-steps": "certify.fp_max_steps",
+           "--fp-newton": "certify.fp_newton_iterations", "--fp-rho-max": "certify.fp_rho_max"}
 
 
 def _what(cfg: CertifyConfig) -> str:
@@ -58,6 +59,8 @@ def _certify(args: argparse.Namespace) -> int:
         print(json.dumps(gc.to_dict(samples=False), allow_nan=False))
     elif c is None:
         print(f"{gc.status}: {name} = 0 ({gc.reason}; {gc.steps_walked} steps walked)")
+        if gc.orbit is not None:
+            print(f"orbit: {gc.orbit.describe()}")
     else:
         assert fp is not None and gc.map_residual is not None and co is not None
         energy = "" if gc.energy is None else f", E* = {gc.energy:.4g} J"
@@ -66,6 +69,8 @@ def _certify(args: argparse.Namespace) -> int:
         print(f"ω* = [{', '.join(f'{v:.4f}' for v in fp.omega)}] rad/s after {fp.steps} steps; residual "
               f"{fp.residual:.2e}" + ("" if cfg.disturbance == "push" else
                                       f" (map at x*: {gc.map_residual:.2e} {cfg.unit})"))
+        if gc.orbit is not None:
+            print(f"orbit: {gc.orbit.describe()}")
         if cfg.set == "ellipsoid" and cfg.disturbance == "state":
             sh = co.shape
             if sh.fallback:
@@ -123,7 +128,7 @@ def _barrier_eval(args: argparse.Namespace) -> int:
 
 def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     c = command(sub, "certify", "robustness certificate of a gait: r* (DTBF on the Poincaré map, in a reduced state) "
-                "or J* (pushes); exit 1 if the gait falls or has no fixed point (r* = 0)", _certify, CERTIFY)
+                "or J* (pushes); exit 1 if the gait falls or has no stable orbit (r* = 0)", _certify, CERTIFY)
     c.add_argument("gait", help=GAIT_HELP)
     c.add_argument("--robot", required=True, help=ROBOT_HELP)
     c.add_argument("--plot", metavar="CERT.png", type=output_path("plot"),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 
 from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
 from robustgait.cli.options import output_path
@@ -12,17 +13,20 @@ SIM = {"--controller": "sim.controller", "--switching": "sim.switching", "--feed
 
 def _walk(args: argparse.Namespace) -> int:
     from robustgait.io.output import write_csv
-    from robustgait.poincare import canonical_reduced_events
+    from robustgait.poincare import canonical_reduced_events, walk_stability
     from robustgait.sim import walk
 
     config, robot, gait = inputs(args)
     with about(args.gait):
-        result = walk(robot, gait, config.sim, video=args.video, comfort=config.comfort)
+        result = walk(robot, gait, config.sim, video=args.video, comfort=config.comfort, certify=config.certify)
+        orbit = walk_stability(robot, gait, result, config.certify, config.sim)
     if args.log is not None:
         xs = canonical_reduced_events(robot, gait, result.events, config.certify.frame)
         write_csv(args.log, ["wx", "wy", "wz"], xs.tolist())
     if args.json:
-        print(result.to_json())
+        out = result.to_dict()
+        out["orbit"] = None if orbit is None else orbit.to_dict()
+        print(json.dumps(out, allow_nan=False))
     else:
         end = f"fell ({result.fall_reason}) at t = {result.time:.2f} s" if result.fell else "no fall"
         print(f"{gait.robot} gait on {robot.name}: {result.steps_taken}/{result.max_steps} steps, {end}; "
@@ -33,6 +37,8 @@ def _walk(args: argparse.Namespace) -> int:
               f"{1e3 * tr['max']:.3g} mrad; torque saturation {tr['saturation']} joint-steps "
               f"({100 * tr['saturation_fraction']:.3g} %)"
               + (f"  ({result.controller_note})" if result.controller_note else ""))
+        if orbit is not None:
+            print(f"orbit of the switching events: {orbit.describe()}")
         if result.comfort is not None:
             print("\n".join(result.comfort.text()))
         else:

@@ -16,6 +16,7 @@ Reconstruction = Literal["holonomic", "angular-only"]
 State = Literal["omega", "centroidal", "velocity"]
 CertifiedSet = Literal["ball", "ellipsoid"]
 CertifyDisturbance = Literal["push", "state"]
+OrbitMetric = Literal["section", "omega"]
 
 # r_max when unset: the paper's 2 rad/s for ``omega``; for the energy states a ball of twice-kinetic-energy radius
 # (√J) and for pushes an impulse (N s) — both well beyond what the exo gaits absorb (docs/certificate.md)
@@ -24,6 +25,23 @@ R_MAX_UNIT = {"omega": "rad/s", "centroidal": "√J", "velocity": "√J", "push"
 R_MAX_LIMIT = {"omega": 10.0, "centroidal": 1000.0, "velocity": 1000.0, "push": 10_000.0}
 # a state certificate's choice when not set: the paper's; a push certificate has exactly these
 STATE_CHOICE_DEFAULTS: dict[str, str | int] = {"state": "omega", "set": "ball", "horizon": 1}
+
+
+# the fixed-point search of results written before the orbit check (2026-11-25): the first iterate after
+# fp_min_steps whose base angular velocity moved by less than fp_tol, no Newton step, no spectral radius — how a
+# study or a certificate file that predates these fields is read back (study/config.py, io/certfile.py), so that it
+# reproduces its x*
+LEGACY_FIXED_POINT: dict[str, object] = {"fp_window": 1, "fp_metric": "omega", "fp_newton_iterations": 0,
+                                         "fp_rho_max": None}
+
+
+# the step fractions a damped Newton iteration tries at once (one batch of the map), the smallest residual taken
+NEWTON_DAMPING = (1.0, 0.5, 0.25, 0.125)
+
+
+def fixed_point_options(config: CertifyConfig) -> dict[str, object]:
+    """Every ``fp_*`` field of ``config``: the options that decide its fixed point x*."""
+    return {f.name: getattr(config, f.name) for f in dataclasses.fields(config) if f.name.startswith("fp_")}
 
 
 def study_disturbance(metric: str, disturbance: CertifyDisturbance) -> CertifyDisturbance:
@@ -151,11 +169,32 @@ class CertifyConfig:
     map: Annotated[MapKind, Doc("step (one step, mirrored) or stride (two steps) return map")] = "step"
     reconstruction: Annotated[Reconstruction, Doc("how a full state is rebuilt from a reduced one")] = "holonomic"
     frame: Annotated[Frame, Doc("frame of the base angular velocity (heading: world frame without yaw)")] = "heading"
-    fp_tol: Annotated[Float, Doc("fixed point: stop when successive reduced states differ by less", unit="rad/s",
-                                 gt=0.0, le=1.0)] = 5e-3
+    fp_tol: Annotated[Float, Doc("fixed point: the orbit has settled when the last fp_window iterates all lie within "
+                                 "this distance of the newest (fp_metric)", unit="rad/s or m/s", gt=0.0,
+                                 le=1.0)] = 1e-2
+    fp_window: Annotated[Int, Doc("fixed point: iterates before the newest that must lie within fp_tol of it (1: "
+                                  "the one before, the rule before 2026-11-25; longer than fp_max_steps: never "
+                                  "settles)", ge=1, le=100)] = 20
+    fp_metric: Annotated[OrbitMetric, Doc(
+        "fixed point: distance of two iterates in section coordinates (the canonical state without base x, y and "
+        "yaw, positions divided by the step duration) or omega (the base angular velocity in frame)")] = "section"
     fp_min_steps: Annotated[Int, Doc("fixed point: least steps before stopping (at most fp_max_steps)", ge=1,
                                      le=1000)] = 10
     fp_max_steps: Annotated[Int, Doc("fixed point: give up after this many steps", ge=1, le=1000)] = 100
+    fp_newton_iterations: Annotated[Int, Doc(
+        "fixed point: most damped Newton iterations on P(x) = x from the settled iterate (0: x* is that iterate)",
+        ge=0, le=50)] = 0
+    fp_newton_tol: Annotated[Float, Doc("fixed point: Newton has converged when ‖P(x) − x‖ is below this (section "
+                                        "coordinates)", unit="rad/s or m/s", gt=0.0, le=1.0)] = 1e-8
+    fp_fd_step: Annotated[Float, Doc("fixed point: finite-difference step of the map's Jacobian (section "
+                                     "coordinates)", unit="rad/s or m/s", gt=0.0, le=0.1)] = 1e-6
+    fp_fd_jump: Annotated[Float, Doc(
+        "fixed point: a Jacobian column whose forward and backward differences differ by more than this fraction of "
+        "the smaller is taken one-sided, the smaller (the map jumps within the step on the other side)", gt=0.0,
+        le=100.0)] = 0.5
+    fp_rho_max: Annotated[Float | None, Doc(
+        "fixed point: refuse an orbit whose linearized map has a spectral radius ρ ≥ this (not set: ρ is not "
+        "computed)", gt=0.0, le=10.0)] = 1.0
     sequential: SequentialConfig = dataclasses.field(default_factory=SequentialConfig)
     ellipsoid: EllipsoidConfig = dataclasses.field(default_factory=EllipsoidConfig)
     push: PushConfig = dataclasses.field(default_factory=PushConfig)
@@ -208,6 +247,20 @@ class CertifyConfig:
     def unit(self) -> str:
         """Unit of r* and of the certificate's coordinates."""
         return R_MAX_UNIT[self.space]
+
+    @property
+    def period(self) -> int:
+        """Steps of one iterate of the map: 1 (step map) or 2 (stride map)."""
+        return 2 if self.map == "stride" else 1
+
+    def fixed_point_steps(self, dim: int) -> int:
+        """Most steps the fixed-point search simulates on a section of ``dim`` coordinates: ``fp_max_steps`` steps of
+        iterates, then per Newton iteration a finite-difference batch (2 dim + 1 maps) and its damped steps, then the
+        Jacobian at x* and the image recorded for the touchdown's flow (2 dim + 2 maps), a map being :attr:`period`
+        steps."""
+        fd = 2 * dim + 1
+        rho = fd + 1 if self.fp_rho_max is not None else 0
+        return self.fp_max_steps + self.period * (self.fp_newton_iterations * (fd + len(NEWTON_DAMPING)) + rho)
 
     @property
     def min_steps(self) -> int:

@@ -16,6 +16,9 @@ PERSON_METRICS = ("person", "simulated-person")
 LearnerName = Literal["polar", "eubo", "random"]
 Hyperparameters = Literal["fixed", "fit"]
 ExecutorName = Literal["local", "ray"]
+# a gait that walked the cap without a certificate scores cap − this: below every certified gait (cap + r* ≥ cap),
+# above every faller (≤ cap − 1)
+UNCERTIFIED_PENALTY = 0.5
 Lengthscale = Annotated[Float, Doc(gt=0.0, le=1e3)]
 
 
@@ -79,6 +82,10 @@ class StudyConfig:
     iterations: Annotated[Int, Doc("batches", ge=1, le=1000)] = 10
     batch: Annotated[Int, Doc("gaits per batch (a batch is ranked: at least 2)", ge=2, le=100)] = 5
     seed: Annotated[Int, Doc("seed of the learner", ge=0, le=SEED_LIMIT)] = 0
+    uncertified_penalty: Annotated[Float, Doc(
+        "push and robustness oracles: a gait that walked the step cap without a certificate scores cap − this, "
+        "below every certified gait (0: tied with a certified r* = 0, the rule of studies created before 2026-11-25)",
+        ge=0.0, lt=1.0)] = UNCERTIFIED_PENALTY
     storage: Annotated[Str | None, Doc(
         "SQLAlchemy URL of the Optuna database; not set: a SQLite file in the study directory")] = None
     study_name: Annotated[Str, Doc("the Optuna study's name in its database")] = "robustgait"

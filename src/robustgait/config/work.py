@@ -12,9 +12,10 @@ robot's steps are:
   1e-5 s timestep, a 10 s gait at 1e-4 s, ``max_step_tau`` 10 on a 5 s gait — whatever the counts.
 * **The command** may take at most :data:`WORK_HEADROOM` = 4 × what its default settings take on the same robot
   and gait (the same steps, default ``max_step_tau``), or :data:`MAX_PHYSICS_STEPS` = 2e7 physics steps if that
-  is more. Counted in simulated steps this does not depend on the robot: the default push certificate simulates
-  12 111 steps (100 fixed-point steps, the map at x*, 10 undisturbed steps of the recovery band, 3 000 pushes ×
-  4 steps) on any robot, and a request may
+  is more. Counted in simulated steps this hardly depends on the robot: the default push certificate simulates
+  12 111 + 2d + 2 steps (100 fixed-point steps and the 2d + 2 of its Jacobian, d the section's coordinates, the map
+  at x*, 10 undisturbed steps of the recovery band, 3 000 pushes × 4 steps): 12 179 on exo and Atalante (d = 33),
+  and a request may
   simulate 4 × that — the largest sample budget (10 000 pushes) is 3.3 ×. So the defaults pass on every robot
   and domain graph. The fixed 2e7 of before refused the default certificate of a study on Atalante's 1.2 s
   multi-contact steps (12 102 steps × 1 710 = 2.07e7 physics steps), and as a constant it would have to be raised

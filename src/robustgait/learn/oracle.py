@@ -4,9 +4,11 @@ An oracle maps an :class:`Outcome` to a score; of two gaits the one with the hig
 and equal scores give no comparison. The scores are a faithful scalarization of the rules, chosen so
 that a study's objective value (what Optuna's tools plot) orders trials exactly as the oracle does:
 
-* ``robustness`` — a gait that walks the step cap beats one that falls; among walkers the higher r*
-  wins; among fallers the one with more steps: score = cap + r* for a walker, steps for a faller
-  (steps < cap ≤ cap + r*). A failed generation is a faller with 0 steps.
+* ``robustness`` — a gait that walks the step cap beats one that falls; among walkers a certified gait beats one
+  without a certificate (its orbit did not settle, is unstable, …) and the higher r* wins; among fallers the one
+  with more steps: score = cap + r* for a certified walker, cap − ½ (``study.uncertified_penalty``) for a walker
+  without a certificate, steps for a faller (steps ≤ cap − 1 < cap − ½ < cap ≤ cap + r*). A failed generation is a
+  faller with 0 steps.
 * ``push`` — as ``robustness`` with the push certificate J* [N s] (``certify --disturbance push``) for r*.
 * ``stability`` — the paper's baseline: steps only, score = steps taken (r* is ignored, so all the
   gaits that walk the cap tie).
@@ -24,17 +26,20 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from robustgait.config import Metric
+from robustgait.config.study import UNCERTIFIED_PENALTY
 from robustgait.errors import RobustGaitError
 
 
 @dataclass(frozen=True)
 class Outcome:
     """What an oracle sees of one evaluated gait: steps completed (0 if generation failed), the step cap
-    of the walk, and r* (J* for the push metric; 0 when the gait was not certified)."""
+    of the walk, r* (J* for the push metric; 0 when the gait was not certified), and whether it was certified (a
+    gait that fell is never certified; only a walker's flag counts)."""
 
     steps_taken: int
     step_cap: int
     r_star: float = 0.0
+    certified: bool = True
     meets: bool = True  # the study's requirements (study.require) hold
 
     @property
@@ -45,11 +50,15 @@ class Outcome:
 REQUIREMENT_PENALTY = 1e7
 
 
-def score(metric: Metric | str, outcome: Outcome) -> float:
-    """The oracle's scalar: robustness (push, and the person metrics) = cap + r* (J*) if the gait walked the cap, else
-    steps; stability = steps; minus :data:`REQUIREMENT_PENALTY` for a gait that fails a requirement."""
+def score(metric: Metric | str, outcome: Outcome, penalty: float = UNCERTIFIED_PENALTY) -> float:
+    """The oracle's scalar: robustness (push, and the person metrics) = cap + r* (J*) if the gait walked the cap and was
+    certified, cap − ``penalty`` if it walked the cap without a certificate, else steps; stability = steps; minus
+    :data:`REQUIREMENT_PENALTY` for a gait that fails a requirement."""
     if metric in ("robustness", "push", "person", "simulated-person"):
-        base = float(outcome.step_cap + outcome.r_star) if outcome.walked_cap else float(outcome.steps_taken)
+        if not outcome.walked_cap:
+            base = float(outcome.steps_taken)
+        else:
+            base = float(outcome.step_cap + outcome.r_star) if outcome.certified else float(outcome.step_cap) - penalty
     elif metric == "stability":
         base = float(outcome.steps_taken)
     else:

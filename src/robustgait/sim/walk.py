@@ -15,11 +15,13 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config import ComfortConfig, SimConfig
+from robustgait.config import CertifyConfig, ComfortConfig, SimConfig
 from robustgait.config.work import MAX_GIF_FRAMES, MAX_VIDEO_PHYSICS_STEPS, Work, check_gif, check_work
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import Gait
 from robustgait.io.output import atomic_output, check_output
+from robustgait.orbit import OrbitReport, search_report
+from robustgait.reduced import reduce_state, section_coordinates
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.comfort import Comfort, ComfortRecorder, measure
@@ -53,7 +55,8 @@ class WalkResult:
     every physics step: RMS and largest |q − y_d| [rad] and the torque saturation (joint-steps whose commanded
     torque exceeded the limit, and their fraction; :class:`~robustgait.sim.controller.TrackingStats`); ``comfort``:
     what a passenger feels (:class:`~robustgait.sim.comfort.Comfort`) when the walk was asked for it and completed a
-    measured step, else None."""
+    measured step, else None; ``orbit``: whether the switching events, written for the gait's stance, settled on an
+    orbit (:func:`walk_orbit`)."""
 
     steps_taken: int
     fell: bool
@@ -69,20 +72,49 @@ class WalkResult:
     tracking: dict[str, float] = field(default_factory=dict)
     comfort: Comfort | None = None
     trajectory: NDArray[np.float64] | None = field(default=None, repr=False)
+    orbit: OrbitReport | None = None
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
         out.pop("trajectory")
+        out["orbit"] = None if self.orbit is None else self.orbit.to_dict()
         return out
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), allow_nan=False)
 
 
+def canonical_event_states(robot: Robot, gait: Gait, events: list[SwitchEvent]
+                           ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The states (len(events), nq), (len(events), nv) of a walk's switching events, each written for the gait's own
+    stance (an event that starts a step of the other stance is mirrored): the sequence the step map acts on."""
+    if not events:
+        return np.empty((0, robot.model.nq)), np.empty((0, robot.model.nv))
+    qpos, qvel = np.array([e.qpos for e in events]), np.array([e.qvel for e in events])
+    # the step that ended was canonical, so the next one is not
+    other = np.array([e.stance == gait.stance for e in events])
+    mq, mv = robot.mirror_state(qpos, qvel)
+    return np.where(other[:, None], mq, qpos), np.where(other[:, None], mv, qvel)
+
+
 def _heading(qpos: NDArray[np.float64]) -> NDArray[np.float64]:
     """Unit horizontal direction of the base's x axis (from the quaternion w, x, y, z)."""
     fwd = quat_to_mat(qpos[3:7])[:2, 0]
     return fwd / max(float(np.linalg.norm(fwd)), 1e-12)
+
+
+def walk_orbit(robot: Robot, gait: Gait, events: list[SwitchEvent], certify: CertifyConfig | None = None
+               ) -> OrbitReport:
+    """Whether a walk's switching events settled on an orbit of the step map: the events written for the gait's
+    stance (:func:`canonical_event_states`), the window search of the certificate's fixed point over them
+    (``certify.fp_window``, ``fp_tol``, ``fp_metric``, ``fp_min_steps``; :func:`robustgait.orbit.search_report`) —
+    no simulation. The spectral radius at the settled event: :meth:`robustgait.poincare.ReturnMap.stability`."""
+    c = certify or CertifyConfig()
+    qpos, qvel = canonical_event_states(robot, gait, events)
+    xs = (reduce_state(qpos, qvel, c.frame) if c.fp_metric == "omega"
+          else section_coordinates(qpos, qvel, gait.step_duration))
+    return search_report(xs, metric=c.fp_metric, window=c.fp_window, tol=c.fp_tol,
+                         min_index=max(c.min_steps - 1, 0), first_step=1)
 
 
 def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, video: str | Path | None = None) -> Work:
@@ -104,7 +136,8 @@ def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, vid
 
 def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: int | None = None,
          keep_trajectory: bool = False, video: str | Path | None = None,
-         engine: StepEngine | None = None, comfort: ComfortConfig | None = None) -> WalkResult:
+         engine: StepEngine | None = None, comfort: ComfortConfig | None = None,
+         certify: CertifyConfig | None = None) -> WalkResult:
     """Walk ``gait`` from its initial state for up to ``steps`` steps (default ``config.step_cap``), switching
     stance at each event.
 
@@ -115,7 +148,8 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     The trajectory (every physics step's full state, (n, nstate), MuJoCo's ``mjSTATE_FULLPHYSICS`` layout,
     time continuing across steps) is kept when ``keep_trajectory`` or ``video`` (an ``.mp4`` or ``.gif`` path,
     rendered after the walk by :func:`render_video`). The work is bounded before anything runs
-    (:func:`check_walk_work`; a video's stricter limits, the output path checked).
+    (:func:`check_walk_work`; a video's stricter limits, the output path checked). ``orbit`` of the result:
+    :func:`walk_orbit` with the fixed-point options of ``certify``.
 
     ``comfort``: measure what a passenger feels over the steps it names (:mod:`robustgait.sim.comfort`,
     ``WalkResult.comfort``); None: not measured.
@@ -184,7 +218,8 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
             switching=eng.config.switching, events=events,
             trajectory=np.concatenate(chunks) if keep_trajectory and chunks else None,
             controller=eng.controller_name, controller_note=eng.controller_note, tracking=stats.summary(),
-            comfort=measure(robot, eng.physics_model, recorder, heading) if recorder is not None else None)
+            comfort=measure(robot, eng.physics_model, recorder, heading) if recorder is not None else None,
+            orbit=walk_orbit(robot, gait, events, certify))
     finally:
         if own:
             eng.close()

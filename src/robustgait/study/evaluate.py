@@ -35,8 +35,9 @@ class Evaluation:
     """The outcome of :func:`evaluate`.
 
     status: ``certified`` (walked the cap, r* computed), ``generation_failed``, ``fell`` (before the cap),
-    ``not_certified`` (walked the cap but the certificate has a failed status: ``no_fixed_point``,
-    ``fell_before_fixed_point``, ``unstable_fixed_point``; the reason starts with it);
+    ``not_certified`` (walked the cap but the certificate has a failed status: ``no_stable_orbit``,
+    ``period_two_orbit``, ``unstable_orbit``, ``fell_before_fixed_point``, ``unstable_fixed_point``; the reason
+    starts with it — the oracles rank it below every certified gait);
     reason: why, in one line ('' when certified). generation: :meth:`GaitGenResult.summary`. r_star: 0
     unless certified. certificate: :meth:`GaitCertificate.to_dict` with the samples (None unless
     certified). comfort: what a passenger feels on the walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`,
@@ -60,7 +61,7 @@ class Evaluation:
     seconds: dict[str, float] = field(default_factory=dict)
 
     def outcome(self) -> Outcome:
-        return Outcome(self.steps_taken, self.step_cap, self.r_star)
+        return Outcome(self.steps_taken, self.step_cap, self.r_star, self.status == "certified")
 
     def certificate_summary(self) -> dict[str, Any] | None:
         """The certificate without its samples (what a study keeps in its database)."""
@@ -150,6 +151,7 @@ def certify_evaluation(robot: Robot, ev: Evaluation, config: Config | None = Non
         return ev
     cfg = config or Config()
     t0 = time.perf_counter()
+    # a fall, no stable orbit: a status, not an exception
     gc = certify_gait(robot, ev.gait, cfg.study_certify, cfg.sim, validate=cfg.validate)
     if gc.ok:
         ev.status, ev.reason = "certified", ""

@@ -71,9 +71,16 @@ def figure_value(name: str, params: Mapping[str, float], result: Mapping[str, An
 
 
 def outcome_of(r: TrialRecord, reqs: Sequence[Requirement] = ()) -> Outcome:
+    """The oracle's view of a stored evaluation (certified: its ``status``; meets: the requirements)."""
     res = r.result or {}
     return Outcome(int(res["steps_taken"]), int(res["step_cap"]), float(res["r_star"]),
-                   all(q.holds(r.params, res) for q in reqs))
+                   res.get("status") == "certified", all(q.holds(r.params, res) for q in reqs))
+
+
+def study_score(config: StudyConfig, r: TrialRecord, reqs: Sequence[Requirement] = ()) -> float:
+    """The study's oracle score of a stored evaluation — recomputed from it whenever a study is resumed (the history
+    the learner reproduces), with the study's own ``uncertified_penalty``."""
+    return score(config.metric, outcome_of(r, reqs), config.uncertified_penalty)
 
 
 def shown(r: TrialRecord, floor: float, reqs: Sequence[Requirement]) -> bool:
@@ -86,7 +93,7 @@ def batch_scores(config: StudyConfig, batch: Sequence[TrialRecord], record: Mapp
                  reqs: Sequence[Requirement]) -> list[float]:
     """The scores that rank a batch: the oracle's (:func:`~robustgait.learn.oracle.score`), or for a person study the
     stored answer's (:func:`~robustgait.learn.oracle.person_scores`: shown gaits by their rank, above the others)."""
-    fallback = [score(config.metric, outcome_of(r, reqs)) for r in batch]
+    fallback = [study_score(config, r, reqs) for r in batch]
     if not config.asks_a_person:
         return fallback
     answer = record.get("answer")

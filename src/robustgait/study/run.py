@@ -39,7 +39,7 @@ from robustgait.gait import BEZIER_DEGREE, Domain, Gait
 from robustgait.io.output import write_json
 from robustgait.io.robotfile import load_robot
 from robustgait.learn.learners import History, Learner, iteration_seed, make_learner
-from robustgait.learn.oracle import batch_comparisons, score
+from robustgait.learn.oracle import batch_comparisons
 from robustgait.learn.space import ActionSpace
 from robustgait.robots import Robot
 from robustgait.robots.spec import SHIPPED_DIR
@@ -55,7 +55,13 @@ from robustgait.study.person import (
     shown_flags,
     simulated_answer,
 )
-from robustgait.study.ranking import Requirement, batch_scores, history_before, outcome_of, requirements
+from robustgait.study.ranking import (  # history_before, study_score: also robustgait.study.run's, as before
+    Requirement,
+    batch_scores,
+    history_before,
+    requirements,
+    study_score,
+)
 from robustgait.study.storage import StudyStore, TrialRecord, default_url
 
 # asked when a person study's batch k waits for answers: returns once the answer is
@@ -354,7 +360,7 @@ class StudyRunner:
 
     def _complete(self, store: StudyStore, trial: TrialRecord, result: dict[str, Any], bar: tqdm,
                   reused_from: int | None = None) -> None:
-        value = score(self.config.metric, outcome_of(replace(trial, result=result), self.reqs))
+        value = study_score(self.config, replace(trial, result=result), self.reqs)
         extra: dict[str, Any] = {"reused_from": reused_from} if reused_from is not None else {}
         store.complete(trial.number, result, value, extra)
         bar.update(1)

@@ -51,6 +51,7 @@ import numpy as np
 from tqdm import tqdm
 
 from robustgait.config import KINDS, CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
+from robustgait.config.certify import fixed_point_options
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
@@ -172,8 +173,9 @@ def _orbitless_start(robot: Any, gait: Any, c: CertifyConfig) -> tuple[Any, Any]
     xbar = ReducedState.at(state, robot, q, v, gait.stance, c).x_star
     k = xbar.shape[0]
     ref = CertificateRef(0.0, False, tuple(float(x) for x in xbar), tuple(tuple(r) for r in np.eye(k).tolist()),
-                         c.space, c.set, c.horizon, None, c.map, c.frame, c.reconstruction, c.fp_tol, c.min_steps,
-                         c.fp_max_steps, "none: no certified fixed point (started from the gait's initial state)")
+                         c.space, c.set, c.horizon, None, c.map, c.frame, c.reconstruction,
+                         tuple(fixed_point_options(c).items()),
+                         "none: no certified fixed point (started from the gait's initial state)")
     return start, ref
 
 

@@ -28,13 +28,14 @@ from tqdm import tqdm
 
 from robustgait.certify import GaitCertificate, certify_gait, certify_steps
 from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, PushConfig, SimConfig, ValidateConfig, to_dict
+from robustgait.config.certify import fixed_point_options
 from robustgait.config.work import Work, check_work
 from robustgait.domains import step_segments
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.poincare import FixedPoint, ReturnMap
 from robustgait.recovery import OrbitBand
-from robustgait.reduced import ReducedState
+from robustgait.reduced import ReducedState, section_dimension
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import StepInputs, step_physics_steps
@@ -53,7 +54,8 @@ class CertificateRef:
     (open set), the centre z* = T x̄* and the transform T (z = T x̄, :class:`robustgait.reduced.Coordinates`) of its
     coordinates, the space certified (omega, centroidal, velocity, or push: then r* is J* [N s] and the check is on
     the pushes' impulses), the set and horizon, E* [J] for an energy state, the map, frame, reconstruction, the
-    fixed-point search options, and where it came from ("computed" or a file path)."""
+    fixed-point search options (every ``fp_*`` field: :func:`robustgait.config.certify.fixed_point_options`), and where
+    it came from ("computed" or a file path)."""
 
     r_star: float
     attained: bool
@@ -66,9 +68,7 @@ class CertificateRef:
     map: MapKind
     frame: Frame
     reconstruction: str
-    fp_tol: float
-    fp_min_steps: int
-    fp_max_steps: int
+    fixed_point: tuple[tuple[str, Any], ...]
     source: str
     push: PushConfig | None = None  # a push certificate's pushed walk: its steps and recovery
 
@@ -79,8 +79,8 @@ class CertificateRef:
             raise RobustGaitError(f"the gait has no certificate to validate against ({gc.status}: {gc.reason})")
         return CertificateRef(float(c.r_star), bool(c.attained), tuple(float(v) for v in c.x_star),
                               tuple(tuple(float(v) for v in row) for row in co.transform), cfg.space, cfg.set,
-                              cfg.horizon, gc.energy, cfg.map, cfg.frame, cfg.reconstruction, cfg.fp_tol,
-                              cfg.min_steps, cfg.fp_max_steps, "computed",
+                              cfg.horizon, gc.energy, cfg.map, cfg.frame, cfg.reconstruction,
+                              tuple(fixed_point_options(cfg).items()), "computed",
                               cfg.push if cfg.disturbance == "push" else None)
 
     @staticmethod
@@ -93,8 +93,8 @@ class CertificateRef:
         k = len(c.x_star)
         t = c.transform(path) or np.eye(k).tolist()
         return CertificateRef(c.r_star, c.attained, tuple(c.x_star), tuple(tuple(row) for row in t), cfg.space,
-                              cfg.set, cfg.horizon, c.energy, cfg.map, cfg.frame, cfg.reconstruction, cfg.fp_tol,
-                              cfg.min_steps, cfg.fp_max_steps, str(path),
+                              cfg.set, cfg.horizon, c.energy, cfg.map, cfg.frame, cfg.reconstruction,
+                              tuple(fixed_point_options(cfg).items()), str(path),
                               cfg.push if cfg.disturbance == "push" else None)
 
     def certify_config(self, base: CertifyConfig) -> CertifyConfig:
@@ -106,8 +106,7 @@ class CertificateRef:
         kw.update(set=self.set, reconstruction=self.reconstruction)
         if self.push is not None:
             kw["push"] = self.push
-        return replace(base, horizon=self.horizon, map=self.map, frame=self.frame, fp_tol=self.fp_tol,
-                       fp_min_steps=self.fp_min_steps, fp_max_steps=self.fp_max_steps, **kw)
+        return replace(base, horizon=self.horizon, map=self.map, frame=self.frame, **dict(self.fixed_point), **kw)
 
     def check_matches(self, config: CertifyConfig) -> None:
         """Refuse a certificate of another space, set or horizon than ``config`` asks for (one line)."""
@@ -427,12 +426,15 @@ class Validator:
         return self._band if isinstance(self._band, OrbitBand) else None
 
 
-def validate_steps(config: ValidateConfig, kinds: int, certify: CertifyConfig, graph: str, certifying: bool) -> int:
+def validate_steps(config: ValidateConfig, kinds: int, certify: CertifyConfig, graph: str, certifying: bool,
+                   dim: int) -> int:
     """The most steps a validation simulates: the certificate when it computes one (:func:`certify_steps`), or else
-    the search for the fixed point (a multi-contact gait's walk to its first heel strike, then up to
-    ``certify.fp_max_steps`` steps); the undisturbed first step; and per disturbance kind ``trials`` trials of
-    period + ``steps_after`` steps (period 2 at most: the stride map)."""
-    setup = certify_steps(certify, graph) if certifying else (0 if graph == "flat" else 1) + certify.fp_max_steps
+    the search for the fixed point (a multi-contact gait's walk to its first heel strike, then the search on a
+    section of ``dim`` coordinates, :meth:`~robustgait.config.CertifyConfig.fixed_point_steps`); the undisturbed
+    first step; and per disturbance kind ``trials`` trials of period + ``steps_after`` steps (period 2 at most: the
+    stride map)."""
+    setup = (certify_steps(certify, graph, dim) if certifying
+             else (0 if graph == "flat" else 1) + certify.fixed_point_steps(dim))
     return setup + 1 + kinds * config.trials * (2 + config.steps_after)
 
 
@@ -441,9 +443,9 @@ def check_validate_work(robot: Robot, gait: Gait, config: ValidateConfig, sim: S
     """Bound a validation of ``kinds`` disturbance kinds before it starts (:mod:`robustgait.config.work`):
     :func:`validate_steps`, each step up to the gait's :func:`~robustgait.sim.engine.step_horizons`, against what
     the default validation of as many kinds (and the default certificate, when ``certifying``) needs here."""
-    graph, cert = gait.domain_graph, certify or CertifyConfig()
-    work = Work(validate_steps(config, kinds, cert, graph, certifying), step_physics_steps(gait, robot.dt, sim))
-    defaults = Work(validate_steps(ValidateConfig(), kinds, CertifyConfig(), graph, certifying),
+    graph, cert, dim = gait.domain_graph, certify or CertifyConfig(), section_dimension(robot)
+    work = Work(validate_steps(config, kinds, cert, graph, certifying, dim), step_physics_steps(gait, robot.dt, sim))
+    defaults = Work(validate_steps(ValidateConfig(), kinds, CertifyConfig(), graph, certifying, dim),
                     step_physics_steps(gait, robot.dt, SimConfig()))
     return check_work(work, defaults, robot.dt, f"{what}validate.trials {config.trials} × (validate.steps_after "
                       f"{config.steps_after} + 2) steps × {kinds} disturbance kind{'s' if kinds > 1 else ''}"
