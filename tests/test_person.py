@@ -130,9 +130,9 @@ def test_requirements_rank_failing_gaits_below_all_others_keeping_their_order():
     assert [all(x.holds(r.params, r.result or {}) for x in q) for r in (ok, slow, long_)] == [True, False, False]
     fell = record(3, 0.0, status="fell")  # no comfort figures: a requirement on one is not met
     assert not q[0].holds(fell.params, fell.result or {})
-    s_ok = score("push", Outcome(50, 50, 20.0, True))
-    s_slow = score("push", Outcome(50, 50, 30.0, False))
-    s_long = score("push", Outcome(50, 50, 25.0, False))
+    s_ok = score("push", Outcome(50, 50, 20.0, meets=True))
+    s_slow = score("push", Outcome(50, 50, 30.0, meets=False))
+    s_long = score("push", Outcome(50, 50, 25.0, meets=False))
     assert s_ok > s_slow > s_long and s_slow == 80.0 - REQUIREMENT_PENALTY
     assert score("stability", Outcome(40, 50, meets=False)) < score("stability", Outcome(3, 50))
     for bad in ("speed=>0.2", "speed>=fast", "speed", ">=0.2"):
