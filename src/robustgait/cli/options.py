@@ -14,7 +14,7 @@ import math
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, get_args, get_origin
 
 from pydantic import ValidationError
 
@@ -72,11 +72,15 @@ def parse_value(info: FieldInfo, text: str) -> Any:
     """Parse one flag's text for a field and validate it with the field's annotation (bounds, choices)."""
     kind = info.scalar
     arity = info.arity
-    if arity is not None:
+    if get_origin(info.bare) is tuple and Ellipsis in get_args(info.bare):  # a list: comma-separated
+        value: Any = [p.strip() for p in text.split(",") if p.strip()]
+        if field_at_item(info, 0) is not str:
+            value = [_scalar(p, field_at_item(info, 0)) for p in value]
+    elif arity is not None:
         parts = [p for p in text.replace(",", " ").split() if p]
         if len(parts) != arity:
             raise argparse.ArgumentTypeError(f"expected {arity} values separated by commas, got {text!r}")
-        value: Any = [_scalar(p, field_at_item(info, i)) for i, p in enumerate(parts)]
+        value = [_scalar(p, field_at_item(info, i)) for i, p in enumerate(parts)]
     elif info.choices:
         value = text
     else:

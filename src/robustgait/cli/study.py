@@ -20,7 +20,8 @@ STUDY: FlagTable = {"--metric": "study.metric", "--learner": "study.learner", "-
          "--budget": "certify.sequential.budget", "--epsilon": "certify.sequential.epsilon", "--steps": "sim.step_cap",
          "--domains": "generate.domains", "--storage": "study.storage", "--seed": ("study.seed", "certify.seed"),
          "--state": "certify.state", "--set": "certify.set", "--horizon": "certify.horizon",
-         "--controller": "sim.controller"}
+         "--controller": "sim.controller", "--require": "study.require", "--floor": "person.floor",
+         "--blind": "person.blind", "--person-seed": "person.simulated.seed"}
 
 
 def _check_executor(run: RunConfig) -> None:
@@ -56,10 +57,17 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
                   f"{c['pelvis_acc_vertical_rms']:.3g} / lateral {c['pelvis_acc_lateral_rms']:.3g} m/s², cost of "
                   f"transport {cot} (docs/comfort.md)")
     obs = st["best_observed"]
-    if obs is not None and (best is None or obs["score"] != best["score"]):
+    if obs is not None and not st.get("person") and (best is None or obs["score"] != best["score"]):
         params = ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
         print(f"best evaluated gait (trial {obs['trial']}; the best gait above is the learner's highest posterior "
               f"mean): {params}; {_name(st)} = {obs['r_star']:.4g} {st['unit']}, {obs['steps_taken']} steps")
+    person = st.get("person")
+    if person:  # docs/person.md
+        floor = person["floor"]
+        shown = "" if floor is None else f"robustness floor {_name(st)} ≥ {floor['value']:.4g} {st['unit']}; "
+        waiting = "" if person["pending"] is None else f"; batch {person['pending'] + 1} waits for an answer " \
+            f"(robustgait study serve {directory})"
+        print(f"  person: {shown}{len(person['answers'])} batches answered{waiting}")
     if st["environment_changes"]:
         print("created with other library versions (" + ", ".join(st["environment_changes"]) + "): the learner "
               "may propose other gaits than it did, and `study resume` refuses a proposal that differs")
@@ -79,23 +87,48 @@ def _run_interruptible(directory: str, run: RunConfig, args: argparse.Namespace)
 
 
 def _study_run(args: argparse.Namespace) -> int:
+    from robustgait.cli.person import serve
     from robustgait.study.run import create_study
 
     config = config_from(args)
     _check_executor(config.run)
+    sock = None
+    if config.study.metric == "person":  # a port in use: one line, before the study exists
+        from robustgait.web.server import bind
+
+        sock = bind(config.web)
     create_study(args.dir, args.robot, config)
     t0 = time.perf_counter()
-    if not _run_interruptible(args.dir, config.run, args):
+    if config.study.metric == "person":
+        if not serve(args.dir, config.run, config, args, sock):
+            return 130
+    elif not _run_interruptible(args.dir, config.run, args):
         return 130
     print_summary(args.dir, time.perf_counter() - t0)
     return 0
 
 
 def _study_resume(args: argparse.Namespace) -> int:
+    from robustgait.cli.person import is_person_study, serve
+
     t0 = time.perf_counter()
-    if not _run_interruptible(args.dir, config_from(args).run, args):
+    config = config_from(args)
+    if is_person_study(args.dir):  # its batches wait for answers on the page
+        if not serve(args.dir, config.run, config, args):
+            return 130
+    elif not _run_interruptible(args.dir, config.run, args):
         return 130
     print_summary(args.dir, time.perf_counter() - t0)
+    return 0
+
+
+def _study_serve(args: argparse.Namespace) -> int:
+    from robustgait.cli.person import serve
+
+    config = config_from(args)
+    if not serve(args.dir, config.run, config, args):
+        return 130
+    print_summary(args.dir)
     return 0
 
 
@@ -225,12 +258,15 @@ def _run_flags(p: argparse.ArgumentParser) -> None:
 def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     s = sub.add_parser("study", help="learn the most robust gait: the simulation-in-the-loop preference study")
     ssub = s.add_subparsers(dest="study_command", required=True, parser_class=type(s))
-    r = command(ssub, "run", "start a study in a new directory and run it to its budget", _study_run,
-                {**STUDY, **RUN})
+    from robustgait.cli import person
+
+    r = command(ssub, "run", "start a study in a new directory and run it to its budget (--metric person: serve its "
+                "page, docs/person.md)", _study_run, {**STUDY, **RUN, **person.WEB})
     r.add_argument("dir", help="study directory (new or empty)")
     r.add_argument("--robot", required=True, help=f"{ROBOT_HELP} with [action_space]")
     _run_flags(r)
-    rs = command(ssub, "resume", "continue a stopped or killed study to its total budget", _study_resume, RUN)
+    rs = command(ssub, "resume", "continue a stopped or killed study to its total budget (a person study: with its "
+                 "page)", _study_resume, {**RUN, **person.WEB})
     rs.add_argument("dir")
     _run_flags(rs)
     st = ssub.add_parser("status", help="progress, best gait and every trial of a study")
@@ -255,6 +291,7 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     va.add_argument("dir", help="study directory")
     va.add_argument("--json", action="store_true", help="print one JSON object: the summary of each kind")
     va.add_argument("--quiet", action="store_true", help="no progress bar")
+    person.add_parsers(ssub, RUN, _study_serve)
 
     dm = command(sub, "demo", "the main job on shipped defaults: a small study of push robustness (J*) on exo + report",
                  _demo, {"--workers": "run.workers"})

@@ -15,6 +15,8 @@ comfort     :class:`ComfortConfig`  the comfort figures of a walk: walk, studies
 certify     :class:`CertifyConfig`  certify, validate, studies, compare
 validate    :class:`ValidateConfig` validate, study validate
 study       :class:`StudyConfig`    study run (saved with the study)
+person      :class:`PersonConfig`   studies ranked by a person or a simulated one (saved with the study)
+web         :class:`WebConfig`      the page of a person study (where: not saved)
 run         :class:`RunConfig`      study run / resume, demo (how, not what: not saved)
 compare     :class:`CompareConfig`  study compare
 report      :class:`ReportConfig`   study report, gait tiles
@@ -77,9 +79,11 @@ from robustgait.config.gait import (
     Stance,
     relative_generation_defaults,
 )
+from robustgait.config.person import PersonConfig, SimulatedPersonConfig, WebConfig, parse_requirement
 from robustgait.config.robot import Plan, RobotCheckConfig, RobotConfig, ScaleRules
 from robustgait.config.sim import Controller, SimConfig, Switching
 from robustgait.config.study import (
+    PERSON_METRICS,
     CompareConfig,
     LearnerConfig,
     LearnerName,
@@ -104,6 +108,8 @@ class Config:
     certify: CertifyConfig = dataclasses.field(default_factory=CertifyConfig)
     validate: ValidateConfig = dataclasses.field(default_factory=ValidateConfig)
     study: StudyConfig = dataclasses.field(default_factory=StudyConfig)
+    person: PersonConfig = dataclasses.field(default_factory=PersonConfig)
+    web: WebConfig = dataclasses.field(default_factory=WebConfig)
     run: RunConfig = dataclasses.field(default_factory=RunConfig)
     compare: CompareConfig = dataclasses.field(default_factory=CompareConfig)
     report: ReportConfig = dataclasses.field(default_factory=ReportConfig)
@@ -138,6 +144,8 @@ class Config:
             **{f"generate.{k}": "not set: the robot spec's [generation] value, else relative to the robot (its help)"
                for k in ROBOT_SCALED},
             "study.storage": "not set: a SQLite file in the study directory",
+            "person.floor": "not set: person.floor_fraction × the certificate of the robot's default gait (the gait "
+                            "section), measured when the study starts",
             "run.workers": f"not set: min(cores, 2) = {default_workers()} here",
             "run.address": "not set: start a local Ray",
             "compare.samples": "not set: study A's",
@@ -216,6 +224,7 @@ __all__ = [
     "DEMO_ROBOT",
     "GAIT_FORMATS",
     "KINDS",
+    "PERSON_METRICS",
     "PRESETS",
     "ROBOT_SCALED",
     "R_MAX_UNIT",
@@ -245,6 +254,7 @@ __all__ = [
     "MapKind",
     "Method",
     "Metric",
+    "PersonConfig",
     "Plan",
     "PreferenceModelConfig",
     "PushConfig",
@@ -257,11 +267,13 @@ __all__ = [
     "ScaleRules",
     "SequentialConfig",
     "SimConfig",
+    "SimulatedPersonConfig",
     "Stance",
     "State",
     "StudyConfig",
     "Switching",
     "ValidateConfig",
+    "WebConfig",
     "choices_of",
     "config",
     "default_workers",
@@ -271,6 +283,7 @@ __all__ = [
     "implied",
     "merge",
     "nest",
+    "parse_requirement",
     "preset",
     "radius_name",
     "relative_generation_defaults",

@@ -7,10 +7,12 @@ import dataclasses
 import os
 from typing import Annotated, Literal
 
-from robustgait.config.base import Bool, Doc, Float, Int, Str, config
+from robustgait.config.base import Bool, Doc, FieldProblem, Float, Int, Str, config
 from robustgait.config.certify import SEED_LIMIT
+from robustgait.config.person import parse_requirement
 
-Metric = Literal["push", "robustness", "stability"]
+Metric = Literal["push", "robustness", "stability", "person", "simulated-person"]
+PERSON_METRICS = ("person", "simulated-person")
 LearnerName = Literal["polar", "eubo", "random"]
 Hyperparameters = Literal["fixed", "fit"]
 ExecutorName = Literal["local", "ray"]
@@ -64,12 +66,18 @@ class LearnerConfig:
 @config
 class StudyConfig:
     """A study: the preference oracle (``push``: J* among gaits that walk the step cap; ``robustness``: the state
-    certificate r* among them; ``stability``: steps only), the learner, the budget (iterations × batch gaits), the
-    learner's seed (iteration k is seeded from (seed, k); the certificates' seed is ``certify.seed``), where it is
-    stored."""
+    certificate r* among them; ``stability``: steps only; ``person``: a person's answers on a web page;
+    ``simulated-person``: a simulated person's, ``[person]``), the requirements on recorded figures (a gait that fails
+    one ranks below every gait that meets them all), the learner, the budget (iterations × batch gaits), the learner's
+    seed (iteration k is seeded from (seed, k); the certificates' seed is ``certify.seed``), where it is stored."""
 
     metric: Annotated[Metric, Doc("preference oracle: J* (push: the push certificate) among gaits that walk the step "
-                                  "cap, r* (robustness: the state certificate), or steps only (stability)")] = "push"
+                                  "cap, r* (robustness: the state certificate), steps only (stability), a person on a "
+                                  "web page (person) or a simulated one (simulated-person)")] = "push"
+    require: Annotated[tuple[Str, ...], Doc(
+        "requirements FIGURE OP NUMBER on recorded figures (speed>=0.2; OP >= <= > <; a comfort figure, r_star, "
+        "steps_taken, mean_speed or a gait parameter), comma-separated: a gait failing one ranks below all that "
+        "meet them")] = ()
     learner: Annotated[LearnerName, Doc("polar (Thompson sampling), eubo (qEUBO) or random")] = "polar"
     iterations: Annotated[Int, Doc("batches", ge=1, le=1000)] = 10
     batch: Annotated[Int, Doc("gaits per batch (a batch is ranked: at least 2)", ge=2, le=100)] = 5
@@ -83,9 +91,21 @@ class StudyConfig:
     study_name: Annotated[Str, Doc("the Optuna study's name in its database")] = "robustgait"
     learning: LearnerConfig = dataclasses.field(default_factory=LearnerConfig)
 
+    def __post_init__(self) -> None:
+        for text in self.require:
+            try:
+                parse_requirement(text)
+            except ValueError as exc:
+                raise FieldProblem("require", str(exc)) from None
+
     @property
     def trials_planned(self) -> int:
         return self.iterations * self.batch
+
+    @property
+    def asks_a_person(self) -> bool:
+        """Ranked by a person or a simulated one (``[person]``: the floor, the page)."""
+        return self.metric in PERSON_METRICS
 
 
 @config
@@ -124,5 +144,8 @@ class ReportConfig:
     axes: Annotated[tuple[Str, Str], Doc("the two parameters of the posterior-mean map")] = (
         "step_length", "step_duration")
     video: Annotated[Bool, Doc("render a video of the best gait")] = True
+    pareto_figure: Annotated[Str, Doc("comfort figure (a cost: lower is better) of the trade-off front over the "
+                                      "certificate, the speed and it (study pareto, the report)")] = (
+        "pelvis_acc_vertical_rms")
     tile_frames: Annotated[Int, Doc("gait tiles: frames of one step (each a 320 × 480 tile)", ge=2, le=60)] = 6
     tile_warmup_steps: Annotated[Int, Doc("gait tiles: steps walked before the step shown", ge=0, le=1000)] = 4

@@ -57,17 +57,23 @@ class History:
     comparisons: tuple[tuple[int, int], ...] = ()
 
     @classmethod
-    def from_batches(cls, batches: Sequence[Sequence[tuple[int, float]]]) -> History:
+    def from_batches(cls, batches: Sequence[Sequence[tuple[int, float]]],
+                     extra: Sequence[tuple[tuple[int, int], tuple[int, int]]] = ()) -> History:
         """From the ranked batches of iterations 0, 1, …: per batch, (grid index, oracle score) per slot;
-        every batch gives all its pairwise comparisons (:func:`batch_comparisons`)."""
+        every batch gives all its pairwise comparisons (:func:`batch_comparisons`). ``extra``: further comparisons
+        (winner, loser) between gaits named by (iteration, slot) — a person's labels across batches."""
         actions: list[int] = []
         iters: list[int] = []
         comps: list[tuple[int, int]] = []
+        starts: list[int] = []
         for k, batch in enumerate(batches):
             base = len(actions)
+            starts.append(base)
             comps += [(base + w, base + lo) for w, lo in batch_comparisons([s for _, s in batch])]
             actions += [int(i) for i, _ in batch]
             iters += [k] * len(batch)
+        comps += [(starts[wk] + ws, starts[lk] + ls) for (wk, ws), (lk, ls) in extra
+                  if wk < len(batches) and lk < len(batches)]
         return cls(tuple(actions), tuple(iters), tuple(comps))
 
     def unique(self) -> tuple[IntArray, list[tuple[int, int]]]:

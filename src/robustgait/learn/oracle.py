@@ -12,6 +12,12 @@ that a study's objective value (what Optuna's tools plot) orders trials exactly 
 * ``push`` — as ``robustness`` with the push certificate J* [N s] (``certify --disturbance push``) for r*.
 * ``stability`` — the paper's baseline: steps only, score = steps taken (r* is ignored, so all the
   gaits that walk the cap tie).
+* ``person``, ``simulated-person`` — a person ranks the batch (:func:`person_scores`); the score of a trial, which
+  also ranks the gaits a person is not shown, is the certificate's (as ``push``/``robustness``).
+
+Requirements (``study.require``): a gait that fails one ranks below every gait that meets them all — its score is
+lowered by :data:`REQUIREMENT_PENALTY`, more than any score can be (scores are below cap + certificate, both at most
+10⁶ by their limits), so failing gaits keep their order among themselves.
 """
 
 from __future__ import annotations
@@ -34,22 +40,43 @@ class Outcome:
     step_cap: int
     r_star: float = 0.0
     certified: bool = True
+    meets: bool = True  # the study's requirements (study.require) hold
 
     @property
     def walked_cap(self) -> bool:
         return self.steps_taken >= self.step_cap
 
 
+REQUIREMENT_PENALTY = 1e7
+
+
 def score(metric: Metric | str, outcome: Outcome, penalty: float = UNCERTIFIED_PENALTY) -> float:
-    """The oracle's scalar: robustness (push) = cap + r* (J*) if the gait walked the cap and was certified, cap −
-    ``penalty`` if it walked the cap without a certificate, else steps; stability = steps."""
-    if metric in ("robustness", "push"):
+    """The oracle's scalar: robustness (push, and the person metrics) = cap + r* (J*) if the gait walked the cap and was
+    certified, cap − ``penalty`` if it walked the cap without a certificate, else steps; stability = steps; minus
+    :data:`REQUIREMENT_PENALTY` for a gait that fails a requirement."""
+    if metric in ("robustness", "push", "person", "simulated-person"):
         if not outcome.walked_cap:
-            return float(outcome.steps_taken)
-        return float(outcome.step_cap + outcome.r_star) if outcome.certified else float(outcome.step_cap) - penalty
-    if metric == "stability":
-        return float(outcome.steps_taken)
-    raise RobustGaitError(f"unknown metric {metric!r}")
+            base = float(outcome.steps_taken)
+        else:
+            base = float(outcome.step_cap + outcome.r_star) if outcome.certified else float(outcome.step_cap) - penalty
+    elif metric == "stability":
+        base = float(outcome.steps_taken)
+    else:
+        raise RobustGaitError(f"unknown metric {metric!r}")
+    return base if outcome.meets else base - REQUIREMENT_PENALTY
+
+
+def person_scores(ranks: Sequence[int | None], fallback: Sequence[float]) -> list[float]:
+    """Scores of a batch ranked by a person, for :func:`batch_comparisons`: ``ranks[i]`` is the rank of slot i among
+    the shown gaits (0 the best; equal ranks: "cannot tell"), None for a gait not shown (below the floor or failing a
+    requirement), which ranks below every shown one and among those by its ``fallback`` score (the certificate's,
+    :func:`score`). Shown: max(fallback) + 1 + (worst rank − rank)."""
+    if len(ranks) != len(fallback):
+        raise RobustGaitError(f"{len(ranks)} ranks for a batch of {len(fallback)}")
+    shown = [r for r in ranks if r is not None]
+    top = max(fallback, default=0.0) + 1.0
+    worst = max(shown, default=0)
+    return [float(f) if r is None else top + (worst - r) for r, f in zip(ranks, fallback, strict=True)]
 
 
 def prefer(metric: Metric | str, a: Outcome, b: Outcome) -> int:

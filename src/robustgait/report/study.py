@@ -34,6 +34,7 @@ from robustgait.io.output import write_text
 from robustgait.io.schema import read_json
 from robustgait.reduced import Coordinates
 from robustgait.report.figures import _save, plot_certificate
+from robustgait.report.person import pareto_parts, person_parts
 
 OUTCOME_COLORS = {"certified": "tab:green", "not_certified": "tab:olive", "fell": "tab:red",
                   "generation_failed": "0.3"}
@@ -134,7 +135,8 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
     from robustgait.learn.learners import make_learner
     from robustgait.learn.model import posterior_mean
     from robustgait.study.config import load_config
-    from robustgait.study.run import completed_batches, history_before, open_store
+    from robustgait.study.ranking import history_before, requirements
+    from robustgait.study.run import completed_batches, open_store
 
     setup = load_config(directory)
     cfg = setup.config.study
@@ -146,10 +148,13 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
     store = open_store(directory, setup, space)
     try:
         batches = completed_batches(store.records())
+        iterations = store.iterations()
     finally:
         store.close()
-    k = max((i for i in range(cfg.iterations) if len(batches.get(i, [])) == cfg.batch), default=-1)
-    history = history_before(k + 1, batches, cfg)
+    # the last iteration ranked (a person study's pending batch has no answer yet: the one before it)
+    k = max((i for i in range(cfg.iterations) if len(batches.get(i, [])) == cfg.batch
+             and (not cfg.asks_a_person or "answer" in iterations.get(i, {}))), default=-1)
+    history = history_before(k + 1, batches, cfg, iterations, requirements(cfg, space.names))
     learner = make_learner(cfg.learner, space, cfg.learning, cfg.seed)
     model = learner.model(history, max(k, 0))
     a, b = (space.names.index(n) for n in axes_names)
@@ -236,8 +241,9 @@ def write_study_report(directory: str | Path, config: ReportConfig | None = None
     best = status["best"]
     figs = [("Best gait per iteration", lambda p: plot_history(status, p), "history.png"),
             ("Explored parameters", lambda p: plot_explored(status, p), "explored.png")]
-    if best is not None:
-        figs.append((f"Posterior mean over {axes[0]} × {axes[1]}",
+    if best is not None:  # for a person study: the learned utility of the person over the parameters
+        figs.append((f"{'Learned utility (posterior mean)' if status['person'] else 'Posterior mean'} over "
+                     f"{axes[0]} × {axes[1]}",
                      lambda p: plot_posterior(d, status, axes, p), "posterior.png"))
     for title, make, name in figs:
         parts.append(f"<h2>{html.escape(title)}</h2>{_img(make(out / name))}")
@@ -254,7 +260,9 @@ def write_study_report(directory: str | Path, config: ReportConfig | None = None
                      f"<p>{html.escape(str(raw.get('statement') or cert.statement()))}</p>")
     else:
         notes.append("The best gait has no certificate (no gait walked the step cap and was certified).")
+    parts += person_parts(status, _table)
     parts += _comfort_parts(status, out, notes)
+    parts += pareto_parts(status, out, config.pareto_figure, _table, _img)
     parts += _validation_parts(d, status, out, notes)
     if video and best is not None and best.get("gait_file"):
         try:

@@ -97,7 +97,17 @@ def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
     """Generate the gait of ``params`` (cold start, ``config.generate``), walk it up to ``config.sim.step_cap``
     steps and, if it walked the cap, certify it (``config.certify``). Pass a ``generator`` built for ``robot`` with
     ``config.generate`` to reuse it (building costs seconds). The certificate is ``config.study_certify`` (J* for the
-    ``push`` metric). Never raises for a bad gait (see :class:`Evaluation`)."""
+    ``push`` metric). Never raises for a bad gait (see :class:`Evaluation`). The two stages are
+    :func:`generate_and_walk` and :func:`certify_evaluation`: ``evaluate`` is exactly one after the other."""
+    cfg = config or Config()
+    return certify_evaluation(robot, generate_and_walk(robot, params, cfg, generator=generator), cfg)
+
+
+def generate_and_walk(robot: Robot, params: GaitParams, config: Config | None = None, *,
+                      generator: GaitGenerator | None = None) -> Evaluation:
+    """The first stage of :func:`evaluate`: generate the gait and walk it to the step cap with its comfort figures.
+    The result's status is ``generation_failed``, ``fell``, or (walked the cap) ``not_certified`` with the reason
+    ``not certified yet`` until :func:`certify_evaluation` certifies it."""
     from robustgait.gaitgen import GaitGenerator
 
     cfg = config or Config()
@@ -123,19 +133,32 @@ def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
         ev.comfort = w.comfort.to_dict() if w.comfort is not None else None
         if w.steps_taken < cap:
             ev.status, ev.reason = "fell", f"fell in step {w.steps_taken + 1} ({w.fall_reason})"
+        else:
+            ev.status, ev.reason = "not_certified", NOT_CERTIFIED_YET
     t_walk = time.perf_counter()
     seconds["walk"] = t_walk - t_gen
-    if ev.status == "fell":
-        seconds["total"] = t_walk - t0
+    seconds["total"] = t_walk - t0
+    return ev
+
+
+NOT_CERTIFIED_YET = "not certified yet"
+
+
+def certify_evaluation(robot: Robot, ev: Evaluation, config: Config | None = None) -> Evaluation:
+    """The second stage of :func:`evaluate`: certify a gait that walked the cap (``config.study_certify``; a fall, no
+    fixed point: a status, not an exception); any other evaluation is returned as it is. Adds to ``ev.seconds``."""
+    if ev.gait is None or ev.status != "not_certified" or ev.reason != NOT_CERTIFIED_YET:
         return ev
+    cfg = config or Config()
+    t0 = time.perf_counter()
     # a fall, no stable orbit: a status, not an exception
-    gc = certify_gait(robot, res.gait, cfg.study_certify, cfg.sim, validate=cfg.validate)
+    gc = certify_gait(robot, ev.gait, cfg.study_certify, cfg.sim, validate=cfg.validate)
     if gc.ok:
         ev.status, ev.reason = "certified", ""
         ev.r_star = float(gc.r_star)
         ev.certificate = gc.to_dict(samples=True)
     else:
         ev.status, ev.reason = "not_certified", f"{gc.status}: {gc.reason}"
-    seconds["certify"] = time.perf_counter() - t_walk
-    seconds["total"] = time.perf_counter() - t0
+    ev.seconds["certify"] = time.perf_counter() - t0
+    ev.seconds["total"] = ev.seconds.get("total", 0.0) + ev.seconds["certify"]
     return ev

@@ -24,7 +24,7 @@ import os
 import sys
 import time
 import uuid
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -39,7 +39,7 @@ from robustgait.gait import BEZIER_DEGREE, Domain, Gait
 from robustgait.io.output import write_json
 from robustgait.io.robotfile import load_robot
 from robustgait.learn.learners import History, Learner, iteration_seed, make_learner
-from robustgait.learn.oracle import Outcome, batch_comparisons, score
+from robustgait.learn.oracle import batch_comparisons
 from robustgait.learn.space import ActionSpace
 from robustgait.robots import Robot
 from robustgait.robots.spec import SHIPPED_DIR
@@ -47,7 +47,26 @@ from robustgait.sim.walk import check_walk_work
 from robustgait.study.config import StudySetup, environment_changes, load_config, save_config
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.executors import Executor, WorkerSpec, make_executor
+from robustgait.study.person import (
+    FLOOR_ATTR,
+    automatic_answer,
+    floor_record,
+    pending_record,
+    shown_flags,
+    simulated_answer,
+)
+from robustgait.study.ranking import (  # history_before, study_score: also robustgait.study.run's, as before
+    Requirement,
+    batch_scores,
+    history_before,
+    requirements,
+    study_score,
+)
 from robustgait.study.storage import StudyStore, TrialRecord, default_url
+
+# asked when a person study's batch k waits for answers: returns once the answer is
+# stored (robustgait.web serves the page that stores it)
+Asker = Callable[[int], None]
 
 LOCK_FILE = ".lock"
 GAITS_DIR = "gaits"
@@ -130,6 +149,7 @@ def create_study(directory: str | Path, robot: str, config: Config | None = None
     if study.batch > space.size:
         raise RobustGaitError(f"a batch of {study.batch} gaits does not fit in an action space of {space.size}")
     check_evaluation_work(setup.config, loaded, space)
+    requirements(study, space.names)  # a requirement on a figure that is not recorded: refused now
     d.mkdir(parents=True, exist_ok=True)
     with study_lock(d):
         store = StudyStore(storage_url(d, setup), study.study_name, space, create=True,
@@ -170,18 +190,6 @@ def open_store(directory: Path, setup: StudySetup, space: ActionSpace) -> StudyS
     return StudyStore(storage_url(directory, setup), setup.config.study.study_name, space)
 
 
-def outcome_of(result: dict[str, Any]) -> Outcome:
-    """The oracle's view of a stored evaluation summary (certified: its ``status``)."""
-    return Outcome(int(result["steps_taken"]), int(result["step_cap"]), float(result["r_star"]),
-                   result.get("status") == "certified")
-
-
-def study_score(config: StudyConfig, result: dict[str, Any]) -> float:
-    """The study's oracle score of a stored evaluation summary — recomputed from it whenever a study is resumed (the
-    history the learner reproduces), with the study's own ``uncertified_penalty``."""
-    return score(config.metric, outcome_of(result), config.uncertified_penalty)
-
-
 def completed_batches(records: list[TrialRecord]) -> dict[int, list[TrialRecord]]:
     """COMPLETE trials per iteration, ordered by slot; an (iteration, slot) completed twice is an error."""
     out: dict[int, dict[int, TrialRecord]] = {}
@@ -195,23 +203,12 @@ def completed_batches(records: list[TrialRecord]) -> dict[int, list[TrialRecord]
     return {k: [v[s] for s in sorted(v)] for k, v in out.items()}
 
 
-def history_before(k: int, batches: dict[int, list[TrialRecord]], config: StudyConfig) -> History:
-    """The learner's history: iterations 0..k−1 (each must be complete), ranked by the study's oracle."""
-    ranked = []
-    for i in range(k):
-        batch = batches.get(i, [])
-        if len(batch) != config.batch:
-            raise RobustGaitError(f"iteration {i} has {len(batch)} of {config.batch} trials complete")
-        ranked.append([(r.index, study_score(config, r.result or {})) for r in batch])
-    return History.from_batches(ranked)
-
-
 class StudyRunner:
     """Runs (or resumes) the study in ``directory`` to its total budget, its evaluations spread as ``run`` says
     (executor, workers); ``progress``: a bar on stderr; ``verbose``: IPOPT's iteration log in the workers."""
 
     def __init__(self, directory: str | Path, run: RunConfig | None = None, *, progress: bool = True,
-                 verbose: bool = False, executor: Executor | None = None):
+                 verbose: bool = False, executor: Executor | None = None, asker: Asker | None = None):
         self.directory = Path(directory)
         self.setup = load_config(self.directory)
         self.config = self.setup.config.study
@@ -223,6 +220,9 @@ class StudyRunner:
         self.learner: Learner = make_learner(self.config.learner, self.space, self.config.learning, self.config.seed)
         self._executor = executor
         self._own_executor = executor is None
+        self.reqs: list[Requirement] = requirements(self.config, self.space.names)
+        self.asker = asker
+        self.floor = 0.0
 
     def executor(self) -> Executor:
         if self._executor is None:
@@ -248,13 +248,58 @@ class StudyRunner:
         done = sum(len(b) for b in completed_batches(store.records()).values())
         with tqdm(total=cfg.trials_planned, initial=done, desc="study", unit="gait", file=sys.stderr,
                   disable=not self.progress, dynamic_ncols=True) as bar:
+            if cfg.asks_a_person:
+                self.floor = self._floor(store)
             for k in range(cfg.iterations):
                 batches = completed_batches(store.records())
-                if len(batches.get(k, [])) == cfg.batch and "recommendation" in store.iterations().get(k, {}):
+                iterations = store.iterations()
+                if len(batches.get(k, [])) == cfg.batch and "recommendation" in iterations.get(k, {}):
                     continue
-                self._propose(store, k, history_before(k, batches, cfg))
+                self._propose(store, k, history_before(k, batches, cfg, iterations, self.reqs))
                 self._evaluate(store, k, bar)
+                if cfg.asks_a_person:
+                    self._ask(store, k)
                 self._close_iteration(store, k, bar)
+
+    def _floor(self, store: StudyStore) -> float:
+        """The robustness floor of a person study (:func:`robustgait.study.person.floor_record`): stored once; not
+        configured, the robot's default gait is evaluated (on the study's workers) when the study first starts."""
+        rec = store.user_attrs().get(FLOOR_ATTR)
+        if rec is None:
+            reference = None
+            if self.setup.config.person.floor is None:
+                self.executor().submit(-1, self.setup.config.params.to_dict())
+                _, reference = self.executor().next_result()
+                reference = {k: v for k, v in reference.items() if k not in ("gait", "certificate")}
+            rec = floor_record(self.setup.config, reference)
+            store.study.set_user_attr(FLOOR_ATTR, rec)
+        return float(rec["value"])
+
+    def _ask(self, store: StudyStore, k: int) -> None:
+        """Iteration k's answer: stored already (a resumed study), none needed (no gait above the floor), a simulated
+        person's, or a person's — the batch is recorded as pending, then the asker waits until the answer is stored."""
+        rec = dict(store.iterations().get(k, {}))
+        if "answer" in rec:
+            return
+        batch = completed_batches(store.records())[k]
+        show = shown_flags(batch, self.floor, self.reqs)
+        if not any(show):
+            rec["answer"] = automatic_answer(len(batch), f"no gait of the batch is certified at or above the floor "
+                                             f"{self.floor:.4g} and meets the requirements: nothing to ask")
+        elif self.config.metric == "simulated-person":
+            rec["answer"] = simulated_answer(self.setup.config, batch, show, k)
+        else:
+            if "pending" not in rec:
+                rec["pending"] = pending_record(batch, self.floor, self.reqs, self.setup.config.study_certify.unit)
+                store.set_iteration(k, rec)
+            if self.asker is None:
+                raise RobustGaitError(f"{self.directory}: iteration {k + 1} waits for a person's answers: "
+                                      f"robustgait study serve {self.directory}")
+            self.asker(k)
+            if "answer" not in store.iterations().get(k, {}):
+                raise RobustGaitError(f"iteration {k + 1}: the person's answer was not stored")
+            return
+        store.set_iteration(k, rec)
 
     def _propose(self, store: StudyStore, k: int, history: History) -> None:
         """Reproduce the proposals of iteration k and enqueue the slots not recorded yet; a stored slot that
@@ -315,7 +360,7 @@ class StudyRunner:
 
     def _complete(self, store: StudyStore, trial: TrialRecord, result: dict[str, Any], bar: tqdm,
                   reused_from: int | None = None) -> None:
-        value = study_score(self.config, result)
+        value = study_score(self.config, replace(trial, result=result), self.reqs)
         extra: dict[str, Any] = {"reused_from": reused_from} if reused_from is not None else {}
         store.complete(trial.number, result, value, extra)
         bar.update(1)
@@ -326,11 +371,12 @@ class StudyRunner:
         """Comparisons of the ranked batch and the learner's recommendation after it."""
         batches = completed_batches(store.records())
         batch = batches[k]
-        scores = [study_score(self.config, r.result or {}) for r in batch]
+        iterations = store.iterations()
+        record = dict(iterations.get(k, {}))
+        scores = batch_scores(self.config, batch, record, self.reqs)
         t0 = time.perf_counter()
-        rec = self.learner.recommend(history_before(k + 1, batches, self.config), k)
+        rec = self.learner.recommend(history_before(k + 1, batches, self.config, iterations, self.reqs), k)
         rec_trial = next((r for i in sorted(batches) for r in batches[i] if r.index == rec), None)
-        record = dict(store.iterations().get(k, {}))
         record.update({"trials": [r.number for r in batch], "scores": scores,
                        "comparisons": [[batch[w].number, batch[lo].number] for w, lo in batch_comparisons(scores)],
                        "recommendation": rec, "recommended_trial": rec_trial.number if rec_trial else None,
@@ -342,6 +388,7 @@ class StudyRunner:
 
 
 def run_study(directory: str | Path, run: RunConfig | None = None, *, progress: bool = True, verbose: bool = False,
-              executor: Executor | None = None) -> None:
-    """Run or resume the study in ``directory`` to its total budget (see :class:`StudyRunner`)."""
-    StudyRunner(directory, run, progress=progress, verbose=verbose, executor=executor).run()
+              executor: Executor | None = None, asker: Asker | None = None) -> None:
+    """Run or resume the study in ``directory`` to its total budget (see :class:`StudyRunner`); a person study's
+    batches wait in ``asker`` for the person's answers (:mod:`robustgait.web`)."""
+    StudyRunner(directory, run, progress=progress, verbose=verbose, executor=executor, asker=asker).run()

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from robustgait.study.config import environment_changes, load_config
+from robustgait.study.person import FLOOR_ATTR, pending_iteration
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord
 
@@ -41,6 +42,7 @@ def _best_entry(r: TrialRecord | None, records: dict[int, TrialRecord]) -> dict[
 
 def study_status(directory: str | Path) -> dict[str, Any]:
     """JSON-ready: ``trials_done``, ``trials_planned``, ``state`` (complete | running | stopped),
+    ``person`` (a person study: its ``floor``, the ``pending`` iteration, every ``answer``; else None), ``require``,
     ``best`` (the learner's recommendation after the last finished iteration: trial, params, r_star,
     steps_taken, comfort, gait file), ``best_observed`` (the evaluated gait with the highest oracle score), one
     record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs), each with its
@@ -53,6 +55,7 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     try:
         records = store.records()
         iterations = store.iterations()
+        floor = store.user_attrs().get(FLOOR_ATTR)
     finally:
         store.close()
     by_number = {r.number: r for r in records}
@@ -78,7 +81,13 @@ def study_status(directory: str | Path) -> dict[str, Any]:
                                       by_number)})
     state = ("complete" if len(finished) == cfg.iterations else
              "running" if is_running(d) else "stopped")
+    person = None
+    if cfg.asks_a_person:  # the floor, the batch waiting for answers, every answer (docs/person.md)
+        person = {"floor": floor, "pending": pending_iteration(iterations),
+                  "answers": [{"iteration": k, **iterations[k]["answer"]} for k in sorted(iterations)
+                              if "answer" in iterations[k]]}
     return {"directory": str(d.resolve()), "state": state, "robot": setup.robot, "metric": cfg.metric,
+            "require": list(cfg.require), "person": person,
             "unit": setup.config.study_certify.unit, "certificate": setup.config.study_certify.space,
             "learner": cfg.learner, "seed": cfg.seed, "trials_done": done, "trials_planned": cfg.trials_planned,
             "iterations_done": len(finished), "iterations_planned": cfg.iterations,

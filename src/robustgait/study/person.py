@@ -1,0 +1,145 @@
+"""A person as a study's oracle (docs/person.md): the robustness floor, the batch a person is asked to rank, and the
+answer stored in the study the moment it is given.
+
+* **The floor** (``person.floor``, in the certificate's unit; not set: ``person.floor_fraction`` × the certificate of
+  the robot's default gait, evaluated once when the study starts): a person is shown only gaits certified at or above
+  it that meet the study's requirements (:func:`robustgait.study.ranking.shown`); a proposal below it is ranked below
+  every shown gait without asking. Stored as the study attribute ``floor``.
+* **A pending batch**: iteration k's record (``iteration_NNN``) gets ``pending`` — the shown slots and why the others
+  are hidden — before the person is asked; the answer is ``answer``: a rank per slot (0 the best, equal ranks "cannot
+  tell", None for a hidden gait), optionally a label per slot (bad / neutral / good), who answered and when.
+  :func:`record_answer` writes it in one transaction (Optuna's study attribute) and refuses a second answer, so
+  nothing is stored twice; a study killed while it waits comes back at the same pending batch with nothing lost.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Sequence
+from typing import Any
+
+from robustgait.config import Config
+from robustgait.errors import RobustGaitError
+from robustgait.learn.person import SimulatedPerson
+from robustgait.study.ranking import LABELS, Requirement, shown
+from robustgait.study.storage import StudyStore, TrialRecord
+
+FLOOR_ATTR = "floor"
+_ANSWER_LOCK = threading.Lock()  # one answer at a time in this process (the page's server threads, the runner)
+
+
+class AnswerError(RobustGaitError):
+    """An answer that cannot be stored: ``status`` is the HTTP status the page gets (400 malformed, 409 stale or
+    already answered)."""
+
+    def __init__(self, message: str, status: int = 400):
+        super().__init__(message)
+        self.status = status
+
+
+def floor_record(config: Config, reference: dict[str, Any] | None) -> dict[str, Any]:
+    """The study's floor: ``person.floor`` if set, else ``floor_fraction`` × the reference (default gait)
+    evaluation's certificate (0 if it was not certified: every certified gait is then shown — said in ``note``)."""
+    p = config.person
+    if p.floor is not None:
+        return {"value": float(p.floor), "source": "person.floor"}
+    if reference is None:
+        raise RobustGaitError("the floor needs the default gait's evaluation")
+    r_star = float(reference.get("r_star") or 0.0)
+    rec = {"value": p.floor_fraction * r_star, "source": "person.floor_fraction", "fraction": p.floor_fraction,
+           "reference": {"params": reference.get("params"), "status": reference.get("status"),
+                         "r_star": r_star, "comfort": reference.get("comfort")}}
+    if reference.get("status") != "certified":
+        rec["note"] = (f"the default gait was not certified ({reference.get('status')}: {reference.get('reason')}): "
+                       "floor 0, every certified gait is shown")
+    return rec
+
+
+def hidden_reason(r: TrialRecord, floor: float, reqs: Sequence[Requirement], unit: str) -> str | None:
+    """Why a gait is not shown (None: it is)."""
+    if shown(r, floor, reqs):
+        return None
+    res = r.result or {}
+    if res.get("status") != "certified":
+        return f"{res.get('status')}: {res.get('reason') or ''}".strip(": ")
+    if float(res["r_star"]) < floor:
+        return f"certified {float(res['r_star']):.3g} {unit}, below the floor {floor:.3g} {unit}"
+    failed = [q.text for q in reqs if not q.holds(r.params, res)]
+    return "fails " + ", ".join(failed)
+
+
+def pending_record(batch: Sequence[TrialRecord], floor: float, reqs: Sequence[Requirement],
+                   unit: str) -> dict[str, Any]:
+    """What iteration k asks: the shown slots, and per hidden slot why."""
+    reasons = {r.slot: hidden_reason(r, floor, reqs, unit) for r in batch}
+    return {"shown": [s for s, why in reasons.items() if why is None],
+            "hidden": {str(s): why for s, why in reasons.items() if why is not None}, "asked_at": time.time()}
+
+
+def automatic_answer(n: int, why: str) -> dict[str, Any]:
+    """The answer of a batch with no gait to show: nothing asked, every gait ranked by the certificate's oracle."""
+    return {"ranks": [None] * n, "labels": [None] * n, "by": "floor", "note": why, "answered_at": time.time()}
+
+
+def simulated_answer(config: Config, batch: Sequence[TrialRecord], show: Sequence[bool], k: int) -> dict[str, Any]:
+    """A simulated person's answer (:class:`~robustgait.learn.person.SimulatedPerson`, ``person.simulated``): its ranks
+    of the shown gaits, drawn with (person seed, iteration), and its utility of every gait (for the benchmarks)."""
+    person = SimulatedPerson.from_config(config.person.simulated)
+    utilities = [person.utility((r.result or {}).get("comfort")) for r in batch]
+    slots = [i for i, s in enumerate(show) if s]
+    ranks: list[int | None] = [None] * len(batch)
+    for slot, rank in zip(slots, person.rank([utilities[i] for i in slots], (k,)), strict=True):
+        ranks[slot] = rank
+    return {"ranks": ranks, "labels": [None] * len(batch), "by": "simulated-person",
+            "person": {"seed": config.person.simulated.seed, "preferred_speed": person.preferred_speed,
+                       "weights": [person.speed_weight, person.acceleration_weight, person.impact_weight]},
+            "utilities": [u if math.isfinite(u) else None for u in utilities], "answered_at": time.time()}
+
+
+def check_answer(pending: dict[str, Any], n: int, ranks: Sequence[int | None], labels: Sequence[str | None]) -> None:
+    """An answer fits its pending batch: a rank for every shown slot and none for a hidden one, ranks 0, 1, … without
+    gaps (equal: cannot tell), labels of shown slots only, each one of :data:`LABELS`."""
+    shown_slots = set(pending["shown"])
+    if len(ranks) != n or len(labels) != n:
+        raise AnswerError(f"the batch has {n} gaits: {len(ranks)} ranks and {len(labels)} labels given")
+    for s in range(n):
+        if (ranks[s] is None) == (s in shown_slots):
+            raise AnswerError(f"gait {s + 1} is {'shown and not ranked' if s in shown_slots else 'not shown'}")
+        if labels[s] is not None and (s not in shown_slots or labels[s] not in LABELS):
+            raise AnswerError(f"gait {s + 1}: label {labels[s]!r} (one of {', '.join(LABELS)}, for a shown gait)")
+    used = sorted({int(r) for r in ranks if r is not None})
+    if used != list(range(len(used))):
+        raise AnswerError(f"ranks must be 0, 1, … without gaps (equal ranks: cannot tell), got {used}")
+
+
+def record_answer(store: StudyStore, k: int, answer: dict[str, Any]) -> dict[str, Any]:
+    """Store ``answer`` (ranks, labels, by, …) as iteration k's, once: a stale iteration (not the pending one) or a
+    second answer is refused (409) and nothing is written. Returns the iteration's record."""
+    with _ANSWER_LOCK:
+        iterations = store.iterations()
+        rec = dict(iterations.get(k, {}))
+        pending = rec.get("pending")
+        if "answer" in rec:
+            raise AnswerError(f"iteration {k + 1} was answered already (at "
+                              f"{time.strftime('%H:%M:%S', time.localtime(rec['answer']['answered_at']))})", 409)
+        if pending is None:
+            waiting = pending_iteration(iterations)
+            raise AnswerError(f"iteration {k + 1} does not wait for an answer"
+                              + (f" (iteration {waiting + 1} does)" if waiting is not None else ""), 409)
+        batch_size = len(rec.get("proposals") or [])
+        check_answer(pending, batch_size, answer["ranks"], answer["labels"])
+        rec["answer"] = {**answer, "answered_at": time.time()}
+        store.set_iteration(k, rec)
+        return rec
+
+
+def pending_iteration(iterations: dict[int, dict[str, Any]]) -> int | None:
+    """The iteration that waits for a person's answer (None: none)."""
+    waiting = [k for k, rec in iterations.items() if "pending" in rec and "answer" not in rec]
+    return min(waiting) if waiting else None
+
+
+def shown_flags(batch: Sequence[TrialRecord], floor: float, reqs: Sequence[Requirement]) -> list[bool]:
+    return [shown(r, floor, reqs) for r in batch]

@@ -1,0 +1,188 @@
+"""A person's preferences in a study (docs/person.md): simulated persons, the person's ranking as comparisons, the
+robustness floor, requirements on recorded figures, labels across batches, the Pareto front — fast, on records."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from robustgait.config import Config, PersonConfig, SimulatedPersonConfig, StudyConfig, with_overrides
+from robustgait.errors import RobustGaitError
+from robustgait.learn import History
+from robustgait.learn.oracle import REQUIREMENT_PENALTY, Outcome, batch_comparisons, person_scores, score
+from robustgait.learn.person import SimulatedPerson
+from robustgait.study.pareto import non_dominated, pareto
+from robustgait.study.person import automatic_answer, floor_record, simulated_answer
+from robustgait.study.ranking import Requirement, figure_names, label_comparisons, requirements, shown
+from robustgait.study.run import create_study
+from robustgait.study.storage import TrialRecord
+
+REPO = Path(__file__).resolve().parents[1]
+PARAMS = ("step_length", "step_duration", "step_width", "step_height")
+
+
+def comfort(speed: float, acc: float = 1.0, impact: float = 5.0) -> dict:  # type: ignore[type-arg]
+    return {"speed": speed, "pelvis_acc_vertical_rms": acc / 2, "pelvis_acc_lateral_rms": acc / 2,
+            "impact_force_ratio": impact}
+
+
+def record(slot: int, r_star: float, status: str = "certified", speed: float = 0.2, length: float = 0.16,
+           iteration: int = 0) -> TrialRecord:
+    result = {"status": status, "steps_taken": 50 if status != "fell" else 10, "step_cap": 50, "r_star": r_star,
+              "mean_speed": speed, "comfort": comfort(speed) if status != "fell" else None, "reason": ""}
+    params = {"step_length": length, "step_duration": 0.8, "step_width": 0.24, "step_height": 0.06}
+    return TrialRecord(slot, "COMPLETE", iteration, slot, slot, params, None, result, None, None, {})
+
+
+# ---- simulated persons ------------------------------------------------------------------------------------
+def test_a_simulated_person_is_drawn_from_its_seed_within_the_ranges():
+    cfg = SimulatedPersonConfig(seed=4)
+    a, b = SimulatedPerson.from_config(cfg), SimulatedPerson.from_config(cfg)
+    assert a == b
+    others = {SimulatedPerson.from_config(SimulatedPersonConfig(seed=s)).preferred_speed for s in range(20)}
+    assert len(others) == 20 and all(0.18 <= v <= 0.30 for v in others)
+    assert 0.5 <= a.speed_weight <= 2.0 and 0.5 <= a.acceleration_weight <= 2.0 and 0.0 <= a.impact_weight <= 1.0
+
+
+def test_simulated_utility_prefers_its_speed_and_less_acceleration_and_impact():
+    p = SimulatedPerson.from_config(SimulatedPersonConfig(seed=1))
+    v = p.preferred_speed
+    assert p.utility(comfort(v)) > p.utility(comfort(v + 0.05)) > p.utility(comfort(v + 0.1))
+    assert p.utility(comfort(v, acc=1.0)) > p.utility(comfort(v, acc=2.0))
+    assert p.utility(comfort(v, impact=3.0)) >= p.utility(comfort(v, impact=6.0))
+    expected = -p.speed_weight * 0 - p.acceleration_weight * 1.0 - p.impact_weight * 5.0 / 5.0
+    assert p.utility(comfort(v)) == pytest.approx(expected)
+    assert p.utility(None) == -math.inf
+
+
+def test_simulated_answers_follow_bradley_terry_and_say_cannot_tell():
+    """Over many questions P(a ranked above b) = σ(Δu/noise); with cannot_tell the close pairs tie at that rate."""
+    p = SimulatedPerson.from_config(SimulatedPersonConfig(seed=0, noise=0.1, cannot_tell=0.0))
+    du = 0.1
+    wins = np.mean([p.rank([du, 0.0], (k,))[0] == 0 for k in range(4000)])
+    assert wins == pytest.approx(1 / (1 + math.exp(-du / 0.1)), abs=0.025)  # σ(1) = 0.731
+    assert p.rank([5.0, 0.0, -5.0], (1,)) == [0, 1, 2]  # far apart: the utility's order, no tie
+    q = SimulatedPerson.from_config(SimulatedPersonConfig(seed=0, noise=0.1, cannot_tell=0.3))
+    ties = np.mean([len(set(q.rank([0.0, 0.0], (k,)))) == 1 for k in range(4000)])
+    assert ties == pytest.approx(0.3, abs=0.025)
+    assert q.rank([0.2, 0.1], (3,)) == q.rank([0.2, 0.1], (3,))  # the same question, the same answer
+
+
+def test_simulated_answer_ranks_only_the_shown_gaits():
+    cfg = Config(person=PersonConfig(simulated=SimulatedPersonConfig(seed=2, noise=1e-3, cannot_tell=0.0)))
+    v = SimulatedPerson.from_config(cfg.person.simulated).preferred_speed
+    batch = [record(0, 20, speed=v + 0.1), record(1, 20, speed=v), record(2, 5, speed=v)]
+    a = simulated_answer(cfg, batch, [True, True, False], 0)
+    assert a["ranks"] == [1, 0, None] and a["by"] == "simulated-person" and len(a["utilities"]) == 3
+
+
+# ---- a person's answer as comparisons -------------------------------------------------------------------
+def test_person_scores_put_every_shown_gait_above_the_hidden_ones():
+    fallback = [60.0, 70.0, 65.0, 10.0]  # cap 50 + J*, or steps of a faller
+    s = person_scores([1, None, 0, None], fallback)
+    assert s[2] > s[0] > s[1] > s[3]  # shown by rank, then hidden by the certificate's oracle
+    assert sorted(batch_comparisons(s)) == [(0, 1), (0, 3), (1, 3), (2, 0), (2, 1), (2, 3)]
+    tie = person_scores([0, 0, None], [55.0, 60.0, 70.0])
+    assert tie[0] == tie[1] > tie[2] and (0, 1) not in batch_comparisons(tie)  # cannot tell: no comparison
+    assert person_scores([None] * 3, [3.0, 2.0, 1.0]) == [3.0, 2.0, 1.0]  # nothing shown: the oracle's order
+    with pytest.raises(RobustGaitError):
+        person_scores([0], [1.0, 2.0])
+
+
+def test_labels_compare_gaits_across_batches():
+    answers = {0: {"answer": {"labels": ["good", None, "bad"]}}, 1: {"answer": {"labels": ["neutral", "bad", None]}},
+               2: {"answer": {"labels": ["good"]}}}
+    comps = label_comparisons({}, answers, 2)  # iterations 0 and 1 only
+    assert set(comps) == {((0, 0), (1, 0)), ((0, 0), (1, 1)), ((1, 0), (0, 2))}  # never within one batch
+    h = History.from_batches([[(10, 1.0), (11, 0.0), (12, 2.0)], [(20, 0.0), (21, 1.0), (22, 2.0)]], comps)
+    assert (0, 3) in h.comparisons and (3, 2) in h.comparisons
+
+
+def test_the_floor_is_a_fraction_of_the_default_gait_or_set():
+    ref = {"params": {"step_length": 0.15}, "status": "certified", "r_star": 18.0, "comfort": None}
+    rec = floor_record(Config(), ref)
+    assert rec["value"] == pytest.approx(0.75 * 18.0) and rec["source"] == "person.floor_fraction"
+    assert floor_record(Config(person=PersonConfig(floor=12.5)), None) == {"value": 12.5, "source": "person.floor"}
+    fell = floor_record(Config(), {**ref, "status": "fell", "r_star": 0.0, "reason": "fell in step 3"})
+    assert fell["value"] == 0.0 and "not certified" in fell["note"]
+    assert automatic_answer(3, "why")["ranks"] == [None, None, None]
+
+
+def test_only_certified_gaits_at_or_above_the_floor_meeting_the_requirements_are_shown():
+    reqs = [Requirement.parse("speed>=0.2", figure_names(PARAMS))]
+    assert shown(record(0, 14.0), 13.5, reqs)
+    assert not shown(record(0, 13.0), 13.5, reqs)  # below the floor
+    assert not shown(record(0, 14.0, status="not_certified"), 0.0, [])
+    assert not shown(record(0, 14.0, speed=0.15), 13.5, reqs)  # fails the requirement
+
+
+# ---- requirements ----------------------------------------------------------------------------------------
+def test_requirements_rank_failing_gaits_below_all_others_keeping_their_order():
+    names = figure_names(PARAMS)
+    q = [Requirement.parse(" speed >= 0.2", names), Requirement.parse("step_length<0.2", names)]
+    ok, slow, long_ = record(0, 20.0), record(1, 30.0, speed=0.15), record(2, 25.0, length=0.22)
+    assert [all(x.holds(r.params, r.result or {}) for x in q) for r in (ok, slow, long_)] == [True, False, False]
+    fell = record(3, 0.0, status="fell")  # no comfort figures: a requirement on one is not met
+    assert not q[0].holds(fell.params, fell.result or {})
+    s_ok = score("push", Outcome(50, 50, 20.0, meets=True))
+    s_slow = score("push", Outcome(50, 50, 30.0, meets=False))
+    s_long = score("push", Outcome(50, 50, 25.0, meets=False))
+    assert s_ok > s_slow > s_long and s_slow == 80.0 - REQUIREMENT_PENALTY
+    assert score("stability", Outcome(40, 50, meets=False)) < score("stability", Outcome(3, 50))
+    for bad in ("speed=>0.2", "speed>=fast", "speed", ">=0.2"):
+        with pytest.raises(RobustGaitError, match="FIGURE OP NUMBER"):
+            with_overrides(Config(), {"study": {"require": [bad]}})
+    with pytest.raises(RobustGaitError, match="no figure 'sped' is recorded"):
+        requirements(StudyConfig(require=("sped>=0.2",)), PARAMS)
+
+
+def test_a_requirement_on_an_unrecorded_figure_is_refused_before_the_study_exists(tmp_path):
+    with pytest.raises(RobustGaitError, match="no figure 'comfort' is recorded"):
+        create_study(tmp_path / "s", "exo", Config(study=StudyConfig(require=("comfort>1",))))
+    assert not (tmp_path / "s").exists()
+
+
+def test_require_on_the_command_line(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+    res = subprocess.run([sys.executable, "-m", "robustgait.cli", "study", "run", str(tmp_path / "s"), "--robot", "exo",
+                          "--require", "speed=>0.2"], env=env, capture_output=True, text=True, timeout=60)
+    assert res.returncode == 2 and res.stderr.strip().splitlines() == [
+        "robustgait: error: argument --require: 'speed=>0.2' is not FIGURE OP NUMBER with OP one of >= <= > < (e.g. "
+        "speed>=0.2)"]
+    from robustgait.cli import build_parser
+    from robustgait.cli.options import config_from
+
+    args = build_parser().parse_args(["study", "run", "d", "--robot", "exo", "--require",
+                                      "speed>=0.2, impact_force_ratio<=6", "--floor", "12", "--person-seed", "3",
+                                      "--metric", "simulated-person"])
+    cfg = config_from(args)
+    assert cfg.study.require == ("speed>=0.2", "impact_force_ratio<=6") and cfg.person.floor == 12.0
+    assert cfg.person.simulated.seed == 3 and cfg.study.asks_a_person
+
+
+# ---- the Pareto front --------------------------------------------------------------------------------------
+def test_non_dominated_rows():
+    x = np.array([[3, 1, -1], [2, 2, -1], [1, 1, -2], [3, 1, -1.5], [2, 2, -1]], dtype=float)
+    assert non_dominated(x).tolist() == [True, True, False, False, True]  # equal rows both stay
+
+
+def test_pareto_over_certificate_speed_and_a_comfort_figure():
+    def trial(n: int, r: float, v: float, acc: float, status: str = "certified", index: int | None = None) -> dict:  # type: ignore[type-arg]
+        return {"number": n, "state": "COMPLETE", "status": status, "grid_index": n if index is None else index,
+                "params": {"step_length": 0.1 + n / 100}, "r_star": r, "gait_file": None,
+                "comfort": {"speed": v, "pelvis_acc_vertical_rms": acc}}
+
+    st = {"unit": "N s", "certificate": "push", "trials": [
+        trial(0, 20, 0.15, 1.4), trial(1, 18, 0.25, 1.5), trial(2, 17, 0.20, 1.6), trial(3, 16, 0.14, 1.0),
+        trial(4, 25, 0.30, 0.5, status="fell"), trial(5, 20, 0.15, 1.4, index=0)]}
+    out = pareto(st, "pelvis_acc_vertical_rms")
+    assert [r["trial"] for r in out["gaits"]] == [0, 1, 2, 3]  # certified, each gait once
+    assert [r["trial"] for r in out["front"]] == [0, 1, 3]  # 2 is beaten by 1 on all three
+    with pytest.raises(RobustGaitError, match="not a comfort cost"):
+        pareto(st, "speed")
