@@ -164,3 +164,52 @@ def test_newton_makes_the_settled_iterate_a_fixed_point(exo, exo_gait):
         assert o.newton_converged and o.newton[-1] <= 1e-8 and len(o.newton) <= 5 and o.rho < 0.85
         x = section_coordinates(fp.qpos[None], fp.qvel[None], exo_gait.step_duration)
         np.testing.assert_allclose(pmap.section_map(fp.qpos)(x), x, atol=1e-8)
+
+
+def test_a_step_map_without_an_orbit_falls_back_to_the_stride_map(exo, exo_gait, monkeypatch):
+    """certify.stride_fallback: a step map whose iterates settle on no orbit (a robot whose left and right differ:
+    faked here by refusing the step map's search) is replaced by the stride map, searched for real; without the
+    fallback, or after another failure, the step map's failure is the answer."""
+    from robustgait.poincare import settle
+
+    real = ReturnMap.find_fixed_point
+
+    def step_refused(self, progress=None):  # type: ignore[no-untyped-def]
+        if self.kind == "step":
+            raise FixedPointFailure("period_two_orbit", 100, "a period-two orbit (faked)")
+        return real(self, progress)
+
+    monkeypatch.setattr(ReturnMap, "find_fixed_point", step_refused)
+    pmap, found = settle(exo, exo_gait, CertifyConfig())
+    with pmap:
+        assert pmap.kind == "stride" and pmap.config.map == "stride" and not isinstance(found, FixedPointFailure)
+        assert found.steps % 2 == 0 and found.orbit is not None and found.orbit.period == 2
+        assert found.orbit.rho is not None and found.orbit.rho < 1
+        assert found.orbit.describe().startswith("stride map (two steps): converged")
+    pmap, found = settle(exo, exo_gait, CertifyConfig(stride_fallback=False))
+    pmap.close()
+    assert pmap.kind == "step" and isinstance(found, FixedPointFailure) and found.status == "period_two_orbit"
+    pmap, found = settle(exo, exo_gait, CertifyConfig(fp_tol=1e-9, fp_max_steps=12, fp_min_steps=10))
+    pmap.close()  # the stride map fails too: the step map's status, both findings in the message
+    assert isinstance(found, FixedPointFailure) and found.status == "period_two_orbit"
+    assert "; the stride map: no stable orbit" in str(found)
+
+
+def test_a_walk_that_alternates_settles_as_a_stride_map_orbit(exo, exo_gait):
+    """walk_orbit: a walk whose left and right steps differ (faked: 0.05 rad/s added to one joint's velocity at every
+    event that ends a gait's-stance step) is a period-two orbit of the step map and a period-one orbit of the stride
+    map — the events of the gait's own stance, two steps apart."""
+    import dataclasses
+
+    from robustgait.sim.walk import walk, walk_orbit
+
+    result = walk(exo, exo_gait, steps=60)
+    events = [dataclasses.replace(e, qvel=[v + (0.05 if i == 8 and e.stance == exo_gait.stance else 0.0)
+                                           for i, v in enumerate(e.qvel)]) for e in result.events]
+    plain = walk_orbit(exo, exo_gait, result.events)
+    assert plain.converged and plain.period == 1
+    step = walk_orbit(exo, exo_gait, events, CertifyConfig(stride_fallback=False))
+    assert not step.converged and step.period_two
+    stride = walk_orbit(exo, exo_gait, events)
+    assert stride.converged and stride.period == 2 and stride.settled % 2 == 0
+    assert events[stride.settled - 1].stance != exo_gait.stance  # x* starts a step of the gait's stance

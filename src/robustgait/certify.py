@@ -24,7 +24,7 @@ from robustgait.config.work import Work, check_work
 from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
 from robustgait.orbit import OrbitReport
-from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap
+from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap, settle
 from robustgait.push import PushMap
 from robustgait.reduced import Coordinates, section_dimension
 from robustgait.robots import Robot
@@ -299,16 +299,18 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
                                fixed_point_physics_steps=pmap.physics_steps,
                                seconds={"fixed_point": t, "sampling": 0.0, "total": t, "sim_steps_per_s": 0.0})
 
-    with ReturnMap(robot, gait, cfg, sim) as pmap:
-        with tqdm(total=cfg.fp_max_steps, desc="fixed point", unit="step", disable=not progress,
-                  leave=False) as bar:
-            def on_step(k: int, residual: float) -> None:
-                bar.update(k - bar.n)
-                bar.set_postfix(residual=f"{residual:.2e}")
-            try:
-                fp = pmap.find_fixed_point(progress=on_step)
-            except FixedPointFailure as exc:
-                return failed(exc.status, str(exc), exc.steps, exc.fixed_point, orbit=exc.orbit)
+    with tqdm(total=cfg.fp_max_steps, desc="fixed point", unit="step", disable=not progress, leave=False) as bar:
+        def on_step(k: int, residual: float) -> None:
+            if k < bar.n:  # the stride map's search after the step map's
+                bar.reset()
+                bar.set_description("fixed point (stride map)")
+            bar.update(k - bar.n)
+            bar.set_postfix(residual=f"{residual:.2e}")
+        pmap, found = settle(robot, gait, cfg, sim, on_step)
+    with pmap:
+        if isinstance(found, FixedPointFailure):
+            return failed(found.status, str(found), found.steps, found.fixed_point, orbit=found.orbit)
+        fp, cfg = found, pmap.config  # the stride map's after a fallback (stride_fallback)
         t1 = time.perf_counter()
         fp_steps = pmap.physics_steps
         coords = Coordinates.of(pmap.reduced)

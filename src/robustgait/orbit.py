@@ -213,6 +213,8 @@ class OrbitReport:
                     f"iterates, {w} needed, {self.steps} steps)")
         else:
             line = f"converged at step {self.settled} ({w}: window residual {self.window_residual:.2e})"
+            if self.period == 2:
+                line = "stride map (two steps): " + line
         if self.newton:
             line += f"; Newton {' → '.join(f'{r:.1e}' for r in self.newton)}" + (
                 "" if self.newton_converged else " (not converged)")
@@ -222,7 +224,8 @@ class OrbitReport:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready; the residuals as :func:`residual_summary`."""
-        return {"metric": self.metric, "window": self.window, "tol": self.tol, "converged": self.converged,
+        return {"metric": self.metric, "window": self.window, "tol": self.tol, "period": self.period,
+                "converged": self.converged,
                 "settled_at_step": self.settled, "window_residual": _finite(self.window_residual),
                 "period_two": self.period_two, "residuals": residual_summary(self.residuals, self.window),
                 "newton_residuals": list(self.newton), "newton_converged": self.newton_converged,

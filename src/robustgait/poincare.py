@@ -35,7 +35,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config import CertifyConfig, Frame, SimConfig
+from robustgait.config import CertifyConfig, Frame, MapKind, SimConfig
 from robustgait.config.certify import NEWTON_DAMPING
 from robustgait.domains import step_segments
 from robustgait.errors import RobustGaitError
@@ -69,15 +69,17 @@ def canonical_reduced_events(robot: Robot, gait: Gait, events: list[SwitchEvent]
 
 def walk_stability(robot: Robot, gait: Gait, result: WalkResult, certify: CertifyConfig | None = None,
                    sim: SimConfig | None = None) -> OrbitReport | None:
-    """A walk's orbit (:attr:`WalkResult.orbit`) with the spectral radius ρ of the step map at the event where it
-    settled (:meth:`ReturnMap.stability`: one batch of 2d + 1 one-step simulations and one more), when it settled
-    and ``certify.fp_rho_max`` is set; otherwise the orbit as it is."""
+    """A walk's orbit (:attr:`WalkResult.orbit`) with the spectral radius ρ of its map (the step map; the stride map
+    for an orbit of period 2, ``certify.stride_fallback``) at the event where it settled (:meth:`ReturnMap.stability`:
+    one batch of 2d + 1 maps and one more), when it settled and ``certify.fp_rho_max`` is set; otherwise the orbit as
+    it is."""
     c = certify or CertifyConfig()
     orbit = result.orbit
     if orbit is None or orbit.settled is None or c.fp_rho_max is None:
         return orbit
     qpos, qvel = canonical_event_states(robot, gait, result.events[orbit.settled - 1:orbit.settled])
-    with ReturnMap(robot, gait, dataclasses.replace(c, map="step", horizon=1), sim) as pmap:
+    kind: MapKind = "stride" if orbit.period == 2 else "step"
+    with ReturnMap(robot, gait, dataclasses.replace(c, map=kind, horizon=1), sim) as pmap:
         x = section_coordinates(qpos, qvel, gait.step_duration)[0]
         try:
             st = pmap.stability(x, qpos[0])
@@ -85,6 +87,37 @@ def walk_stability(robot: Robot, gait: Gait, result: WalkResult, certify: Certif
             return orbit
     return dataclasses.replace(orbit, map_residual=st.map_residual, rho=st.rho, moduli=st.moduli,
                                rho_fixed_event=st.rho_fixed_event, one_sided=st.one_sided)
+
+
+def settle(robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig | None = None,
+           progress: Callable[[int, float], None] | None = None
+           ) -> tuple[ReturnMap, FixedPoint | FixedPointFailure]:
+    """The map of ``config`` at its fixed point (:meth:`ReturnMap.find_fixed_point`), or the failure — with
+    ``stride_fallback``, a step map whose iterates settle on no orbit (``no_stable_orbit``, ``period_two_orbit``)
+    is replaced by the stride map (two physical steps, unmirrored), searched from the gait's start: the mirrored step
+    map of a robot whose left and right differ (T1's shanks: 60 g) is not the walk's map, and wanders while the
+    walk settles on a period-two orbit of it (``docs/certificate.md``, "Fixed point"). The caller closes the map
+    returned (the stride map after a fallback: ``map.kind``); a failure of both is the step map's status, the stride
+    map's finding appended."""
+    pmap = ReturnMap(robot, gait, config, sim)
+    try:
+        return pmap, pmap.find_fixed_point(progress)
+    except FixedPointFailure as exc:
+        if config.map != "step" or not config.stride_fallback or exc.status not in ("no_stable_orbit",
+                                                                                    "period_two_orbit"):
+            return pmap, exc
+        first = exc
+    pmap.close()
+    stride = ReturnMap(robot, gait, dataclasses.replace(config, map="stride"), sim)
+    try:
+        return stride, stride.find_fixed_point(progress)
+    except FixedPointFailure as exc:
+        if exc.status == "fell_before_fixed_point":
+            return stride, exc
+        return stride, FixedPointFailure(exc.status if exc.status == "unstable_orbit" else first.status, first.steps,
+                                         f"{first}; the stride map: {exc}",
+                                         exc.orbit if exc.status == "unstable_orbit" else first.orbit,
+                                         exc.fixed_point)
 
 
 class FixedPointFailure(RobustGaitError):
@@ -206,7 +239,8 @@ class ReturnMap:
                 f"{cfg.fp_tol:g} ({cfg.fp_metric} coordinates) in {orbit.steps} steps: smallest successive residual "
                 f"{min(orbit.residuals):.3g}, last window {orbit.window_residual:.3g}")
         if status == "period_two_orbit":
-            hint = "; certify the stride map instead (--map stride)" if self.kind == "step" else ""
+            hint = ("; certify the stride map instead (--map stride)"
+                    if self.kind == "step" and not cfg.stride_fallback else "")
             raise FixedPointFailure("period_two_orbit", orbit.steps, f"a period-two orbit: {what}, but iterates two "
                                     f"apart settled (window residual {window_residual(xs, cfg.fp_window, 2):.3g})"
                                     + hint, orbit)

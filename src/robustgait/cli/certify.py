@@ -71,6 +71,9 @@ def _certify(args: argparse.Namespace) -> int:
                                       f" (map at x*: {gc.map_residual:.2e} {cfg.unit})"))
         if gc.orbit is not None:
             print(f"orbit: {gc.orbit.describe()}")
+        if gc.config.map != cfg.map:
+            print("map: stride — two steps, one on each leg, unmirrored: the step map's iterates settled on no "
+                  "orbit (certify.stride_fallback; a robot whose left and right differ)")
         if cfg.set == "ellipsoid" and cfg.disturbance == "state":
             sh = co.shape
             if sh.fallback:

@@ -167,6 +167,10 @@ class CertifyConfig:
     seed: Annotated[Int, Doc("seed of the perturbations", ge=0, le=SEED_LIMIT)] = 0
     barrier: Annotated[Barrier, Doc("ball: H = r² − ‖x − x*‖²; paper: the paper's literal H = r − ‖x − x*‖²")] = "ball"
     map: Annotated[MapKind, Doc("step (one step, mirrored) or stride (two steps) return map")] = "step"
+    stride_fallback: Annotated[Bool, Doc(
+        "step map only: when its iterates settle on no orbit (wandering or period two), search the stride map's — "
+        "two physical steps, one on each leg, unmirrored: the orbit of a robot whose left and right differ — and "
+        "certify that map if it settles (the certificate says so)")] = True
     reconstruction: Annotated[Reconstruction, Doc("how a full state is rebuilt from a reduced one")] = "holonomic"
     frame: Annotated[Frame, Doc("frame of the base angular velocity (heading: world frame without yaw)")] = "heading"
     fp_tol: Annotated[Float, Doc("fixed point: the orbit has settled when the last fp_window iterates all lie within "
@@ -257,10 +261,13 @@ class CertifyConfig:
         """Most steps the fixed-point search simulates on a section of ``dim`` coordinates: ``fp_max_steps`` steps of
         iterates, then per Newton iteration a finite-difference batch (2 dim + 1 maps) and its damped steps, then the
         Jacobian at x* and the image recorded for the touchdown's flow (2 dim + 2 maps), a map being :attr:`period`
-        steps."""
+        steps; with ``stride_fallback``, the step map's search that found no orbit and then the stride map's."""
         fd = 2 * dim + 1
         rho = fd + 1 if self.fp_rho_max is not None else 0
-        return self.fp_max_steps + self.period * (self.fp_newton_iterations * (fd + len(NEWTON_DAMPING)) + rho)
+        own = self.fp_max_steps + self.period * (self.fp_newton_iterations * (fd + len(NEWTON_DAMPING)) + rho)
+        if self.map == "step" and self.stride_fallback:  # the step map's search gave up, then the stride map's
+            return self.fp_max_steps + dataclasses.replace(self, map="stride").fixed_point_steps(dim)
+        return own
 
     @property
     def min_steps(self) -> int:

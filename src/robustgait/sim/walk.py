@@ -5,7 +5,9 @@ Stability in the sense of the paper is the number of steps completed before a fa
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -108,13 +110,25 @@ def walk_orbit(robot: Robot, gait: Gait, events: list[SwitchEvent], certify: Cer
     """Whether a walk's switching events settled on an orbit of the step map: the events written for the gait's
     stance (:func:`canonical_event_states`), the window search of the certificate's fixed point over them
     (``certify.fp_window``, ``fp_tol``, ``fp_metric``, ``fp_min_steps``; :func:`robustgait.orbit.search_report`) —
-    no simulation. The spectral radius at the settled event: :meth:`robustgait.poincare.ReturnMap.stability`."""
+    no simulation. A walk that settles on no orbit of the step map is searched again as the stride map's
+    (``certify.stride_fallback``: the events of the gait's own stance, two steps apart — a robot whose left and
+    right differ); its report then has period 2. The spectral radius at the settled event:
+    :func:`robustgait.poincare.walk_stability`."""
     c = certify or CertifyConfig()
     qpos, qvel = canonical_event_states(robot, gait, events)
     xs = (reduce_state(qpos, qvel, c.frame) if c.fp_metric == "omega"
           else section_coordinates(qpos, qvel, gait.step_duration))
-    return search_report(xs, metric=c.fp_metric, window=c.fp_window, tol=c.fp_tol,
-                         min_index=max(c.min_steps - 1, 0), first_step=1)
+    period = 2 if c.map == "stride" else 1
+    own = np.array([e.stance != gait.stance for e in events], dtype=bool)  # events that start a gait's-stance step
+    if period == 2:  # the stride map's iterates: the events of the gait's own stance, every other step
+        return search_report(xs[own], metric=c.fp_metric, window=c.fp_window, tol=c.fp_tol, period=2,
+                             min_index=max(math.ceil((c.min_steps - 2) / 2), 0), first_step=2)
+    report = search_report(xs, metric=c.fp_metric, window=c.fp_window, tol=c.fp_tol,
+                           min_index=max(c.min_steps - 1, 0), first_step=1)
+    if report.converged or not c.stride_fallback:
+        return report
+    stride = walk_orbit(robot, gait, events, dataclasses.replace(c, map="stride"))
+    return stride if stride.converged else report
 
 
 def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, video: str | Path | None = None) -> Work:
