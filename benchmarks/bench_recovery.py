@@ -96,7 +96,7 @@ def run_gait(job: dict[str, Any]) -> dict[str, Any]:
     from robustgait.gaitgen import GaitGenerator
     from robustgait.io.gaitfile import save_gait
     from robustgait.io.robotfile import load_robot
-    from robustgait.poincare import FixedPointFailure, ReturnMap
+    from robustgait.poincare import FixedPointFailure, settle
     from robustgait.push import PushMap
     from robustgait.sim import walk
     from robustgait.sim.trials import simulate_trials
@@ -122,11 +122,12 @@ def run_gait(job: dict[str, Any]) -> dict[str, Any]:
         return out | {"status": "fell", "reason": w.fall_reason}
     base = CertifyConfig()
     raw_push = PushConfig(recovery_radius=0.0, recovery_scatter=0.0)  # distances only: the radii are applied below
-    with ReturnMap(robot, gait, base, sim) as pmap:
-        try:
-            fp = pmap.find_fixed_point()
-        except FixedPointFailure as exc:
-            return out | {"status": exc.status, "reason": str(exc)}
+    pmap, found = settle(robot, gait, base, sim)  # the stride map when the step map has no orbit (T1)
+    with pmap:
+        if isinstance(found, FixedPointFailure):
+            return out | {"status": found.status, "reason": str(found)}
+        fp = found
+        out["map"] = pmap.kind
         vcfg = ValidateConfig()
         pm = PushMap(pmap.engine, fp, vcfg, raw_push)
         assert pm.band is not None
