@@ -28,7 +28,7 @@ from robustgait.inspection.gains import (
     spectral_radius,
     static_torques,
 )
-from robustgait.inspection.mirror import Mirror, find_mirror, fk_residual, name_partner
+from robustgait.inspection.mirror import Mirror, find_mirror, fk_residual, mass_asymmetry, name_partner
 from robustgait.inspection.model import open_model
 from robustgait.inspection.scale import RobotSize, axis_range, nice_step, scale
 
@@ -226,6 +226,24 @@ def test_mirror_signs_follow_the_axes_and_reflect_the_model(tmp_path: Path) -> N
     knee = next(j for j in r.joints if r.joint_name(j) == "left_knee")
     bad = Mirror(mirror.partner, {**mirror.sign, knee: -1.0, mirror.partner[knee]: -1.0}, mirror.body_partner)
     assert fk_residual(r, bad, 10, 0).position > 0.05
+
+
+def test_mass_asymmetry_finds_the_side_that_differs(tmp_path: Path) -> None:
+    """A model whose kinematics reflect exactly can still differ left to right in its masses (T1's shanks, 60 g):
+    found pair by pair, the lighter body named."""
+    xml = biped_xml()
+    r = open_model(write(tmp_path, xml))
+    same = mass_asymmetry(r, find_mirror(r, 1e-3))
+    assert same.mass == 0 and same.inertia == 0 and "same masses" in same.describe(r)
+    at = xml.index('name="right_shin"')
+    at = xml.index('mass="2.0"', at)
+    heavier = xml[:at] + 'mass="2.06" diaginertia="0.021 0.02 0.002"' + xml[at + len('mass="2.0" diaginertia="0.02 '
+                                                                                       '0.02 0.002"'):]
+    r = open_model(write(tmp_path, heavier, "heavier.xml"))
+    asym = mass_asymmetry(r, find_mirror(r, 1e-3))
+    assert asym.mass == pytest.approx(0.06) and asym.inertia == pytest.approx(0.001 / 0.021)
+    assert r.body_name(asym.body) == "left_shin" and r.body_name(asym.partner) == "right_shin"
+    assert "'left_shin' is 60 g lighter than 'right_shin'" in asym.describe(r)
 
 
 # ----------------------------------------------------------------------------------------------- gains

@@ -13,8 +13,9 @@ base's x, y and yaw, under which the map is equivariant): iterate until a window
 ``fp_tol``, optionally refine by damped Newton on P(x) = x, then the spectral radius ρ of the linearized map
 (:mod:`robustgait.orbit`); a gait whose orbit does not settle, settles with period two, or whose ρ ≥ ``fp_rho_max``
 has no fixed point to certify — unless the stride map, searched when the step map has no orbit (:func:`settle`,
-``stride_fallback``: a robot whose left and right differ), settles. The certificate's reduced state (Φ, ι and metric of ``certify.state``:
-:class:`robustgait.reduced.ReducedState`) is set up at x*. Frames of the base angular velocity ω:
+``stride_fallback``: a robot whose left and right differ), settles. The certificate's reduced state (Φ, ι and
+metric of ``certify.state``: :class:`robustgait.reduced.ReducedState`) is set up at x*.
+Frames of the base angular velocity ω:
 
 * ``heading`` (default): ω in the world frame rotated by the base's yaw, R_z(ψ)ᵀ ω. Equals the world frame
   for a robot heading along +x, and is invariant to the slow heading drift of a real walk — which the

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from robustgait.config import RobotCheckConfig, RobotConfig
 from robustgait.inspection.gains import static_torques, tipping_stiffness
-from robustgait.inspection.mirror import fk_residual, mirror_from_names
+from robustgait.inspection.mirror import fk_residual, mass_asymmetry, mirror_from_names
 from robustgait.inspection.model import RobotModel, geom_bottom
 from robustgait.robots import Robot
 from robustgait.robots.spec import SIDES
@@ -87,13 +87,15 @@ def check_mirror(robot: Robot, config: RobotConfig) -> CheckResult:
     except ValueError as exc:
         return CheckResult("mirror", False, f"mirror: FAIL: {exc}")
     res = fk_residual(rm, mirror, config.mirror_samples, config.seed)
+    asym = mass_asymmetry(rm, mirror)
     ok = res.position <= config.mirror_tolerance and res.angle <= config.mirror_angle_tolerance
     where = "" if ok else f" (worst body '{rm.body_name(res.body)}')"
     return CheckResult("mirror", bool(ok), f"mirror: {'ok' if ok else 'FAIL'}: forward kinematics of the relabeled "
                        f"configuration vs the reflected one over {res.samples} random configurations: largest residual "
                        f"{res.position:.2g} m, {res.angle:.2g} rad (tolerance {config.mirror_tolerance:g} m, "
-                       f"{config.mirror_angle_tolerance:g} rad){where}",
-                       {"position": res.position, "angle": res.angle})
+                       f"{config.mirror_angle_tolerance:g} rad){where}; {asym.describe(rm)}",
+                       {"position": res.position, "angle": res.angle, "mass_asymmetry": asym.mass,
+                        "inertia_asymmetry": asym.inertia})
 
 
 def check_soles(robot: Robot, config: RobotCheckConfig) -> CheckResult:

@@ -181,6 +181,43 @@ def fk_residual(robot: RobotModel, mirror: Mirror, samples: int, seed: int) -> R
     return Residual(position, angle, body, samples)
 
 
+@dataclass(frozen=True)
+class MassAsymmetry:
+    """The largest difference of mass [kg] between a body and its mirror image (``body`` the lighter), and the largest
+    relative difference of their principal inertias, over every pair of :attr:`Mirror.body_partner`."""
+
+    mass: float
+    body: int
+    partner: int
+    inertia: float
+
+    def describe(self, robot: RobotModel) -> str:
+        """One clause: how much the two sides differ, and what it means for the certificate."""
+        if self.mass <= 0.0 and self.inertia <= 0.0:
+            return "left and right have the same masses and inertias"
+        return (f"left and right differ: '{robot.body_name(self.body)}' is {1000 * self.mass:.3g} g lighter than "
+                f"'{robot.body_name(self.partner)}', principal inertias up to {100 * self.inertia:.2g} % apart — the "
+                "walk's orbit may have period two, certified on the stride map (certify.stride_fallback)")
+
+
+def mass_asymmetry(robot: RobotModel, mirror: Mirror) -> MassAsymmetry:
+    """max |m_b − m_b'| over body pairs (b, b') of the mirror, and max_i |I_b,i − I_b',i| / max(I_b,i, I_b',i) of
+    their sorted principal inertias: a model whose kinematics reflect exactly may still not be its own mirror image
+    in its dynamics (Menagerie's T1: the shanks differ by 60 g), so that the mirrored step map is not the walk's map
+    (``docs/certificate.md``, "Fixed point")."""
+    m = robot.model
+    mass, body, partner, inertia = 0.0, robot.base, robot.base, 0.0
+    for b, c in mirror.body_partner.items():
+        dm = abs(float(m.body_mass[b] - m.body_mass[c]))
+        if dm > mass:
+            light, heavy = (b, c) if m.body_mass[b] < m.body_mass[c] else (c, b)
+            mass, body, partner = dm, light, heavy
+        ib, ic = np.sort(m.body_inertia[b]), np.sort(m.body_inertia[c])
+        scale = np.maximum(np.maximum(ib, ic), 1e-12)
+        inertia = max(inertia, float(np.max(np.abs(ib - ic) / scale)))
+    return MassAsymmetry(mass, body, partner, inertia)
+
+
 def mirror_from_names(robot: RobotModel, pairs: Mapping[str, tuple[str, float]], tolerance: float) -> Mirror:
     """A spec's relabeling (joint name → (partner name, sign)) as a :class:`Mirror` of ``robot``'s joints, with
     the body partners it implies (for :func:`fk_residual`)."""

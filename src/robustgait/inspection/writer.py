@@ -13,6 +13,7 @@ import numpy as np
 
 from robustgait.inspection.discover import SIDES, Sole
 from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
+from robustgait.inspection.mirror import mass_asymmetry
 from robustgait.inspection.model import GEOM_TYPES
 from robustgait.inspection.scale import GAIT_AXES, sig
 from robustgait.robots.spec import FallCriteria
@@ -319,7 +320,7 @@ def summary(draft: Draft, spec_path: str | Path) -> list[str]:
              else "the world's unnamed plane")
     out.append(f"floor: {floor}; planned {len(draft.planned)} joints, held {len(draft.held)}")
     out.append(f"mirror: verified on {res.samples} random configurations, largest residual {res.position:.2g} m, "
-               f"{res.angle:.2g} rad")
+               f"{res.angle:.2g} rad; {mass_asymmetry(r, draft.mirror).describe(r)}")
     kp = np.array([draft.gains[j].kp for j in draft.planned])
     bounds = [draft.gains[j].bound for j in draft.planned]
     out.append(f"gains ({draft.config.bandwidth:g} Hz, ζ {draft.config.damping_ratio:g}, cap τ_max / "
