@@ -174,9 +174,11 @@ def test_a_step_map_without_an_orbit_falls_back_to_the_stride_map(exo, exo_gait,
 
     real = ReturnMap.find_fixed_point
 
+    status = ["period_two_orbit"]
+
     def step_refused(self, progress=None):  # type: ignore[no-untyped-def]
         if self.kind == "step":
-            raise FixedPointFailure("period_two_orbit", 100, "a period-two orbit (faked)")
+            raise FixedPointFailure(status[0], 100, f"{status[0]} (faked)")
         return real(self, progress)
 
     monkeypatch.setattr(ReturnMap, "find_fixed_point", step_refused)
@@ -186,6 +188,11 @@ def test_a_step_map_without_an_orbit_falls_back_to_the_stride_map(exo, exo_gait,
         assert found.steps % 2 == 0 and found.orbit is not None and found.orbit.period == 2
         assert found.orbit.rho is not None and found.orbit.rho < 1
         assert found.orbit.describe().startswith("stride map (two steps): converged")
+    status[0] = "unstable_orbit"  # a settled orbit with ρ ≥ 1 is not searched again: the stride map's ρ is its square
+    pmap, found = settle(exo, exo_gait, CertifyConfig())
+    pmap.close()
+    assert pmap.kind == "step" and isinstance(found, FixedPointFailure) and found.status == "unstable_orbit"
+    status[0] = "period_two_orbit"
     pmap, found = settle(exo, exo_gait, CertifyConfig(stride_fallback=False))
     pmap.close()
     assert pmap.kind == "step" and isinstance(found, FixedPointFailure) and found.status == "period_two_orbit"

@@ -95,18 +95,19 @@ def settle(robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig | Non
            progress: Callable[[int, float], None] | None = None
            ) -> tuple[ReturnMap, FixedPoint | FixedPointFailure]:
     """The map of ``config`` at its fixed point (:meth:`ReturnMap.find_fixed_point`), or the failure — with
-    ``stride_fallback``, a step map whose iterates settle on no orbit (``no_stable_orbit``, ``period_two_orbit``)
-    is replaced by the stride map (two physical steps, unmirrored), searched from the gait's start: the mirrored step
-    map of a robot whose left and right differ (T1's shanks: 60 g) is not the walk's map, and wanders while the
-    walk settles on a period-two orbit of it (``docs/certificate.md``, "Fixed point"). The caller closes the map
-    returned (the stride map after a fallback: ``map.kind``); a failure of both is the step map's status, the stride
-    map's finding appended."""
+    ``stride_fallback``, a step map whose iterates settle on no orbit (``no_stable_orbit``, ``period_two_orbit``) or
+    fall (``fell_before_fixed_point``) is replaced by the stride map (two physical steps, unmirrored), searched from
+    the gait's start: the mirrored step map of a robot whose left and right differ (T1's shanks: 60 g) steps on the
+    same leg again and again, which is not the walk — it wanders, or falls, while the walk settles on a period-two
+    orbit of it (``docs/certificate.md``, "Fixed point"). An orbit the step map found unstable is not searched again
+    (for a symmetric robot the stride map's ρ is its square). The caller closes the map returned (the stride map
+    after a fallback: ``map.kind``); a failure of both is the step map's status (the stride map's if it settled
+    unstable or fell, or the step map fell), the stride map's finding appended."""
     pmap = ReturnMap(robot, gait, config, sim)
     try:
         return pmap, pmap.find_fixed_point(progress)
     except FixedPointFailure as exc:
-        if config.map != "step" or not config.stride_fallback or exc.status not in ("no_stable_orbit",
-                                                                                    "period_two_orbit"):
+        if config.map != "step" or not config.stride_fallback or exc.status == "unstable_orbit":
             return pmap, exc
         first = exc
     pmap.close()
@@ -114,11 +115,12 @@ def settle(robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig | Non
     try:
         return stride, stride.find_fixed_point(progress)
     except FixedPointFailure as exc:
-        if exc.status == "fell_before_fixed_point":
-            return stride, exc
-        return stride, FixedPointFailure(exc.status if exc.status == "unstable_orbit" else first.status, first.steps,
+        # the stride map's finding when it is the stronger one (it settled unstable, or fell), or when the step map
+        # fell (the mirrored step map of an asymmetric robot can fall where the walk does not)
+        own = exc.status in ("unstable_orbit", "fell_before_fixed_point") or first.status == "fell_before_fixed_point"
+        return stride, FixedPointFailure(exc.status if own else first.status, exc.steps if own else first.steps,
                                          f"{first}; the stride map: {exc}",
-                                         exc.orbit if exc.status == "unstable_orbit" else first.orbit,
+                                         exc.orbit if own else first.orbit,
                                          exc.fixed_point)
 
 
