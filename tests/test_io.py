@@ -277,8 +277,8 @@ def test_total_work_is_bounded_before_simulating(tmp_path, gait_file):
                    "over the limit of 2e+06")
     code, _, err = cli("certify", gait_file(), "--robot", "exo", "--override", "certify.push.steps=100")
     assert code == 2
-    one_error_line(err, "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303179 simulated "
-                   "steps of up to 1.05 s", "over the limit of 5.1e+07 (4 × the 1.3e+07 the defaults need here)")
+    one_error_line(err, "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303347 simulated "
+                   "steps of up to 1.05 s", "over the limit of 5.2e+07 (4 × the 1.3e+07 the defaults need here)")
     code, _, err = cli("walk", gait_file(), "--robot", "exo", "--steps", "200", "--video", tmp_path / "v.gif")
     assert code == 2
     one_error_line(err, "v.gif: this walk could last 210 s, 6300 frames at 30 fps: a .gif holds at most 3600")

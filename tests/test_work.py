@@ -71,10 +71,11 @@ def test_certify_defaults_pass(case):
     c = defaults_of("certify", "g.json", "--robot", SPEC[name])
     assert c.certify.disturbance == "push"
     worst = check_certify_work(robot, gait, c.certify, c.sim)
-    # 100 fixed-point steps and its Jacobian's 2d + 2 = 68 (d = 33 on exo and Atalante), the map at x*, 10 steps of
+    # 100 fixed-point steps of the step map, then (stride_fallback) 100 of the stride map and its Jacobian's 2d + 2 =
+    # 68 maps of 2 steps (d = 33 on exo and Atalante), the map at x*, 10 steps of
     # the recovery band, 3000 pushes of 1 + 3 steps (+ a multi-contact gait's first heel strike)
     assert section_dimension(robot) == 33
-    assert worst == (12_179 + (gait.domain_graph == "multicontact")) * step_physics_steps(gait, robot.dt, c.sim)
+    assert worst == (12_347 + (gait.domain_graph == "multicontact")) * step_physics_steps(gait, robot.dt, c.sim)
 
 
 @pytest.mark.parametrize("kind", [*KINDS, "all"])
@@ -150,10 +151,10 @@ def test_the_limit_is_relative_to_the_defaults(exo, exo_gait):
     """Within 4 × the defaults' work (or 2e7) passes, beyond is refused, on the same robot and gait."""
     step = step_physics_steps(exo_gait, exo.dt, SimConfig())
     defaults = Work(certify_steps(CertifyConfig(), "flat", section_dimension(exo)), step)
-    assert defaults.steps == 12_179 and work_limit(defaults) == 4 * 12_179 * 1050 > MAX_PHYSICS_STEPS
-    assert check_work(Work(4 * 12_179, step), defaults, exo.dt, "x") == 4 * 12_179 * 1050
-    with pytest.raises(RobustGaitError, match=r"^x: 48717 simulated steps .* over the limit of 5.1e\+07 \(4 × the "):
-        check_work(Work(4 * 12_179 + 1, step), defaults, exo.dt, "x")
+    assert defaults.steps == 12_347 and work_limit(defaults) == 4 * 12_347 * 1050 > MAX_PHYSICS_STEPS
+    assert check_work(Work(4 * 12_347, step), defaults, exo.dt, "x") == 4 * 12_347 * 1050
+    with pytest.raises(RobustGaitError, match=r"^x: 49389 simulated steps .* over the limit of 5.2e\+07 \(4 × the "):
+        check_work(Work(4 * 12_347 + 1, step), defaults, exo.dt, "x")
     small = Work(10, step)  # a small job on a robot whose defaults are small: the 2e7 floor
     assert work_limit(small) == MAX_PHYSICS_STEPS and check_work(Work(19_000, step), small, exo.dt, "x")
 
@@ -173,7 +174,7 @@ def test_a_mistaken_timestep_is_refused(exo, exo_gait, monkeypatch):
 
 @pytest.mark.parametrize("argv, message", [
     (["certify", "{g}", "--robot", "exo", "--override", "certify.push.steps=100"],
-     "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303179 simulated steps"),
+     "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303347 simulated steps"),
     (["validate", "{g}", "--robot", "exo", "--trials", "10000", "--steps-after", "1000", "--disturbance", "all"],
      f"validate.trials 10000 × (validate.steps_after 1000 + 2) steps × {len(KINDS)} disturbance kinds + the "
      "certificate"),
