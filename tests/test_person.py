@@ -148,6 +148,7 @@ def test_a_requirement_on_an_unrecorded_figure_is_refused_before_the_study_exist
     assert not (tmp_path / "s").exists()
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_require_on_the_command_line(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
     res = subprocess.run([sys.executable, "-m", "robustgait.cli", "study", "run", str(tmp_path / "s"), "--robot", "exo",

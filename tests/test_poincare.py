@@ -126,6 +126,7 @@ def test_section_coordinates_invert_and_the_map_is_equivariant_under_x_y_and_yaw
     assert np.abs(image(elliptic, 0.7, -1.3, 0.7) - e0).max() < 1e-9
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_the_exo_gait_settles_on_a_stable_orbit(exo, exo_gait):
     """The shipped search on the stored flat-foot gait: a window of 20 iterates within 0.01 at step 27, ρ = 0.79 with
     the touchdown found in continuous time (0.86 at a fixed touchdown step), the fixed point's residual the map's."""
@@ -138,6 +139,7 @@ def test_the_exo_gait_settles_on_a_stable_orbit(exo, exo_gait):
     assert fp.residual == o.map_residual < 1e-2 and not o.newton
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_orbits_the_search_refuses(exo, exo_mc_gait, request):
     """The stored multi-contact gait never settles (no window of 20 within 0.01 in 100 steps); Atalante's FROST gait
     settles, but on an orbit whose linearization has ρ > 1: perturbations grow (docs/certificate.md)."""
@@ -166,6 +168,7 @@ def test_newton_makes_the_settled_iterate_a_fixed_point(exo, exo_gait):
         np.testing.assert_allclose(pmap.section_map(fp.qpos)(x), x, atol=1e-8)
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_a_step_map_without_an_orbit_falls_back_to_the_stride_map(exo, exo_gait, monkeypatch):
     """certify.stride_fallback: a step map whose iterates settle on no orbit (a robot whose left and right differ:
     faked here by refusing the step map's search) is replaced by the stride map, searched for real; without the

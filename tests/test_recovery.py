@@ -75,6 +75,7 @@ def test_recovery_refuses_the_late_falls_a_fall_only_certificate_certifies():
     assert (model.walk(j, 19)[0] == 0).all()
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_a_push_that_ends_off_its_orbit_fails(exo, exo_gait):
     cfg = CertifyConfig(disturbance="push")
     with ReturnMap(exo, exo_gait, cfg) as pmap:

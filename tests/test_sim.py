@@ -8,6 +8,7 @@ from robustgait import RobustGaitError, SimConfig, StepEngine, load_robot, walk
 from robustgait.sim import render_video
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_gait_walks_on_a_mirrored_period_one_orbit(robot_gait):
     robot, gait = robot_gait
     res = walk(robot, gait, steps=40, keep_trajectory=True)
@@ -29,6 +30,7 @@ def test_gait_walks_on_a_mirrored_period_one_orbit(robot_gait):
     np.testing.assert_allclose(w[1], w[0] * [-1, 1, -1], atol=0.03)
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_a_walk_says_whether_its_switching_events_settled_on_a_stable_orbit(exo, exo_gait, exo_mc_gait):
     """From the events a walk already has (no simulation): the stored flat-foot gait settles at step 27, and its step
     map there has ρ = 0.79 (one batch of one-step simulations); the multi-contact gait walks its 50 steps without ever
@@ -47,6 +49,7 @@ def test_a_walk_says_whether_its_switching_events_settled_on_a_stable_orbit(exo,
     assert "NOT converged (wandering" in mc.orbit.describe() and walk_stability(exo, exo_mc_gait, mc) is mc.orbit
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_generated_gait_keeps_the_pelvis_level(exo, exo_gait):
     """The exoskeleton-grade bounds of gait generation hold in simulation: pelvis roll within ±6°."""
     from robustgait.rotations import quat_to_mat

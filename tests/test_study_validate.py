@@ -246,6 +246,7 @@ def test_report_with_and_without_validation(small_study, first_run, tmp_path):
     assert "Validation:" not in page and (bare / "report" / "history.png").is_file()
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_a_changed_gait_file_is_validated_again(small_study, first_run):
     """The stored results are keyed by the files too (last in this module: it leaves one gait stored twice)."""
     g = next(r for r in first_run[0]["gaits"] if r["grid_index"] == 20)

@@ -229,6 +229,7 @@ def test_parse_answer_tiers_are_ranks():
     assert a.iteration == 2 and a.ranks == [1, 2, 0, 1, None] and a.labels == [None, None, None, "neutral", None]
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_a_port_in_use_is_one_line_and_exit_2(tmp_path):
     busy = socket.socket()
     busy.bind(("127.0.0.1", 0))
@@ -255,6 +256,7 @@ def test_serve_refuses_a_study_that_is_not_ranked_by_a_person(tmp_path):
         PersonPage(d)
 
 
+@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_status_and_report_show_the_answers(served, capsys):
     from robustgait.cli.study import print_summary
     from robustgait.config import ReportConfig
