@@ -121,6 +121,8 @@ def run_gait(job: dict[str, Any]) -> dict[str, Any]:
     if w.steps_taken < cfg.sim.step_cap:
         return out | {"status": "fell", "reason": w.fall_reason}
     base = CertifyConfig()
+    if job.get("push_steps"):  # a longer certificate horizon: the pushed step and N more
+        base = replace(base, push=replace(base.push, steps=int(job["push_steps"])))
     raw_push = PushConfig(recovery_radius=0.0, recovery_scatter=0.0)  # distances only: the radii are applied below
     pmap, found = settle(robot, gait, base, sim)  # the stride map when the step map has no orbit (T1)
     with pmap:
@@ -176,6 +178,9 @@ def cmd_run(args: argparse.Namespace) -> None:
                   for r in rows]
     else:
         params = grid_params(args.robot, args.grid, "flat")
+    if args.only_ok:
+        certified = [json.loads(line) for line in Path(args.only_ok).read_text().splitlines() if line.strip()]
+        params = [r["params"] for r in certified if r.get("status") == "ok"]
     if args.limit:
         params = [params[i] for i in np.unique(np.linspace(0, len(params) - 1, args.limit).round().astype(int))]
     jobs = []
@@ -183,7 +188,7 @@ def cmd_run(args: argparse.Namespace) -> None:
         label = "L{step_length:g}_T{step_duration:g}_W{step_width:g}_H{step_height:g}".format(**p)
         if label not in done:
             jobs.append({"robot": args.robot, "label": label, "params": p, "radii": _radii(args.radii),
-                         "gait_dir": args.gait_dir})
+                         "push_steps": args.push_steps, "gait_dir": args.gait_dir})
     if args.gait_dir:
         Path(args.gait_dir).mkdir(parents=True, exist_ok=True)
     commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True,
@@ -266,6 +271,8 @@ def main() -> None:
     r.add_argument("--grid", type=int, default=12)
     r.add_argument("--limit", type=int, default=0)
     r.add_argument("--radii", default="none,0.3")
+    r.add_argument("--push-steps", type=int, default=0, help="certify.push.steps (0: the default, 3)")
+    r.add_argument("--only-ok", help="a result file of this bench: run only the gaits certified there")
     r.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
     r.add_argument("--out", required=True)
     r.add_argument("--gait-dir")
