@@ -91,7 +91,7 @@ def run_gait(job: dict[str, Any]) -> dict[str, Any]:
     """One gait (module docstring)."""
     from dataclasses import replace
 
-    from robustgait.config import CertifyConfig, Config, GaitParams, PushConfig, SimConfig, ValidateConfig
+    from robustgait.config import CertifyConfig, Config, GaitParams, SimConfig, ValidateConfig
     from robustgait.estimators import certify_map_sequential
     from robustgait.gaitgen import GaitGenerator
     from robustgait.io.gaitfile import save_gait
@@ -123,7 +123,7 @@ def run_gait(job: dict[str, Any]) -> dict[str, Any]:
     base = CertifyConfig()
     if job.get("push_steps"):  # a longer certificate horizon: the pushed step and N more
         base = replace(base, push=replace(base.push, steps=int(job["push_steps"])))
-    raw_push = PushConfig(recovery_radius=0.0, recovery_scatter=0.0)  # distances only: the radii are applied below
+    raw_push = replace(base.push, recovery_radius=0.0, recovery_scatter=0.0)  # distances only: radii applied below
     pmap, found = settle(robot, gait, base, sim)  # the stride map when the step map has no orbit (T1)
     with pmap:
         if isinstance(found, FixedPointFailure):
