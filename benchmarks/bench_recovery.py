@@ -256,6 +256,19 @@ def cmd_report(args: argparse.Namespace) -> None:
             verdict = "met" if rate.high <= 0.05 and rate.rate <= eps else "not met"
             print(f"| {key} | {np.median(x):.2f} | {k20}/{n20} = {100 * rate.rate:.1f} % [{100 * rate.low:.1f}, "
                   f"{100 * rate.high:.1f}] ({verdict}) | {kh}/{n20} = {100 * rate_h.rate:.1f} % | {rho_text} |")
+        if args.stored:  # the study gaits' stored s50 and J* (bench_predict.py): today's ranking on the same gaits
+            stored = {}
+            for line in Path(args.stored).read_text().splitlines():
+                if line.strip():
+                    row = json.loads(line)
+                    stored[row["label"]] = row
+            both = [r for r in ok if r["label"] in stored and stored[r["label"]]["kinds"]["push"]["s50"] is not None]
+            s50 = [stored[r["label"]]["kinds"]["push"]["s50"] for r in both]
+            old = spearman([stored[r["label"]]["push_cert"]["j_star"] for r in both], s50, "J*", "push s50")
+            print(f"\nagainst the stored push s50 of {args.stored} ({len(both)} gaits): the stored J* ρ {old.rho:.3f} "
+                  f"(p {old.p:.1g})" + "".join(
+                      f"; J* ν = {key} ρ {sp.rho:.3f} (p {sp.p:.1g})" for key in keys
+                      for sp in [spearman([r["certificates"][key]["j_star"] for r in both], s50, "J*", "push s50")]))
         secs = [r["seconds"] for r in ok]
         if secs:
             print(f"\nper gait: {np.median(secs):.0f} s median (generation, walk, fixed point, J* per ν, "
@@ -279,6 +292,8 @@ def main() -> None:
     r.set_defaults(func=cmd_run)
     rep = sub.add_parser("report")
     rep.add_argument("files", nargs="+")
+    rep.add_argument("--stored", help="bench_predict.py rows (benchmarks/data/bench_predict_exo.jsonl): ρ against "
+                     "their push s50, and their stored J*'s")
     rep.set_defaults(func=cmd_report)
     args = p.parse_args()
     args.func(args)
