@@ -264,6 +264,9 @@ def cmd_report(args: argparse.Namespace) -> None:
                     stored[row["label"]] = row
             both = [r for r in ok if r["label"] in stored and stored[r["label"]]["kinds"]["push"]["s50"] is not None]
             s50 = [stored[r["label"]]["kinds"]["push"]["s50"] for r in both]
+            if len(both) < 3:
+                print(f"\nagainst the stored push s50 of {args.stored}: {len(both)} gaits in common")
+                continue
             old = spearman([stored[r["label"]]["push_cert"]["j_star"] for r in both], s50, "J*", "push s50")
             print(f"\nagainst the stored push s50 of {args.stored} ({len(both)} gaits): the stored J* ρ {old.rho:.3f} "
                   f"(p {old.p:.1g})" + "".join(
