@@ -588,3 +588,33 @@ def test_check_refuses_a_held_joint_that_does_not_exist(tmp_path: Path, capsys: 
 def test_draft_errors_are_input_errors(tmp_path: Path) -> None:
     with pytest.raises(RobustGaitError, match="no free joint"):
         draft_spec(write(tmp_path, biped_xml(freejoint=False, keyframe=False)), RobotConfig())
+
+
+@needs_t1
+def test_a_robot_of_collision_geoms_only_is_rendered(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """T1 without its visual meshes has only collision geoms, in group 3, which MuJoCo hides by default: videos and
+    tiles show that group (sim.walk.scene_option), so that the robot is in the picture; exo's are unchanged."""
+    import mujoco
+
+    from robustgait import load_robot
+    from robustgait.sim.walk import offscreen_renderer, scene_option
+
+    spec = tmp_path / "t1.toml"
+    assert run(capsys, "robot", "init", T1, "-o", spec)[0] == 0
+    for robot, groups in ((load_robot(spec), [1, 1, 1, 1, 0, 0]), (load_robot("exo"), [1, 1, 1, 0, 0, 0])):
+        option = scene_option(robot)
+        assert list(option.geomgroup) == groups
+        m = robot.model
+        d = mujoco.MjData(m)
+        d.qpos[2] = 1.0
+        mujoco.mj_forward(m, d)
+        renderer = offscreen_renderer(robot, 160, 120)
+        cam = mujoco.MjvCamera()
+        cam.type, cam.trackbodyid, cam.distance = mujoco.mjtCamera.mjCAMERA_TRACKING, robot.base_body_id, 2.5
+        renderer.update_scene(d, cam)
+        default = renderer.render().astype(int)
+        renderer.update_scene(d, cam, scene_option=option)
+        shown = renderer.render().astype(int)
+        renderer.close()
+        changed = int((np.abs(default - shown).sum(axis=2) > 30).sum())
+        assert (changed > 200) if groups[3] else (changed == 0)

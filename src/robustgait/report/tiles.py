@@ -14,7 +14,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.io.output import atomic_output, check_output
 from robustgait.robots import Robot
-from robustgait.sim.walk import offscreen_renderer, walk
+from robustgait.sim.walk import offscreen_renderer, scene_option, walk
 
 # camera azimuths [deg] of the two rows: MuJoCo's free camera at azimuth 90 looks along +y (it sees the
 # robot's right side; the robot walks to the right of the image), at 180 along −x (the robot walks towards it)
@@ -64,7 +64,7 @@ def render_tiles(robot: Robot, gait: Gait, path: str | Path, config: ReportConfi
                 base = data.xpos[robot.base_body_id]
                 cam.lookat[:] = [base[0], base[1], 0.95 * base[2]]  # the middle of a standing person
                 cam.distance, cam.elevation, cam.azimuth = distance, -5.0, azimuth
-                renderer.update_scene(data, cam)
+                renderer.update_scene(data, cam, scene_option=scene_option(robot))
                 row.append(renderer.render().copy())
             rows.append(np.concatenate(row, axis=1))
     finally:

@@ -266,6 +266,22 @@ def offscreen_renderer(robot: Robot, width: int, height: int) -> mujoco.Renderer
             "MUJOCO_GL=egl or MUJOCO_GL=osmesa and install libegl1 or libosmesa6") from None
 
 
+def scene_option(robot: Robot) -> mujoco.MjvOption:
+    """The visualization option of every rendering of the robot: MuJoCo's default (geom groups 0–2 shown), plus every
+    group the robot's geoms are in when none of them is visible in 0–2 — a model stripped of its visual meshes
+    keeps only collision geoms, which Menagerie puts in group 3 (Booster T1): without this the video shows the floor
+    alone."""
+    m = robot.model
+    opt = mujoco.MjvOption()
+    own = (m.geom_bodyid > 0) & (m.geom_rgba[:, 3] > 0)
+    shown = own & (m.geom_group < 3)
+    if own.any() and not shown.any():
+        for g in np.unique(m.geom_group[own]):
+            if 0 <= g < len(opt.geomgroup):
+                opt.geomgroup[int(g)] = 1
+    return opt
+
+
 def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path, *, fps: int = 30,
                  width: int = 640, height: int = 480) -> int:
     """Render a trajectory (full-physics states, as kept by :func:`walk`) to an ``.mp4`` (H.264 via ffmpeg) or
@@ -284,6 +300,7 @@ def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path
         if n_frames > MAX_GIF_FRAMES:
             raise input_error(path, f"{n_frames} frames, over the {MAX_GIF_FRAMES} a .gif may hold (use .mp4)")
     renderer = offscreen_renderer(robot, width, height)
+    option = scene_option(robot)
     m = robot.model
     data = mujoco.MjData(m)
     cam = mujoco.MjvCamera()
@@ -297,7 +314,7 @@ def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path
                 break
             mujoco.mj_setState(m, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS.value)
             mujoco.mj_forward(m, data)
-            renderer.update_scene(data, cam)
+            renderer.update_scene(data, cam, scene_option=option)
             yield renderer.render()
 
     count = 0

@@ -16,7 +16,7 @@ from robustgait.gait import Gait
 from robustgait.io.output import atomic_output
 from robustgait.report.tiles import VIEWS
 from robustgait.robots import Robot
-from robustgait.sim.walk import offscreen_renderer, walk
+from robustgait.sim.walk import offscreen_renderer, scene_option, walk
 
 FPS = 20
 WIDTH, HEIGHT = 288, 324  # one view; the video is two views wide
@@ -54,7 +54,7 @@ def render_person_video(robot: Robot, gait: Gait, path: str | Path, steps: int, 
                     cam.type = mujoco.mjtCamera.mjCAMERA_FREE
                     cam.lookat[:] = [base[0], 0.0, 0.9]  # follows the walk forward; height fixed for every gait
                     cam.distance, cam.elevation, cam.azimuth = DISTANCE, -5.0, azimuth
-                    renderer.update_scene(data, cam)
+                    renderer.update_scene(data, cam, scene_option=scene_option(robot))
                     views.append(renderer.render().copy())
                 writer.append_data(np.concatenate(views, axis=1))  # type: ignore[attr-defined]
                 count += 1
