@@ -52,6 +52,7 @@ def render_tiles(robot: Robot, gait: Gait, path: str | Path, config: ReportConfi
     m = robot.model
     data = mujoco.MjData(m)
     renderer = offscreen_renderer(robot, width, height)
+    option = scene_option(robot)
     rows = []
     try:
         for _, azimuth in VIEWS:
@@ -64,7 +65,7 @@ def render_tiles(robot: Robot, gait: Gait, path: str | Path, config: ReportConfi
                 base = data.xpos[robot.base_body_id]
                 cam.lookat[:] = [base[0], base[1], 0.95 * base[2]]  # the middle of a standing person
                 cam.distance, cam.elevation, cam.azimuth = distance, -5.0, azimuth
-                renderer.update_scene(data, cam, scene_option=scene_option(robot))
+                renderer.update_scene(data, cam, scene_option=option)
                 row.append(renderer.render().copy())
             rows.append(np.concatenate(row, axis=1))
     finally:

@@ -118,9 +118,8 @@ def walk_orbit(robot: Robot, gait: Gait, events: list[SwitchEvent], certify: Cer
     qpos, qvel = canonical_event_states(robot, gait, events)
     xs = (reduce_state(qpos, qvel, c.frame) if c.fp_metric == "omega"
           else section_coordinates(qpos, qvel, gait.step_duration))
-    period = 2 if c.map == "stride" else 1
-    own = np.array([e.stance != gait.stance for e in events], dtype=bool)  # events that start a gait's-stance step
-    if period == 2:  # the stride map's iterates: the events of the gait's own stance, every other step
+    if c.map == "stride":  # the stride map's iterates: the events that start a step of the gait's own stance
+        own = np.array([e.stance != gait.stance for e in events], dtype=bool)
         return search_report(xs[own], metric=c.fp_metric, window=c.fp_window, tol=c.fp_tol, period=2,
                              min_index=max(math.ceil((c.min_steps - 2) / 2), 0), first_step=2)
     report = search_report(xs, metric=c.fp_metric, window=c.fp_window, tol=c.fp_tol,

@@ -39,6 +39,7 @@ def render_person_video(robot: Robot, gait: Gait, path: str | Path, steps: int, 
     m = robot.model
     data = mujoco.MjData(m)
     renderer = offscreen_renderer(robot, WIDTH, HEIGHT)
+    option = scene_option(robot)
     count = 0
     try:
         with atomic_output(path, "video") as tmp, imageio.get_writer(
@@ -54,7 +55,7 @@ def render_person_video(robot: Robot, gait: Gait, path: str | Path, steps: int, 
                     cam.type = mujoco.mjtCamera.mjCAMERA_FREE
                     cam.lookat[:] = [base[0], 0.0, 0.9]  # follows the walk forward; height fixed for every gait
                     cam.distance, cam.elevation, cam.azimuth = DISTANCE, -5.0, azimuth
-                    renderer.update_scene(data, cam, scene_option=scene_option(robot))
+                    renderer.update_scene(data, cam, scene_option=option)
                     views.append(renderer.render().copy())
                 writer.append_data(np.concatenate(views, axis=1))  # type: ignore[attr-defined]
                 count += 1
