@@ -10,7 +10,7 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
   range of r*, the statement's bound, samples, physics steps, wall time. After every certificate raw
   ``mujoco.rollout`` (same model and threads, 100 states near x*, zero control) measures the machine's speed
   under the same load: the sampler/raw ratio, measured in the run (wall times are this machine's, as measured).
-* ``coverage``: ``--runs`` sequential certificates of each synthetic map (:mod:`robustgait.synthetic`):
+* ``coverage``: ``--runs`` sequential certificates of each synthetic map (:mod:`robustgait.certificate.synthetic`):
   fraction of runs whose true violating fraction in B(r*) exceeds ε (must be ≤ β) — and the same for a naive
   rule that ignores the data-dependent choice of r*, to show the check can fail.
 * ``barrier``: r* with H = r² − ‖x − x*‖² (``ball``) and the paper's H = r − ‖x − x*‖² on the Atalante gait.
@@ -60,14 +60,14 @@ from mujoco import rollout
 
 from bench_orbit import cmd_orbit  # the orbit check's measurement (its own module: this one is long enough)
 from robustgait import load_gait, load_robot
-from robustgait.barrier import distances, sample_ball, solve_radius
-from robustgait.certify import GaitCertificate, certify_gait
+from robustgait.certificate.barrier import distances, sample_ball, solve_radius
+from robustgait.certificate.certify import GaitCertificate, certify_gait
+from robustgait.certificate.estimators import certify_map_sequential
+from robustgait.certificate.poincare import FixedPointFailure, ReturnMap
+from robustgait.certificate.synthetic import BandMap, ConeMap
 from robustgait.config import CertifyConfig, GaitParams, GenerationConfig, SequentialConfig, SimConfig
-from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
-from robustgait.poincare import FixedPointFailure, ReturnMap
 from robustgait.robots import Robot
-from robustgait.synthetic import BandMap, ConeMap
 
 REPO = Path(__file__).resolve().parents[1]
 ATALANTE = REPO.parent / "shared" / "atalante"
@@ -549,8 +549,8 @@ def cmd_push_sweep(args: argparse.Namespace) -> None:
     """Where a gait's pushes fail: its J* (default certificate), the falls the estimator met below
     ``--near`` × J* (impulse, direction, phase, fall step and reason), then pushes at fixed impulses
     (``--sweep`` × J*) over 24 directions × 13 phases of the validation's range: a grid of fall steps."""
+    from robustgait.certificate.push import PushMap, push_phase
     from robustgait.config import ValidateConfig
-    from robustgait.push import PushMap, push_phase
 
     robot, gait = gaits(args)["exo"]
     cfg = CertifyConfig()

@@ -41,9 +41,9 @@ import mujoco
 import numpy as np
 
 from robustgait import load_gait, load_robot, walk
+from robustgait.certificate.poincare import FixedPointFailure, ReturnMap
 from robustgait.config import KINDS, CertifyConfig, CompareConfig, ValidateConfig
 from robustgait.gait import Gait
-from robustgait.poincare import FixedPointFailure, ReturnMap
 from robustgait.report.tiles import render_tiles
 from robustgait.robots import Robot
 from robustgait.robots.model import CONTACT_SENSORS

@@ -44,9 +44,9 @@ import numpy as np
 
 from bench_rollout import start_states  # the same K start states as the rollout benchmark
 from robustgait import CertifyConfig, SimConfig, StepEngine, load_gait, load_robot, walk
+from robustgait.certificate.poincare import FixedPointFailure, ReturnMap
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.poincare import FixedPointFailure, ReturnMap
 from robustgait.robots import Robot
 from robustgait.sim.feedback import FeedbackEngine, PDController
 from robustgait.sim.passivity import PassivityController, PassivityGains

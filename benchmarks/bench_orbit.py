@@ -31,13 +31,13 @@ from pathlib import Path
 import numpy as np
 
 from robustgait import load_gait, load_robot
-from robustgait.certify import GaitCertificate, certify_gait
+from robustgait.certificate.certify import GaitCertificate, certify_gait
+from robustgait.certificate.numerics import fd_jacobian, settled_at, spectral_radius, window_residual
+from robustgait.certificate.poincare import FixedPointFailure, ReturnMap
+from robustgait.certificate.reduced import section_coordinates
 from robustgait.config import CertifyConfig, SimConfig
 from robustgait.config.certify import LEGACY_FIXED_POINT
 from robustgait.gait import Gait
-from robustgait.orbit import fd_jacobian, settled_at, spectral_radius, window_residual
-from robustgait.poincare import FixedPointFailure, ReturnMap
-from robustgait.reduced import section_coordinates
 from robustgait.robots import Robot
 
 REPO = Path(__file__).resolve().parents[1]

@@ -63,7 +63,7 @@ class MemoPushes:
         self.pm, self.cache = pm, {}  # type: ignore[var-annotated]
 
     def outcomes(self, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        from robustgait.push import push_phase
+        from robustgait.certificate.push import push_phase
 
         keys = [row.tobytes() for row in np.ascontiguousarray(j, dtype="<f8")]
         todo = [i for i, k in enumerate(keys) if k not in self.cache]
@@ -91,13 +91,13 @@ def run_gait(job: dict[str, Any]) -> dict[str, Any]:
     """One gait (module docstring)."""
     from dataclasses import replace
 
+    from robustgait.certificate.estimators import certify_map_sequential
+    from robustgait.certificate.poincare import FixedPointFailure, settle
+    from robustgait.certificate.push import PushMap
     from robustgait.config import CertifyConfig, Config, GaitParams, SimConfig, ValidateConfig
-    from robustgait.estimators import certify_map_sequential
     from robustgait.gaitgen import GaitGenerator
     from robustgait.io.gaitfile import save_gait
     from robustgait.io.robotfile import load_robot
-    from robustgait.poincare import FixedPointFailure, settle
-    from robustgait.push import PushMap
     from robustgait.sim import walk
     from robustgait.sim.trials import simulate_trials
     from robustgait.study.validate import _orbitless_start

@@ -9,8 +9,8 @@ evenly spaced in grid order (all of them when the grid is smaller), each
 * walked ``--steps`` steps (default 300) with the spec's simulator (PD + feedforward): steps walked, fall reason,
   tracking RMS and max |q − y_d|, torque saturation (fraction of joint-steps at a limit);
 * the step map's orbit, from the walk's switching events written in the canonical stance
-  (:func:`robustgait.poincare.canonical_reduced_events`, base angular velocity in the heading frame): over the last
-  ``--window`` (20) iterates, r1 = max ‖x_{k+1} − x_k‖ and r2 = max ‖x_{k+2} − x_k‖. ``p1``: r1 < tol (a fixed
+  (:func:`robustgait.certificate.poincare.canonical_reduced_events`, base angular velocity in the heading frame): over
+  the last ``--window`` (20) iterates, r1 = max ‖x_{k+1} − x_k‖ and r2 = max ‖x_{k+2} − x_k‖. ``p1``: r1 < tol (a fixed
   point of the step map); ``p2``: r2 < tol ≤ r1 (a period-two orbit: left and right steps alternate, a fixed point
   of the stride map); ``grid``: neither, but min(r1, r2) < tol + 2 × the event grid's floor (below); ``wander``:
   none of these; ``fell``; ``nosolve``. The floor: the largest change of the reduced state over the one physics
@@ -139,7 +139,7 @@ def grid_floor(robot: Any, trajectory: np.ndarray, events: list[Any], window: in
     touchdowns, ‖x(t_e) − x(t_e − h)‖ [rad/s]: touchdowns are found on the physics-step grid, so an iterate is
     only defined to within it, and two iterates whose touchdowns fall one step apart differ by about that much
     (mirroring flips signs of components only: the norm needs no canonical stance)."""
-    from robustgait.reduced import reduce_state
+    from robustgait.certificate.reduced import reduce_state
 
     nq = robot.model.nq
     times = trajectory[:, 0]
@@ -155,9 +155,9 @@ def grid_floor(robot: Any, trajectory: np.ndarray, events: list[Any], window: in
 def point(index: int, steps: int, window: int, tol: float) -> dict[str, Any]:
     """One grid point: solve, walk, orbit (module docstring)."""
     from robustgait import walk
+    from robustgait.certificate.poincare import canonical_reduced_events
     from robustgait.config import SimConfig
     from robustgait.learn.space import ActionSpace
-    from robustgait.poincare import canonical_reduced_events
 
     robot, gen = _STATE["robot"], _STATE["gen"]
     params = ActionSpace.from_robot(robot, "flat").params(index)

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from robustgait import RobustGaitError
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
+from robustgait.certificate.poincare import ReturnMap
 from robustgait.cli import main
 from robustgait.config import CertifyConfig, SequentialConfig, SimConfig
 from robustgait.config.certify import LEGACY_FIXED_POINT
-from robustgait.poincare import ReturnMap
 from robustgait.report import outcome_masks, plot_barrier_trace, plot_certificate
 from tests.conftest import EXO_GAIT, EXO_MC_GAIT, search_options, standing_gait
 
@@ -139,7 +139,7 @@ def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
 
 @pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_figures(tmp_path, small_cert, seq_cert):
-    from robustgait.barrier import barrier_along
+    from robustgait.certificate.barrier import barrier_along
 
     masks = outcome_masks(small_cert.certificate)
     assert sum(int(m.sum()) for m in masks.values()) == 24

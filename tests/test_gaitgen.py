@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from robustgait import GaitParams, RobustGaitError, load_gait, load_robot, walk
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
 from robustgait.cli import main
 from robustgait.config import CertifyConfig, GenerationConfig, SequentialConfig
 from robustgait.gaitgen import GaitGenerator, generate_gait

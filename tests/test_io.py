@@ -16,7 +16,7 @@ import pytest
 import yaml
 
 from robustgait import RobustGaitError, load_gait, load_robot
-from robustgait.barrier import load_reduced_log as reexported
+from robustgait.certificate.barrier import load_reduced_log as reexported
 from robustgait.cli import main
 from robustgait.io import limits as L
 from robustgait.io.logs import load_reduced_log

@@ -1,5 +1,6 @@
-"""The orbit check's numerics (robustgait.orbit) on maps with known orbits (robustgait.synthetic): a window of iterates,
-period two, finite-difference Jacobians of piecewise-smooth maps, spectral radii, damped Newton, and the verdict."""
+"""The orbit check's numerics (robustgait.certificate.numerics) on maps with known orbits
+(robustgait.certificate.synthetic): a window of iterates, period two, finite-difference Jacobians of piecewise-smooth
+maps, spectral radii, damped Newton, and the verdict."""
 
 from __future__ import annotations
 
@@ -7,9 +8,7 @@ import numpy as np
 import pytest
 
 from robustgait import RobustGaitError
-from robustgait.config import CertifyConfig
-from robustgait.config.certify import NEWTON_DAMPING
-from robustgait.orbit import (
+from robustgait.certificate.numerics import (
     OrbitReport,
     fd_jacobian,
     flow_projection,
@@ -21,7 +20,9 @@ from robustgait.orbit import (
     spectral_radius,
     window_residual,
 )
-from robustgait.synthetic import LinearMap, QuadraticMap, iterates
+from robustgait.certificate.synthetic import LinearMap, QuadraticMap, iterates
+from robustgait.config import CertifyConfig
+from robustgait.config.certify import NEWTON_DAMPING
 
 CFG = CertifyConfig()  # the shipped window, tolerance, finite-difference step and ρ bound
 

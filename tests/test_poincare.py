@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 
 from robustgait import CertifyConfig, RobustGaitError
-from robustgait.poincare import FixedPointFailure, ReturnMap
-from robustgait.reduced import reduce_state, section_coordinates, section_state, stance_jacobian
+from robustgait.certificate.poincare import FixedPointFailure, ReturnMap
+from robustgait.certificate.reduced import reduce_state, section_coordinates, section_state, stance_jacobian
 from tests.conftest import ATALANTE_GAIT, search_options
 
 
@@ -173,7 +173,7 @@ def test_a_step_map_without_an_orbit_falls_back_to_the_stride_map(exo, exo_gait,
     """certify.stride_fallback: a step map whose iterates settle on no orbit (a robot whose left and right differ:
     faked here by refusing the step map's search) is replaced by the stride map, searched for real; without the
     fallback, or after another failure, the step map's failure is the answer."""
-    from robustgait.poincare import settle
+    from robustgait.certificate.poincare import settle
 
     real = ReturnMap.find_fixed_point
 

@@ -1,4 +1,4 @@
-"""The push map of J* (robustgait.push): the validation's walk, on flat-foot and multi-contact gaits."""
+"""The push map of J* (robustgait.certificate.push): the validation's walk, on flat-foot and multi-contact gaits."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
+from robustgait.certificate.poincare import ReturnMap
+from robustgait.certificate.push import PushMap, push_phase
 from robustgait.config import CertifyConfig, PushConfig, ValidateConfig
-from robustgait.poincare import ReturnMap
-from robustgait.push import PushMap, push_phase
 from robustgait.report import plot_certificate
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import FALL_REASONS

@@ -1,7 +1,7 @@
-"""The recovery criterion of the push certificate (robustgait.recovery, docs/certificate.md "Recovery"): distances
-in the base's Froude-scaled velocity with known answers, the band's radius, and on a synthetic push model with late
-falls that a certificate asking only "no fall yet" certifies pushes that fall later, and one asking for recovery
-does not."""
+"""The recovery criterion of the push certificate (robustgait.certificate.recovery, docs/certificate.md "Recovery"):
+distances in the base's Froude-scaled velocity with known answers, the band's radius, and on a synthetic push model
+with late falls that a certificate asking only "no fall yet" certifies pushes that fall later, and one asking for
+recovery does not."""
 
 from __future__ import annotations
 
@@ -10,12 +10,12 @@ import math
 import numpy as np
 import pytest
 
+from robustgait.certificate.estimators import certify_map_sequential
+from robustgait.certificate.poincare import ReturnMap
+from robustgait.certificate.push import NOT_RECOVERED, PushMap
+from robustgait.certificate.recovery import OrbitBand, froude_scales, heading_velocity
+from robustgait.certificate.synthetic import DivergingPush
 from robustgait.config import CertifyConfig, PushConfig, SequentialConfig, ValidateConfig
-from robustgait.estimators import certify_map_sequential
-from robustgait.poincare import ReturnMap
-from robustgait.push import NOT_RECOVERED, PushMap
-from robustgait.recovery import OrbitBand, froude_scales, heading_velocity
-from robustgait.synthetic import DivergingPush
 
 
 def _yawed(qpos: np.ndarray, qvel: np.ndarray, psi: float) -> tuple[np.ndarray, np.ndarray]:

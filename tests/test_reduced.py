@@ -1,6 +1,6 @@
-"""Tests for robustgait.reduced: the reduced states of a certificate (omega, centroidal, velocity) — frames, the
-reconstruction ι (stance sole kept still, Φ(ι(x̄)) = x̄, ι(x̄*) = x*), the metrics (kinetic energy), the centroidal
-momentum against MuJoCo's physics (a push's Δh is its impulse), and the certificate's coordinates."""
+"""Tests for robustgait.certificate.reduced: the reduced states of a certificate (omega, centroidal, velocity) —
+frames, the reconstruction ι (stance sole kept still, Φ(ι(x̄)) = x̄, ι(x̄*) = x*), the metrics (kinetic energy), the
+centroidal momentum against MuJoCo's physics (a push's Δh is its impulse), and the certificate's coordinates."""
 
 import mujoco
 import numpy as np
@@ -8,9 +8,9 @@ import pytest
 from scipy import stats
 
 from robustgait import CertifyConfig
-from robustgait.barrier import sample_ball
-from robustgait.poincare import ReturnMap
-from robustgait.reduced import (
+from robustgait.certificate.barrier import sample_ball
+from robustgait.certificate.poincare import ReturnMap
+from robustgait.certificate.reduced import (
     Coordinates,
     ReducedState,
     centroidal_momentum,
@@ -20,8 +20,8 @@ from robustgait.reduced import (
     reduce_state,
     stance_jacobian,
 )
+from robustgait.certificate.shape import Shape
 from robustgait.rotations import quat_to_mat
-from robustgait.shape import Shape
 
 STATES = ("omega", "centroidal", "velocity")
 

@@ -35,7 +35,7 @@ def test_a_walk_says_whether_its_switching_events_settled_on_a_stable_orbit(exo,
     """From the events a walk already has (no simulation): the stored flat-foot gait settles at step 27, and its step
     map there has ρ = 0.79 (one batch of one-step simulations); the multi-contact gait walks its 50 steps without ever
     settling — a walk to the cap on a wandering orbit says so, and gets no ρ."""
-    from robustgait.poincare import walk_stability
+    from robustgait.certificate.poincare import walk_stability
 
     res = walk(exo, exo_gait, steps=30)
     o = res.orbit

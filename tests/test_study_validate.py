@@ -20,7 +20,7 @@ import pytest
 from tqdm import tqdm
 
 from robustgait import RobustGaitError, load_gait, load_robot
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
 from robustgait.cli import main
 from robustgait.config import GaitParams, StudyConfig, ValidateConfig, to_dict
 from robustgait.sim import walk

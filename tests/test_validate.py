@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from robustgait import RobustGaitError, load_robot
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
 from robustgait.cli import main
 from robustgait.config import CertifyConfig, ReportConfig, SimConfig, ValidateConfig
 from robustgait.io.gaitfile import save_gait

@@ -9,7 +9,8 @@ import time
 
 import pytest
 
-from robustgait.certify import certify_steps, check_certify_work
+from robustgait.certificate.certify import certify_steps, check_certify_work
+from robustgait.certificate.reduced import section_dimension
 from robustgait.cli import build_parser
 from robustgait.cli.options import config_from
 from robustgait.config import KINDS, CertifyConfig, Config, SimConfig, preset
@@ -18,7 +19,6 @@ from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.io.gaitfile import save_gait
 from robustgait.learn.space import ActionSpace
-from robustgait.reduced import section_dimension
 from robustgait.sim.engine import step_physics_steps
 from robustgait.sim.walk import check_walk_work
 from robustgait.study.run import check_evaluation_work, longest_gaits

@@ -36,7 +36,7 @@ def _what(cfg: CertifyConfig) -> str:
 
 
 def _certify(args: argparse.Namespace) -> int:
-    from robustgait.certify import certify_gait
+    from robustgait.certificate.certify import certify_gait
 
     config, robot, gait = inputs(args)
     cfg = config.certify
@@ -102,7 +102,7 @@ def _certify(args: argparse.Namespace) -> int:
 
 
 def _barrier_eval(args: argparse.Namespace) -> int:
-    from robustgait.barrier import barrier_along
+    from robustgait.certificate.barrier import barrier_along
     from robustgait.io.logs import load_reduced_log
 
     alpha = config_from(args).certify.alpha

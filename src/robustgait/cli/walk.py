@@ -12,8 +12,8 @@ SIM = {"--controller": "sim.controller", "--switching": "sim.switching", "--feed
 
 
 def _walk(args: argparse.Namespace) -> int:
+    from robustgait.certificate.poincare import canonical_reduced_events, walk_stability
     from robustgait.io.output import write_csv
-    from robustgait.poincare import canonical_reduced_events, walk_stability
     from robustgait.sim import walk
 
     config, robot, gait = inputs(args)

@@ -1,4 +1,5 @@
-"""Options of a certificate (:mod:`robustgait.certify`, :mod:`robustgait.estimators`, :mod:`robustgait.barrier`)."""
+"""Options of a certificate (:mod:`robustgait.certificate.certify`, :mod:`robustgait.certificate.estimators`,
+:mod:`robustgait.certificate.barrier`)."""
 
 from __future__ import annotations
 
@@ -75,7 +76,7 @@ def verification_size(epsilon: float, beta: float, attempt: int) -> int:
 
 @config
 class SequentialConfig:
-    """Options of the sequential estimator (:mod:`robustgait.estimators`; defaults measured in
+    """Options of the sequential estimator (:mod:`robustgait.certificate.estimators`; defaults measured in
     ``docs/certificate.md``)."""
 
     epsilon: Annotated[Float, Doc("bound on the violating volume fraction of B(r*) to certify", gt=0.0,
@@ -100,8 +101,8 @@ class SequentialConfig:
 
 @config
 class EllipsoidConfig:
-    """How the shape S of the ellipsoid {δ : δᵀ S δ ≤ r²} is found (:mod:`robustgait.shape`): a least-squares fit
-    of the certified map's linearization A at x* on a small ball, then AᵀSA − S = −I, det S = 1."""
+    """How the shape S of the ellipsoid {δ : δᵀ S δ ≤ r²} is found (:mod:`robustgait.certificate.shape`): a
+    least-squares fit of the certified map's linearization A at x* on a small ball, then AᵀSA − S = −I, det S = 1."""
 
     fit_samples: Annotated[Int, Doc("map evaluations of the fit (uniform in the fit ball)", ge=4, le=10_000)] = 64
     fit_radius: Annotated[Float, Doc("radius of the fit ball, as a fraction of r_max", gt=0.0, le=1.0)] = 0.05
@@ -111,11 +112,11 @@ class EllipsoidConfig:
 
 @config
 class PushConfig:
-    """The push certificate J* (``disturbance = push``, :mod:`robustgait.push`): the steps after the pushed one within
-    which a fall is a failure, and the sizes of the sequential estimator's first round and exploration — smaller than
-    a state certificate's, since the failing set of a 2-D impulse disk needs less exploration (the statement does not
-    depend on it; ε, β, the budget and the rest are ``sequential``'s). Push duration and phases are the validation's
-    (``validate.push_duration``, ``validate.push_phase``)."""
+    """The push certificate J* (``disturbance = push``, :mod:`robustgait.certificate.push`): the steps after the
+    pushed one within which a fall is a failure, and the sizes of the sequential estimator's first round and
+    exploration — smaller than a state certificate's, since the failing set of a 2-D impulse disk needs less
+    exploration (the statement does not depend on it; ε, β, the budget and the rest are ``sequential``'s). Push
+    duration and phases are the validation's (``validate.push_duration``, ``validate.push_phase``)."""
 
     steps: Annotated[Int, Doc("steps after the pushed one within which a fall, or not being back near the orbit at "
                               "their end, is a failure", ge=1, le=100)] = 3

@@ -18,11 +18,11 @@ from robustgait.io.schema import read_json, table, validate
 
 @table(extra="ignore")
 class CertificateFile:
-    """What ``validate`` needs of a certificate JSON (:meth:`robustgait.certify.GaitCertificate.to_dict`; its other
-    keys are ignored): status, r*, whether the supremum is attained, z* (the centre in the certificate's coordinates),
-    the map, frame, reconstruction, the coordinates' transform T (z = T x̄; absent in certificates of the base angular
-    velocity written before states were a choice: the identity), E* and the certificate's config (its state, set,
-    horizon and fixed-point search)."""
+    """What ``validate`` needs of a certificate JSON (:meth:`robustgait.certificate.certify.GaitCertificate.to_dict`;
+    its other keys are ignored): status, r*, whether the supremum is attained, z* (the centre in the certificate's
+    coordinates), the map, frame, reconstruction, the coordinates' transform T (z = T x̄; absent in certificates of the
+    base angular velocity written before states were a choice: the identity), E* and the certificate's config (its
+    state, set, horizon and fixed-point search)."""
 
     r_star: Annotated[Float, Doc(ge=0.0)]
     attained: Bool

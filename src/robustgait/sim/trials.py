@@ -1,6 +1,6 @@
 """Disturbed walks of many trials at once, shared by the validation (:mod:`robustgait.validate`) and the push
-certificate (:mod:`robustgait.push`): every domain of every step is one batched :meth:`StepEngine.step` call on
-the trials still walking, with per-trial inputs given by a function of the :class:`Segment` being run."""
+certificate (:mod:`robustgait.certificate.push`): every domain of every step is one batched :meth:`StepEngine.step`
+call on the trials still walking, with per-trial inputs given by a function of the :class:`Segment` being run."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.certificate.recovery import OrbitBand
 from robustgait.config import PushConfig
 from robustgait.domains import other_side, step_segments
-from robustgait.recovery import OrbitBand
 from robustgait.sim.engine import StepEngine, StepInputs
 
 FloatArray = NDArray[np.float64]
@@ -115,7 +115,7 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
 def wrench_window(force: FloatArray, start: NDArray[np.int64], width: int, horizon: int) -> FloatArray:
     """Base wrench series (N, horizon, 6) [N, N m]: the horizontal world-frame force (N, 2) of push i over the
     physics steps [start_i, start_i + width) (cut at the horizon), zero elsewhere. Shared by the push map
-    (:func:`robustgait.push.push_series`) and the validation's pushes
+    (:func:`robustgait.certificate.push.push_series`) and the validation's pushes
     (:func:`robustgait.validate.disturbances.push_wrench`)."""
     out = np.zeros((force.shape[0], horizon, 6))
     for i in range(force.shape[0]):
@@ -144,7 +144,7 @@ def pushed_first_step(engine: StepEngine, wrench: FloatArray) -> Inputs:
 
 
 def orbit_band(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, push: PushConfig) -> OrbitBand | None:
-    """The neighbourhood a pushed walk must return to (:class:`robustgait.recovery.OrbitBand`), from
+    """The neighbourhood a pushed walk must return to (:class:`robustgait.certificate.recovery.OrbitBand`), from
     ``push.recovery_band_steps`` undisturbed steps from x* = (``qpos`` (nq,), ``qvel`` (nv,)), a section state of
     the gait's stance (None without ``push.recovery``)."""
     if not push.recovery:

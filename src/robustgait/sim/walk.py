@@ -17,13 +17,13 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.certificate.numerics import OrbitReport, search_report
+from robustgait.certificate.reduced import reduce_state, section_coordinates
 from robustgait.config import CertifyConfig, ComfortConfig, SimConfig
 from robustgait.config.work import MAX_GIF_FRAMES, MAX_VIDEO_PHYSICS_STEPS, Work, check_gif, check_work
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import Gait
 from robustgait.io.output import atomic_output, check_output
-from robustgait.orbit import OrbitReport, search_report
-from robustgait.reduced import reduce_state, section_coordinates
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.comfort import Comfort, ComfortRecorder, measure
@@ -109,11 +109,11 @@ def walk_orbit(robot: Robot, gait: Gait, events: list[SwitchEvent], certify: Cer
                ) -> OrbitReport:
     """Whether a walk's switching events settled on an orbit of the step map: the events written for the gait's
     stance (:func:`canonical_event_states`), the window search of the certificate's fixed point over them
-    (``certify.fp_window``, ``fp_tol``, ``fp_metric``, ``fp_min_steps``; :func:`robustgait.orbit.search_report`) —
-    no simulation. A walk that settles on no orbit of the step map is searched again as the stride map's
-    (``certify.stride_fallback``: the events of the gait's own stance, two steps apart — a robot whose left and
-    right differ); its report then has period 2. The spectral radius at the settled event:
-    :func:`robustgait.poincare.walk_stability`."""
+    (``certify.fp_window``, ``fp_tol``, ``fp_metric``, ``fp_min_steps``;
+    :func:`robustgait.certificate.numerics.search_report`) — no simulation. A walk that settles on no orbit of the step
+    map is searched again as the stride map's (``certify.stride_fallback``: the events of the gait's own stance, two
+    steps apart — a robot whose left and right differ); its report then has period 2. The spectral radius at the
+    settled event: :func:`robustgait.certificate.poincare.walk_stability`."""
     c = certify or CertifyConfig()
     qpos, qvel = canonical_event_states(robot, gait, events)
     xs = (reduce_state(qpos, qvel, c.frame) if c.fp_metric == "omega"

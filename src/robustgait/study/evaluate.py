@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
 from robustgait.config import Config, GaitParams
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from robustgait.certify import check_certify_work
+from robustgait.certificate.certify import check_certify_work
 from robustgait.config import Config, GaitParams, RunConfig, StudyConfig, radius_name
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait

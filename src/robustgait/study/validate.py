@@ -156,8 +156,8 @@ def _orbitless_start(robot: Any, gait: Any, c: CertifyConfig) -> tuple[Any, Any]
     """A start and a :class:`CertificateRef` of r* = 0 for a gait without a certified fixed point: its initial
     state as a section state (a multi-contact gait walked to its first heel strike), x̄ of that state (the
     certificate's state, identity transform) as the 'centre' (there is no set: nothing lies inside it)."""
-    from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap
-    from robustgait.reduced import ReducedState, reduce_state
+    from robustgait.certificate.poincare import FixedPoint, FixedPointFailure, ReturnMap
+    from robustgait.certificate.reduced import ReducedState, reduce_state
     from robustgait.validate.run import CertificateRef
 
     if gait.initial_state is None:

@@ -26,16 +26,16 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from robustgait.certify import GaitCertificate, certify_gait, certify_steps
+from robustgait.certificate.certify import GaitCertificate, certify_gait, certify_steps
+from robustgait.certificate.poincare import FixedPoint, ReturnMap
+from robustgait.certificate.recovery import OrbitBand
+from robustgait.certificate.reduced import ReducedState, section_dimension
 from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, PushConfig, SimConfig, ValidateConfig, to_dict
 from robustgait.config.certify import fixed_point_options
 from robustgait.config.work import Work, check_work
 from robustgait.domains import step_segments
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.poincare import FixedPoint, ReturnMap
-from robustgait.recovery import OrbitBand
-from robustgait.reduced import ReducedState, section_dimension
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import StepInputs, step_physics_steps
@@ -51,11 +51,11 @@ FloatArray = NDArray[np.float64]
 @dataclass(frozen=True)
 class CertificateRef:
     """What a validation needs of a gait's certificate: r*, whether the supremum is attained (closed set) or not
-    (open set), the centre z* = T x̄* and the transform T (z = T x̄, :class:`robustgait.reduced.Coordinates`) of its
-    coordinates, the space certified (omega, centroidal, velocity, or push: then r* is J* [N s] and the check is on
-    the pushes' impulses), the set and horizon, E* [J] for an energy state, the map, frame, reconstruction, the
-    fixed-point search options (every ``fp_*`` field: :func:`robustgait.config.certify.fixed_point_options`), and where
-    it came from ("computed" or a file path)."""
+    (open set), the centre z* = T x̄* and the transform T (z = T x̄,
+    :class:`robustgait.certificate.reduced.Coordinates`) of its coordinates, the space certified (omega, centroidal,
+    velocity, or push: then r* is J* [N s] and the check is on the pushes' impulses), the set and horizon, E* [J] for
+    an energy state, the map, frame, reconstruction, the fixed-point search options (every ``fp_*`` field:
+    :func:`robustgait.config.certify.fixed_point_options`), and where it came from ("computed" or a file path)."""
 
     r_star: float
     attained: bool

@@ -8,13 +8,13 @@ so a symmetric gait has a period-1 fixed point of the **step map** P: S → S (o
 fall in any of them a fall.
 
 The fixed point x* (:meth:`ReturnMap.find_fixed_point`, ``docs/certificate.md`` "Fixed point") is searched on full
-states in **section coordinates** (:func:`robustgait.reduced.section_coordinates`: the canonical state without the
-base's x, y and yaw, under which the map is equivariant): iterate until a window of ``fp_window`` iterates lies within
-``fp_tol``, optionally refine by damped Newton on P(x) = x, then the spectral radius ρ of the linearized map
-(:mod:`robustgait.orbit`); a gait whose orbit does not settle, settles with period two, or whose ρ ≥ ``fp_rho_max``
-has no fixed point to certify — unless the stride map, searched when the step map has no orbit (:func:`settle`,
-``stride_fallback``: a robot whose left and right differ), settles. The certificate's reduced state (Φ, ι and
-metric of ``certify.state``: :class:`robustgait.reduced.ReducedState`) is set up at x*.
+states in **section coordinates** (:func:`.reduced.section_coordinates`: the canonical state
+without the base's x, y and yaw, under which the map is equivariant): iterate until a window of ``fp_window`` iterates
+lies within ``fp_tol``, optionally refine by damped Newton on P(x) = x, then the spectral radius ρ of the linearized map
+(:mod:`.numerics`); a gait whose orbit does not settle, settles with period two, or whose ρ ≥
+``fp_rho_max`` has no fixed point to certify — unless the stride map, searched when the step map has no orbit
+(:func:`settle`, ``stride_fallback``: a robot whose left and right differ), settles. The certificate's reduced state
+(Φ, ι and metric of ``certify.state``: :class:`.reduced.ReducedState`) is set up at x*.
 Frames of the base angular velocity ω:
 
 * ``heading`` (default): ω in the world frame rotated by the base's yaw, R_z(ψ)ᵀ ω. Equals the world frame
@@ -37,12 +37,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config import CertifyConfig, Frame, MapKind, SimConfig
-from robustgait.config.certify import NEWTON_DAMPING
-from robustgait.domains import step_segments
-from robustgait.errors import RobustGaitError
-from robustgait.gait import Gait
-from robustgait.orbit import (
+from robustgait.certificate.numerics import (
     BatchMap,
     Jacobian,
     OrbitReport,
@@ -54,7 +49,12 @@ from robustgait.orbit import (
     spectral_radius,
     window_residual,
 )
-from robustgait.reduced import ReducedState, reduce_state, section_coordinates, section_state
+from robustgait.certificate.reduced import ReducedState, reduce_state, section_coordinates, section_state
+from robustgait.config import CertifyConfig, Frame, MapKind, SimConfig
+from robustgait.config.certify import NEWTON_DAMPING
+from robustgait.domains import step_segments
+from robustgait.errors import RobustGaitError
+from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.sim.factory import make_engine
 from robustgait.sim.walk import SwitchEvent, WalkResult, canonical_event_states
@@ -127,8 +127,9 @@ def settle(robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig | Non
 class FixedPointFailure(RobustGaitError):
     """The fixed-point search failed — a property of the gait, not bad input: ``status`` is
     ``fell_before_fixed_point``, ``no_stable_orbit``, ``period_two_orbit`` or ``unstable_orbit``; ``steps`` the steps
-    walked (completed) before it ended; ``orbit`` what the search saw (:class:`robustgait.orbit.OrbitReport`, None if
-    the gait fell before its first iterate); ``fixed_point`` the x* refused (``unstable_orbit``)."""
+    walked (completed) before it ended; ``orbit`` what the search saw
+    (:class:`.numerics.OrbitReport`, None if the gait fell before its first iterate);
+    ``fixed_point`` the x* refused (``unstable_orbit``)."""
 
     def __init__(self, status: str, steps: int, message: str, orbit: OrbitReport | None = None,
                  fixed_point: FixedPoint | None = None):
@@ -144,7 +145,7 @@ class FixedPoint:
     """x* of the chosen map: its full canonical state (qpos, qvel), its base angular velocity ω* (3,) in the search's
     frame, its residual (‖P(x*) − x*‖ in section coordinates when the search computed it — with Newton or ρ —, else the
     window residual of ``fp_metric``), the steps walked until the orbit settled, the successive residuals of the
-    iterates, and the search's :class:`~robustgait.orbit.OrbitReport` (None for a start that is not a search's)."""
+    iterates, and the search's :class:`~.numerics.OrbitReport` (None for a start that is not a search's)."""
 
     qpos: FloatArray
     qvel: FloatArray
@@ -207,7 +208,7 @@ class ReturnMap:
     def find_fixed_point(self, progress: Callable[[int, float], None] | None = None) -> FixedPoint:
         """Iterate the map on full states from the gait's initial state until its orbit settles — the first iterate
         x_k after ``fp_min_steps`` steps whose window of ``fp_window`` iterates all lie within ``fp_tol`` of it
-        (:func:`robustgait.orbit.window_residual` in ``fp_metric``) —, refine x* by damped Newton on P(x) = x in
+        (:func:`.numerics.window_residual` in ``fp_metric``) —, refine x* by damped Newton on P(x) = x in
         section coordinates (``fp_newton_iterations``; x* stays x_k unless Newton converges), then take the spectral
         radius ρ of the linearized map at x* (:meth:`stability`) unless ``fp_rho_max`` is not set.
 
@@ -309,7 +310,7 @@ class ReturnMap:
 
     def stability(self, x: FloatArray, reference: FloatArray, jacobian: Jacobian | None = None) -> Stability:
         """The linearized map at x (section coordinates, states rebuilt with ``reference``'s x, y and yaw): J by
-        finite differences (``jacobian`` if given, else ONE batch of 2d + 1 states, :func:`robustgait.orbit.fd_jacobian`
+        finite differences (``jacobian`` if given, else ONE batch of 2d + 1 states, :func:`.numerics.fd_jacobian`
         with ``fp_fd_step``, ``fp_fd_jump``), then, for impact switching, Π J with the touchdown found in continuous
         time (:meth:`touchdown_projection`): ρ and the eigenvalue moduli of Π J, and ρ of J (touchdown at a fixed
         physics step). Raises :class:`RobustGaitError` if the map falls on both sides of a coordinate."""
@@ -322,7 +323,7 @@ class ReturnMap:
                          len(j.one_sided))
 
     def touchdown_projection(self, x: FloatArray, reference: FloatArray) -> FloatArray | None:
-        """Π (d, d) of :func:`robustgait.orbit.flow_projection` at the image of x (section coordinates): the flow f
+        """Π (d, d) of :func:`.numerics.flow_projection` at the image of x (section coordinates): the flow f
         there by a backward difference over the last physics step, (x_S(end) − x_S(one step before)) / Δt, and the
         gradient of the guard — the signed distance of the landing sole (the gait's stance sole in canonical
         coordinates) to the floor, ``mj_geomDistance`` — by central differences in the position coordinates. None for
@@ -444,7 +445,7 @@ class ReturnMap:
 
     def reconstruct(self, xbar: FloatArray) -> tuple[FloatArray, FloatArray]:
         """ι(x̄): full canonical states (N, nq), (N, nv) from reduced states (N, n)
-        (:meth:`robustgait.reduced.ReducedState.iota`)."""
+        (:meth:`.reduced.ReducedState.iota`)."""
         return self.reduced.iota(np.atleast_2d(np.asarray(xbar, dtype=float)))
 
     def __call__(self, xbar: FloatArray, progress: Callable[[int], None] | None = None) -> FloatArray:

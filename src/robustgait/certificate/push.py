@@ -5,12 +5,12 @@ A sample is a horizontal impulse J = (J_x, J_y) [N s] in the heading frame of th
 its periodic orbit at x* (canonical stance), is pushed at its base's centre of mass with the force J / duration for
 the validation's ``push_duration``, starting at a phase φ of the step in the validation's ``push_phase`` range (as
 ``robustgait validate --disturbance push``), and walks on for ``push.steps`` steps. A push *fails* when the robot
-falls within those steps or, at their end, is not back in its orbit's neighbourhood (:mod:`robustgait.recovery`:
-the base's Froude-scaled velocity within ``push.recovery_radius`` of x*'s, or within a multiple of the undisturbed
-orbit's own scatter). The map returns the fixed point (0, 0) when the push did not fail and NaN when it failed, so the
-DTBF condition of :mod:`robustgait.barrier` reads "no failure" and the largest certified ball is J*: with confidence
-1 − β at most ε of the pushes uniform in the disk |J| ≤ J* (the estimators' statement) make the robot fall or leave
-it off its orbit after those steps.
+falls within those steps or, at their end, is not back in its orbit's neighbourhood
+(:mod:`.recovery`: the base's Froude-scaled velocity within ``push.recovery_radius`` of x*'s, or
+within a multiple of the undisturbed orbit's own scatter). The map returns the fixed point (0, 0) when the push did not
+fail and NaN when it failed, so the DTBF condition of :mod:`.barrier` reads "no failure" and the
+largest certified ball is J*: with confidence 1 − β at most ε of the pushes uniform in the disk |J| ≤ J* (the
+estimators' statement) make the robot fall or leave it off its orbit after those steps.
 
 The phase is a function of the sample (:func:`push_phase`: a hash of J's bytes mapped into the phase range), so the
 map is deterministic — the estimators' assumption — while over the disk the phases are uniform, and the pushes of
@@ -26,8 +26,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.certificate.poincare import FixedPoint
 from robustgait.config import PushConfig, ValidateConfig
-from robustgait.poincare import FixedPoint
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import StepEngine
 from robustgait.sim.trials import orbit_band, pushed_first_step, simulate_trials, wrench_window

@@ -1,7 +1,8 @@
-"""Certify a gait: fixed point of its return map (:mod:`robustgait.poincare`) → its reduced state
-(:mod:`robustgait.reduced`) → the certified set's coordinates (:mod:`robustgait.shape`) → sampled images → r* and a
-confidence statement (:mod:`robustgait.estimators`, :mod:`robustgait.barrier`); or, for ``disturbance = push``,
-sampled pushes → J* (:mod:`robustgait.push`). ``docs/certificate.md``; ``robustgait certify`` calls this.
+"""Certify a gait: fixed point of its return map (:mod:`.poincare`) → its reduced state
+(:mod:`.reduced`) → the certified set's coordinates (:mod:`.shape`) →
+sampled images → r* and a confidence statement (:mod:`.estimators`,
+:mod:`.barrier`); or, for ``disturbance = push``, sampled pushes → J*
+(:mod:`.push`). ``docs/certificate.md``; ``robustgait certify`` calls this.
 
 A gait that falls before reaching a fixed point, has none, or falls from its own fixed point is a result,
 not an error: the certificate has a ``status`` other than ``ok`` and r* = 0 (in a study it is a data point).
@@ -18,17 +19,17 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from robustgait.barrier import Certificate, certify_map, evaluate_map, sample_ball
+from robustgait.certificate.barrier import Certificate, certify_map, evaluate_map, sample_ball
+from robustgait.certificate.estimators import certify_map_sequential
+from robustgait.certificate.numerics import OrbitReport
+from robustgait.certificate.poincare import FixedPoint, FixedPointFailure, ReturnMap, settle
+from robustgait.certificate.push import PushMap
+from robustgait.certificate.reduced import Coordinates, section_dimension
+from robustgait.certificate.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, to_dict
 from robustgait.config.work import Work, check_work
-from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
-from robustgait.orbit import OrbitReport
-from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap, settle
-from robustgait.push import PushMap
-from robustgait.reduced import Coordinates, section_dimension
 from robustgait.robots import Robot
-from robustgait.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
 from robustgait.sim.engine import step_physics_steps
 
 STATUSES = ("ok", "fell_before_fixed_point", "no_stable_orbit", "period_two_orbit", "unstable_orbit",
@@ -45,7 +46,7 @@ class GaitCertificate:
     ``unstable_orbit`` (the orbit settled, but the linearized map at x* has spectral radius ρ ≥ ``fp_rho_max``);
     ``unstable_fixed_point`` (the reduced map falls from x̄* itself within the horizon: through the reconstruction x̄*
     is not on a walking orbit). reason: one line (empty if ok). steps_walked: steps of the fixed-point search
-    (completed before a fall). orbit: what the fixed-point search saw (:class:`robustgait.orbit.OrbitReport`: the
+    (completed before a fall). orbit: what the fixed-point search saw (:class:`.numerics.OrbitReport`: the
     window, ρ and the eigenvalue moduli, Newton's residuals; None if the gait fell before its first iterate).
     certificate (the barrier :class:`Certificate` in the certificate's coordinates: r*, samples, images, margins,
     rounds, statement), coordinates (z = T x̄ of the reduced state, the shape of the set; :class:`Coordinates`),
@@ -255,7 +256,7 @@ def _in_coordinates(pmap: ReturnMap, coords: Coordinates, paths: _Paths | None =
 def fit_shape(pmap: ReturnMap, ball: Coordinates, cfg: CertifyConfig) -> Shape:
     """The ellipsoid's shape S in the state's metric coordinates: P^k on ``ellipsoid.fit_samples`` samples uniform in
     the ball of radius ``fit_radius`` × r_max (seed stream ``[seed, 3]``: common random numbers), a least-squares
-    linearization and its Lyapunov ellipsoid (:func:`robustgait.shape.shape_from_fit`)."""
+    linearization and its Lyapunov ellipsoid (:func:`.shape.shape_from_fit`)."""
     e = cfg.ellipsoid
     rng = np.random.default_rng([cfg.seed, 3])
     z0 = sample_ball(e.fit_samples, ball.dim, e.fit_radius * cfg.radius, ball.x_star, rng)
@@ -271,8 +272,8 @@ def fit_shape(pmap: ReturnMap, ball: Coordinates, cfg: CertifyConfig) -> Shape:
 def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
                  validate: ValidateConfig | None = None, progress: bool = False) -> GaitCertificate:
     """Find x* by iterating the map, then certify the set of ``config`` around it with the configured estimator
-    (``uniform``: :func:`robustgait.barrier.certify_map`; ``sequential``:
-    :func:`robustgait.estimators.certify_map_sequential`), in the state, set and horizon of the config; or, with
+    (``uniform``: :func:`.barrier.certify_map`; ``sequential``:
+    :func:`.estimators.certify_map_sequential`), in the state, set and horizon of the config; or, with
     ``disturbance = push``, the impulse disk J* (pushes as ``validate``'s: duration and phases of ``validate``).
 
     With ``ellipsoid.compare_ball`` an ellipsoid's certificate also certifies the ball of the same state (its r* and

@@ -36,10 +36,10 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.certificate.shape import Shape
 from robustgait.config import CertifyConfig, Frame, Reconstruction
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
-from robustgait.shape import Shape
 
 StateName = Literal["omega", "centroidal", "velocity"]
 FloatArray = NDArray[np.float64]
@@ -361,7 +361,7 @@ def metric_factor(metric: FloatArray) -> FloatArray:
 class Coordinates:
     """The coordinates a certificate is computed in: z = T x̄ of the reduced state x̄ = Φ(x), T = Cᵀ Lᵀ, where Lᵀ makes
     the state's metric Euclidean (:func:`metric_factor`) and Cᵀ the certified set's shape a ball
-    (:class:`robustgait.shape.Shape`; C = I for the ball). The certified set B(z*, r*) is then
+    (:class:`.shape.Shape`; C = I for the ball). The certified set B(z*, r*) is then
     {x̄ : (x̄ − x̄*)ᵀ Tᵀ T (x̄ − x̄*) ≤ r*²}.
 
     ``space``: omega, centroidal, velocity, or push (impulses, T = I); ``unit`` of z and r*; ``energy``: ‖z − z*‖²

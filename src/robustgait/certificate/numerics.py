@@ -1,11 +1,12 @@
 """Periodic orbits of a batched map F: (N, d) → (N, d) (NaN rows: the sample fell), whatever the map is: whether its
 iterates have settled (a window of them within a tolerance; a period-two orbit), its finite-difference Jacobian (ONE
 call of F on 2d + 1 states), the spectral radius ρ of a linearization, and damped Newton on F(x) = x
-(``docs/certificate.md``, "Fixed point"; :mod:`robustgait.poincare` gives the return map in section coordinates).
+(``docs/certificate.md``, "Fixed point"; :mod:`.poincare` gives the return map in section
+coordinates).
 
 F need only be piecewise smooth: the simulated step map jumps where a touchdown or a contact crosses a physics step,
 so the Jacobian takes a column one-sided, from the side without a jump, when its forward and backward differences
-disagree (:func:`fd_jacobian`). Maps with known answers: :mod:`robustgait.synthetic`.
+disagree (:func:`fd_jacobian`). Maps with known answers: :mod:`.synthetic`.
 """
 
 from __future__ import annotations
