@@ -210,11 +210,12 @@ def test_atalante_generated_gait_walks(tmp_path, capsys):
 
 @pytest.mark.slow
 @needs_atalante
-def test_atalante_multicontact_gait_walks_and_is_certified():
+def test_atalante_multicontact_gait_walks_and_is_refused_as_unstable():
     """Atalante rolls heel-to-toe only with its swing sole free to leave toe-off toe-down
     (gait_quality.swing_toe_down_until = 0.5 in examples/atalante.toml): then the T = 1.0 s gait walks 50 steps,
-    striking at the planned time, at L/T. Its orbit settles but is marginally unstable (ρ 1.05: docs/gaitgen.md), so
-    the shipped search refuses it and a bound of 1.1 certifies it."""
+    striking at the planned time, at L/T, and 300 steps undisturbed in a band it holds (σ 0.017). Its orbit is
+    marginally unstable (a finite-difference ρ of 1.05 at x*, docs/gaitgen.md): one of the orbit search's eight probing
+    pushes of 4 N s (to the right) fells it, and the certificate refuses it as unstable, with that reason."""
     robot = load_robot(ATALANTE_SPEC)
     assert robot.spec.gait_quality.swing_toe_down_until == 0.5
     res = GaitGenerator(robot, GenerationConfig(domains="multicontact")).solve(GaitParams(step_duration=1.0))
@@ -224,10 +225,10 @@ def test_atalante_multicontact_gait_walks_and_is_certified():
     assert all(abs(e.tau - 1.0) < 0.02 for e in w.events)  # no early heel strike
     assert w.mean_speed == pytest.approx(0.15 / 1.0, rel=0.05)
     cfg = CertifyConfig(method="uniform", disturbance="state", n_samples=24, r_max=1.0, seed=3)
-    refused = certify_gait(robot, res.gait, cfg)
-    assert refused.status == "unstable_orbit" and 1.0 <= refused.orbit.rho < 1.1, refused.reason
-    cert = certify_gait(robot, res.gait, dataclasses.replace(cfg, fp_rho_max=1.1))
-    assert cert.ok, cert.reason
+    cert = certify_gait(robot, res.gait, cfg)
+    assert cert.status == "unstable" and "did not come back to its band" in cert.reason and "fell" in cert.reason
+    probe = cert.orbit.probe
+    assert probe is not None and sum(probe.fell) >= 1 and probe.impulse < 5.0
 
 
 @pytest.mark.slow

@@ -9,7 +9,6 @@ from scipy import stats
 
 from robustgait import CertifyConfig
 from robustgait.certificate.barrier import sample_ball
-from robustgait.certificate.poincare import ReturnMap
 from robustgait.certificate.reduced import (
     Coordinates,
     ReducedState,
@@ -20,6 +19,7 @@ from robustgait.certificate.reduced import (
     reduce_state,
     stance_jacobian,
 )
+from robustgait.certificate.search import find_orbit
 from robustgait.certificate.shape import Shape
 from robustgait.rotations import quat_to_mat
 
@@ -64,8 +64,7 @@ def test_reduced_state_of_mirror_is_reflected(robot_gait):
 
 @pytest.fixture(scope="module")
 def fixed_point(exo, exo_gait):
-    with ReturnMap(exo, exo_gait) as pmap:
-        return pmap.find_fixed_point()
+    return find_orbit(exo, exo_gait).fixed_point("heading")
 
 
 def _state(name, exo, exo_gait, fp, **kw):

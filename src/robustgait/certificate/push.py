@@ -1,16 +1,16 @@
 """The push map of a certificate in the disturbance's own units (``certify --disturbance push``,
 ``docs/certificate.md``, "J*").
 
-A sample is a horizontal impulse J = (J_x, J_y) [N s] in the heading frame of the fixed point x*. The robot starts on
-its periodic orbit at x* (canonical stance), is pushed at its base's centre of mass with the force J / duration for
-the validation's ``push_duration``, starting at a phase φ of the step in the validation's ``push_phase`` range (as
-``robustgait validate --disturbance push``), and walks on for ``push.steps`` steps. A push *fails* when the robot
-falls within those steps or, at their end, is not back in its orbit's neighbourhood
-(:mod:`.recovery`: the base's Froude-scaled velocity within ``push.recovery_radius`` of x*'s, or
-within a multiple of the undisturbed orbit's own scatter). The map returns the fixed point (0, 0) when the push did not
-fail and NaN when it failed, so the DTBF condition of :mod:`.barrier` reads "no failure" and the
-largest certified ball is J*: with confidence 1 − β at most ε of the pushes uniform in the disk |J| ≤ J* (the
-estimators' statement) make the robot fall or leave it off its orbit after those steps.
+A sample is a horizontal impulse J = (J_x, J_y) [N s] in the heading frame of x*. The robot starts on its orbit at x*
+(a switching state the undisturbed walk reached, :mod:`.orbit`), is pushed at its base's centre of mass with the force
+J / duration for the validation's ``push_duration``, starting at a phase φ of the step in the validation's
+``push_phase`` range (as ``robustgait validate --disturbance push``), and walks on. A push **fails** when the robot
+falls within the pushed step and ``push.horizon`` more, or is not back in its orbit's band (:class:`.band.Band`: every
+coordinate of the section state near x*'s) for ``push.recovery_steps`` consecutive steps by then. A pushed walk stops
+as soon as it has recovered, so a push costs the steps it needs. The map returns (0, 0) when the push did not fail
+and NaN when it failed, so the DTBF condition of :mod:`.barrier` reads "no failure" and the largest certified ball is
+J*: with confidence 1 − β at most ε of the pushes uniform in the disk |J| ≤ J* (the estimators' statement) make the
+robot fall or leave it off its band within the horizon.
 
 The phase is a function of the sample (:func:`push_phase`: a hash of J's bytes mapped into the phase range), so the
 map is deterministic — the estimators' assumption — while over the disk the phases are uniform, and the pushes of
@@ -26,13 +26,16 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.certificate.poincare import FixedPoint
+from robustgait.certificate.band import Band, band_coordinates
 from robustgait.config import PushConfig, ValidateConfig
+from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import StepEngine
-from robustgait.sim.trials import orbit_band, pushed_first_step, simulate_trials, wrench_window
+from robustgait.sim.trials import Stop, pushed_first_step, simulate_trials, wrench_window
 
 FloatArray = NDArray[np.float64]
+
+NOT_RECOVERED = "not_recovered"  # the reason of a push that did not fall but was not back in the band in time
 
 
 def push_phase(impulse: FloatArray, low: float, high: float) -> FloatArray:
@@ -54,65 +57,101 @@ def push_series(impulse: FloatArray, phase: FloatArray, heading: float, duration
     return wrench_window(world / (width * dt), np.round(phase * period / dt).astype(int), width, horizon)
 
 
-NOT_RECOVERED = "not_recovered"  # the reason of a push that did not fall but ended off its orbit
+def recovery_stop(band: Band, robot: Robot, steps: int, recovered: NDArray[np.int64],
+                  farthest: FloatArray | None = None) -> Stop:
+    """The stop rule of recovering walks (:func:`robustgait.sim.trials.simulate_trials`): a trial is done once its
+    section state has been in ``band`` (the phase of the state after j steps from x* is j mod k) for ``steps``
+    consecutive steps; ``recovered`` (K,) gets the step it was done at (1-based, counted from the pushed step), and
+    ``farthest`` (K,), if given, the largest band distance (:meth:`.band.Band.distance`) of its states until then."""
+    run = np.zeros(recovered.shape[0], dtype=np.int64)
+    nq = robot.model.nq
+
+    def stop(k: int, idx: NDArray[np.int64], states: FloatArray) -> NDArray[np.bool_]:
+        z = band_coordinates(robot, states[:, :nq], states[:, nq:])
+        distance = band.distance(z, k + 1)
+        if farthest is not None:
+            farthest[idx] = np.fmax(farthest[idx], distance)
+        with np.errstate(invalid="ignore"):
+            inside = distance <= 1.0
+        run[idx] = np.where(inside, run[idx] + 1, 0)
+        done = run[idx] >= steps
+        recovered[idx[done]] = k + 1
+        return np.asarray(done)
+    return stop
+
+
+def recovered_steps(band: Band, robot: Robot, sections: FloatArray, steps: int) -> NDArray[np.int64]:
+    """The step (1-based) at which each walk had been in ``band`` for ``steps`` consecutive steps, 0 if it never was,
+    from its section states after every step (K, H, nq + nv) from x* (canonical; NaN after a fall): the rule of
+    :func:`recovery_stop` on recorded walks (``validate``)."""
+    k, h, _ = sections.shape
+    recovered = np.zeros(k, dtype=np.int64)
+    stop = recovery_stop(band, robot, steps, recovered)
+    live = np.ones(k, dtype=bool)
+    for j in range(h):
+        idx = np.flatnonzero(live & np.isfinite(sections[:, j]).all(axis=1))
+        if idx.size:
+            live[idx[stop(j, idx, sections[idx, j])]] = False
+    return recovered
 
 
 class PushMap:
-    """J (N, 2) → (N, 2): (0, 0) if the push did not fail — the robot did not fall within the pushed step and
-    ``push.steps`` more and is back in its orbit's neighbourhood at their end — NaN if it failed (module docstring).
-    ``engine``: the gait's engine; ``fp``: its fixed point (a section state that starts a step of the gait's stance).
-    The walk is the validation's (:func:`robustgait.sim.trials.simulate_trials`): a multi-contact step is the previous
-    leg's rolling double support then the single support, and the push's window spans the whole step, as
-    ``validate --disturbance push``'s."""
+    """J (N, 2) → (N, 2): (0, 0) if the push did not fail, NaN if it failed (module docstring). ``engine``: the gait's
+    engine; ``qpos``, ``qvel``: x* (a section state that starts a step of the gait's stance), ``band``: its orbit's
+    band (None: a fall is the only failure, ``push.recovery`` false). The walk is the validation's
+    (:func:`robustgait.sim.trials.simulate_trials`): a multi-contact step is the previous leg's rolling double support
+    then the single support, and the push's window spans the whole step, as ``validate --disturbance push``'s."""
 
-    def __init__(self, engine: StepEngine, fp: FixedPoint, validate: ValidateConfig, push: PushConfig):
-        self.engine, self.fp, self.steps = engine, fp, push.steps
+    def __init__(self, engine: StepEngine, qpos: FloatArray, qvel: FloatArray, band: Band | None,
+                 validate: ValidateConfig, push: PushConfig):
+        self.engine, self.qpos, self.qvel = engine, qpos, qvel
+        self.band = band if push.recovery else None
+        self.horizon, self.recovery_steps = push.horizon, push.recovery_steps
         self.validate = validate
-        r = quat_to_mat(fp.qpos[3:7])
+        r = quat_to_mat(qpos[3:7])
         self.heading = float(math.atan2(r[1, 0], r[0, 0]))
         self.step_duration = next(iter(engine.gaits.values())).step_duration
         self.window = sum(engine.horizons)  # a step runs each domain once (robustgait.domains.step_segments)
         self.physics_steps = 0
-        self.band = orbit_band(engine, fp.qpos, fp.qvel, push)
-        self.physics_steps = 0  # the band's undisturbed steps are the fixed point's, not the samples'
         self.fall_step: list[NDArray[np.int64]] = []  # per call: the 1-based step each sample fell in (0: none)
-        self.distance: list[FloatArray] = []  # per call: each sample's distance from the orbit at the end (NaN: fell)
+        self.recovered: list[NDArray[np.int64]] = []  # per call: the step each sample was recovered at (0: not)
+        self.farthest: FloatArray | None = None  # the last walk's largest band distance per sample (with a band)
 
     def walk(self, impulse: FloatArray, phase: FloatArray) -> tuple[NDArray[np.bool_], list[str | None],
-                                                                   NDArray[np.int64], FloatArray]:
+                                                                   NDArray[np.int64], NDArray[np.int64]]:
         """Push the robot with impulses J (N, 2) [N s, heading frame] starting at the phases φ (N,) of the step and
-        walk ``steps`` more: whether each push did not fail, its failure reason (a fall reason, or
-        :data:`NOT_RECOVERED`), the 1-based step it fell in (0: none) and its scaled distance from the orbit at the
-        end (:meth:`OrbitBand.distance`; NaN if it fell, 0 without a band). The map (:meth:`__call__`) is this walk
-        at the phases of :func:`push_phase`; an explicit φ maps a gait's failing set over direction and phase
+        walk until each push recovered, fell, or the horizon: whether each push did not fail, its failure reason (a
+        fall reason, or :data:`NOT_RECOVERED`), the 1-based step it fell in (0: none) and the step it was back in the
+        band for ``recovery_steps`` steps (0: it was not; without a band, 0). The map (:meth:`__call__`) is this walk at
+        the phases of :func:`push_phase`; an explicit φ maps a gait's failing set over direction and phase
         (``benchmarks/bench_certify.py push-sweep``)."""
         j = np.atleast_2d(np.asarray(impulse, dtype=float))
         n = j.shape[0]
         eng, cfg = self.engine, self.validate
         wrench = push_series(j, np.asarray(phase, dtype=float), self.heading, cfg.push_duration, self.step_duration,
                              eng.robot.dt, self.window)
-        qpos, qvel = np.tile(self.fp.qpos, (n, 1)), np.tile(self.fp.qvel, (n, 1))
-        n_steps = 1 + self.steps
-        alive, reasons, fall_step, last, physics = simulate_trials(eng, qpos, qvel, n_steps, n_steps,
-                                                                   pushed_first_step(eng, wrench), first_at=0)
+        recovered = np.zeros(n, dtype=np.int64)
+        self.farthest = np.zeros(n)
+        stop = (recovery_stop(self.band, eng.robot, self.recovery_steps, recovered, self.farthest)
+                if self.band is not None else None)
+        n_steps = 1 + self.horizon
+        alive, reasons, fall_step, _, physics = simulate_trials(
+            eng, np.tile(self.qpos, (n, 1)), np.tile(self.qvel, (n, 1)), n_steps, n_steps,
+            pushed_first_step(eng, wrench), first_at=0, stop=stop)
         self.physics_steps += physics
-        distance = np.full(n, np.nan)
-        distance[alive] = 0.0
-        if self.band is not None and alive.any():
-            nq = eng.nq
-            distance[alive] = self.band.distance(last[alive, :nq], last[alive, nq:])
-            off = alive & (distance > self.band.radius)
+        if self.band is not None:
+            off = alive & (recovered == 0)
             alive = alive & ~off
             reasons = [NOT_RECOVERED if o else r for o, r in zip(off, reasons, strict=True)]
-        return alive, reasons, fall_step, distance
+        return alive, reasons, fall_step, recovered
 
     def __call__(self, impulse: FloatArray, progress: Callable[[int], None] | None = None) -> FloatArray:
         j = np.atleast_2d(np.asarray(impulse, dtype=float))
-        ok, _, fall_step, distance = self.walk(j, push_phase(j, *self.validate.push_phase))
+        ok, _, fall_step, recovered = self.walk(j, push_phase(j, *self.validate.push_phase))
         if progress is not None:
             progress(j.shape[0])
         self.fall_step.append(fall_step)
-        self.distance.append(distance)
+        self.recovered.append(recovered)
         out = np.zeros((j.shape[0], 2))
         out[~ok] = np.nan
         return out

@@ -13,14 +13,17 @@ either barrier). Only the volume fraction of the violating set in a ball matters
   direction and on its hashed phase (:func:`.push.push_phase`): the push certificate's J* (true
   J* and violating fraction of every disk known by quadrature).
 * :class:`DivergingPush` — pushes that walk a few steps and fall later beyond a known critical impulse: the push
-  certificate's recovery criterion (:mod:`.recovery`).
+  certificate's recovery criterion (:mod:`.push`).
 
-Maps with known orbits, for the fixed point's orbit check (:mod:`.numerics`):
+Maps with known orbits, for the orbit search (:func:`.orbit.map_orbit`) and the linearization (:mod:`.numerics`):
 
 * :class:`LinearMap` — x* + A (x − x*) with a chosen spectrum (ρ known), optionally with a staircase of jumps along
   its first coordinate (piecewise smooth, as the simulated map is where a touchdown crosses a physics step).
 * :class:`QuadraticMap` — the logistic map on one coordinate, contracting on the others: converging (r < 3),
-  period two (3 < r < 1 + √6) or chaotic, wandering past an unstable x* (r = 3.9).
+  period two (3 < r < 1 + √6), period four (1 + √6 < r < 3.544) or chaotic, wandering past an unstable x* (r = 3.9).
+* :class:`NoisyMap` — another map plus bounded uniform noise: a noisy attractor, a band rather than a point (a
+  contraction: accepted, with its scatter; an expansion: its band keeps growing).
+* :class:`DriftMap` — a slow drift: one coordinate advances by a constant each map, the others follow it.
 """
 
 from __future__ import annotations
@@ -250,6 +253,39 @@ class QuadraticMap:
         x = np.atleast_2d(np.asarray(x, dtype=np.float64))
         out = self.gain * x
         out[:, 0] = self.r * x[:, 0] * (1.0 - x[:, 0])
+        return np.asarray(out, dtype=np.float64)
+
+
+class NoisyMap:
+    """F(x) + η, η uniform in [−``amplitude``, ``amplitude``]^d, drawn from a generator seeded with ``seed`` (the
+    noise of successive calls differs; a map with known answers: F's attractor widened by at most
+    amplitude / (1 − gain) for a contraction of gain < 1)."""
+
+    def __init__(self, inner: Callable[[FloatArray], FloatArray], amplitude: float, seed: int = 0):
+        if amplitude < 0.0:
+            raise RobustGaitError(f"amplitude must be ≥ 0, got {amplitude!r}")
+        self.inner, self.amplitude = inner, amplitude
+        self.rng = np.random.default_rng(seed)
+
+    def __call__(self, x: ArrayLike) -> FloatArray:
+        out = np.asarray(self.inner(np.atleast_2d(np.asarray(x, dtype=np.float64))), dtype=np.float64)
+        return np.asarray(out + self.rng.uniform(-self.amplitude, self.amplitude, out.shape))
+
+
+@dataclass(frozen=True)
+class DriftMap:
+    """x_0 ↦ x_0 + ``velocity``, x_i ↦ x_0 + ``gain`` (x_i − x_0) for i ≥ 1, on (N, ``dim``): every coordinate
+    settles onto the first, which moves by a constant each map — no orbit, a walk whose band keeps moving (it turns
+    or drifts slowly)."""
+
+    velocity: float
+    gain: float = 0.5
+    dim: int = 3
+
+    def __call__(self, x: ArrayLike) -> FloatArray:
+        x = np.atleast_2d(np.asarray(x, dtype=np.float64))
+        out = x[:, :1] + self.gain * (x - x[:, :1])
+        out[:, 0] = x[:, 0] + self.velocity
         return np.asarray(out, dtype=np.float64)
 
 

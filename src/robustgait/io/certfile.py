@@ -49,14 +49,13 @@ class CertificateFile:
 
     def certify_config(self, src: str | Path) -> CertifyConfig:
         """The certificate's own options (a certificate of an older version: the fields it has; one written before
-        states were a choice certified the base angular velocity in a ball, one step; one written before the orbit
-        check found its fixed point by the rule of that time, :data:`~robustgait.config.certify.LEGACY_FIXED_POINT`)."""
+        states were a choice certified the base angular velocity in a ball, one step; the fields of a fixed-point search
+        that the orbit search replaced are dropped, :func:`~robustgait.config.certify.without_retired`)."""
         from robustgait.config import STATE_CHOICE_DEFAULTS, from_dict
-        from robustgait.config.certify import LEGACY_FIXED_POINT
+        from robustgait.config.certify import without_retired
 
-        keep = {k: v for k, v in self.config.items() if k in {f.name for f in dataclasses.fields(CertifyConfig)}}
-        if "fp_window" not in keep:
-            keep.update(LEGACY_FIXED_POINT)
+        fields = {f.name for f in dataclasses.fields(CertifyConfig)}
+        keep = {k: v for k, v in without_retired(self.config).items() if k in fields}
         for k, v in {**STATE_CHOICE_DEFAULTS, "disturbance": "state"}.items():
             keep.setdefault(k, v)
         keep.update({"map": self.map, "frame": self.frame, "reconstruction": self.reconstruction})
