@@ -110,3 +110,34 @@ def test_a_robot_whose_sides_differ_walks_a_stride_map_orbit(t1):
     o = find_orbit(t1, gen.gait)
     assert o.ok and o.period in (2, 4) and o.sides_differ, o.describe()
     del load_gait
+
+
+@pytest.mark.slow  # a certificate of the AMBER lab's gait: ~15 s
+def test_the_atalante_frost_gait_is_certified(atalante, atalante_gait):
+    """The paper's own gait walks 300 of 300 steps in a band of ~0.006; a finite-difference ρ of 1.2 (1.21, 2.78 or 1.68
+    at three steps) refused it. It settles, holds, comes back from the probe: certified, J* > 0."""
+    from robustgait.certificate.certify import certify_gait
+
+    gc = certify_gait(atalante, atalante_gait)
+    assert gc.ok, gc.reason
+    assert gc.orbit is not None and gc.orbit.period == 1 and gc.orbit.sigma < 0.02 and gc.r_star > 1.0
+    assert gc.orbit.probe is not None and gc.orbit.probe.ok
+
+
+@pytest.mark.slow  # a walk of 245 steps and the search's 63
+def test_a_gait_that_falls_after_245_steps_is_refused(exo, exo_gait):
+    """exo's stored gait on a 3.5° slope 6° off downhill: it turns away from downhill ever faster and falls at step
+    245, undisturbed. Its switching states look settled for dozens of steps; the band's hold sees them move: refused
+    (unsettled), long before the fall."""
+    from robustgait import load_robot
+    from robustgait.certificate.certify import certify_gait
+
+    robot = load_robot("exo")  # a model of its own: gravity tilted
+    slope, azimuth = np.radians(3.5), np.radians(6.0)
+    robot.model.opt.gravity[:] = 9.81 * np.array([np.sin(slope) * np.cos(azimuth), np.sin(slope) * np.sin(azimuth),
+                                                  -np.cos(slope)])
+    res = walk(robot, exo_gait, SimConfig(step_cap=300))
+    assert res.fell and res.steps_taken == 245
+    gc = certify_gait(robot, exo_gait)
+    assert gc.status == Status.UNSETTLED and "then left that band" in gc.reason and gc.r_star == 0
+    assert gc.steps_walked < 100

@@ -568,3 +568,25 @@ def test_ray_worker_killed_mid_task_is_retried(tmp_path, reference_study):
     st = study_status(d)
     assert st["state"] == "complete" and st["trials_done"] == 6
     assert comparable(d) == comparable(reference_study)
+
+
+def test_the_progress_bar_and_status_say_a_refused_gait_is_refused():
+    """A gait that walked the cap without a certificate is 'refused' with its status, not a zero; study status counts
+    every outcome."""
+    from robustgait.study.run import outcome_line
+    from robustgait.study.status import outcome_counts
+    from robustgait.study.storage import TrialRecord
+
+    results = [{"status": "certified", "r_star": 21.5, "steps_taken": 50},
+               {"status": "not_certified", "r_star": 0.0, "steps_taken": 50,
+                "reason": "unsettled: its band keeps moving …"},
+               {"status": "not_certified", "r_star": 0.0, "steps_taken": 50, "reason": "unstable: the walk settled …"},
+               {"status": "fell", "r_star": 0.0, "steps_taken": 12},
+               {"status": "generation_failed", "r_star": 0.0, "steps_taken": 0}]
+    lines = [outcome_line(r, "J*") for r in results]
+    assert lines == ["J* 21.500, steps 50", "refused (unsettled), steps 50", "refused (unstable), steps 50",
+                     "fell in step 13", "generation failed"]
+    records = [TrialRecord(i, "COMPLETE", 0, i, i, {}, None, r, None, None, {}) for i, r in enumerate(results)]
+    records.append(TrialRecord(9, "RUNNING", 0, 9, 9, {}, None, None, None, None, {}))
+    assert outcome_counts(records) == {"certified": 1, "fell": 1, "generation_failed": 1, "refused: unsettled": 1,
+                                       "refused: unstable": 1}
