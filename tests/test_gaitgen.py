@@ -161,7 +161,8 @@ def test_grid_over_the_action_space_walks(exo, gen):
 
 @pytest.mark.parametrize("kwargs, reason", [
     ({"step_width": 0.1}, "feet collide"),
-    ({"step_length": 1.3}, "beyond the leg reach"),
+    ({"step_length": 1.3}, "beyond generate.max_step_length"),
+    ({"step_length": 0.5, "step_width": 1.0, "step_duration": 1.5}, "beyond the leg reach"),
 ])
 @pytest.mark.slow
 def test_infeasible_parameters_fail_with_a_reason(exo, gen, kwargs, reason):
@@ -272,3 +273,31 @@ def test_cli_multicontact_bad_rolling_fraction(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--rolling-fraction: must satisfy 0.05 ≤ x ≤ 0.6 (got 0.9)" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_a_request_no_leg_of_that_size_walks_is_refused_before_any_solve(tmp_path, capsys):
+    """Step length in leg lengths, speed as a Froude number, swing height in leg lengths: the issue's request on exo
+    (0.7 m in 0.2 s, 0.3 m high: 3.5 m/s, Froude 1.36) is refused in one line, exit 2, nothing written, without
+    building the problem; every point of exo's action spaces passes."""
+    import time
+
+    from robustgait.cli import main
+    from robustgait.config.gait import reach_problem
+    from robustgait.learn.space import ActionSpace
+
+    exo = load_robot("exo")
+    cfg = GenerationConfig()
+    t0 = time.perf_counter()
+    out = tmp_path / "g.json"
+    code = main(["gait", "generate", "--robot", "exo", "--step-length", "0.7", "--step-duration", "0.2",
+                 "--step-height", "0.3", "-o", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and time.perf_counter() - t0 < 5 and not out.exists()
+    assert len(err.strip().splitlines()) == 1 and "Froude number 1.36, beyond generate.max_froude = 0.5" in err
+    assert "beyond generate.max_step_height" in reach_problem(
+        GaitParams(step_length=0.2, step_duration=0.8, step_height=0.3), exo.scale, cfg)
+    assert "beyond generate.max_step_length" in reach_problem(
+        GaitParams(step_length=0.8, step_duration=2.0), exo.scale, cfg)
+    for graph in ("flat", "multicontact"):
+        space = ActionSpace.from_robot(exo, graph)
+        assert all(reach_problem(space.params(i).resolved(graph), exo.scale, cfg) is None for i in range(space.size))
