@@ -43,7 +43,7 @@ def test_walk_json(capsys, gait_robot):
     assert res["steps_taken"] == 5 and res["fell"] is False and res["fall_reason"] is None
     assert (0.08 < res["mean_speed"] < 0.2 if name == "atalante" else abs(res["mean_speed"] - 0.15 / 0.7) < 0.01)
     assert len(res["events"]) == 5
-    assert res["orbit"]["status"] == "unsettled" and res["orbit"]["steps"] == 5  # 5 events: too few to tell
+    assert res["orbit"]["status"] == "undecided" and res["orbit"]["steps"] == 5  # 5 events: too few to tell
     assert res["comfort"] is None  # 5 steps end before the first measured one (comfort.skip_steps = 5)
     code, out, _ = run(capsys, "walk", gait, "--robot", robot, "--steps", "5", "--json", "--override",
                        "comfort.skip_steps=2")

@@ -155,7 +155,7 @@ def test_a_fall_and_a_short_walk_are_said_as_such():
     assert o.status == Status.FELL and "fell in step 12" in o.reason and o.steps == 11
     z = iterates(QuadraticMap(2.8), START, 10)[1:]
     short, i = classify(z, ORBIT, min_period=1, radius=0.03, multiple=3.0)
-    assert i is None and short.status == Status.UNSETTLED and "too few" in short.reason
+    assert i is None and short.status == Status.UNDECIDED and "before its switching states settled" in short.reason
 
 
 def test_the_settling_test_compares_the_last_window_with_the_one_before():

@@ -60,7 +60,7 @@ def test_walk_and_the_certificate_report_the_same_orbit(exo, exo_gait, exo_orbit
 
 def test_a_walk_too_short_to_tell_says_so(exo, exo_gait):
     o = walk(exo, exo_gait, SimConfig(step_cap=20)).orbit
-    assert o is not None and o.status == Status.UNSETTLED and "too few to tell" in o.reason
+    assert o is not None and o.status == Status.UNDECIDED and "before its switching states settled" in o.reason
 
 
 def test_a_walk_whose_steps_alternate_is_a_period_two_orbit(exo, exo_gait):

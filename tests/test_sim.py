@@ -43,7 +43,7 @@ def test_a_walk_says_whether_its_switching_events_settled_on_an_orbit(exo, exo_g
     assert mc.steps_taken == 120 and not mc.fell and mc.orbit is not None and mc.orbit.ok
     assert mc.orbit.sigma > 10 * o.sigma and "settled at step" in mc.orbit.describe()
     short = walk(exo, exo_gait, steps=50).orbit
-    assert short is not None and short.status == "unsettled" and "are needed to see the band hold" in short.reason
+    assert short is not None and short.status == "undecided" and "are needed to see the band hold" in short.reason
 
 
 @pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it

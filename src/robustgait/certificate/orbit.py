@@ -45,13 +45,15 @@ FloatArray = NDArray[np.float64]
 
 class Status(str, enum.Enum):
     """What a certificate or an orbit search concluded: ``ok``; ``fell`` (the undisturbed walk fell while its orbit
-    was searched); ``unsettled`` (its band kept growing or moving: it drifts, turns or slowly falls); ``unstable``
+    was searched); ``unsettled`` (its band kept growing or moving: it drifts, turns or slowly falls); ``undecided``
+    (a walk that ended before the rule could tell: too few steps — a walk's, never a certificate's); ``unstable``
     (it settled, but states perturbed from the band did not come back to it); ``unstable_fixed_point`` (a state
     certificate's reduced map falls from x̄* itself: through the reconstruction x̄* is not on a walking orbit)."""
 
     OK = "ok"
     FELL = "fell"
     UNSETTLED = "unsettled"
+    UNDECIDED = "undecided"
     UNSTABLE = "unstable"
     UNSTABLE_FIXED_POINT = "unstable_fixed_point"
 
@@ -389,6 +391,10 @@ class Watch:
             if fell is not None and n < cfg.max_steps:
                 return Orbit(Status.FELL, f"the gait fell in step {n + 1} ({fell}) before its switching states "
                              "settled", n, cfg.window, sides_differ=sides), None
+            if not self.done:
+                return Orbit(Status.UNDECIDED, f"the walk ended after {n} steps, before its switching states settled "
+                             f"(the rule watches up to {cfg.max_steps} steps for them to settle, then "
+                             f"{cfg.hold_steps} more)", n, cfg.window, sides_differ=sides), None
             u = self.last if isinstance(self.last, Unsettled) else Unsettled("too_short")
             return Orbit(Status.UNSETTLED, unsettled_reason(u, n, cfg.window), n, cfg.window,
                          sigma_a=None if np.isnan(u.sigma_a) else u.sigma_a,
@@ -417,7 +423,7 @@ class Watch:
                 return dataclasses.replace(orbit, status=Status.FELL, reason=(
                     f"the gait fell in step {n + 1} ({fell}), {self.held} steps after its switching states settled "
                     f"by step {settled_at}")), None
-            return dataclasses.replace(orbit, status=Status.UNSETTLED, reason=(
+            return dataclasses.replace(orbit, status=Status.UNDECIDED, reason=(
                 f"its switching states settled by step {settled_at}, but the walk ended {self.held} steps later: "
                 f"{cfg.hold_steps} are needed to see the band hold (walk at least {settled_at + cfg.hold_steps} "
                 "steps)")), x_star
@@ -430,7 +436,7 @@ def classify(z: FloatArray, cfg: OrbitConfig, *, min_period: int, radius: float,
     walk fell in the step after the last when ``fell`` names the reason): :class:`Watch` fed the states until it has
     its answer — the states after it are not looked at, so a longer walk of the same gait gives the same orbit —, and
     the index of x* in z (None without a band). The orbit's status is ``ok`` when it settled and held (stability is
-    the search's), ``fell`` or ``unsettled`` otherwise."""
+    the search's), ``fell``, ``unsettled``, or ``undecided`` for a walk too short to tell."""
     watch = Watch(cfg, min_period, radius, multiple, first_step)
     for row in z:
         if watch.add(row):
