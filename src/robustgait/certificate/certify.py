@@ -131,11 +131,11 @@ class GaitCertificate:
                      f"with |J| {inside} J* all recovered (union bound over the {c.n_samples + 1} possible choices of "
                      "J*)")
         p = cfg.push
-        fail = (f"make the robot fall within that step and {p.horizon} more" if not p.recovery else
-                f"make the robot fall within that step and {p.horizon} more, or leave it off its orbit's band by then "
-                f"(back for {p.recovery_steps} consecutive steps: every coordinate of the switching state within "
-                f"{p.recovery_radius:g} of x*'s in band coordinates, or {p.recovery_scatter:g}× the orbit's own "
-                "scatter)")
+        fail = f"make the robot fall within that step and {p.horizon} more"
+        if p.recovery:
+            fail += (f" (a pushed walk stops once recovered: {p.recovery_steps} consecutive steps with every "
+                     f"coordinate of the switching state within {p.recovery_radius:g} of its orbit's band in band "
+                     f"coordinates, or {p.recovery_scatter:g}× the orbit's own scatter)")
         return (f"With confidence {100.0 * c.confidence:g}%, at most {100.0 * c.violation_bound:.3g}% of the pushes "
                 f"with impulse |J| {inside} J* = {c.r_star:.4g} N s (uniform in that disk; {v.push_duration:g} s long, "
                 f"starting at a phase in [{v.push_phase[0]:g}, {v.push_phase[1]:g}] of the step) {fail}: {basis}.")

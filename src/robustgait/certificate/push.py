@@ -5,12 +5,13 @@ A sample is a horizontal impulse J = (J_x, J_y) [N s] in the heading frame of x*
 (a switching state the undisturbed walk reached, :mod:`.orbit`), is pushed at its base's centre of mass with the force
 J / duration for the validation's ``push_duration``, starting at a phase φ of the step in the validation's
 ``push_phase`` range (as ``robustgait validate --disturbance push``), and walks on. A push **fails** when the robot
-falls within the pushed step and ``push.horizon`` more, or is not back in its orbit's band (:class:`.band.Band`: every
-coordinate of the section state near x*'s) for ``push.recovery_steps`` consecutive steps by then. A pushed walk stops
-as soon as it has recovered, so a push costs the steps it needs. The map returns (0, 0) when the push did not fail
-and NaN when it failed, so the DTBF condition of :mod:`.barrier` reads "no failure" and the largest certified ball is
-J*: with confidence 1 − β at most ε of the pushes uniform in the disk |J| ≤ J* (the estimators' statement) make the
-robot fall or leave it off its band within the horizon.
+falls within the pushed step and ``push.horizon`` more. A pushed walk stops as soon as it has **recovered** — its
+whole switching state back in its orbit's band (:class:`.band.Band`) for ``push.recovery_steps`` consecutive steps,
+from where the orbit's own stability brings it home (a walk back in the band does not fall later: measured,
+``docs/certificate.md`` "Recovery") — so a push costs the steps it needs, and a push that neither falls nor recovers
+walks the whole horizon. The map returns (0, 0) when the push did not fail and NaN when it failed, so the DTBF
+condition of :mod:`.barrier` reads "no failure" and the largest certified ball is J*: with confidence 1 − β at most ε
+of the pushes uniform in the disk |J| ≤ J* (the estimators' statement) make the robot fall within the horizon.
 
 The phase is a function of the sample (:func:`push_phase`: a hash of J's bytes mapped into the phase range), so the
 map is deterministic — the estimators' assumption — while over the disk the phases are uniform, and the pushes of
@@ -34,8 +35,6 @@ from robustgait.sim.engine import StepEngine
 from robustgait.sim.trials import Stop, pushed_first_step, simulate_trials, wrench_window
 
 FloatArray = NDArray[np.float64]
-
-NOT_RECOVERED = "not_recovered"  # the reason of a push that did not fall but was not back in the band in time
 
 
 def push_phase(impulse: FloatArray, low: float, high: float) -> FloatArray:
@@ -98,9 +97,10 @@ def recovered_steps(band: Band, robot: Robot, sections: FloatArray, steps: int) 
 class PushMap:
     """J (N, 2) → (N, 2): (0, 0) if the push did not fail, NaN if it failed (module docstring). ``engine``: the gait's
     engine; ``qpos``, ``qvel``: x* (a section state that starts a step of the gait's stance), ``band``: its orbit's
-    band (None: a fall is the only failure, ``push.recovery`` false). The walk is the validation's
-    (:func:`robustgait.sim.trials.simulate_trials`): a multi-contact step is the previous leg's rolling double support
-    then the single support, and the push's window spans the whole step, as ``validate --disturbance push``'s."""
+    band, where a recovered walk stops (None, or ``push.recovery`` false: every push walks the whole horizon). The walk
+    is the validation's (:func:`robustgait.sim.trials.simulate_trials`): a multi-contact step is the previous leg's
+    rolling double support then the single support, and the push's window spans the whole step, as ``validate
+    --disturbance push``'s."""
 
     def __init__(self, engine: StepEngine, qpos: FloatArray, qvel: FloatArray, band: Band | None,
                  validate: ValidateConfig, push: PushConfig):
@@ -120,9 +120,9 @@ class PushMap:
     def walk(self, impulse: FloatArray, phase: FloatArray) -> tuple[NDArray[np.bool_], list[str | None],
                                                                    NDArray[np.int64], NDArray[np.int64]]:
         """Push the robot with impulses J (N, 2) [N s, heading frame] starting at the phases φ (N,) of the step and
-        walk until each push recovered, fell, or the horizon: whether each push did not fail, its failure reason (a
-        fall reason, or :data:`NOT_RECOVERED`), the 1-based step it fell in (0: none) and the step it was back in the
-        band for ``recovery_steps`` steps (0: it was not; without a band, 0). The map (:meth:`__call__`) is this walk at
+        walk until each push recovered, fell, or the horizon: whether each push did not fail (fall), its fall reason
+        (None: none), the 1-based step it fell in (0: none) and the step it was back in the band for
+        ``recovery_steps`` steps (0: it was not; without a band, 0). The map (:meth:`__call__`) is this walk at
         the phases of :func:`push_phase`; an explicit φ maps a gait's failing set over direction and phase
         (``benchmarks/bench_certify.py push-sweep``)."""
         j = np.atleast_2d(np.asarray(impulse, dtype=float))
@@ -139,10 +139,6 @@ class PushMap:
             eng, np.tile(self.qpos, (n, 1)), np.tile(self.qvel, (n, 1)), n_steps, n_steps,
             pushed_first_step(eng, wrench), first_at=0, stop=stop)
         self.physics_steps += physics
-        if self.band is not None:
-            off = alive & (recovered == 0)
-            alive = alive & ~off
-            reasons = [NOT_RECOVERED if o else r for o, r in zip(off, reasons, strict=True)]
         return alive, reasons, fall_step, recovered
 
     def __call__(self, impulse: FloatArray, progress: Callable[[int], None] | None = None) -> FloatArray:

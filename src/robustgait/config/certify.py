@@ -179,25 +179,24 @@ class OrbitConfig:
 @config
 class PushConfig:
     """The push certificate J* (``disturbance = push``, :mod:`robustgait.certificate.push`): when a pushed walk has
-    failed, and the sizes of the sequential estimator's first round and exploration — smaller than a state
-    certificate's, since the failing set of a 2-D impulse disk needs less exploration (the statement does not depend
-    on it; ε, β, the budget and the rest are ``sequential``'s). Push duration and phases are the validation's
-    (``validate.push_duration``, ``validate.push_phase``). A pushed walk runs until it has been back in its orbit's
-    band for ``recovery_steps`` consecutive steps (recovered: it stops), falls, or reaches ``horizon`` steps after
-    the pushed one (not recovered)."""
+    failed — it fell within the pushed step and ``horizon`` more —, when it may stop early — back in its orbit's band
+    for ``recovery_steps`` consecutive steps (recovered) —, and the sizes of the sequential estimator's first round
+    and exploration, smaller than a state certificate's since the failing set of a 2-D impulse disk needs less
+    exploration (the statement does not depend on it; ε, β, the budget and the rest are ``sequential``'s). Push
+    duration and phases are the validation's (``validate.push_duration``, ``validate.push_phase``)."""
 
-    horizon: Annotated[Int, Doc("steps after the pushed one within which the robot must be back in its orbit's band "
-                                "(the statement's horizon)", ge=1, le=100)] = 20
-    recovery: Annotated[Bool, Doc("a pushed walk must come back to its orbit's band; false: a fall within the horizon "
-                                  "is the only failure (every push walks the whole horizon)")] = True
+    horizon: Annotated[Int, Doc("steps after the pushed one within which a fall is a failure (the statement's "
+                                "horizon)", ge=1, le=100)] = 20
+    recovery: Annotated[Bool, Doc("stop a pushed walk once it has recovered (back in its orbit's band for "
+                                  "recovery_steps steps); false: every push walks the whole horizon")] = True
     recovery_radius: Annotated[Float, Doc(
         "the band's floor ν: every coordinate of the section state within this distance of x*'s, in band "
         "coordinates (angles in rad, velocities over √(g l) or √(g/l); docs/certificate.md, Recovery)", gt=0.0,
         le=10.0)] = 0.03
     recovery_scatter: Annotated[Float, Doc("the band is at least this multiple of the undisturbed orbit's own "
                                            "scatter in each coordinate", ge=0.0, le=1000.0)] = 3.0
-    recovery_steps: Annotated[Int, Doc("consecutive steps in the band that make a pushed walk recovered", ge=1,
-                                       le=100)] = 2
+    recovery_steps: Annotated[Int, Doc("consecutive steps in the band that make a pushed walk recovered (it stops)",
+                                       ge=1, le=100)] = 2
     first_round: Annotated[Int, Doc("round 1: uniform pushes in the disk of radius r_max", ge=1, le=10_000)] = 50
     explore: Annotated[Int, Doc("exploration pushes before the first verification", ge=0, le=100_000)] = 100
     explore_after_failure: Annotated[Int, Doc("exploration pushes before each further verification", ge=0,

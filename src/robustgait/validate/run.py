@@ -147,7 +147,7 @@ class KindResult:
     energy: FloatArray | None = None  # (N,) kinetic energy the disturbance added at the first section [J]
     energy_star: float | None = None  # E* of the certificate [J] (energy states)
     # a push certificate's own criterion at its horizon (the pushed step and push.horizon more): (N,) whether each
-    # trial failed it (fell before it was back in the orbit's band, or was not back by then), and that horizon
+    # trial failed it (fell by then, before it was back in the orbit's band), and that horizon
     horizon_failed: NDArray[np.bool_] | None = None
     horizon: int | None = None
 
@@ -402,12 +402,13 @@ class Validator:
                 self.inputs_for(kind, d), first_at=self.nominal_at, progress=bar.update, sections=sections)
         horizon_failed = None
         if sections is not None and horizon is not None and ref.push is not None:
-            # the certificate's own criterion at its horizon: fell by then, or not back in the orbit's band by then
+            # the certificate's own criterion at its horizon: fell by then — unless it had recovered first (the
+            # certificate's pushed walk stops there: a later fall is not its)
+            horizon_failed = (fall_step > 0) & (fall_step <= horizon)
             band = self.orbit.band if self.orbit is not None and ref.push.recovery else None
-            if band is not None:  # the certificate's pushed walk stops once recovered: a later fall is not its
-                horizon_failed = recovered_steps(band, self.robot, sections[:, :horizon], ref.push.recovery_steps) == 0
-            else:
-                horizon_failed = (fall_step > 0) & (fall_step <= horizon)
+            if band is not None:
+                back = recovered_steps(band, self.robot, sections[:, :horizon], ref.push.recovery_steps)
+                horizon_failed &= back == 0
         reached = np.isfinite(first).all(axis=1)
         energy = np.full(n, np.nan)
         x1 = np.full((n, self.reduced.dim), np.nan)
