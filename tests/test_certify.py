@@ -378,8 +378,8 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
     verify = [r for r in c.rounds if r.kind == "verify"]
     assert gc.ok and c.method == "sequential" and verify[-1].passed and c.violation_bound <= 0.2
     text = gc.statement()
-    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed all "
-            f"recovered (verification attempt {len(verify)}:") in text
+    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed: none "
+            f"fell (verification attempt {len(verify)}:") in text
     assert f"none of the {c.n_samples} pushes of its {len(c.rounds)} rounds" in text
     # what a failure is: a fall within the pushed step and push.horizon more (a walk back in the band stops there)
     assert "make the robot fall within that step and 6 more (a pushed walk stops once recovered: 2 consecutive" in text

@@ -123,12 +123,12 @@ class GaitCertificate:
         if c.method == "sequential":
             verify = [r for r in c.rounds if r.kind == "verify"]
             n_a, attempt = verify[-1].n_samples, len(verify)
-            basis = (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed all recovered "
+            basis = (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed: none fell "
                      f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}), and none of the "
                      f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* failed")
         else:
             basis = (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
-                     f"with |J| {inside} J* all recovered (union bound over the {c.n_samples + 1} possible choices of "
+                     f"with |J| {inside} J* did not fall (union bound over the {c.n_samples + 1} possible choices of "
                      "J*)")
         p = cfg.push
         fail = f"make the robot fall within that step and {p.horizon} more"
