@@ -216,7 +216,7 @@ def test_atalante_multicontact_gait_walks_and_is_refused_as_unstable():
     (gait_quality.swing_toe_down_until = 0.5 in examples/atalante.toml): then the T = 1.0 s gait walks 50 steps,
     striking at the planned time, at L/T, and 300 steps undisturbed in a band it holds (σ 0.017). Its orbit is
     marginally unstable (a finite-difference ρ of 1.05 at x*, docs/gaitgen.md): one of the orbit search's eight probing
-    pushes of 4 N s (to the right) fells it, and the certificate refuses it as unstable, with that reason."""
+    pushes of 4 N s (to the right) and another fell it, and the certificate refuses it as unstable, with that reason."""
     robot = load_robot(ATALANTE_SPEC)
     assert robot.spec.gait_quality.swing_toe_down_until == 0.5
     res = GaitGenerator(robot, GenerationConfig(domains="multicontact")).solve(GaitParams(step_duration=1.0))
@@ -227,7 +227,7 @@ def test_atalante_multicontact_gait_walks_and_is_refused_as_unstable():
     assert w.mean_speed == pytest.approx(0.15 / 1.0, rel=0.05)
     cfg = CertifyConfig(method="uniform", disturbance="state", n_samples=24, r_max=1.0, seed=3)
     cert = certify_gait(robot, res.gait, cfg)
-    assert cert.status == "unstable" and "did not come back to its band" in cert.reason and "fell" in cert.reason
+    assert cert.status == "unstable" and "fell within 20 steps" in cert.reason
     probe = cert.orbit.probe
     assert probe is not None and sum(probe.fell) >= 1 and probe.impulse < 5.0
 

@@ -84,8 +84,25 @@ def test_a_settled_walk_that_does_not_come_back_is_unstable():
 
     o = search(F, np.array([0.02, 0.1, 0.1]))
     assert o.status == Status.UNSTABLE and o.band is not None and o.probe is not None and not o.probe.ok
-    assert "did not come back" in o.reason
+    assert "moved away from the band" in o.reason and any(o.probe.diverging) and not any(o.probe.fell)
     assert search(F, np.array([0.02, 0.1, 0.1]), perturbation=0.04).ok  # within the basin: they come back
+
+
+def test_a_probe_that_settles_on_another_orbit_of_the_gait_is_not_a_divergence():
+    """Two attractors, x_0 = 0 and x_0 = 0.2 (a gait that walks two orbits, as Atalante's L 0.18 T 0.6 does: period 2,
+    and period 1 once pushed): perturbed states that land in the other one stay near it without entering the band —
+    they do not move away, and the orbit is stable; a state that falls is not."""
+    inner = LinearMap.with_spectrum((0.5, 0.5, 0.5), np.zeros(3))
+
+    def F(x):  # type: ignore[no-untyped-def]
+        out = inner(x)
+        far = np.asarray(x)[:, 0] > 0.06
+        out[far, 0] = 0.2 + 0.5 * (np.asarray(x)[far, 0] - 0.2)
+        return out
+
+    o = search(F, np.array([0.02, 0.1, 0.1]))
+    assert o.ok and o.probe is not None and not all(o.probe.recovered) and not any(o.probe.diverging)
+    assert "stayed near it" in o.describe()
 
 
 @pytest.mark.parametrize("r, k", [(3.2, 2), (3.5, 4)])

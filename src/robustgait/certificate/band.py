@@ -11,7 +11,8 @@ in radians; the base's linear velocity (heading frame) / √(g l); its angular v
 band's start is in phase j mod k), a centre c_p (d,) and a per-coordinate scatter σ_p (d,) (the largest deviation of
 the undisturbed walk's states of that phase from c_p). A state z is *in the band* of phase p when every coordinate
 lies within its half-width w_p,i = max(ν, κ σ_p,i) of c_p,i: a floor ν, or κ times the orbit's own scatter where
-the undisturbed walk scatters more (an attractor that is a noisy band, not a point).
+the undisturbed walk scatters more (an attractor that is a noisy band, not a point). A walk back on its orbit may be
+out of phase with it (:meth:`Band.inside_shifted`).
 """
 
 from __future__ import annotations
@@ -81,6 +82,18 @@ class Band:
         with np.errstate(invalid="ignore"):
             return np.asarray(np.max(np.abs(z - self.centres[p]) / self.half_width[p], axis=1, initial=0.0)
                               * np.where(np.isfinite(z).all(axis=1), 1.0, np.nan))
+
+    def distance_shifted(self, z: FloatArray, step: int) -> FloatArray:
+        """The band distance (K, k) of states z (K, d) after ``step`` steps from the phase (step + s) mod k, for every
+        shift s (:meth:`inside_shifted`)."""
+        return np.stack([self.distance(z, step + s) for s in range(self.period)], axis=1)
+
+    def inside_shifted(self, z: FloatArray, step: int) -> NDArray[np.bool_]:
+        """Whether states z (K, d) after ``step`` steps lie in the band of phase (step + s) mod k, for every shift s =
+        0 … k − 1: (K, k). A pushed walk may come back to its orbit one or more steps out of phase — a period-2 orbit
+        whose two steps swapped — which is the same orbit; a run of states in the band under one shift is a return."""
+        with np.errstate(invalid="ignore"):
+            return np.asarray(self.distance_shifted(z, step) <= 1.0)
 
     def inside(self, z: FloatArray, phase: int | NDArray[np.int64]) -> NDArray[np.bool_]:
         """Whether states z (K, d) of phase(s) p lie in the band (a NaN state does not)."""

@@ -202,9 +202,11 @@ class Linearization:
 @dataclass(frozen=True)
 class Probe:
     """The stability check: pushes of ``impulse`` [N s] (``orbit.probe_impulse`` × m √(g l), doubled until they take
-    the walk out of its band) from x*, each walked until it has been back in the band for ``push.recovery_steps``
-    steps (``recovered``) or fell, within ``horizon`` (``orbit.probe_horizon``) steps; ``steps``: the step each came
-    back (0: did not); ``left``: whether it left the band on the way."""
+    the walk out of its band) from x*, each walked ``horizon`` (``orbit.probe_horizon``) steps or until it has been
+    back in the band for ``push.recovery_steps`` steps (``recovered``, at step ``steps``; 0: not) or fell (``fell``);
+    ``left``: it left the band on the way; ``diverging``: it neither fell nor came back, and its distance from the
+    band kept growing (:func:`diverging`). The orbit is stable when no probe fell or diverged — a probe that settles
+    near the band without entering it (another orbit of the same gait, a slow mode) is not a divergence."""
 
     impulse: float
     horizon: int
@@ -212,14 +214,27 @@ class Probe:
     steps: tuple[int, ...]
     fell: tuple[bool, ...]
     left: tuple[bool, ...]
+    diverging: tuple[bool, ...] = ()
 
     @property
     def ok(self) -> bool:
-        return all(self.recovered)
+        return not any(self.fell) and not any(self.diverging)
 
     def to_dict(self) -> dict[str, Any]:
         return {"impulse": self.impulse, "horizon": self.horizon, "recovered": list(self.recovered),
-                "steps": list(self.steps), "fell": list(self.fell), "left": list(self.left)}
+                "steps": list(self.steps), "fell": list(self.fell), "left": list(self.left),
+                "diverging": list(self.diverging)}
+
+
+def diverging(trace: FloatArray, growth: float) -> bool:
+    """Whether a walk's distance from its orbit's band (one value per step, NaN after it stopped) kept growing: its
+    largest value over the last quarter of the steps it walked exceeds ``growth`` × its largest over the first half
+    (``orbit.probe_growth``) — a walk that moves away from the band, as a repelling orbit's does, rather than one
+    that stays near it or settles on another orbit of the gait."""
+    d = trace[np.isfinite(trace)]
+    if d.size < 4:
+        return False
+    return bool(d[-max(1, d.size // 4):].max() > growth * d[:d.size // 2].max())
 
 
 @dataclass(frozen=True)
@@ -309,8 +324,11 @@ class Orbit:
             if self.status != Status.OK:
                 line += f"; {self.status}: {self.reason}"
         if self.probe is not None and self.probe.ok:
+            back = sum(self.probe.recovered)
             line += (f"; stable: {len(self.probe.recovered)} pushes of {self.probe.impulse:.3g} N s "
-                     f"({sum(self.probe.left)} left the band) came back to it within {max(self.probe.steps)} steps")
+                     f"({sum(self.probe.left)} left the band), {back} came back to it within "
+                     f"{max(self.probe.steps)} steps" + ("" if back == len(self.probe.recovered) else
+                                                          f", {len(self.probe.recovered) - back} stayed near it"))
         if self.linearization is not None:
             line += "; " + self.linearization.describe()
         return line
@@ -520,8 +538,9 @@ def map_orbit(F: Callable[[FloatArray], FloatArray], x0: FloatArray, config: Cer
     u = rng.uniform(-1.0, 1.0, (o.probe_pushes, z.shape[1]))
     u /= np.abs(u).max(axis=1, keepdims=True)
     states = z[i] + perturbation * u
-    run = np.zeros(o.probe_pushes, dtype=np.int64)
+    run = np.zeros((o.probe_pushes, orbit.band.period), dtype=np.int64)
     back = np.zeros(o.probe_pushes, dtype=np.int64)
+    trace = np.full((o.probe_pushes, o.probe_horizon), np.nan)
     left = np.zeros(o.probe_pushes, dtype=bool)
     fallen = np.zeros(o.probe_pushes, dtype=bool)
     for j in range(1, o.probe_horizon + 1):
@@ -533,13 +552,18 @@ def map_orbit(F: Callable[[FloatArray], FloatArray], x0: FloatArray, config: Cer
         d = orbit.band.distance(states, j)
         with np.errstate(invalid="ignore"):
             left |= live & (d > 1.0)
-            run = np.where(live & (d <= 1.0), run + 1, 0)
-        back[live & (run >= p.recovery_steps)] = j
+        shifted = orbit.band.distance_shifted(states, j)
+        trace[live, j - 1] = shifted[live].min(axis=1)
+        with np.errstate(invalid="ignore"):
+            run = np.where(live[:, None] & (shifted <= 1.0), run + 1, 0)
+        back[live & (run.max(axis=1) >= p.recovery_steps)] = j
+    moving = tuple(bool(b == 0 and not f and diverging(tr, o.probe_growth))
+                   for b, f, tr in zip(back, fallen, trace, strict=True))
     probe = Probe(perturbation, o.probe_horizon, tuple(bool(b) for b in back > 0), tuple(int(b) for b in back),
-                  tuple(bool(f) for f in fallen), tuple(bool(x) for x in left))
+                  tuple(bool(f) for f in fallen), tuple(bool(x) for x in left), moving)
     orbit = dataclasses.replace(orbit, probe=probe)
     if not probe.ok:
         orbit = dataclasses.replace(orbit, status=Status.UNSTABLE, reason=(
-            f"the iterates settled, but {len(back) - int((back > 0).sum())} of {len(back)} states perturbed by "
-            f"{perturbation:g} from x* did not come back to the band within {o.probe_horizon} maps"))
+            f"the iterates settled, but of {len(back)} states perturbed by {perturbation:g} from x*, "
+            f"{sum(moving)} moved away from the band and {int(fallen.sum())} fell within {o.probe_horizon} maps"))
     return orbit

@@ -57,23 +57,27 @@ def push_series(impulse: FloatArray, phase: FloatArray, heading: float, duration
 
 
 def recovery_stop(band: Band, robot: Robot, steps: int, recovered: NDArray[np.int64],
-                  farthest: FloatArray | None = None) -> Stop:
+                  farthest: FloatArray | None = None, trace: FloatArray | None = None) -> Stop:
     """The stop rule of recovering walks (:func:`robustgait.sim.trials.simulate_trials`): a trial is done once its
-    section state has been in ``band`` (the phase of the state after j steps from x* is j mod k) for ``steps``
-    consecutive steps; ``recovered`` (K,) gets the step it was done at (1-based, counted from the pushed step), and
-    ``farthest`` (K,), if given, the largest band distance (:meth:`.band.Band.distance`) of its states until then."""
-    run = np.zeros(recovered.shape[0], dtype=np.int64)
+    section state has been in ``band`` for ``steps`` consecutive steps, in phase with the orbit or shifted by whole
+    steps (:meth:`.band.Band.inside_shifted`: the state after j steps from x* in the band of phase (j + s) mod k, the
+    same s throughout the run); ``recovered`` (K,) gets the step it was done at (1-based, counted from the pushed
+    step), ``farthest`` (K,), if given, the largest in-phase band distance (:meth:`.band.Band.distance`) of its
+    states until then, and ``trace`` (K, H), if given, after each step its distance from the band under the nearest
+    shift (NaN once it stopped or fell)."""
+    run = np.zeros((recovered.shape[0], band.period), dtype=np.int64)
     nq = robot.model.nq
 
     def stop(k: int, idx: NDArray[np.int64], states: FloatArray) -> NDArray[np.bool_]:
         z = band_coordinates(robot, states[:, :nq], states[:, nq:])
-        distance = band.distance(z, k + 1)
         if farthest is not None:
-            farthest[idx] = np.fmax(farthest[idx], distance)
+            farthest[idx] = np.fmax(farthest[idx], band.distance(z, k + 1))
+        shifted = band.distance_shifted(z, k + 1)
+        if trace is not None:
+            trace[idx, k] = shifted.min(axis=1)
         with np.errstate(invalid="ignore"):
-            inside = distance <= 1.0
-        run[idx] = np.where(inside, run[idx] + 1, 0)
-        done = run[idx] >= steps
+            run[idx] = np.where(shifted <= 1.0, run[idx] + 1, 0)
+        done = run[idx].max(axis=1) >= steps
         recovered[idx[done]] = k + 1
         return np.asarray(done)
     return stop
@@ -116,6 +120,7 @@ class PushMap:
         self.fall_step: list[NDArray[np.int64]] = []  # per call: the 1-based step each sample fell in (0: none)
         self.recovered: list[NDArray[np.int64]] = []  # per call: the step each sample was recovered at (0: not)
         self.farthest: FloatArray | None = None  # the last walk's largest band distance per sample (with a band)
+        self.trace: FloatArray | None = None  # the last walk's band distance after every step (K, 1 + horizon)
 
     def walk(self, impulse: FloatArray, phase: FloatArray) -> tuple[NDArray[np.bool_], list[str | None],
                                                                    NDArray[np.int64], NDArray[np.int64]]:
@@ -131,10 +136,10 @@ class PushMap:
         wrench = push_series(j, np.asarray(phase, dtype=float), self.heading, cfg.push_duration, self.step_duration,
                              eng.robot.dt, self.window)
         recovered = np.zeros(n, dtype=np.int64)
-        self.farthest = np.zeros(n)
-        stop = (recovery_stop(self.band, eng.robot, self.recovery_steps, recovered, self.farthest)
-                if self.band is not None else None)
         n_steps = 1 + self.horizon
+        self.farthest, self.trace = np.zeros(n), np.full((n, n_steps), np.nan)
+        stop = (recovery_stop(self.band, eng.robot, self.recovery_steps, recovered, self.farthest, self.trace)
+                if self.band is not None else None)
         alive, reasons, fall_step, _, physics = simulate_trials(
             eng, np.tile(self.qpos, (n, 1)), np.tile(self.qvel, (n, 1)), n_steps, n_steps,
             pushed_first_step(eng, wrench), first_at=0, stop=stop)

@@ -6,9 +6,9 @@ the band come back to it (``docs/certificate.md``, "The orbit the gait walks").
    (:class:`.orbit.SettlingWatch`); the orbit, its period, band and x* are :func:`.orbit.classify_walk`'s, so
    ``walk`` reports the same orbit for the same gait once it has walked as far.
 2. **Stable** — ``orbit.probe_pushes`` pushes of ``orbit.probe_impulse`` × m √(g l) at evenly spaced directions
-   start from x* and must each come back to the band for ``push.recovery_steps`` steps within
-   ``orbit.probe_horizon`` steps (the push map's own walk, :class:`.push.PushMap`). A probe that falls or stays off the
-   band: ``unstable``.
+   start from x*, each walked until it has come back to the band for ``push.recovery_steps`` steps, within
+   ``orbit.probe_horizon`` steps (the push map's own walk, :class:`.push.PushMap`). A probe that falls, or does not
+   come back and keeps moving away from the band (:func:`.orbit.diverging`): ``unstable``.
 3. **ρ** — with ``orbit.linearization``, the linearized map at x* as a diagnostic (:mod:`.linearization`).
 """
 
@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.certificate.linearization import linearize
-from robustgait.certificate.orbit import Orbit, Probe, SettlingWatch, Status
+from robustgait.certificate.orbit import Orbit, Probe, SettlingWatch, Status, diverging
 from robustgait.certificate.push import PushMap, push_phase
 from robustgait.certificate.returnmap import FullStateMap
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig
@@ -56,13 +56,17 @@ def probe_stability(engine: StepEngine, orbit: Orbit, config: CertifyConfig, val
     for doubling in range(o.probe_doublings + 1):
         impulse = size * np.column_stack([np.cos(angles), np.sin(angles)])
         _, _, fall_step, recovered = pm.walk(impulse, push_phase(impulse, *validate.push_phase))
-        assert pm.farthest is not None
+        assert pm.farthest is not None and pm.trace is not None
         left = pm.farthest > 1.0
-        if left.any() or not (recovered > 0).all() or doubling == o.probe_doublings:
+        if left.any() or (fall_step > 0).any() or doubling == o.probe_doublings:
             break
         size *= 2.0
+    trace = pm.trace
+    assert trace is not None
+    moving = tuple(bool(r == 0 and f == 0 and diverging(tr, o.probe_growth))
+                   for r, f, tr in zip(recovered, fall_step, trace, strict=True))
     return Probe(size, o.probe_horizon, tuple(bool(r) for r in recovered > 0), tuple(int(r) for r in recovered),
-                 tuple(bool(f) for f in fall_step > 0), tuple(bool(x) for x in left)), pm.physics_steps
+                 tuple(bool(f) for f in fall_step > 0), tuple(bool(x) for x in left), moving), pm.physics_steps
 
 
 def find_orbit(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
@@ -108,12 +112,11 @@ def find_orbit(robot: Robot, gait: Gait, config: CertifyConfig | None = None, si
 
 
 def _unstable_reason(probe: Probe) -> str:
-    """One line: which probing pushes did not come back."""
-    n = len(probe.recovered)
-    bad = n - sum(probe.recovered)
-    fell = sum(probe.fell)
-    return (f"the walk settled, but {bad} of {n} pushes of {probe.impulse:.3g} N s from x* did not come back to its "
-            f"band within {probe.horizon} steps" + (f" ({fell} fell)" if fell else ""))
+    """One line: which probing pushes fell or moved away."""
+    n, fell, moving = len(probe.recovered), sum(probe.fell), sum(probe.diverging)
+    what = " and ".join(([f"{fell} fell"] if fell else []) + ([f"{moving} moved away from its band"] if moving else []))
+    return (f"the walk settled, but of {n} pushes of {probe.impulse:.3g} N s from x*, {what} within {probe.horizon} "
+            "steps")
 
 
 def initial_section(robot: Robot, gait: Gait, engine: StepEngine) -> tuple[FloatArray, FloatArray]:

@@ -149,6 +149,9 @@ class OrbitConfig:
                                      "the band", ge=1, le=100)] = 8
     probe_horizon: Annotated[Int, Doc("stability: steps after the probing push within which it must be back in the "
                                       "band (push.recovery_steps of them in a row)", ge=2, le=100)] = 20
+    probe_growth: Annotated[Float, Doc("stability: a probe that neither fell nor came back diverges when its largest "
+                                       "distance from the band over the last quarter of its steps exceeds this "
+                                       "multiple of its largest over the first half", gt=1.0, le=100.0)] = 1.5
     probe_doublings: Annotated[Int, Doc("stability: most doublings of the probing impulse while no probe leaves the "
                                         "band", ge=0, le=10)] = 3
     linearization: Annotated[Bool, Doc("also compute the linearized map at x* as a diagnostic (ρ; never a verdict): "
