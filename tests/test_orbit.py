@@ -250,3 +250,14 @@ def test_flow_projection_moves_the_event_onto_the_guard():
     np.testing.assert_allclose(p @ f, 0.0, atol=1e-12)
     np.testing.assert_allclose(p @ p, p, atol=1e-12)
     assert flow_projection(np.array([1.0, 0.0]), np.array([0.0, 1.0])) is None  # the flow along the guard
+
+
+def test_the_linearization_says_what_a_repelling_point_means_and_when_it_is_not_defined() -> None:
+    from robustgait.certificate.orbit import Linearization
+
+    stable = Linearization(True, 0.8, 0.82, 0.7).describe()
+    assert stable.startswith("ρ = 0.8 ") and "repels" not in stable
+    repelling = Linearization(True, 1.23, 1.227, 1.32).describe()
+    assert "ρ = 1.23" in repelling and "repels tiny perturbations" in repelling and "band's scale" in repelling
+    undefined = Linearization(False, 1.31, 0.81, None, reason="1.31 and 0.81 more than 10 % apart").describe()
+    assert undefined.startswith("linearization not defined (contact events)") and "0.81" in undefined

@@ -190,8 +190,13 @@ class Linearization:
 
     def describe(self) -> str:
         if self.defined and self.rho is not None:
-            return (f"ρ = {self.rho:.3g} (linearization at x*; a perturbation along its eigenvector: "
+            text = (f"ρ = {self.rho:.3g} (linearization at x*; a perturbation along its eigenvector: "
                     f"×{self.rate:.3g}/map)")
+            if self.rho > 1.0:
+                # A contact walk can settle on a small invariant ring around a repelling x*: the verdict is the
+                # band's (the probe's), so say what ρ > 1 does and does not mean.
+                text += "; x* itself repels tiny perturbations, which grow until they reach the band's scale"
+            return text
         return f"linearization not defined (contact events): {self.reason}"
 
     def to_dict(self) -> dict[str, Any]:
