@@ -22,7 +22,9 @@ s₅₀), and the median certificate cost.
     python benchmarks/bench_recovery.py run --robot examples/atalante.toml --grid 20 --out …
     python benchmarks/bench_recovery.py report FILE.jsonl [--stored benchmarks/data/bench_predict_exo.jsonl]
 
-A killed run continues: a gait already in ``--out`` is skipped.
+A killed run continues: a gait already in ``--out`` is skipped. ``recheck FILE --robot R [--status unstable]``
+certifies the rows of those statuses again with the current code (a change of the verdict's rule that leaves the
+other rows as they are), keeping their walks and validation pushes; each records what it was (``recheck``).
 
 ``scan``: how the recovery rule was chosen. For a gait, ``--pushes`` pushes uniform in the disk of radius ``--r-max``
 (seeded directions, the certificate's hashed phases) from the orbit search's x*, each walked ``--horizon`` steps
@@ -68,11 +70,67 @@ def grid_params(robot_name: str, n: int, domains: str) -> list[dict[str, float]]
     return [space.value(int(i)) for i in idx]
 
 
+def certify_fields(robot: Any, gait: Any, sim: Any) -> tuple[Any, dict[str, Any]]:
+    """The gait certified with the shipped defaults, and the row's certificate fields (module docstring, 2)."""
+    from robustgait.certificate.certify import certify_gait
+    from robustgait.config import CertifyConfig
+
+    t1 = time.perf_counter()
+    gc = certify_gait(robot, gait, CertifyConfig(), sim)
+    o = gc.orbit
+    return gc, dict(status=str(gc.status), reason=gc.reason, j_star=gc.r_star if gc.ok else None,
+                    certify_seconds=time.perf_counter() - t1, physics_steps=gc.physics_steps,
+                    orbit_physics_steps=gc.orbit_physics_steps,
+                    samples=gc.certificate.n_samples if gc.certificate is not None else 0,
+                    orbit={"status": str(o.status), "period": o.period, "sigma": o.sigma, "settled": o.settled,
+                           "steps": o.steps, "probe": o.probe.impulse if o.probe is not None else None}
+                    if o is not None else None)
+
+
+def recheck_gait(job: dict[str, Any]) -> dict[str, Any]:
+    """A row's gait regenerated and certified again with the current code; the row's walk and validation kept."""
+    from robustgait.config import Config, GaitParams, SimConfig
+    from robustgait.gaitgen import GaitGenerator
+    from robustgait.io.robotfile import load_robot
+
+    os.nice(5)
+    robot = load_robot(job["robot"])
+    res = GaitGenerator(robot, Config().generate).solve(GaitParams(**job["row"]["params"]))
+    if res.gait is None:
+        return {"status": "generation_failed", "reason": res.reason}
+    return certify_fields(robot, res.gait, SimConfig(n_threads=1))[1]
+
+
+def cmd_recheck(args: argparse.Namespace) -> None:
+    """Certify again, with the current code, the rows of ``FILE`` whose status is in ``--status``; each keeps its walk
+    and validation pushes (they do not depend on the verdict) and records what it was (``recheck``). The file is
+    rewritten once every row is done."""
+    path = Path(args.file)
+    rows = load_rows(str(path))
+    wanted = set(args.status.split(","))
+    todo = [i for i, r in enumerate(rows) if r.get("status") in wanted and "params" in r]
+    commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    print(f"# bench_recovery recheck {date.today()} commit {commit}: {len(todo)} rows of {path} ({args.status})",
+          flush=True)
+    with ProcessPoolExecutor(args.workers) as pool:
+        futures = {pool.submit(recheck_gait, {"robot": args.robot, "row": rows[i]}): i for i in todo}
+        for f in as_completed(futures):
+            i = futures[f]
+            before = {k: rows[i].get(k) for k in ("status", "reason", "j_star", "commit", "date")}
+            rows[i].update(f.result())
+            rows[i]["recheck"] = {"commit": commit, "date": str(date.today()), "before": before}
+            print(f"{rows[i]['label']}: {before['status']} -> {rows[i]['status']}"
+                  + ("" if rows[i].get("j_star") is None else f" J* {rows[i]['j_star']:.3f}"), flush=True)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    tmp.replace(path)
+
+
 def run_gait(job: dict[str, Any]) -> dict[str, Any]:
     """One gait (module docstring)."""
     from dataclasses import replace
 
-    from robustgait.certificate.certify import certify_gait
     from robustgait.config import CertifyConfig, Config, GaitParams, SimConfig, ValidateConfig
     from robustgait.gaitgen import GaitGenerator
     from robustgait.io.gaitfile import save_gait
@@ -96,16 +154,9 @@ def run_gait(job: dict[str, Any]) -> dict[str, Any]:
         save_gait(gait, Path(job["gait_dir"]) / f"{job['label']}.json")
     w = walk(robot, gait, replace(sim, step_cap=job["steps"]))
     out.update(steps_taken=w.steps_taken, fall=w.fall_reason)
-    t1 = time.perf_counter()
-    gc = certify_gait(robot, gait, CertifyConfig(), sim)
+    gc, fields = certify_fields(robot, gait, sim)
+    out.update(fields)
     o = gc.orbit
-    out.update(status=str(gc.status), reason=gc.reason, j_star=gc.r_star if gc.ok else None,
-               certify_seconds=time.perf_counter() - t1, physics_steps=gc.physics_steps,
-               orbit_physics_steps=gc.orbit_physics_steps,
-               samples=gc.certificate.n_samples if gc.certificate is not None else 0,
-               orbit={"status": str(o.status), "period": o.period, "sigma": o.sigma, "settled": o.settled,
-                      "steps": o.steps, "probe": o.probe.impulse if o.probe is not None else None}
-               if o is not None else None)
     # the validation's pushes: from the certificate's x*, or the orbit's, or the gait's first switching state
     vcfg = ValidateConfig(trials=job["trials"])
     start, ref = _orbitless_start(robot, gait, CertifyConfig())
@@ -279,6 +330,11 @@ def cmd_report(args: argparse.Namespace) -> None:
             s50 = "" if r.get("s50") is None else f"{r['s50']:.1f}"
             surv = "" if r.get("survived") is None else f"{100 * r['survived']:.0f} %"
             print(f"| {r['label']} | {walks} | {verdict} | {orbit} | {js} | {s50} | {surv} |")
+        rechecked = [r for r in rows if "recheck" in r]
+        if rechecked:
+            commits_r = sorted({r["recheck"]["commit"] for r in rechecked})
+            print(f"\ncertified again at commit {', '.join(commits_r)} (`recheck`; walks and pushes of the run): "
+                  + "; ".join(f"{r['label']} {r['recheck']['before']['status']} → {r['status']}" for r in rechecked))
         ok = [r for r in rows if r.get("status") == "ok"]
         walked = [r for r in rows if (r.get("steps_taken") or 0) >= 300]
         refused_walking = [r for r in walked if r.get("status") != "ok"]
@@ -348,6 +404,12 @@ def main() -> None:
     rep.add_argument("--stored", help="bench_predict.py rows (benchmarks/data/bench_predict_exo.jsonl): ρ against "
                      "their push s50, and their stored J*'s")
     rep.set_defaults(func=cmd_report)
+    rc = sub.add_parser("recheck", help="certify some rows again with the current code (their walks and pushes kept)")
+    rc.add_argument("file")
+    rc.add_argument("--robot", required=True, help="the robot the rows were run on (as given to run)")
+    rc.add_argument("--status", default="unstable", help="comma-separated statuses to recheck")
+    rc.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
+    rc.set_defaults(func=cmd_recheck)
     sc = sub.add_parser("scan")
     sc.add_argument("--robot", required=True)
     sc.add_argument("--gait", required=True)

@@ -261,3 +261,19 @@ def test_the_linearization_says_what_a_repelling_point_means_and_when_it_is_not_
     assert "ρ = 1.23" in repelling and "repels tiny perturbations" in repelling and "band's scale" in repelling
     undefined = Linearization(False, 1.31, 0.81, None, reason="1.31 and 0.81 more than 10 % apart").describe()
     assert undefined.startswith("linearization not defined (contact events)") and "0.81" in undefined
+
+
+def test_a_probe_that_falls_measures_the_basin_and_one_that_moves_away_the_orbit() -> None:
+    """Stable: none of the probes moved away and not all fell (a fall is J*'s business); unstable: one moved away, or
+    every one fell."""
+    from robustgait.certificate.orbit import Probe
+
+    def probe(recovered, fell, diverging):  # type: ignore[no-untyped-def]
+        n = len(recovered)
+        return Probe(1.0, 20, tuple(recovered), tuple(3 if r else 0 for r in recovered), tuple(fell), (True,) * n,
+                     tuple(diverging))
+
+    assert probe([True, True, False], [False, False, True], [False] * 3).ok
+    assert not probe([True, True, False], [False, False, False], [False, False, True]).ok
+    assert not probe([False] * 3, [True] * 3, [False] * 3).ok
+    assert probe([False] * 3, [False] * 3, [False] * 3).ok  # near the band without entering it: not a divergence

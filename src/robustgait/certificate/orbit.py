@@ -210,8 +210,10 @@ class Probe:
     the walk out of its band) from x*, each walked ``horizon`` (``orbit.probe_horizon``) steps or until it has been
     back in the band for ``push.recovery_steps`` steps (``recovered``, at step ``steps``; 0: not) or fell (``fell``);
     ``left``: it left the band on the way; ``diverging``: it neither fell nor came back, and its distance from the
-    band kept growing (:func:`diverging`). The orbit is stable when no probe fell or diverged — a probe that settles
-    near the band without entering it (another orbit of the same gait, a slow mode) is not a divergence."""
+    band kept growing (:func:`diverging`). The orbit is stable when no probe diverged and not every probe fell. A
+    probe that fell is a push of that size and direction beyond what the gait survives — the size of its basin, which
+    J* measures, not the orbit's instability; a probe that settles near the
+    band without entering it (another orbit of the same gait, a slow mode) is not a divergence either."""
 
     impulse: float
     horizon: int
@@ -223,7 +225,7 @@ class Probe:
 
     @property
     def ok(self) -> bool:
-        return not any(self.fell) and not any(self.diverging)
+        return not any(self.diverging) and not all(self.fell)
 
     def to_dict(self) -> dict[str, Any]:
         return {"impulse": self.impulse, "horizon": self.horizon, "recovered": list(self.recovered),
@@ -330,10 +332,13 @@ class Orbit:
                 line += f"; {self.status}: {self.reason}"
         if self.probe is not None and self.probe.ok:
             back = sum(self.probe.recovered)
+            fell = sum(self.probe.fell)
+            near = len(self.probe.recovered) - back - fell
             line += (f"; stable: {len(self.probe.recovered)} pushes of {self.probe.impulse:.3g} N s "
                      f"({sum(self.probe.left)} left the band), {back} came back to it within "
-                     f"{max(self.probe.steps)} steps" + ("" if back == len(self.probe.recovered) else
-                                                          f", {len(self.probe.recovered) - back} stayed near it"))
+                     f"{max(self.probe.steps)} steps" + (f", {near} stayed near it" if near else "")
+                     + (f", {fell} fell (a push that size is beyond the gait's basin in its direction: J* lies "
+                        "below it)" if fell else ""))
         if self.linearization is not None:
             line += "; " + self.linearization.describe()
         return line
@@ -570,5 +575,6 @@ def map_orbit(F: Callable[[FloatArray], FloatArray], x0: FloatArray, config: Cer
     if not probe.ok:
         orbit = dataclasses.replace(orbit, status=Status.UNSTABLE, reason=(
             f"the iterates settled, but of {len(back)} states perturbed by {perturbation:g} from x*, "
-            f"{sum(moving)} moved away from the band and {int(fallen.sum())} fell within {o.probe_horizon} maps"))
+            f"{sum(moving)} moved away from the band, {int(fallen.sum())} fell and {int((back > 0).sum())} came back "
+            f"within {o.probe_horizon} maps"))
     return orbit

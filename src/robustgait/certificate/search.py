@@ -7,8 +7,9 @@ the band come back to it (``docs/certificate.md``, "The orbit the gait walks").
    ``walk`` reports the same orbit for the same gait once it has walked as far.
 2. **Stable** — ``orbit.probe_pushes`` pushes of ``orbit.probe_impulse`` × m √(g l) at evenly spaced directions
    start from x*, each walked until it has come back to the band for ``push.recovery_steps`` steps, within
-   ``orbit.probe_horizon`` steps (the push map's own walk, :class:`.push.PushMap`). A probe that falls, or does not
-   come back and keeps moving away from the band (:func:`.orbit.diverging`): ``unstable``.
+   ``orbit.probe_horizon`` steps (the push map's own walk, :class:`.push.PushMap`). ``unstable`` when a probe does
+   not come back and keeps moving away from the band (:func:`.orbit.diverging`), or every probe falls; a probe that
+   falls is a push beyond the gait's basin in its direction, which J* measures (:class:`.orbit.Probe`).
 3. **ρ** — with ``orbit.linearization``, the linearized map at x* as a diagnostic (:mod:`.linearization`).
 """
 
@@ -112,11 +113,13 @@ def find_orbit(robot: Robot, gait: Gait, config: CertifyConfig | None = None, si
 
 
 def _unstable_reason(probe: Probe) -> str:
-    """One line: which probing pushes fell or moved away."""
-    n, fell, moving = len(probe.recovered), sum(probe.fell), sum(probe.diverging)
-    what = " and ".join(([f"{fell} fell"] if fell else []) + ([f"{moving} moved away from its band"] if moving else []))
-    return (f"the walk settled, but of {n} pushes of {probe.impulse:.3g} N s from x*, {what} within {probe.horizon} "
-            "steps")
+    """One line: which probing pushes moved away from the band, fell or stayed near it, and how many came back."""
+    n, fell, moving, back = len(probe.recovered), sum(probe.fell), sum(probe.diverging), sum(probe.recovered)
+    near = n - fell - moving - back
+    what = ", ".join([f"{moving} moved away from its band"] * bool(moving) + [f"{fell} fell"] * bool(fell)
+                     + [f"{near} stayed near it without entering it"] * bool(near))
+    return (f"the walk settled, but of {n} pushes of {probe.impulse:.3g} N s from x*, {what} and {back} came back "
+            f"within {probe.horizon} steps")
 
 
 def initial_section(robot: Robot, gait: Gait, engine: StepEngine) -> tuple[FloatArray, FloatArray]:

@@ -145,8 +145,9 @@ class OrbitConfig:
                                         "(the robot's momentum at its pendulum speed; 0: no probe); doubled until "
                                         "they take the walk out of its band", ge=0.0,
                                         le=1.0)] = 0.01
-    probe_pushes: Annotated[Int, Doc("stability: probing pushes, at evenly spaced directions; each must come back to "
-                                     "the band", ge=1, le=100)] = 8
+    probe_pushes: Annotated[Int, Doc("stability: probing pushes, at evenly spaced directions; the orbit is stable when "
+                                     "none moves away from the band and not all fall (one that falls is a push "
+                                     "beyond the basin, for J*)", ge=1, le=100)] = 8
     probe_horizon: Annotated[Int, Doc("stability: steps after the probing push within which it must be back in the "
                                       "band (push.recovery_steps of them in a row)", ge=2, le=100)] = 20
     probe_growth: Annotated[Float, Doc("stability: a probe that neither fell nor came back diverges when its largest "
