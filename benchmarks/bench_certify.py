@@ -10,12 +10,14 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
   range of r*, the statement's bound, samples, physics steps, wall time. After every certificate raw
   ``mujoco.rollout`` (same model and threads, 100 states near x*, zero control) measures the machine's speed
   under the same load: the sampler/raw ratio, measured in the run (wall times are this machine's, as measured).
-* ``coverage``: ``--runs`` sequential certificates of each synthetic map (:mod:`robustgait.synthetic`):
+* ``coverage``: ``--runs`` sequential certificates of each synthetic map (:mod:`robustgait.certificate.synthetic`):
   fraction of runs whose true violating fraction in B(r*) exceeds ε (must be ≤ β) — and the same for a naive
   rule that ignores the data-dependent choice of r*, to show the check can fail.
 * ``barrier``: r* with H = r² − ‖x − x*‖² (``ball``) and the paper's H = r − ‖x − x*‖² on the Atalante gait.
-* ``speed``: the Atalante gait's four (map × reconstruction) uniform certificates, then the sampler against raw
-  ``mujoco.rollout`` on the same batch (ratio), and determinism of the JSON over ``--repeat`` runs.
+* ``speed``: the Atalante gait's four (map × reconstruction) uniform certificates (``map``: the shortest map the orbit
+  is searched on; each row gives the orbit's period, settling step and σ, and the orbit search's seconds), then the
+  sampler against raw ``mujoco.rollout`` on the same batch (ratio), and determinism of the JSON over ``--repeat``
+  runs.
 * ``horizon`` (issue 18 item 1): sequential certificates of horizon K = 1, 2, 3 (``--horizons``) on the thin
   gaits of ``benchmarks/data/learner_table_exo.jsonl`` (table r* < 0.05) and the default flat-foot and multi-contact
   exo gaits: r*, the excursion, samples, physics steps, wall time. Then the event-logic check: ``--probe`` states
@@ -26,21 +28,34 @@ maps with known answers, both barriers, and the sampler's speed against raw ``mu
   and the push certificate, one after the other in the same run: r*, E*, wall time and its ratio to ``omega``'s.
 * ``push`` (issue 18 item 7, J*'s cost): on the default exo gait (or ``--exo-gait``), ``--seeds`` omega/ball
   certificates, then the push certificate J* for each ``--push-variants`` tuple (first round / exploration /
-  exploration after a failed verification / steps after the push), same run: J*, samples, physics steps, wall and
-  its ratio to omega/ball's.
+  exploration after a failed verification / ``push.horizon``, the steps after the pushed one; the first tuple is the
+  shipped default certificate), same run: J*, samples, physics steps of the sampling and of the orbit search, wall,
+  the orbit search's seconds, and the wall's ratio to omega/ball's.
 * ``push-gaits`` (issue 18 item 7 over many gaits; not part of ``all``): per gait of ``--gaits`` (a glob, e.g. the
   gait files of studies; ``--limit`` of them evenly spaced), omega/ball, then J* for each ``--gait-variants``
-  (default: whole verification batches, ``push.verify_chunk = 0``, and as shipped, chunked), one after the other in
+  (``name:verify_chunk/horizon[/explore_after_failure]``; default: whole verification batches,
+  ``push.verify_chunk = 0``, and as shipped, chunked; both at the shipped horizon of 20), one after the other in
   one worker: their wall-time and physics-step ratios and verification attempts; then each variant's check against
   the gaits' validation pushes in ``benchmarks/data/bench_predict_exo.jsonl`` (pushes ≤ J* that fell).
-* ``push-sweep`` (not part of ``all``): where one exo gait's pushes fail (the default gait or ``--exo-gait``): its J*,
-  the falls the estimator met below ``--near`` × J* (direction, phase, step, reason), and grids of fall steps over
-  24 directions × 13 phases at ``--sweep`` × J*.
-* ``orbit`` (issue 28 item 3; not part of ``all``): the fixed point's orbit check on the default exo, multi-contact
-  exo and Atalante FROST gaits (and ``--extra ROBOT=FILE``): the rule before it, the window, the window with
-  ``--newton`` Newton iterations — status, ρ, eigenvalue moduli, cost, J* with ``--seed`` and the move of x* — and
-  the finite-difference check of ρ (``--fd-steps``, forward differences, growth of random perturbations); then the
-  shipped search alone on ``--survey ROBOT=FILE`` gaits; :mod:`bench_orbit`.
+* ``push-sweep`` (not part of ``all``): where one exo gait's pushes fail (the default gait or ``--exo-gait``): its
+  orbit (:func:`robustgait.certificate.search.find_orbit`), its J* (the default push certificate's estimator on the
+  push map from the orbit's x* and band), the failures the estimator met below ``--near`` × J* (direction, phase,
+  the step it fell in or that it was not back in the band, reason), and grids of outcomes over 24 directions × 13
+  phases at ``--sweep`` × J* (``PushMap.walk`` at explicit phases: recovered, fell in step n, or not back in the band
+  within ``push.horizon``).
+* ``orbit`` (not part of ``all``): ρ, a diagnostic and never a gate — :mod:`bench_orbit` (``--only``, ``--extra``,
+  ``--fd-steps``): per gait (the stored default exo gait tests/data/exo_gait.json or ``--exo-gait``, the stored
+  multi-contact exo gait, the Atalante FROST gait and ``--extra ROBOT=FILE``) the orbit search's verdict with
+  ``orbit.linearization`` and its diagnostic.
+
+The fixed-point search these modes used (``ReturnMap.find_fixed_point``) was replaced by the orbit search: every mode
+now takes the orbit from :func:`robustgait.certificate.search.find_orbit` and its maps from
+:class:`robustgait.certificate.returnmap.FullStateMap` (the orbit's period) and
+:class:`robustgait.certificate.reducedmap.ReducedMap` (the reduced map). Removed with it: ``orbit``'s comparison of
+fixed-point rules (the rule before the orbit check against the window and window + Newton refinement), their J*
+(``--seed``), ``--newton``, ``--orbit-parts`` and ``--survey`` (its gaits go to ``--extra``); ``push``'s and
+``push-gaits``' fourth field is now ``push.horizon`` (steps after the pushed one, default 20) instead of the fixed
+``push.steps``.
 """
 
 from __future__ import annotations
@@ -58,16 +73,23 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from bench_orbit import cmd_orbit  # the orbit check's measurement (its own module: this one is long enough)
+from bench_orbit import add_orbit_arguments, cmd_orbit  # ρ's measurement (its own module: this one is long enough)
 from robustgait import load_gait, load_robot
-from robustgait.barrier import distances, sample_ball, solve_radius
-from robustgait.certify import GaitCertificate, certify_gait
+from robustgait.certificate.barrier import distances, sample_ball, solve_radius
+from robustgait.certificate.certify import GaitCertificate, certify_gait
+from robustgait.certificate.estimators import certify_map_sequential
+from robustgait.certificate.orbit import Orbit
+from robustgait.certificate.reduced import ReducedState
+from robustgait.certificate.reducedmap import ReducedMap
+from robustgait.certificate.returnmap import FullStateMap
+from robustgait.certificate.search import find_orbit
+from robustgait.certificate.synthetic import BandMap, ConeMap
 from robustgait.config import CertifyConfig, GaitParams, GenerationConfig, SequentialConfig, SimConfig
-from robustgait.estimators import certify_map_sequential
+from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.poincare import FixedPointFailure, ReturnMap
 from robustgait.robots import Robot
-from robustgait.synthetic import BandMap, ConeMap
+from robustgait.sim.engine import StepEngine
+from robustgait.sim.factory import make_engine
 
 REPO = Path(__file__).resolve().parents[1]
 ATALANTE = REPO.parent / "shared" / "atalante"
@@ -101,16 +123,42 @@ def gaits(args: argparse.Namespace) -> dict[str, tuple[Robot, Gait]]:
     return out
 
 
+class OrbitMaps:
+    """A gait's orbit (:func:`robustgait.certificate.search.find_orbit`) and a state certificate's maps on it, on one
+    engine: ``fmap`` the full-state map of the orbit's period, ``reduced`` the reduced state of ``config`` set up at
+    x*, ``pmap`` the reduced map of ``config.horizon`` maps. A context manager (closes the engine); raises
+    :class:`RobustGaitError` when the gait has no orbit (``orbit`` is then still set)."""
+
+    def __init__(self, robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig):
+        self.engine: StepEngine = make_engine(robot, gait, sim)
+        try:
+            self.orbit: Orbit = find_orbit(robot, gait, config, sim, engine=self.engine)
+            if not self.orbit.ok or self.orbit.qpos is None or self.orbit.qvel is None:
+                raise RobustGaitError(f"no orbit: {self.orbit.status}: {self.orbit.reason}")
+            self.fmap = FullStateMap(robot, gait, self.orbit.period, engine=self.engine)
+            self.reduced = ReducedState.at(config.state, robot, self.orbit.qpos, self.orbit.qvel, gait.stance, config)
+            self.pmap = ReducedMap(self.fmap, self.reduced, config.horizon)
+        except BaseException:
+            self.engine.close()
+            raise
+
+    def __enter__(self) -> OrbitMaps:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.engine.close()
+
+
 class RawRollout:
-    """Raw mujoco.rollout (zero control) on n states near a gait's fixed point: the machine's speed now."""
+    """Raw mujoco.rollout (zero control) on n states near a gait's x*: the machine's speed now."""
 
     def __init__(self, robot: Robot, gait: Gait, sim: SimConfig, n: int = 100, nstep: int = 500):
         self.robot, self.n, self.nstep = robot, n, nstep
         self.pool = rollout.Rollout(nthread=sim.threads)
-        with ReturnMap(robot, gait, CertifyConfig(disturbance="state"), sim) as pmap:
-            fp = pmap.find_fixed_point()
-            qpos, qvel = pmap.reconstruct(sample_ball(n, 3, 0.05, fp.omega, np.random.default_rng(0)))
-            self.init = pmap.engine.full_states(qpos, qvel)
+        with OrbitMaps(robot, gait, CertifyConfig(disturbance="state"), sim) as om:
+            red = om.reduced
+            qpos, qvel = om.pmap.reconstruct(sample_ball(n, red.dim, 0.05, red.x_star, np.random.default_rng(0)))
+            self.init = om.engine.full_states(qpos, qvel)
         self.ctrl = np.zeros((n, nstep, robot.model.nu))
         self.datas = [robot.new_data() for _ in range(sim.threads)]
         self.pool.rollout(robot.model, self.datas, self.init[:2], self.ctrl[:2, :10])  # start the threads
@@ -247,13 +295,14 @@ def deterministic_json(gc: GaitCertificate) -> str:
 
 
 def row(gc: GaitCertificate) -> str:
-    c, fp, s = gc.certificate, gc.fixed_point, gc.seconds
-    assert c is not None and fp is not None and gc.map_residual is not None
+    c, fp, o, s = gc.certificate, gc.fixed_point, gc.orbit, gc.seconds
+    assert c is not None and fp is not None and o is not None and o.sigma is not None and gc.map_residual is not None
     x = ", ".join(f"{v:.4f}" for v in fp.omega)
     return (f"{gc.config.map:6s} {gc.config.reconstruction:12s} r* {c.r_star:.4f}{'' if c.attained else ' (sup)'}  "
-            f"x* [{x}]  fp residual {fp.residual:.2e} after {fp.steps:3d} steps  map residual {gc.map_residual:.2e}  "
-            f"fell {int(c.fell.sum()):3d}  inside {c.n_inside:3d}  fixed point {s['fixed_point']:.2f} s  "
-            f"sampling {s['sampling']:.2f} s  ({s['sim_steps_per_s']:.0f} steps/s)")
+            f"x* [{x}] after step {fp.step:3d}  orbit period {o.period}, settled at step {o.settled}, σ "
+            f"{o.sigma:.2g}  map residual {gc.map_residual:.2e}  fell {int(c.fell.sum()):3d}  inside "
+            f"{c.n_inside:3d}  orbit {s['orbit']:.2f} s  sampling {s['sampling']:.2f} s  "
+            f"({s['sim_steps_per_s']:.0f} steps/s)")
 
 
 def cmd_speed(args: argparse.Namespace) -> None:
@@ -279,11 +328,10 @@ def cmd_speed(args: argparse.Namespace) -> None:
     raw = []
     first = runs[0].certificate
     assert first is not None and runs[0].fixed_point is not None
-    with ReturnMap(robot, gait, cfg, sim) as pmap, rollout.Rollout(nthread=threads) as pool:
-        fp = pmap.find_fixed_point()
-        assert np.array_equal(fp.omega, runs[0].fixed_point.omega)
-        qpos, qvel = pmap.reconstruct(np.asarray(first.samples))
-        init = pmap.engine.full_states(qpos, qvel)
+    with OrbitMaps(robot, gait, cfg, sim) as om, rollout.Rollout(nthread=threads) as pool:
+        assert np.array_equal(om.orbit.fixed_point(cfg.frame).omega, runs[0].fixed_point.omega)
+        qpos, qvel = om.pmap.reconstruct(np.asarray(first.samples))
+        init = om.engine.full_states(qpos, qvel)
         nstep = int(np.ceil(runs[0].physics_steps / n))
         ctrl = np.zeros((n, nstep, robot.model.nu))
         datas = [robot.new_data() for _ in range(threads)]
@@ -316,15 +364,15 @@ def thin_gaits(limit: float = 0.05) -> list[GaitParams]:
 def probe_events(robot: Robot, gait: Gait, sim: SimConfig, n: int, radius: float) -> str:
     """One step from n states uniform in B(radius) of the omega/ball/1 map: fall reasons and touchdown phases."""
     cfg = CertifyConfig(disturbance="state")
-    with ReturnMap(robot, gait, cfg, sim) as pmap:
-        try:
-            fp = pmap.find_fixed_point()
-        except FixedPointFailure as e:
-            return f"no fixed point: {e}"
-        red = pmap.reduced
+    try:
+        om = OrbitMaps(robot, gait, cfg, sim)
+    except RobustGaitError as e:
+        return str(e)
+    with om:
+        red = om.reduced
         x = sample_ball(n, red.dim, radius, red.x_star, np.random.default_rng(0))
-        qpos, qvel = pmap.reconstruct(x)
-        b = pmap.engine.step(qpos, qvel, pmap.stance, domain=0)
+        qpos, qvel = om.pmap.reconstruct(x)
+        b = om.engine.step(qpos, qvel, gait.stance, domain=0)
         ok = np.array([r is None for r in b.fall_reason])
         mq, mv = robot.mirror_state(b.qpos[ok], b.qvel[ok])
         image = red.phi(mq, mv)
@@ -333,8 +381,8 @@ def probe_events(robot: Robot, gait: Gait, sim: SimConfig, n: int, radius: float
         if r is not None:
             reasons[r] = reasons.get(r, 0) + 1
     tau = b.tau[ok]
-    d0 = np.linalg.norm(x[ok] - fp.omega, axis=1)
-    d1 = np.linalg.norm(image - fp.omega, axis=1)
+    d0 = np.linalg.norm(x[ok] - red.x_star, axis=1)
+    d1 = np.linalg.norm(image - red.x_star, axis=1)
     grows = d1 > d0
     held = np.abs(tau - sim.min_switch_tau) < 1.5 * robot.dt / gait.step_duration
 
@@ -415,33 +463,40 @@ def cmd_push(args: argparse.Namespace) -> None:
     exo, gait = gaits(args)["exo"]
     variants = [tuple(int(v) for v in t.split("/")) for t in args.push_variants.split(",")]
     print(f"## push: {args.exo_gait or 'default exo gait'}, {args.seeds} seeds each, sequential; J* per (first round / "
-          f"exploration / exploration after a failure / steps after the push) against omega/ball; {load()}")
-    print("| certificate | J* or r* mean (range) | samples | physics steps | wall: mean (range) | "
-          "ratio to omega/ball |")
-    print("|---|---|---|---|---|---|")
+          f"exploration / exploration after a failure / horizon: steps after the pushed one) against omega/ball; "
+          f"{load()}")
+    print("| certificate | J* or r* mean (range) | samples | physics steps: sampling (orbit search) | wall: mean "
+          "(range) | orbit search: mean | ratio to omega/ball |")
+    print("|---|---|---|---|---|---|---|")
     cfgs = [("omega/ball", CertifyConfig(disturbance="state"))] + [
         (f"push {f}/{e}/{a}/{k}", CertifyConfig(disturbance="push", push=PushConfig(
-            first_round=f, explore=e, explore_after_failure=a, steps=k))) for f, e, a, k in variants]
+            first_round=f, explore=e, explore_after_failure=a, horizon=k))) for f, e, a, k in variants]
     base = None
     for name, cfg in cfgs:
         gcs = [certify_gait(exo, gait, replace(cfg, seed=s), sim) for s in range(args.seeds)]
+        failed = [g for g in gcs if not g.ok]
+        if failed:
+            print(f"| {name} | {failed[0].status}: {failed[0].reason} | | | | | |", flush=True)
+            continue
         r = np.array([g.r_star for g in gcs])
         wall = np.array([g.seconds["total"] for g in gcs])
         base = wall.mean() if base is None else base
         print(f"| {name} | {r.mean():.4g} ({r.min():.4g}–{r.max():.4g}) | "
               f"{np.mean([g.certificate.n_samples for g in gcs if g.certificate]):.0f} | "
-              f"{np.mean([g.physics_steps for g in gcs]) / 1e6:.2f} M | {wall.mean():.1f} s ({wall.min():.1f}–"
-              f"{wall.max():.1f}) | {wall.mean() / base:.2f} |", flush=True)
+              f"{np.mean([g.physics_steps for g in gcs]) / 1e6:.2f} M "
+              f"({np.mean([g.orbit_physics_steps for g in gcs]) / 1e6:.2f} M) | {wall.mean():.1f} s ({wall.min():.1f}–"
+              f"{wall.max():.1f}) | {np.mean([g.seconds['orbit'] for g in gcs]):.1f} s | {wall.mean() / base:.2f} |",
+              flush=True)
 
 
 def _variants(spec: str) -> list[tuple[str, int, int, int | None]]:
-    """``name:chunk/steps[/after],…`` → [(name, push.verify_chunk, push.steps, push.explore_after_failure or None
+    """``name:chunk/horizon[/after],…`` → [(name, push.verify_chunk, push.horizon, push.explore_after_failure or None
     for the default)]."""
     out = []
     for item in spec.split(","):
         name, _, rest = item.partition(":")
-        chunk, steps, *after = rest.split("/")
-        out.append((name, int(chunk), int(steps), int(after[0]) if after else None))
+        chunk, horizon, *after = rest.split("/")
+        out.append((name, int(chunk), int(horizon), int(after[0]) if after else None))
     return out
 
 
@@ -457,9 +512,9 @@ def _push_gait(job: tuple[str, str]) -> dict:
     out: dict = {"gait": Path(path).parent.name}
     runs = [("omega", CertifyConfig(disturbance="state"))] + [
         (name, CertifyConfig(disturbance="push", push=PushConfig(
-            verify_chunk=chunk, steps=steps,
+            verify_chunk=chunk, horizon=horizon,
             explore_after_failure=PushConfig.explore_after_failure if after is None else after)))
-        for name, chunk, steps, after in _variants(spec)]
+        for name, chunk, horizon, after in _variants(spec)]
     for name, cfg in runs:
         t0 = time.perf_counter()
         gc = certify_gait(exo, gait, cfg, sim)
@@ -498,7 +553,7 @@ def _validation_check(rows: list[dict], names: list[str]) -> None:
 
 def cmd_push_gaits(args: argparse.Namespace) -> None:
     """J*'s cost over many gaits: per gait (``--gaits`` glob, one per directory name, ``--limit`` evenly spaced),
-    J* for each ``--gait-variants`` (verification chunk / steps after the push) against omega/ball on the same gait,
+    J* for each ``--gait-variants`` (verification chunk / horizon) against omega/ball on the same gait,
     same worker; then each variant's check on the gaits' validation pushes."""
     import glob
     from concurrent.futures import ProcessPoolExecutor
@@ -511,7 +566,7 @@ def cmd_push_gaits(args: argparse.Namespace) -> None:
         names = [names[i] for i in np.unique(np.round(np.linspace(0, len(names) - 1, args.limit)).astype(int))]
     variants = [v[0] for v in _variants(args.gait_variants)]
     print(f"## push-gaits: {len(names)} gaits of {args.gaits}, {args.workers} workers, one rollout thread each; "
-          f"variants {args.gait_variants} (name:verify_chunk/steps[/explore after a failure]); {load()}")
+          f"variants {args.gait_variants} (name:verify_chunk/horizon[/explore after a failure]); {load()}")
     print("| gait | omega r* (s) | " + " | ".join(f"J* {k} (samples, attempts, s, ratio; physics ratio)"
                                                 for k in variants) + " |")
     print("|---|---|" + "---|" * len(variants))
@@ -546,46 +601,61 @@ def cmd_push_gaits(args: argparse.Namespace) -> None:
 
 
 def cmd_push_sweep(args: argparse.Namespace) -> None:
-    """Where a gait's pushes fail: its J* (default certificate), the falls the estimator met below
-    ``--near`` × J* (impulse, direction, phase, fall step and reason), then pushes at fixed impulses
-    (``--sweep`` × J*) over 24 directions × 13 phases of the validation's range: a grid of fall steps."""
+    """Where a gait's pushes fail: its J* (default certificate), the failures the estimator met below ``--near`` × J*
+    (impulse, direction, phase, the step it fell in or that it did not come back to the band, and the reason), then
+    pushes at fixed impulses (``--sweep`` × J*) over 24 directions × 13 phases of the validation's range: a grid of
+    outcomes (:meth:`robustgait.certificate.push.PushMap.walk` at explicit phases)."""
+    from robustgait.certificate.push import PushMap, push_phase
     from robustgait.config import ValidateConfig
-    from robustgait.push import PushMap, push_phase
 
     robot, gait = gaits(args)["exo"]
     cfg = CertifyConfig()
     vcfg = ValidateConfig()
-    with ReturnMap(robot, gait, cfg, SimConfig(n_threads=args.threads)) as pmap:
-        fp = pmap.find_fixed_point()
-        pm = PushMap(pmap.engine, fp, vcfg, cfg.push)
+    engine = make_engine(robot, gait, SimConfig(n_threads=args.threads))
+    try:
+        t0 = time.perf_counter()
+        orbit = find_orbit(robot, gait, cfg, validate=vcfg, engine=engine)
+        if not orbit.ok or orbit.qpos is None or orbit.qvel is None:
+            raise SystemExit(f"push-sweep: no orbit ({orbit.status}: {orbit.reason})")
+        print(f"## push-sweep: orbit in {time.perf_counter() - t0:.1f} s: {orbit.describe()}")
+        pm = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push)
         t0 = time.perf_counter()
         cert = certify_map_sequential(pm, np.zeros(2), cfg)
         j_star = cert.r_star
         d = np.linalg.norm(cert.samples, axis=1)
         near = np.flatnonzero(cert.fell & (d < args.near * j_star))
-        print(f"## push-sweep: {args.exo_gait or 'the default exo gait'}: J* {j_star:.2f} N s "
-              f"({cert.n_samples} pushes, {sum(r.kind == 'verify' for r in cert.rounds)} verification attempts, "
-              f"{time.perf_counter() - t0:.1f} s); falls below {args.near} J*: {near.size}")
+        attempts = sum(r.kind == "verify" for r in cert.rounds)
+        print(f"{args.exo_gait or 'the default exo gait'}: J* {j_star:.2f} N s ({cert.n_samples} pushes, {attempts} "
+              f"verification attempts, {time.perf_counter() - t0:.1f} s; horizon {cfg.push.horizon} steps after the "
+              f"pushed one, back in the band for {cfg.push.recovery_steps} steps); failures below {args.near} J*: "
+              f"{near.size}")
         if near.size:
             j = cert.samples[near]
             phase = push_phase(j, *vcfg.push_phase)
             _, reasons, steps, _ = pm.walk(j, phase)
             for k in np.argsort(d[near]):
+                what = f"fell in step {steps[k]}" if steps[k] > 0 else "not back in the band"
                 print(f"  |J| {d[near][k]:6.2f} N s, direction {math.degrees(math.atan2(j[k, 1], j[k, 0])):5.0f}°, "
-                      f"phase {phase[k]:.2f}: fell in step {steps[k]} ({reasons[k]})")
+                      f"phase {phase[k]:.2f}: {what} ({reasons[k]})")
         directions = np.arange(-180, 180, 15)
         phases = np.linspace(vcfg.push_phase[0], vcfg.push_phase[1], 13)
         dd, pp = np.meshgrid(np.radians(directions), phases, indexing="ij")
         for f in (float(x) for x in args.sweep.split(",")):
             mag = f * j_star
             j = mag * np.stack([np.cos(dd.ravel()), np.sin(dd.ravel())], axis=1)
-            alive, _, steps, _ = pm.walk(j, pp.ravel())
-            grid = steps.reshape(dd.shape)
-            print(f"|J| = {f:g} J* = {mag:.2f} N s: {int((~alive).sum())} of {alive.size} pushes fall "
-                  f"({100 * (~alive).mean():.1f} %); rows: direction in the heading frame (0° forward, 90° left), "
-                  f"columns: phase {phases[0]:.2f} … {phases[-1]:.2f}; '.' walked, digit: the step it fell in")
+            alive, _, steps, recovered = pm.walk(j, pp.ravel())
+            fell = steps > 0
+            cells = np.where(alive, ".", np.where(fell, np.minimum(steps, 9).astype(str), "o")).reshape(dd.shape)
+            print(f"|J| = {f:g} J* = {mag:.2f} N s: {int((~alive).sum())} of {alive.size} pushes fail "
+                  f"({100 * (~alive).mean():.1f} %: {int(fell.sum())} fall, {int((~alive & ~fell).sum())} not back "
+                  f"in the band); recovered by step {np.median(recovered[alive]) if alive.any() else float('nan'):.0f} "
+                  f"(median); rows: direction in the heading frame (0° forward, 90° left), columns: phase "
+                  f"{phases[0]:.2f} … {phases[-1]:.2f}; '.' recovered, digit: the step it fell in, 'o': walked but "
+                  f"not back in the band within the horizon")
             for a, deg in enumerate(directions):
-                print(f"  {deg:5d}°  " + "".join("." if g == 0 else str(min(g, 9)) for g in grid[a]))
+                print(f"  {deg:5d}°  " + "".join(cells[a]))
+    finally:
+        engine.close()
     print(load())
 
 
@@ -611,25 +681,18 @@ def main() -> None:
     ap.add_argument("--horizons", default="1,2,3", help="horizon: K values (default 1,2,3)")
     ap.add_argument("--start", type=int, default=0, help="horizon: skip the first N gaits (a resumed run)")
     ap.add_argument("--probe", type=int, default=400, help="horizon: states walked one step per gait (default 400)")
-    ap.add_argument("--push-variants", default="100/200/100/3,100/100/50/3,50/100/50/3,100/200/100/2",
-                    help="push: first-round/explore/explore-after-failure/steps tuples (the shipped one first)")
+    ap.add_argument("--push-variants", default="50/100/50/20,100/200/100/20,50/100/50/10",
+                    help="push: first-round/explore/explore-after-failure/horizon tuples (the shipped one first; "
+                         "horizon: push.horizon, steps after the pushed one)")
     ap.add_argument("--gaits", default="", help="push-gaits: a glob of gait files (one per directory name)")
     ap.add_argument("--limit", type=int, default=0, help="push-gaits: at most N gaits, evenly spaced by name")
     ap.add_argument("--workers", type=int, default=2, help="push-gaits: worker processes")
-    ap.add_argument("--gait-variants", default="whole:0/3,chunked:25/3",
-                    help="push-gaits: J* variants name:verify_chunk/steps[/explore_after_failure] (default "
-                         "whole:0/3,chunked:25/3)")
+    ap.add_argument("--gait-variants", default="whole:0/20,chunked:25/20",
+                    help="push-gaits: J* variants name:verify_chunk/horizon[/explore_after_failure] (default "
+                         "whole:0/20,chunked:25/20)")
     ap.add_argument("--near", type=float, default=1.2, help="push-sweep: list the falls below this × J* (1.2)")
     ap.add_argument("--sweep", default="0.8,1.0,1.1", help="push-sweep: impulses of the grids, × J* (0.8,1.0,1.1)")
-    ap.add_argument("--seed", type=int, default=0, help="orbit: the certificates' seed (0)")
-    ap.add_argument("--newton", type=int, default=5, help="orbit: Newton iterations of window+newton (5)")
-    ap.add_argument("--fd-steps", default="1e-7,1e-6,1e-5", help="orbit: finite-difference steps compared")
-    ap.add_argument("--extra", action="append", default=[], help="orbit: more gaits, ROBOT=FILE (repeatable)")
-    ap.add_argument("--orbit-parts", default="rules,fd,survey",
-                    help="orbit: rules (with the finite-difference check and the survey after them), or any of fd, "
-                         "survey and windows alone")
-    ap.add_argument("--survey", action="append", default=[],
-                    help="orbit: gaits of the survey (the shipped search only), ROBOT=FILE (repeatable)")
+    add_orbit_arguments(ap)  # orbit: --only, --extra, --fd-steps (bench_orbit)
     ap.add_argument("-v", "--verbose", action="store_true", help="seeds: one line per certificate")
     args = ap.parse_args()
     if args.repeat < 2:

@@ -6,8 +6,11 @@ one robot and measures, for each:
 - r* re-certified with fresh seeds (``study compare``: study A's certificate, seeds ``--seed-base`` …);
 - every disturbance kind of ``validate`` (``--trials`` each, seed 0, common random numbers): success rate with
   its Wilson interval and the critical size s₅₀ ± s.e. (logistic fit);
-- the orbit's scatter: how far successive section states of 80 steps of the step map stay apart (a point
-  certificate cannot certify a ball smaller than it);
+- the orbit's scatter: the orbit search (:func:`robustgait.certificate.search.find_orbit`) — its status, period and
+  band scatter σ (band coordinates) — and how far successive switching states of its band (the settling window and
+  the hold, canonical) stay apart in the base angular velocity ω (heading frame), median and max (a point
+  certificate cannot certify a ball smaller than it). This replaces the old measure over steps 41–80 of the step
+  map iterated by the removed fixed-point search: the band's states are the walk's own after it settled;
 - a 50-step walk: mean speed against L/T, pelvis roll range, and the soles' pitch at touchdown (toe up, the
   heel strike of a multi-contact gait) and at lift-off (toe down, its toe-off), medians over steps 10–40, from
   the walked trajectory (not from the gait's design): a touchdown ends, a lift-off starts, a flight of ≥ 50 ms
@@ -41,9 +44,10 @@ import mujoco
 import numpy as np
 
 from robustgait import load_gait, load_robot, walk
+from robustgait.certificate.reduced import reduce_state
+from robustgait.certificate.search import find_orbit
 from robustgait.config import KINDS, CertifyConfig, CompareConfig, ValidateConfig
 from robustgait.gait import Gait
-from robustgait.poincare import FixedPointFailure, ReturnMap
 from robustgait.report.tiles import render_tiles
 from robustgait.robots import Robot
 from robustgait.robots.model import CONTACT_SENSORS
@@ -148,21 +152,22 @@ def gait_figures(robot: Robot, gait: Gait) -> dict[str, Any]:
     return walk_figures(robot, gait) | {"scatter": orbit_scatter(robot, gait)}
 
 
-def orbit_scatter(robot: Robot, gait: Gait, steps: int = 80, tail: int = 40) -> dict[str, float]:
-    """How far the step map's orbit is from a period-1 fixed point: ‖x̄_k+1 − x̄_k‖ of the certificate's
-    reduced state over the last ``tail`` of ``steps`` iterates from the gait's start (median and max, rad/s).
-    A certificate around a point cannot hold on a ball smaller than this scatter (docs/gaitgen.md)."""
-    residuals: list[float] = []
-    cfg = CertifyConfig(disturbance="state", fp_tol=1e-12, fp_min_steps=steps, fp_max_steps=steps)
-    with ReturnMap(robot, gait, cfg) as rm:
-        try:
-            rm.find_fixed_point(progress=lambda k, r: residuals.append(r))
-        except FixedPointFailure:
-            pass  # no iterate within 1e-12: expected, the residuals are what is measured
-    r = np.array(residuals[-tail:])
-    if len(residuals) < steps:
-        return {"steps": len(residuals), "median": float("nan"), "max": float("nan")}
-    return {"steps": len(residuals), "median": float(np.median(r)), "max": float(r.max())}
+def orbit_scatter(robot: Robot, gait: Gait) -> dict[str, Any]:
+    """How far the walk's orbit is from a period-1 fixed point: the orbit search's status, period, settling step and
+    band scatter σ (band coordinates), and ‖x̄_k+1 − x̄_k‖ of the certificate's reduced state (the base angular
+    velocity, heading frame) over the band's successive switching states (canonical; median and max, rad/s). A
+    certificate around a point cannot hold on a ball smaller than this scatter (docs/gaitgen.md)."""
+    cfg = CertifyConfig(disturbance="state")
+    orbit = find_orbit(robot, gait, cfg)
+    out: dict[str, Any] = {"status": str(orbit.status), "steps": orbit.steps, "period": orbit.period,
+                           "settled": orbit.settled, "sigma": orbit.sigma, "median": float("nan"),
+                           "max": float("nan")}
+    if orbit.states is None or len(orbit.states) < 2:
+        return out
+    nq = robot.model.nq
+    omega = reduce_state(orbit.states[:, :nq], orbit.states[:, nq:], cfg.frame)
+    r = np.linalg.norm(np.diff(omega, axis=0), axis=1)
+    return out | {"states": len(orbit.states), "median": float(np.median(r)), "max": float(r.max())}
 
 
 def best_gait(directory: Path) -> tuple[Robot, Gait, dict[str, Any]]:
@@ -261,7 +266,10 @@ def print_table(record: dict[str, Any]) -> None:
         row(f"{kind}: success", lambda x, k=kind: fmt_rate(x["validation"][k]["success"]))
         row(f"{kind}: s₅₀ [{first['validation'][kind]['unit']}]",
             lambda x, k=kind: fmt_critical(x["validation"][k]["critical"]))
-    row("orbit scatter ‖x̄ₖ₊₁ − x̄ₖ‖, steps 41–80 [rad/s]",
+    row("orbit (period, σ in band coordinates)", lambda x: "—" if "period" not in x["walk"]["scatter"] else
+        f"{x['walk']['scatter']['status']}, period {x['walk']['scatter']['period']}, σ "
+        + ("—" if x["walk"]["scatter"]["sigma"] is None else f"{x['walk']['scatter']['sigma']:.2g}"))
+    row("orbit scatter ‖x̄ₖ₊₁ − x̄ₖ‖ [rad/s] (band states; records before the orbit search: steps 41–80)",
         lambda x: f"median {x['walk']['scatter']['median']:.2g}, max {x['walk']['scatter']['max']:.2g}")
     row("speed [m/s] (L/T)", lambda x: f"{x['walk']['speed']:.3f} ({x['walk']['speed_design']:.3f})")
     row("pelvis roll [deg]", lambda x: "{:+.1f} … {:+.1f}".format(*x["walk"]["roll"]))

@@ -53,7 +53,7 @@ def one(task: dict[str, Any]) -> dict[str, Any]:
 
 def measure(task: dict[str, Any]) -> dict[str, Any]:
     from robustgait import load_gait, load_robot, walk
-    from robustgait.certify import certify_gait
+    from robustgait.certificate.certify import certify_gait
     from robustgait.config import KINDS, CertifyConfig, GaitParams, SimConfig, ValidateConfig
     from robustgait.gaitgen import generate_gait
     from robustgait.validate import validate_gait

@@ -18,7 +18,9 @@ direct-torque actuation and with explicit damping (see sim/feedback.py, "Actuati
 Gain scan (``--scan``): walks a gait ``--steps`` steps with the passivity law for every uniform Λ in ``--lam``
 and K_D = c·kd (the spec's PD damping) for every c in ``--c``, beside the PD and the law with the PD's own
 stiffness (Λ = kp/kd, K_D = kd), and prints steps walked, tracking RMS / max and saturation per pair — how the
-``[controller.passivity]`` gains of a robot spec are chosen (docs/feedback.md).
+``[controller.passivity]`` gains of a robot spec are chosen (docs/feedback.md) — and, for each law that walks, its
+orbit (:func:`robustgait.certificate.search.find_orbit` on the feedback engine: settled step, period, band scatter
+σ and ‖ω*‖, or its status when it has none; this replaces the removed fixed-point search's step and residual).
 
     python benchmarks/bench_feedback.py --scan [--robot exo|SPEC.toml] [--gait FILE] [--lam 10 20 40]
         [--c 1 2 3] [--steps 10] [--kinds latency,noise --trials 40]
@@ -44,9 +46,9 @@ import numpy as np
 
 from bench_rollout import start_states  # the same K start states as the rollout benchmark
 from robustgait import CertifyConfig, SimConfig, StepEngine, load_gait, load_robot, walk
+from robustgait.certificate.search import find_orbit
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.poincare import FixedPointFailure, ReturnMap
 from robustgait.robots import Robot
 from robustgait.sim.feedback import FeedbackEngine, PDController
 from robustgait.sim.passivity import PassivityController, PassivityGains
@@ -160,11 +162,11 @@ def scan(args: argparse.Namespace) -> None:
             laws.append((f"passivity Λ = {lam:g}/s, K_D = {c:g} kd", PassivityController(gains)))
     for name, ctl in laws:
         res, s, dt = tracked_walk(robot, gait, ctl, config, args.steps)
-        fp = fixed_point(robot, gait, ctl, config) if res.fall_reason is None else "—"
+        orbit = orbit_summary(robot, gait, ctl, config) if res.fall_reason is None else "—"
         dist = disturbances(robot, gait, ctl, args) if res.fall_reason is None and args.kinds else ""
         print(f"  {name:<44} walked {res.steps_taken:>3}/{args.steps} ({res.fall_reason or 'no fall'}) | RMS "
               f"{s['rms'] * 1e3:7.3f} mrad, max {s['max'] * 1e3:7.2f} mrad | saturation "
-              f"{100 * s['saturation_fraction']:6.3f} % | fixed point: {fp}{dist} | {dt:.1f} s", flush=True)
+              f"{100 * s['saturation_fraction']:6.3f} % | orbit: {orbit}{dist} | {dt:.1f} s", flush=True)
 
 
 def disturbances(robot: Robot, gait: Gait, ctl: object, args: argparse.Namespace) -> str:
@@ -186,7 +188,7 @@ def disturbances(robot: Robot, gait: Gait, ctl: object, args: argparse.Namespace
         v = validate_gait(robot, gait, ValidateConfig(trials=args.trials, seed=0), sim=sim,
                           kinds=args.kinds.split(","),
                           certify=CertifyConfig(method="uniform", disturbance="state", n_samples=10))
-    except RobustGaitError as e:  # e.g. no fixed point to start the trials from
+    except RobustGaitError as e:  # e.g. no orbit to start the trials from
         return f" | not validated: {str(e)[:60]}"
     out = []
     for k, kr in v.kinds.items():
@@ -197,18 +199,17 @@ def disturbances(robot: Robot, gait: Gait, ctl: object, args: argparse.Namespace
     return " | " + "; ".join(out)
 
 
-def fixed_point(robot: Robot, gait: Gait, ctl: object, config: SimConfig) -> str:
-    """Whether the step map under this law has a fixed point (the certificate's first need), and where."""
-    pmap = ReturnMap(robot, gait, CertifyConfig(disturbance="state"), SimConfig(n_threads=1))
-    pmap.engine.close()
-    pmap.engine = FeedbackEngine(robot, gait, ctl, config)  # type: ignore[arg-type]
-    try:
-        with pmap:
-            fp = pmap.find_fixed_point()
-    except FixedPointFailure as e:
-        detail = str(e).rsplit("(", 1)[-1].rstrip(")") if e.status == "no_stable_orbit" else f"step {e.steps}"
-        return f"none, {e.status} ({detail})"
-    return f"step {fp.steps}, residual {fp.residual:.1e}, ‖ω*‖ {np.linalg.norm(fp.omega):.3f} rad/s"
+def orbit_summary(robot: Robot, gait: Gait, ctl: object, config: SimConfig) -> str:
+    """Whether the walk under this law has an orbit (the certificate's first need: settled in a band and stable under
+    small pushes), and where: settled step, period, σ and ‖ω*‖, or its status and reason."""
+    cfg = CertifyConfig(disturbance="state")
+    with FeedbackEngine(robot, gait, ctl, config) as eng:  # type: ignore[arg-type]
+        orbit = find_orbit(robot, gait, cfg, engine=eng)
+    if not orbit.ok:
+        return f"none, {orbit.status} after {orbit.steps} steps ({orbit.reason[:80]})"
+    fp = orbit.fixed_point(cfg.frame)
+    return (f"settled at step {orbit.settled}, period {orbit.period}, σ {orbit.sigma:.2g}, ‖ω*‖ "
+            f"{np.linalg.norm(fp.omega):.3f} rad/s")
 
 
 def delays(args: argparse.Namespace) -> None:

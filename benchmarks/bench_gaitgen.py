@@ -33,7 +33,7 @@ from dataclasses import replace
 import numpy as np
 
 from robustgait import GaitParams, load_robot, walk
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
 from robustgait.config import CertifyConfig, GenerationConfig
 from robustgait.gait import Gait
 from robustgait.gaitgen import GaitGenerator, GaitGenResult

@@ -1,43 +1,54 @@
-"""The fixed point's orbit check (issue 28 item 3), measured: ``python benchmarks/bench_certify.py orbit`` (this module
-holds the measurement; ``bench_certify.py`` runs it).
+"""ρ, a diagnostic and never a gate, measured: ``python benchmarks/bench_orbit.py`` (or ``python
+benchmarks/bench_certify.py orbit``, which runs this module's :func:`cmd_orbit`).
 
 Per gait — the default exo gait (tests/data/exo_gait.json or ``--exo-gait``), the stored multi-contact exo gait
-(tests/data/exo_multicontact_gait.json), the Atalante FROST gait (../shared), and any ``--extra ROBOT=FILE`` — three
-fixed-point rules, each a push certificate J* with ``--seed``:
+(tests/data/exo_multicontact_gait.json), the Atalante FROST gait (examples/atalante.toml with
+../shared/atalante/jt_bez_2023-09-10.yaml; skipped with a message when absent), and any ``--extra ROBOT=FILE``;
+``--only`` picks some of them by name (``exo``, ``multicontact``, ``atalante``, an extra's file stem) —
+:func:`robustgait.certificate.search.find_orbit` with ``orbit.linearization`` on, and printed:
 
-* ``before``: the rule before the check (``LEGACY_FIXED_POINT``, fp_tol 5e-3 rad/s on the base angular velocity);
-* ``window``: the shipped default (a window of fp_window iterates within fp_tol in section coordinates, then ρ);
-* ``window+newton``: the same, x* refined by ``--newton`` damped Newton iterations.
+* the orbit's verdict: status, period (physical steps), σ (the band's scatter, band coordinates), the step it settled
+  at, the steps walked and the probe's impulse (with how many probing pushes came back);
+* the diagnostic (:mod:`robustgait.certificate.linearization`): ρ at ``orbit.fd_step`` and at 10× it, whether they
+  agree within ``orbit.fd_agreement`` (10 %), the per-map rate of a perturbation along the leading eigenvector, the top
+  eigenvalue moduli, whether ρ is defined and if not why;
+* the search's seconds and physics steps (its walk, the stability probe and the linearization together).
 
-Printed: status, the step the orbit settled at, the window residual, Newton's residuals, ρ (touchdown in continuous
-time) and ρ at a fixed touchdown step, the top eigenvalue moduli, the fixed-point stage's physics steps and seconds, J*
-and the move of x* from the ``before`` x* (section coordinates; ω*). Then, at the settled iterate of the default rule,
-the finite-difference check of ρ: ρ for each ``--fd-steps`` (robust central differences) and for forward differences,
-the growth of a perturbation along the top eigenvector and of 8 random ones over 8 steps of the map at amplitudes
-1e-6 and 1e-4 — the empirical rates (‖δ_8‖ / ‖δ_0‖)^(1/8) and, for the random ones, (‖δ_8‖ / ‖δ_4‖)^(1/4) — against
-ρ, and how far 300 iterates of the map from x* wander (steps 100–300, from their mean). Last, a survey of
-``--survey ROBOT=FILE`` gaits: the shipped search alone (status, settled step, ρ, moduli, cost; no J*). ``windows``
-(``--orbit-parts windows``): for the standard and survey gaits, where windows of several lengths and tolerances first
-hold on 150 iterates, and the share of later windows that keep holding.
+``--fd-steps h1,h2,…``: then, per gait whose orbit was found, ρ at each finite-difference step h (one
+:func:`robustgait.certificate.numerics.fd_jacobian` batch of the map of the orbit's period in section coordinates at
+x*, times the touchdown projection when there is one), ρ at a fixed touchdown step (without it), the one-sided
+columns, and the per-map rate of a perturbation of 10 h along that Jacobian's leading eigenvector over
+``orbit.confirm_steps`` maps.
+
+What the old version measured and this one does not: the fixed-point rules (the rule before the orbit check, the
+window of ``fp_window`` iterates within ``fp_tol``, Newton refinement of x*), their J* and the move of x* between
+them, the survey of the shipped search with other ``fp_tol`` (``--survey``), and the window-length study
+(``--orbit-parts windows``) — the fixed-point search and its options were replaced by the orbit search
+(:mod:`robustgait.certificate.search`), whose verdict no longer depends on ρ. Gaits that used to go to ``--survey``
+go to ``--extra``; the finite-difference check of ρ at several steps survives as ``--fd-steps``.
+
+    python benchmarks/bench_orbit.py [--only exo] [--extra ROBOT=FILE …] [--fd-steps 1e-7,1e-6,1e-5] [--threads N]
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
+import os
 import time
 from pathlib import Path
 
 import numpy as np
 
 from robustgait import load_gait, load_robot
-from robustgait.certify import GaitCertificate, certify_gait
+from robustgait.certificate.numerics import fd_jacobian, spectral_radius
+from robustgait.certificate.orbit import Orbit
+from robustgait.certificate.reduced import section_coordinates
+from robustgait.certificate.returnmap import FullStateMap
+from robustgait.certificate.search import find_orbit
 from robustgait.config import CertifyConfig, SimConfig
-from robustgait.config.certify import LEGACY_FIXED_POINT
+from robustgait.config.certify import OrbitConfig
+from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.orbit import fd_jacobian, settled_at, spectral_radius, window_residual
-from robustgait.poincare import FixedPointFailure, ReturnMap
-from robustgait.reduced import section_coordinates
 from robustgait.robots import Robot
 
 REPO = Path(__file__).resolve().parents[1]
@@ -55,166 +66,144 @@ def named_gaits(items: list[str]) -> dict[str, tuple[Robot, Gait]]:
 
 
 def orbit_gaits(args: argparse.Namespace) -> dict[str, tuple[Robot, Gait]]:
-    exo = load_robot("exo")
-    out = {"exo flat": (exo, load_gait(args.exo_gait or REPO / "tests" / "data" / "exo_gait.json", exo)),
-           "exo multi-contact": (exo, load_gait(REPO / "tests" / "data" / "exo_multicontact_gait.json", exo))}
-    if (ATALANTE / "loadedExo.xml").is_file():
-        robot = load_robot(REPO / "examples" / "atalante.toml")
-        out["Atalante FROST"] = (robot, load_gait(ATALANTE / "jt_bez_2023-09-10.yaml", robot))
+    """The gaits measured (module docstring), restricted to ``--only`` when given; loaded only when picked."""
+    only = set(args.only.split(",")) if args.only else None
+
+    def wanted(name: str) -> bool:
+        return only is None or name in only
+
+    out: dict[str, tuple[Robot, Gait]] = {}
+    if wanted("exo") or wanted("multicontact"):
+        exo = load_robot("exo")
+        if wanted("exo"):
+            out["exo"] = (exo, load_gait(args.exo_gait or REPO / "tests" / "data" / "exo_gait.json", exo))
+        if wanted("multicontact"):
+            out["multicontact"] = (exo, load_gait(REPO / "tests" / "data" / "exo_multicontact_gait.json", exo))
+    if wanted("atalante"):
+        if (ATALANTE / "loadedExo.xml").is_file():
+            robot = load_robot(REPO / "examples" / "atalante.toml")
+            out["atalante"] = (robot, load_gait(ATALANTE / "jt_bez_2023-09-10.yaml", robot))
+        else:
+            print(f"{ATALANTE} is missing: the Atalante FROST gait is skipped")
+    extra = named_gaits(args.extra)
+    return out | {k: v for k, v in extra.items() if wanted(k)}
+
+
+def _f(v: float | None, fmt: str = ".4f") -> str:
+    return "—" if v is None else format(v, fmt)
+
+
+def orbit_row(name: str, orbit: Orbit, agreement: float, seconds: float) -> str:
+    """One Markdown row: the orbit's verdict, the linearization diagnostic and the cost."""
+    settled = "—" if orbit.settled is None else str(orbit.settled)
+    sigma = "—" if orbit.sigma is None else f"{orbit.sigma:.2g}"
+    probe = "—"
+    if orbit.probe is not None:
+        p = orbit.probe
+        probe = f"{p.impulse:.3g} N s ({sum(p.recovered)}/{len(p.recovered)} back)"
+    lin = orbit.linearization
+    if lin is None:
+        cells = ["—"] * 5 + ["not computed (no orbit)" if not orbit.ok else "not computed"]
     else:
-        print("../shared/atalante is missing: the Atalante gait is skipped")
-    return out | named_gaits(args.extra)
+        agree = "—"
+        if lin.rho is not None and lin.rho_coarse is not None:
+            gap = abs(lin.rho - lin.rho_coarse) / max(lin.rho, lin.rho_coarse, 1e-300)
+            agree = f"{'yes' if gap <= agreement else 'no'} ({100 * gap:.1f} %)"
+        moduli = " ".join(f"{m:.3f}" for m in lin.moduli[:4]) or "—"
+        defined = "yes" if lin.defined else f"no: {lin.reason}"
+        cells = [_f(lin.rho), _f(lin.rho_coarse), agree, _f(lin.rate), moduli, defined]
+    return (f"| {name} | {orbit.status} | {orbit.period} | {sigma} | {settled} | {orbit.steps} | {probe} | "
+            + " | ".join(cells) + f" | {seconds:.1f} s | {orbit.physics_steps / 1e3:.0f} k |")
 
 
-def _rules(newton: int) -> dict[str, CertifyConfig]:
-    legacy = CertifyConfig(**{**LEGACY_FIXED_POINT, "fp_tol": 5e-3})  # type: ignore[arg-type]
-    return {"before": legacy, "window": CertifyConfig(), "window+newton": CertifyConfig(fp_newton_iterations=newton)}
-
-
-def _row(name: str, rule: str, gc: GaitCertificate, base: GaitCertificate | None, t: float) -> str:
-    o, fp = gc.orbit, gc.fixed_point
-    settled = "—" if o is None or o.settled is None else str(o.settled)
-    window = "—" if o is None else f"{o.window_residual:.1e}"
-    newton = "—" if o is None or not o.newton else " → ".join(f"{r:.0e}" for r in o.newton)
-    rho = "—" if o is None or o.rho is None else f"{o.rho:.3f} ({o.rho_fixed_event:.3f})"
-    moduli = "—" if o is None or not o.moduli else " ".join(f"{m:.2f}" for m in o.moduli[:4])
-    move = "—"
-    if fp is not None and base is not None and base.fixed_point is not None:
-        b = base.fixed_point
-        dx = np.linalg.norm(section_coordinates(fp.qpos[None], fp.qvel[None], t)
-                            - section_coordinates(b.qpos[None], b.qvel[None], t))
-        move = f"{dx:.1e} ({np.linalg.norm(fp.omega - b.omega):.1e})"
-    j = f"{gc.r_star:.2f}" if gc.ok else "—"
-    return (f"| {name} | {rule} | {gc.status} | {settled} | {window} | {newton} | {rho} | {moduli} | "
-            f"{gc.fixed_point_physics_steps / 1e3:.0f} k | {gc.seconds['fixed_point']:.2f} s | {j} | {move} |")
-
-
-def _spread(xs: np.ndarray) -> float:
-    """The largest distance of finite iterates (K, d) from their mean."""
-    ok = xs[np.isfinite(xs).all(axis=1)]
-    return float(np.linalg.norm(ok - ok.mean(axis=0), axis=1).max()) if len(ok) else float("nan")
-
-
-def _fd_check(robot: Robot, gait: Gait, sim: SimConfig, steps: list[float]) -> list[str]:
-    """ρ at the settled iterate for several finite-difference steps, forward differences, the growth of perturbations
-    over 8 steps of the map, and how far 300 iterates from x* wander."""
-    cfg = CertifyConfig(fp_rho_max=None)
-    with ReturnMap(robot, gait, cfg, sim) as pmap:
-        try:
-            fp = pmap.find_fixed_point()
-        except FixedPointFailure as exc:
-            return [f"  (no settled iterate: {exc.status})"]
-        ref = fp.qpos
-        x = section_coordinates(fp.qpos[None], fp.qvel[None], gait.step_duration)[0]
-        F = pmap.section_map(ref)
-        proj = pmap.touchdown_projection(x, ref)
-        lines = []
+def fd_check(robot: Robot, gait: Gait, orbit: Orbit, cfg: OrbitConfig, sim: SimConfig,
+             steps: list[float]) -> list[str]:
+    """ρ at x* for each finite-difference step h (module docstring), with and without the touchdown projection, the
+    one-sided columns, and the per-map rate of a perturbation of 10 h along the leading eigenvector."""
+    assert orbit.qpos is not None and orbit.qvel is not None
+    t0 = time.perf_counter()
+    lines = []
+    with FullStateMap(robot, gait, orbit.period, sim) as fmap:
+        x = section_coordinates(orbit.qpos[None], orbit.qvel[None], gait.step_duration)[0]
+        F = fmap.section_map(orbit.qpos)
+        proj = fmap.touchdown_projection(x, orbit.qpos)
+        starts, rows = [x], []
         for h in steps:
-            j = fd_jacobian(F, x, h, cfg.fp_fd_jump)
-            rho = spectral_radius(j.matrix if proj is None else proj @ j.matrix)[0]
-            lines.append(f"  h = {h:g}: ρ = {rho:.4f}, at a fixed touchdown step {spectral_radius(j.matrix)[0]:.4f}, "
-                         f"{len(j.one_sided)} one-sided columns")
-        h = cfg.fp_fd_step
-        d = x.size
-        y = F(np.vstack([x[None], x + h * np.eye(d)]))
-        forward = ((y[1:] - y[0]) / h).T
-        rho_f = spectral_radius(forward if proj is None else proj @ forward)[0]
-        lines.append(f"  forward differences, h = {h:g}: ρ = {rho_f:.4f}")
-        a = j.matrix if proj is None else proj @ j.matrix
-        lam, vec = np.linalg.eig(a)
-        top = vec[:, np.argmax(np.abs(lam))].real
-        rng = np.random.default_rng(0)
-        for amp in (1e-6, 1e-4):
-            u = rng.standard_normal((8, d))
-            u = np.vstack([top, u]) / np.linalg.norm(np.vstack([top, u]), axis=1, keepdims=True)
-            xs, sep = np.vstack([x, x + amp * u]), [np.full(9, amp)]
-            for _ in range(8):
-                xs = F(xs)
-                sep.append(np.linalg.norm(xs[1:] - xs[0], axis=1))
-            r = np.array(sep)
-            late = np.median(r[8, 1:] / r[4, 1:]) ** (1 / 4)
-            lines.append(f"  perturbation of {amp:g} along the top eigenvector: × {r[8, 0] / amp:.3g} in 8 steps (rate "
-                         f"{(r[8, 0] / amp) ** (1 / 8):.3f}); 8 random ones: × {np.median(r[8, 1:]) / amp:.3g} "
-                         f"(median; rate over steps 4–8 {late:.3f})")
-        xs = [x]
-        for _ in range(300):
-            xs.append(F(xs[-1][None])[0])
-        tail = np.array(xs[100:])
-        lines.append(f"  300 iterates of the map from x*: steps 100–300 within {_spread(tail):.2g} of their mean"
-                     + ("" if np.isfinite(tail).all() else " (it fell)"))
+            try:
+                j = fd_jacobian(F, x, h, cfg.fd_jump)
+            except RobustGaitError as exc:
+                lines.append(f"  h = {h:g}: no Jacobian ({exc})")
+                continue
+            a = j.matrix if proj is None else proj @ j.matrix
+            rho, _ = spectral_radius(a)
+            values, vectors = np.linalg.eig(a)
+            v = vectors[:, int(np.argmax(np.abs(values)))]
+            u = np.real(v) if np.linalg.norm(np.real(v)) >= np.linalg.norm(np.imag(v)) else np.imag(v)
+            starts.append(x + 10.0 * h * u / np.linalg.norm(u))
+            rows.append((h, rho, spectral_radius(j.matrix)[0], len(j.one_sided)))
+        # the perturbations along each step's leading eigenvector, iterated beside x* in one batch
+        xs = np.vstack(starts)
+        for _ in range(cfg.confirm_steps):
+            xs = F(xs)
+        for i, (h, rho, rho_fixed, one_sided) in enumerate(rows, start=1):
+            sep = float(np.linalg.norm(xs[i] - xs[0]))
+            rate = (sep / (10.0 * h)) ** (1.0 / cfg.confirm_steps) if np.isfinite(sep) else float("nan")
+            lines.append(f"  h = {h:g}: ρ = {rho:.4f} (at a fixed touchdown step {rho_fixed:.4f}), {one_sided} "
+                         f"one-sided columns; a perturbation of {10 * h:g} along its leading eigenvector: "
+                         + (f"×{rate:.4f}/map over {cfg.confirm_steps} maps" if np.isfinite(rate) else "fell"))
+        lines.append(f"  ({'touchdown projection' if proj is not None else 'no touchdown projection'}; "
+                     f"{fmap.physics_steps / 1e3:.0f} k physics steps, {time.perf_counter() - t0:.1f} s)")
     return lines
 
 
 def cmd_orbit(args: argparse.Namespace) -> None:
+    """The measurement of the module docstring."""
     sim = SimConfig(n_threads=args.threads)
-    parts = set(args.orbit_parts.split(","))
-    if "rules" not in parts:
-        for name, (robot, gait) in orbit_gaits(args).items() if "fd" in parts else ():
-            print(f"{name}: finite-difference check of ρ at the settled iterate")
-            print("\n".join(_fd_check(robot, gait, sim, [float(v) for v in args.fd_steps.split(",")])))
-        if "survey" in parts:
-            _survey(args, sim)
-        if "windows" in parts:
-            _windows(args, sim)
-        return
-    print("| gait | rule | status | settled at step | window residual | Newton ‖P(x) − x‖ | ρ (fixed touchdown) | "
-          "top moduli | fixed-point physics steps | fixed-point seconds | J* [N s] | x* move from before: section "
-          "(ω*) |")
-    print("|" + "---|" * 12)
-    checks: dict[str, list[str]] = {}
+    cfg = CertifyConfig(orbit=OrbitConfig(linearization=True))
+    o = cfg.orbit
+    print(f"## orbit: find_orbit with orbit.linearization (fd_step {o.fd_step:g} and {10 * o.fd_step:g}, agreement "
+          f"{100 * o.fd_agreement:g} %, {o.confirm_steps} maps along the eigenvector, tolerance "
+          f"{100 * o.confirm_tolerance:g} %); threads {sim.threads}; load average "
+          + " ".join(f"{v:.2f}" for v in os.getloadavg()))
+    print("| gait | status | period | σ | settled at step | steps walked | probe | ρ (h) | ρ (10 h) | agree within "
+          f"{100 * o.fd_agreement:g} % | rate/map along the eigenvector | top moduli | ρ defined | seconds | "
+          "physics steps |")
+    print("|" + "---|" * 15)
+    orbits: dict[str, tuple[Robot, Gait, Orbit]] = {}
     for name, (robot, gait) in orbit_gaits(args).items():
-        base: GaitCertificate | None = None
-        for rule, cfg in _rules(args.newton).items():
-            t0 = time.perf_counter()
-            gc = certify_gait(robot, gait, dataclasses.replace(cfg, seed=args.seed), sim)
-            if rule == "before":
-                base = gc
-            wall = time.perf_counter() - t0
-            print(_row(name, rule, gc, base, gait.step_duration) + f"  <!-- {wall:.1f} s -->", flush=True)
-        checks[name] = _fd_check(robot, gait, sim, [float(v) for v in args.fd_steps.split(",")])
-    for name, lines in checks.items():
-        print(f"{name}: finite-difference check of ρ at the settled iterate")
-        print("\n".join(lines))
-    _survey(args, sim)
+        t0 = time.perf_counter()
+        orbit = find_orbit(robot, gait, cfg, sim)
+        print(orbit_row(name, orbit, o.fd_agreement, time.perf_counter() - t0), flush=True)
+        orbits[name] = (robot, gait, orbit)
+    for name, (_, _, orbit) in orbits.items():
+        print(f"{name}: {orbit.describe()}")
+    if not args.fd_steps:
+        return
+    steps = [float(v) for v in args.fd_steps.split(",")]
+    for name, (robot, gait, orbit) in orbits.items():
+        print(f"{name}: ρ at x* for finite-difference steps {args.fd_steps} (period-{orbit.period} map)")
+        if not orbit.ok or orbit.qpos is None:
+            print(f"  (no orbit: {orbit.status})")
+            continue
+        print("\n".join(fd_check(robot, gait, orbit, o, sim, steps)), flush=True)
 
 
-def _windows(args: argparse.Namespace, sim: SimConfig, steps: int = 150) -> None:
-    """The window's length and tolerance: per gait (the standard ones and ``--survey``), ``steps`` iterates of the step
-    map from its start in section coordinates, the step at which a window of W iterates first holds within tol for
-    several (W, tol), and the share of the windows of 20 that hold over steps 40–``steps`` (a settled orbit keeps
-    them, a scattered one passes one by luck)."""
-    combos = ((10, 1e-2), (20, 5e-3), (20, 1e-2), (20, 2e-2), (30, 1e-2))
-    print(f"\n| gait | {' | '.join(f'W {w}, tol {t:g}' for w, t in combos)} | windows of 20 within 0.01 that hold, "
-          f"steps 40–{steps} | spread of steps 40–{steps} |\n|" + "---|" * (len(combos) + 3))
-    for name, (robot, gait) in (orbit_gaits(args) | named_gaits(args.survey)).items():
-        with ReturnMap(robot, gait, CertifyConfig(), sim) as pmap:
-            q, v = pmap.initial_section()
-            xs = [section_coordinates(q, v, gait.step_duration)[0]]
-            for _ in range(steps):
-                q, v, reason = pmap._advance(q, v)
-                if reason[0] is not None:
-                    break
-                xs.append(section_coordinates(q, v, gait.step_duration)[0])
-        a = np.array(xs)
-        cells = [str(settled_at(a, w, t, min_index=10)) for w, t in combos]
-        held = np.mean([window_residual(a[:k + 1], 20) <= 1e-2 for k in range(40, len(a))])
-        print(f"| {name} | {' | '.join(c.replace('None', 'never') for c in cells)} | {held:.0%} | "
-              f"{_spread(a[40:]):.2g} |", flush=True)
+def add_orbit_arguments(ap: argparse.ArgumentParser) -> None:
+    """The options of :func:`cmd_orbit` other than ``--exo-gait`` and ``--threads`` (bench_certify has those)."""
+    ap.add_argument("--only", default="",
+                    help="orbit: only these gaits, comma-separated (exo, multicontact, atalante, an extra's file stem)")
+    ap.add_argument("--extra", action="append", default=[], help="orbit: more gaits, ROBOT=FILE (repeatable)")
+    ap.add_argument("--fd-steps", default="",
+                    help="orbit: also ρ at these finite-difference steps, comma-separated (e.g. 1e-7,1e-6,1e-5)")
 
 
-def _survey(args: argparse.Namespace, sim: SimConfig) -> None:
-    """The shipped search alone on the ``--survey`` gaits, and where its window settles with fp_tol 5e-3 and 2e-2."""
-    if args.survey:
-        print("\n| gait | status | settled at step | window residual | ρ (fixed touchdown) | top moduli | "
-              "fixed-point physics steps | fixed-point seconds | settled with fp_tol 5e-3, 2e-2 |\n|" + "---|" * 9)
-    for name, (robot, gait) in named_gaits(args.survey).items():
-        gc = certify_gait(robot, gait, CertifyConfig(method="uniform", n_samples=1), sim)
-        cells = _row(name, "window", gc, None, gait.step_duration).split(" | ")
-        other = []
-        for tol in (5e-3, 2e-2):
-            with ReturnMap(robot, gait, CertifyConfig(fp_tol=tol, fp_rho_max=None), sim) as pmap:
-                try:
-                    other.append(str(pmap.find_fixed_point().steps))
-                except FixedPointFailure as exc:
-                    other.append(exc.status)
-        print(" | ".join([cells[0], *cells[2:5], *cells[6:10], ", ".join(other)]) + " |", flush=True)
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--exo-gait", help="the exo gait file (default tests/data/exo_gait.json)")
+    ap.add_argument("--threads", type=int, default=0, help="0 = one per core")
+    add_orbit_arguments(ap)
+    cmd_orbit(ap.parse_args())
+
+
+if __name__ == "__main__":
+    main()

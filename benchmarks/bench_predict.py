@@ -82,11 +82,11 @@ def gaits_of(studies: list[Path]) -> list[dict[str, Any]]:
 
 def one_gait(task: dict[str, Any]) -> dict[str, Any]:
     """Everything of one gait (module docstring). Runs in a worker: one rollout thread, BLAS on one thread."""
-    from robustgait.certify import certify_gait
+    from robustgait.certificate.certify import certify_gait
+    from robustgait.certificate.reduced import ReducedState
     from robustgait.config import CertifyConfig, SimConfig, ValidateConfig
     from robustgait.io.gaitfile import load_gait
     from robustgait.io.robotfile import load_robot
-    from robustgait.reduced import ReducedState
     from robustgait.validate import disturbances as dist
     from robustgait.validate.run import CertificateRef, Validator, simulate_trials
     from robustgait.validate.stats import logistic_fit

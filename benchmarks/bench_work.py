@@ -19,14 +19,14 @@ from datetime import date
 from pathlib import Path
 
 from robustgait import load_gait, load_robot
-from robustgait.certify import certify_steps, check_certify_work
+from robustgait.certificate.certify import certify_steps, check_certify_work
+from robustgait.certificate.reduced import section_dimension
 from robustgait.cli import build_parser
 from robustgait.cli.options import config_from
 from robustgait.config import KINDS, CertifyConfig, Config, SimConfig, ValidateConfig, preset
 from robustgait.config.work import Work, work_limit
 from robustgait.gait import Gait
 from robustgait.learn.space import ActionSpace
-from robustgait.reduced import section_dimension
 from robustgait.robots import Robot
 from robustgait.sim.engine import step_physics_steps
 from robustgait.sim.walk import check_walk_work

@@ -18,6 +18,7 @@ ATALANTE_SPEC = REPO / "examples" / "atalante.toml"
 ATALANTE_GAIT = ATALANTE_DIR / "jt_bez_2023-09-10.yaml"
 EXO_GAIT = REPO / "tests" / "data" / "exo_gait.json"
 EXO_MC_GAIT = REPO / "tests" / "data" / "exo_multicontact_gait.json"
+T1_MODEL = REPO.parent / "shared" / "robots" / "booster_t1" / "t1.xml"
 
 needs_atalante = pytest.mark.skipif(not (ATALANTE_DIR / "loadedExo.xml").is_file(),
                                     reason="../shared/atalante (AMBER lab model) is not beside the repository")
@@ -70,17 +71,18 @@ def flat_robot_gait(request):  # type: ignore[no-untyped-def]
     return request.getfixturevalue("atalante"), request.getfixturevalue("atalante_gait")
 
 
-def search_options(gait) -> dict:  # type: ignore[no-untyped-def, type-arg]
-    """The fixed-point options a test of the map's or the certificate's mechanics searches a stored gait with: the
-    shipped search for the flat-foot exo gait; for the two stored gaits the shipped search refuses — the multi-contact
-    exo gait (its orbit never settles: no_stable_orbit) and Atalante's FROST gait (it settles on an unstable orbit, ρ
-    1.1–1.2: unstable_orbit; docs/certificate.md "Fixed point") — the rule before the orbit check, which found them a
-    fixed point. The refusals themselves: test_poincare.py, test_certify.py."""
-    from robustgait.config.certify import LEGACY_FIXED_POINT
+@pytest.fixture(scope="session")
+def t1(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """Booster T1 (../shared/robots, MuJoCo Menagerie, meshes removed) with the spec ``robot init`` writes for it, as a
+    user brings it (skipped with the reason when absent)."""
+    if not T1_MODEL.is_file():
+        pytest.skip("../shared/robots/booster_t1 (Booster T1) is not beside the repository")
+    from robustgait import load_robot
+    from robustgait.cli import main
 
-    if gait.robot == "exo" and gait.domain_graph == "flat":
-        return {}
-    return {**LEGACY_FIXED_POINT, "fp_tol": 5e-3}
+    spec = tmp_path_factory.mktemp("t1") / "t1.toml"
+    assert main(["robot", "init", str(T1_MODEL), "-o", str(spec)]) == 0
+    return load_robot(spec)
 
 
 def write_frost_yaml(gait, path, *, inputparams=None):  # type: ignore[no-untyped-def]

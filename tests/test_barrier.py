@@ -1,4 +1,4 @@
-"""Tests for robustgait.barrier: DTBF, exact r* from samples, confidence bound, logged trajectories."""
+"""Tests for robustgait.certificate.barrier: DTBF, exact r* from samples, confidence bound, logged trajectories."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy import stats
 
-from robustgait.barrier import (
+from robustgait.certificate.barrier import (
     barrier_along,
     barrier_margin,
     barrier_value,

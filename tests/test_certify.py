@@ -6,13 +6,16 @@ import numpy as np
 import pytest
 
 from robustgait import RobustGaitError
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
+from robustgait.certificate.orbit import Status
+from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.cli import main
-from robustgait.config import CertifyConfig, SequentialConfig, SimConfig
-from robustgait.config.certify import LEGACY_FIXED_POINT
-from robustgait.poincare import ReturnMap
+from robustgait.config import CertifyConfig, OrbitConfig, SequentialConfig, SimConfig
 from robustgait.report import outcome_masks, plot_barrier_trace, plot_certificate
-from tests.conftest import EXO_GAIT, EXO_MC_GAIT, search_options, standing_gait
+from tests.conftest import EXO_GAIT, EXO_MC_GAIT, standing_gait
+
+# an orbit search that cannot settle: two windows of 16 must agree to within 1e-12
+NEVER_SETTLES = OrbitConfig(max_steps=32, floor=1e-12, drift=1e-9)
 
 
 def uniform(**kw):  # type: ignore[no-untyped-def]
@@ -22,7 +25,7 @@ def uniform(**kw):  # type: ignore[no-untyped-def]
 
 @pytest.fixture(scope="module")
 def small_cert(robot_gait):
-    return certify_gait(*robot_gait, uniform(n_samples=24, r_max=1.0, seed=3, **search_options(robot_gait[1])))
+    return certify_gait(*robot_gait, uniform(n_samples=24, r_max=1.0, seed=3))
 
 
 # a sequential certificate small enough for a test: ε = 0.2 needs 17 verification samples
@@ -33,12 +36,12 @@ SMALL_SEQ = SequentialConfig(epsilon=0.2, first_round=16, round_size=16, explore
 @pytest.fixture(scope="module")
 def seq_cert(robot_gait):
     return certify_gait(*robot_gait, CertifyConfig(method="sequential", disturbance="state", r_max=1.0, seed=3,
-                                                   sequential=SMALL_SEQ, **search_options(robot_gait[1])))
+                                                   sequential=SMALL_SEQ))
 
 
 def test_certificate_is_consistent(small_cert):
     c = small_cert.certificate
-    assert small_cert.status == "ok" and small_cert.ok and small_cert.steps_walked == small_cert.fixed_point.steps
+    assert small_cert.status == Status.OK and small_cert.ok and small_cert.steps_walked == small_cert.orbit.steps
     assert c.method == "uniform" and len(c.rounds) == 1 and c.rounds[0].r_hat == c.r_star
     assert 0 <= c.r_star <= 1.0 and c.n_samples == 24
     np.testing.assert_array_equal(c.fell, np.isnan(c.images).any(axis=1))
@@ -46,23 +49,22 @@ def test_certificate_is_consistent(small_cert):
     inside = d < c.r_star
     assert np.all(c.margins[inside] >= 0) and inside.sum() <= c.n_inside
     assert np.all(d <= 1.0 + 1e-12)
-    assert small_cert.fixed_point.residual < 1e-2 and small_cert.map_residual < 0.02
-    assert small_cert.physics_steps > 24 * 500
+    assert small_cert.map_residual < 0.05 and small_cert.sigma is not None and small_cert.sigma < 0.05
+    assert small_cert.physics_steps > 24 * 500 and small_cert.orbit_physics_steps > 0
 
 
 @pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_same_seed_same_json(robot_gait, small_cert):
     """Same seed, same certificate — also on one rollout thread instead of one per core (studies give every
     worker all cores and rely on it)."""
-    opts = search_options(robot_gait[1])
-    again = certify_gait(*robot_gait, uniform(n_samples=24, r_max=1.0, seed=3, **opts), SimConfig(n_threads=1))
+    again = certify_gait(*robot_gait, uniform(n_samples=24, r_max=1.0, seed=3), SimConfig(n_threads=1))
     a, b = small_cert.to_dict(), again.to_dict()
     a.pop("seconds")
     b.pop("seconds")
     assert b["sim"]["n_threads"] == 1
     b["sim"]["n_threads"] = a["sim"]["n_threads"]
     assert json.dumps(a) == json.dumps(b)
-    other = certify_gait(*robot_gait, uniform(n_samples=24, r_max=1.0, seed=4, **opts))
+    other = certify_gait(*robot_gait, uniform(n_samples=24, r_max=1.0, seed=4))
     assert other.to_dict()["samples"] != a["samples"]
 
 
@@ -77,7 +79,7 @@ def test_sequential_certificate(robot_gait, seq_cert):
     d = np.linalg.norm(c.samples - c.x_star, axis=1)
     assert np.all(c.margins[d < c.r_star] >= 0)
     # round 1 is the uniform estimator's draw (16 samples, seed 3): relative to x*, it depends on the seed only
-    u = certify_gait(*robot_gait, uniform(n_samples=16, r_max=1.0, seed=3, **search_options(robot_gait[1])))
+    u = certify_gait(*robot_gait, uniform(n_samples=16, r_max=1.0, seed=3))
     np.testing.assert_array_equal(c.samples[:16], u.certificate.samples)
     assert c.rounds[0].r_hat == u.r_star
     res = json.loads(json.dumps(seq_cert.to_dict(), allow_nan=False))
@@ -92,8 +94,7 @@ def test_paired_samples_across_gaits(robot_gait, seq_cert):
     robot, gait = robot_gait
     no_exploration = SequentialConfig(epsilon=0.2, first_round=16, explore=0, explore_after_failure=0, budget=60)
     other = certify_gait(robot, gait.mirrored(robot), CertifyConfig(method="sequential", disturbance="state",
-                                                                     r_max=1.0, seed=3, sequential=no_exploration,
-                                                                     **search_options(gait)))
+                                                                     r_max=1.0, seed=3, sequential=no_exploration))
     a, b = seq_cert.certificate, other.certificate
     assert not np.allclose(a.x_star, b.x_star)
     np.testing.assert_allclose(a.samples[:16] - a.x_star, b.samples[:16] - b.x_star, atol=1e-12)
@@ -112,34 +113,33 @@ def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
     qvel[3] = 6.0
     tipped = dataclasses.replace(stand, initial_state=dataclasses.replace(stand.initial_state, qvel=qvel))
     fell = certify_gait(exo, tipped, uniform())
-    assert fell.status == "fell_before_fixed_point" and fell.r_star == 0 and fell.vacuous
-    assert fell.certificate is None and fell.fixed_point is None and "fell within step 1" in fell.reason
+    assert fell.status == Status.FELL and fell.r_star == 0 and fell.vacuous
+    assert fell.certificate is None and fell.fixed_point is None and "fell in step 1" in fell.reason
     assert fell.steps_walked == 0
-    none = certify_gait(exo, exo_gait, uniform(fp_tol=1e-9, fp_max_steps=12, fp_min_steps=10))
-    assert none.status == "no_stable_orbit" and none.r_star == 0 and none.steps_walked == 12
+    none = certify_gait(exo, exo_gait, uniform(orbit=NEVER_SETTLES))
+    assert none.status == Status.UNSETTLED and none.r_star == 0 and none.steps_walked == 32
     res = json.loads(json.dumps(none.to_dict(), allow_nan=False))
-    assert res["status"] == "no_stable_orbit" and res["r_star"] == 0 and res["vacuous"] and res["x_star"] is None
-    orbit = res["orbit"]
-    assert orbit["converged"] is False and orbit["residuals"]["steps"] == 12 and orbit["rho"] is None
+    assert res["status"] == "unsettled" and res["r_star"] == 0 and res["vacuous"] and res["x_star"] is None
+    assert res["orbit"]["settled_at_step"] is None and res["orbit"]["steps"] == 32 and res["orbit"]["sigma"] is None
     # the reduced map falling from x̄* itself: its image of x̄* is replaced by a fall
-    real_call = ReturnMap.__call__
+    real_call = ReducedMap.__call__
 
-    def falls_at_x_star(self, xbar, progress=None):
+    def falls_at_x_star(self, xbar, progress=None):  # type: ignore[no-untyped-def]
         out = real_call(self, xbar, progress)
-        if self.fixed_point is not None and np.allclose(xbar, self.reduced.x_star):
+        if np.allclose(xbar, self.reduced.x_star):
             out[:] = np.nan
         return out
 
-    monkeypatch.setattr(ReturnMap, "__call__", falls_at_x_star)
+    monkeypatch.setattr(ReducedMap, "__call__", falls_at_x_star)
     unstable = certify_gait(exo, exo_gait, uniform(n_samples=4))
-    assert unstable.status == "unstable_fixed_point" and unstable.r_star == 0
-    assert unstable.fixed_point is not None and unstable.steps_walked == unstable.fixed_point.steps
+    assert unstable.status == Status.UNSTABLE_FIXED_POINT and unstable.r_star == 0
+    assert unstable.fixed_point is not None and unstable.steps_walked == unstable.orbit.steps
     assert "falls from its own fixed point" in unstable.statement()
 
 
 @pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_figures(tmp_path, small_cert, seq_cert):
-    from robustgait.barrier import barrier_along
+    from robustgait.certificate.barrier import barrier_along
 
     masks = outcome_masks(small_cert.certificate)
     assert sum(int(m.sum()) for m in masks.values()) == 24
@@ -178,10 +178,11 @@ def test_cli_certify_json(capsys, tmp_path):
                         "--json", "--plot", str(tmp_path / "c.png"), "-o", str(tmp_path / "c.json"))
     res = json.loads(out)
     assert code == 0
-    for key in ("r_star", "x_star", "fixed_point_residual", "n_samples", "n_fell", "map", "reconstruction",
-                "seconds"):
+    for key in ("r_star", "x_star", "fixed_point_step", "sigma", "period", "n_samples", "n_fell", "map",
+                "reconstruction", "seconds"):
         assert key in res
-    assert res["n_samples"] == 12 and res["map"] == "step" and res["reconstruction"] == "holonomic"
+    assert res["n_samples"] == 12 and res["map"] == "auto" and res["period"] == 1
+    assert res["reconstruction"] == "holonomic" and res["sigma"] is None and res["orbit"]["sigma"] < 1e-3
     assert len(json.loads((tmp_path / "c.json").read_text())["samples"]) == 12
     assert (tmp_path / "c.png").stat().st_size > 10_000
 
@@ -200,9 +201,11 @@ def test_cli_certify_sequential(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("extra, status, message", [
-    (["--override", "sim.max_step_tau=1.002"], "fell_before_fixed_point", "before a fixed point was reached"),
-    (["--fp-tol", "1e-9", "--fp-max-steps", "12"], "no_stable_orbit", "no stable orbit: the step-map iterates"),
-    (["--fp-rho-max", "0.5"], "unstable_orbit", "has spectral radius ρ = 0.79"),
+    (["--override", "sim.max_step_tau=1.002"], "fell", "before its switching states settled"),
+    (["--orbit-steps", "32", "--override", "certify.orbit.floor=1e-12", "--override", "certify.orbit.drift=1e-9"],
+     "unsettled", "its band keeps"),
+    (["--override", "certify.orbit.probe_impulse=0.5", "--override", "certify.orbit.probe_doublings=0"], "unstable",
+     "8 fell and 0 came back within 20 steps"),
 ])
 @pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_cli_certify_gait_failure_is_a_result(capsys, tmp_path, extra, status, message):
@@ -217,19 +220,20 @@ def test_cli_certify_gait_failure_is_a_result(capsys, tmp_path, extra, status, m
 
 @pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
 def test_cli_certify_reports_the_orbit(capsys):
-    """A certificate says on which orbit it stands (ρ, the window), and a gait whose orbit never settles gets none:
-    exit 1, its status, the orbit line."""
+    """A certificate says on which orbit it stands (settled step, period, band, the probe), for the flat-foot gait
+    and for the stored multi-contact gait, whose switching states scatter in a wider band."""
     code, out, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--method", "uniform", "--samples", "4",
                         "--json")
     res = json.loads(out)
     o = res["orbit"]
-    assert code == 0 and o["converged"] and o["settled_at_step"] == res["fixed_point_steps"] == 27
-    assert 0.7 < o["rho"] < 0.9 and len(o["moduli"]) == 33 and o["window"] == 20 and o["tol"] == 0.01
-    assert res["fixed_point_residual"] == o["map_residual"] and res["fixed_point_physics_steps"] > 67 * 600
+    assert code == 0 and o["status"] == "ok" and o["period"] == 1 and o["settled_at_step"] < o["steps"]
+    assert res["fixed_point_step"] == o["x_star_step"] and o["probe"]["recovered"] == [True] * 8
+    assert o["linearization"] is None and res["orbit_physics_steps"] > 30 * 600
     code, out, err = _cli(capsys, "certify", str(EXO_MC_GAIT), "--robot", "exo", "--method", "uniform", "--samples",
                           "4")
-    assert code == 1 and err == "" and out.startswith("no_stable_orbit: J* = 0 (no stable orbit")
-    assert "orbit: NOT converged (wandering; window residual" in out and "100 steps walked" in out
+    assert code == 0 and err == "" and "orbit: settled at step" in out and "period-1 orbit" in out
+    mc = float(out.split("band of σ = ")[1].split(" ")[0])
+    assert mc > o["sigma"]
 
 
 @pytest.mark.parametrize("extra, message", [
@@ -247,6 +251,10 @@ def test_cli_certify_reports_the_orbit(capsys):
     (["--method", "sequential", "--budget", "100"], "argument --budget: 100 samples cannot hold"),
     (["--override", "certify.sequential.budget=100"], "--override certify.sequential.budget=100: "),
     (["--override", "certify.nope=1"], "certify.nope: unknown setting"),
+    (["--orbit-steps", "20"], "argument --orbit-steps: must be at least min_steps (10) and two windows (32)"),
+    (["--override", "certify.orbit.window=15"], "certify.orbit.window: must be a multiple of max_period 4"),
+    (["--override", "certify.orbit.max_period=3"], "certify.orbit.max_period: must be a power of two"),
+    (["--map", "hop"], "argument --map: must be one of 'auto', 'step', 'stride' (got 'hop')"),
 ])
 def test_cli_certify_bad_input(capsys, tmp_path, extra, message):
     out_json = tmp_path / "c.json"
@@ -278,33 +286,23 @@ def test_cli_walk_log_then_barrier_eval(capsys, tmp_path):
 
 
 # ---- regression: the headline figures are deterministic for a seed ------------------------------------------
-# Measured on main 63fee94 and again after the configuration tree (3ee64ad): identical to the last digit.
-PINNED = {("exo", "uniform"): 0.48816619978446785, ("exo", "sequential"): 0.35440094083257295,
-          ("exo-multicontact", "uniform"): 0.9984739342663146, ("exo-multicontact", "sequential"): 0.0608276374489585}
-# the same certificates at the shipped fixed point (the orbit check, 2026-11-25): the flat-foot gait's
-PINNED_NOW = {"uniform": 0.48816619978446785, "sequential": 0.34506779411032074}
+# the paper's certificate (omega ball, one step) of the two stored gaits at the orbit search's x*, seed 0
+PINNED = {("exo", "uniform"): 0.48816619978446785, ("exo", "sequential"): 0.35487481531929144,
+          ("exo-multicontact", "uniform"): 0.9984739342663146, ("exo-multicontact", "sequential"): 0.07692298937608628}
 
 
 @pytest.mark.parametrize("name, method", [
     ("exo", "uniform"), ("exo-multicontact", "uniform"),
     pytest.param("exo", "sequential", marks=pytest.mark.slow),
     pytest.param("exo-multicontact", "sequential", marks=pytest.mark.slow)])
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # ≥ 3.5 s: plain pytest ≤ 60 s; CI runs it
 def test_stored_gaits_keep_their_r_star_for_seed_0(request, name, method):
     robot = request.getfixturevalue("exo")
     gait = request.getfixturevalue("exo_gait" if name == "exo" else "exo_mc_gait")
-    # the paper's certificate and the fixed point of the rule before the orbit check, named explicitly: the pins hold
-    # whatever the defaults become
+    # the paper's certificate named explicitly: the pins hold whatever the defaults become
     gc = certify_gait(robot, gait, CertifyConfig(method=method, seed=0, disturbance="state", state="omega", set="ball",
-                                                 horizon=1, **{**LEGACY_FIXED_POINT, "fp_tol": 5e-3}))
+                                                 horizon=1))
     assert gc.ok and gc.r_star == pytest.approx(PINNED[(name, method)], abs=1e-6)
-    # the shipped search: the flat-foot gait's x* moves to the settled iterate (step 27 instead of 10); its uniform r*
-    # for seed 0 does not move (the same sample bounds it), the sequential one by −2.6 % (0.35440 → 0.34507, within its
-    # range over seeds 0–9, 0.3441–0.3596); the multi-contact gait's orbit never settles (test_poincare.py)
-    if name == "exo":
-        now = certify_gait(robot, gait, CertifyConfig(method=method, seed=0, disturbance="state"))
-        assert now.ok and now.fixed_point.steps == 27
-        assert now.r_star == pytest.approx(PINNED_NOW[method], abs=1e-6)
 
 
 # ---- reduced states, shaped sets, horizons, pushes -----------------------------------------------------------
@@ -356,7 +354,7 @@ def test_horizon_certificate_reports_its_excursion(exo, exo_gait):
 def test_push_certificate(exo, exo_gait):
     # falls only (push.recovery false): the image of a push is then its fall (recovery: test_push.py)
     gc = certify_gait(exo, exo_gait, uniform(disturbance="push", n_samples=12, seed=1,
-                                             push={"steps": 1, "recovery": False}))
+                                             push={"horizon": 1, "recovery": False}))
     c = gc.certificate
     assert gc.ok and c.samples.shape == (12, 2) and c.r_max == 100.0 and gc.config.unit == "N s"
     # the image of a push is the origin (absorbed) or a fall: J* is the smallest impulse that fell (or r_max)
@@ -374,18 +372,18 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
     """The statement of a sequential J* names its passing batch (size and attempt, from the rounds) in pushes and
     the disk, not the state certificate's ball and r*."""
     gc = certify_gait(exo, exo_gait, CertifyConfig(
-        disturbance="push", seed=3, push={"steps": 1, "first_round": 8, "explore": 8, "explore_after_failure": 8},
+        disturbance="push", seed=3, push={"horizon": 6, "first_round": 8, "explore": 8, "explore_after_failure": 8},
         sequential=SequentialConfig(epsilon=0.2, budget=400)))
     c = gc.certificate
     verify = [r for r in c.rounds if r.kind == "verify"]
     assert gc.ok and c.method == "sequential" and verify[-1].passed and c.violation_bound <= 0.2
     text = gc.statement()
-    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed all "
-            f"recovered (verification attempt {len(verify)}:") in text
+    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed: none "
+            f"fell (verification attempt {len(verify)}:") in text
     assert f"none of the {c.n_samples} pushes of its {len(c.rounds)} rounds" in text
-    # what a failure is: a fall within the pushed step and push.steps more, or off the orbit at their end
-    assert "make the robot fall within that step and 1 more, or leave it off its orbit at their end" in text
-    assert "farther than 0.3 in Froude units" in text
+    # what a failure is: a fall within the pushed step and push.horizon more (a walk back in the band stops there)
+    assert "make the robot fall within that step and 6 more (a pushed walk stops once recovered: 2 consecutive" in text
+    assert "every coordinate of the switching state within 0.03 of its orbit's band" in text
     assert "ball" not in text and "r*" not in text
 
 

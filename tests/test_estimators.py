@@ -1,5 +1,5 @@
-"""Tests for robustgait.estimators: the sequential estimator on maps with known answers (convergence, coverage of
-its confidence statement, common random numbers), against the paper's uniform estimator."""
+"""Tests for robustgait.certificate.estimators: the sequential estimator on maps with known answers (convergence,
+coverage of its confidence statement, common random numbers), against the paper's uniform estimator."""
 
 from __future__ import annotations
 
@@ -10,17 +10,17 @@ import math
 import numpy as np
 import pytest
 
-from robustgait.barrier import certify_map, distances, sample_ball, solve_radius
-from robustgait.config import CertifyConfig, SequentialConfig
-from robustgait.errors import RobustGaitError
-from robustgait.estimators import (
+from robustgait.certificate.barrier import certify_map, distances, sample_ball, solve_radius
+from robustgait.certificate.estimators import (
     certify_map_sequential,
     propose_round,
     verification_beta,
     verification_bound,
     verification_size,
 )
-from robustgait.synthetic import BandMap, ConeMap, PushThresholdMap
+from robustgait.certificate.synthetic import BandMap, ConeMap, PushThresholdMap
+from robustgait.config import CertifyConfig, SequentialConfig
+from robustgait.errors import RobustGaitError
 
 X_STAR = np.array([0.4, 0.2, 0.3])
 

@@ -372,8 +372,8 @@ def test_mutated_logs_evaluate_or_fail_cleanly(data):
 NUMBER_TEXT = st.one_of(st.sampled_from(["0", "-1", "1", "1e9", "1000000000", "nan", "inf", "-inf", "0.5", "",
                                          "abc", "2", "10", "10.0001", "1e-300", "9223372036854775808", " 3"]),
                         st.integers(-(2**70), 2**70).map(str), st.floats().map(repr))
-OPTIONS = {"walk": ["--steps"], "certify": ["--samples", "--r-max", "--alpha", "--seed", "--fp-tol", "--fp-max-steps",
-                                            "--epsilon", "--beta", "--budget"],
+OPTIONS = {"walk": ["--steps"], "certify": ["--samples", "--r-max", "--alpha", "--seed", "--orbit-steps",
+                                            "--push-horizon", "--epsilon", "--beta", "--budget"],
            "barrier-eval": ["--r", "--alpha"]}
 
 

@@ -230,11 +230,23 @@ def test_mirror_signs_follow_the_axes_and_reflect_the_model(tmp_path: Path) -> N
 
 def test_mass_asymmetry_finds_the_side_that_differs(tmp_path: Path) -> None:
     """A model whose kinematics reflect exactly can still differ left to right in its masses (T1's shanks, 60 g):
-    found pair by pair, the lighter body named."""
+    found pair by pair, the lighter body named — and a difference at the level of a model file's rounding (half a
+    milligram, an inertia 0.5 % apart) is not a difference: certified on the step map."""
+    tol = (RobotConfig().side_mass_tolerance, RobotConfig().side_inertia_tolerance)
     xml = biped_xml()
     r = open_model(write(tmp_path, xml))
     same = mass_asymmetry(r, find_mirror(r, 1e-3))
-    assert same.mass == 0 and same.inertia == 0 and "same masses" in same.describe(r)
+    assert same.mass == 0 and same.inertia == 0 and "same masses" in same.describe(r, *tol)
+    assert not same.differs(*tol)
+    at = xml.index('name="right_shin"')
+    at = xml.index('mass="2.0"', at)
+    rounding = xml[:at] + 'mass="2.0000005" diaginertia="0.0201 0.02 0.002"' + xml[
+        at + len('mass="2.0" diaginertia="0.02 0.02 0.002"'):]
+    r = open_model(write(tmp_path, rounding, "rounding.xml"))
+    tiny = mass_asymmetry(r, find_mirror(r, 1e-3))
+    assert tiny.mass == pytest.approx(5e-7) and tiny.inertia == pytest.approx(0.0001 / 0.0201)
+    assert not tiny.differs(*tol) and "the same within the tolerance" in tiny.describe(r, *tol)
+    assert "certified on the step map" in tiny.describe(r, *tol)
     at = xml.index('name="right_shin"')
     at = xml.index('mass="2.0"', at)
     heavier = xml[:at] + 'mass="2.06" diaginertia="0.021 0.02 0.002"' + xml[at + len('mass="2.0" diaginertia="0.02 '
@@ -243,7 +255,8 @@ def test_mass_asymmetry_finds_the_side_that_differs(tmp_path: Path) -> None:
     asym = mass_asymmetry(r, find_mirror(r, 1e-3))
     assert asym.mass == pytest.approx(0.06) and asym.inertia == pytest.approx(0.001 / 0.021)
     assert r.body_name(asym.body) == "left_shin" and r.body_name(asym.partner) == "right_shin"
-    assert "'left_shin' is 60 g lighter than 'right_shin'" in asym.describe(r)
+    assert asym.differs(*tol) and "'left_shin' is 60 g lighter than 'right_shin'" in asym.describe(r, *tol)
+    assert "certified on the stride map" in asym.describe(r, *tol)
 
 
 # ----------------------------------------------------------------------------------------------- gains

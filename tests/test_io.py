@@ -16,7 +16,7 @@ import pytest
 import yaml
 
 from robustgait import RobustGaitError, load_gait, load_robot
-from robustgait.barrier import load_reduced_log as reexported
+from robustgait.certificate.barrier import load_reduced_log as reexported
 from robustgait.cli import main
 from robustgait.io import limits as L
 from robustgait.io.logs import load_reduced_log
@@ -246,7 +246,7 @@ def test_npz_header_is_checked_before_decompressing(tmp_path):
     (["walk", "{g}", "--robot", "exo", "--steps", "1e9"], "argument --steps: expected an integer, got '1e9'"),
     (["walk", "{g}", "--robot", "exo", "--steps", "1000000000"], "argument --steps: must satisfy 1 ≤ x ≤ 1000"),
     (["certify", "{g}", "--robot", "exo", "--samples", "1000000000"], "argument --samples: must satisfy"),
-    (["certify", "{g}", "--robot", "exo", "--fp-max-steps", "1000000000"], "argument --fp-max-steps: must"),
+    (["certify", "{g}", "--robot", "exo", "--orbit-steps", "1000000000"], "argument --orbit-steps: must"),
     (["certify", "{g}", "--robot", "exo", "--r-max", "1e6"], "argument --r-max: must satisfy 0 < x ≤ 10000"),
     (["certify", "{g}", "--robot", "exo", "--r-max", "nan"], "argument --r-max: must be a finite number (got nan)"),
     (["certify", "{g}", "--robot", "exo", "--plot", "{t}/c.txt"], "unknown plot format '.txt'"),
@@ -275,10 +275,10 @@ def test_total_work_is_bounded_before_simulating(tmp_path, gait_file):
     assert code == 2
     one_error_line(err, f"{slow}: 1000 steps (sim.step_cap) with a video: 1000 simulated steps of up to 15 s",
                    "over the limit of 2e+06")
-    code, _, err = cli("certify", gait_file(), "--robot", "exo", "--override", "certify.push.steps=100")
+    code, _, err = cli("certify", gait_file(), "--robot", "exo", "--override", "certify.push.horizon=100")
     assert code == 2
-    one_error_line(err, "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303347 simulated "
-                   "steps of up to 1.05 s", "over the limit of 5.2e+07 (4 × the 1.3e+07 the defaults need here)")
+    one_error_line(err, "certify.orbit.max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303836 simulated "
+                   "steps of up to 1.05 s", "over the limit of 2.7e+08 (4 × the 6.7e+07 the defaults need here)")
     code, _, err = cli("walk", gait_file(), "--robot", "exo", "--steps", "200", "--video", tmp_path / "v.gif")
     assert code == 2
     one_error_line(err, "v.gif: this walk could last 210 s, 6300 frames at 30 fps: a .gif holds at most 3600")

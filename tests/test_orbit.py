@@ -1,145 +1,225 @@
-"""The orbit check's numerics (robustgait.orbit) on maps with known orbits (robustgait.synthetic): a window of iterates,
-period two, finite-difference Jacobians of piecewise-smooth maps, spectral radii, damped Newton, and the verdict."""
+"""The orbit a map settles on, from its iterates (robustgait.certificate.orbit) — on maps whose answer is known
+(robustgait.certificate.synthetic): a contraction, a noisy attractor, a slow drift, an expansion that wanders beyond
+its band, period-two and period-four orbits — and the numerics of the linearization diagnostic (finite differences of
+piecewise-smooth maps, spectral radii, the event's flow projection)."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pytest
 
 from robustgait import RobustGaitError
+from robustgait.certificate.barrier import certify_map
+from robustgait.certificate.numerics import fd_jacobian, flow_projection, spectral_radius
+from robustgait.certificate.orbit import Status, classify, map_orbit, periods, settle_window
+from robustgait.certificate.synthetic import DriftMap, LinearMap, NoisyMap, QuadraticMap, iterates
 from robustgait.config import CertifyConfig
-from robustgait.config.certify import NEWTON_DAMPING
-from robustgait.orbit import (
-    OrbitReport,
-    fd_jacobian,
-    flow_projection,
-    newton,
-    orbit_status,
-    residual_summary,
-    search_report,
-    settled_at,
-    spectral_radius,
-    window_residual,
-)
-from robustgait.synthetic import LinearMap, QuadraticMap, iterates
 
-CFG = CertifyConfig()  # the shipped window, tolerance, finite-difference step and ρ bound
+CFG = CertifyConfig()  # the shipped orbit options and recovery band
+ORBIT = CFG.orbit
+START = np.r_[0.3, 0.2, -0.1]
 
 
-def search(xs: np.ndarray, window: int = CFG.fp_window) -> OrbitReport:
-    return search_report(xs, metric="section", window=window, tol=CFG.fp_tol, min_index=CFG.fp_min_steps)
+def search(F, x0=START, **kw):  # type: ignore[no-untyped-def]
+    """The orbit search on a synthetic map, probing with perturbations of 0.1 (outside the band's floor 0.03)."""
+    return map_orbit(F, x0, CFG, perturbation=kw.pop("perturbation", 0.1), **kw)
 
 
-def with_rho(report: OrbitReport, F, x) -> OrbitReport:  # type: ignore[no-untyped-def]
-    import dataclasses
-
-    j = fd_jacobian(F, x, CFG.fp_fd_step, CFG.fp_fd_jump)
-    rho, moduli = spectral_radius(j.matrix)
-    return dataclasses.replace(report, rho=rho, moduli=tuple(moduli))
-
-
-def test_window_residual_measures_the_last_iterates_from_the_newest():
-    xs = np.array([[0.0], [5.0], [1.0], [1.2], [0.9], [1.0]])
-    assert window_residual(xs, 3) == pytest.approx(0.2) and window_residual(xs, 4) == pytest.approx(4.0)
-    assert window_residual(xs, 2, period=2) == pytest.approx(4.0) and window_residual(xs, 6) == np.inf
-    assert settled_at(xs, 1, 0.25) == 3 and settled_at(xs, 1, 0.25, min_index=4) == 5
-    assert settled_at(xs, 2, 0.25) == 5 and settled_at(xs, 5, 0.25) is None
-    with pytest.raises(RobustGaitError, match="window and period must be ≥ 1"):
-        window_residual(xs, 0)
-    assert residual_summary([], 3)["steps"] == 0
-    s = residual_summary([3.0, 1.0, 2.0, 0.5], 2)
-    assert s == {"steps": 4, "last": 0.5, "min": 0.5, "median_last_window": 1.25, "max_last_window": 2.0}
+def test_a_contraction_is_accepted_on_its_fixed_point():
+    """A linear map of spectral radius 0.8 from 0.3 away: settled, period 1, x* within the band of the true fixed point,
+    σ far below the floor; every perturbed state comes back (and each left the band first: the probe tested
+    something)."""
+    F = LinearMap.with_spectrum((0.8, 0.5, -0.3), np.array([0.1, 0.2, 0.3]), skew=0.2)
+    o = search(F)
+    assert o.status == Status.OK and o.ok and o.period == 1 and o.band is not None
+    assert o.sigma is not None and o.sigma < ORBIT.floor and o.held == ORBIT.hold_steps
+    assert o.steps == o.band_steps[1] < ORBIT.max_steps + ORBIT.hold_steps
+    np.testing.assert_allclose(o.band.centres[0], F.x_star, atol=1e-3)
+    assert o.probe is not None and o.probe.ok and sum(o.probe.left) >= len(o.probe.left) // 2
+    assert "settled at step" in o.describe() and o.to_dict()["period"] == 1
 
 
-def test_a_wandering_map_that_dips_below_the_tolerance_once_is_refused():
-    """The chaotic logistic map (r = 3.9) passes once close to its repelling fixed point: one successive residual
-    below fp_tol at step 31, none before or after. The rule before the check (a window of 1) took that iterate for x*;
-    the shipped window of 20 refuses the orbit, and Newton from the dip finds x* with ρ = 1.9: unstable."""
-    F = QuadraticMap(3.9)
-    xs = iterates(F, np.r_[F.preimage(F.x_star[0] + 3e-3, 30), 0.0, 0.0], 100)
-    dips = np.flatnonzero(np.linalg.norm(np.diff(xs, axis=0), axis=1) < CFG.fp_tol) + 1
-    assert dips.tolist() == [31]
-    assert search(xs, window=1).settled == 31  # the old rule: a certificate
-    report = search(xs)
-    assert report.settled is None and not report.period_two and report.window_residual > 0.5
-    assert orbit_status(report, CFG.fp_rho_max) == "no_stable_orbit"
-    nr = newton(F, xs[31], step=CFG.fp_fd_step, jump=CFG.fp_fd_jump, tol=1e-12, iterations=8, damping=NEWTON_DAMPING)
-    assert nr.converged and np.allclose(nr.x, F.x_star, atol=1e-12)
-    settled = search(xs[:32], window=1)
-    assert orbit_status(with_rho(settled, F, nr.x), CFG.fp_rho_max) == "unstable_orbit"
-    assert with_rho(settled, F, nr.x).rho == pytest.approx(1.9, abs=1e-6)
+def test_a_noisy_contraction_is_accepted_with_its_scatter():
+    """The same contraction plus uniform noise of ±0.01: no point attractor, a band — accepted, σ reported, of the
+    noise's order (at most amplitude / (1 − 0.8) = 0.05 in a coordinate, at least the amplitude's half)."""
+    F = NoisyMap(LinearMap.with_spectrum((0.8, 0.5, -0.3), np.zeros(3)), 0.01, seed=4)
+    o = search(F)
+    assert o.ok and o.period == 1 and o.sigma is not None and 0.005 < o.sigma < 0.05
+    assert o.to_dict()["sigma"] == o.sigma and f"σ = {o.sigma:.2g}" in o.describe()
 
 
-@pytest.mark.parametrize("eigenvalues, status", [((0.98, 0.5, -0.3, 0.1), "ok"), ((1.02, 0.5, -0.3, 0.1),
-                                                                                   "unstable_orbit"),
-                                                 ((-1.05, 0.2, 0.0, 0.0), "unstable_orbit")])
+@pytest.mark.parametrize("velocity", [0.002, 2e-4])
+def test_a_slow_drift_is_refused(velocity):
+    """Every coordinate follows the first, which advances a little each map: the iterates never settle — the last
+    window leaves the band of the one before, or its centre moves by more than its own scatter."""
+    o = search(DriftMap(velocity))
+    assert o.status == Status.UNSETTLED and not o.ok
+    assert "keeps growing" in o.reason or "keeps moving" in o.reason or "then left that band" in o.reason
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_map_that_wanders_beyond_its_band_is_refused(seed):
+    """A slow expansion (eigenvalue 1.08) with noise: from 0.01 off its fixed point the iterates leave every band they
+    were in (a growing band); from the noise floor they first look settled, and the probe's perturbed states do not
+    come back (unstable). Refused either way, whatever the noise's draw."""
+    F = NoisyMap(LinearMap.with_spectrum((1.08, 0.5, 0.2), np.zeros(3)), 1e-4, seed=seed)
+    o = search(F, np.r_[0.01, 0.0, 0.0])
+    assert o.status == Status.UNSETTLED and "keeps growing" in o.reason, o.reason
+    quiet = search(F, np.zeros(3))
+    assert quiet.status in (Status.UNSETTLED, Status.UNSTABLE) and not quiet.ok
+
+
+def test_a_settled_walk_that_does_not_come_back_is_unstable():
+    """A band with a repelling direction beyond it: x ↦ x* + 0.5 (x − x*) inside |x_0 − x*_0| < 0.05, expanding
+    ×1.5 outside — the iterates settle on x*, but perturbations of 0.1 never return: unstable."""
+    inner = LinearMap.with_spectrum((0.5, 0.5, 0.5), np.zeros(3))
+
+    def F(x):  # type: ignore[no-untyped-def]
+        out = inner(x)
+        far = np.abs(np.asarray(x)[:, 0]) >= 0.05
+        out[far, 0] = 1.5 * np.asarray(x)[far, 0]
+        return out
+
+    o = search(F, np.array([0.02, 0.1, 0.1]))
+    assert o.status == Status.UNSTABLE and o.band is not None and o.probe is not None and not o.probe.ok
+    assert "moved away from the band" in o.reason and any(o.probe.diverging) and not any(o.probe.fell)
+    assert search(F, np.array([0.02, 0.1, 0.1]), perturbation=0.04).ok  # within the basin: they come back
+
+
+def test_a_probe_that_settles_on_another_orbit_of_the_gait_is_not_a_divergence():
+    """Two attractors, x_0 = 0 and x_0 = 0.2 (a gait that walks two orbits, as Atalante's L 0.18 T 0.6 does: period 2,
+    and period 1 once pushed): perturbed states that land in the other one stay near it without entering the band —
+    they do not move away, and the orbit is stable; a state that falls is not."""
+    inner = LinearMap.with_spectrum((0.5, 0.5, 0.5), np.zeros(3))
+
+    def F(x):  # type: ignore[no-untyped-def]
+        out = inner(x)
+        far = np.asarray(x)[:, 0] > 0.06
+        out[far, 0] = 0.2 + 0.5 * (np.asarray(x)[far, 0] - 0.2)
+        return out
+
+    o = search(F, np.array([0.02, 0.1, 0.1]))
+    assert o.ok and o.probe is not None and not all(o.probe.recovered) and not any(o.probe.diverging)
+    assert "stayed near it" in o.describe()
+
+
+@pytest.mark.parametrize("r, k", [(3.2, 2), (3.5, 4)])
+def test_period_two_and_four_orbits_are_recognised_and_certified_on_their_own_map(r, k):
+    """The logistic map at r = 3.2 settles on a period-two orbit, at 3.5 on a period-four one: recognised with that
+    period (not refused), x* on the orbit; the k-fold map has x* as a fixed point and a barrier certificate around it,
+    the map itself none (it moves x* to the orbit's next point)."""
+    F = QuadraticMap(r)
+    # probes of 0.01 (a band of 0.003): 0.05 off the period-four orbit lies near the unstable period-two one, which a
+    # perturbed state leaves only slowly
+    fine = dataclasses.replace(CFG, push=dataclasses.replace(CFG.push, recovery_radius=0.003))
+    o = map_orbit(F, START, fine, perturbation=0.01)
+    assert o.ok and o.period == k and o.probe is not None and any(o.probe.left), o.describe()
+    x_star = o.band.centres[0]
+    if k == 2:
+        assert min(abs(x_star[0] - p) for p in F.period_two) < 1e-6
+
+    def Fk(x):  # type: ignore[no-untyped-def]
+        for _ in range(k):
+            x = F(x)
+        return x
+
+    np.testing.assert_allclose(Fk(x_star[None])[0], x_star, atol=1e-6)
+    cfg = CertifyConfig(disturbance="state", method="uniform", r_max=0.05, n_samples=200)
+    own = certify_map(Fk, x_star, cfg)
+    assert own.r_star > 0.0 and not own.vacuous
+    assert certify_map(F, x_star, cfg).vacuous  # every sample's image is the orbit's next point, far away
+
+
+def test_a_robot_whose_sides_differ_is_searched_from_period_two():
+    """min_period 2 (the stride map: a robot whose left and right differ) finds a period-2 orbit even where period 1
+    explains the iterates as well — the map certified is the walk's two steps."""
+    F = LinearMap.with_spectrum((0.7, 0.5, 0.2), np.zeros(3))
+    assert search(F).period == 1 and search(F, min_period=2).period == 2
+    assert periods(4) == (1, 2, 4) and periods(4, 2) == (2, 4) and periods(1) == (1,)
+
+
+def test_a_band_that_moves_after_it_settled_is_refused():
+    """Settled on its fixed point, then the map starts drifting (a slope that turns the walk: a gait that falls after
+    hundreds of steps looks settled for dozens): the hold sees the band's centre move and refuses it."""
+    inner = LinearMap.with_spectrum((0.5, 0.5, 0.5), np.zeros(3))
+    calls = {"n": 0}
+
+    def F(x):  # type: ignore[no-untyped-def]
+        calls["n"] += 1
+        out = inner(x)
+        if calls["n"] > 40:
+            out[:, 0] += 0.002 * (calls["n"] - 40) / 40  # a drift that starts after the walk settled
+        return out
+
+    o = search(F)
+    assert o.status == Status.UNSETTLED and "then left that band" in o.reason and o.settled is not None
+    assert o.held < ORBIT.hold_steps
+
+
+def test_a_fall_and_a_short_walk_are_said_as_such():
+    """A map whose image is not finite after 12 maps: the orbit is 'fell', with the step; a sequence shorter than
+    two windows cannot be told."""
+    calls = {"n": 0}
+
+    def F(x):  # type: ignore[no-untyped-def]
+        calls["n"] += 1
+        out = 0.5 * np.asarray(x)
+        return out if calls["n"] < 12 else np.full_like(out, np.nan)
+
+    o = search(F)
+    assert o.status == Status.FELL and "fell in step 12" in o.reason and o.steps == 11
+    z = iterates(QuadraticMap(2.8), START, 10)[1:]
+    short, i = classify(z, ORBIT, min_period=1, radius=0.03, multiple=3.0)
+    assert i is None and short.status == Status.UNDECIDED and "before its switching states settled" in short.reason
+
+
+def test_the_settling_test_compares_the_last_window_with_the_one_before():
+    """Two windows of a constant sequence settle at once; a jump in the last window larger than settle_multiple × the
+    window before's scatter (or the floor) is a growing band; a centre that moved by more than drift × the last
+    window's scatter is a moving band."""
+    w = ORBIT.window
+    z = np.zeros((2 * w, 2))
+    assert settle_window(z, 1, ORBIT, 1, 0.03, 3.0).__class__.__name__ == "Settling"
+    z[-1, 0] = 2 * ORBIT.floor
+    out = settle_window(z, 1, ORBIT, 1, 0.03, 3.0)
+    assert out.__class__.__name__ == "Unsettled" and out.why == "growing"
+    z[:w, 0] = 0.005 * (-1.0) ** np.arange(w)  # the window before scatters 0.005: the jump is now inside its band
+    assert settle_window(z, 1, ORBIT, 1, 0.03, 3.0).__class__.__name__ == "Settling"
+    cfg = dataclasses.replace(ORBIT, settle_multiple=0.1)
+    assert settle_window(z, 1, cfg, 1, 0.03, 3.0).__class__.__name__ == "Unsettled"
+    z[w:, 1] = 0.004  # B moved from A's centre by 0.004 > its own scatter (the floor, 0.001)
+    out = settle_window(z, 1, ORBIT, 1, 0.03, 3.0)
+    assert out.__class__.__name__ == "Unsettled" and out.why == "moving"
+
+
+@pytest.mark.parametrize("eigenvalues", [(0.98, 0.5, -0.3, 0.1), (1.02, 0.5, -0.3, 0.1), (-1.05, 0.2, 0.0, 0.0)])
 @pytest.mark.parametrize("skew", [0.0, 0.4])
-def test_linear_maps_have_their_spectral_radius(eigenvalues, status, skew):
+def test_linear_maps_have_their_spectral_radius(eigenvalues, skew):
     """ρ of a linear map (normal, or not: skew) from one finite-difference batch, within 1e-7 (the map is linear: only
-    rounding); ρ 0.98 is accepted, 1.02 and 1.05 (a flip) refused."""
+    rounding)."""
     F = LinearMap.with_spectrum(eigenvalues, np.array([0.3, -0.2, 1.0, 0.5]), skew=skew, seed=1)
     x = F.x_star + 1e-3 * np.array([1.0, 1.0, -1.0, 0.5])
-    j = fd_jacobian(F, x, CFG.fp_fd_step, CFG.fp_fd_jump)
+    j = fd_jacobian(F, x, ORBIT.fd_step, ORBIT.fd_jump)
     np.testing.assert_allclose(j.matrix, F.a, atol=1e-8)
     rho, moduli = spectral_radius(j.matrix)
     assert rho == pytest.approx(F.rho, abs=1e-7) and moduli[0] == rho and np.all(np.diff(moduli) <= 0)
     np.testing.assert_allclose(sorted(moduli), sorted(np.abs(eigenvalues)), atol=1e-7)
-    settled = search(np.repeat(x[None], 25, axis=0))  # an orbit that sits still: only ρ decides
-    assert orbit_status(with_rho(settled, F, x), CFG.fp_rho_max) == status
-    assert orbit_status(with_rho(settled, F, x), None) == "ok"  # ρ not asked for
-
-
-def test_a_period_two_map_is_refused_with_that_reason():
-    """The logistic map at r = 3.2 settles on a period-two orbit: successive iterates never settle, iterates two apart
-    do, at the two known points; P∘P's own window settles."""
-    F = QuadraticMap(3.2)
-    xs = iterates(F, np.r_[0.3, 0.2, -0.1], 100)
-    report = search(xs)
-    assert report.settled is None and report.period_two and orbit_status(report, 1.0) == "period_two_orbit"
-    np.testing.assert_allclose(sorted(xs[-2:, 0]), F.period_two, atol=1e-9)
-    assert search(xs[::2]).settled is not None  # the stride map
-    assert search(iterates(QuadraticMap(2.8), np.r_[0.3, 0.2, -0.1], 100)).period_two is False
-
-
-@pytest.mark.parametrize("r", [2.8, 3.9])
-def test_newton_converges_on_a_smooth_nonlinear_map(r):
-    """Damped Newton on the logistic map from 0.05 off its fixed point: quadratic convergence to it (stable or not),
-    the Jacobian there of spectral radius |2 − r|."""
-    F = QuadraticMap(r, dim=4, gain=0.3)
-    nr = newton(F, F.x_star + np.array([0.05, 0.1, -0.1, 0.2]), step=CFG.fp_fd_step, jump=CFG.fp_fd_jump, tol=1e-12,
-                iterations=10, damping=NEWTON_DAMPING)
-    assert nr.converged and np.allclose(nr.x, F.x_star, atol=1e-12) and len(nr.residuals) <= 7
-    r_ = np.asarray(nr.residuals)
-    assert np.all(np.diff(r_) < 0)
-    big = r_[:-1] > 1e-6  # quadratic while above the finite-difference error
-    assert np.all(r_[1:][big] <= 10 * r_[:-1][big] ** 2)
-    assert nr.jacobian is not None and spectral_radius(nr.jacobian.matrix)[0] == pytest.approx(F.rho, abs=1e-6)
-    assert nr.evaluations == len(nr.residuals) * (2 * 4 + 1) + (len(nr.residuals) - 1) * len(NEWTON_DAMPING)
-
-
-def test_newton_does_not_claim_a_fixed_point_the_map_jumps_across():
-    """A staircase map that jumps across the diagonal has no fixed point: its residual is nowhere below the gap at the
-    jump, and Newton stops there (no damped step lowers it) without claiming convergence."""
-    F = LinearMap.with_spectrum((0.5, 0.5), np.zeros(2), jump=-0.5e-4, width=1e-4, bias=0.4e-4)
-    probe = np.linspace(-3e-4, 3e-4, 60001)[:, None] * np.array([1.0, 0.0])
-    assert np.min(np.linalg.norm(F(probe) - probe, axis=1)) > 1e-5  # the residual's smallest value: at the jump
-    nr = newton(F, np.array([1e-5, 0.0]), step=1e-7, jump=CFG.fp_fd_jump, tol=CFG.fp_newton_tol, iterations=10,
-                damping=NEWTON_DAMPING)
-    assert not nr.converged and nr.residuals[-1] > 1e-5
 
 
 def test_a_column_with_a_jump_on_one_side_is_taken_from_the_other():
     """x sits 0.3 h below a jump of the staircase: the central difference along x_0 would be off by jump / 2h; the
     robust column is the backward difference, exact for the linear pieces, and says it was one-sided."""
-    h = CFG.fp_fd_step
+    h = ORBIT.fd_step
     F = LinearMap.with_spectrum((0.7, -0.4, 0.2), np.zeros(3), skew=0.3, jump=2e-3, width=1e-2)
     x = np.array([5e-3 - 0.3 * h, 0.01, -0.02])
-    j = fd_jacobian(F, x, h, CFG.fp_fd_jump)
+    j = fd_jacobian(F, x, h, ORBIT.fd_jump)
     assert j.one_sided == (0,)
     np.testing.assert_allclose(j.matrix, F.a, atol=1e-7)
     central = (F(x + h * np.eye(3)[0]) - F(x - h * np.eye(3)[0]))[0] / (2 * h)
     assert abs(central[0] - F.a[0, 0]) > 100  # what the rule avoids
-    np.testing.assert_allclose(fd_jacobian(F, np.zeros(3), h, CFG.fp_fd_jump).matrix, F.a, atol=1e-8)
+    np.testing.assert_allclose(fd_jacobian(F, np.zeros(3), h, ORBIT.fd_jump).matrix, F.a, atol=1e-8)
 
 
 def test_a_side_that_falls_is_left_out_and_both_sides_falling_raise():
@@ -150,7 +230,7 @@ def test_a_side_that_falls_is_left_out_and_both_sides_falling_raise():
         out[np.asarray(x)[:, 1] > 1e-7] = np.nan
         return out
 
-    j = fd_jacobian(falls_right, np.zeros(2), 1e-6, CFG.fp_fd_jump)
+    j = fd_jacobian(falls_right, np.zeros(2), 1e-6, ORBIT.fd_jump)
     assert j.one_sided == (1,) and np.allclose(j.matrix, a.a, atol=1e-8)
     with pytest.raises(RobustGaitError, match="falls on both sides of coordinate"):
         fd_jacobian(lambda x: np.where(np.abs(np.asarray(x)[:, :1]) > 0, np.nan, a(x)), np.zeros(2), 1e-6, 0.5)
@@ -172,18 +252,28 @@ def test_flow_projection_moves_the_event_onto_the_guard():
     assert flow_projection(np.array([1.0, 0.0]), np.array([0.0, 1.0])) is None  # the flow along the guard
 
 
-def test_the_report_says_what_it_saw():
-    xs = iterates(QuadraticMap(2.8), np.r_[0.3, 0.2, -0.1], 60)
-    report = search(xs)
-    assert report.converged and report.settled is not None and report.steps == report.settled
-    assert report.window_residual <= CFG.fp_tol and len(report.residuals) == report.settled
-    d = report.to_dict()
-    assert d["converged"] and d["settled_at_step"] == report.settled and d["residuals"]["steps"] == report.settled
-    assert "converged at step" in report.describe()
-    wander = search(iterates(QuadraticMap(3.9), np.r_[0.3, 0.0, 0.0], 40))
-    assert "NOT converged (wandering" in wander.describe() and wander.to_dict()["settled_at_step"] is None
-    assert "period two" in search(iterates(QuadraticMap(3.2), np.r_[0.3, 0.0, 0.0], 60)).describe()
-    short = search(iterates(QuadraticMap(2.8), np.r_[0.3, 0.0, 0.0], 4))
-    assert "too few iterates for a window of 20: 4 steps" in short.describe()
-    assert short.to_dict()["window_residual"] is None
-    assert search(np.empty((0, 3))).steps == 0
+def test_the_linearization_says_what_a_repelling_point_means_and_when_it_is_not_defined() -> None:
+    from robustgait.certificate.orbit import Linearization
+
+    stable = Linearization(True, 0.8, 0.82, 0.7).describe()
+    assert stable.startswith("ρ = 0.8 ") and "repels" not in stable
+    repelling = Linearization(True, 1.23, 1.227, 1.32).describe()
+    assert "ρ = 1.23" in repelling and "repels tiny perturbations" in repelling and "band's scale" in repelling
+    undefined = Linearization(False, 1.31, 0.81, None, reason="1.31 and 0.81 more than 10 % apart").describe()
+    assert undefined.startswith("linearization not defined (contact events)") and "0.81" in undefined
+
+
+def test_a_probe_that_falls_measures_the_basin_and_one_that_moves_away_the_orbit() -> None:
+    """Stable: none of the probes moved away and not all fell (a fall is J*'s business); unstable: one moved away, or
+    every one fell."""
+    from robustgait.certificate.orbit import Probe
+
+    def probe(recovered, fell, diverging):  # type: ignore[no-untyped-def]
+        n = len(recovered)
+        return Probe(1.0, 20, tuple(recovered), tuple(3 if r else 0 for r in recovered), tuple(fell), (True,) * n,
+                     tuple(diverging))
+
+    assert probe([True, True, False], [False, False, True], [False] * 3).ok
+    assert not probe([True, True, False], [False, False, False], [False, False, True]).ok
+    assert not probe([False] * 3, [True] * 3, [False] * 3).ok
+    assert probe([False] * 3, [False] * 3, [False] * 3).ok  # near the band without entering it: not a divergence

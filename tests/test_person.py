@@ -18,7 +18,7 @@ from robustgait.learn import History
 from robustgait.learn.oracle import REQUIREMENT_PENALTY, Outcome, batch_comparisons, person_scores, score
 from robustgait.learn.person import SimulatedPerson
 from robustgait.study.pareto import non_dominated, pareto
-from robustgait.study.person import automatic_answer, floor_record, simulated_answer
+from robustgait.study.person import automatic_answer, floor_record, recommendation, simulated_answer
 from robustgait.study.ranking import Requirement, figure_names, label_comparisons, requirements, shown
 from robustgait.study.run import create_study
 from robustgait.study.storage import TrialRecord
@@ -120,6 +120,23 @@ def test_only_certified_gaits_at_or_above_the_floor_meeting_the_requirements_are
     assert not shown(record(0, 13.0), 13.5, reqs)  # below the floor
     assert not shown(record(0, 14.0, status="not_certified"), 0.0, [])
     assert not shown(record(0, 14.0, speed=0.15), 13.5, reqs)  # fails the requirement
+
+
+def test_the_recommendation_is_never_refused_or_below_the_floor():
+    """The page's current recommendation: the learner's newest pick when a person may be shown it, else the newest
+    earlier pick that may — never a gait the certificate refused or one below the floor (a 15.9 N s pick under a
+    17.1 N s floor, from a batch the person was never shown), with a note on the picks passed over."""
+    by_number = {0: record(0, 18.0), 1: record(1, 15.9), 2: record(2, 16.0, status="not_certified")}
+    its = {0: {"recommendation": 3, "recommended_trial": 0}, 1: {"recommendation": 4, "recommended_trial": 1},
+           2: {"recommendation": 5, "recommended_trial": 2}}
+    pick, note = recommendation(its, by_number, 17.1, [])
+    assert pick is not None and pick.number == 0
+    assert "after iteration 3, 2 may not be shown" in note and "its pick after iteration 1" in note
+    pick, note = recommendation({0: its[0]}, by_number, 17.1, [])
+    assert pick is not None and pick.number == 0 and note == ""
+    pick, note = recommendation({1: its[1], 2: its[2]}, by_number, 17.1, [])
+    assert pick is None and "no pick of the learner is certified at or above the floor yet" in note
+    assert recommendation({}, by_number, 17.1, []) == (None, "")
 
 
 # ---- requirements ----------------------------------------------------------------------------------------

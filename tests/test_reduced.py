@@ -1,6 +1,6 @@
-"""Tests for robustgait.reduced: the reduced states of a certificate (omega, centroidal, velocity) — frames, the
-reconstruction ι (stance sole kept still, Φ(ι(x̄)) = x̄, ι(x̄*) = x*), the metrics (kinetic energy), the centroidal
-momentum against MuJoCo's physics (a push's Δh is its impulse), and the certificate's coordinates."""
+"""Tests for robustgait.certificate.reduced: the reduced states of a certificate (omega, centroidal, velocity) —
+frames, the reconstruction ι (stance sole kept still, Φ(ι(x̄)) = x̄, ι(x̄*) = x*), the metrics (kinetic energy), the
+centroidal momentum against MuJoCo's physics (a push's Δh is its impulse), and the certificate's coordinates."""
 
 import mujoco
 import numpy as np
@@ -8,9 +8,8 @@ import pytest
 from scipy import stats
 
 from robustgait import CertifyConfig
-from robustgait.barrier import sample_ball
-from robustgait.poincare import ReturnMap
-from robustgait.reduced import (
+from robustgait.certificate.barrier import sample_ball
+from robustgait.certificate.reduced import (
     Coordinates,
     ReducedState,
     centroidal_momentum,
@@ -20,8 +19,9 @@ from robustgait.reduced import (
     reduce_state,
     stance_jacobian,
 )
+from robustgait.certificate.search import find_orbit
+from robustgait.certificate.shape import Shape
 from robustgait.rotations import quat_to_mat
-from robustgait.shape import Shape
 
 STATES = ("omega", "centroidal", "velocity")
 
@@ -64,8 +64,7 @@ def test_reduced_state_of_mirror_is_reflected(robot_gait):
 
 @pytest.fixture(scope="module")
 def fixed_point(exo, exo_gait):
-    with ReturnMap(exo, exo_gait) as pmap:
-        return pmap.find_fixed_point()
+    return find_orbit(exo, exo_gait).fixed_point("heading")
 
 
 def _state(name, exo, exo_gait, fp, **kw):

@@ -1,15 +1,13 @@
-"""Tests for robustgait.shape: the linearization fit, the Lyapunov ellipsoid (positive definite, det 1, the
+"""Tests for robustgait.certificate.shape: the linearization fit, the Lyapunov ellipsoid (positive definite, det 1, the
 equation), its coordinates, the fallback to the ball, and an ellipsoid certifying what no ball can (a contracting
 map that is not normal)."""
 
 import numpy as np
 import pytest
 
-from robustgait.barrier import sample_ball
-from robustgait.config import CertifyConfig, SequentialConfig
-from robustgait.errors import RobustGaitError
-from robustgait.estimators import certify_map_sequential
-from robustgait.shape import (
+from robustgait.certificate.barrier import sample_ball
+from robustgait.certificate.estimators import certify_map_sequential
+from robustgait.certificate.shape import (
     Shape,
     ellipsoid_transform,
     fit_linearization,
@@ -17,6 +15,8 @@ from robustgait.shape import (
     shape_from_fit,
     volume_ratio,
 )
+from robustgait.config import CertifyConfig, SequentialConfig
+from robustgait.errors import RobustGaitError
 
 # contracting (eigenvalues 0.5, 0.3, 0.2) but not normal: ‖A‖ ≈ 1.6 stretches some directions in one step
 A = np.array([[0.5, 1.2, 0.0], [0.0, 0.3, 0.4], [0.0, 0.0, 0.2]])

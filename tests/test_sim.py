@@ -30,23 +30,20 @@ def test_gait_walks_on_a_mirrored_period_one_orbit(robot_gait):
     np.testing.assert_allclose(w[1], w[0] * [-1, 1, -1], atol=0.03)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
-def test_a_walk_says_whether_its_switching_events_settled_on_a_stable_orbit(exo, exo_gait, exo_mc_gait):
-    """From the events a walk already has (no simulation): the stored flat-foot gait settles at step 27, and its step
-    map there has ρ = 0.79 (one batch of one-step simulations); the multi-contact gait walks its 50 steps without ever
-    settling — a walk to the cap on a wandering orbit says so, and gets no ρ."""
-    from robustgait.poincare import walk_stability
-
-    res = walk(exo, exo_gait, steps=30)
+@pytest.mark.slow  # two walks of a few seconds
+def test_a_walk_says_whether_its_switching_events_settled_on_an_orbit(exo, exo_gait, exo_mc_gait):
+    """From the events a walk already has (no simulation): the stored flat-foot gait settles in a band far below the
+    recovery floor, the multi-contact gait in a wider one; both hold their band — the orbit the certificate's search
+    finds (tests/test_search.py); a walk too short to see the band hold says so."""
+    res = walk(exo, exo_gait, steps=120)
     o = res.orbit
-    assert o is not None and o.converged and o.settled == 27 and o.window_residual <= 0.01 and o.rho is None
-    st = walk_stability(exo, exo_gait, res)
-    assert st is not None and st.settled == 27 and 0.7 < st.rho < 0.9 and "ρ = 0.79" in st.describe()
-    assert res.to_dict()["orbit"]["settled_at_step"] == 27
-    mc = walk(exo, exo_mc_gait, steps=50)
-    assert mc.steps_taken == 50 and not mc.fell and mc.orbit is not None and not mc.orbit.converged
-    assert mc.orbit.steps == 50 and mc.orbit.window_residual > 0.01
-    assert "NOT converged (wandering" in mc.orbit.describe() and walk_stability(exo, exo_mc_gait, mc) is mc.orbit
+    assert o is not None and o.ok and o.period == 1 and o.sigma < 1e-3 and o.held == 64
+    assert res.to_dict()["orbit"]["settled_at_step"] == o.settled
+    mc = walk(exo, exo_mc_gait, steps=120)
+    assert mc.steps_taken == 120 and not mc.fell and mc.orbit is not None and mc.orbit.ok
+    assert mc.orbit.sigma > 10 * o.sigma and "settled at step" in mc.orbit.describe()
+    short = walk(exo, exo_gait, steps=50).orbit
+    assert short is not None and short.status == "undecided" and "are needed to see the band hold" in short.reason
 
 
 @pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it

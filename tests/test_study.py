@@ -25,7 +25,9 @@ from robustgait.config import (
     Config,
     GenerationConfig,
     LearnerConfig,
+    OrbitConfig,
     PreferenceModelConfig,
+    PushConfig,
     RunConfig,
     SimConfig,
     StudyConfig,
@@ -125,9 +127,12 @@ def test_a_format_2_study_keeps_its_certificate_whatever_the_defaults(tmp_path):
 
 
 def test_a_study_with_the_first_push_steps_key_still_loads(tmp_path):
+    """push_steps (format 3 as first written), later push.steps: a fixed horizon the recovery band retired — the study
+    loads with the horizon of the push's statement."""
     raw = {"format_version": 3, "robot": "exo", "config": {"certify": {"push_steps": 2, "method": "uniform"}}}
     (tmp_path / "study.json").write_text(json.dumps(raw))
-    assert load_config(tmp_path).config.certify.push.steps == 2
+    c = load_config(tmp_path).config.certify
+    assert c.push.horizon == PushConfig().horizon and c.method == "uniform"
 
 
 def test_a_push_study_written_before_chunked_verification_keeps_whole_batches(tmp_path):
@@ -155,24 +160,20 @@ def test_a_push_study_with_a_state_choice_it_never_used_still_loads(tmp_path):
 def test_a_study_written_before_the_orbit_check_resumes_with_the_rules_it_ran_with(tmp_path):
     """A resume recomputes the learner's history from the stored results with the study's oracle (stored objective
     values and iteration records are written, never compared), then checks the proposals of an iteration already
-    recorded against the learner's reproduction. A study created before the orbit check (its study.json has no
-    uncertified_penalty, no fp_window, …) therefore loads with the rules it ran with: a gait that walked the cap without
-    a certificate tied with a certified r* = 0 — today's rule would add that comparison to its history, which can change
-    the reproduced proposals and stop the resume — and the fixed point of the first iterate within fp_tol."""
+    recorded against the learner's reproduction. A study created before certificates checked their orbit (its
+    study.json has no uncertified_penalty and no orbit fields) therefore loads with the rule it ran with: a gait that
+    walked the cap without a certificate tied with a certified r* = 0 — today's rule would add that comparison to its
+    history, which can change the reproduced proposals and stop the resume."""
     from robustgait.study.run import completed_batches, history_before
     from robustgait.study.storage import TrialRecord
 
     save_config(tmp_path, StudySetup("exo", TINY))
     raw = json.loads((tmp_path / "study.json").read_text())
-    for key in ("fp_window", "fp_metric", "fp_newton_iterations", "fp_newton_tol", "fp_fd_step", "fp_fd_jump",
-                "fp_rho_max"):
-        del raw["config"]["certify"][key]
+    del raw["config"]["certify"]["orbit"]
     del raw["config"]["study"]["uncertified_penalty"]
     (tmp_path / "study.json").write_text(json.dumps(raw))
     old = load_config(tmp_path).config
-    assert old.study.uncertified_penalty == 0.0 and old.certify.fp_tol == TINY.certify.fp_tol
-    c = old.certify
-    assert (c.fp_window, c.fp_metric, c.fp_newton_iterations, c.fp_rho_max) == (1, "omega", 0, None)
+    assert old.study.uncertified_penalty == 0.0
     # one stored batch: certified with r* = 0, walked the cap without a certificate, fell
     results = [{"status": "certified", "steps_taken": 5, "step_cap": 5, "r_star": 0.0},
                {"status": "not_certified", "steps_taken": 5, "step_cap": 5, "r_star": 0.0},
@@ -183,8 +184,27 @@ def test_a_study_written_before_the_orbit_check_resumes_with_the_rules_it_ran_wi
     now = history_before(1, batches, replace(old.study, batch=3, uncertified_penalty=0.5))
     assert now.comparisons == ((0, 1), (0, 2), (1, 2))  # what today's rule would have recomputed
     save_config(tmp_path, StudySetup("exo", TINY))  # a study created now keeps today's rules
-    new = load_config(tmp_path).config
-    assert new.study.uncertified_penalty == 0.5 and new.certify.fp_window == 20 and new.certify.fp_rho_max == 1.0
+    assert load_config(tmp_path).config.study.uncertified_penalty == 0.5
+
+
+def test_a_study_with_the_fixed_point_fields_the_orbit_search_retired_still_loads(tmp_path):
+    """A study written with the fixed-point search's fields (fp_*, stride_fallback) and a fixed push horizon
+    (push.steps, push.recovery_band_steps) loads without them: its new gaits' orbits are found by the orbit search, its
+    uncertified penalty is the one it ran with."""
+    save_config(tmp_path, StudySetup("exo", TINY))
+    raw = json.loads((tmp_path / "study.json").read_text())
+    certify = raw["config"]["certify"]
+    del certify["orbit"]
+    certify.update({"fp_tol": 0.01, "fp_window": 20, "fp_metric": "section", "fp_min_steps": 10, "fp_max_steps": 100,
+                    "fp_newton_iterations": 0, "fp_newton_tol": 1e-8, "fp_fd_step": 1e-6, "fp_fd_jump": 0.5,
+                    "fp_rho_max": 1.0, "stride_fallback": True, "map": "step"})
+    certify["push"].update({"steps": 3, "recovery_band_steps": 10})
+    for k in ("horizon", "recovery_steps"):
+        del certify["push"][k]
+    (tmp_path / "study.json").write_text(json.dumps(raw))
+    c = load_config(tmp_path).config
+    assert c.certify.orbit == CertifyConfig().orbit and c.certify.map == "step" and c.study.uncertified_penalty == 0.5
+    assert c.certify.push.horizon == PushConfig().horizon
 
 
 def test_push_metric_certifies_pushes_and_robustness_states():
@@ -380,11 +400,12 @@ def test_evaluate_never_raises_and_records_stages(exo_generator):
     falls = evaluate(strict, GaitParams(), TINY, generator=gen)
     assert falls.status == "fell" and falls.fell and falls.fall_reason == "base_low" and falls.r_star == 0.0
     assert falls.reason == f"fell in step {falls.steps_taken + 1} (base_low)" and "certify" not in falls.seconds
-    # walks the cap but has no certificate: a fixed-point search that cannot converge
-    no_fp = replace(TINY, certify=replace(TINY.certify, fp_tol=1e-12, fp_min_steps=1, fp_max_steps=2))
+    # walks the cap but has no certificate: an orbit search that cannot settle
+    never = OrbitConfig(max_steps=32, floor=1e-12, drift=1e-9)
+    no_fp = replace(TINY, certify=replace(TINY.certify, orbit=never))
     nc = evaluate(robot, GaitParams(), no_fp, generator=gen)
     assert nc.status == "not_certified" and nc.steps_taken == 5 and nc.r_star == 0.0
-    assert nc.reason.startswith("no_stable_orbit: ") and nc.outcome().walked_cap and not nc.outcome().certified
+    assert nc.reason.startswith("unsettled: ") and nc.outcome().walked_cap and not nc.outcome().certified
     # an evaluation is a function of the parameters and the config alone (what resume and reuse rely on)
     again = evaluate(robot, GaitParams(), TINY, generator=gen)
     assert without_times(again.to_dict()) == without_times(good.to_dict())
@@ -547,3 +568,25 @@ def test_ray_worker_killed_mid_task_is_retried(tmp_path, reference_study):
     st = study_status(d)
     assert st["state"] == "complete" and st["trials_done"] == 6
     assert comparable(d) == comparable(reference_study)
+
+
+def test_the_progress_bar_and_status_say_a_refused_gait_is_refused():
+    """A gait that walked the cap without a certificate is 'refused' with its status, not a zero; study status counts
+    every outcome."""
+    from robustgait.study.run import outcome_line
+    from robustgait.study.status import outcome_counts
+    from robustgait.study.storage import TrialRecord
+
+    results = [{"status": "certified", "r_star": 21.5, "steps_taken": 50},
+               {"status": "not_certified", "r_star": 0.0, "steps_taken": 50,
+                "reason": "unsettled: its band keeps moving …"},
+               {"status": "not_certified", "r_star": 0.0, "steps_taken": 50, "reason": "unstable: the walk settled …"},
+               {"status": "fell", "r_star": 0.0, "steps_taken": 12},
+               {"status": "generation_failed", "r_star": 0.0, "steps_taken": 0}]
+    lines = [outcome_line(r, "J*") for r in results]
+    assert lines == ["J* 21.500, steps 50", "refused (unsettled), steps 50", "refused (unstable), steps 50",
+                     "fell in step 13", "generation failed"]
+    records = [TrialRecord(i, "COMPLETE", 0, i, i, {}, None, r, None, None, {}) for i, r in enumerate(results)]
+    records.append(TrialRecord(9, "RUNNING", 0, 9, 9, {}, None, None, None, None, {}))
+    assert outcome_counts(records) == {"certified": 1, "fell": 1, "generation_failed": 1, "refused: unsettled": 1,
+                                       "refused: unstable": 1}

@@ -20,9 +20,9 @@ import pytest
 from tqdm import tqdm
 
 from robustgait import RobustGaitError, load_gait, load_robot
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
 from robustgait.cli import main
-from robustgait.config import GaitParams, StudyConfig, ValidateConfig, to_dict
+from robustgait.config import GaitParams, OrbitConfig, StudyConfig, ValidateConfig, to_dict
 from robustgait.sim import walk
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.run import StudyRunner, create_study, open_store
@@ -52,7 +52,7 @@ def small_study(tmp_path_factory):
     create_study(d, "exo", replace(TINY, study=StudyConfig(iterations=1, batch=6)))
     robot = load_robot("exo")
     exo = load_gait(EXO_GAIT, robot)
-    no_fp = replace(TINY.certify, fp_tol=1e-12, fp_min_steps=1, fp_max_steps=2)
+    no_fp = replace(TINY.certify, orbit=OrbitConfig(max_steps=32, floor=1e-12, drift=1e-9))
     runner = StudyRunner(d)
     store = open_store(d, runner.setup, runner.space)
     bar = tqdm(disable=True)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from robustgait import RobustGaitError, load_robot
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
 from robustgait.cli import main
 from robustgait.config import CertifyConfig, ReportConfig, SimConfig, ValidateConfig
 from robustgait.io.gaitfile import save_gait
@@ -25,7 +25,6 @@ from robustgait.validate import (
     wilson_interval,
 )
 from robustgait.validate import disturbances as dist
-from tests.conftest import search_options
 
 
 def test_wilson_interval_known_values():
@@ -252,7 +251,7 @@ def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_ce
     p = tmp_path / "cert.json"
     p.write_text(json.dumps(small_cert.to_dict()))
     ref = CertificateRef.load(p)
-    assert ref.r_star == small_cert.r_star and ref.map == "step"
+    assert ref.r_star == small_cert.r_star and ref.map == "auto" and dict(ref.orbit)["map"] == "auto"
     np.testing.assert_allclose(ref.x_star, small_cert.certificate.x_star)
     assert ref.space == "omega" and ref.set == "ball" and ref.horizon == 1
     bad = tmp_path / "bad.json"
@@ -279,9 +278,11 @@ def test_a_push_certificate_with_an_unused_state_choice_still_loads(tmp_path, ex
     """Before J* and a state choice were exclusive, `certify --disturbance push --state velocity` wrote the unused
     state into the certificate's config: it loads as the push certificate it is."""
     gc = certify_gait(exo, exo_gait, CertifyConfig(disturbance="push", method="uniform", n_samples=4,
-                                                    push={"steps": 1}))
+                                                    push={"horizon": 1}))
     d = gc.to_dict()
     d["config"] = {**d["config"], "state": "velocity", "set": "ellipsoid", "horizon": 2}
+    # a certificate of the fixed-point search's version: fields it had that the orbit search retired are dropped
+    d["config"]["fp_window"], d["config"]["push"]["steps"] = 20, 3
     p = tmp_path / "push.json"
     p.write_text(json.dumps(d))
     ref = CertificateRef.load(p)
@@ -308,8 +309,7 @@ def test_gait_tiles_are_a_real_image(tmp_path, exo, exo_gait):
 # ---- multi-contact gaits: a step is the previous leg's double support, then single support to heel strike -----
 @pytest.fixture(scope="module")
 def mc_validator(exo, exo_mc_gait):
-    cert = certify_gait(exo, exo_mc_gait, CertifyConfig(method="uniform", disturbance="state", n_samples=8,
-                                                        **search_options(exo_mc_gait)))
+    cert = certify_gait(exo, exo_mc_gait, CertifyConfig(method="uniform", disturbance="state", n_samples=8))
     with Validator(exo, exo_mc_gait, ValidateConfig(trials=4, steps_after=2), certificate=cert) as v:
         yield v
 
@@ -329,8 +329,9 @@ def test_multicontact_zero_push_in_either_domain_is_the_undisturbed_walk(mc_vali
     x1 = v.certificate.to_z(v.reduced.phi(first[:, :nq], first[:, nq:]))
     assert ok[0] and res.success.all()
     np.testing.assert_array_equal(res.x_first, np.repeat(x1, 2, axis=0))
-    # x̄₁ is the heel-strike section after one step: the map's image of x̄*, within its residual
-    assert res.distance.max() < 0.02
+    # x̄₁ is the heel-strike section after one step: the map's image of x̄*, within the orbit's own scatter (a
+    # multi-contact gait's band is noisy: σ 0.02 rad/s in ω)
+    assert res.distance.max() < 0.05
 
 
 def test_multicontact_pushes_act_in_the_domain_they_start_in(mc_validator, exo):

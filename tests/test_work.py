@@ -9,7 +9,8 @@ import time
 
 import pytest
 
-from robustgait.certify import certify_steps, check_certify_work
+from robustgait.certificate.certify import certify_steps, check_certify_work
+from robustgait.certificate.reduced import section_dimension
 from robustgait.cli import build_parser
 from robustgait.cli.options import config_from
 from robustgait.config import KINDS, CertifyConfig, Config, SimConfig, preset
@@ -18,7 +19,6 @@ from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.io.gaitfile import save_gait
 from robustgait.learn.space import ActionSpace
-from robustgait.reduced import section_dimension
 from robustgait.sim.engine import step_physics_steps
 from robustgait.sim.walk import check_walk_work
 from robustgait.study.run import check_evaluation_work, longest_gaits
@@ -71,11 +71,13 @@ def test_certify_defaults_pass(case):
     c = defaults_of("certify", "g.json", "--robot", SPEC[name])
     assert c.certify.disturbance == "push"
     worst = check_certify_work(robot, gait, c.certify, c.sim)
-    # 100 fixed-point steps of the step map, then (stride_fallback) 100 of the stride map and its Jacobian's 2d + 2 =
-    # 68 maps of 2 steps (d = 33 on exo and Atalante), the map at x*, 10 steps of
-    # the recovery band, 3000 pushes of 1 + 3 steps (+ a multi-contact gait's first heel strike)
-    assert section_dimension(robot) == 33
-    assert worst == (12_347 + (gait.domain_graph == "multicontact")) * step_physics_steps(gait, robot.dt, c.sim)
+    # the orbit search: orbit.max_steps + orbit.hold_steps steps of the walk, the probe's pushes (orbit.probe_pushes at
+    # up to 1 + orbit.probe_doublings sizes, each the pushed step and orbit.probe_horizon more); then the budget's
+    # pushes, each the pushed step and push.horizon more
+    o, p = c.certify.orbit, c.certify.push
+    search = o.max_steps + o.hold_steps + (1 + o.probe_doublings) * o.probe_pushes * (1 + o.probe_horizon)
+    assert worst == (search + c.certify.sequential.budget * (1 + p.horizon)) * step_physics_steps(gait, robot.dt,
+                                                                                                  c.sim)
 
 
 @pytest.mark.parametrize("kind", [*KINDS, "all"])
@@ -115,10 +117,10 @@ def test_study_and_demo_defaults_pass(request, name, graph):
         check_certify_work(robot, gait, c.study_certify, c.sim)
 
 
-@pytest.mark.parametrize("override", [  # on both sides of the limit: 4 × the default 12 179 steps of 1.5 T at most
-    [], ["certify.sequential.budget=10000"], ["certify.push.steps=15"], ["certify.push.steps=16"],
+@pytest.mark.parametrize("override", [  # on both sides of the limit: 4 × the default 63 836 steps of 1.5 T at most
+    [], ["certify.sequential.budget=10000"], ["certify.push.horizon=83"], ["certify.push.horizon=84"],
     ["sim.step_cap=1000"], ["sim.max_step_tau=6"], ["sim.max_step_tau=6.1"], ["certify.disturbance=state"],
-    ["certify.method=uniform", "certify.n_samples=10000", "certify.push.steps=4"],
+    ["certify.method=uniform", "certify.n_samples=10000", "certify.push.horizon=24"],
     ["certify.disturbance=state", "certify.horizon=10", "certify.map=stride"],
 ])
 @pytest.mark.parametrize("graph", GRAPHS)
@@ -151,10 +153,10 @@ def test_the_limit_is_relative_to_the_defaults(exo, exo_gait):
     """Within 4 × the defaults' work (or 2e7) passes, beyond is refused, on the same robot and gait."""
     step = step_physics_steps(exo_gait, exo.dt, SimConfig())
     defaults = Work(certify_steps(CertifyConfig(), "flat", section_dimension(exo)), step)
-    assert defaults.steps == 12_347 and work_limit(defaults) == 4 * 12_347 * 1050 > MAX_PHYSICS_STEPS
-    assert check_work(Work(4 * 12_347, step), defaults, exo.dt, "x") == 4 * 12_347 * 1050
-    with pytest.raises(RobustGaitError, match=r"^x: 49389 simulated steps .* over the limit of 5.2e\+07 \(4 × the "):
-        check_work(Work(4 * 12_347 + 1, step), defaults, exo.dt, "x")
+    assert defaults.steps == 63_836 and work_limit(defaults) == 4 * 63_836 * 1050 > MAX_PHYSICS_STEPS
+    assert check_work(Work(4 * 63_836, step), defaults, exo.dt, "x") == 4 * 63_836 * 1050
+    with pytest.raises(RobustGaitError, match=r"^x: 255345 simulated steps .* over the limit of 2.7e\+08 \(4 × the "):
+        check_work(Work(4 * 63_836 + 1, step), defaults, exo.dt, "x")
     small = Work(10, step)  # a small job on a robot whose defaults are small: the 2e7 floor
     assert work_limit(small) == MAX_PHYSICS_STEPS and check_work(Work(19_000, step), small, exo.dt, "x")
 
@@ -173,16 +175,16 @@ def test_a_mistaken_timestep_is_refused(exo, exo_gait, monkeypatch):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["certify", "{g}", "--robot", "exo", "--override", "certify.push.steps=100"],
-     "certify.fp_max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303347 simulated steps"),
+    (["certify", "{g}", "--robot", "exo", "--override", "certify.push.horizon=100"],
+     "certify.orbit.max_steps 100 + certify.sequential.budget 3000 × 101 steps: 303836 simulated steps"),
     (["validate", "{g}", "--robot", "exo", "--trials", "10000", "--steps-after", "1000", "--disturbance", "all"],
-     f"validate.trials 10000 × (validate.steps_after 1000 + 2) steps × {len(KINDS)} disturbance kinds + the "
+     f"validate.trials 10000 × (validate.steps_after 1000 + 4) steps × {len(KINDS)} disturbance kinds + the "
      "certificate"),
     (["walk", "{long}", "--robot", "exo", "--override", "sim.max_step_tau=10"],
      "one simulated step may last 50 s, 50000 physics steps"),
     (["study", "run", "{t}/s", "--robot", "exo", "--override", "certify.sequential.budget=10000", "--override",
-      "certify.push.steps=10"], "study: one evaluation of a 1.1 s gait: certify.fp_max_steps 100 + "
-     "certify.sequential.budget 10000 × 11 steps"),
+      "certify.push.horizon=30"], "study: one evaluation of a 1.1 s gait: certify.orbit.max_steps 100 + "
+     "certify.sequential.budget 10000 × 31 steps"),
 ])
 def test_mistaken_settings_are_one_line_exit_2_before_any_work(tmp_path, exo_gait, argv, message):
     g, long = save_gait(exo_gait, tmp_path / "g.json"), tmp_path / "long.json"

@@ -27,8 +27,9 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 from robustgait._lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from robustgait.barrier import Certificate, certify_map, invariant_radius
-    from robustgait.certify import GaitCertificate, certify_gait
+    from robustgait.certificate.barrier import Certificate, certify_map, invariant_radius
+    from robustgait.certificate.certify import GaitCertificate, certify_gait
+    from robustgait.certificate.estimators import certify_map_sequential
     from robustgait.config import (
         CertifyConfig,
         ComfortConfig,
@@ -41,7 +42,6 @@ if TYPE_CHECKING:
         ValidateConfig,
     )
     from robustgait.errors import RobustGaitError
-    from robustgait.estimators import certify_map_sequential
     from robustgait.gait import Gait
     from robustgait.gaitgen import GaitGenerator, generate_gait
     from robustgait.io.gaitfile import load_gait, save_gait
@@ -54,12 +54,12 @@ if TYPE_CHECKING:
 __version__ = "0.1.0"
 
 _EXPORTS = {
-    **dict.fromkeys(("Certificate", "certify_map", "invariant_radius"), "barrier"),
-    **dict.fromkeys(("GaitCertificate", "certify_gait"), "certify"),
+    **dict.fromkeys(("Certificate", "certify_map", "invariant_radius"), "certificate.barrier"),
+    **dict.fromkeys(("GaitCertificate", "certify_gait"), "certificate.certify"),
     **dict.fromkeys(("CertifyConfig", "ComfortConfig", "Config", "GaitParams", "GenerationConfig", "SequentialConfig",
                      "SimConfig", "StudyConfig", "ValidateConfig"), "config"),
     "RobustGaitError": "errors",
-    "certify_map_sequential": "estimators",
+    "certify_map_sequential": "certificate.estimators",
     "Gait": "gait",
     **dict.fromkeys(("GaitGenerator", "generate_gait"), "gaitgen"),
     **dict.fromkeys(("load_gait", "save_gait"), "io.gaitfile"),

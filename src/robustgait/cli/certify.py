@@ -14,29 +14,28 @@ from robustgait.errors import RobustGaitError
 from robustgait.io.limits import BARRIER_R, X_STAR
 
 CERTIFY = {"--state": "certify.state", "--set": "certify.set", "--horizon": "certify.horizon",
-           "--disturbance": "certify.disturbance", "--push-steps": "certify.push.steps",
+           "--disturbance": "certify.disturbance", "--push-horizon": "certify.push.horizon",
            "--push-duration": "validate.push_duration", "--compare-ball": "certify.ellipsoid.compare_ball",
            "--method": "certify.method", "--samples": "certify.n_samples", "--epsilon": "certify.sequential.epsilon",
            "--budget": "certify.sequential.budget", "--beta": "certify.beta", "--barrier": "certify.barrier",
            "--r-max": "certify.r_max", "--alpha": "certify.alpha", "--seed": "certify.seed", "--map": "certify.map",
            "--reconstruction": "certify.reconstruction", "--frame": "certify.frame",
-           "--switching": "sim.switching", "--controller": "sim.controller", "--fp-tol": "certify.fp_tol",
-           "--fp-window": "certify.fp_window", "--fp-max-steps": "certify.fp_max_steps",
-           "--fp-newton": "certify.fp_newton_iterations", "--fp-rho-max": "certify.fp_rho_max"}
+           "--switching": "sim.switching", "--controller": "sim.controller",
+           "--orbit-steps": "certify.orbit.max_steps", "--rho": "certify.orbit.linearization"}
 
 
 def _what(cfg: CertifyConfig) -> str:
     """The certificate's kind in a few words: state, set, horizon, map, reconstruction (or the push's steps)."""
     if cfg.disturbance == "push":
-        return f"pushes, {cfg.push.steps} steps after"
-    bits = [f"{cfg.state} {cfg.set}", f"{cfg.map} map" + ("" if cfg.horizon == 1 else f" ^{cfg.horizon}")]
+        return f"pushes, back in the band within {cfg.push.horizon} steps"
+    bits = [f"{cfg.state} {cfg.set}"] + ([] if cfg.horizon == 1 else [f"horizon {cfg.horizon}"])
     if cfg.state == "omega":
         bits += [f"{cfg.frame} frame", f"{cfg.reconstruction} reconstruction"]
     return ", ".join(bits)
 
 
 def _certify(args: argparse.Namespace) -> int:
-    from robustgait.certify import certify_gait
+    from robustgait.certificate.certify import certify_gait
 
     config, robot, gait = inputs(args)
     cfg = config.certify
@@ -59,21 +58,17 @@ def _certify(args: argparse.Namespace) -> int:
         print(json.dumps(gc.to_dict(samples=False), allow_nan=False))
     elif c is None:
         print(f"{gc.status}: {name} = 0 ({gc.reason}; {gc.steps_walked} steps walked)")
-        if gc.orbit is not None:
+        if gc.orbit is not None and gc.orbit.band is not None:
             print(f"orbit: {gc.orbit.describe()}")
     else:
-        assert fp is not None and gc.map_residual is not None and co is not None
+        assert fp is not None and co is not None and gc.orbit is not None
         energy = "" if gc.energy is None else f", E* = {gc.energy:.4g} J"
         print(f"{name} = {c.r_star:.4g} {cfg.unit}{energy}  ({_what(cfg)}, {cfg.barrier} barrier, α = {cfg.alpha:g}, "
               f"{cfg.method}: N = {c.n_samples}, seed {cfg.seed})")
-        print(f"ω* = [{', '.join(f'{v:.4f}' for v in fp.omega)}] rad/s after {fp.steps} steps; residual "
-              f"{fp.residual:.2e}" + ("" if cfg.disturbance == "push" else
-                                      f" (map at x*: {gc.map_residual:.2e} {cfg.unit})"))
-        if gc.orbit is not None:
-            print(f"orbit: {gc.orbit.describe()}")
-        if gc.config.map != cfg.map:
-            print("map: stride — two steps, one on each leg, unmirrored: the step map's iterates settled on no "
-                  "orbit (certify.stride_fallback; a robot whose left and right differ)")
+        print(f"orbit: {gc.orbit.describe()}")
+        print(f"x*: the switching state after step {fp.step}, ω* = [{', '.join(f'{v:.4f}' for v in fp.omega)}] rad/s"
+              + ("" if gc.map_residual is None else f"; map at x*: {gc.map_residual:.2e} {cfg.unit}")
+              + ("" if gc.sigma is None else f"; the orbit's scatter σ = {gc.sigma:.3g} {cfg.unit}"))
         if cfg.set == "ellipsoid" and cfg.disturbance == "state":
             sh = co.shape
             if sh.fallback:
@@ -96,13 +91,13 @@ def _certify(args: argparse.Namespace) -> int:
         print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside; controller {gc.controller}"
               + (f" ({gc.controller_note})" if gc.controller_note else ""))
         print(gc.statement())
-        print(f"time: fixed point {gc.seconds['fixed_point']:.2f} s, sampling {gc.seconds['sampling']:.2f} s "
+        print(f"time: orbit {gc.seconds['orbit']:.2f} s, sampling {gc.seconds['sampling']:.2f} s "
               f"({gc.seconds['sim_steps_per_s']:.0f} simulated steps/s)")
     return 0 if gc.ok else 1
 
 
 def _barrier_eval(args: argparse.Namespace) -> int:
-    from robustgait.barrier import barrier_along
+    from robustgait.certificate.barrier import barrier_along
     from robustgait.io.logs import load_reduced_log
 
     alpha = config_from(args).certify.alpha
@@ -131,7 +126,8 @@ def _barrier_eval(args: argparse.Namespace) -> int:
 
 def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     c = command(sub, "certify", "robustness certificate of a gait: r* (DTBF on the Poincaré map, in a reduced state) "
-                "or J* (pushes); exit 1 if the gait falls or has no stable orbit (r* = 0)", _certify, CERTIFY)
+                "or J* (pushes); exit 1 if the gait falls, its switching states settle in no band, or small pushes "
+                "do not come back to it (r* = 0)", _certify, CERTIFY)
     c.add_argument("gait", help=GAIT_HELP)
     c.add_argument("--robot", required=True, help=ROBOT_HELP)
     c.add_argument("--plot", metavar="CERT.png", type=output_path("plot"),

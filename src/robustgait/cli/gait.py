@@ -32,13 +32,17 @@ def _convert(args: argparse.Namespace) -> int:
 
 
 def _generate(args: argparse.Namespace) -> int:
+    from robustgait.config.gait import reach_problem
     from robustgait.gaitgen import GaitGenerator
     from robustgait.io.gaitfile import load_gait, save_gait
     from robustgait.io.robotfile import load_robot
 
     robot = load_robot(args.robot)
     config = config_from(args, Config(gait=robot.default_params))  # the spec's [gait] under file and flags
-    params = config.params
+    params = config.params.resolved(config.generate.domains)
+    problem = reach_problem(params, robot.scale, config.generate)
+    if problem is not None:  # before the problem is built: no solve can walk it
+        raise RobustGaitError(f"{robot.name}: {problem}")
     warm = load_gait(args.warm_start, robot) if args.warm_start else None
     live = not args.json
     if live:

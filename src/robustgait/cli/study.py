@@ -46,6 +46,8 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
     print(f"study {directory}: {st['trials_done']}/{st['trials_planned']} gaits evaluated{took} "
           f"({st['unique_gaits']} unique), {st['iterations_done']}/{st['iterations_planned']} iterations, "
           f"{st['state']}")
+    if st["outcomes"]:
+        print("outcomes: " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in st["outcomes"].items()))
     if best is not None:
         params = ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())
         print(f"best gait (trial {best['trial']}): {params}; {_name(st)} = {best['r_star']:.4g} {st['unit']}, "

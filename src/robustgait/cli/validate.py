@@ -66,7 +66,7 @@ def _validate(args: argparse.Namespace) -> int:
               f"{rate_text(chk['outside']):<24} {chk['fell_before_event']:>17}")
         if "inside_at_horizon" in chk and kr.horizon is not None:
             print(f"          the certificate's own promise at its horizon (the pushed step and {kr.horizon - 1} "
-                  f"more: no fall, back near the orbit), pushes |J| ≤ J* that failed it: "
+                  f"more: no fall before it was back in its orbit's band), pushes |J| ≤ J* that failed it: "
                   f"{rate_text(chk['inside_at_horizon'])}; at the user's horizon, {cfg.steps_after} steps: fell "
                   f"{rate_text(chk['inside'])}")
         q = kr.summary()["energy"]

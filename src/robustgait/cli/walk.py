@@ -12,21 +12,20 @@ SIM = {"--controller": "sim.controller", "--switching": "sim.switching", "--feed
 
 
 def _walk(args: argparse.Namespace) -> int:
+    from robustgait.certificate.reduced import reduce_state
     from robustgait.io.output import write_csv
-    from robustgait.poincare import canonical_reduced_events, walk_stability
     from robustgait.sim import walk
+    from robustgait.sim.walk import canonical_event_states
 
     config, robot, gait = inputs(args)
     with about(args.gait):
         result = walk(robot, gait, config.sim, video=args.video, comfort=config.comfort, certify=config.certify)
-        orbit = walk_stability(robot, gait, result, config.certify, config.sim)
+    orbit = result.orbit
     if args.log is not None:
-        xs = canonical_reduced_events(robot, gait, result.events, config.certify.frame)
+        xs = reduce_state(*canonical_event_states(robot, gait, result.events), config.certify.frame)
         write_csv(args.log, ["wx", "wy", "wz"], xs.tolist())
     if args.json:
-        out = result.to_dict()
-        out["orbit"] = None if orbit is None else orbit.to_dict()
-        print(json.dumps(out, allow_nan=False))
+        print(json.dumps(result.to_dict(), allow_nan=False))
     else:
         end = f"fell ({result.fall_reason}) at t = {result.time:.2f} s" if result.fell else "no fall"
         print(f"{gait.robot} gait on {robot.name}: {result.steps_taken}/{result.max_steps} steps, {end}; "
@@ -38,7 +37,7 @@ def _walk(args: argparse.Namespace) -> int:
               f"({100 * tr['saturation_fraction']:.3g} %)"
               + (f"  ({result.controller_note})" if result.controller_note else ""))
         if orbit is not None:
-            print(f"orbit of the switching events: {orbit.describe()}")
+            print(f"orbit of the switching events: {orbit.describe()} (stability: robustgait certify)")
         if result.comfort is not None:
             print("\n".join(result.comfort.text()))
         else:

@@ -1,4 +1,5 @@
-"""Options of a certificate (:mod:`robustgait.certify`, :mod:`robustgait.estimators`, :mod:`robustgait.barrier`)."""
+"""Options of a certificate (:mod:`robustgait.certificate.certify`, :mod:`robustgait.certificate.estimators`,
+:mod:`robustgait.certificate.barrier`)."""
 
 from __future__ import annotations
 
@@ -10,13 +11,12 @@ from robustgait.config.base import Bool, Doc, FieldProblem, Float, Int, config
 
 Method = Literal["sequential", "uniform"]
 Barrier = Literal["ball", "paper"]
-MapKind = Literal["step", "stride"]
+MapKind = Literal["auto", "step", "stride"]
 Frame = Literal["heading", "world", "body"]
 Reconstruction = Literal["holonomic", "angular-only"]
 State = Literal["omega", "centroidal", "velocity"]
 CertifiedSet = Literal["ball", "ellipsoid"]
 CertifyDisturbance = Literal["push", "state"]
-OrbitMetric = Literal["section", "omega"]
 
 # r_max when unset: the paper's 2 rad/s for ``omega``; for the energy states a ball of twice-kinetic-energy radius
 # (√J) and for pushes an impulse (N s) — both well beyond what the exo gaits absorb (docs/certificate.md)
@@ -27,21 +27,28 @@ R_MAX_LIMIT = {"omega": 10.0, "centroidal": 1000.0, "velocity": 1000.0, "push": 
 STATE_CHOICE_DEFAULTS: dict[str, str | int] = {"state": "omega", "set": "ball", "horizon": 1}
 
 
-# the fixed-point search of results written before the orbit check (2026-11-25): the first iterate after
-# fp_min_steps whose base angular velocity moved by less than fp_tol, no Newton step, no spectral radius — how a
-# study or a certificate file that predates these fields is read back (study/config.py, io/certfile.py), so that it
-# reproduces its x*
-LEGACY_FIXED_POINT: dict[str, object] = {"fp_window": 1, "fp_metric": "omega", "fp_newton_iterations": 0,
-                                         "fp_rho_max": None}
+# the fields of the fixed-point search and of the fixed push horizon that the orbit search and the recovery band
+# replaced: a study or a certificate file that has them is read back without them (study/config.py,
+# io/certfile.py), and its orbit is found again by the orbit search
+RETIRED_FIELDS = ("fp_tol", "fp_window", "fp_metric", "fp_min_steps", "fp_max_steps", "fp_newton_iterations",
+                  "fp_newton_tol", "fp_fd_step", "fp_fd_jump", "fp_rho_max", "stride_fallback")
+RETIRED_PUSH_FIELDS = ("steps", "recovery_band_steps")
 
 
-# the step fractions a damped Newton iteration tries at once (one batch of the map), the smallest residual taken
-NEWTON_DAMPING = (1.0, 0.5, 0.25, 0.125)
+def without_retired(certify: dict[str, object]) -> dict[str, object]:
+    """A ``[certify]`` table as written by an older version, without :data:`RETIRED_FIELDS` and, in its ``push``
+    table, :data:`RETIRED_PUSH_FIELDS` (the rest is read as it is)."""
+    out = {k: v for k, v in certify.items() if k not in RETIRED_FIELDS}
+    push = out.get("push")
+    if isinstance(push, dict):
+        out["push"] = {k: v for k, v in push.items() if k not in RETIRED_PUSH_FIELDS}
+    return out
 
 
-def fixed_point_options(config: CertifyConfig) -> dict[str, object]:
-    """Every ``fp_*`` field of ``config``: the options that decide its fixed point x*."""
-    return {f.name: getattr(config, f.name) for f in dataclasses.fields(config) if f.name.startswith("fp_")}
+def orbit_options(config: CertifyConfig) -> dict[str, object]:
+    """The options that decide a certificate's orbit and x*: ``map`` and every field of ``orbit``."""
+    return {"map": config.map, **{f"orbit.{f.name}": getattr(config.orbit, f.name)
+                                   for f in dataclasses.fields(config.orbit)}}
 
 
 def study_disturbance(metric: str, disturbance: CertifyDisturbance) -> CertifyDisturbance:
@@ -75,7 +82,7 @@ def verification_size(epsilon: float, beta: float, attempt: int) -> int:
 
 @config
 class SequentialConfig:
-    """Options of the sequential estimator (:mod:`robustgait.estimators`; defaults measured in
+    """Options of the sequential estimator (:mod:`robustgait.certificate.estimators`; defaults measured in
     ``docs/certificate.md``)."""
 
     epsilon: Annotated[Float, Doc("bound on the violating volume fraction of B(r*) to certify", gt=0.0,
@@ -100,8 +107,8 @@ class SequentialConfig:
 
 @config
 class EllipsoidConfig:
-    """How the shape S of the ellipsoid {δ : δᵀ S δ ≤ r²} is found (:mod:`robustgait.shape`): a least-squares fit
-    of the certified map's linearization A at x* on a small ball, then AᵀSA − S = −I, det S = 1."""
+    """How the shape S of the ellipsoid {δ : δᵀ S δ ≤ r²} is found (:mod:`robustgait.certificate.shape`): a
+    least-squares fit of the certified map's linearization A at x* on a small ball, then AᵀSA − S = −I, det S = 1."""
 
     fit_samples: Annotated[Int, Doc("map evaluations of the fit (uniform in the fit ball)", ge=4, le=10_000)] = 64
     fit_radius: Annotated[Float, Doc("radius of the fit ball, as a fraction of r_max", gt=0.0, le=1.0)] = 0.05
@@ -110,24 +117,90 @@ class EllipsoidConfig:
 
 
 @config
-class PushConfig:
-    """The push certificate J* (``disturbance = push``, :mod:`robustgait.push`): the steps after the pushed one within
-    which a fall is a failure, and the sizes of the sequential estimator's first round and exploration — smaller than
-    a state certificate's, since the failing set of a 2-D impulse disk needs less exploration (the statement does not
-    depend on it; ε, β, the budget and the rest are ``sequential``'s). Push duration and phases are the validation's
-    (``validate.push_duration``, ``validate.push_phase``)."""
+class OrbitConfig:
+    """How the orbit a gait walks is found and judged (:mod:`robustgait.certificate.orbit`,
+    :mod:`robustgait.certificate.search`; ``docs/certificate.md``, "The orbit the gait walks"). Distances are in band
+    coordinates: the section state made dimensionless by the leg length l and gravity g (angles in rad, velocities
+    over √(g l) or √(g/l))."""
 
-    steps: Annotated[Int, Doc("steps after the pushed one within which a fall, or not being back near the orbit at "
-                              "their end, is a failure", ge=1, le=100)] = 3
-    recovery: Annotated[Bool, Doc("a pushed walk must also end those steps back near its orbit (recovery_radius); "
-                                  "false: a fall is the only failure")] = True
+    max_steps: Annotated[Int, Doc("steps walked at most while the switching states are searched for their band",
+                                  ge=2, le=1000)] = 100
+    min_steps: Annotated[Int, Doc("least steps before the walk may count as settled", ge=1, le=1000)] = 10
+    hold_steps: Annotated[Int, Doc("steps walked after the switching states settled, in which every window's centre "
+                                   "must stay in the band (a walk that drifts, turns or slowly falls moves it)", ge=0,
+                                   le=1000)] = 64
+    window: Annotated[Int, Doc("steps of each of the two windows compared (the last against the one before); a "
+                               "multiple of max_period", ge=2, le=500)] = 16
+    max_period: Annotated[Int, Doc("longest period (physical steps) searched, a power of two: 1 (the step map "
+                                   "only), 2 (also the stride map), 4, 8", ge=1, le=8)] = 4
+    period_ratio: Annotated[Float, Doc("a shorter period is chosen while its scatter is within this multiple of the "
+                                       "best period's", ge=1.0, le=100.0)] = 2.0
+    settle_multiple: Annotated[Float, Doc("settled: every state of the last window lies within this multiple of the "
+                                          "window before's scatter of its centre", gt=0.0, le=100.0)] = 3.0
+    drift: Annotated[Float, Doc("settled: the last window's centre moved at most this multiple of its own scatter",
+                                gt=0.0, le=100.0)] = 1.0
+    floor: Annotated[Float, Doc("scatter below which two windows are the same (band coordinates)", gt=0.0,
+                                le=1.0)] = 1e-3
+    probe_impulse: Annotated[Float, Doc("stability: the first impulse of the probing pushes, as a fraction of m √(g l) "
+                                        "(the robot's momentum at its pendulum speed; 0: no probe); doubled until "
+                                        "they take the walk out of its band", ge=0.0,
+                                        le=1.0)] = 0.01
+    probe_pushes: Annotated[Int, Doc("stability: probing pushes, at evenly spaced directions; the orbit is stable when "
+                                     "none moves away from the band and not all fall (one that falls is a push "
+                                     "beyond the basin, for J*)", ge=1, le=100)] = 8
+    probe_horizon: Annotated[Int, Doc("stability: steps after the probing push within which it must be back in the "
+                                      "band (push.recovery_steps of them in a row)", ge=2, le=100)] = 20
+    probe_growth: Annotated[Float, Doc("stability: a probe that neither fell nor came back diverges when its largest "
+                                       "distance from the band over the last quarter of its steps exceeds this "
+                                       "multiple of its largest over the first half", gt=1.0, le=100.0)] = 1.5
+    probe_doublings: Annotated[Int, Doc("stability: most doublings of the probing impulse while no probe leaves the "
+                                        "band", ge=0, le=10)] = 3
+    linearization: Annotated[Bool, Doc("also compute the linearized map at x* as a diagnostic (ρ; never a verdict): "
+                                       "two Jacobians and a perturbation along the leading eigenvector")] = False
+    fd_step: Annotated[Float, Doc("linearization: the finer finite-difference step (section coordinates; the coarser "
+                                  "is ten times it)", unit="rad/s or m/s", gt=0.0, le=0.01)] = 1e-6
+    fd_jump: Annotated[Float, Doc(
+        "linearization: a Jacobian column whose forward and backward differences differ by more than this fraction of "
+        "the smaller is taken one-sided, the smaller (the map jumps within the step on the other side)", gt=0.0,
+        le=100.0)] = 0.5
+    fd_agreement: Annotated[Float, Doc("linearization: ρ is defined when its values at the two steps agree within this "
+                                       "fraction", gt=0.0, le=1.0)] = 0.1
+    confirm_steps: Annotated[Int, Doc("linearization: maps a perturbation along the leading eigenvector is iterated "
+                                      "to confirm ρ", ge=1, le=100)] = 8
+    confirm_tolerance: Annotated[Float, Doc("linearization: the perturbation's per-map factor must lie within this "
+                                            "fraction of ρ", gt=0.0, le=1.0)] = 0.25
+
+    def __post_init__(self) -> None:
+        if self.max_period & (self.max_period - 1):
+            raise FieldProblem("max_period", f"must be a power of two (1, 2, 4, 8), got {self.max_period}")
+        if self.window % self.max_period:
+            raise FieldProblem("window", f"must be a multiple of max_period {self.max_period}, got {self.window}")
+        if self.max_steps < max(self.min_steps, 2 * self.window):
+            raise FieldProblem("max_steps", f"must be at least min_steps ({self.min_steps}) and two windows "
+                               f"({2 * self.window}), got {self.max_steps}")
+
+
+@config
+class PushConfig:
+    """The push certificate J* (``disturbance = push``, :mod:`robustgait.certificate.push`): when a pushed walk has
+    failed — it fell within the pushed step and ``horizon`` more —, when it may stop early — back in its orbit's band
+    for ``recovery_steps`` consecutive steps (recovered) —, and the sizes of the sequential estimator's first round
+    and exploration, smaller than a state certificate's since the failing set of a 2-D impulse disk needs less
+    exploration (the statement does not depend on it; ε, β, the budget and the rest are ``sequential``'s). Push
+    duration and phases are the validation's (``validate.push_duration``, ``validate.push_phase``)."""
+
+    horizon: Annotated[Int, Doc("steps after the pushed one within which a fall is a failure (the statement's "
+                                "horizon)", ge=1, le=100)] = 20
+    recovery: Annotated[Bool, Doc("stop a pushed walk once it has recovered (back in its orbit's band for "
+                                  "recovery_steps steps); false: every push walks the whole horizon")] = True
     recovery_radius: Annotated[Float, Doc(
-        "the orbit's neighbourhood: distance from x* in the base's Froude-scaled velocity (v/√(g l), ω/√(g/l), "
-        "heading frame; docs/certificate.md, Recovery)", ge=0.0, le=100.0)] = 0.3
-    recovery_scatter: Annotated[Float, Doc("the recovery radius is at least this multiple of the undisturbed orbit's "
-                                           "own scatter about x*", ge=0.0, le=1000.0)] = 3.0
-    recovery_band_steps: Annotated[Int, Doc("undisturbed steps from x* whose scatter sets that floor", ge=1,
-                                            le=1000)] = 10
+        "the band's floor ν: every coordinate of the section state within this distance of x*'s, in band "
+        "coordinates (angles in rad, velocities over √(g l) or √(g/l); docs/certificate.md, Recovery)", gt=0.0,
+        le=10.0)] = 0.03
+    recovery_scatter: Annotated[Float, Doc("the band is at least this multiple of the undisturbed orbit's own "
+                                           "scatter in each coordinate", ge=0.0, le=1000.0)] = 3.0
+    recovery_steps: Annotated[Int, Doc("consecutive steps in the band that make a pushed walk recovered (it stops)",
+                                       ge=1, le=100)] = 2
     first_round: Annotated[Int, Doc("round 1: uniform pushes in the disk of radius r_max", ge=1, le=10_000)] = 50
     explore: Annotated[Int, Doc("exploration pushes before the first verification", ge=0, le=100_000)] = 100
     explore_after_failure: Annotated[Int, Doc("exploration pushes before each further verification", ge=0,
@@ -135,6 +208,11 @@ class PushConfig:
     verify_chunk: Annotated[Int, Doc("verification pushes simulated per chunk; a batch is abandoned at the first "
                                      "chunk with a fall inside the disk verified (0: the whole batch at once)", ge=0,
                                      le=10_000)] = 25
+
+    def __post_init__(self) -> None:
+        if self.recovery and self.recovery_steps > 1 + self.horizon:
+            raise FieldProblem("recovery_steps", f"must be at most the pushed step and horizon ({1 + self.horizon} "
+                               f"steps), got {self.recovery_steps}")
 
 
 @config
@@ -166,42 +244,16 @@ class CertifyConfig:
     beta: Annotated[Float, Doc("1 − confidence of the violation bound", gt=0.0, lt=1.0)] = 0.05
     seed: Annotated[Int, Doc("seed of the perturbations", ge=0, le=SEED_LIMIT)] = 0
     barrier: Annotated[Barrier, Doc("ball: H = r² − ‖x − x*‖²; paper: the paper's literal H = r − ‖x − x*‖²")] = "ball"
-    map: Annotated[MapKind, Doc("step (one step, mirrored) or stride (two steps) return map")] = "step"
-    stride_fallback: Annotated[Bool, Doc(
-        "step map only: when its iterates settle on no orbit (wandering or period two), search the stride map's — "
-        "two physical steps, one on each leg, unmirrored: the orbit of a robot whose left and right differ — and "
-        "certify that map if it settles (the certificate says so)")] = True
+    map: Annotated[MapKind, Doc(
+        "the shortest map the orbit is searched on: step (one step, mirrored), stride (two steps, one on each leg), "
+        "auto (stride when the robot's left and right differ, else step); an orbit of period k is certified on the "
+        "k-step map")] = "auto"
     reconstruction: Annotated[Reconstruction, Doc("how a full state is rebuilt from a reduced one")] = "holonomic"
     frame: Annotated[Frame, Doc("frame of the base angular velocity (heading: world frame without yaw)")] = "heading"
-    fp_tol: Annotated[Float, Doc("fixed point: the orbit has settled when the last fp_window iterates all lie within "
-                                 "this distance of the newest (fp_metric)", unit="rad/s or m/s", gt=0.0,
-                                 le=1.0)] = 1e-2
-    fp_window: Annotated[Int, Doc("fixed point: iterates before the newest that must lie within fp_tol of it (1: "
-                                  "the one before, the rule before 2026-11-25; longer than fp_max_steps: never "
-                                  "settles)", ge=1, le=100)] = 20
-    fp_metric: Annotated[OrbitMetric, Doc(
-        "fixed point: distance of two iterates in section coordinates (the canonical state without base x, y and "
-        "yaw, positions divided by the step duration) or omega (the base angular velocity in frame)")] = "section"
-    fp_min_steps: Annotated[Int, Doc("fixed point: least steps before stopping (at most fp_max_steps)", ge=1,
-                                     le=1000)] = 10
-    fp_max_steps: Annotated[Int, Doc("fixed point: give up after this many steps", ge=1, le=1000)] = 100
-    fp_newton_iterations: Annotated[Int, Doc(
-        "fixed point: most damped Newton iterations on P(x) = x from the settled iterate (0: x* is that iterate)",
-        ge=0, le=50)] = 0
-    fp_newton_tol: Annotated[Float, Doc("fixed point: Newton has converged when ‖P(x) − x‖ is below this (section "
-                                        "coordinates)", unit="rad/s or m/s", gt=0.0, le=1.0)] = 1e-8
-    fp_fd_step: Annotated[Float, Doc("fixed point: finite-difference step of the map's Jacobian (section "
-                                     "coordinates)", unit="rad/s or m/s", gt=0.0, le=0.1)] = 1e-6
-    fp_fd_jump: Annotated[Float, Doc(
-        "fixed point: a Jacobian column whose forward and backward differences differ by more than this fraction of "
-        "the smaller is taken one-sided, the smaller (the map jumps within the step on the other side)", gt=0.0,
-        le=100.0)] = 0.5
-    fp_rho_max: Annotated[Float | None, Doc(
-        "fixed point: refuse an orbit whose linearized map has a spectral radius ρ ≥ this (not set: ρ is not "
-        "computed)", gt=0.0, le=10.0)] = 1.0
     sequential: SequentialConfig = dataclasses.field(default_factory=SequentialConfig)
     ellipsoid: EllipsoidConfig = dataclasses.field(default_factory=EllipsoidConfig)
     push: PushConfig = dataclasses.field(default_factory=PushConfig)
+    orbit: OrbitConfig = dataclasses.field(default_factory=OrbitConfig)
 
     @property
     def estimator(self) -> SequentialConfig:
@@ -252,27 +304,16 @@ class CertifyConfig:
         """Unit of r* and of the certificate's coordinates."""
         return R_MAX_UNIT[self.space]
 
-    @property
-    def period(self) -> int:
-        """Steps of one iterate of the map: 1 (step map) or 2 (stride map)."""
-        return 2 if self.map == "stride" else 1
-
-    def fixed_point_steps(self, dim: int) -> int:
-        """Most steps the fixed-point search simulates on a section of ``dim`` coordinates: ``fp_max_steps`` steps of
-        iterates, then per Newton iteration a finite-difference batch (2 dim + 1 maps) and its damped steps, then the
-        Jacobian at x* and the image recorded for the touchdown's flow (2 dim + 2 maps), a map being :attr:`period`
-        steps; with ``stride_fallback``, the step map's search that found no orbit and then the stride map's."""
-        fd = 2 * dim + 1
-        rho = fd + 1 if self.fp_rho_max is not None else 0
-        own = self.fp_max_steps + self.period * (self.fp_newton_iterations * (fd + len(NEWTON_DAMPING)) + rho)
-        if self.map == "step" and self.stride_fallback:  # the step map's search gave up, then the stride map's
-            return self.fp_max_steps + dataclasses.replace(self, map="stride").fixed_point_steps(dim)
-        return own
-
-    @property
-    def min_steps(self) -> int:
-        """Least fixed-point steps in effect: fp_min_steps, or fp_max_steps if that is smaller."""
-        return min(self.fp_min_steps, self.fp_max_steps)
+    def orbit_steps(self, dim: int) -> int:
+        """Most steps the orbit search simulates on a section of ``dim`` coordinates: ``orbit.max_steps`` +
+        ``orbit.hold_steps`` steps of the walk, the stability probe's pushes (each the pushed step and
+        ``orbit.probe_horizon`` more, at each of up to 1 + ``orbit.probe_doublings`` sizes), and with
+        ``orbit.linearization`` two finite-difference batches of 2 dim + 1 maps, the image recorded for the touchdown's
+        flow and 2 ``orbit.confirm_steps`` maps along the eigenvector, a map being up to ``orbit.max_period`` steps."""
+        o = self.orbit
+        probe = (1 + o.probe_doublings) * o.probe_pushes * (1 + o.probe_horizon) if o.probe_impulse > 0 else 0
+        lin = o.max_period * (2 * (2 * dim + 1) + 1 + 2 * o.confirm_steps) if o.linearization else 0
+        return o.max_steps + o.hold_steps + probe + lin
 
     @property
     def samples_planned(self) -> int:
@@ -284,7 +325,8 @@ class CertifyConfig:
 
     @property
     def steps_per_sample(self) -> int:
-        """Steps simulated per sample at most: the horizon (× 2 for the stride map), or a push's steps."""
+        """Steps simulated per sample at most: a push's (the pushed step and ``push.horizon`` more), or the horizon's
+        maps of up to ``orbit.max_period`` steps each."""
         if self.disturbance == "push":
-            return 1 + self.push.steps
-        return self.horizon * (2 if self.map == "stride" else 1)
+            return 1 + self.push.horizon
+        return self.horizon * self.orbit.max_period

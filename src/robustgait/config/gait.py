@@ -115,6 +115,12 @@ class GenerationConfig:
     ds_free_joints: Annotated[tuple[Str, ...] | None, Doc(
         "multi-contact: the 4 swing-leg joints that are not outputs in double support; not set: picked from the "
         "joint axes")] = None
+    max_step_length: Annotated[Float, Doc("longest step a robot is asked for, in leg lengths (checked before any "
+                                          "solve)", gt=0.0, le=2.0)] = 0.8
+    max_froude: Annotated[Float, Doc("fastest walk a robot is asked for, as a Froude number (L/T)² / (g l): walking "
+                                     "ends near 0.5 (checked before any solve)", gt=0.0, le=10.0)] = 0.5
+    max_step_height: Annotated[Float, Doc("highest swing clearance a robot is asked for, in leg lengths (checked "
+                                          "before any solve)", gt=0.0, le=1.0)] = 0.3
     max_iter: Annotated[Int, Doc("IPOPT iteration limit", ge=1, le=100_000)] = 300
     tol: Annotated[Float, Doc("IPOPT convergence tolerance", gt=0.0, le=1.0)] = 1e-8
 
@@ -140,6 +146,30 @@ class GenerationConfig:
         if value is None:
             raise ValueError(f"generate.{name} is not set: resolve the options with GenerationConfig.for_robot")
         return value
+
+
+def reach_problem(params: GaitParams, scale: RobotScale, config: GenerationConfig) -> str | None:
+    """Why a robot of leg length l (``scale``) cannot be asked for resolved ``params``, in one clause, or None: a step
+    longer than ``max_step_length`` × l, a speed whose Froude number (L/T)² / (g l) exceeds ``max_froude`` (a walk,
+    not a run), a swing clearance above ``max_step_height`` × l, or a step (L, W) beyond 1.2 l from the hip. Checked
+    before any solve: IPOPT would spend its iteration limit on what no leg of that size walks."""
+    leg, g = scale.leg_length, scale.gravity
+    froude = (params.step_length / params.duration) ** 2 / (g * leg)
+    if params.step_length > config.max_step_length * leg:
+        return (f"step length {params.step_length:g} m is {params.step_length / leg:.2f} leg lengths, beyond "
+                f"generate.max_step_length = {config.max_step_length:g} (leg length {leg:.3f} m)")
+    if froude > config.max_froude:
+        speed = params.step_length / params.duration
+        return (f"a step of {params.step_length:g} m in {params.duration:g} s is {speed:.3g} m/s, Froude number "
+                f"{froude:.3g}, beyond generate.max_froude = {config.max_froude:g} (a walk, not a run; leg length "
+                f"{leg:.3f} m)")
+    if params.step_height > config.max_step_height * leg:
+        return (f"swing height {params.step_height:g} m is {params.step_height / leg:.2f} leg lengths, beyond "
+                f"generate.max_step_height = {config.max_step_height:g} (leg length {leg:.3f} m)")
+    if math.hypot(params.step_length, params.step_width) > 1.2 * leg:
+        return (f"a step of {params.step_length:g} m × {params.step_width:g} m is beyond the leg reach "
+                f"(leg length {leg:.3f} m)")
+    return None
 
 
 ROBOT_SCALED = ("min_normal_force", "min_line_force", "cop_margin", "foot_gap", "impact_velocity",

@@ -131,6 +131,11 @@ class RobotConfig:
                                            le=0.1)] = 1e-3
     mirror_angle_tolerance: Annotated[Float, Doc("largest mirror residual: orientation error of a body", unit="rad",
                                                  gt=0.0, le=0.5)] = 1e-3
+    side_mass_tolerance: Annotated[Float, Doc(
+        "left and right differ when a body and its mirror image differ in mass by more than this fraction of the "
+        "heavier and by more than 1 g (a model file's rounding is not a difference)", ge=0.0, le=1.0)] = 1e-3
+    side_inertia_tolerance: Annotated[Float, Doc(
+        "... or in a principal inertia by more than this fraction of the larger", ge=0.0, le=1.0)] = 0.01
     mirror_samples: Annotated[Int, Doc("random configurations of the mirror's forward-kinematics check", ge=1,
                                        le=10_000)] = 20
     seed: Annotated[Int, Doc("seed of the mirror check's configurations", ge=0, le=2**63 - 1)] = 0

@@ -12,17 +12,15 @@ robot's steps are:
   1e-5 s timestep, a 10 s gait at 1e-4 s, ``max_step_tau`` 10 on a 5 s gait — whatever the counts.
 * **The command** may take at most :data:`WORK_HEADROOM` = 4 × what its default settings take on the same robot
   and gait (the same steps, default ``max_step_tau``), or :data:`MAX_PHYSICS_STEPS` = 2e7 physics steps if that
-  is more. Counted in simulated steps this hardly depends on the robot: the default push certificate simulates
-  12 111 + 2d + 2 steps (100 fixed-point steps and the 2d + 2 of its Jacobian, d the section's coordinates, the map
-  at x*, 10 undisturbed steps of the recovery band, 3 000 pushes × 4 steps): 12 179 on exo and Atalante (d = 33),
-  and a request may
-  simulate 4 × that — the largest sample budget (10 000 pushes) is 3.3 ×. So the defaults pass on every robot
-  and domain graph. The fixed 2e7 of before refused the default certificate of a study on Atalante's 1.2 s
-  multi-contact steps (12 102 steps × 1 710 = 2.07e7 physics steps), and as a constant it would have to be raised
-  again for every longer gait. A setting that multiplies the steps beyond that — ``certify.push.steps`` 100
-  (25 ×), ``validate --trials 10000 --steps-after 1000`` — is refused before any work. The 2e7 floor keeps
-  everything that passed before passing: 2e7 physics steps are ~3–7 min batched (certify, 2 cores) and ~30 min
-  for one walk. The defaults' worst cases: ``docs/inputs.md`` (``benchmarks/bench_work.py``).
+  is more. Counted in simulated steps this hardly depends on the robot: a certificate simulates its orbit search
+  (``orbit.max_steps`` + ``orbit.hold_steps`` steps of the walk and the stability probe's pushes,
+  :meth:`~robustgait.config.CertifyConfig.orbit_steps`) and, per planned sample, the steps of
+  :attr:`~robustgait.config.CertifyConfig.steps_per_sample` (a push: the pushed step and ``push.horizon`` more),
+  every sample counted as walking to its horizon (:func:`robustgait.certificate.certify.certify_steps`); a request
+  may simulate 4 × what the defaults do, so the defaults pass on every robot and domain graph, and a setting that
+  multiplies the steps beyond that — ``certify.push.horizon`` 100 with the default budget, ``validate --trials
+  10000 --steps-after 1000`` — is refused before any work. The 2e7 floor keeps small jobs on small robots passing.
+  The defaults' worst cases: ``docs/inputs.md`` (``benchmarks/bench_work.py``).
 
 Memory, not time, bounds a video: every state of the walk is kept for the renderer, and an animated .gif keeps
 every frame until it is written; those limits are absolute.

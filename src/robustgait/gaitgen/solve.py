@@ -13,6 +13,7 @@ from scipy.optimize import least_squares
 
 from robustgait.bezier import bernstein_basis, bezier, bezier_derivative, bezier_derivative_coeffs
 from robustgait.config import GaitParams, GenerationConfig
+from robustgait.config.gait import reach_problem
 from robustgait.domains import Contact
 from robustgait.dynamics import Dynamics, foot_frame
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait, State
@@ -302,13 +303,7 @@ class GaitGenerator:
             return (f"step width {params.step_width:g} m makes the feet collide: the soles are "
                     f"{2 * prob.half_width:.3f} m wide and need a {cfg.scaled('foot_gap'):g} m gap (width ≥ "
                     f"{min_width:.3f} m)")
-        reach = self.robot.leg_length
-        if np.hypot(params.step_length, params.step_width) > 1.2 * reach:
-            return (f"a step of {params.step_length:g} m × {params.step_width:g} m is beyond the leg reach "
-                    f"(leg length {reach:.3f} m)")
-        if params.step_height > 0.5 * reach:
-            return f"swing height {params.step_height:g} m is beyond half the leg length ({reach:.3f} m)"
-        return None
+        return reach_problem(params, self.robot.scale, cfg)
 
     def solve(self, params: GaitParams, warm_start: Gait | None = None) -> GaitGenResult:
         """Solve for one set of essential constraints; never raises on infeasible input or solver failure:

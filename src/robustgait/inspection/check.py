@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from robustgait.config import RobotCheckConfig, RobotConfig
 from robustgait.inspection.gains import static_torques, tipping_stiffness
-from robustgait.inspection.mirror import fk_residual, mass_asymmetry, mirror_from_names
+from robustgait.inspection.mirror import Mirror, fk_residual, mass_asymmetry, mirror_from_names
 from robustgait.inspection.model import RobotModel, geom_bottom
 from robustgait.robots import Robot
 from robustgait.robots.spec import SIDES
@@ -76,14 +76,31 @@ def standing_qpos(robot: Robot, rm: RobotModel) -> NDArray[np.float64]:
     return rm.qpos(height=floor - low)
 
 
-def check_mirror(robot: Robot, config: RobotConfig) -> CheckResult:
-    """The spec's mirror reflects the model (:func:`robustgait.inspection.mirror.fk_residual`)."""
+def spec_mirror(robot: Robot, config: RobotConfig) -> tuple[RobotModel, Mirror]:
+    """The spec's left/right relabeling as a :class:`~robustgait.inspection.mirror.Mirror` of the inspected model
+    (raises ValueError when the spec's pairs do not match the model)."""
     spec = robot.spec
     pairs = {j: (spec.joints[p], s) for j, p, s in zip(spec.joints, spec.mirror_perm, spec.mirror_sign, strict=True)}
     pairs |= {h.name: (h.mirror, h.sign) for h in spec.held}
     rm = inspected(robot)
+    return rm, mirror_from_names(rm, pairs, config.mirror_tolerance)
+
+
+def sides_differ(robot: Robot, config: RobotConfig | None = None) -> bool:
+    """Whether the robot's left and right differ in mass or inertia beyond ``config``'s tolerances
+    (:meth:`~robustgait.inspection.mirror.MassAsymmetry.differs`): then its walk is certified on the stride map."""
+    c = config or RobotConfig()
     try:
-        mirror = mirror_from_names(rm, pairs, config.mirror_tolerance)
+        rm, mirror = spec_mirror(robot, c)
+    except ValueError:  # a relabeling that does not match the model: robot check says so; no mirrored map is trusted
+        return True
+    return mass_asymmetry(rm, mirror).differs(c.side_mass_tolerance, c.side_inertia_tolerance)
+
+
+def check_mirror(robot: Robot, config: RobotConfig) -> CheckResult:
+    """The spec's mirror reflects the model (:func:`robustgait.inspection.mirror.fk_residual`)."""
+    try:
+        rm, mirror = spec_mirror(robot, config)
     except ValueError as exc:
         return CheckResult("mirror", False, f"mirror: FAIL: {exc}")
     res = fk_residual(rm, mirror, config.mirror_samples, config.seed)
@@ -93,9 +110,11 @@ def check_mirror(robot: Robot, config: RobotConfig) -> CheckResult:
     return CheckResult("mirror", bool(ok), f"mirror: {'ok' if ok else 'FAIL'}: forward kinematics of the relabeled "
                        f"configuration vs the reflected one over {res.samples} random configurations: largest residual "
                        f"{res.position:.2g} m, {res.angle:.2g} rad (tolerance {config.mirror_tolerance:g} m, "
-                       f"{config.mirror_angle_tolerance:g} rad){where}; {asym.describe(rm)}",
+                       f"{config.mirror_angle_tolerance:g} rad){where}; "
+                       f"{asym.describe(rm, config.side_mass_tolerance, config.side_inertia_tolerance)}",
                        {"position": res.position, "angle": res.angle, "mass_asymmetry": asym.mass,
-                        "inertia_asymmetry": asym.inertia})
+                        "inertia_asymmetry": asym.inertia,
+                        "sides_differ": asym.differs(config.side_mass_tolerance, config.side_inertia_tolerance)})
 
 
 def check_soles(robot: Robot, config: RobotCheckConfig) -> CheckResult:

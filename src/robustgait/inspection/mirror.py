@@ -181,41 +181,57 @@ def fk_residual(robot: RobotModel, mirror: Mirror, samples: int, seed: int) -> R
     return Residual(position, angle, body, samples)
 
 
+# a mass difference at or below this is a model file's rounding, whatever the body's mass [kg]
+ROUNDING_MASS = 1e-3
+
+
 @dataclass(frozen=True)
 class MassAsymmetry:
-    """The largest difference of mass [kg] between a body and its mirror image (``body`` the lighter), and the largest
-    relative difference of their principal inertias, over every pair of :attr:`Mirror.body_partner`."""
+    """The largest difference of mass [kg] between a body and its mirror image (``body`` the lighter), relative to
+    the heavier (``relative``), and the largest relative difference of their principal inertias, over every pair of
+    :attr:`Mirror.body_partner`."""
 
     mass: float
+    relative: float
     body: int
     partner: int
     inertia: float
 
-    def describe(self, robot: RobotModel) -> str:
+    def differs(self, mass_tolerance: float, inertia_tolerance: float) -> bool:
+        """Whether left and right differ: a mass difference above ``mass_tolerance`` of the heavier body and above
+        :data:`ROUNDING_MASS`, or a principal inertia more than ``inertia_tolerance`` apart."""
+        return (self.mass > ROUNDING_MASS and self.relative > mass_tolerance) or self.inertia > inertia_tolerance
+
+    def describe(self, robot: RobotModel, mass_tolerance: float, inertia_tolerance: float) -> str:
         """One clause: how much the two sides differ, and what it means for the certificate."""
+        amount = (f"'{robot.body_name(self.body)}' is {1000 * self.mass:.3g} g lighter than "
+                  f"'{robot.body_name(self.partner)}', principal inertias up to {100 * self.inertia:.2g} % apart")
+        if self.differs(mass_tolerance, inertia_tolerance):
+            return (f"left and right differ: {amount} — certified on the stride map, two steps (certify.map auto)")
         if self.mass <= 0.0 and self.inertia <= 0.0:
             return "left and right have the same masses and inertias"
-        return (f"left and right differ: '{robot.body_name(self.body)}' is {1000 * self.mass:.3g} g lighter than "
-                f"'{robot.body_name(self.partner)}', principal inertias up to {100 * self.inertia:.2g} % apart — the "
-                "walk's orbit may have period two, certified on the stride map (certify.stride_fallback)")
+        return (f"left and right are the same within the tolerance ({amount}; a difference counts above "
+                f"{100 * mass_tolerance:g} % of a body's mass and {1000 * ROUNDING_MASS:g} g, or "
+                f"{100 * inertia_tolerance:g} % of an inertia) — certified on the step map")
 
 
 def mass_asymmetry(robot: RobotModel, mirror: Mirror) -> MassAsymmetry:
-    """max |m_b − m_b'| over body pairs (b, b') of the mirror, and max_i |I_b,i − I_b',i| / max(I_b,i, I_b',i) of
-    their sorted principal inertias: a model whose kinematics reflect exactly may still not be its own mirror image
-    in its dynamics (Menagerie's T1: the shanks differ by 60 g), so that the mirrored step map is not the walk's map
-    (``docs/certificate.md``, "Fixed point")."""
+    """max |m_b − m_b'| over body pairs (b, b') of the mirror (with |m_b − m_b'| / max(m_b, m_b') of that pair), and
+    max_i |I_b,i − I_b',i| / max(I_b,i, I_b',i) of their sorted principal inertias: a model whose kinematics reflect
+    exactly may still not be its own mirror image in its dynamics (Menagerie's T1: the shanks differ by 60 g), so
+    that the mirrored step map is not the walk's map (``docs/certificate.md``, "The orbit the gait walks")."""
     m = robot.model
-    mass, body, partner, inertia = 0.0, robot.base, robot.base, 0.0
+    mass, relative, body, partner, inertia = 0.0, 0.0, robot.base, robot.base, 0.0
     for b, c in mirror.body_partner.items():
         dm = abs(float(m.body_mass[b] - m.body_mass[c]))
         if dm > mass:
             light, heavy = (b, c) if m.body_mass[b] < m.body_mass[c] else (c, b)
             mass, body, partner = dm, light, heavy
+            relative = dm / max(float(m.body_mass[heavy]), 1e-12)
         ib, ic = np.sort(m.body_inertia[b]), np.sort(m.body_inertia[c])
         scale = np.maximum(np.maximum(ib, ic), 1e-12)
         inertia = max(inertia, float(np.max(np.abs(ib - ic) / scale)))
-    return MassAsymmetry(mass, body, partner, inertia)
+    return MassAsymmetry(mass, relative, body, partner, inertia)
 
 
 def mirror_from_names(robot: RobotModel, pairs: Mapping[str, tuple[str, float]], tolerance: float) -> Mirror:

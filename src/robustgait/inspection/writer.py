@@ -304,7 +304,7 @@ def render(draft: Draft, spec_path: str | Path) -> str:
 
 def summary(draft: Draft, spec_path: str | Path) -> list[str]:
     """What ``robot init`` prints: what it found and decided, one fact per line."""
-    r, legs, res = draft.robot, draft.legs, draft.residual
+    r, legs, res, c = draft.robot, draft.legs, draft.residual, draft.config
     out = [f"{r.path.name}: {len(r.joints)} joints besides the base '{r.base_name}', {r.mass:.3g} kg; posture: "
            + (f"keyframe '{r.keyframe}'" if r.keyframe else "no keyframe (joints at 0)")
            + f", standing height {legs.standing_height:.3g} m"]
@@ -320,7 +320,8 @@ def summary(draft: Draft, spec_path: str | Path) -> list[str]:
              else "the world's unnamed plane")
     out.append(f"floor: {floor}; planned {len(draft.planned)} joints, held {len(draft.held)}")
     out.append(f"mirror: verified on {res.samples} random configurations, largest residual {res.position:.2g} m, "
-               f"{res.angle:.2g} rad; {mass_asymmetry(r, draft.mirror).describe(r)}")
+               f"{res.angle:.2g} rad; "
+               f"{mass_asymmetry(r, draft.mirror).describe(r, c.side_mass_tolerance, c.side_inertia_tolerance)}")
     kp = np.array([draft.gains[j].kp for j in draft.planned])
     bounds = [draft.gains[j].bound for j in draft.planned]
     out.append(f"gains ({draft.config.bandwidth:g} Hz, ζ {draft.config.damping_ratio:g}, cap τ_max / "

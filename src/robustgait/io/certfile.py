@@ -18,11 +18,11 @@ from robustgait.io.schema import read_json, table, validate
 
 @table(extra="ignore")
 class CertificateFile:
-    """What ``validate`` needs of a certificate JSON (:meth:`robustgait.certify.GaitCertificate.to_dict`; its other
-    keys are ignored): status, r*, whether the supremum is attained, z* (the centre in the certificate's coordinates),
-    the map, frame, reconstruction, the coordinates' transform T (z = T x̄; absent in certificates of the base angular
-    velocity written before states were a choice: the identity), E* and the certificate's config (its state, set,
-    horizon and fixed-point search)."""
+    """What ``validate`` needs of a certificate JSON (:meth:`robustgait.certificate.certify.GaitCertificate.to_dict`;
+    its other keys are ignored): status, r*, whether the supremum is attained, z* (the centre in the certificate's
+    coordinates), the map, frame, reconstruction, the coordinates' transform T (z = T x̄; absent in certificates of the
+    base angular velocity written before states were a choice: the identity), E* and the certificate's config (its
+    state, set, horizon and fixed-point search)."""
 
     r_star: Annotated[Float, Doc(ge=0.0)]
     attained: Bool
@@ -49,14 +49,13 @@ class CertificateFile:
 
     def certify_config(self, src: str | Path) -> CertifyConfig:
         """The certificate's own options (a certificate of an older version: the fields it has; one written before
-        states were a choice certified the base angular velocity in a ball, one step; one written before the orbit
-        check found its fixed point by the rule of that time, :data:`~robustgait.config.certify.LEGACY_FIXED_POINT`)."""
+        states were a choice certified the base angular velocity in a ball, one step; the fields of a fixed-point search
+        that the orbit search replaced are dropped, :func:`~robustgait.config.certify.without_retired`)."""
         from robustgait.config import STATE_CHOICE_DEFAULTS, from_dict
-        from robustgait.config.certify import LEGACY_FIXED_POINT
+        from robustgait.config.certify import without_retired
 
-        keep = {k: v for k, v in self.config.items() if k in {f.name for f in dataclasses.fields(CertifyConfig)}}
-        if "fp_window" not in keep:
-            keep.update(LEGACY_FIXED_POINT)
+        fields = {f.name for f in dataclasses.fields(CertifyConfig)}
+        keep = {k: v for k, v in without_retired(self.config).items() if k in fields}
         for k, v in {**STATE_CHOICE_DEFAULTS, "disturbance": "state"}.items():
             keep.setdefault(k, v)
         keep.update({"map": self.map, "frame": self.frame, "reconstruction": self.reconstruction})

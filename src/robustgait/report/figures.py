@@ -15,9 +15,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
-from robustgait.barrier import BarrierTrace, Certificate
+from robustgait.certificate.barrier import BarrierTrace, Certificate
+from robustgait.certificate.reduced import Coordinates
 from robustgait.io.output import atomic_output, check_output
-from robustgait.reduced import Coordinates
 
 FloatArray = NDArray[np.float64]
 

@@ -27,12 +27,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from robustgait.barrier import Certificate, Round
+from robustgait.certificate.barrier import Certificate, Round
+from robustgait.certificate.reduced import Coordinates
 from robustgait.config import ReportConfig, radius_name
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_text
 from robustgait.io.schema import read_json
-from robustgait.reduced import Coordinates
 from robustgait.report.figures import _save, plot_certificate
 from robustgait.report.person import pareto_parts, person_parts
 

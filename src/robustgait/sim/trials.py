@@ -1,6 +1,6 @@
 """Disturbed walks of many trials at once, shared by the validation (:mod:`robustgait.validate`) and the push
-certificate (:mod:`robustgait.push`): every domain of every step is one batched :meth:`StepEngine.step` call on
-the trials still walking, with per-trial inputs given by a function of the :class:`Segment` being run."""
+certificate (:mod:`robustgait.certificate.push`): every domain of every step is one batched :meth:`StepEngine.step`
+call on the trials still walking, with per-trial inputs given by a function of the :class:`Segment` being run."""
 
 from __future__ import annotations
 
@@ -10,9 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config import PushConfig
 from robustgait.domains import other_side, step_segments
-from robustgait.recovery import OrbitBand
 from robustgait.sim.engine import StepEngine, StepInputs
 
 FloatArray = NDArray[np.float64]
@@ -38,11 +36,14 @@ class Segment:
 
 
 Inputs = Callable[[Segment, NDArray[np.int64]], "StepInputs | None"]
+# after step k (0-based): the trials idx still walking and their section states (len(idx), nq + nv), canonical →
+# which of them are done (they stop walking, without a fall)
+Stop = Callable[[int, NDArray[np.int64], FloatArray], NDArray[np.bool_]]
 
 
 def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_steps: int, period: int,
                     inputs: Inputs, *, first_at: int, progress: Callable[[int], None] | None = None,
-                    sections: FloatArray | None = None
+                    sections: FloatArray | None = None, stop: Stop | None = None
                     ) -> tuple[NDArray[np.bool_], list[str | None], NDArray[np.int64], FloatArray, int]:
     """Walk K trials from canonical section states (K, nq), (K, nv) for ``n_steps`` steps (stances alternate from
     the gait's), each domain of a step one batched :meth:`StepEngine.step` on the trials still walking
@@ -54,12 +55,15 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
     (K,), fall reasons, the 1-based step of each fall (0 = none), the full state (qpos, qvel) at the section after
     ``period`` steps ((K, nq + nv); canonical stance; NaN if fell before) and the physics steps simulated.
     ``sections`` (K, n_steps, nq + nv), if given, is filled with the state at the section after every step, written
-    for the canonical stance (NaN from a fall on).
+    for the canonical stance (NaN from a fall on, and after a trial stopped). ``stop(k, idx, states)`` after each
+    step k (0-based): the trials it marks are done and walk no further (a recovered push: no fall; their state after
+    ``period`` steps is NaN if they stopped before).
     """
     robot = engine.robot
     k_all = qpos.shape[0]
     qpos, qvel = qpos.copy(), qvel.copy()
     alive = np.ones(k_all, dtype=bool)
+    done = np.zeros(k_all, dtype=bool)
     fall_step = np.zeros(k_all, dtype=np.int64)
     reasons: list[str | None] = [None] * k_all
     first = np.full((k_all, engine.nq + engine.nv), np.nan)
@@ -73,7 +77,7 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
     for k in range(n_steps):
         offset = np.zeros(k_all, dtype=np.int64)
         for seg_stance, domain in step_segments(stance, n_domains):
-            idx = np.flatnonzero(alive)
+            idx = np.flatnonzero(alive & ~done)
             if idx.size == 0:
                 break
             seg = Segment(k, index, seg_stance, domain, prev, offset[idx], prev_at[idx],
@@ -95,8 +99,10 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
             offset[idx[ok]] += at
             prev = (seg_stance, domain)
             index += 1
-        if k == period - 1 or sections is not None:
-            ok_all = np.flatnonzero(alive)
+        if k == period - 1 or sections is not None or stop is not None:
+            ok_all = np.flatnonzero(alive & ~done)
+            if sections is not None:
+                sections[:, k] = np.nan
             if ok_all.size:
                 qp, qv = qpos[ok_all], qvel[ok_all]
                 if k % 2 == 0:  # the state starts a step of the other stance: write it for the canonical one
@@ -104,18 +110,21 @@ def simulate_trials(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, n_st
                 if k == period - 1:
                     first[ok_all] = np.hstack([qp, qv])
                 if sections is not None:
-                    sections[:, k] = np.nan
                     sections[ok_all, k] = np.hstack([qp, qv])
+                if stop is not None:
+                    done[ok_all[stop(k, ok_all, np.hstack([qp, qv]))]] = True
         stance = other_side(stance)
         if progress is not None:
             progress(1)
+        if not (alive & ~done).any():
+            break
     return alive, reasons, fall_step, first, physics
 
 
 def wrench_window(force: FloatArray, start: NDArray[np.int64], width: int, horizon: int) -> FloatArray:
     """Base wrench series (N, horizon, 6) [N, N m]: the horizontal world-frame force (N, 2) of push i over the
     physics steps [start_i, start_i + width) (cut at the horizon), zero elsewhere. Shared by the push map
-    (:func:`robustgait.push.push_series`) and the validation's pushes
+    (:func:`robustgait.certificate.push.push_series`) and the validation's pushes
     (:func:`robustgait.validate.disturbances.push_wrench`)."""
     out = np.zeros((force.shape[0], horizon, 6))
     for i in range(force.shape[0]):
@@ -141,15 +150,3 @@ def pushed_first_step(engine: StepEngine, wrench: FloatArray) -> Inputs:
         w[at >= wrench.shape[1]] = 0.0  # past the first step's window: no push
         return StepInputs(base_wrench=w)
     return push
-
-
-def orbit_band(engine: StepEngine, qpos: FloatArray, qvel: FloatArray, push: PushConfig) -> OrbitBand | None:
-    """The neighbourhood a pushed walk must return to (:class:`robustgait.recovery.OrbitBand`), from
-    ``push.recovery_band_steps`` undisturbed steps from x* = (``qpos`` (nq,), ``qvel`` (nv,)), a section state of
-    the gait's stance (None without ``push.recovery``)."""
-    if not push.recovery:
-        return None
-    k = push.recovery_band_steps
-    sections = np.full((1, k, engine.nq + engine.nv), np.nan)
-    simulate_trials(engine, qpos[None], qvel[None], k, 1, lambda seg, idx: None, first_at=0, sections=sections)
-    return OrbitBand.of(engine.robot, (qpos, qvel), sections[0], push.recovery_radius, push.recovery_scatter)

@@ -5,10 +5,8 @@ Stability in the sense of the paper is the number of steps completed before a fa
 
 from __future__ import annotations
 
-import dataclasses
 import json
-import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -17,13 +15,12 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.certificate.orbit import Orbit, classify_walk
 from robustgait.config import CertifyConfig, ComfortConfig, SimConfig
 from robustgait.config.work import MAX_GIF_FRAMES, MAX_VIDEO_PHYSICS_STEPS, Work, check_gif, check_work
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import Gait
 from robustgait.io.output import atomic_output, check_output
-from robustgait.orbit import OrbitReport, search_report
-from robustgait.reduced import reduce_state, section_coordinates
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.comfort import Comfort, ComfortRecorder, measure
@@ -58,7 +55,7 @@ class WalkResult:
     torque exceeded the limit, and their fraction; :class:`~robustgait.sim.controller.TrackingStats`); ``comfort``:
     what a passenger feels (:class:`~robustgait.sim.comfort.Comfort`) when the walk was asked for it and completed a
     measured step, else None; ``orbit``: whether the switching events, written for the gait's stance, settled on an
-    orbit (:func:`walk_orbit`)."""
+    orbit (:func:`walk_orbit`); ``physics_steps`` simulated."""
 
     steps_taken: int
     fell: bool
@@ -74,7 +71,8 @@ class WalkResult:
     tracking: dict[str, float] = field(default_factory=dict)
     comfort: Comfort | None = None
     trajectory: NDArray[np.float64] | None = field(default=None, repr=False)
-    orbit: OrbitReport | None = None
+    orbit: Orbit | None = None
+    physics_steps: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
@@ -105,29 +103,13 @@ def _heading(qpos: NDArray[np.float64]) -> NDArray[np.float64]:
     return fwd / max(float(np.linalg.norm(fwd)), 1e-12)
 
 
-def walk_orbit(robot: Robot, gait: Gait, events: list[SwitchEvent], certify: CertifyConfig | None = None
-               ) -> OrbitReport:
-    """Whether a walk's switching events settled on an orbit of the step map: the events written for the gait's
-    stance (:func:`canonical_event_states`), the window search of the certificate's fixed point over them
-    (``certify.fp_window``, ``fp_tol``, ``fp_metric``, ``fp_min_steps``; :func:`robustgait.orbit.search_report`) —
-    no simulation. A walk that settles on no orbit of the step map is searched again as the stride map's
-    (``certify.stride_fallback``: the events of the gait's own stance, two steps apart — a robot whose left and
-    right differ); its report then has period 2. The spectral radius at the settled event:
-    :func:`robustgait.poincare.walk_stability`."""
-    c = certify or CertifyConfig()
-    qpos, qvel = canonical_event_states(robot, gait, events)
-    xs = (reduce_state(qpos, qvel, c.frame) if c.fp_metric == "omega"
-          else section_coordinates(qpos, qvel, gait.step_duration))
-    if c.map == "stride":  # the stride map's iterates: the events that start a step of the gait's own stance
-        own = np.array([e.stance != gait.stance for e in events], dtype=bool)
-        return search_report(xs[own], metric=c.fp_metric, window=c.fp_window, tol=c.fp_tol, period=2,
-                             min_index=max(math.ceil((c.min_steps - 2) / 2), 0), first_step=2)
-    report = search_report(xs, metric=c.fp_metric, window=c.fp_window, tol=c.fp_tol,
-                           min_index=max(c.min_steps - 1, 0), first_step=1)
-    if report.converged or not c.stride_fallback:
-        return report
-    stride = walk_orbit(robot, gait, events, dataclasses.replace(c, map="stride"))
-    return stride if stride.converged else report
+def walk_orbit(robot: Robot, gait: Gait, result: WalkResult, certify: CertifyConfig | None = None) -> Orbit:
+    """The orbit of a walk's switching states, written for the gait's stance (:func:`canonical_event_states`): the
+    certificate's own classification (:func:`robustgait.certificate.orbit.classify_walk`, the options of
+    ``certify.orbit`` and ``certify.map``) — no simulation, and the same orbit the certificate's search finds on the
+    same gait (it walks the same steps and stops where they settle)."""
+    qpos, qvel = canonical_event_states(robot, gait, result.events)
+    return classify_walk(robot, qpos, qvel, certify or CertifyConfig(), result.fall_reason if result.fell else None)
 
 
 def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, video: str | Path | None = None) -> Work:
@@ -150,7 +132,7 @@ def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, vid
 def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: int | None = None,
          keep_trajectory: bool = False, video: str | Path | None = None,
          engine: StepEngine | None = None, comfort: ComfortConfig | None = None,
-         certify: CertifyConfig | None = None) -> WalkResult:
+         certify: CertifyConfig | None = None, until: Callable[[list[SwitchEvent]], bool] | None = None) -> WalkResult:
     """Walk ``gait`` from its initial state for up to ``steps`` steps (default ``config.step_cap``), switching
     stance at each event.
 
@@ -162,7 +144,8 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     time continuing across steps) is kept when ``keep_trajectory`` or ``video`` (an ``.mp4`` or ``.gif`` path,
     rendered after the walk by :func:`render_video`). The work is bounded before anything runs
     (:func:`check_walk_work`; a video's stricter limits, the output path checked). ``orbit`` of the result:
-    :func:`walk_orbit` with the fixed-point options of ``certify``.
+    :func:`walk_orbit` with the orbit options of ``certify``. ``until(events)``, called after each completed step,
+    ends the walk early when it returns true (the orbit search stops where the switching states have settled).
 
     ``comfort``: measure what a passenger feels over the steps it names (:mod:`robustgait.sim.comfort`,
     ``WalkResult.comfort``); None: not measured.
@@ -191,11 +174,13 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
         events: list[SwitchEvent] = []
         chunks: list[NDArray[np.float64]] = []
         fell, reason, last = False, None, start
+        physics = 0
         for i in range(steps):
             section: SwitchEvent | None = None
             for d in range(len(eng.graph)):  # the step's domains in order; the section ends domain 0
                 start_state = eng.full_states(qpos, qvel)[0]
                 batch = eng.step(qpos, qvel, stance, domain=d, record=True)
+                physics += batch.physics_steps
                 tr = batch.trajectory[0]
                 _track(stats, eng, batch, start_state, tr, stance, d)
                 if recorder is not None:
@@ -224,6 +209,8 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
             if recorder is not None:
                 recorder.end_step(i + 1)
             stance = "left" if stance == "right" else "right"
+            if until is not None and until(events):
+                break
         disp = float(np.dot(last[:2] - start[:2], heading))
         result = WalkResult(
             steps_taken=len(events), fell=fell, fall_reason=reason, time=t,
@@ -232,7 +219,8 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
             trajectory=np.concatenate(chunks) if keep_trajectory and chunks else None,
             controller=eng.controller_name, controller_note=eng.controller_note, tracking=stats.summary(),
             comfort=measure(robot, eng.physics_model, recorder, heading) if recorder is not None else None,
-            orbit=walk_orbit(robot, gait, events, certify))
+            physics_steps=physics)
+        result.orbit = walk_orbit(robot, gait, result, certify)
     finally:
         if own:
             eng.close()

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
 from robustgait.config import CertifyConfig, CompareConfig, SimConfig, ValidateConfig
 from robustgait.errors import input_error
 from robustgait.gait import Gait

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from robustgait.config import STATE_CHOICE_DEFAULTS, Config, GenerationConfig, from_dict, study_disturbance, to_dict
-from robustgait.config.certify import LEGACY_FIXED_POINT
+from robustgait.config.certify import without_retired
 from robustgait.errors import input_error
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
@@ -42,21 +42,22 @@ def _without_unused_state_choice(raw: Any) -> Any:
     return {**raw, "config": {**cfg, "certify": {**cfg["certify"], **STATE_CHOICE_DEFAULTS}}}
 
 
-def _before_orbit_check(raw: Any) -> Any:
-    """A study written before the orbit check (2026-11-25) as it ran: its certificates' fixed point the first iterate
-    within fp_tol (:data:`~robustgait.config.certify.LEGACY_FIXED_POINT`), and a gait that walked the cap without a
-    certificate tied with a certified r* = 0 (``uncertified_penalty`` 0) — a resumed study recomputes its history's
-    scores from the stored results, and must reproduce the learner's proposals and keep one rule throughout."""
+def _retired_certify_fields(raw: Any) -> Any:
+    """A study written by an older version, read by this one: the certify fields that the orbit search and the
+    recovery band replaced are dropped (:func:`~robustgait.config.certify.without_retired`; a resumed study finds its
+    new gaits' orbits by the orbit search, its stored results stay as they were); one written before certificates
+    checked their orbit (it has no ``fp_window``) ranked a gait that walked the cap without a certificate as a
+    certified r* = 0 (``uncertified_penalty`` 0) — a resumed study recomputes its history's scores from the stored
+    results and must keep one rule throughout."""
     cfg = raw.get("config") if isinstance(raw, dict) else None
     if not isinstance(cfg, dict):
         return raw
     certify, study = cfg.get("certify"), cfg.get("study")
     certify = dict(certify) if isinstance(certify, dict) else {}
     study = dict(study) if isinstance(study, dict) else {}
-    if "fp_window" not in certify:
-        certify.update(LEGACY_FIXED_POINT)
-    study.setdefault("uncertified_penalty", 0.0)
-    return {**raw, "config": {**cfg, "certify": certify, "study": study}}
+    if "fp_window" not in certify and "orbit" not in certify:
+        study.setdefault("uncertified_penalty", 0.0)
+    return {**raw, "config": {**cfg, "certify": without_retired(certify), "study": study}}
 
 
 # the libraries whose versions decide a study's numbers: gait generation, simulation, certificate, learner
@@ -132,12 +133,11 @@ def load_config(directory: str | Path) -> StudySetup:
     certify = raw["config"].get("certify") if isinstance(raw, dict) and isinstance(raw.get("config"), dict) else None
     if isinstance(certify, dict) and ("push_steps" in certify or isinstance(certify.get("push"), dict)):
         push = {**(certify.get("push") or {})}
-        if "push_steps" in certify:  # format 3 as first written (284a6aa–2be8282)
-            push["steps"] = certify["push_steps"]
         push.setdefault("verify_chunk", 0)  # written before chunked verification: whole verification batches
+        # format 3 as first written had a push_steps key: the fixed horizon the recovery band retired
         certify = {k: v for k, v in certify.items() if k != "push_steps"} | {"push": push}
         raw = {**raw, "config": {**raw["config"], "certify": certify}}
-    raw = _without_unused_state_choice(_before_orbit_check(raw))
+    raw = _without_unused_state_choice(_retired_certify_fields(raw))
     if not (isinstance(raw, dict) and raw.get("format_version") == FORMAT_VERSION and isinstance(raw.get("robot"), str)
             and "config" in raw):
         raise input_error(path, f"unsupported study file (format_version {FORMAT_VERSION} expected)")

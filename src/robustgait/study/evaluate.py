@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
-from robustgait.certify import certify_gait
+from robustgait.certificate.certify import certify_gait
 from robustgait.config import Config, GaitParams
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
@@ -35,9 +35,9 @@ class Evaluation:
     """The outcome of :func:`evaluate`.
 
     status: ``certified`` (walked the cap, r* computed), ``generation_failed``, ``fell`` (before the cap),
-    ``not_certified`` (walked the cap but the certificate has a failed status: ``no_stable_orbit``,
-    ``period_two_orbit``, ``unstable_orbit``, ``fell_before_fixed_point``, ``unstable_fixed_point``; the reason
-    starts with it — the oracles rank it below every certified gait);
+    ``not_certified`` (walked the cap but the certificate refused it: ``unsettled``, ``unstable``, ``fell`` in the
+    orbit search, ``unstable_fixed_point`` (:class:`robustgait.certificate.orbit.Status`); the reason starts with it —
+    the oracles rank it below every certified gait);
     reason: why, in one line ('' when certified). generation: :meth:`GaitGenResult.summary`. r_star: 0
     unless certified. certificate: :meth:`GaitCertificate.to_dict` with the samples (None unless
     certified). comfort: what a passenger feels on the walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`,

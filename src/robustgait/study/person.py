@@ -141,5 +141,24 @@ def pending_iteration(iterations: dict[int, dict[str, Any]]) -> int | None:
     return min(waiting) if waiting else None
 
 
+def recommendation(iterations: dict[int, dict[str, Any]], by_number: dict[int, TrialRecord], floor: float,
+                   reqs: Sequence[Requirement]) -> tuple[TrialRecord | None, str]:
+    """The gait a person study recommends now: the learner's pick after the newest finished iteration when a person
+    may be shown it (:func:`~robustgait.study.ranking.shown`: certified, at or above the floor, requirements met), else
+    the newest earlier pick that may — never a gait refused or below the floor, and never one of a batch the person
+    was not shown for that reason. Returns it (None: no pick qualifies yet) and a note on the picks passed over."""
+    finished = [k for k in sorted(iterations) if "recommendation" in iterations[k]]
+    skipped: list[str] = []
+    for k in reversed(finished):
+        number = iterations[k].get("recommended_trial")
+        r = by_number.get(number) if number is not None else None
+        if r is not None and shown(r, floor, reqs):
+            note = (f"the learner's picks after iteration {', '.join(skipped)} may not be shown (refused or below "
+                    f"the floor): its pick after iteration {k + 1}") if skipped else ""
+            return r, note
+        skipped.append(str(k + 1))
+    return None, ("no pick of the learner is certified at or above the floor yet" if finished else "")
+
+
 def shown_flags(batch: Sequence[TrialRecord], floor: float, reqs: Sequence[Requirement]) -> list[bool]:
     return [shown(r, floor, reqs) for r in batch]

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from robustgait.certify import check_certify_work
+from robustgait.certificate.certify import check_certify_work
 from robustgait.config import Config, GaitParams, RunConfig, StudyConfig, radius_name
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait
@@ -364,8 +364,8 @@ class StudyRunner:
         extra: dict[str, Any] = {"reused_from": reused_from} if reused_from is not None else {}
         store.complete(trial.number, result, value, extra)
         bar.update(1)
-        bar.set_postfix_str(f"iteration {trial.iteration + 1}/{self.config.iterations}, last {self.name} "
-                            f"{result['r_star']:.3f}, steps {result['steps_taken']}")
+        bar.set_postfix_str(f"iteration {trial.iteration + 1}/{self.config.iterations}, last: "
+                            f"{outcome_line(result, self.name)}")
 
     def _close_iteration(self, store: StudyStore, k: int, bar: tqdm) -> None:
         """Comparisons of the ranked batch and the learner's recommendation after it."""
@@ -383,8 +383,21 @@ class StudyRunner:
                        "recommend_seconds": time.perf_counter() - t0})
         store.set_iteration(k, record)
         if rec_trial is not None and rec_trial.result is not None:
-            bar.set_postfix_str(f"iteration {k + 1}/{self.config.iterations} done, best {self.name} "
-                                f"{rec_trial.result['r_star']:.3f}, steps {rec_trial.result['steps_taken']}")
+            bar.set_postfix_str(f"iteration {k + 1}/{self.config.iterations} done, best: "
+                                f"{outcome_line(rec_trial.result, self.name)}")
+
+
+def outcome_line(result: dict[str, Any], name: str) -> str:
+    """An evaluation's outcome in a few words for a progress bar: its certified value, or why it has none — the
+    refusal's status (a gait without a stable orbit is refused, not a zero), a fall, a failed generation."""
+    status = result.get("status")
+    if status == "certified":
+        return f"{name} {result['r_star']:.3f}, steps {result['steps_taken']}"
+    if status == "not_certified":
+        return f"refused ({str(result.get('reason', '')).split(':', 1)[0]}), steps {result['steps_taken']}"
+    if status == "fell":
+        return f"fell in step {result.get('steps_taken', 0) + 1}"
+    return str(status).replace("_", " ")
 
 
 def run_study(directory: str | Path, run: RunConfig | None = None, *, progress: bool = True, verbose: bool = False,

@@ -40,13 +40,30 @@ def _best_entry(r: TrialRecord | None, records: dict[int, TrialRecord]) -> dict[
             "certificate_file": (src.result or {}).get("certificate_file")}
 
 
+def outcome_counts(records: list[TrialRecord]) -> dict[str, int]:
+    """How the evaluated gaits ended (COMPLETE trials, a reused evaluation counted once per trial): ``certified``,
+    ``refused: <status>`` (walked the cap without a certificate — the certificate's refusal: unsettled, unstable,
+    fell in its search …), ``fell`` (before the cap), ``generation_failed``."""
+    out: dict[str, int] = {}
+    for r in records:
+        if r.state != "COMPLETE" or r.result is None:
+            continue
+        res = r.result
+        key = str(res.get("status"))
+        if key == "not_certified":
+            key = "refused: " + str(res.get("reason") or "").split(":", 1)[0]
+        out[key] = out.get(key, 0) + 1
+    return dict(sorted(out.items()))
+
+
 def study_status(directory: str | Path) -> dict[str, Any]:
     """JSON-ready: ``trials_done``, ``trials_planned``, ``state`` (complete | running | stopped),
     ``person`` (a person study: its ``floor``, the ``pending`` iteration, every ``answer``; else None), ``require``,
     ``best`` (the learner's recommendation after the last finished iteration: trial, params, r_star,
     steps_taken, comfort, gait file), ``best_observed`` (the evaluated gait with the highest oracle score), one
     record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs), each with its
-    ``comfort`` figures (``docs/comfort.md``; None when not measured or evaluated before they existed)."""
+    ``comfort`` figures (``docs/comfort.md``; None when not measured or evaluated before they existed), and
+    ``outcomes`` (:func:`outcome_counts`)."""
     d = Path(directory)
     setup = load_config(d)
     cfg = setup.config.study
@@ -91,7 +108,7 @@ def study_status(directory: str | Path) -> dict[str, Any]:
             "unit": setup.config.study_certify.unit, "certificate": setup.config.study_certify.space,
             "learner": cfg.learner, "seed": cfg.seed, "trials_done": done, "trials_planned": cfg.trials_planned,
             "iterations_done": len(finished), "iterations_planned": cfg.iterations,
-            "unique_gaits": len({r.index for r in complete}),
+            "unique_gaits": len({r.index for r in complete}), "outcomes": outcome_counts(records),
             "best": _best_entry(best, by_number), "best_observed": _best_entry(observed, by_number),
             "iterations": per_iteration, "trials": [trial_summary(r) for r in sorted(records, key=lambda r: r.number)],
             "config": setup.to_dict()["config"], "environment": setup.environment,

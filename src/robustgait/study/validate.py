@@ -35,7 +35,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import math
 import multiprocessing
 import os
 import sys
@@ -51,7 +50,7 @@ import numpy as np
 from tqdm import tqdm
 
 from robustgait.config import KINDS, CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
-from robustgait.config.certify import fixed_point_options
+from robustgait.config.certify import orbit_options
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
@@ -156,25 +155,29 @@ def _orbitless_start(robot: Any, gait: Any, c: CertifyConfig) -> tuple[Any, Any]
     """A start and a :class:`CertificateRef` of r* = 0 for a gait without a certified fixed point: its initial
     state as a section state (a multi-contact gait walked to its first heel strike), x̄ of that state (the
     certificate's state, identity transform) as the 'centre' (there is no set: nothing lies inside it)."""
-    from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap
-    from robustgait.reduced import ReducedState, reduce_state
+    from robustgait.certificate.orbit import FixedPoint
+    from robustgait.certificate.reduced import ReducedState, reduce_state
+    from robustgait.certificate.search import initial_section
+    from robustgait.sim.factory import make_engine
     from robustgait.validate.run import CertificateRef
 
     if gait.initial_state is None:
         raise RobustGaitError("the gait has no initial state to start the trials from")
-    with ReturnMap(robot, gait, c) as pmap:  # a multi-contact gait: walked from its start to its first heel strike
-        try:
-            qs, vs = pmap.initial_section()
-        except FixedPointFailure as exc:
-            raise RobustGaitError(f"no section state to start the trials from: {exc}") from None
+    engine = make_engine(robot, gait)
+    try:  # a multi-contact gait: walked from its start to its first heel strike
+        qs, vs = initial_section(robot, gait, engine)
+    except RobustGaitError as exc:
+        raise RobustGaitError(f"no section state to start the trials from: {exc}") from None
+    finally:
+        engine.close()
     q, v = qs[0], vs[0]
-    start = FixedPoint(q.copy(), v.copy(), reduce_state(q[None], v[None], c.frame)[0], math.nan, 0, ())
+    start = FixedPoint(q.copy(), v.copy(), reduce_state(q[None], v[None], c.frame)[0], 0)
     state = "omega" if c.space == "push" else c.state
     xbar = ReducedState.at(state, robot, q, v, gait.stance, c).x_star
     k = xbar.shape[0]
     ref = CertificateRef(0.0, False, tuple(float(x) for x in xbar), tuple(tuple(r) for r in np.eye(k).tolist()),
                          c.space, c.set, c.horizon, None, c.map, c.frame, c.reconstruction,
-                         tuple(fixed_point_options(c).items()),
+                         tuple(orbit_options(c).items()),
                          "none: no certified fixed point (started from the gait's initial state)")
     return start, ref
 

@@ -26,21 +26,22 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm import tqdm
 
-from robustgait.certify import GaitCertificate, certify_gait, certify_steps
+from robustgait.certificate.certify import GaitCertificate, certify_gait, certify_steps
+from robustgait.certificate.orbit import FixedPoint, Orbit
+from robustgait.certificate.push import recovered_steps
+from robustgait.certificate.reduced import ReducedState, section_dimension
+from robustgait.certificate.search import find_orbit
 from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, PushConfig, SimConfig, ValidateConfig, to_dict
-from robustgait.config.certify import fixed_point_options
+from robustgait.config.certify import orbit_options
 from robustgait.config.work import Work, check_work
 from robustgait.domains import step_segments
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.poincare import FixedPoint, ReturnMap
-from robustgait.recovery import OrbitBand
-from robustgait.reduced import ReducedState, section_dimension
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
 from robustgait.sim.engine import StepInputs, step_physics_steps
 from robustgait.sim.factory import make_engine
-from robustgait.sim.trials import Inputs, Segment, orbit_band, pushed_first_step, simulate_trials
+from robustgait.sim.trials import Inputs, Segment, pushed_first_step, simulate_trials
 from robustgait.validate import disturbances as dist
 from robustgait.validate.disturbances import SIZE_LABELS, Draws
 from robustgait.validate.stats import LogisticFit, Rate, binned_rates, logistic_fit
@@ -51,11 +52,11 @@ FloatArray = NDArray[np.float64]
 @dataclass(frozen=True)
 class CertificateRef:
     """What a validation needs of a gait's certificate: r*, whether the supremum is attained (closed set) or not
-    (open set), the centre z* = T x̄* and the transform T (z = T x̄, :class:`robustgait.reduced.Coordinates`) of its
-    coordinates, the space certified (omega, centroidal, velocity, or push: then r* is J* [N s] and the check is on
-    the pushes' impulses), the set and horizon, E* [J] for an energy state, the map, frame, reconstruction, the
-    fixed-point search options (every ``fp_*`` field: :func:`robustgait.config.certify.fixed_point_options`), and where
-    it came from ("computed" or a file path)."""
+    (open set), the centre z* = T x̄* and the transform T (z = T x̄,
+    :class:`robustgait.certificate.reduced.Coordinates`) of its coordinates, the space certified (omega, centroidal,
+    velocity, or push: then r* is J* [N s] and the check is on the pushes' impulses), the set and horizon, E* [J] for
+    an energy state, the map, frame, reconstruction, the orbit search's options (``map`` and every ``orbit`` field:
+    :func:`robustgait.config.certify.orbit_options`), and where it came from ("computed" or a file path)."""
 
     r_star: float
     attained: bool
@@ -68,9 +69,9 @@ class CertificateRef:
     map: MapKind
     frame: Frame
     reconstruction: str
-    fixed_point: tuple[tuple[str, Any], ...]
+    orbit: tuple[tuple[str, Any], ...]
     source: str
-    push: PushConfig | None = None  # a push certificate's pushed walk: its steps and recovery
+    push: PushConfig | None = None  # a push certificate's pushed walk: its horizon and recovery
 
     @staticmethod
     def of(gc: GaitCertificate) -> CertificateRef:
@@ -80,7 +81,7 @@ class CertificateRef:
         return CertificateRef(float(c.r_star), bool(c.attained), tuple(float(v) for v in c.x_star),
                               tuple(tuple(float(v) for v in row) for row in co.transform), cfg.space, cfg.set,
                               cfg.horizon, gc.energy, cfg.map, cfg.frame, cfg.reconstruction,
-                              tuple(fixed_point_options(cfg).items()), "computed",
+                              tuple(orbit_options(cfg).items()), "computed",
                               cfg.push if cfg.disturbance == "push" else None)
 
     @staticmethod
@@ -94,11 +95,11 @@ class CertificateRef:
         t = c.transform(path) or np.eye(k).tolist()
         return CertificateRef(c.r_star, c.attained, tuple(c.x_star), tuple(tuple(row) for row in t), cfg.space,
                               cfg.set, cfg.horizon, c.energy, cfg.map, cfg.frame, cfg.reconstruction,
-                              tuple(fixed_point_options(cfg).items()), str(path),
+                              tuple(orbit_options(cfg).items()), str(path),
                               cfg.push if cfg.disturbance == "push" else None)
 
     def certify_config(self, base: CertifyConfig) -> CertifyConfig:
-        """``base`` with this certificate's state, set, horizon, map, frame, reconstruction and fixed-point search."""
+        """``base`` with this certificate's state, set, horizon, map, frame, reconstruction and orbit search."""
         from dataclasses import replace
 
         kw: dict[str, Any] = {"disturbance": "push"} if self.space == "push" else {"state": self.space,
@@ -106,7 +107,10 @@ class CertificateRef:
         kw.update(set=self.set, reconstruction=self.reconstruction)
         if self.push is not None:
             kw["push"] = self.push
-        return replace(base, horizon=self.horizon, map=self.map, frame=self.frame, **dict(self.fixed_point), **kw)
+        options = dict(self.orbit)
+        orbit = replace(base.orbit, **{k.split(".", 1)[1]: v for k, v in options.items() if k.startswith("orbit.")})
+        return replace(base, horizon=self.horizon, map=options.get("map", self.map), frame=self.frame, orbit=orbit,
+                       **kw)
 
     def check_matches(self, config: CertifyConfig) -> None:
         """Refuse a certificate of another space, set or horizon than ``config`` asks for (one line)."""
@@ -142,8 +146,8 @@ class KindResult:
     seconds: float
     energy: FloatArray | None = None  # (N,) kinetic energy the disturbance added at the first section [J]
     energy_star: float | None = None  # E* of the certificate [J] (energy states)
-    # a push certificate's own criterion at its horizon (the pushed step and push.steps more): (N,) whether each
-    # trial failed it (fell by then, or off the orbit's neighbourhood at its end), and that horizon in steps
+    # a push certificate's own criterion at its horizon (the pushed step and push.horizon more): (N,) whether each
+    # trial failed it (fell by then, before it was back in the orbit's band), and that horizon
     horizon_failed: NDArray[np.bool_] | None = None
     horizon: int | None = None
 
@@ -273,23 +277,29 @@ class Validator:
         self.sim = sim or SimConfig()
         self.progress = progress
         t0 = time.perf_counter()
-        fp: FixedPoint | None = None
+        orbit: Orbit | None = None
         base = certify or CertifyConfig()
         if certificate is None:
             gc = certify_gait(robot, gait, certify, self.sim, validate=self.config, progress=progress)
-            ref, fp = CertificateRef.of(gc), gc.fixed_point
+            ref, orbit = CertificateRef.of(gc), gc.orbit
         elif isinstance(certificate, GaitCertificate):
-            ref, fp = CertificateRef.of(certificate), certificate.fixed_point
+            ref, orbit = CertificateRef.of(certificate), certificate.orbit
         else:
             ref = certificate if isinstance(certificate, CertificateRef) else CertificateRef.load(certificate)
         if certify is not None and certificate is not None:
             ref.check_matches(certify)
-        if start is not None:
-            fp = start
         cert_cfg = ref.certify_config(base)
-        if fp is None:
-            with ReturnMap(robot, gait, cert_cfg, self.sim) as pmap:
-                fp = pmap.find_fixed_point()
+        if start is None and (orbit is None or not orbit.ok):
+            orbit = find_orbit(robot, gait, cert_cfg, self.sim, validate=self.config)
+            if not orbit.ok:
+                raise RobustGaitError(f"the gait has no stable orbit to start the trials from ({orbit.status}: "
+                                      f"{orbit.reason})")
+        if start is None:
+            assert orbit is not None
+            fp: FixedPoint = orbit.fixed_point(cert_cfg.frame)
+        else:
+            fp = start
+        self.orbit = orbit if start is None else None
         state = "omega" if ref.space == "push" else ref.space
         # Φ of the certificate's state at this fixed point: x̄₁ of a trial in the certificate's coordinates; also the
         # kinetic energy a disturbance added (any state: M(q*) of the fixed point)
@@ -302,7 +312,7 @@ class Validator:
                                       f"this gait's fixed point {np.round(z, 4).tolist()} (another gait, robot or "
                                       "simulation option?)")
         self.certificate, self.fixed_point = ref, fp
-        self.period = 1 if ref.map == "step" else 2
+        self.period = self.orbit.period if self.orbit is not None else 1
         self.engine = make_engine(robot, gait, self.sim)
         # the undisturbed first step: its segments' horizons and durations, the length of the step
         q, v = fp.qpos[None], fp.qvel[None]
@@ -318,7 +328,6 @@ class Validator:
         self.nominal_at = round(float(nominal.duration[0]) / robot.dt)
         self.step_length = float(np.linalg.norm(q[0, :2] - fp.qpos[:2]))
         self._physics_model: Any = None
-        self._band: OrbitBand | bool | None = False  # not computed yet
         self.seconds_setup = time.perf_counter() - t0
 
     def close(self) -> None:
@@ -384,7 +393,7 @@ class Validator:
         fp = self.fixed_point
         n_steps = self.period + cfg.steps_after
         ref, nq = self.certificate, self.robot.model.nq
-        horizon = 1 + ref.push.steps if ref.push is not None and kind == "push" else None
+        horizon = 1 + ref.push.horizon if ref.push is not None and kind == "push" else None
         sections = (np.full((n, n_steps, nq + self.robot.model.nv), np.nan)
                     if horizon is not None and horizon <= n_steps else None)
         with tqdm(total=n_steps, desc=f"validate {kind}", unit="step", disable=not self.progress, leave=False) as bar:
@@ -392,14 +401,14 @@ class Validator:
                 self.engine, np.tile(fp.qpos, (n, 1)), np.tile(fp.qvel, (n, 1)), n_steps, self.period,
                 self.inputs_for(kind, d), first_at=self.nominal_at, progress=bar.update, sections=sections)
         horizon_failed = None
-        if sections is not None and horizon is not None:
-            # the certificate's own criterion at its horizon: fell by then, or off the orbit's neighbourhood
+        if sections is not None and horizon is not None and ref.push is not None:
+            # the certificate's own criterion at its horizon: fell by then — unless it had recovered first (the
+            # certificate's pushed walk stops there: a later fall is not its)
             horizon_failed = (fall_step > 0) & (fall_step <= horizon)
-            band = self.band()
+            band = self.orbit.band if self.orbit is not None and ref.push.recovery else None
             if band is not None:
-                end = sections[:, horizon - 1]
-                standing = ~horizon_failed
-                horizon_failed[standing] = ~band.inside(end[standing, :nq], end[standing, nq:])
+                back = recovered_steps(band, self.robot, sections[:, :horizon], ref.push.recovery_steps)
+                horizon_failed &= back == 0
         reached = np.isfinite(first).all(axis=1)
         energy = np.full(n, np.nan)
         x1 = np.full((n, self.reduced.dim), np.nan)
@@ -418,24 +427,15 @@ class Validator:
                           energy_star=ref.energy, horizon_failed=horizon_failed,
                           horizon=horizon if horizon_failed is not None else None)
 
-    def band(self) -> OrbitBand | None:
-        """The orbit's neighbourhood of a push certificate's recovery criterion (None without one), computed once."""
-        if self._band is False:
-            push, fp = self.certificate.push, self.fixed_point
-            self._band = orbit_band(self.engine, fp.qpos, fp.qvel, push) if push is not None else None
-        return self._band if isinstance(self._band, OrbitBand) else None
-
 
 def validate_steps(config: ValidateConfig, kinds: int, certify: CertifyConfig, graph: str, certifying: bool,
                    dim: int) -> int:
     """The most steps a validation simulates: the certificate when it computes one (:func:`certify_steps`), or else
-    the search for the fixed point (a multi-contact gait's walk to its first heel strike, then the search on a
-    section of ``dim`` coordinates, :meth:`~robustgait.config.CertifyConfig.fixed_point_steps`); the undisturbed
-    first step; and per disturbance kind ``trials`` trials of period + ``steps_after`` steps (period 2 at most: the
-    stride map)."""
-    setup = (certify_steps(certify, graph, dim) if certifying
-             else (0 if graph == "flat" else 1) + certify.fixed_point_steps(dim))
-    return setup + 1 + kinds * config.trials * (2 + config.steps_after)
+    the orbit search on a section of ``dim`` coordinates (:meth:`~robustgait.config.CertifyConfig.orbit_steps`); the
+    undisturbed first step; and per disturbance kind ``trials`` trials of a map (up to ``orbit.max_period`` steps) and
+    ``steps_after`` steps. ``graph``: the gait's domain graph (the count does not depend on it)."""
+    setup = certify_steps(certify, graph, dim) if certifying else certify.orbit_steps(dim)
+    return setup + 1 + kinds * config.trials * (certify.orbit.max_period + config.steps_after)
 
 
 def check_validate_work(robot: Robot, gait: Gait, config: ValidateConfig, sim: SimConfig, *, kinds: int = 1,
@@ -448,7 +448,8 @@ def check_validate_work(robot: Robot, gait: Gait, config: ValidateConfig, sim: S
     defaults = Work(validate_steps(ValidateConfig(), kinds, CertifyConfig(), graph, certifying, dim),
                     step_physics_steps(gait, robot.dt, SimConfig()))
     return check_work(work, defaults, robot.dt, f"{what}validate.trials {config.trials} × (validate.steps_after "
-                      f"{config.steps_after} + 2) steps × {kinds} disturbance kind{'s' if kinds > 1 else ''}"
+                      f"{config.steps_after} + {cert.orbit.max_period}) steps × {kinds} disturbance "
+                      f"kind{'s' if kinds > 1 else ''}"
                       + (" + the certificate" if certifying else ""))
 
 

@@ -28,7 +28,8 @@ from robustgait.config import RunConfig, WebConfig, radius_name
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.sim.comfort import FIGURES
 from robustgait.study.config import load_config
-from robustgait.study.person import FLOOR_ATTR, AnswerError, pending_iteration, record_answer
+from robustgait.study.person import FLOOR_ATTR, AnswerError, pending_iteration, recommendation, record_answer
+from robustgait.study.ranking import requirements
 from robustgait.study.run import GAITS_DIR, completed_batches, gait_label, open_store
 from robustgait.study.storage import TrialRecord
 from robustgait.web.answers import parse_answer
@@ -58,6 +59,7 @@ class PersonPage:
             raise input_error(self.directory, f"study.metric is {self.setup.config.study.metric}: only a study with "
                               "--metric person is ranked on the page")
         self.space = self.setup.action_space()
+        self.reqs = requirements(self.setup.config.study, self.space.names)
         self.token = token or secrets.token_urlsafe(18)
         self.store = open_store(self.directory, self.setup, self.space)
         self.lock = threading.Lock()  # the page's threads share one database connection
@@ -148,9 +150,13 @@ class PersonPage:
             "answers": self._answers(iterations, batches)}
         if phase == "waiting" and k is not None:
             out["batch"], out["hidden"] = self._batch(k, batches.get(k, []), iterations[k], blind)
-        last = iterations[finished[-1]].get("recommended_trial") if finished else None
-        if last is not None and last in by_number and (complete or not blind):  # blind: only at the end
-            out["recommendation"] = self._gait_view(by_number[last], blind=False)
+        if complete or not blind:  # blind: only at the end
+            value = -math.inf if floor is None else float(floor["value"])
+            pick, note = recommendation(iterations, by_number, value, self.reqs)
+            if pick is not None:
+                out["recommendation"] = self._gait_view(pick, blind=False)
+            if note:
+                out["recommendation_note"] = note
         if complete:
             self.final_seen.set()
         return out

@@ -10,17 +10,20 @@ either barrier). Only the volume fraction of the violating set in a ball matters
   and the true r* is 0, which makes every certificate with ε < a wrong — the case that tests a confidence
   statement.
 * :class:`PushThresholdMap` — a 2-D impulse disk whose pushes fail beyond a threshold that depends on the push's
-  direction and on its hashed phase (:func:`robustgait.push.push_phase`): the push certificate's J* (true J* and
-  violating fraction of every disk known by quadrature).
+  direction and on its hashed phase (:func:`.push.push_phase`): the push certificate's J* (true
+  J* and violating fraction of every disk known by quadrature).
 * :class:`DivergingPush` — pushes that walk a few steps and fall later beyond a known critical impulse: the push
-  certificate's recovery criterion (:mod:`robustgait.recovery`).
+  certificate's recovery criterion (:mod:`.push`).
 
-Maps with known orbits, for the fixed point's orbit check (:mod:`robustgait.orbit`):
+Maps with known orbits, for the orbit search (:func:`.orbit.map_orbit`) and the linearization (:mod:`.numerics`):
 
 * :class:`LinearMap` — x* + A (x − x*) with a chosen spectrum (ρ known), optionally with a staircase of jumps along
   its first coordinate (piecewise smooth, as the simulated map is where a touchdown crosses a physics step).
 * :class:`QuadraticMap` — the logistic map on one coordinate, contracting on the others: converging (r < 3),
-  period two (3 < r < 1 + √6) or chaotic, wandering past an unstable x* (r = 3.9).
+  period two (3 < r < 1 + √6), period four (1 + √6 < r < 3.544) or chaotic, wandering past an unstable x* (r = 3.9).
+* :class:`NoisyMap` — another map plus bounded uniform noise: a noisy attractor, a band rather than a point (a
+  contraction: accepted, with its scatter; an expansion: its band keeps growing).
+* :class:`DriftMap` — a slow drift: one coordinate advances by a constant each map, the others follow it.
 """
 
 from __future__ import annotations
@@ -133,8 +136,9 @@ class BandMap:
 class PushThresholdMap:
     """A push-failure model on the impulse disk: J = (J_x, J_y) ↦ (0, 0) (absorbed) or NaN (fell), falling when
     |J| > J_c = j0 (1 + a cos θ)(1 − b φ), θ the direction of J and φ ∈ [0, 1) its phase from
-    :func:`robustgait.push.push_phase` (the certificate's hashed phase). True J* = j0 (1 − a)(1 − b) (the infimum
-    over directions and phases); :meth:`violating_fraction` of the disk B(r) by quadrature over θ and φ (uniform)."""
+    :func:`.push.push_phase` (the certificate's hashed phase). True J* = j0 (1 − a)(1 − b) (the
+    infimum over directions and phases); :meth:`violating_fraction` of the disk B(r) by quadrature over θ and φ
+    (uniform)."""
 
     j0: float = 20.0
     a: float = 0.3
@@ -161,7 +165,7 @@ class PushThresholdMap:
         return float(np.mean(np.maximum(0.0, 1.0 - (jc / r) ** 2)))
 
     def __call__(self, x: ArrayLike) -> FloatArray:
-        from robustgait.push import push_phase
+        from robustgait.certificate.push import push_phase
 
         j = np.atleast_2d(np.asarray(x, dtype=np.float64))
         theta = np.arctan2(j[:, 1], j[:, 0])
@@ -252,6 +256,39 @@ class QuadraticMap:
         return np.asarray(out, dtype=np.float64)
 
 
+class NoisyMap:
+    """F(x) + η, η uniform in [−``amplitude``, ``amplitude``]^d, drawn from a generator seeded with ``seed`` (the
+    noise of successive calls differs; a map with known answers: F's attractor widened by at most
+    amplitude / (1 − gain) for a contraction of gain < 1)."""
+
+    def __init__(self, inner: Callable[[FloatArray], FloatArray], amplitude: float, seed: int = 0):
+        if amplitude < 0.0:
+            raise RobustGaitError(f"amplitude must be ≥ 0, got {amplitude!r}")
+        self.inner, self.amplitude = inner, amplitude
+        self.rng = np.random.default_rng(seed)
+
+    def __call__(self, x: ArrayLike) -> FloatArray:
+        out = np.asarray(self.inner(np.atleast_2d(np.asarray(x, dtype=np.float64))), dtype=np.float64)
+        return np.asarray(out + self.rng.uniform(-self.amplitude, self.amplitude, out.shape))
+
+
+@dataclass(frozen=True)
+class DriftMap:
+    """x_0 ↦ x_0 + ``velocity``, x_i ↦ x_0 + ``gain`` (x_i − x_0) for i ≥ 1, on (N, ``dim``): every coordinate
+    settles onto the first, which moves by a constant each map — no orbit, a walk whose band keeps moving (it turns
+    or drifts slowly)."""
+
+    velocity: float
+    gain: float = 0.5
+    dim: int = 3
+
+    def __call__(self, x: ArrayLike) -> FloatArray:
+        x = np.atleast_2d(np.asarray(x, dtype=np.float64))
+        out = x[:, :1] + self.gain * (x - x[:, :1])
+        out[:, 0] = x[:, 0] + self.velocity
+        return np.asarray(out, dtype=np.float64)
+
+
 def iterates(F: Callable[[FloatArray], FloatArray], x0: ArrayLike, n: int) -> FloatArray:
     """x_0, F(x_0), …, F^n(x_0) (n + 1, d) of a batched map."""
     xs = [np.asarray(x0, dtype=np.float64)]
@@ -263,7 +300,7 @@ def iterates(F: Callable[[FloatArray], FloatArray], x0: ArrayLike, n: int) -> Fl
 @dataclass(frozen=True)
 class DivergingPush:
     """A push model with late falls and a known answer, for the push certificate's recovery criterion
-    (:mod:`robustgait.recovery`). A push of impulse |J| leaves the walker at distance d₁ = |J| / mass from its orbit
+    (:mod:`.recovery`). A push of impulse |J| leaves the walker at distance d₁ = |J| / mass from its orbit
     after the pushed step; each further step maps d ↦ a d + b d² (a < 1: small deviations die out; the unstable
     point d_u = (1 − a) / b separates the pushes that recover from those that diverge); the walker falls in the first
     step whose d exceeds ``d_fall``. Pushes just above the true critical impulse J_u = mass · d_u walk several steps
@@ -291,7 +328,7 @@ class DivergingPush:
         return fall, np.where(fall == 0, d, np.nan)
 
     def map(self, steps: int, radius: float | None) -> Callable[[FloatArray, object], FloatArray]:
-        """The push map of :class:`robustgait.push.PushMap` on this model: (0, 0) for a push that neither falls within
+        """The push map of :class:`.push.PushMap` on this model: (0, 0) for a push that neither falls within
         the pushed step and ``steps`` more nor ends farther than ``radius`` from the orbit (None: falls only)."""
         def P(j: FloatArray, progress: object = None) -> FloatArray:
             fall, d = self.walk(j, steps)

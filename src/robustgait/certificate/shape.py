@@ -11,7 +11,7 @@ are ellipsoids, the set this module shapes:
 2. :func:`lyapunov_shape` — S from AᵀSA − S = −I (positive definite iff A is Schur stable), scaled to det S = 1, so
    the ellipsoid of "radius" r has the volume of the ball of radius r;
 3. :func:`ellipsoid_transform` — coordinates in which that ellipsoid is the ball: z = Cᵀ δ with S = C Cᵀ, so the
-   estimators (:mod:`robustgait.barrier`, :mod:`robustgait.estimators`) certify it unchanged.
+   estimators (:mod:`.barrier`, :mod:`.estimators`) certify it unchanged.
 
 A gait whose fitted A is not Schur stable has no quadratic Lyapunov function of its linearization: the ellipsoid
 falls back to the ball (S = I) and says so (``fallback``).

@@ -36,10 +36,10 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.certificate.shape import Shape
 from robustgait.config import CertifyConfig, Frame, Reconstruction
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
-from robustgait.shape import Shape
 
 StateName = Literal["omega", "centroidal", "velocity"]
 FloatArray = NDArray[np.float64]
@@ -94,7 +94,7 @@ def section_coordinates(qpos: FloatArray, qvel: FloatArray, duration: float) -> 
 
     The coordinates of the return map's fixed point (``docs/certificate.md``, "Fixed point"): the physics does not
     depend on x and y at all, and on ψ only through MuJoCo's pyramidal friction cone, whose facets are fixed in the
-    world (an elliptic cone: none; measured in ``tests/test_poincare.py``)."""
+    world (an elliptic cone: none; measured in ``tests/test_returnmap.py``)."""
     qpos, qvel = np.atleast_2d(qpos), np.atleast_2d(qvel)
     r = quat_to_mat(qpos[:, 3:7])
     roll = np.arctan2(r[:, 2, 1], r[:, 2, 2])
@@ -361,7 +361,7 @@ def metric_factor(metric: FloatArray) -> FloatArray:
 class Coordinates:
     """The coordinates a certificate is computed in: z = T x̄ of the reduced state x̄ = Φ(x), T = Cᵀ Lᵀ, where Lᵀ makes
     the state's metric Euclidean (:func:`metric_factor`) and Cᵀ the certified set's shape a ball
-    (:class:`robustgait.shape.Shape`; C = I for the ball). The certified set B(z*, r*) is then
+    (:class:`.shape.Shape`; C = I for the ball). The certified set B(z*, r*) is then
     {x̄ : (x̄ − x̄*)ᵀ Tᵀ T (x̄ − x̄*) ≤ r*²}.
 
     ``space``: omega, centroidal, velocity, or push (impulses, T = I); ``unit`` of z and r*; ``energy``: ‖z − z*‖²

@@ -1,10 +1,11 @@
 """Estimators of r* from samples of a batched return map, and the confidence statement each one supports.
 
 ``docs/certificate.md`` (derivations). Two estimators, both exact for their samples
-(:func:`robustgait.barrier.solve_radius`):
+(:func:`.barrier.solve_radius`):
 
 * ``uniform`` — the paper's: N i.i.d. samples uniform in B(x*, r_max); the statement is a union bound over
-  the N + 1 values r* can take (:func:`robustgait.barrier.certify_map`, :func:`~robustgait.barrier.violation_bound`).
+  the N + 1 values r* can take (:func:`.barrier.certify_map`,
+  :func:`~.barrier.violation_bound`).
 * ``sequential`` (:func:`certify_map_sequential`) — beyond the paper. Exploration proposes r̂, verification
   certifies it:
 
@@ -46,7 +47,7 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from robustgait.barrier import (
+from robustgait.certificate.barrier import (
     BatchedMap,
     Certificate,
     Round,
@@ -167,7 +168,7 @@ class _Pool:
 def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConfig | None = None) -> Certificate:
     """The sequential estimator (module docstring): certify a batched map P: (N, n) → (N, n) (NaN rows =
     fell) around its fixed point x_star (n,) with ``config`` (``r_max``, ``alpha``, ``beta``, ``seed``,
-    ``barrier`` and the estimator's options ``sequential``). Returns a :class:`~robustgait.barrier.Certificate`
+    ``barrier`` and the estimator's options ``sequential``). Returns a :class:`~.barrier.Certificate`
     with ``method="sequential"``, every round (``rounds``: kind, radius, samples, samples used, r̂ after it)
     and, if a verification batch passed, ``violation_bound`` = ε_a ≤ ε (:func:`verification_bound`) at
     confidence 1 − β; otherwise ``budget_exhausted`` (bound 1) or, if r̂ reached 0, a vacuous certificate.

@@ -11,7 +11,7 @@ closed ball). ``paper``: the paper's literal H = r − ‖x − x*‖², still r
 DTBF condition for the return map P: H(P(x)) − H(x) ≥ −α H(x), 0 < α < 1. For one sample with
 d = ‖x − x*‖ and p = ‖P(x) − x*‖ it reads α r² ≥ p² − (1 − α) d² (``ball``) or α r ≥ p² − (1 − α) d²
 (``paper``); a fall is p = ∞ (never satisfied). The estimators built on this (the paper's uniform one and a
-sequential one) are in :mod:`robustgait.estimators`.
+sequential one) are in :mod:`.estimators`.
 
 Conventions: arrays of states have the state in the last axis; a row of images with a NaN (or any
 non-finite entry) is a fall. Problems caused by input raise :class:`RobustGaitError` (one line).
@@ -265,7 +265,7 @@ def distances(x0: FloatArray, x1: FloatArray, x_star: FloatArray) -> tuple[Float
 # -------------------------------------------------------------------------------------- certificate
 @dataclass(frozen=True)
 class Round:
-    """One round of samples of an estimator (:mod:`robustgait.estimators`).
+    """One round of samples of an estimator (:mod:`.estimators`).
 
     kind: ``uniform`` (i.i.d. uniform in B(x*, radius): the paper's draw), ``explore`` (proposals of the
     sequential estimator inside B(radius), any distribution), ``verify`` (fresh i.i.d. uniform in B(radius),
@@ -401,7 +401,7 @@ def certificate_from_samples(
     """Certificate from given samples x0 (N, n) and images x1 (N, n) (NaN row = fell), x_star (n,).
 
     The confidence statement assumes x0 i.i.d. uniform on B_{r_max}(x*) (see :func:`violation_bound`);
-    the sequential estimator replaces it with its own (:mod:`robustgait.estimators`).
+    the sequential estimator replaces it with its own (:mod:`.estimators`).
     """
     a0, a1, xs = _check_samples(x0, x1, x_star)
     a, b = float(alpha), float(beta)
@@ -451,7 +451,7 @@ def certify_map(P: BatchedMap, x_star: ArrayLike, config: CertifyConfig | None =
 
     Draws N points uniform in B_{r_max}(x*) with ``np.random.default_rng(seed)`` (:func:`sample_ball`),
     evaluates P once on the batch and returns :func:`certificate_from_samples`. The sequential estimator is
-    :func:`robustgait.estimators.certify_map_sequential`.
+    :func:`.estimators.certify_map_sequential`.
     """
     cfg = config or CertifyConfig(method="uniform")
     xs = _check_point("x_star", x_star)

@@ -1,10 +1,12 @@
-"""Certify a gait: fixed point of its return map (:mod:`robustgait.poincare`) → its reduced state
-(:mod:`robustgait.reduced`) → the certified set's coordinates (:mod:`robustgait.shape`) → sampled images → r* and a
-confidence statement (:mod:`robustgait.estimators`, :mod:`robustgait.barrier`); or, for ``disturbance = push``,
-sampled pushes → J* (:mod:`robustgait.push`). ``docs/certificate.md``; ``robustgait certify`` calls this.
+"""Certify a gait: the orbit it walks (:mod:`.search`: settled in a band, stable under small pushes) → x* → its
+reduced state (:mod:`.reduced`) → the certified set's coordinates (:mod:`.shape`) → sampled images of the map of the
+orbit's period (:mod:`.reducedmap`) → r* and a confidence statement (:mod:`.estimators`, :mod:`.barrier`); or, for
+``disturbance = push``, sampled pushes from x* that must come back to the orbit's band → J* (:mod:`.push`).
+``docs/certificate.md``; ``robustgait certify`` calls this.
 
-A gait that falls before reaching a fixed point, has none, or falls from its own fixed point is a result,
-not an error: the certificate has a ``status`` other than ``ok`` and r* = 0 (in a study it is a data point).
+A gait that falls, settles on no band, does not come back from small pushes, or whose reduced map falls from x̄* is a
+result, not an error: the certificate has a ``status`` other than ``ok`` (:class:`.orbit.Status`) and r* = 0 (in a
+study it is a data point).
 """
 
 from __future__ import annotations
@@ -18,44 +20,43 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from robustgait.barrier import Certificate, certify_map, evaluate_map, sample_ball
+from robustgait.certificate.barrier import Certificate, certify_map, evaluate_map, sample_ball
+from robustgait.certificate.estimators import certify_map_sequential
+from robustgait.certificate.orbit import FixedPoint, Orbit, Status
+from robustgait.certificate.push import PushMap
+from robustgait.certificate.reduced import Coordinates, ReducedState, section_dimension
+from robustgait.certificate.reducedmap import ReducedMap
+from robustgait.certificate.returnmap import FullStateMap
+from robustgait.certificate.search import find_orbit
+from robustgait.certificate.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, to_dict
 from robustgait.config.work import Work, check_work
-from robustgait.estimators import certify_map_sequential
 from robustgait.gait import Gait
-from robustgait.orbit import OrbitReport
-from robustgait.poincare import FixedPoint, FixedPointFailure, ReturnMap, settle
-from robustgait.push import PushMap
-from robustgait.reduced import Coordinates, section_dimension
 from robustgait.robots import Robot
-from robustgait.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
 from robustgait.sim.engine import step_physics_steps
-
-STATUSES = ("ok", "fell_before_fixed_point", "no_stable_orbit", "period_two_orbit", "unstable_orbit",
-            "unstable_fixed_point")
+from robustgait.sim.factory import make_engine
 
 
 @dataclass
 class GaitCertificate:
     """A gait's certificate.
 
-    status: one of :data:`STATUSES` — ``ok``; ``fell_before_fixed_point`` (the gait fell while its fixed point
-    was searched); ``no_stable_orbit`` (no window of ``fp_window`` iterates settled within ``fp_tol`` in
-    ``fp_max_steps``); ``period_two_orbit`` (none did, but iterates two apart settled: certify the stride map);
-    ``unstable_orbit`` (the orbit settled, but the linearized map at x* has spectral radius ρ ≥ ``fp_rho_max``);
-    ``unstable_fixed_point`` (the reduced map falls from x̄* itself within the horizon: through the reconstruction x̄*
-    is not on a walking orbit). reason: one line (empty if ok). steps_walked: steps of the fixed-point search
-    (completed before a fall). orbit: what the fixed-point search saw (:class:`robustgait.orbit.OrbitReport`: the
-    window, ρ and the eigenvalue moduli, Newton's residuals; None if the gait fell before its first iterate).
-    certificate (the barrier :class:`Certificate` in the certificate's coordinates: r*, samples, images, margins,
-    rounds, statement), coordinates (z = T x̄ of the reduced state, the shape of the set; :class:`Coordinates`),
-    fixed_point and map_residual ‖P(x̄*) − x̄*‖ (certificate coordinates, one map) are None where the search did not
-    get that far. r_star is 0 unless ok. ball: for an ellipsoid certified with ``ellipsoid.compare_ball``, the ball
-    certified beside it (its volume ratio: :attr:`volume_ratio`). excursion: horizon k ≥ 2, per j = 1 … k the
-    largest ‖P^j(z) − z*‖ over the samples in the certified set.
+    status: :class:`.orbit.Status` — ``ok``; ``fell``, ``unsettled``, ``unstable`` (the orbit search's verdict,
+    :mod:`.search`); ``unstable_fixed_point`` (the reduced map falls from x̄* itself within the horizon: through the
+    reconstruction x̄* is not on a walking orbit). reason: one line (empty if ok). steps_walked: steps of the orbit
+    search's walk (completed before a fall). orbit: what the search found (:class:`.orbit.Orbit`: the band, its period
+    and scatter σ, the probe, ρ when asked). certificate (the barrier :class:`Certificate` in the certificate's
+    coordinates: r*, samples, images, margins, rounds, statement), coordinates (z = T x̄ of the reduced state, the
+    shape of the set; :class:`Coordinates`), fixed_point (x*: a switching state of the settled walk) and map_residual
+    ‖P(x̄*) − x̄*‖ (certificate coordinates, one map) are None where the certificate did not get that far. r_star is 0
+    unless ok. sigma: a state certificate's σ, the orbit's own scatter about x̄* in the certificate's coordinates (the
+    last window's switching states of x*'s phase): an r* not above it certifies nothing the walk does not already do.
+    ball: for an ellipsoid certified with ``ellipsoid.compare_ball``, the ball certified beside it (its volume ratio:
+    :attr:`volume_ratio`). excursion: horizon k ≥ 2, per j = 1 … k the largest ‖P^j(z) − z*‖ over the samples in the
+    certified set.
     """
 
-    status: str
+    status: Status
     certificate: Certificate | None
     fixed_point: FixedPoint | None
     map_residual: float | None
@@ -72,21 +73,27 @@ class GaitCertificate:
     validate: ValidateConfig | None = None  # push certificates: the push duration and phases used
     controller: str = "pd"  # the tracking law that ran (sim.controller, unless the note says why not)
     controller_note: str = ""
-    orbit: OrbitReport | None = None
-    fixed_point_physics_steps: int = 0  # simulated by the fixed-point search (its iterates, Newton, ρ)
+    orbit: Orbit | None = None
+    orbit_physics_steps: int = 0  # simulated by the orbit search (its walk, the probe, ρ)
+    sigma: float | None = None
 
     @property
     def ok(self) -> bool:
-        return self.status == "ok"
+        return self.status == Status.OK
 
     @property
     def r_star(self) -> float:
         return self.certificate.r_star if self.certificate is not None else 0.0
 
     @property
+    def below_scatter(self) -> bool:
+        """A state certificate whose r* is not above the orbit's own scatter σ: vacuous."""
+        return self.certificate is not None and self.sigma is not None and self.certificate.r_star <= self.sigma
+
+    @property
     def vacuous(self) -> bool:
-        """True when nothing is certified: a failed status, or no sample inside B(r*)."""
-        return self.certificate is None or self.certificate.vacuous
+        """True when nothing is certified: a failed status, no sample inside B(r*), or r* ≤ σ."""
+        return self.certificate is None or self.certificate.vacuous or self.below_scatter
 
     @property
     def energy(self) -> float | None:
@@ -103,38 +110,53 @@ class GaitCertificate:
         return volume_ratio(self.certificate.r_star, self.ball.r_star, self.coordinates.dim)
 
     def statement(self) -> str:
+        """The certificate in words: what it promises, with its confidence, its horizon and its basis."""
         if self.certificate is None:
             return f"No certificate ({self.status}): {self.reason}; r* = 0 after {self.steps_walked} steps."
         c, cfg = self.certificate, self.config
-        if cfg.disturbance != "push" or c.vacuous or c.budget_exhausted:
+        if cfg.disturbance != "push":
+            return c.statement() + self._scatter_clause()
+        if c.vacuous or c.budget_exhausted:
             return c.statement()
         v = self.validate or ValidateConfig()
         inside = "≤" if c.attained else "<"
         if c.method == "sequential":
             verify = [r for r in c.rounds if r.kind == "verify"]
             n_a, attempt = verify[-1].n_samples, len(verify)
-            basis = (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed all recovered "
+            basis = (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed: none fell "
                      f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}), and none of the "
                      f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* failed")
         else:
             basis = (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
-                     f"with |J| {inside} J* all recovered (union bound over the {c.n_samples + 1} possible choices of "
+                     f"with |J| {inside} J* did not fall (union bound over the {c.n_samples + 1} possible choices of "
                      "J*)")
         p = cfg.push
-        fail = ("make the robot fall within that step and {k} more" if not p.recovery else
-                "make the robot fall within that step and {k} more, or leave it off its orbit at their end (base "
-                f"velocity farther than {p.recovery_radius:g} in Froude units, or {p.recovery_scatter:g}× its "
-                "undisturbed scatter, from x*'s)").format(k=p.steps)
+        fail = f"make the robot fall within that step and {p.horizon} more"
+        if p.recovery:
+            fail += (f" (a pushed walk stops once recovered: {p.recovery_steps} consecutive steps with every "
+                     f"coordinate of the switching state within {p.recovery_radius:g} of its orbit's band in band "
+                     f"coordinates, or {p.recovery_scatter:g}× the orbit's own scatter)")
         return (f"With confidence {100.0 * c.confidence:g}%, at most {100.0 * c.violation_bound:.3g}% of the pushes "
                 f"with impulse |J| {inside} J* = {c.r_star:.4g} N s (uniform in that disk; {v.push_duration:g} s long, "
                 f"starting at a phase in [{v.push_phase[0]:g}, {v.push_phase[1]:g}] of the step) {fail}: {basis}.")
+
+    def _scatter_clause(self) -> str:
+        """A state certificate's σ, and what it means for r*."""
+        if self.sigma is None:
+            return ""
+        unit = self.config.unit
+        if self.below_scatter:
+            return (f" The orbit's own switching states scatter σ = {self.sigma:.3g} {unit} about x̄*: r* is not above "
+                    "it, so the certificate is vacuous (it certifies no perturbation the undisturbed walk does not "
+                    "make itself).")
+        return f" The orbit's own switching states scatter σ = {self.sigma:.3g} {unit} about x̄*."
 
     def to_dict(self, *, samples: bool = True) -> dict[str, Any]:
         """JSON-ready; everything but ``seconds`` is deterministic for a given seed."""
         fp, cfg = self.fixed_point, self.config
         out: dict[str, Any] = {
             "robot": self.robot,
-            "status": self.status,
+            "status": str(self.status),
             "reason": self.reason,
             "r_star": 0.0,
             "vacuous": True,
@@ -146,11 +168,12 @@ class GaitCertificate:
             "unit": cfg.unit,
             "x_star": None,
             "omega_star": None if fp is None else [float(v) for v in fp.omega],
-            "fixed_point_residual": None if fp is None else fp.residual,
-            "fixed_point_steps": None if fp is None else fp.steps,
+            "fixed_point_step": None if fp is None else fp.step,
             "map_residual": self.map_residual,
             "orbit": None if self.orbit is None else self.orbit.to_dict(),
             "map": cfg.map,
+            "period": None if self.orbit is None else self.orbit.period,
+            "sigma": self.sigma,
             "reconstruction": cfg.reconstruction,
             "frame": cfg.frame,
             "method": cfg.method,
@@ -167,6 +190,7 @@ class GaitCertificate:
                     c.pop(key)
             c["statement"] = self.statement()
             out.update(c)
+            out["vacuous"] = self.vacuous
         if self.coordinates is not None:
             out["coordinates"] = self.coordinates.to_dict()
         if self.ball is not None:
@@ -175,7 +199,7 @@ class GaitCertificate:
                            "statement": self.ball.statement(), "volume_ratio": self.volume_ratio}
         if self.excursion is not None:
             out["excursion"] = self.excursion
-        out.update({"physics_steps": self.physics_steps, "fixed_point_physics_steps": self.fixed_point_physics_steps,
+        out.update({"physics_steps": self.physics_steps, "orbit_physics_steps": self.orbit_physics_steps,
                     "config": to_dict(cfg), "sim": to_dict(self.sim),
                     "seconds": self.seconds})
         if self.validate is not None:
@@ -200,16 +224,13 @@ def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: boo
 
 
 def certify_steps(config: CertifyConfig, graph: str, dim: int) -> int:
-    """The most steps a certificate simulates: a multi-contact gait's walk to its first heel strike (one step at
-    most), the fixed-point search on a section of ``dim`` coordinates (:meth:`CertifyConfig.fixed_point_steps`: up to
-    ``fp_max_steps`` steps of the map, its Newton iterations and ρ), the map at x* (``horizon`` steps, × 2 for the
-    stride map), and :attr:`~CertifyConfig.steps_per_sample` for each of :attr:`~CertifyConfig.samples_planned`
-    (a push: the pushed step and ``push.steps`` more; with recovery, the undisturbed walk that measures the orbit's
-    scatter first)."""
-    start = 0 if graph == "flat" else 1
-    band = config.push.recovery_band_steps if config.disturbance == "push" and config.push.recovery else 0
-    return (start + config.fixed_point_steps(dim) + config.horizon * config.period + band
-            + config.samples_planned * config.steps_per_sample)
+    """The most steps a certificate simulates: the orbit search on a section of ``dim`` coordinates
+    (:meth:`CertifyConfig.orbit_steps`: its walk, the probe, ρ when asked), a state certificate's map at x*
+    (``horizon`` maps of up to ``orbit.max_period`` steps), and :attr:`~CertifyConfig.steps_per_sample` for each of
+    :attr:`~CertifyConfig.samples_planned` (a push: the pushed step and ``push.horizon`` more, every push walking to
+    the horizon). ``graph``: the gait's domain graph (the count does not depend on it)."""
+    at_x_star = 0 if config.disturbance == "push" else config.horizon * config.orbit.max_period
+    return config.orbit_steps(dim) + at_x_star + config.samples_planned * config.steps_per_sample
 
 
 def check_certify_work(robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig) -> int:
@@ -220,7 +241,7 @@ def check_certify_work(robot: Robot, gait: Gait, config: CertifyConfig, sim: Sim
     dim = section_dimension(robot)
     return check_work(Work(certify_steps(config, graph, dim), step_physics_steps(gait, robot.dt, sim)),
                       Work(certify_steps(CertifyConfig(), graph, dim), step_physics_steps(gait, robot.dt, SimConfig())),
-                      robot.dt, f"certify.fp_max_steps {config.fp_max_steps} + certify.{samples} "
+                      robot.dt, f"certify.orbit.max_steps {config.orbit.max_steps} + certify.{samples} "
                       f"{config.samples_planned} × {config.steps_per_sample} steps")
 
 
@@ -242,7 +263,7 @@ class _Paths:
         return [float(v) for v in np.max(np.where(np.isfinite(dist), dist, np.inf), axis=1)]
 
 
-def _in_coordinates(pmap: ReturnMap, coords: Coordinates, paths: _Paths | None = None) -> BatchMap:
+def _in_coordinates(pmap: ReducedMap, coords: Coordinates, paths: _Paths | None = None) -> BatchMap:
     """P^k in the certificate's coordinates: z ↦ T P^k(T⁻¹ z)."""
     def P(z: np.ndarray, progress: Progress | None = None) -> np.ndarray:
         out = coords.to_z(pmap(coords.to_xbar(z), progress=progress))
@@ -252,10 +273,10 @@ def _in_coordinates(pmap: ReturnMap, coords: Coordinates, paths: _Paths | None =
     return P
 
 
-def fit_shape(pmap: ReturnMap, ball: Coordinates, cfg: CertifyConfig) -> Shape:
+def fit_shape(pmap: ReducedMap, ball: Coordinates, cfg: CertifyConfig) -> Shape:
     """The ellipsoid's shape S in the state's metric coordinates: P^k on ``ellipsoid.fit_samples`` samples uniform in
     the ball of radius ``fit_radius`` × r_max (seed stream ``[seed, 3]``: common random numbers), a least-squares
-    linearization and its Lyapunov ellipsoid (:func:`robustgait.shape.shape_from_fit`)."""
+    linearization and its Lyapunov ellipsoid (:func:`.shape.shape_from_fit`)."""
     e = cfg.ellipsoid
     rng = np.random.default_rng([cfg.seed, 3])
     z0 = sample_ball(e.fit_samples, ball.dim, e.fit_radius * cfg.radius, ball.x_star, rng)
@@ -268,87 +289,96 @@ def fit_shape(pmap: ReturnMap, ball: Coordinates, cfg: CertifyConfig) -> Shape:
     return shape_from_fit(fit)
 
 
+def orbit_scatter(orbit: Orbit, reduced: ReducedState, coords: Coordinates) -> float:
+    """σ of a state certificate: the largest distance, in the certificate's coordinates, of the orbit's last-window
+    switching states of x*'s phase from x̄* (0 without them)."""
+    states = orbit.phase_states(0)
+    if states is None or not len(states):
+        return 0.0
+    nq = reduced.robot.model.nq
+    z = coords.to_z(reduced.phi(states[:, :nq], states[:, nq:]))
+    return float(np.max(np.linalg.norm(z - coords.x_star, axis=1)))
+
+
 def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
                  validate: ValidateConfig | None = None, progress: bool = False) -> GaitCertificate:
-    """Find x* by iterating the map, then certify the set of ``config`` around it with the configured estimator
-    (``uniform``: :func:`robustgait.barrier.certify_map`; ``sequential``:
-    :func:`robustgait.estimators.certify_map_sequential`), in the state, set and horizon of the config; or, with
-    ``disturbance = push``, the impulse disk J* (pushes as ``validate``'s: duration and phases of ``validate``).
+    """Find the orbit the gait walks (:func:`.search.find_orbit`: settled, stable), then certify the set of
+    ``config`` around its x* with the configured estimator (``uniform``: :func:`.barrier.certify_map`;
+    ``sequential``: :func:`.estimators.certify_map_sequential`) on the map of the orbit's period, in the state, set
+    and horizon of the config; or, with ``disturbance = push``, the impulse disk J* (pushes as ``validate``'s:
+    duration and phases of ``validate``; the probe's too).
 
     With ``ellipsoid.compare_ball`` an ellipsoid's certificate also certifies the ball of the same state (its r* and
-    the volume ratio are reported). A gait that falls, has no fixed point or falls from it returns a certificate with
-    that ``status`` and r* = 0 (no exception); too much work for the limits raises :class:`RobustGaitError` before any
-    simulation.
-    ``progress``: bars on stderr.
+    the volume ratio are reported). A gait without a stable orbit, or whose reduced map falls from x̄*, returns a
+    certificate with that ``status`` and r* = 0 (no exception); too much work for the limits raises
+    :class:`RobustGaitError` before any simulation. ``progress``: bars on stderr.
     """
     cfg = config or CertifyConfig()
     sim = sim or SimConfig()
     push = cfg.disturbance == "push"
-    vcfg = (validate or ValidateConfig()) if push else None
+    vcfg = validate or ValidateConfig()
     check_certify_work(robot, gait, cfg, sim)
     t0 = time.perf_counter()
-
-    def failed(status: str, reason: str, steps: int, fp: FixedPoint | None = None,
-               map_residual: float | None = None, orbit: OrbitReport | None = None) -> GaitCertificate:
-        t = time.perf_counter() - t0
-        return GaitCertificate(status=status, certificate=None, fixed_point=fp, map_residual=map_residual,
-                               config=cfg, sim=sim, robot=robot.name, physics_steps=0, steps_walked=steps,
-                               reason=reason, validate=vcfg, controller=pmap.engine.controller_name,
-                               controller_note=pmap.engine.controller_note,
-                               orbit=orbit if orbit is not None or fp is None else fp.orbit,
-                               fixed_point_physics_steps=pmap.physics_steps,
-                               seconds={"fixed_point": t, "sampling": 0.0, "total": t, "sim_steps_per_s": 0.0})
-
-    with tqdm(total=cfg.fp_max_steps, desc="fixed point", unit="step", disable=not progress, leave=False) as bar:
-        def on_step(k: int, residual: float) -> None:
-            if k < bar.n:  # the stride map's search after the step map's
-                bar.reset()
-                bar.set_description("fixed point (stride map)")
-            bar.update(k - bar.n)
-            bar.set_postfix(residual=f"{residual:.2e}")
-        pmap, found = settle(robot, gait, cfg, sim, on_step)
-    with pmap:
-        if isinstance(found, FixedPointFailure):
-            return failed(found.status, str(found), found.steps, found.fixed_point, orbit=found.orbit)
-        fp, cfg = found, pmap.config  # the stride map's after a fallback (stride_fallback)
+    engine = make_engine(robot, gait, sim)
+    try:
+        with tqdm(total=cfg.orbit.max_steps, desc="orbit", unit="step", disable=not progress, leave=False) as bar:
+            orbit = find_orbit(robot, gait, cfg, sim, validate=vcfg, engine=engine,
+                               progress=lambda k: bar.update(k - bar.n))
         t1 = time.perf_counter()
-        fp_steps = pmap.physics_steps
-        coords = Coordinates.of(pmap.reduced)
-        image = coords.to_z(pmap(pmap.reduced.x_star[None]))[0]
-        first = coords.to_z(pmap.last_path[0])[0] if pmap.last_path is not None else image
-        map_residual = float(np.linalg.norm(first - coords.x_star))
-        if not np.all(np.isfinite(image)):
-            return failed("unstable_fixed_point", f"the return map falls from its own fixed point within "
-                          f"{cfg.horizon} step(s) (through the {cfg.reconstruction} reconstruction x̄* is not on a "
-                          "walking orbit)", fp.steps, fp)
-        pmap.physics_steps = 0
+
+        def result(status: Status, reason: str, **kw: Any) -> GaitCertificate:
+            t = time.perf_counter()
+            seconds = kw.pop("seconds", {"orbit": t1 - t0, "sampling": 0.0, "total": t - t0, "sim_steps_per_s": 0.0})
+            return GaitCertificate(status=status, reason=reason, config=cfg, sim=sim, robot=robot.name,
+                                   seconds=seconds, steps_walked=orbit.steps, validate=vcfg if push else None,
+                                   controller=engine.controller_name, controller_note=engine.controller_note,
+                                   orbit=orbit, orbit_physics_steps=orbit.physics_steps, **kw)
+
+        if not orbit.ok:
+            return result(orbit.status, orbit.reason, certificate=None, fixed_point=None, map_residual=None,
+                          physics_steps=0)
+        assert orbit.qpos is not None and orbit.qvel is not None
+        fp = orbit.fixed_point(cfg.frame)
         t2 = time.perf_counter()
         ball: Certificate | None = None
         excursion: list[float] | None = None
+        sigma: float | None = None
+        map_residual: float | None = None
         if push:
-            assert vcfg is not None
             coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
-            pushes = PushMap(pmap.engine, fp, vcfg, cfg.push)
+            pushes = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push)
             cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}")
             steps = pushes.physics_steps
         else:
+            fmap = FullStateMap(robot, gait, orbit.period, engine=engine)
+            reduced = ReducedState.at(cfg.state, robot, orbit.qpos, orbit.qvel, gait.stance, cfg)
+            pmap = ReducedMap(fmap, reduced, cfg.horizon)
+            coords = Coordinates.of(reduced)
+            image = coords.to_z(pmap(reduced.x_star[None]))[0]
+            first = coords.to_z(pmap.last_path[0])[0] if pmap.last_path is not None else image
+            map_residual = float(np.linalg.norm(first - coords.x_star))
+            if not np.all(np.isfinite(image)):
+                return result(Status.UNSTABLE_FIXED_POINT, f"the return map falls from its own fixed point within "
+                              f"{cfg.horizon} map(s) (through the {cfg.reconstruction} reconstruction x̄* is not on a "
+                              "walking orbit)", certificate=None, fixed_point=fp, map_residual=None, physics_steps=0)
+            fmap.physics_steps = 0
             if cfg.set == "ellipsoid":
                 shape = fit_shape(pmap, coords, cfg)
                 if cfg.ellipsoid.compare_ball:
                     ball = _estimate(_in_coordinates(pmap, coords), coords.x_star, cfg, progress,
                                      f"{cfg.state} ball, {cfg.method}")
                 coords = dataclasses.replace(coords, shape=shape)
+            sigma = orbit_scatter(orbit, reduced, coords)
             paths = _Paths()
             desc = f"{cfg.state} {cfg.set}{'' if cfg.horizon == 1 else f', P^{cfg.horizon}'}, {cfg.method}"
             cert = _estimate(_in_coordinates(pmap, coords, paths), coords.x_star, cfg, progress, desc)
             if cfg.horizon > 1:
                 excursion = paths.excursion(cert, coords)
-            steps = pmap.physics_steps
+            steps = fmap.physics_steps
         t3 = time.perf_counter()
-    return GaitCertificate(status="ok", certificate=cert, fixed_point=fp, map_residual=map_residual, config=cfg,
-                           sim=sim, robot=robot.name, physics_steps=steps, steps_walked=fp.steps,
-                           coordinates=coords, ball=ball, excursion=excursion, validate=vcfg,
-                           controller=pmap.engine.controller_name, controller_note=pmap.engine.controller_note,
-                           orbit=fp.orbit, fixed_point_physics_steps=fp_steps,
-                           seconds={"fixed_point": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,
-                                    "sim_steps_per_s": steps / max(t3 - t2, 1e-9)})
+        return result(Status.OK, "", certificate=cert, fixed_point=fp, map_residual=map_residual,
+                      physics_steps=steps, coordinates=coords, ball=ball, excursion=excursion, sigma=sigma,
+                      seconds={"orbit": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,
+                               "sim_steps_per_s": steps / max(t3 - t2, 1e-9)})
+    finally:
+        engine.close()

@@ -1,0 +1,138 @@
+"""The orbit search: walk the gait until its switching states settle in a band, then check that states perturbed from
+the band come back to it (``docs/certificate.md``, "The orbit the gait walks").
+
+1. **Settled** — the gait is walked (:func:`robustgait.sim.walk.walk`, the walk every command runs) until its
+   switching states settle (by ``orbit.max_steps``) and their band has held ``orbit.hold_steps`` more steps
+   (:class:`.orbit.SettlingWatch`); the orbit, its period, band and x* are :func:`.orbit.classify_walk`'s, so
+   ``walk`` reports the same orbit for the same gait once it has walked as far.
+2. **Stable** — ``orbit.probe_pushes`` pushes of ``orbit.probe_impulse`` × m √(g l) at evenly spaced directions
+   start from x*, each walked until it has come back to the band for ``push.recovery_steps`` steps, within
+   ``orbit.probe_horizon`` steps (the push map's own walk, :class:`.push.PushMap`). ``unstable`` when a probe does
+   not come back and keeps moving away from the band (:func:`.orbit.diverging`), or every probe falls; a probe that
+   falls is a push beyond the gait's basin in its direction, which J* measures (:class:`.orbit.Probe`).
+3. **ρ** — with ``orbit.linearization``, the linearized map at x* as a diagnostic (:mod:`.linearization`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from robustgait.certificate.linearization import linearize
+from robustgait.certificate.orbit import Orbit, Probe, SettlingWatch, Status, diverging
+from robustgait.certificate.push import PushMap, push_phase
+from robustgait.certificate.returnmap import FullStateMap
+from robustgait.config import CertifyConfig, SimConfig, ValidateConfig
+from robustgait.errors import RobustGaitError
+from robustgait.gait import Gait
+from robustgait.robots import Robot
+from robustgait.sim.engine import StepEngine
+from robustgait.sim.factory import make_engine
+from robustgait.sim.walk import SwitchEvent, walk
+
+FloatArray = NDArray[np.float64]
+
+
+def probe_impulse(robot: Robot, fraction: float) -> float:
+    """J [N s] = fraction × m √(g l): an impulse relative to the robot's momentum at its pendulum speed."""
+    return fraction * robot.mass * robot.scale.speed
+
+
+def probe_stability(engine: StepEngine, orbit: Orbit, config: CertifyConfig, validate: ValidateConfig
+                    ) -> tuple[Probe, int]:
+    """The stability probe of step 2 (module docstring) from the settled ``orbit``'s x* and band, and the physics
+    steps it simulated: ``orbit.probe_pushes`` pushes at evenly spaced directions, their impulse doubled (at most
+    ``orbit.probe_doublings`` times) while none of them takes the walk out of its band — a probe that never leaves
+    the band tests nothing."""
+    assert orbit.qpos is not None and orbit.qvel is not None and orbit.band is not None
+    o, robot = config.orbit, engine.robot
+    angles = 2.0 * math.pi * np.arange(o.probe_pushes) / o.probe_pushes
+    push = dataclasses.replace(config.push, recovery=True, horizon=o.probe_horizon)
+    pm = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, validate, push)
+    size = probe_impulse(robot, o.probe_impulse)
+    for doubling in range(o.probe_doublings + 1):
+        impulse = size * np.column_stack([np.cos(angles), np.sin(angles)])
+        _, _, fall_step, recovered = pm.walk(impulse, push_phase(impulse, *validate.push_phase))
+        assert pm.farthest is not None and pm.trace is not None
+        left = pm.farthest > 1.0
+        if left.any() or (fall_step > 0).any() or doubling == o.probe_doublings:
+            break
+        size *= 2.0
+    trace = pm.trace
+    assert trace is not None
+    moving = tuple(bool(r == 0 and f == 0 and diverging(tr, o.probe_growth))
+                   for r, f, tr in zip(recovered, fall_step, trace, strict=True))
+    return Probe(size, o.probe_horizon, tuple(bool(r) for r in recovered > 0), tuple(int(r) for r in recovered),
+                 tuple(bool(f) for f in fall_step > 0), tuple(bool(x) for x in left), moving), pm.physics_steps
+
+
+def find_orbit(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
+               validate: ValidateConfig | None = None, engine: StepEngine | None = None,
+               progress: Callable[[int], None] | None = None) -> Orbit:
+    """The orbit of the gait's walk (module docstring): settled, stable, and with ``orbit.linearization`` ρ. Never
+    raises for a gait that falls or does not settle: the orbit's status says so (:class:`.orbit.Status`).
+    ``engine``: the gait's engine (built from ``sim`` otherwise, and closed); ``validate``: the push duration and
+    phases of the probe; ``progress(step)`` after each step of the walk."""
+    cfg = config or CertifyConfig()
+    v = validate or ValidateConfig()
+    own = engine is None
+    eng = engine or make_engine(robot, gait, sim)
+    try:
+        watch = SettlingWatch(robot, gait.stance, cfg)
+
+        def until(events: list[SwitchEvent]) -> bool:
+            if progress is not None:
+                progress(len(events))
+            return watch(events)
+
+        result = walk(robot, gait, eng.config, steps=cfg.orbit.max_steps + cfg.orbit.hold_steps, engine=eng,
+        certify=cfg,
+                      until=until)
+        orbit = result.orbit
+        assert orbit is not None
+        physics = result.physics_steps
+        if orbit.ok and cfg.orbit.probe_impulse > 0:
+            probe, steps = probe_stability(eng, orbit, cfg, v)
+            physics += steps
+            orbit = dataclasses.replace(orbit, probe=probe)
+            if not probe.ok:
+                orbit = dataclasses.replace(orbit, status=Status.UNSTABLE, reason=_unstable_reason(probe))
+        if orbit.ok and cfg.orbit.linearization:
+            assert orbit.qpos is not None and orbit.qvel is not None
+            with FullStateMap(robot, gait, orbit.period, engine=eng) as fmap:
+                orbit = dataclasses.replace(orbit, linearization=linearize(fmap, orbit.qpos, orbit.qvel, cfg.orbit))
+                physics += fmap.physics_steps
+        return dataclasses.replace(orbit, physics_steps=physics)
+    finally:
+        if own:
+            eng.close()
+
+
+def _unstable_reason(probe: Probe) -> str:
+    """One line: which probing pushes moved away from the band, fell or stayed near it, and how many came back."""
+    n, fell, moving, back = len(probe.recovered), sum(probe.fell), sum(probe.diverging), sum(probe.recovered)
+    near = n - fell - moving - back
+    what = ", ".join([f"{moving} moved away from its band"] * bool(moving) + [f"{fell} fell"] * bool(fell)
+                     + [f"{near} stayed near it without entering it"] * bool(near))
+    return (f"the walk settled, but of {n} pushes of {probe.impulse:.3g} N s from x*, {what} and {back} came back "
+            f"within {probe.horizon} steps")
+
+
+def initial_section(robot: Robot, gait: Gait, engine: StepEngine) -> tuple[FloatArray, FloatArray]:
+    """The gait's initial state as a canonical section state (1, nq), (1, nv): itself for a flat-foot gait; a
+    multi-contact gait starts at the beginning of single support, so it is walked to its heel strike first and
+    mirrored. Raises :class:`RobustGaitError` if it falls on the way."""
+    init = gait.initial_state
+    if init is None:
+        raise RobustGaitError("the gait has no initial state to start from")
+    qpos, qvel = init.qpos[None].copy(), init.qvel[None].copy()
+    if len(engine.graph) > 1:
+        b = engine.step(qpos, qvel, gait.stance, domain=0)
+        if b.fell[0]:
+            raise RobustGaitError(f"the gait fell within step 1 ({b.fall_reason[0]}) before its first switching event")
+        qpos, qvel = robot.mirror_state(b.qpos, b.qvel)
+    return qpos, qvel
