@@ -211,12 +211,12 @@ def test_atalante_generated_gait_walks(tmp_path, capsys):
 
 @pytest.mark.slow
 @needs_atalante
-def test_atalante_multicontact_gait_walks_and_is_refused_as_unstable():
+def test_atalante_multicontact_gait_walks_and_is_certified_with_its_falling_probes_below_j_star():
     """Atalante rolls heel-to-toe only with its swing sole free to leave toe-off toe-down
     (gait_quality.swing_toe_down_until = 0.5 in examples/atalante.toml): then the T = 1.0 s gait walks 50 steps,
-    striking at the planned time, at L/T, and 300 steps undisturbed in a band it holds (σ 0.017). Its orbit is
-    marginally unstable (a finite-difference ρ of 1.05 at x*, docs/gaitgen.md): one of the orbit search's eight probing
-    pushes of 4 N s (to the right) and another fell it, and the certificate refuses it as unstable, with that reason."""
+    striking at the planned time, at L/T, and 300 steps undisturbed in a band it holds (σ 0.017). Some of the orbit
+    search's eight probing pushes of 4 N s fell it and the others came back to the band: the falls measure its basin,
+    not the orbit, so it is certified (docs/gaitgen.md), and its orbit line says that J* lies below the probe."""
     robot = load_robot(ATALANTE_SPEC)
     assert robot.spec.gait_quality.swing_toe_down_until == 0.5
     res = GaitGenerator(robot, GenerationConfig(domains="multicontact")).solve(GaitParams(step_duration=1.0))
@@ -227,9 +227,11 @@ def test_atalante_multicontact_gait_walks_and_is_refused_as_unstable():
     assert w.mean_speed == pytest.approx(0.15 / 1.0, rel=0.05)
     cfg = CertifyConfig(method="uniform", disturbance="state", n_samples=24, r_max=1.0, seed=3)
     cert = certify_gait(robot, res.gait, cfg)
-    assert cert.status == "unstable" and "fell within 20 steps" in cert.reason
+    assert cert.status == "ok", cert.reason
     probe = cert.orbit.probe
-    assert probe is not None and sum(probe.fell) >= 1 and probe.impulse < 5.0
+    assert probe is not None and probe.ok and probe.impulse < 5.0
+    assert 1 <= sum(probe.fell) < len(probe.fell) and any(probe.recovered) and not any(probe.diverging)
+    assert "J* lies below it" in cert.orbit.describe()
 
 
 @pytest.mark.slow

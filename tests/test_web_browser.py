@@ -108,10 +108,10 @@ def test_rank_submit_kill_resume_in_chromium(tmp_path):
             serve, url = start("study", "serve", str(d), "--port", "0", "--quiet", "--override", "web.linger=2")
             page.goto(url)
             wait_for_batch(page, 2)
-            # batch 2's second proposal (L 0.22, T 0.8, W 0.28, h 0.08) settles on no orbit of the step or the
-            # stride map: not certified, so not shown — one gait to rank, none to tie with, the other stored unranked
-            assert page.locator("input[data-testid^=tie-]").count() == 0
-            assert page.locator("[data-testid^=up-]").count() == 1
+            # batch 2: both proposals certified (the second, L 0.22, T 0.8, W 0.28, h 0.08, on a period-4 orbit), both
+            # shown; submitted as listed
+            assert page.locator("input[data-testid^=tie-]").count() == 1
+            assert page.locator("[data-testid^=up-]").count() == 2
             page.click("[data-testid=submit]")
             page.wait_for_function("() => document.querySelector('[data-testid=status]').textContent"
                                    ".startsWith('The study is complete')", timeout=600_000)
@@ -125,7 +125,7 @@ def test_rank_submit_kill_resume_in_chromium(tmp_path):
     st = study_status(d)
     assert st["state"] == "complete" and st["trials_done"] == 4
     answers = st["person"]["answers"]
-    assert [a["ranks"] for a in answers] == [[1, 0], [0, None]] and answers[0]["labels"] == ["good", None]
+    assert [a["ranks"] for a in answers] == [[1, 0], [0, 1]] and answers[0]["labels"] == ["good", None]
     assert all(a["by"] == "person" for a in answers)
     if os.environ.get("ROBUSTGAIT_SCREENSHOT"):  # the docs' screenshot: ROBUSTGAIT_SCREENSHOT=docs/person_page.png
         shutil.copy(tmp_path / "page.png", os.environ["ROBUSTGAIT_SCREENSHOT"])
