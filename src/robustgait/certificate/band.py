@@ -12,7 +12,7 @@ band's start is in phase j mod k), a centre c_p (d,) and a per-coordinate scatte
 the undisturbed walk's states of that phase from c_p). A state z is *in the band* of phase p when every coordinate
 lies within its half-width w_p,i = max(ν, κ σ_p,i) of c_p,i: a floor ν, or κ times the orbit's own scatter where
 the undisturbed walk scatters more (an attractor that is a noisy band, not a point). A walk back on its orbit may be
-out of phase with it (:meth:`Band.inside_shifted`).
+out of phase with it (:meth:`Band.distance_shifted`).
 """
 
 from __future__ import annotations
@@ -84,16 +84,11 @@ class Band:
                               * np.where(np.isfinite(z).all(axis=1), 1.0, np.nan))
 
     def distance_shifted(self, z: FloatArray, step: int) -> FloatArray:
-        """The band distance (K, k) of states z (K, d) after ``step`` steps from the phase (step + s) mod k, for every
-        shift s (:meth:`inside_shifted`)."""
+        """The band distance (K, k) of states z (K, d) after ``step`` steps from the band of phase (step + s) mod k,
+        for every shift s = 0 … k − 1 (column 0: in phase, :meth:`distance`). A pushed walk may come back to its orbit
+        one or more steps out of phase — a period-2 orbit whose two steps swapped — which is the same orbit; a run of
+        states within distance 1 under one shift is a return (:func:`advance_runs`)."""
         return np.stack([self.distance(z, step + s) for s in range(self.period)], axis=1)
-
-    def inside_shifted(self, z: FloatArray, step: int) -> NDArray[np.bool_]:
-        """Whether states z (K, d) after ``step`` steps lie in the band of phase (step + s) mod k, for every shift s =
-        0 … k − 1: (K, k). A pushed walk may come back to its orbit one or more steps out of phase — a period-2 orbit
-        whose two steps swapped — which is the same orbit; a run of states in the band under one shift is a return."""
-        with np.errstate(invalid="ignore"):
-            return np.asarray(self.distance_shifted(z, step) <= 1.0)
 
     def inside(self, z: FloatArray, phase: int | NDArray[np.int64]) -> NDArray[np.bool_]:
         """Whether states z (K, d) of phase(s) p lie in the band (a NaN state does not)."""
@@ -104,3 +99,13 @@ class Band:
         """JSON-ready: ν, κ, σ, the period and, per phase, the largest scatter."""
         return {"radius": self.radius, "multiple": self.multiple, "sigma": self.sigma, "period": self.period,
                 "phase_sigma": [float(s.max(initial=0.0)) for s in self.scatter]}
+
+
+def advance_runs(band: Band, run: NDArray[np.int64], z: FloatArray, step: int) -> FloatArray:
+    """One step of the recovery count: ``run`` (K, k), the consecutive steps each walk has been in ``band`` under
+    each phase shift (:meth:`Band.distance_shifted`), is incremented where the states z (K, d) after ``step`` steps
+    are in it and reset elsewhere (a NaN state, a fall, resets), in place; returns their shifted distances (K, k)."""
+    shifted = band.distance_shifted(z, step)
+    with np.errstate(invalid="ignore"):
+        run[:] = np.where(shifted <= 1.0, run + 1, 0)
+    return shifted

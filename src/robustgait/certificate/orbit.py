@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.certificate.band import Band, band_coordinates
+from robustgait.certificate.band import Band, advance_runs, band_coordinates
 from robustgait.certificate.reduced import reduce_state, section_dimension
 from robustgait.config import CertifyConfig
 from robustgait.config.certify import Frame, MapKind, OrbitConfig
@@ -193,8 +193,8 @@ class Linearization:
             text = (f"ρ = {self.rho:.3g} (linearization at x*; a perturbation along its eigenvector: "
                     f"×{self.rate:.3g}/map)")
             if self.rho > 1.0:
-                # A contact walk can settle on a small invariant ring around a repelling x*: the verdict is the
-                # band's (the probe's), so say what ρ > 1 does and does not mean.
+                # A contact walk can settle in a small band around a repelling x*: the verdict is the band's (the
+                # probe's), so say what ρ > 1 does and does not mean.
                 text += "; x* itself repels tiny perturbations, which grow until they reach the band's scale"
             return text
         return f"linearization not defined (contact events): {self.reason}"
@@ -212,8 +212,8 @@ class Probe:
     ``left``: it left the band on the way; ``diverging``: it neither fell nor came back, and its distance from the
     band kept growing (:func:`diverging`). The orbit is stable when no probe diverged and not every probe fell. A
     probe that fell is a push of that size and direction beyond what the gait survives — the size of its basin, which
-    J* measures, not the orbit's instability; a probe that settles near the
-    band without entering it (another orbit of the same gait, a slow mode) is not a divergence either."""
+    J* measures, not the orbit's instability; a probe that settles near the band without entering it (another orbit of
+    the same gait, a slow mode) is not a divergence either."""
 
     impulse: float
     horizon: int
@@ -231,6 +231,14 @@ class Probe:
         return {"impulse": self.impulse, "horizon": self.horizon, "recovered": list(self.recovered),
                 "steps": list(self.steps), "fell": list(self.fell), "left": list(self.left),
                 "diverging": list(self.diverging)}
+
+
+def moving_away(recovered: NDArray[np.int64], fell: NDArray[np.bool_] | NDArray[np.int64], trace: FloatArray,
+                growth: float) -> tuple[bool, ...]:
+    """Per probe: neither came back (``recovered`` 0) nor fell (``fell`` false or 0), and :func:`diverging` on its
+    row of ``trace`` (K, H)."""
+    return tuple(bool(r == 0 and not f and diverging(tr, growth)) for r, f, tr in zip(recovered, fell, trace,
+                                                                                        strict=True))
 
 
 def diverging(trace: FloatArray, growth: float) -> bool:
@@ -559,16 +567,12 @@ def map_orbit(F: Callable[[FloatArray], FloatArray], x0: FloatArray, config: Cer
             break
         states[live] = np.asarray(F(states[live]), dtype=float)
         fallen |= live & ~np.isfinite(states).all(axis=1)
-        d = orbit.band.distance(states, j)
+        shifted = advance_runs(orbit.band, run, np.where(live[:, None], states, np.nan), j)
         with np.errstate(invalid="ignore"):
-            left |= live & (d > 1.0)
-        shifted = orbit.band.distance_shifted(states, j)
+            left |= live & (shifted[:, 0] > 1.0)
         trace[live, j - 1] = shifted[live].min(axis=1)
-        with np.errstate(invalid="ignore"):
-            run = np.where(live[:, None] & (shifted <= 1.0), run + 1, 0)
         back[live & (run.max(axis=1) >= p.recovery_steps)] = j
-    moving = tuple(bool(b == 0 and not f and diverging(tr, o.probe_growth))
-                   for b, f, tr in zip(back, fallen, trace, strict=True))
+    moving = moving_away(back, fallen, trace, o.probe_growth)
     probe = Probe(perturbation, o.probe_horizon, tuple(bool(b) for b in back > 0), tuple(int(b) for b in back),
                   tuple(bool(f) for f in fallen), tuple(bool(x) for x in left), moving)
     orbit = dataclasses.replace(orbit, probe=probe)

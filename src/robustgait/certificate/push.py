@@ -27,7 +27,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.certificate.band import Band, band_coordinates
+from robustgait.certificate.band import Band, advance_runs, band_coordinates
 from robustgait.config import PushConfig, ValidateConfig
 from robustgait.robots import Robot
 from robustgait.rotations import quat_to_mat
@@ -60,8 +60,8 @@ def recovery_stop(band: Band, robot: Robot, steps: int, recovered: NDArray[np.in
                   farthest: FloatArray | None = None, trace: FloatArray | None = None) -> Stop:
     """The stop rule of recovering walks (:func:`robustgait.sim.trials.simulate_trials`): a trial is done once its
     section state has been in ``band`` for ``steps`` consecutive steps, in phase with the orbit or shifted by whole
-    steps (:meth:`.band.Band.inside_shifted`: the state after j steps from x* in the band of phase (j + s) mod k, the
-    same s throughout the run); ``recovered`` (K,) gets the step it was done at (1-based, counted from the pushed
+    steps (:func:`.band.advance_runs`: the state after j steps from x* in the band of phase (j + s) mod k, the same s
+    throughout the run); ``recovered`` (K,) gets the step it was done at (1-based, counted from the pushed
     step), ``farthest`` (K,), if given, the largest in-phase band distance (:meth:`.band.Band.distance`) of its
     states until then, and ``trace`` (K, H), if given, after each step its distance from the band under the nearest
     shift (NaN once it stopped or fell)."""
@@ -70,14 +70,14 @@ def recovery_stop(band: Band, robot: Robot, steps: int, recovered: NDArray[np.in
 
     def stop(k: int, idx: NDArray[np.int64], states: FloatArray) -> NDArray[np.bool_]:
         z = band_coordinates(robot, states[:, :nq], states[:, nq:])
+        runs = run[idx]
+        shifted = advance_runs(band, runs, z, k + 1)
+        run[idx] = runs
         if farthest is not None:
-            farthest[idx] = np.fmax(farthest[idx], band.distance(z, k + 1))
-        shifted = band.distance_shifted(z, k + 1)
+            farthest[idx] = np.fmax(farthest[idx], shifted[:, 0])
         if trace is not None:
             trace[idx, k] = shifted.min(axis=1)
-        with np.errstate(invalid="ignore"):
-            run[idx] = np.where(shifted <= 1.0, run[idx] + 1, 0)
-        done = run[idx].max(axis=1) >= steps
+        done = runs.max(axis=1) >= steps
         recovered[idx[done]] = k + 1
         return np.asarray(done)
     return stop

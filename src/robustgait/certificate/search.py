@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.certificate.linearization import linearize
-from robustgait.certificate.orbit import Orbit, Probe, SettlingWatch, Status, diverging
+from robustgait.certificate.orbit import Orbit, Probe, SettlingWatch, Status, moving_away
 from robustgait.certificate.push import PushMap, push_phase
 from robustgait.certificate.returnmap import FullStateMap
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig
@@ -57,15 +57,13 @@ def probe_stability(engine: StepEngine, orbit: Orbit, config: CertifyConfig, val
     for doubling in range(o.probe_doublings + 1):
         impulse = size * np.column_stack([np.cos(angles), np.sin(angles)])
         _, _, fall_step, recovered = pm.walk(impulse, push_phase(impulse, *validate.push_phase))
-        assert pm.farthest is not None and pm.trace is not None
+        assert pm.farthest is not None
         left = pm.farthest > 1.0
         if left.any() or (fall_step > 0).any() or doubling == o.probe_doublings:
             break
         size *= 2.0
-    trace = pm.trace
-    assert trace is not None
-    moving = tuple(bool(r == 0 and f == 0 and diverging(tr, o.probe_growth))
-                   for r, f, tr in zip(recovered, fall_step, trace, strict=True))
+    assert pm.trace is not None
+    moving = moving_away(recovered, fall_step, pm.trace, o.probe_growth)
     return Probe(size, o.probe_horizon, tuple(bool(r) for r in recovered > 0), tuple(int(r) for r in recovered),
                  tuple(bool(f) for f in fall_step > 0), tuple(bool(x) for x in left), moving), pm.physics_steps
 
