@@ -85,6 +85,22 @@ def t1(tmp_path_factory):  # type: ignore[no-untyped-def]
     return load_robot(spec)
 
 
+@pytest.fixture(scope="session")
+def t1_narrow(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """Booster T1 with narrow soles — four 5 mm contact spheres per foot on a 0.19 × 0.04 m footprint
+    (:func:`tests.robots.narrow_t1_xml`) — and the spec ``robot init`` writes for it (skipped when T1 is absent)."""
+    if not T1_MODEL.is_file():
+        pytest.skip("../shared/robots/booster_t1 (Booster T1) is not beside the repository")
+    from robustgait import load_robot
+    from robustgait.cli import main
+    from tests.robots import narrow_t1_xml
+
+    d = tmp_path_factory.mktemp("t1_narrow")
+    xml = narrow_t1_xml(T1_MODEL, d)
+    assert main(["robot", "init", str(xml), "-o", str(d / "t1.toml")]) == 0
+    return load_robot(d / "t1.toml")
+
+
 def write_frost_yaml(gait, path, *, inputparams=None):  # type: ignore[no-untyped-def]
     """Write a one-domain gait as a FROST/ambersim YAML (``coeff_jt`` in Fortran order, ``step_dur``, the initial
     state as ``ffPos``/``startingPos``/``ffVel``/``startingVel``): a FROST file for any robot, for the importer's

@@ -34,6 +34,7 @@ def _convert(args: argparse.Namespace) -> int:
 def _generate(args: argparse.Namespace) -> int:
     from robustgait.config.gait import reach_problem
     from robustgait.gaitgen import GaitGenerator
+    from robustgait.gaitgen.walkcheck import walk_check
     from robustgait.io.gaitfile import load_gait, save_gait
     from robustgait.io.robotfile import load_robot
 
@@ -58,6 +59,15 @@ def _generate(args: argparse.Namespace) -> int:
         if args.json:
             print(json.dumps(summary, allow_nan=False))
         raise RobustGaitError(f"gait generation failed ({res.status}): {res.reason}")
+    if live and config.generate.walk_steps:
+        print(f"solved; walking it {config.generate.walk_steps} steps in MuJoCo ...", flush=True)
+    walked = walk_check(robot, res.gait, config, res.check)
+    summary["walk_check"] = walked.to_dict()
+    if not walked.passed:
+        summary["output"] = None
+        if args.json:
+            print(json.dumps(summary, allow_nan=False))
+        raise RobustGaitError(f"gait generation failed (Walk_Check_Failed): {walked.text()}")
     save_gait(res.gait, args.output)
     if args.json:
         print(json.dumps(summary, allow_nan=False))
@@ -69,6 +79,8 @@ def _generate(args: argparse.Namespace) -> int:
         print(f"physics check passed: dynamics residual {c.dynamics_residual:.1e} (MuJoCo), periodicity "
               f"{c.periodicity:.1e}, min normal force {c.min_normal_force:.0f} N, friction |f_t|/f_z ≤ "
               f"{c.friction_ratio:.2f}, {c.cop_text()}")
+        if walked.steps:
+            print(f"walk check passed: the gait {walked.text()}")
         print(f"wrote {args.output}")
     return 0
 

@@ -122,6 +122,8 @@ class GenerationConfig:
     max_step_height: Annotated[Float, Doc("highest swing clearance a robot is asked for, in leg lengths (checked "
                                           "before any solve)", gt=0.0, le=1.0)] = 0.3
     max_iter: Annotated[Int, Doc("IPOPT iteration limit", ge=1, le=100_000)] = 300
+    walk_steps: Annotated[Int, Doc("steps the generated gait must walk in MuJoCo under the configured controller "
+                                   "before gait generate calls it good (0: no walk check)", ge=0, le=1000)] = 20
     tol: Annotated[Float, Doc("IPOPT convergence tolerance", gt=0.0, le=1.0)] = 1e-8
 
     def __post_init__(self) -> None:

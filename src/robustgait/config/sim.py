@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import os
+from dataclasses import field
 from typing import Annotated, Literal
 
 from robustgait.config.base import Bool, Doc, Float, Int, config
+from robustgait.config.regulator import RegulatorConfig
 
 Switching = Literal["impact", "time"]
 Controller = Literal["pd", "passivity"]
@@ -35,6 +37,7 @@ class SimConfig:
     n_threads: Annotated[Int, Doc("MuJoCo rollout threads (0: one per core)", ge=0, le=256)] = 0
     max_speed: Annotated[Float, Doc("a joint or base speed above this counts as diverged", unit="rad/s or m/s",
                                     gt=0.0, le=1e4)] = 100.0
+    regulator: RegulatorConfig = field(default_factory=RegulatorConfig)
 
     @property
     def threads(self) -> int:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robustgait.config.regulator import RegulatorConfig, regulator_rule
 from robustgait.inspection.discover import SIDES, Sole
 from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
 from robustgait.inspection.mirror import mass_asymmetry
@@ -330,6 +331,9 @@ def summary(draft: Draft, spec_path: str | Path) -> list[str]:
                + (f", {bounds.count('stability')} lowered for stability" if "stability" in bounds else ""))
     g = draft.scaled.gait
     out.append("default gait: " + ", ".join(f"{k} {v:g}" for k, v in g.items()))
+    width = min(legs[side].sole.width for side in SIDES)
+    out.append(f"balance: {regulator_rule(RegulatorConfig(), width, legs.leg_length, 1)[1]} for flat-foot gaits "
+               "(sim.regulator)")
     out += [f"note: {n}" for n in draft.notes]
     out.append(f"wrote {spec_path}; check it: robustgait robot check {spec_path}")
     return out

@@ -35,6 +35,7 @@ from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.robots.model import CONTACT_SENSORS
 from robustgait.sim.controller import step_controls
+from robustgait.sim.regulator import regulator_for
 
 FALL_REASONS = ("base_low", "tilt", "non_foot_contact", "diverged", "no_touchdown")
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
@@ -184,6 +185,10 @@ class StepEngine:
         self._sens = {s: adr[CONTACT_SENSORS[i]] for i, s in enumerate(("left", "right"))}
         self._sens_floor = adr[CONTACT_SENSORS[2]]
         self._cos_max_tilt = math.cos(robot.spec.fall.max_tilt)
+        self.regulator = regulator_for(robot, self.gaits, self.config.regulator, self.config.chunk_steps,
+                                       self.horizons[0])
+        if self.regulator is not None:
+            self.controller_name = f"{self.controller_name}+{self.regulator.name}"
 
     @property
     def physics_model(self) -> mujoco.MjModel:
@@ -299,19 +304,21 @@ class StepEngine:
         return replace(inputs, ctrl_offset=off, sensor_noise=None)
 
     def _rollout(self, active: NDArray[np.int64], current: NDArray[np.float64], ctrl: NDArray[np.float64],
-                 k0: int, n: int, inputs: StepInputs | None
+                 k0: int, n: int, inputs: StepInputs | None, reg: NDArray[np.float64] | None = None
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """One chunk of n physics steps from step k0 for the samples ``active`` (see :class:`StepInputs`): states
-        and sensors (A, n, ·), and the controls applied ((A or 1, n, nu): one series shared by all, or per sample)."""
+        and sensors (A, n, ·), and the controls applied ((A or 1, n, nu): one series shared by all, or per sample).
+        ``reg`` (A, n, nu): the step regulator's control offsets, if it runs."""
         assert self._pool is not None
+        c = ctrl[None, k0:k0 + n]
+        if reg is not None:
+            c = c + reg
         if inputs is None:
-            c = ctrl[None, k0:k0 + n]
             return (*self._pool.rollout(self.robot.model, self._datas, current[active], c, nstep=n), c)
         m = self.robot.model
-        c = ctrl[None, k0:k0 + n]
         off = inputs.ctrl_offset
         if off is not None and k0 < off.shape[1]:
-            c = np.repeat(c, active.size, axis=0)
+            c = np.repeat(c, active.size, axis=0) if c.shape[0] == 1 else c.copy()
             w = min(n, off.shape[1] - k0)
             c[:, :w] += off[active, k0:k0 + w]
         applied = c
@@ -374,10 +381,14 @@ class StepEngine:
         k0 = 0
         if progress is not None and bad.any():
             progress(int(bad.sum()))
+        regulator = self.regulator if domain == 0 else None
+        if regulator is not None:
+            regulator.begin(stance, current)
         while active.size and k0 < horizon:
             n = min(self.config.chunk_steps, horizon - k0)
+            reg = regulator.offsets(active, current[active], k0, n) if regulator is not None else None
             with quiet_mujoco():
-                st, sens, applied = self._rollout(active, current, ctrl, k0, n, inputs)
+                st, sens, applied = self._rollout(active, current, ctrl, k0, n, inputs, reg)
             physics += active.size * n
             first, first_code = self._scan(st, sens, k0, stance, domain)
             done = first >= 0

@@ -243,6 +243,9 @@ class FeedbackEngine(StepEngine):
             raise RobustGaitError("the feedback engine needs MuJoCo ≥ 4.0 (mujoco.batch)") from None
         self._mjbatch = mjbatch
         super().__init__(robot, gait, config)
+        if self.regulator is not None:
+            raise RobustGaitError(f"the H-LIP step regulator runs with the pd controller, not the feedback engine's "
+                                  f"laws ({self.regulator.reason}): use sim.controller pd, or sim.regulator.mode off")
         self.controller = controller if controller is not None else PDController(
             feedforward=self.config.feedforward)
         self.controller_name = self.controller.name
@@ -393,9 +396,10 @@ class FeedbackEngine(StepEngine):
         return self._model
 
     def _rollout(self, active: NDArray[np.int64], current: NDArray[np.float64], ctrl: NDArray[np.float64],
-                 k0: int, n: int, inputs: StepInputs | None
+                 k0: int, n: int, inputs: StepInputs | None, reg: NDArray[np.float64] | None = None
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """n physics steps of the closed loop from step k0 for the samples ``active`` (module docstring).
+        """n physics steps of the closed loop from step k0 for the samples ``active`` (module docstring); ``reg`` is
+        always None (this engine refuses the step regulator).
 
         The controller's NumPy runs with one BLAS thread: its products are small, and a multi-threaded BLAS
         competing with the batch's threads (or another process) for the cores was measured 5× slower."""

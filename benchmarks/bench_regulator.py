@@ -1,0 +1,124 @@
+"""Step-to-step balance on a narrow-footed humanoid (``docs/simulation.md``, "Step-to-step balance";
+``docs/your-robot.md``, "When your robot's feet are narrow").
+
+``build DIR``: Booster T1 from ../shared with each sole replaced by four 5 mm contact spheres on a 0.19 × 0.04 m
+footprint (``tests/robots.py``), and the spec ``robot init`` writes for it (``DIR/t1.toml``).
+
+``default DIR``: as a user would, with the CLI: the default gait generated with the shipped defaults (the H-LIP
+regulator on by the narrow-sole rule), walked ``--steps`` steps undisturbed, certified with the defaults; and the same
+gait generated with ``sim.regulator.mode=off``: does the walk check refuse it, with which reason? Prints one JSON.
+
+``exo``: the shipped exo's stored gait certified with the regulator off and forced on, ``--seeds`` perturbation
+seeds each: J* on against J* off and its spread over seeds. Prints one JSON.
+
+The grid (≥ 10 gaits: walks 300 steps? certified? falls within 20 steps among pushes below J*):
+``bench_recovery.py run --robot DIR/t1.toml --grid 12 --out benchmarks/data/regulator/t1_narrow.jsonl``, then
+``bench_recovery.py report`` on it.
+
+    python benchmarks/bench_regulator.py build /tmp/t1_narrow
+    python benchmarks/bench_regulator.py default /tmp/t1_narrow > benchmarks/data/regulator/default.json
+    python benchmarks/bench_regulator.py exo > benchmarks/data/regulator/exo.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from datetime import date
+from pathlib import Path
+from typing import Any
+
+REPO = Path(__file__).resolve().parents[1]
+T1 = REPO.parent / "shared" / "robots" / "booster_t1" / "t1.xml"
+EXO_GAIT = REPO / "tests" / "data" / "exo_gait.json"
+
+
+def _cli(*args: str) -> tuple[int, str, float]:
+    """Run ``robustgait ARGS``: (exit code, stdout + stderr, seconds)."""
+    t0 = time.perf_counter()
+    p = subprocess.run([sys.executable, "-c", "import sys; from robustgait.cli import main; sys.exit(main())",
+                        *args], capture_output=True, text=True, cwd=REPO)
+    return p.returncode, p.stdout + p.stderr, time.perf_counter() - t0
+
+
+def _stamp() -> dict[str, str]:
+    commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    return {"commit": commit, "date": str(date.today())}
+
+
+def build(out: Path) -> None:
+    sys.path.insert(0, str(REPO))
+    from tests.robots import narrow_t1_xml
+
+    if not T1.is_file():
+        raise SystemExit(f"{T1} is absent: the benchmark needs ../shared/robots/booster_t1")
+    xml = narrow_t1_xml(T1, out)
+    code, text, _ = _cli("robot", "init", str(xml), "-o", str(out / "t1.toml"))
+    print(text, end="")
+    if code:
+        raise SystemExit(code)
+
+
+def default(d: Path, steps: int) -> dict[str, Any]:
+    robot = str(d / "t1.toml")
+    row: dict[str, Any] = {**_stamp(), "robot": robot}
+    code, text, sec = _cli("gait", "generate", "--robot", robot, "-o", str(d / "gait.json"))
+    row["generate"] = {"exit": code, "seconds": round(sec, 1), "walk_check": _line(text, "walk check")}
+    code, text, sec = _cli("walk", "--robot", robot, str(d / "gait.json"), "--steps", str(steps), "--json")
+    w = json.loads(text.strip().splitlines()[-1]) if code == 0 else {}
+    row["walk"] = {"exit": code, "seconds": round(sec, 1), "steps_taken": w.get("steps_taken"),
+                   "fell": w.get("fell"), "controller": w.get("controller")}
+    code, text, sec = _cli("certify", "--robot", robot, str(d / "gait.json"), "--json")
+    c = json.loads(text.strip().splitlines()[-1]) if code == 0 else {}
+    row["certify"] = {"exit": code, "seconds": round(sec, 1), "status": c.get("status"), "j_star": c.get("r_star"),
+                      "error": None if code == 0 else text.strip().splitlines()[-1]}
+    code, text, sec = _cli("gait", "generate", "--robot", robot, "-o", str(d / "gait_off.json"), "--override",
+                           "sim.regulator.mode=off")
+    row["generate_off"] = {"exit": code, "seconds": round(sec, 1), "message": text.strip().splitlines()[-1],
+                           "file_written": (d / "gait_off.json").exists()}
+    return row
+
+
+def _line(text: str, start: str) -> str | None:
+    return next((ln for ln in text.splitlines() if ln.startswith(start)), None)
+
+
+def exo(seeds: int) -> dict[str, Any]:
+    row: dict[str, Any] = {**_stamp(), "gait": str(EXO_GAIT.relative_to(REPO))}
+    for mode in ("off", "on"):
+        runs = []
+        for seed in range(seeds):
+            code, text, sec = _cli("certify", "--robot", "exo", str(EXO_GAIT), "--json", "--override",
+                                   f"sim.regulator.mode={mode}", "--override", f"certify.seed={seed}")
+            c = json.loads(text.strip().splitlines()[-1]) if code == 0 else {}
+            runs.append({"seed": seed, "exit": code, "status": c.get("status"), "j_star": c.get("r_star"),
+                         "seconds": round(sec, 1)})
+        row[mode] = runs
+    return row
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    b = sub.add_parser("build")
+    b.add_argument("dir", type=Path)
+    d = sub.add_parser("default")
+    d.add_argument("dir", type=Path)
+    d.add_argument("--steps", type=int, default=300)
+    e = sub.add_parser("exo")
+    e.add_argument("--seeds", type=int, default=3)
+    args = ap.parse_args()
+    if args.cmd == "build":
+        build(args.dir)
+    elif args.cmd == "default":
+        print(json.dumps(default(args.dir, args.steps)))
+    else:
+        print(json.dumps(exo(args.seeds)))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,59 @@
+"""Options of the step-to-step balance regulator (:mod:`robustgait.sim.regulator`, ``docs/simulation.md``, "Step-to-step
+balance"): when it runs, its gain, and how far it may move a foot."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from robustgait.config.base import Doc, Float, config
+
+RegulatorMode = Literal["auto", "on", "off"]
+RegulatorGain = Literal["deadbeat", "lqr"]
+
+
+@config
+class RegulatorConfig:
+    """The H-LIP foot-placement regulator on top of a flat-foot gait's tracking controller. ``auto``: on when the sole
+    is narrow for the robot (sole width / leg length < ``narrow_ratio``, :func:`regulator_rule`)."""
+
+    mode: Annotated[RegulatorMode, Doc(
+        "H-LIP step regulator: auto (on when sole width / leg length < narrow_ratio, flat-foot gaits), on, or off")
+    ] = "auto"
+    narrow_ratio: Annotated[Float, Doc("auto mode: the regulator is on below this sole width / leg length", ge=0.0,
+                                       le=1.0)] = 0.10
+    gain: Annotated[RegulatorGain, Doc(
+        "stepping gain: deadbeat (the S2S error dies in two steps) or lqr (dimensionless LQR weights)")] = "deadbeat"
+    gain_scale: Annotated[Float, Doc(
+        "fraction of the H-LIP gain applied: the H-LIP is a point-foot model, and a joint-tracked stance ankle holds "
+        "part of the CoM error it lets grow (1: the H-LIP's own gain, for a point or line foot)", gt=0.0,
+        le=1.0)] = 0.1
+    land_tau: Annotated[Float, Doc("phase by which the swing foot's correction is fully applied", gt=0.0,
+                                   le=1.0)] = 0.8
+    freeze_tau: Annotated[Float, Doc("phase after which the correction is no longer updated (≤ land_tau)", ge=0.0,
+                                     le=1.0)] = 0.7
+    carry_tau: Annotated[Float, Doc(
+        "phase by which the joint error at the step start (the previous step's landing correction) is blended out "
+        "of the references (0: not blended)", ge=0.0, le=1.0)] = 0.4
+    max_step_change: Annotated[Float, Doc("largest change of the landing point per axis, as a fraction of the leg "
+                                          "length", gt=0.0, le=1.0)] = 0.2
+    foot_gap: Annotated[Float, Doc("least lateral gap between the soles' edges a correction leaves, as a fraction "
+                                   "of the leg length", ge=0.0, le=1.0)] = 0.02
+
+
+def regulator_rule(config: RegulatorConfig, sole_width: float, leg_length: float, domains: int
+                   ) -> tuple[bool, str]:
+    """Whether the regulator runs for a robot whose sole is ``sole_width`` [m] wide and whose leg is ``leg_length``
+    [m] long, on a gait of ``domains`` domains, and why (one line). ``auto``: on iff the gait is flat-foot (one
+    domain) and sole_width / leg_length < ``narrow_ratio``; ``on`` is refused for multi-contact gaits (their
+    rolling double support has no H-LIP step)."""
+    ratio = sole_width / leg_length
+    what = f"sole {sole_width:.3f} m / leg {leg_length:.3f} m = {ratio:.3f}"
+    if domains != 1:
+        if config.mode == "on":
+            raise ValueError("sim.regulator.mode = on is for flat-foot gaits; this gait is multi-contact")
+        return False, "multi-contact gait: H-LIP step regulator off"
+    if config.mode != "auto":
+        return config.mode == "on", f"H-LIP step regulator {config.mode} (sim.regulator.mode; {what})"
+    if ratio < config.narrow_ratio:
+        return True, f"{what} < {config.narrow_ratio:g}: narrow soles, H-LIP step regulator on"
+    return False, f"{what} ≥ {config.narrow_ratio:g}: H-LIP step regulator off"

@@ -1,0 +1,295 @@
+"""Step-to-step balance for an HZD gait (``docs/simulation.md``, "Step-to-step balance"): the H-LIP foot-placement
+regulator (:mod:`robustgait.sim.hlip`) on top of the joint tracking controller.
+
+A joint-space tracking controller on an HZD gait has no balance feedback: a sole too narrow to hold the base
+through the ankle tips, and nothing brings the walk back. The regulator closes that loop where a walking robot
+does, at the next foothold:
+
+1. At every chunk boundary of a step (each ``sim.chunk_steps`` physics steps, before τ = ``freeze_tau``) it
+   measures each sample's CoM state x = [p, v] per horizontal axis, relative to the stance sole's centre in the
+   sole's heading frame, and compares it with the gait's own x*(τ) at the same phase — computed by kinematics from
+   the gait's outputs with the stance sole flat, so the comparison carries no model bias.
+2. It predicts the error at the nominal pre-impact instant with the H-LIP flow and sets the landing change
+   Δu = K e^{A_S (T_S − t)} (x − x*) (:func:`~robustgait.sim.hlip.step_correction`), clipped per axis to
+   ``max_step_change`` leg lengths and, inward, to keep ``foot_gap`` between the soles.
+3. The landing change becomes a swing-leg joint offset g = G Δu, G the least-squares inverse of the swing sole's
+   5 × n Jacobian (horizontal position and orientation, stance sole frame, base fixed) at the gait's pre-impact
+   posture with the orientation rows held at zero — the foot still lands flat. The offset is blended
+   in with a quintic in phase, reaching its target at ``land_tau``; it is continuous across updates.
+4. At the step start the joints differ from the references by e0 (the previous landing correction, now in the
+   stance leg, and any tracking error); e0 is blended out of the references by ``carry_tau`` instead of being a
+   step in the servos' error (Morris & Grizzle, IEEE TAC 54(8), 2009: hybrid-invariant deformation of the outputs).
+
+The servos then track y_d + o with controls c = y_d + o + (kd (ẏ_d + ȯ) + u_ff) / kp; each sample gets its own
+control series per chunk, so ``mujoco.rollout`` still runs the step with no Python call per physics step. The
+correction is a function of the state at the step start and at boundaries fixed relative to it: the closed-loop
+step map stays a function of the section state, as the certificate assumes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from robustgait.config.regulator import RegulatorConfig, regulator_rule
+from robustgait.gait import Gait
+from robustgait.robots import Robot
+from robustgait.sim import hlip
+from robustgait.sim.controller import desired_outputs
+
+Array = NDArray[np.float64]
+
+
+def quintic_blend(s: Array) -> tuple[Array, Array]:
+    """S(s) = 10 s³ − 15 s⁴ + 6 s⁵ and S′(s) on s clipped to [0, 1] (…): rises from 0 to 1 with zero slope and
+    curvature at both ends."""
+    s = np.clip(s, 0.0, 1.0)
+    return s**3 * (10.0 - 15.0 * s + 6.0 * s**2), 30.0 * s**2 * (1.0 - s) ** 2
+
+
+def sole_frame(data: mujoco.MjData, geom: int) -> tuple[Array, Array]:
+    """Centre (3,) and heading rotation R_z(ψ)ᵀ (2, 2) of a sole geom: world horizontal vectors into the sole's
+    heading frame (x forward along the sole, y to its left), ψ the yaw of the sole's x axis."""
+    r = data.geom_xmat[geom]
+    psi = math.atan2(r[3], r[0])
+    c, s = math.cos(psi), math.sin(psi)
+    return data.geom_xpos[geom].copy(), np.array([[c, s], [-s, c]])
+
+
+def com_state(robot: Robot, data: mujoco.MjData, states: Array, stance: str) -> Array:
+    """x = [p, v] per axis (K, 2, 2) — axis 0 forward, 1 lateral — of the CoM relative to the stance sole's centre
+    in its heading frame [m, m/s], from full-physics states (K, nstate)."""
+    m = robot.model
+    nq, nv = m.nq, m.nv
+    geom = robot.sole_geom_id[stance]
+    out = np.empty((states.shape[0], 2, 2))
+    for i, st in enumerate(states):
+        data.qpos[:] = st[1:1 + nq]
+        data.qvel[:] = st[1 + nq:1 + nq + nv]
+        mujoco.mj_kinematics(m, data)
+        mujoco.mj_comPos(m, data)
+        mujoco.mj_comVel(m, data)
+        mujoco.mj_subtreeVel(m, data)
+        centre, rot = sole_frame(data, geom)
+        out[i, :, 0] = rot @ (data.subtree_com[0, :2] - centre[:2])
+        out[i, :, 1] = rot @ data.subtree_linvel[0, :2]
+    return out
+
+
+def _posture(robot: Robot, gait: Gait, tau: Array) -> Array:
+    """qpos (K, nq) with the base at the origin, the planned joints at y_d(τ) and the held ones at their angles."""
+    q = np.zeros((tau.size, robot.model.nq))
+    q[:, 3] = 1.0
+    q[:, robot.qpos_idx] = desired_outputs(gait, tau)[0]
+    q[:, robot.held_qpos_idx] = robot.held_angle
+    return q
+
+
+def nominal_com(robot: Robot, gait: Gait, tau: Array, dtau: float = 1e-4) -> tuple[Array, float]:
+    """The gait's own CoM state x*(τ) (K, 2, 2) at phases τ (K,), and its mean CoM height over the stance sole [m].
+
+    By kinematics from the outputs y_d(τ) with the stance sole flat on the floor (what the HZD gait was solved
+    for): p* is the CoM relative to the sole's centre in the sole frame — the same for any base pose — and
+    v* = dp*/dτ / T by central differences in τ."""
+    data = mujoco.MjData(robot.model)
+    geom = robot.sole_geom_id[gait.stance]
+
+    def rel(t: Array) -> Array:
+        out = np.empty((t.size, 3))
+        for i, q in enumerate(_posture(robot, gait, t)):
+            data.qpos[:] = q
+            mujoco.mj_kinematics(robot.model, data)
+            mujoco.mj_comPos(robot.model, data)
+            r = data.geom_xmat[geom].reshape(3, 3)
+            out[i] = r.T @ (data.subtree_com[0] - data.geom_xpos[geom])
+        return out
+
+    p = rel(tau)
+    lo, hi = np.maximum(tau - dtau, 0.0), tau + dtau   # one-sided at τ = 0 (the outputs start there)
+    dp = (rel(hi) - rel(lo)) / ((hi - lo) * gait.domains[0].duration)[:, None]
+    x = np.stack([p[:, :2], dp[:, :2]], axis=-1)
+    return x, float(np.mean(p[:, 2]))
+
+
+def swing_dofs(robot: Robot, side: str) -> NDArray[np.int64]:
+    """Indices into the planned joints (m) of the swing leg's: the planned joints on the chain from the base to
+    ``side``'s sole."""
+    m = robot.model
+    body = int(m.geom_bodyid[robot.sole_geom_id[side]])
+    chain: set[int] = set()
+    while body > 0:
+        chain.update(range(int(m.body_dofadr[body]), int(m.body_dofadr[body] + m.body_dofnum[body])))
+        body = int(m.body_parentid[body])
+    return np.array([j for j, d in enumerate(robot.dof_idx) if int(d) in chain], dtype=np.int64)
+
+
+def landing_map(robot: Robot, gait: Gait) -> tuple[Array, Array]:
+    """G (m, 2): the planned-joint offset that moves the swing sole by (Δx, Δy) [m] in the stance sole's frame at
+    the gait's pre-impact posture (τ = 1), keeping its orientation (minimum-norm solution on the 5 × n Jacobian of
+    the swing sole's horizontal position and orientation, base fixed: near a straight landing leg, holding the
+    height too would take large knee motions for a millimetre of height); and the swing sole's position relative to
+    the stance sole there (2,) [m]."""
+    m = robot.model
+    data = mujoco.MjData(m)
+    data.qpos[:] = _posture(robot, gait, np.array([1.0]))[0]
+    mujoco.mj_kinematics(m, data)
+    mujoco.mj_comPos(m, data)
+    stance = gait.stance
+    swing = "left" if stance == "right" else "right"
+    rot = data.geom_xmat[robot.sole_geom_id[stance]].reshape(3, 3).T
+    jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+    mujoco.mj_jacGeom(m, data, jacp, jacr, robot.sole_geom_id[swing])
+    dofs = swing_dofs(robot, swing)
+    cols = robot.dof_idx[dofs]
+    jac = np.vstack([(rot @ jacp[:, cols])[:2], rot @ jacr[:, cols]])  # (5, n)
+    g = np.zeros((robot.n_joints, 2))
+    g[dofs] = np.linalg.pinv(jac)[:, :2]
+    rel = rot @ (data.geom_xpos[robot.sole_geom_id[swing]] - data.geom_xpos[robot.sole_geom_id[stance]])
+    return g, rel[:2]
+
+
+@dataclass
+class _Stance:
+    """What the regulator knows of one stance: x* at the chunk boundaries (B, 2, 2), the landing map G (m, 2), and
+    the lateral landing change inward that keeps the soles apart [m] with its sign (+1: inward is +y)."""
+
+    nominal: Array
+    landing: Array
+    inward_room: float
+    inward_sign: float
+
+
+class StepRegulator:
+    """The H-LIP foot-placement regulator of one gait on one robot (module docstring), for an engine that rolls
+    a domain out in chunks of ``chunk`` physics steps. Call :meth:`begin` at each step start with its K start
+    states, then :meth:`offsets` at each chunk boundary."""
+
+    name = "hlip"
+
+    def __init__(self, robot: Robot, gaits: dict[str, Gait], config: RegulatorConfig, chunk: int, horizon: int,
+                 reason: str = ""):
+        self.robot = robot
+        self.config = config
+        self.reason = reason
+        self._gaits = gaits
+        self.chunk = chunk
+        gait = next(iter(gaits.values()))
+        self.period = gait.domains[0].duration
+        self.steps_per_period = self.period / robot.dt
+        bounds = np.arange(0, horizon, chunk)
+        self.stances: dict[str, _Stance] = {}
+        heights = []
+        leg = robot.leg_length
+        half_width = robot.scale.sole_half_width
+        for stance, g in gaits.items():
+            nominal, z0 = nominal_com(robot, g, bounds / self.steps_per_period)
+            heights.append(z0)
+            landing, rel = landing_map(robot, g)
+            room = max(abs(float(rel[1])) - 2.0 * half_width - config.foot_gap * leg, 0.0)
+            self.stances[stance] = _Stance(nominal, landing, room, -math.copysign(1.0, float(rel[1])))
+        self.z0 = float(np.mean(heights))
+        self.lam = hlip.pendulum_rate(self.z0, float(np.linalg.norm(robot.model.opt.gravity)))
+        a, b = hlip.s2s_matrices(self.lam, self.period, 0.0)
+        self.hlip_gain = (hlip.deadbeat_gain(self.lam, self.period, 0.0) if config.gain == "deadbeat"
+                          else hlip.lqr_gain(a, b, self.z0, self.lam))
+        self.rho = hlip.closed_loop_radius(a, b, self.hlip_gain)
+        self.gain = config.gain_scale * self.hlip_gain
+        self.max_change = config.max_step_change * leg
+        self._data = mujoco.MjData(robot.model)
+        self._kp = robot.kp
+        self._ratio = robot.kd / robot.kp
+        self._stance = ""
+        self._o0 = np.zeros((0, robot.n_joints))   # offset at the start of the current blend segment
+        self._goal = np.zeros((0, robot.n_joints))
+        self._s0 = np.zeros(0)                     # S at the start of the segment
+        self._e0 = np.zeros((0, robot.n_joints))   # joint error at the step start (carried out)
+        self.updates = 0
+        self.clipped = 0
+        self.largest = 0.0
+
+    def summary(self) -> dict[str, float | int | str]:
+        """What the regulator did so far: corrections computed, how many were clipped, the largest |Δu| [m], and its
+        model (z0 [m], λ [1/s], T_S [s], the gain applied, the spectral radius of the H-LIP closed loop with the
+        H-LIP's own gain)."""
+        return {"regulator": self.name, "updates": self.updates, "clipped": self.clipped,
+                "largest_step_change": round(self.largest, 4), "z0": round(self.z0, 4), "lambda": round(self.lam, 3),
+                "t_ssp": self.period, "gain": f"[{self.gain[0]:.3f}, {self.gain[1]:.3f}]",
+                "hlip_rho": round(self.rho, 3)}
+
+    def begin(self, stance: str, states: Array) -> None:
+        """Start a step of ``stance`` for K samples from their full-physics start states (K, nstate)."""
+        kk = states.shape[0]
+        m = self.robot.n_joints
+        self._stance = stance
+        self._o0 = np.zeros((kk, m))
+        self._goal = np.zeros((kk, m))
+        self._s0 = np.zeros(kk)
+        q = states[:, 1:1 + self.robot.model.nq][:, self.robot.qpos_idx]
+        y0 = desired_outputs(self._gaits[stance], np.zeros(1))[0][0]
+        self._e0 = np.nan_to_num(q - y0) if self.config.carry_tau > 0 else np.zeros((kk, m))
+
+    def _blend(self, tau: Array) -> tuple[Array, Array]:
+        """S and dS/dτ of the landing blend at phases τ (…)."""
+        s, ds = quintic_blend(tau / self.config.land_tau)
+        return s, ds / self.config.land_tau
+
+    def offsets(self, active: NDArray[np.int64], states: Array, k0: int, n: int) -> Array:
+        """Servo control offsets (A, n, nu) for physics steps k0..k0+n−1 of the samples ``active`` from their states
+        (A, nstate) at step k0: the landing correction, updated from these states before ``freeze_tau``, and the
+        step-start carry, each with its rate through kd/kp."""
+        cfg = self.config
+        st = self.stances[self._stance]
+        tau_b = k0 / self.steps_per_period
+        tau = (k0 + np.arange(n)) / self.steps_per_period
+        s_tau, ds_tau = self._blend(tau)
+        s_b = float(self._blend(np.array([tau_b]))[0][0])
+        o0, goal, s0 = self._o0[active], self._goal[active], self._s0[active]
+        if tau_b < min(cfg.freeze_tau, cfg.land_tau) and states.shape[0]:
+            # the offset reached at this boundary, then a new segment from it towards the new goal
+            w = (s_b - s0) / np.maximum(1.0 - s0, 1e-12)
+            o_b = o0 + w[:, None] * (goal - o0)
+            error = com_state(self.robot, self._data, states, self._stance) - st.nominal[k0 // self.chunk]
+            du = hlip.step_correction(self.gain, self.lam, error, self.period - k0 * self.robot.dt)
+            lim = np.array([self.max_change, self.max_change])
+            clipped = np.abs(du) > lim
+            du = np.clip(du, -lim, lim)
+            inward = du[:, 1] * st.inward_sign
+            clipped[:, 1] |= inward > st.inward_room
+            du[:, 1] = np.where(inward > st.inward_room, st.inward_sign * st.inward_room, du[:, 1])
+            self.updates += du.shape[0]
+            self.clipped += int(clipped.any(axis=1).sum())
+            self.largest = max(self.largest, float(np.abs(du).max(initial=0.0)))
+            goal = du @ st.landing.T
+            o0, s0 = o_b, np.full(active.size, s_b)
+            self._o0[active], self._goal[active], self._s0[active] = o0, goal, s0
+        frac = (s_tau[None, :] - s0[:, None]) / np.maximum(1.0 - s0[:, None], 1e-12)       # (A, n)
+        dfrac = ds_tau[None, :] / np.maximum(1.0 - s0[:, None], 1e-12)
+        diff = (goal - o0)[:, None, :]
+        off = o0[:, None, :] + frac[..., None] * diff                                       # (A, n, m)
+        rate = dfrac[..., None] * diff / self.period
+        if cfg.carry_tau > 0:
+            c, dc = quintic_blend(tau / cfg.carry_tau)
+            e0 = self._e0[active][:, None, :]
+            off = off + (1.0 - c)[None, :, None] * e0
+            rate = rate - (dc / (cfg.carry_tau * self.period))[None, :, None] * e0
+        servo = off + self._ratio * rate
+        nu = self.robot.model.nu
+        if servo.shape[2] == nu:
+            return servo
+        out = np.zeros((servo.shape[0], n, nu))
+        out[:, :, :servo.shape[2]] = servo
+        return out
+
+
+def regulator_for(robot: Robot, gaits: dict[str, Gait], config: RegulatorConfig, chunk: int, horizon: int
+                  ) -> StepRegulator | None:
+    """The regulator a gait's engine runs (:func:`~robustgait.config.regulator.regulator_rule`), or None."""
+    gait = next(iter(gaits.values()))
+    on, reason = regulator_rule(config, 2.0 * robot.scale.sole_half_width, robot.leg_length, len(gait.domains))
+    if not on:
+        return None
+    return StepRegulator(robot, gaits, config, chunk, horizon, reason)
