@@ -94,11 +94,14 @@ def predicted_preimpact(lam: float, x: NDArray[np.float64], t_left: NDArray[np.f
     """x̂⁻ = e^{A_S t_left} x (…, 2): the pre-impact state the SSP flow reaches from x (…, 2) in the t_left (…) [s]
     left of the step (t_left ≤ 0 is taken as 0: the state itself)."""
     flow = ssp_flow(lam, np.maximum(t_left, 0.0))
-    return np.einsum("...ij,...j->...i", flow, x)
+    # elementwise, not a BLAS product: a batch's rows are then bit for bit the rows computed one by one
+    return np.stack([flow[..., 0, 0] * x[..., 0] + flow[..., 0, 1] * x[..., 1],
+                     flow[..., 1, 0] * x[..., 0] + flow[..., 1, 1] * x[..., 1]], axis=-1)
 
 
 def step_correction(k: NDArray[np.float64], lam: float, error: NDArray[np.float64],
                     t_left: NDArray[np.float64] | float) -> NDArray[np.float64]:
     """Δu = K e^{A_S t_left} (x − x*) (…,) [m]: the change of the next step from the CoM state error x − x* (…, 2)
     measured t_left (…) [s] before the nominal pre-impact instant, x* the orbit's state at the same instant."""
-    return np.asarray(predicted_preimpact(lam, error, t_left) @ k)
+    x = predicted_preimpact(lam, error, t_left)
+    return np.asarray(k[0] * x[..., 0] + k[1] * x[..., 1])

@@ -263,7 +263,7 @@ class StepRegulator:
             self.updates += du.shape[0]
             self.clipped += int(clipped.any(axis=1).sum())
             self.largest = max(self.largest, float(np.abs(du).max(initial=0.0)))
-            goal = du @ st.landing.T
+            goal = du[:, :1] * st.landing[:, 0] + du[:, 1:] * st.landing[:, 1]  # G Δu, elementwise (exact per row)
             o0, s0 = o_b, np.full(active.size, s_b)
             self._o0[active], self._goal[active], self._s0[active] = o0, goal, s0
         frac = (s_tau[None, :] - s0[:, None]) / np.maximum(1.0 - s0[:, None], 1e-12)       # (A, n)

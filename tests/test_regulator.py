@@ -1,0 +1,172 @@
+"""The H-LIP step regulator (robustgait.sim.regulator) and the walk check of gait generate (robustgait.gaitgen.
+walkcheck): when it runs, what it measures and commands, that it leaves the other robots bit for bit, and that a
+narrow-footed humanoid walks with it and is refused without it."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import mujoco
+import numpy as np
+import pytest
+
+from robustgait.cli import main
+from robustgait.config import Config, SimConfig
+from robustgait.config.regulator import RegulatorConfig, regulator_rule
+from robustgait.errors import RobustGaitError
+from robustgait.sim.engine import StepEngine
+from robustgait.sim.factory import make_engine
+from robustgait.sim.regulator import com_state, landing_map, nominal_com, swing_dofs
+from robustgait.sim.walk import walk
+
+ON = SimConfig(regulator=RegulatorConfig(mode="on"))
+
+
+def _start(robot, gait):  # type: ignore[no-untyped-def]
+    s = gait.initial_state
+    if s.qpos.size != robot.model.nq:
+        return robot.expand_state(s.qpos, s.qvel)
+    return s.qpos, s.qvel
+
+
+def test_the_rule_turns_the_regulator_on_for_narrow_soles_only() -> None:
+    cfg = RegulatorConfig()
+    assert regulator_rule(cfg, 0.12, 0.921, 1)[0] is False          # exo: 0.130
+    assert regulator_rule(cfg, 0.10, 0.553, 1)[0] is False          # T1: 0.181
+    on, why = regulator_rule(cfg, 0.03, 0.567, 1)                   # narrow T1: 0.053
+    assert on and "0.053 < 0.1: narrow soles" in why
+    assert regulator_rule(replace(cfg, mode="on"), 0.12, 0.921, 1)[0] is True
+    assert regulator_rule(replace(cfg, mode="off"), 0.03, 0.567, 1)[0] is False
+    assert regulator_rule(cfg, 0.03, 0.567, 2) == (False, "multi-contact gait: H-LIP step regulator off")
+    with pytest.raises(ValueError, match="flat-foot gaits"):
+        regulator_rule(replace(cfg, mode="on"), 0.03, 0.567, 2)
+
+
+def test_robots_with_wide_soles_run_without_it_bit_for_bit(exo, exo_gait, exo_mc_gait, t1):  # type: ignore[no-untyped-def]
+    """auto leaves exo and T1 alone: no regulator object, the engine's code path is the one without it, and a walk
+    with mode = off is the same walk to the last bit."""
+    for gait in (exo_gait, exo_mc_gait):
+        assert make_engine(exo, gait).regulator is None
+    from tests.conftest import standing_gait
+
+    held = tuple((h.name, h.angle) for h in t1.spec.held)
+    assert make_engine(t1, replace(standing_gait(t1), held=held)).regulator is None
+    off = SimConfig(regulator=RegulatorConfig(mode="off"))
+    a = walk(exo, exo_gait, steps=3, keep_trajectory=True)
+    b = walk(exo, exo_gait, off, steps=3, keep_trajectory=True)
+    assert a.controller == b.controller == "pd"
+    assert a.trajectory is not None and b.trajectory is not None
+    assert np.array_equal(a.trajectory, b.trajectory)
+
+
+def test_nominal_com_is_the_gaits_own_state_at_its_preimpact_instant(exo, exo_gait):  # type: ignore[no-untyped-def]
+    x, z0 = nominal_com(exo, exo_gait, np.array([0.0, 1.0]))
+    assert 0.5 * exo.leg_length < z0 < 1.2 * exo.leg_length
+    eng = StepEngine(exo, exo_gait, ON)
+    for tau, state in ((0, exo_gait.initial_state), (1, exo_gait.pre_impact_state)):
+        qp, qv = state.qpos, state.qvel
+        measured = com_state(exo, mujoco.MjData(exo.model), eng.full_states(qp[None], qv[None]), exo_gait.stance)
+        np.testing.assert_allclose(measured[0], x[tau], atol=2e-3)
+
+
+def test_landing_map_moves_the_swing_sole_flat_by_the_asked_amount(exo, exo_gait):  # type: ignore[no-untyped-def]
+    g, rel = landing_map(exo, exo_gait)
+    swing = "left" if exo_gait.stance == "right" else "right"
+    assert rel[1] > 0.1  # the left foot lands on the left of the right stance foot
+    assert set(np.flatnonzero(np.abs(g).sum(axis=1))) <= set(swing_dofs(exo, swing))
+    m, d = exo.model, mujoco.MjData(exo.model)
+
+    def sole(q):  # type: ignore[no-untyped-def]
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        st = exo.sole_geom_id[exo_gait.stance]
+        r = d.geom_xmat[st].reshape(3, 3).T
+        return r @ (d.geom_xpos[exo.sole_geom_id[swing]] - d.geom_xpos[st]), r @ d.geom_xmat[
+            exo.sole_geom_id[swing]].reshape(3, 3)
+
+    from robustgait.sim.regulator import _posture
+
+    q0 = _posture(exo, exo_gait, np.array([1.0]))[0]
+    p0, r0 = sole(q0)
+    for du in (np.array([0.002, 0.0]), np.array([0.0, -0.002])):
+        q = q0.copy()
+        q[exo.qpos_idx] += g @ du
+        p, r = sole(q)
+        np.testing.assert_allclose((p - p0)[:2], du, atol=1e-4)   # first order: 2 mm within 0.1 mm
+        assert np.abs(r - r0).max() < 1e-3                        # the sole keeps its orientation
+
+
+def test_on_the_orbit_it_commands_nothing_and_a_batch_is_its_samples_one_by_one(exo, exo_gait):  # type: ignore[no-untyped-def]
+    eng = StepEngine(exo, exo_gait, ON)
+    reg = eng.regulator
+    assert reg is not None and eng.controller_name == "pd+hlip"
+    qp, qv = exo_gait.initial_state.qpos, exo_gait.initial_state.qvel
+    states = eng.full_states(qp[None], qv[None])
+    reg.begin(exo_gait.stance, states)
+    off = reg.offsets(np.array([0]), states, 0, 50)
+    assert off.shape == (1, 50, exo.model.nu) and np.abs(off).max() < 2e-3
+    rng = np.random.default_rng(0)
+    qvs = np.repeat(qv[None], 3, axis=0)
+    qvs[:, :2] += rng.normal(0.0, 0.1, (3, 2))
+    batch = eng.step(np.repeat(qp[None], 3, axis=0), qvs, exo_gait.stance)
+    for i in range(3):
+        one = eng.step(qp[None], qvs[i:i + 1], exo_gait.stance)
+        assert np.array_equal(one.qpos[0], batch.qpos[i]) and one.duration[0] == batch.duration[i]
+    assert reg.updates > 0 and reg.largest > 0.0
+
+
+def test_the_feedback_engine_refuses_it_in_one_line(exo, exo_gait):  # type: ignore[no-untyped-def]
+    cfg = replace(ON, controller="passivity")
+    with pytest.raises(RobustGaitError, match="runs with the pd controller") as e:
+        make_engine(exo, exo_gait, cfg)
+    assert "\n" not in str(e.value)
+
+
+def test_robot_init_says_whether_it_is_on(t1_narrow, t1):  # type: ignore[no-untyped-def]
+    assert t1_narrow.scale.sole_half_width * 2 == pytest.approx(0.03)
+    assert regulator_rule(RegulatorConfig(), 0.03, t1_narrow.leg_length, 1)[0]
+    assert not regulator_rule(RegulatorConfig(), 2 * t1.scale.sole_half_width, t1.leg_length, 1)[0]
+
+
+@pytest.fixture(scope="module")
+def narrow_gait(t1_narrow):  # type: ignore[no-untyped-def]
+    from robustgait.gaitgen import GaitGenerator
+
+    res = GaitGenerator(t1_narrow).solve(t1_narrow.default_params)
+    assert res.gait is not None, res.reason
+    return res.gait
+
+
+@pytest.mark.slow
+def test_a_narrow_footed_humanoid_walks_with_the_regulator_and_falls_without(t1_narrow, narrow_gait):  # type: ignore[no-untyped-def]
+    """Four 5 mm spheres per foot on a 4 cm footprint: the default gait falls within 20 steps under the joint PD alone
+    (a stance sole tips over its edge); with the regulator (on by the rule) it walks 50 steps."""
+    with_it = walk(t1_narrow, narrow_gait, steps=50)
+    assert with_it.controller == "pd+hlip" and not with_it.fell and with_it.steps_taken == 50
+    without = walk(t1_narrow, narrow_gait, SimConfig(regulator=RegulatorConfig(mode="off")), steps=20)
+    assert without.fell and without.steps_taken < 20
+
+
+@pytest.mark.slow
+def test_gait_generate_refuses_a_gait_that_does_not_walk_and_says_why(t1_narrow, tmp_path, capsys):  # type: ignore[no-untyped-def]
+    spec = str(t1_narrow.spec.source)
+    out = tmp_path / "g.json"
+    assert main(["gait", "generate", "--robot", spec, "-o", str(out), "--override", "sim.regulator.mode=off"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and not out.exists()
+    assert "gait generation failed (Walk_Check_Failed): the gait fell in step" in err
+    assert "tipped over its" in err and "sim.regulator.mode=on" in err
+    assert main(["gait", "generate", "--robot", spec, "-o", str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["walk_check"]["controller"] == "pd+hlip" and not summary["walk_check"]["fell"]
+    assert out.exists()
+
+
+@pytest.mark.slow
+def test_the_narrow_footed_humanoid_is_certified_with_the_defaults(t1_narrow, narrow_gait):  # type: ignore[no-untyped-def]
+    from robustgait import certify_gait
+
+    cert = certify_gait(t1_narrow, narrow_gait, Config().certify)
+    assert cert.status == "ok", cert.reason
+    assert cert.controller == "pd+hlip" and cert.r_star > 0.5
