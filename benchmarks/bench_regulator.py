@@ -8,6 +8,11 @@ footprint (``tests/robots.py``), and the spec ``robot init`` writes for it (``DI
 regulator on by the narrow-sole rule), walked ``--steps`` steps undisturbed, certified with the defaults; and the same
 gait generated with ``sim.regulator.mode=off``: does the walk check refuse it, with which reason? Prints one JSON.
 
+``gains DIR``: how ``sim.regulator.gain_scale`` was chosen. The default gait of ``DIR`` walked ``--steps`` steps
+undisturbed with the regulator off, and on at each scale (0: only the step-start blend, no foot placement); and from
+the 6th switching state, pushes of 1–5 N s in 12 directions (0.1 s, from the step start), each walked 20 steps after:
+falls per magnitude. Prints one JSON line per setting.
+
 ``exo``: the shipped exo's stored gait certified with the regulator off and forced on, ``--seeds`` perturbation
 seeds each: J* on against J* off and its spread over seeds. Prints one JSON.
 
@@ -101,6 +106,54 @@ def exo(seeds: int) -> dict[str, Any]:
     return row
 
 
+def gains(d: Path, steps: int, scales: list[float]) -> None:
+    import dataclasses
+
+    import numpy as np
+
+    from robustgait import load_gait, load_robot
+    from robustgait.config import SimConfig
+    from robustgait.config.regulator import RegulatorConfig
+    from robustgait.sim.engine import StepEngine
+
+    robot = load_robot(d / "t1.toml")
+    gait = load_gait(d / "gait.json", robot)
+    mags, angles = np.arange(1.0, 6.0), np.arange(12) * np.pi / 6
+    impulse = np.array([[m * np.cos(a), m * np.sin(a)] for m in mags for a in angles])
+    for scale in [None, *scales]:
+        reg = RegulatorConfig(mode="off") if scale is None else RegulatorConfig(mode="on", gain_scale=scale)
+        eng = StepEngine(robot, gait, dataclasses.replace(SimConfig(), regulator=reg))
+        qp, qv = (robot.expand_state(gait.initial_state.qpos, gait.initial_state.qvel)
+                  if gait.initial_state.qpos.size != robot.model.nq
+                  else (gait.initial_state.qpos, gait.initial_state.qvel))
+        qp, qv, stance = qp[None], qv[None], gait.stance
+        taken, section = steps, None
+        for i in range(steps):
+            b = eng.step(qp, qv, stance)
+            if b.fell[0]:
+                taken = i
+                break
+            qp, qv, stance = b.qpos, b.qvel, ("left" if stance == "right" else "right")
+            if i == 5:
+                section = (qp.copy(), qv.copy(), stance)
+        row: dict[str, Any] = {**_stamp(), "gain_scale": scale, "steps": taken}
+        if section is not None:
+            q, v, stance = section
+            k = len(impulse)
+            q, v = np.repeat(q, k, axis=0), np.repeat(v, k, axis=0)
+            v[:, :2] += impulse / robot.mass  # an impulse J [N s] on the whole body: Δv = J / m at the step start
+            alive = np.ones(k, dtype=bool)
+            for _ in range(21):
+                b = eng.step(q, v, stance)
+                alive &= ~b.fell
+                q, v = b.qpos, b.qvel  # a fallen sample's NaN state is a fall again at once, at no cost
+                stance = "left" if stance == "right" else "right"
+            row["falls_per_impulse"] = {f"{m:g}": int((~alive).reshape(len(mags), -1)[j].sum())
+                                        for j, m in enumerate(mags)}
+            row["pushes_per_impulse"] = len(angles)
+        print(json.dumps(row), flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -109,11 +162,17 @@ def main() -> None:
     d = sub.add_parser("default")
     d.add_argument("dir", type=Path)
     d.add_argument("--steps", type=int, default=300)
+    g = sub.add_parser("gains")
+    g.add_argument("dir", type=Path)
+    g.add_argument("--steps", type=int, default=300)
+    g.add_argument("--scales", default="0,0.05,0.1,0.2,0.35,0.5,1")
     e = sub.add_parser("exo")
     e.add_argument("--seeds", type=int, default=3)
     args = ap.parse_args()
     if args.cmd == "build":
         build(args.dir)
+    elif args.cmd == "gains":
+        gains(args.dir, args.steps, [float(x) for x in args.scales.split(",")])
     elif args.cmd == "default":
         print(json.dumps(default(args.dir, args.steps)))
     else:

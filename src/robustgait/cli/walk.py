@@ -36,6 +36,11 @@ def _walk(args: argparse.Namespace) -> int:
               f"{1e3 * tr['max']:.3g} mrad; torque saturation {tr['saturation']} joint-steps "
               f"({100 * tr['saturation_fraction']:.3g} %)"
               + (f"  ({result.controller_note})" if result.controller_note else ""))
+        reg = result.regulator
+        if reg is not None:
+            print(f"step regulator (H-LIP, z0 {reg['z0']:.3g} m, T_S {reg['t_ssp']:.3g} s, gain {reg['gain']}): "
+                  f"{reg['updates']} corrections, largest landing change {100 * reg['largest_step_change']:.3g} cm, "
+                  f"{reg['clipped']} clipped (tracking errors include its corrections)")
         if orbit is not None:
             print(f"orbit of the switching events: {orbit.describe()} (stability: robustgait certify)")
         if result.comfort is not None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from robustgait.config.base import Doc, Float, config
+from robustgait.config.base import Bool, Doc, Float, config
 
 RegulatorMode = Literal["auto", "on", "off"]
 RegulatorGain = Literal["deadbeat", "lqr"]
@@ -24,16 +24,18 @@ class RegulatorConfig:
     gain: Annotated[RegulatorGain, Doc(
         "stepping gain: deadbeat (the S2S error dies in two steps) or lqr (dimensionless LQR weights)")] = "deadbeat"
     gain_scale: Annotated[Float, Doc(
-        "fraction of the H-LIP gain applied: the H-LIP is a point-foot model, and a joint-tracked stance ankle holds "
-        "part of the CoM error it lets grow (1: the H-LIP's own gain, for a point or line foot)", gt=0.0,
-        le=1.0)] = 0.1
+        "fraction of the H-LIP gain applied (1: the H-LIP's own gain; 0: no foot placement, only the step-start "
+        "blend)", ge=0.0, le=1.0)] = 0.25
+    predict: Annotated[Bool, Doc(
+        "predict the CoM error at touchdown with the H-LIP's pendulum flow (a point-foot model); off: the error "
+        "measured now is the estimate (a flat foot the joint PD holds does not let it grow that way)")] = False
     land_tau: Annotated[Float, Doc("phase by which the swing foot's correction is fully applied", gt=0.0,
                                    le=1.0)] = 0.8
     freeze_tau: Annotated[Float, Doc("phase after which the correction is no longer updated (≤ land_tau)", ge=0.0,
                                      le=1.0)] = 0.7
     carry_tau: Annotated[Float, Doc(
         "phase by which the joint error at the step start (the previous step's landing correction) is blended out "
-        "of the references (0: not blended)", ge=0.0, le=1.0)] = 0.4
+        "of the references (0: not blended)", ge=0.0, le=1.0)] = 0.2
     max_step_change: Annotated[Float, Doc("largest change of the landing point per axis, as a fraction of the leg "
                                           "length", gt=0.0, le=1.0)] = 0.2
     foot_gap: Annotated[Float, Doc("least lateral gap between the soles' edges a correction leaves, as a fraction "

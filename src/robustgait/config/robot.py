@@ -35,6 +35,10 @@ class ScaleRules:
     step_width_gap: Annotated[Float, Doc("least step width: sole width + this multiple of the feet's clearance "
                                          "generate.foot_gap (the default step width is the hip spacing, at least "
                                          "this)", ge=0.0, le=10.0)] = 2.0
+    narrow_step_duration: Annotated[Float, Doc(
+        "longest flat-foot step of the action space ÷ √(l/g) when the soles are narrow (sole width / leg length < "
+        "sim.regulator.narrow_ratio): a long single support on a narrow sole falls whatever the next foothold",
+        gt=0.0, le=20.0)] = 3.0
     action_step_length: AxisRule = (0.67, 1.47, 6)
     action_step_duration: AxisRule = (0.86, 1.57, 5)
     action_step_width: AxisRule = (0.88, 1.2, 4)

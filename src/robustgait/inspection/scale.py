@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass
 
 from robustgait.config import GaitParams, RobotScale, ScaleRules, field_at, relative_generation_defaults
+from robustgait.config.regulator import RegulatorConfig, regulator_rule
 
 # the [generation] keys a written spec carries (the landing-velocity bounds are left to the loader's rules, which
 # use its own leg length)
@@ -92,6 +93,21 @@ def generation(size: RobotSize) -> dict[str, float]:
     return {k: float(rules[k]) for k in GENERATION_KEYS}
 
 
+def narrow_soles(size: RobotSize) -> bool:
+    """The soles are narrow for the robot: the step regulator's rule (:func:`~robustgait.config.regulator.
+    regulator_rule` with the default ``sim.regulator``) turns it on for flat-foot gaits."""
+    return regulator_rule(RegulatorConfig(), size.sole_width, size.leg_length, 1)[0]
+
+
+def duration_rule(size: RobotSize, rules: ScaleRules) -> tuple[float, float, int]:
+    """The flat-foot action space's duration axis rule: ``action_step_duration``, its high end capped at
+    ``narrow_step_duration`` · √(l/g) when the soles are narrow (:func:`narrow_soles`)."""
+    low, high, points = rules.action_step_duration
+    if narrow_soles(size):
+        high = min(high, rules.narrow_step_duration / rules.step_duration)
+    return low, high, points
+
+
 def nice_step(x: float) -> float:
     """The grid step nearest ``x`` among 1, 2, 2.5 and 5 × 10^k."""
     k = math.floor(math.log10(x))
@@ -146,7 +162,8 @@ def scale(size: RobotSize, rules: ScaleRules) -> Scaled:
     gait = {"step_length": sig(step_length(size, rules)), "step_duration": sig(step_duration(size, rules)),
             "step_width": sig(step_width(size, rules)), "step_height": sig(step_height(size, rules))}
     mc_gait = {**gait, "step_duration": sig(step_duration(size, rules, multicontact=True))}
-    flat = {a: axis_range(a, gait[a], getattr(rules, f"action_{a}")) for a in GAIT_AXES}
+    flat = {a: axis_range(a, gait[a], duration_rule(size, rules) if a == "step_duration"
+                          else getattr(rules, f"action_{a}")) for a in GAIT_AXES}
     mc = {a: axis_range(a, mc_gait[a], getattr(rules, f"multicontact_{a}")) for a in GAIT_AXES}
     mc["rolling_fraction"] = rules.rolling_fraction
     band = pelvis_height_band(size, rules)

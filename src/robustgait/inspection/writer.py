@@ -16,7 +16,7 @@ from robustgait.inspection.discover import SIDES, Sole
 from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
 from robustgait.inspection.mirror import mass_asymmetry
 from robustgait.inspection.model import GEOM_TYPES
-from robustgait.inspection.scale import GAIT_AXES, sig
+from robustgait.inspection.scale import GAIT_AXES, narrow_soles, sig
 from robustgait.robots.spec import FallCriteria
 
 BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
@@ -242,7 +242,8 @@ def _scaled(draft: Draft) -> list[str]:
         f"joint_velocity = {num(s.joint_velocity, 3)}  # {rules.joint_velocity:g} × {rate}",
         "", "[action_space]",
         "# studies search this grid, [low, high, step]: [low, high] = multiples of the [gait] default, a nice step "
-        "(robot.scale.action_*)",
+        "(robot.scale.action_*)" + ("; narrow soles: steps end by robot.scale.narrow_step_duration × √(l/g)"
+                                    if narrow_soles(draft.size) else ""),
         *(f"{a} = {axis(s.action_space[a])}" for a in GAIT_AXES),
         "", "[action_space.multicontact]",
         "# multi-contact studies (robot.scale.multicontact_*, rolling_fraction)",

@@ -107,11 +107,14 @@ class TrackingStats:
 
 
 def pd_tracking(robot: Robot, gait: Gait, before: NDArray[np.float64], domain: int = 0, *,
-                feedforward: bool = True) -> tuple[int, NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+                feedforward: bool = True, controls: NDArray[np.float64] | None = None
+                ) -> tuple[int, NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
     """Tracking of the servo PD over one recorded domain: ``before`` (n, nstate) are the full-physics states at the
     start of its physics steps k = 0..n−1 (MuJoCo's ``mjSTATE_FULLPHYSICS``: time, qpos, qvel, ...), ``gait`` the
     gait of this step's stance. At each: e = q − y_d(τ_k) and the commanded torque τ = kp (y_d − q) + kd (ẏ_d − q̇)
-    + u_ff (the PD the servos apply before their clamp), saturated when |τ| exceeds the torque limit. Returns
+    + u_ff (the PD the servos apply before their clamp) — or, given the applied ``controls`` (n, nu) of those steps
+    (the step regulator's references), the servos' τ = kp (c − q) − kd q̇ —, saturated when |τ| exceeds the torque
+    limit. Returns
     (n, saturation (m,), Σ e² (m,), max |e| (m,)) for :meth:`TrackingStats.add`."""
     n = before.shape[0]
     nq = robot.model.nq
@@ -119,9 +122,13 @@ def pd_tracking(robot: Robot, gait: Gait, before: NDArray[np.float64], domain: i
     qd = before[:, 1 + nq + robot.dof_idx]
     tau_k = np.arange(n, dtype=np.float64) * (robot.dt / gait.domains[domain].duration)
     y, dy = desired_outputs(gait, tau_k, domain)
-    u = robot.kp * (y - q) + robot.kd * (dy - qd)
-    if feedforward:
-        u = u + feedforward_torque(gait, tau_k, domain)
+    if controls is not None:  # the servos' own law on the applied controls: u = kp (c − q) − kd q̇
+        m = q.shape[1]
+        u = robot.kp * (controls[:n, :m] - q) - robot.kd * qd
+    else:
+        u = robot.kp * (y - q) + robot.kd * (dy - qd)
+        if feedforward:
+            u = u + feedforward_torque(gait, tau_k, domain)
     e = q - y
     return (n, (np.abs(u) > robot.torque_limit).sum(axis=0), (e * e).sum(axis=0),
             np.abs(e).max(axis=0, initial=0.0))

@@ -115,6 +115,26 @@ def nominal_com(robot: Robot, gait: Gait, tau: Array, dtau: float = 1e-4) -> tup
     return x, float(np.mean(p[:, 2]))
 
 
+def com_jacobian(robot: Robot, gait: Gait, tau: Array, joints: NDArray[np.int64], dq: float = 1e-5) -> Array:
+    """∂p*/∂q_j (K, 2, n): how the CoM's horizontal position relative to the stance sole (sole frame) moves with the
+    planned joints ``joints`` (n,) at the gait's postures y_d(τ) (K,), by central differences."""
+    data = mujoco.MjData(robot.model)
+    geom = robot.sole_geom_id[gait.stance]
+    out = np.empty((tau.size, 2, joints.size))
+    for i, q in enumerate(_posture(robot, gait, tau)):
+        for c, j in enumerate(joints):
+            side = []
+            for sign in (1.0, -1.0):
+                data.qpos[:] = q
+                data.qpos[robot.qpos_idx[j]] += sign * dq
+                mujoco.mj_kinematics(robot.model, data)
+                mujoco.mj_comPos(robot.model, data)
+                r = data.geom_xmat[geom].reshape(3, 3)
+                side.append(r.T @ (data.subtree_com[0] - data.geom_xpos[geom]))
+            out[i, :, c] = (side[0] - side[1])[:2] / (2.0 * dq)
+    return out
+
+
 def swing_dofs(robot: Robot, side: str) -> NDArray[np.int64]:
     """Indices into the planned joints (m) of the swing leg's: the planned joints on the chain from the base to
     ``side``'s sole."""
@@ -154,10 +174,12 @@ def landing_map(robot: Robot, gait: Gait) -> tuple[Array, Array]:
 
 @dataclass
 class _Stance:
-    """What the regulator knows of one stance: x* at the chunk boundaries (B, 2, 2), the landing map G (m, 2), and
-    the lateral landing change inward that keeps the soles apart [m] with its sign (+1: inward is +y)."""
+    """What the regulator knows of one stance: x* at the chunk boundaries (B, 2, 2), how the CoM moves with the
+    swing leg's joints there (B, 2, m: zero columns for the other joints), the landing map G (m, 2), and the lateral
+    landing change inward that keeps the soles apart [m] with its sign (+1: inward is +y)."""
 
     nominal: Array
+    swing_com: Array
     landing: Array
     inward_room: float
     inward_sign: float
@@ -190,7 +212,10 @@ class StepRegulator:
             heights.append(z0)
             landing, rel = landing_map(robot, g)
             room = max(abs(float(rel[1])) - 2.0 * half_width - config.foot_gap * leg, 0.0)
-            self.stances[stance] = _Stance(nominal, landing, room, -math.copysign(1.0, float(rel[1])))
+            swing = swing_dofs(robot, "left" if stance == "right" else "right")
+            swing_com = np.zeros((bounds.size, 2, robot.n_joints))
+            swing_com[:, :, swing] = com_jacobian(robot, g, bounds / self.steps_per_period, swing)
+            self.stances[stance] = _Stance(nominal, swing_com, landing, room, -math.copysign(1.0, float(rel[1])))
         self.z0 = float(np.mean(heights))
         self.lam = hlip.pendulum_rate(self.z0, float(np.linalg.norm(robot.model.opt.gravity)))
         a, b = hlip.s2s_matrices(self.lam, self.period, 0.0)
@@ -246,14 +271,23 @@ class StepRegulator:
         tau_b = k0 / self.steps_per_period
         tau = (k0 + np.arange(n)) / self.steps_per_period
         s_tau, ds_tau = self._blend(tau)
-        s_b = float(self._blend(np.array([tau_b]))[0][0])
+        s_arr, ds_arr = self._blend(np.array([tau_b]))
+        s_b, ds_b = float(s_arr[0]), float(ds_arr[0])
         o0, goal, s0 = self._o0[active], self._goal[active], self._s0[active]
         if tau_b < min(cfg.freeze_tau, cfg.land_tau) and states.shape[0]:
-            # the offset reached at this boundary, then a new segment from it towards the new goal
-            w = (s_b - s0) / np.maximum(1.0 - s0, 1e-12)
-            o_b = o0 + w[:, None] * (goal - o0)
-            error = com_state(self.robot, self._data, states, self._stance) - st.nominal[k0 // self.chunk]
-            du = hlip.step_correction(self.gain, self.lam, error, self.period - k0 * self.robot.dt)
+            # the offset reached at this boundary and its rate, then a new segment from it towards the new goal
+            span = np.maximum(1.0 - s0, 1e-12)
+            o_b = o0 + ((s_b - s0) / span)[:, None] * (goal - o0)
+            do_b = (ds_b / span / self.period)[:, None] * (goal - o0)
+            b = k0 // self.chunk
+            error = com_state(self.robot, self._data, states, self._stance) - st.nominal[b]
+            # the CoM shift the correction itself makes (the swing leg's own offset) is not an error: left in, it
+            # would feed back within the step through the swing leg's mass
+            jac = st.swing_com[b]
+            error[:, :, 0] -= (o_b[:, None, :] * jac[None]).sum(axis=-1)
+            error[:, :, 1] -= (do_b[:, None, :] * jac[None]).sum(axis=-1)
+            t_left = self.period - k0 * self.robot.dt if cfg.predict else 0.0
+            du = hlip.step_correction(self.gain, self.lam, error, t_left)
             lim = np.array([self.max_change, self.max_change])
             clipped = np.abs(du) > lim
             du = np.clip(du, -lim, lim)

@@ -55,7 +55,8 @@ class WalkResult:
     torque exceeded the limit, and their fraction; :class:`~robustgait.sim.controller.TrackingStats`); ``comfort``:
     what a passenger feels (:class:`~robustgait.sim.comfort.Comfort`) when the walk was asked for it and completed a
     measured step, else None; ``orbit``: whether the switching events, written for the gait's stance, settled on an
-    orbit (:func:`walk_orbit`); ``physics_steps`` simulated."""
+    orbit (:func:`walk_orbit`); ``physics_steps`` simulated; ``regulator``: what the step regulator did
+    (:meth:`~robustgait.sim.regulator.StepRegulator.summary`), None when it did not run."""
 
     steps_taken: int
     fell: bool
@@ -73,6 +74,7 @@ class WalkResult:
     trajectory: NDArray[np.float64] | None = field(default=None, repr=False)
     orbit: Orbit | None = None
     physics_steps: int = 0
+    regulator: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
@@ -219,7 +221,7 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
             trajectory=np.concatenate(chunks) if keep_trajectory and chunks else None,
             controller=eng.controller_name, controller_note=eng.controller_note, tracking=stats.summary(),
             comfort=measure(robot, eng.physics_model, recorder, heading) if recorder is not None else None,
-            physics_steps=physics)
+            physics_steps=physics, regulator=eng.regulator.summary() if eng.regulator is not None else None)
         result.orbit = walk_orbit(robot, gait, result, certify)
     finally:
         if own:
@@ -240,7 +242,10 @@ def _track(stats: TrackingStats, eng: StepEngine, batch: object, start: NDArray[
         return
     before = np.vstack([start[None], trajectory[:-1]]) if trajectory.size else start[None]
     before = before[np.isfinite(before).all(axis=1)]
-    stats.add(*pd_tracking(eng.robot, eng.gaits[stance], before, domain, feedforward=eng.config.feedforward))
+    # with the step regulator the servos' references carry its corrections: their torque is the applied controls'
+    controls = batch.controls[0][:before.shape[0]] if eng.regulator is not None else None  # type: ignore[attr-defined]
+    stats.add(*pd_tracking(eng.robot, eng.gaits[stance], before, domain, feedforward=eng.config.feedforward,
+                           controls=controls))
 
 
 def offscreen_renderer(robot: Robot, width: int, height: int) -> mujoco.Renderer:
