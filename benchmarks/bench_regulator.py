@@ -8,10 +8,14 @@ footprint (``tests/robots.py``), and the spec ``robot init`` writes for it (``DI
 regulator on by the narrow-sole rule), walked ``--steps`` steps undisturbed, certified with the defaults; and the same
 gait generated with ``sim.regulator.mode=off``: does the walk check refuse it, with which reason? Prints one JSON.
 
-``gains DIR``: how ``sim.regulator.gain_scale`` was chosen. The default gait of ``DIR`` walked ``--steps`` steps
-undisturbed with the regulator off, and on at each scale (0: only the step-start blend, no foot placement); and from
-the 6th switching state, pushes of 1–5 N s in 12 directions (0.1 s, from the step start), each walked 20 steps after:
-falls per magnitude. Prints one JSON line per setting.
+How the regulator's defaults were chosen (each ``--variant`` a ``key=value;…`` of ``sim.regulator``, mode on unless
+given, e.g. ``mode=off`` or ``gain_scale=0.1;carry_tau=0.4``):
+
+* ``sweep DIR``: the default gait and ``--grid`` points of the robot's grid, generated, then walked ``--steps`` steps
+  undisturbed under each variant: steps walked, one JSON line per gait;
+* ``pushes DIR``: the default gait (``DIR/gait.json``) under each variant, from its 6th switching state pushed with
+  1–5 N s in 12 directions (an instant velocity change J/m at the step start), each walked the pushed step and 20
+  more: falls per magnitude, one JSON line per variant.
 
 ``exo``: the shipped exo's stored gait certified with the regulator off and forced on, ``--seeds`` perturbation
 seeds each: J* on against J* off and its spread over seeds. Prints one JSON.
@@ -106,51 +110,95 @@ def exo(seeds: int) -> dict[str, Any]:
     return row
 
 
-def gains(d: Path, steps: int, scales: list[float]) -> None:
+def _variant(text: str) -> Any:
+    """A RegulatorConfig from ``key=value;key=value`` (mode on unless given)."""
+    from robustgait.config.regulator import RegulatorConfig
+
+    kw: dict[str, Any] = {"mode": "on"}
+    for item in filter(None, text.split(";")):
+        key, value = item.split("=")
+        kw[key] = value if key in ("mode", "gain") else value in ("1", "true") if key == "predict" else float(value)
+    return RegulatorConfig(**kw)
+
+
+def _engine(robot: Any, gait: Any, variant: str) -> Any:
+    from robustgait.config import SimConfig
+    from robustgait.sim.engine import StepEngine
+
+    return StepEngine(robot, gait, SimConfig(regulator=_variant(variant)))
+
+
+def _start(robot: Any, gait: Any) -> tuple[Any, Any]:
+    s = gait.initial_state
+    if s.qpos.size != robot.model.nq:
+        q, v = robot.expand_state(s.qpos, s.qvel)
+        return q[None], v[None]
+    return s.qpos[None], s.qvel[None]
+
+
+def _walk(eng: Any, robot: Any, gait: Any, steps: int, keep: int = -1) -> tuple[int, Any]:
+    """Steps walked (≤ steps) from the gait's initial state, and the switching state after step ``keep``."""
+    qp, qv = _start(robot, gait)
+    stance, kept = gait.stance, None
+    for i in range(steps):
+        b = eng.step(qp, qv, stance)
+        if b.fell[0]:
+            return i, kept
+        qp, qv, stance = b.qpos, b.qvel, ("left" if stance == "right" else "right")
+        if i == keep:
+            kept = (qp.copy(), qv.copy(), stance)
+    return steps, kept
+
+
+def sweep(d: Path, grid: int, steps: int, variants: list[str]) -> None:
+    from robustgait import load_robot
+    from robustgait.config import GaitParams
+    from robustgait.gaitgen import GaitGenerator
+
+    sys.path.insert(0, str(REPO / "benchmarks"))
+    from bench_recovery import grid_params
+
+    robot = load_robot(d / "t1.toml")
+    gen = GaitGenerator(robot)
     import dataclasses
 
+    for params in [dataclasses.asdict(robot.default_params), *grid_params(str(d / "t1.toml"), grid, "flat")]:
+        res = gen.solve(GaitParams(**{k: params[k] for k in ("step_length", "step_duration", "step_width",
+                                                              "step_height")}))
+        row: dict[str, Any] = {**_stamp(), "params": {k: params[k] for k in ("step_length", "step_duration",
+                                                                             "step_width", "step_height")}}
+        if res.gait is not None:
+            row["steps"] = {v: _walk(_engine(robot, res.gait, v), robot, res.gait, steps)[0] for v in variants}
+        else:
+            row["generation"] = res.status
+        print(json.dumps(row), flush=True)
+
+
+def pushes(d: Path, variants: list[str]) -> None:
     import numpy as np
 
     from robustgait import load_gait, load_robot
-    from robustgait.config import SimConfig
-    from robustgait.config.regulator import RegulatorConfig
-    from robustgait.sim.engine import StepEngine
 
     robot = load_robot(d / "t1.toml")
     gait = load_gait(d / "gait.json", robot)
     mags, angles = np.arange(1.0, 6.0), np.arange(12) * np.pi / 6
     impulse = np.array([[m * np.cos(a), m * np.sin(a)] for m in mags for a in angles])
-    for scale in [None, *scales]:
-        reg = RegulatorConfig(mode="off") if scale is None else RegulatorConfig(mode="on", gain_scale=scale)
-        eng = StepEngine(robot, gait, dataclasses.replace(SimConfig(), regulator=reg))
-        qp, qv = (robot.expand_state(gait.initial_state.qpos, gait.initial_state.qvel)
-                  if gait.initial_state.qpos.size != robot.model.nq
-                  else (gait.initial_state.qpos, gait.initial_state.qvel))
-        qp, qv, stance = qp[None], qv[None], gait.stance
-        taken, section = steps, None
-        for i in range(steps):
-            b = eng.step(qp, qv, stance)
-            if b.fell[0]:
-                taken = i
-                break
-            qp, qv, stance = b.qpos, b.qvel, ("left" if stance == "right" else "right")
-            if i == 5:
-                section = (qp.copy(), qv.copy(), stance)
-        row: dict[str, Any] = {**_stamp(), "gain_scale": scale, "steps": taken}
-        if section is not None:
-            q, v, stance = section
-            k = len(impulse)
-            q, v = np.repeat(q, k, axis=0), np.repeat(v, k, axis=0)
+    for variant in variants:
+        eng = _engine(robot, gait, variant)
+        taken, kept = _walk(eng, robot, gait, 6, keep=5)
+        row: dict[str, Any] = {**_stamp(), "variant": variant, "undisturbed_steps": taken}
+        if kept is not None:
+            q, v, stance = kept
+            q, v = np.repeat(q, len(impulse), axis=0), np.repeat(v, len(impulse), axis=0)
             v[:, :2] += impulse / robot.mass  # an impulse J [N s] on the whole body: Δv = J / m at the step start
-            alive = np.ones(k, dtype=bool)
+            alive = np.ones(len(impulse), dtype=bool)
             for _ in range(21):
                 b = eng.step(q, v, stance)
                 alive &= ~b.fell
                 q, v = b.qpos, b.qvel  # a fallen sample's NaN state is a fall again at once, at no cost
                 stance = "left" if stance == "right" else "right"
-            row["falls_per_impulse"] = {f"{m:g}": int((~alive).reshape(len(mags), -1)[j].sum())
-                                        for j, m in enumerate(mags)}
-            row["pushes_per_impulse"] = len(angles)
+            fell = (~alive).reshape(len(mags), len(angles)).sum(axis=1)
+            row["falls_of_12_per_impulse_Ns"] = {f"{m:g}": int(f) for m, f in zip(mags, fell, strict=True)}
         print(json.dumps(row), flush=True)
 
 
@@ -162,17 +210,23 @@ def main() -> None:
     d = sub.add_parser("default")
     d.add_argument("dir", type=Path)
     d.add_argument("--steps", type=int, default=300)
-    g = sub.add_parser("gains")
-    g.add_argument("dir", type=Path)
-    g.add_argument("--steps", type=int, default=300)
-    g.add_argument("--scales", default="0,0.05,0.1,0.2,0.35,0.5,1")
+    sw = sub.add_parser("sweep")
+    sw.add_argument("dir", type=Path)
+    sw.add_argument("--grid", type=int, default=12)
+    sw.add_argument("--steps", type=int, default=300)
+    sw.add_argument("--variant", action="append", required=True)
+    pu = sub.add_parser("pushes")
+    pu.add_argument("dir", type=Path)
+    pu.add_argument("--variant", action="append", required=True)
     e = sub.add_parser("exo")
     e.add_argument("--seeds", type=int, default=3)
     args = ap.parse_args()
     if args.cmd == "build":
         build(args.dir)
-    elif args.cmd == "gains":
-        gains(args.dir, args.steps, [float(x) for x in args.scales.split(",")])
+    elif args.cmd == "sweep":
+        sweep(args.dir, args.grid, args.steps, args.variant)
+    elif args.cmd == "pushes":
+        pushes(args.dir, args.variant)
     elif args.cmd == "default":
         print(json.dumps(default(args.dir, args.steps)))
     else:
