@@ -1,8 +1,8 @@
 """Step-to-step balance on a narrow-footed humanoid (``docs/simulation.md``, "Step-to-step balance";
 ``docs/your-robot.md``, "When your robot's feet are narrow").
 
-``build DIR``: Booster T1 from ../shared with each sole replaced by four 5 mm contact spheres on a 0.19 × 0.04 m
-footprint (``tests/robots.py``), and the spec ``robot init`` writes for it (``DIR/t1.toml``).
+``build DIR [--width W]``: Booster T1 from ../shared with each sole replaced by four 5 mm contact spheres on a
+0.19 × W m footprint (default 0.04; ``tests/robots.py``), and the spec ``robot init`` writes for it (``DIR/t1.toml``).
 
 ``default DIR``: as a user would, with the CLI: the default gait generated with the shipped defaults (the H-LIP
 regulator on by the narrow-sole rule), walked ``--steps`` steps undisturbed, certified with the defaults; and the same
@@ -59,13 +59,13 @@ def _stamp() -> dict[str, str]:
     return {"commit": commit, "date": str(date.today())}
 
 
-def build(out: Path) -> None:
+def build(out: Path, width: float) -> None:
     sys.path.insert(0, str(REPO))
     from tests.robots import narrow_t1_xml
 
     if not T1.is_file():
         raise SystemExit(f"{T1} is absent: the benchmark needs ../shared/robots/booster_t1")
-    xml = narrow_t1_xml(T1, out)
+    xml = narrow_t1_xml(T1, out, width)
     code, text, _ = _cli("robot", "init", str(xml), "-o", str(out / "t1.toml"))
     print(text, end="")
     if code:
@@ -162,7 +162,8 @@ def sweep(d: Path, grid: int, steps: int, variants: list[str]) -> None:
     gen = GaitGenerator(robot)
     import dataclasses
 
-    for params in [dataclasses.asdict(robot.default_params), *grid_params(str(d / "t1.toml"), grid, "flat")]:
+    points = grid_params(str(d / "t1.toml"), grid, "flat") if grid else []
+    for params in [dataclasses.asdict(robot.default_params), *points]:
         res = gen.solve(GaitParams(**{k: params[k] for k in ("step_length", "step_duration", "step_width",
                                                               "step_height")}))
         row: dict[str, Any] = {**_stamp(), "params": {k: params[k] for k in ("step_length", "step_duration",
@@ -207,6 +208,8 @@ def main() -> None:
     sub = ap.add_subparsers(dest="cmd", required=True)
     b = sub.add_parser("build")
     b.add_argument("dir", type=Path)
+    b.add_argument("--width", type=float, default=0.04, help="outer width of the sphere footprint [m] (0.015: a line "
+                   "foot, its spheres 5 mm apart)")
     d = sub.add_parser("default")
     d.add_argument("dir", type=Path)
     d.add_argument("--steps", type=int, default=300)
@@ -222,7 +225,7 @@ def main() -> None:
     e.add_argument("--seeds", type=int, default=3)
     args = ap.parse_args()
     if args.cmd == "build":
-        build(args.dir)
+        build(args.dir, args.width)
     elif args.cmd == "sweep":
         sweep(args.dir, args.grid, args.steps, args.variant)
     elif args.cmd == "pushes":

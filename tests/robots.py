@@ -11,13 +11,14 @@ SPHERE_RADIUS = 0.005
 SPHERE_X = 0.095
 
 
-def narrow_t1_xml(t1_xml: Path, out_dir: Path) -> Path:
+def narrow_t1_xml(t1_xml: Path, out_dir: Path, width: float = NARROW_WIDTH) -> Path:
     """Booster T1 with each sole box replaced by four contact spheres (radius :data:`SPHERE_RADIUS`) at the corners of
-    a 0.19 × :data:`NARROW_WIDTH` m footprint under the box; writes ``out_dir/t1.xml`` and returns it."""
+    a 0.19 × ``width`` m footprint under the box (0.015: a line foot, its spheres 5 mm apart); writes
+    ``out_dir/t1.xml`` and returns it."""
     import mujoco
 
     spec = mujoco.MjSpec.from_file(str(t1_xml))
-    y = NARROW_WIDTH / 2.0 - SPHERE_RADIUS
+    y = width / 2.0 - SPHERE_RADIUS
     for side in ("left", "right"):
         box = spec.geom(f"{side}_foot_box")
         x0, z = box.pos[0], box.pos[2] - box.size[2] + SPHERE_RADIUS

@@ -13,14 +13,14 @@ import pytest
 
 from robustgait.cli import main
 from robustgait.config import Config, SimConfig
-from robustgait.config.regulator import RegulatorConfig, regulator_rule
+from robustgait.config.regulator import RegulatorConfig, placement_share, regulator_rule
 from robustgait.errors import RobustGaitError
 from robustgait.sim.engine import StepEngine
 from robustgait.sim.factory import make_engine
 from robustgait.sim.regulator import com_state, landing_map, nominal_com, swing_dofs
 from robustgait.sim.walk import walk
 
-ON = SimConfig(regulator=RegulatorConfig(mode="on"))
+ON = SimConfig(regulator=RegulatorConfig(mode="on", gain_scale=0.25))
 
 
 def _start(robot, gait):  # type: ignore[no-untyped-def]
@@ -41,6 +41,16 @@ def test_the_rule_turns_the_regulator_on_for_narrow_soles_only() -> None:
     assert regulator_rule(cfg, 0.03, 0.567, 2) == (False, "multi-contact gait: H-LIP step regulator off")
     with pytest.raises(ValueError, match="flat-foot gaits"):
         regulator_rule(replace(cfg, mode="on"), 0.03, 0.567, 2)
+
+
+def test_the_share_of_the_hlip_gain_fades_as_the_sole_widens() -> None:
+    cfg = RegulatorConfig()
+    assert placement_share(cfg, 0.0, 0.5) == 1.0                                  # a point foot: the H-LIP's gain
+    assert placement_share(cfg, 0.03, 0.567) == pytest.approx(1 - (0.03 / 0.567 / 0.06) ** 2)
+    assert placement_share(cfg, 0.12, 0.921) == 0.0                                # exo forced on: the blend only
+    assert placement_share(replace(cfg, gain_scale=0.5), 0.12, 0.921) == 0.5
+    shares = [placement_share(cfg, w, 0.5) for w in np.linspace(0.0, 0.05, 11)]
+    assert np.all(np.diff(shares) <= 0)
 
 
 def test_robots_with_wide_soles_run_without_it_bit_for_bit(exo, exo_gait, exo_mc_gait, t1):  # type: ignore[no-untyped-def]
@@ -170,3 +180,26 @@ def test_the_narrow_footed_humanoid_is_certified_with_the_defaults(t1_narrow, na
     cert = certify_gait(t1_narrow, narrow_gait, Config().certify)
     assert cert.status == "ok", cert.reason
     assert cert.controller == "pd+hlip" and cert.r_star > 0.5
+
+
+@pytest.mark.slow
+def test_a_line_footed_humanoid_walks_with_the_hlip_gain_its_sole_leaves_to_the_foot(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """Spheres 5 mm apart: nearly a line foot (sole width / leg 0.009), so the rule applies 98 % of the H-LIP gain,
+    and the default gait walks 100 steps; with the share the 3 cm sole gets (0.22) it falls."""
+    from robustgait import load_robot
+    from robustgait.gaitgen import GaitGenerator
+    from tests.conftest import T1_MODEL
+    from tests.robots import narrow_t1_xml
+
+    if not T1_MODEL.is_file():
+        pytest.skip("../shared/robots/booster_t1 (Booster T1) is not beside the repository")
+    d = tmp_path_factory.mktemp("t1_line")
+    assert main(["robot", "init", str(narrow_t1_xml(T1_MODEL, d, width=0.015)), "-o", str(d / "t1.toml")]) == 0
+    robot = load_robot(d / "t1.toml")
+    res = GaitGenerator(robot).solve(robot.default_params)
+    assert res.gait is not None, res.reason
+    w = walk(robot, res.gait, steps=100)
+    assert w.controller == "pd+hlip" and w.regulator is not None and w.regulator["share"] > 0.95
+    assert not w.fell and w.steps_taken == 100
+    weak = walk(robot, res.gait, SimConfig(regulator=RegulatorConfig(mode="on", gain_scale=0.22)), steps=100)
+    assert weak.fell

@@ -23,9 +23,13 @@ class RegulatorConfig:
                                        le=1.0)] = 0.10
     gain: Annotated[RegulatorGain, Doc(
         "stepping gain: deadbeat (the S2S error dies in two steps) or lqr (dimensionless LQR weights)")] = "deadbeat"
-    gain_scale: Annotated[Float, Doc(
-        "fraction of the H-LIP gain applied (1: the H-LIP's own gain; 0: no foot placement, only the step-start "
-        "blend)", ge=0.0, le=1.0)] = 0.25
+    placement_width: Annotated[Float, Doc(
+        "sole width / leg length at which foot placement fades out: the share of the H-LIP gain applied is "
+        "max(0, 1 − (ratio / placement_width)²) — all of it for a line or point foot, none for a sole wide enough to "
+        "hold the CoM through the ankle", gt=0.0, le=1.0)] = 0.06
+    gain_scale: Annotated[Float | None, Doc(
+        "share of the H-LIP gain applied, overriding placement_width's rule (0: no foot placement, only the "
+        "step-start blend)", ge=0.0, le=1.0)] = None
     predict: Annotated[Bool, Doc(
         "predict the CoM error at touchdown with the H-LIP's pendulum flow (a point-foot model); off: the error "
         "measured now is the estimate (a flat foot the joint PD holds does not let it grow that way)")] = False
@@ -40,6 +44,15 @@ class RegulatorConfig:
                                           "length", gt=0.0, le=1.0)] = 0.2
     foot_gap: Annotated[Float, Doc("least lateral gap between the soles' edges a correction leaves, as a fraction "
                                    "of the leg length", ge=0.0, le=1.0)] = 0.02
+
+
+def placement_share(config: RegulatorConfig, sole_width: float, leg_length: float) -> float:
+    """κ, the share of the H-LIP stepping gain the regulator applies: ``gain_scale`` if set, else
+    max(0, 1 − (r / ``placement_width``)²) with r = sole_width / leg_length. A point-foot pendulum (r → 0) needs all
+    of it; a flat foot that the joint PD holds keeps part of the CoM error from growing, and a wide one all of it."""
+    if config.gain_scale is not None:
+        return config.gain_scale
+    return max(0.0, 1.0 - (sole_width / leg_length / config.placement_width) ** 2)
 
 
 def regulator_rule(config: RegulatorConfig, sole_width: float, leg_length: float, domains: int

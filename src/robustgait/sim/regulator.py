@@ -9,9 +9,11 @@ does, at the next foothold:
    measures each sample's CoM state x = [p, v] per horizontal axis, relative to the stance sole's centre in the
    sole's heading frame, and compares it with the gait's own x*(τ) at the same phase — computed by kinematics from
    the gait's outputs with the stance sole flat, so the comparison carries no model bias.
-2. It predicts the error at the nominal pre-impact instant with the H-LIP flow and sets the landing change
-   Δu = K e^{A_S (T_S − t)} (x − x*) (:func:`~robustgait.sim.hlip.step_correction`), clipped per axis to
-   ``max_step_change`` leg lengths and, inward, to keep ``foot_gap`` between the soles.
+2. It sets the landing change Δu = κ K (x − x*) (:func:`~robustgait.sim.hlip.step_correction` with no time left:
+   the error measured now is the estimate of the error at touchdown; with ``predict`` the H-LIP's prediction
+   e^{A_S (T_S − t)} (x − x*) instead), κ the share of the H-LIP gain the sole's width leaves to the foot
+   (:func:`~robustgait.config.regulator.placement_share`), clipped per axis to ``max_step_change`` leg lengths and,
+   inward, to keep ``foot_gap`` between the soles.
 3. The landing change becomes a swing-leg joint offset g = G Δu, G the least-squares inverse of the swing sole's
    5 × n Jacobian (horizontal position and orientation, stance sole frame, base fixed) at the gait's pre-impact
    posture with the orientation rows held at zero — the foot still lands flat. The offset is blended
@@ -35,7 +37,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config.regulator import RegulatorConfig, regulator_rule
+from robustgait.config.regulator import RegulatorConfig, placement_share, regulator_rule
 from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.sim import hlip
@@ -222,7 +224,8 @@ class StepRegulator:
         self.hlip_gain = (hlip.deadbeat_gain(self.lam, self.period, 0.0) if config.gain == "deadbeat"
                           else hlip.lqr_gain(a, b, self.z0, self.lam))
         self.rho = hlip.closed_loop_radius(a, b, self.hlip_gain)
-        self.gain = config.gain_scale * self.hlip_gain
+        self.share = placement_share(config, 2.0 * robot.scale.sole_half_width, robot.leg_length)
+        self.gain = self.share * self.hlip_gain
         self.max_change = config.max_step_change * leg
         self._data = mujoco.MjData(robot.model)
         self._kp = robot.kp
@@ -238,11 +241,12 @@ class StepRegulator:
 
     def summary(self) -> dict[str, float | int | str]:
         """What the regulator did so far: corrections computed, how many were clipped, the largest |Δu| [m], and its
-        model (z0 [m], λ [1/s], T_S [s], the gain applied, the spectral radius of the H-LIP closed loop with the
-        H-LIP's own gain)."""
+        model (z0 [m], λ [1/s], T_S [s], the share κ of the H-LIP gain and the gain applied, the spectral radius of
+        the H-LIP closed loop with the H-LIP's own gain)."""
         return {"regulator": self.name, "updates": self.updates, "clipped": self.clipped,
                 "largest_step_change": round(self.largest, 4), "z0": round(self.z0, 4), "lambda": round(self.lam, 3),
-                "t_ssp": self.period, "gain": f"[{self.gain[0]:.3f}, {self.gain[1]:.3f}]",
+                "t_ssp": self.period, "share": round(self.share, 3),
+                "gain": f"[{self.gain[0]:.3f}, {self.gain[1]:.3f}]",
                 "hlip_rho": round(self.rho, 3)}
 
     def begin(self, stance: str, states: Array) -> None:
