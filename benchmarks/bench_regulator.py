@@ -128,17 +128,9 @@ def _engine(robot: Any, gait: Any, variant: str) -> Any:
     return StepEngine(robot, gait, SimConfig(regulator=_variant(variant)))
 
 
-def _start(robot: Any, gait: Any) -> tuple[Any, Any]:
-    s = gait.initial_state
-    if s.qpos.size != robot.model.nq:
-        q, v = robot.expand_state(s.qpos, s.qvel)
-        return q[None], v[None]
-    return s.qpos[None], s.qvel[None]
-
-
 def _walk(eng: Any, robot: Any, gait: Any, steps: int, keep: int = -1) -> tuple[int, Any]:
     """Steps walked (≤ steps) from the gait's initial state, and the switching state after step ``keep``."""
-    qp, qv = _start(robot, gait)
+    qp, qv = gait.initial_state.qpos[None], gait.initial_state.qvel[None]  # the robot's full state
     stance, kept = gait.stance, None
     for i in range(steps):
         b = eng.step(qp, qv, stance)

@@ -23,13 +23,6 @@ from robustgait.sim.walk import walk
 ON = SimConfig(regulator=RegulatorConfig(mode="on", gain_scale=0.25))
 
 
-def _start(robot, gait):  # type: ignore[no-untyped-def]
-    s = gait.initial_state
-    if s.qpos.size != robot.model.nq:
-        return robot.expand_state(s.qpos, s.qvel)
-    return s.qpos, s.qvel
-
-
 def test_the_rule_turns_the_regulator_on_for_narrow_soles_only() -> None:
     cfg = RegulatorConfig()
     assert regulator_rule(cfg, 0.12, 0.921, 1)[0] is False          # exo: 0.130

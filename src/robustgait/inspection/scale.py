@@ -93,10 +93,15 @@ def generation(size: RobotSize) -> dict[str, float]:
     return {k: float(rules[k]) for k in GENERATION_KEYS}
 
 
+def balance(size: RobotSize) -> tuple[bool, str]:
+    """Whether the step regulator runs for the robot's flat-foot gaits, and why: its rule
+    (:func:`~robustgait.config.regulator.regulator_rule`) with the default ``sim.regulator``."""
+    return regulator_rule(RegulatorConfig(), size.sole_width, size.leg_length, 1)
+
+
 def narrow_soles(size: RobotSize) -> bool:
-    """The soles are narrow for the robot: the step regulator's rule (:func:`~robustgait.config.regulator.
-    regulator_rule` with the default ``sim.regulator``) turns it on for flat-foot gaits."""
-    return regulator_rule(RegulatorConfig(), size.sole_width, size.leg_length, 1)[0]
+    """The soles are narrow for the robot: :func:`balance` turns the step regulator on."""
+    return balance(size)[0]
 
 
 def duration_rule(size: RobotSize, rules: ScaleRules) -> tuple[float, float, int]:

@@ -11,12 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
-from robustgait.config.regulator import RegulatorConfig, regulator_rule
 from robustgait.inspection.discover import SIDES, Sole
 from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
 from robustgait.inspection.mirror import mass_asymmetry
 from robustgait.inspection.model import GEOM_TYPES
-from robustgait.inspection.scale import GAIT_AXES, narrow_soles, sig
+from robustgait.inspection.scale import GAIT_AXES, balance, narrow_soles, sig
 from robustgait.robots.spec import FallCriteria
 
 BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
@@ -332,9 +331,7 @@ def summary(draft: Draft, spec_path: str | Path) -> list[str]:
                + (f", {bounds.count('stability')} lowered for stability" if "stability" in bounds else ""))
     g = draft.scaled.gait
     out.append("default gait: " + ", ".join(f"{k} {v:g}" for k, v in g.items()))
-    width = min(legs[side].sole.width for side in SIDES)
-    out.append(f"balance: {regulator_rule(RegulatorConfig(), width, legs.leg_length, 1)[1]} for flat-foot gaits "
-               "(sim.regulator)")
+    out.append(f"balance: {balance(draft.size)[1]} for flat-foot gaits (sim.regulator)")
     out += [f"note: {n}" for n in draft.notes]
     out.append(f"wrote {spec_path}; check it: robustgait robot check {spec_path}")
     return out

@@ -91,6 +91,14 @@ def _posture(robot: Robot, gait: Gait, tau: Array) -> Array:
     return q
 
 
+def _com_in_sole(robot: Robot, data: mujoco.MjData, qpos: Array, geom: int) -> Array:
+    """The CoM relative to sole geom ``geom``'s centre, in the sole's frame (3,) [m], at configuration ``qpos``."""
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(robot.model, data)
+    mujoco.mj_comPos(robot.model, data)
+    return np.asarray(data.geom_xmat[geom].reshape(3, 3).T @ (data.subtree_com[0] - data.geom_xpos[geom]))
+
+
 def nominal_com(robot: Robot, gait: Gait, tau: Array, dtau: float = 1e-4) -> tuple[Array, float]:
     """The gait's own CoM state x*(τ) (K, 2, 2) at phases τ (K,), and its mean CoM height over the stance sole [m].
 
@@ -101,14 +109,7 @@ def nominal_com(robot: Robot, gait: Gait, tau: Array, dtau: float = 1e-4) -> tup
     geom = robot.sole_geom_id[gait.stance]
 
     def rel(t: Array) -> Array:
-        out = np.empty((t.size, 3))
-        for i, q in enumerate(_posture(robot, gait, t)):
-            data.qpos[:] = q
-            mujoco.mj_kinematics(robot.model, data)
-            mujoco.mj_comPos(robot.model, data)
-            r = data.geom_xmat[geom].reshape(3, 3)
-            out[i] = r.T @ (data.subtree_com[0] - data.geom_xpos[geom])
-        return out
+        return np.array([_com_in_sole(robot, data, q, geom) for q in _posture(robot, gait, t)])
 
     p = rel(tau)
     lo, hi = np.maximum(tau - dtau, 0.0), tau + dtau   # one-sided at τ = 0 (the outputs start there)
@@ -127,12 +128,9 @@ def com_jacobian(robot: Robot, gait: Gait, tau: Array, joints: NDArray[np.int64]
         for c, j in enumerate(joints):
             side = []
             for sign in (1.0, -1.0):
-                data.qpos[:] = q
-                data.qpos[robot.qpos_idx[j]] += sign * dq
-                mujoco.mj_kinematics(robot.model, data)
-                mujoco.mj_comPos(robot.model, data)
-                r = data.geom_xmat[geom].reshape(3, 3)
-                side.append(r.T @ (data.subtree_com[0] - data.geom_xpos[geom]))
+                moved = q.copy()
+                moved[robot.qpos_idx[j]] += sign * dq
+                side.append(_com_in_sole(robot, data, moved, geom))
             out[i, :, c] = (side[0] - side[1])[:2] / (2.0 * dq)
     return out
 
@@ -228,7 +226,6 @@ class StepRegulator:
         self.gain = self.share * self.hlip_gain
         self.max_change = config.max_step_change * leg
         self._data = mujoco.MjData(robot.model)
-        self._kp = robot.kp
         self._ratio = robot.kd / robot.kp
         self._stance = ""
         self._o0 = np.zeros((0, robot.n_joints))   # offset at the start of the current blend segment

@@ -241,9 +241,14 @@ def _track(stats: TrackingStats, eng: StepEngine, batch: object, start: NDArray[
         stats.add(int(batch.control_steps[0]), batch.saturation[0], batch.error_sq[0], batch.error_max[0])
         return
     before = np.vstack([start[None], trajectory[:-1]]) if trajectory.size else start[None]
-    before = before[np.isfinite(before).all(axis=1)]
-    # with the step regulator the servos' references carry its corrections: their torque is the applied controls'
-    controls = batch.controls[0][:before.shape[0]] if eng.regulator is not None else None  # type: ignore[attr-defined]
+    rows = np.flatnonzero(np.isfinite(before).all(axis=1))
+    before = before[rows]
+    controls = None
+    if eng.regulator is not None:
+        # the servos' references carry the regulator's corrections: their torque is the applied controls', whose row
+        # j was applied from row j of ``before`` (a step that ended at once recorded none)
+        recorded = batch.controls[0]  # type: ignore[attr-defined]
+        controls = recorded[rows[rows < len(recorded)]]
     stats.add(*pd_tracking(eng.robot, eng.gaits[stance], before, domain, feedforward=eng.config.feedforward,
                            controls=controls))
 
