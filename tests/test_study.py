@@ -448,6 +448,21 @@ def _completed(db: Path) -> int:
 
 
 @pytest.mark.slow
+def test_status_reports_the_machine_use_of_a_run(reference_study):
+    """Each evaluation records its worker's CPU time; `study status` divides their sum by the busy wall time and the
+    cores: two workers with a rollout thread per core keep the machine busy, so the share is well above one core's."""
+    st = study_status(reference_study)
+    use = st["utilisation"]
+    assert use is not None and use["cores"] == (os.cpu_count() or 1)
+    assert all(t["seconds"] for t in st["trials"] if t["state"] == "COMPLETE")
+    assert 0.0 < use["share"] <= 1.05  # CPU time is counted a little beyond the trials' recorded wall intervals
+    if use["cores"] >= 2:
+        assert use["share"] > 1.0 / use["cores"]
+    out = cli("study", "status", str(reference_study))
+    assert out.returncode == 0 and "machine use: " in out.stdout
+
+
+@pytest.mark.slow
 def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path, reference_study):
     """kill -9 of `study run` (1 worker) after its first completed trial; `study resume` finishes it: every
     trial exactly once, and the same gaits, outcomes, comparisons and best as the 2-worker reference."""

@@ -48,6 +48,10 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
           f"{st['state']}")
     if st["outcomes"]:
         print("outcomes: " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in st["outcomes"].items()))
+    use = st.get("utilisation")
+    if use:
+        print(f"machine use: {use['share']:.0%} of {use['cores']:.0f} cores while evaluating ({use['cpu_seconds']:.0f} "
+              f"CPU s over {use['busy_seconds']:.0f} s)")
     if best is not None:
         params = ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())
         print(f"best gait (trial {best['trial']}): {params}; {_name(st)} = {best['r_star']:.4g} {st['unit']}, "

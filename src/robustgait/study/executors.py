@@ -30,6 +30,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections import deque
 from collections.abc import Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -76,9 +77,12 @@ class EvaluationWorker:
         from robustgait.config import GaitParams
         from robustgait.study.evaluate import evaluate
 
+        cpu = time.process_time()
         ev = evaluate(self.robot, GaitParams(**params), self.config, generator=self.generator)
         out = ev.to_dict()
-        out["worker"] = {"pid": os.getpid(), "host": os.uname().nodename}
+        # the worker runs one evaluation at a time, so its process CPU time (every thread) is this evaluation's
+        out["cpu_seconds"] = time.process_time() - cpu
+        out["worker"] = {"pid": os.getpid(), "host": os.uname().nodename, "cores": os.cpu_count() or 1}
         return out
 
     def pid(self) -> int:

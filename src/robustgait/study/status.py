@@ -56,6 +56,28 @@ def outcome_counts(records: list[TrialRecord]) -> dict[str, int]:
     return dict(sorted(out.items()))
 
 
+def utilisation(records: list[TrialRecord]) -> dict[str, float] | None:
+    """How much of the machine the study's evaluations used: ``cpu_seconds`` Σ of the evaluations' process CPU time
+    (every thread; an evaluation reused from another trial counted once), ``busy_seconds`` the wall time during which
+    at least one evaluation ran (the union of the trials' start–complete intervals: time the study was stopped, or
+    spent between batches on the learner, is not counted), ``cores`` of the machine, and ``share`` = cpu_seconds /
+    (busy_seconds × cores) ∈ [0, 1]. None when no completed evaluation recorded its CPU time."""
+    done = [r for r in records if r.state == "COMPLETE" and r.reused_from is None and r.started is not None
+            and r.completed is not None and (r.result or {}).get("cpu_seconds") is not None]
+    if not done:
+        return None
+    spans = sorted((float(r.started or 0.0), float(r.completed or 0.0)) for r in done)
+    busy, end = 0.0, -float("inf")
+    for start, stop in spans:
+        busy += max(0.0, stop - max(start, end))
+        end = max(end, stop)
+    results = [r.result or {} for r in done]
+    cpu = float(sum(res["cpu_seconds"] for res in results))
+    cores = float(max(res.get("worker", {}).get("cores", 1) for res in results))
+    return {"cpu_seconds": cpu, "busy_seconds": busy, "cores": cores,
+            "share": cpu / (busy * cores) if busy > 0 else 0.0}
+
+
 def study_status(directory: str | Path) -> dict[str, Any]:
     """JSON-ready: ``trials_done``, ``trials_planned``, ``state`` (complete | running | stopped),
     ``person`` (a person study: its ``floor``, the ``pending`` iteration, every ``answer``; else None), ``require``,
@@ -63,7 +85,7 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     steps_taken, comfort, gait file), ``best_observed`` (the evaluated gait with the highest oracle score), one
     record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs), each with its
     ``comfort`` figures (``docs/comfort.md``; None when not measured or evaluated before they existed), and
-    ``outcomes`` (:func:`outcome_counts`)."""
+    ``outcomes`` (:func:`outcome_counts`), ``utilisation`` (:func:`utilisation`)."""
     d = Path(directory)
     setup = load_config(d)
     cfg = setup.config.study
@@ -109,6 +131,7 @@ def study_status(directory: str | Path) -> dict[str, Any]:
             "learner": cfg.learner, "seed": cfg.seed, "trials_done": done, "trials_planned": cfg.trials_planned,
             "iterations_done": len(finished), "iterations_planned": cfg.iterations,
             "unique_gaits": len({r.index for r in complete}), "outcomes": outcome_counts(records),
+            "utilisation": utilisation(records),
             "best": _best_entry(best, by_number), "best_observed": _best_entry(observed, by_number),
             "iterations": per_iteration, "trials": [trial_summary(r) for r in sorted(records, key=lambda r: r.number)],
             "config": setup.to_dict()["config"], "environment": setup.environment,

@@ -50,6 +50,8 @@ class TrialRecord:
     reused_from: int | None
     retry_of: int | None
     attrs: dict[str, Any]
+    started: float | None = None  # POSIX time the trial started and completed (Optuna's record)
+    completed: float | None = None
 
 
 class StudyStore:
@@ -138,7 +140,9 @@ class StudyStore:
             out.append(TrialRecord(t.number, t.state.name, a["iteration"], a["slot"], a["grid_index"], params,
                                    t.value if t.state.name == "COMPLETE" else None,
                                    a.get("result") if t.state.name == "COMPLETE" else None,
-                                   a.get("reused_from"), a.get("retry_of"), dict(a)))
+                                   a.get("reused_from"), a.get("retry_of"), dict(a),
+                                   t.datetime_start.timestamp() if t.datetime_start else None,
+                                   t.datetime_complete.timestamp() if t.datetime_complete else None))
         return out
 
     # ---- study-level records -----------------------------------------------------------------------------
