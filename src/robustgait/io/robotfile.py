@@ -99,6 +99,7 @@ class FallTable:
 class SimTable:
     timestep: Annotated[Float, L.TIMESTEP] | None = None
     integrator: Integrator | None = None
+    stable_pd: Annotated[bool, L.STABLE_PD] = False
 
 
 @table
@@ -339,6 +340,7 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
         fall=FallCriteria(min_base_height=s.fall.min_base_height, max_tilt=s.fall.max_tilt),
         timestep=s.sim.timestep,
         integrator=s.sim.integrator,
+        stable_pd=s.sim.stable_pd,
         description=s.description,
         source=path.resolve(),
         gait_quality=quality,

@@ -71,6 +71,20 @@ def resolve_model(spec: RobotSpec, mjs: mujoco.MjSpec) -> tuple[dict[str, Sole],
     return soles, floor
 
 
+def servo_damping(kp: float | NDArray[np.float64], kd: float | NDArray[np.float64], h: float, stable: bool
+                  ) -> float | NDArray[np.float64]:
+    """The damping a servo realises, kd or, as stable PD, kd + h kp [N m s/rad].
+
+    A servo u = kp (c − q) − kd q̇ in MuJoCo's actuators is integrated with its damping implicit (``implicitfast``
+    takes the velocity derivative of actuator forces) and its stiffness explicit. Stable PD (Tan, Liu & Turk, "Stable
+    proportional-derivative controllers", IEEE CG&A 31(4), 2011) evaluates the stiffness at the next step's position,
+    kp (c − q − h q̇), so the law becomes u = kp (c − q) − (kd + h kp) q̇: the same continuous law as h → 0, with the
+    stiffness's first-order term implicit too. The references' feed-forward uses the same damping
+    (:func:`robustgait.sim.controller.step_controls`), so a tracked reference keeps zero error. ``h``: the physics step
+    [s]."""
+    return kd + h * kp if stable else kd
+
+
 def build_mjspec(spec: RobotSpec, mjs: mujoco.MjSpec, soles: dict[str, Sole], floor: str) -> mujoco.MjSpec:
     """``mjs`` (resolved by :func:`resolve_model`; edited in place and returned) with our actuators — one servo per
     planned joint (output order), then per held joint — and our contact sensors, and the spec's simulation
@@ -83,7 +97,9 @@ def build_mjspec(spec: RobotSpec, mjs: mujoco.MjSpec, soles: dict[str, Sole], fl
         mjs.delete(key)
     servos = [*zip(spec.joints, spec.kp, spec.kd, spec.torque_limit, strict=True),
               *((h.name, h.kp, h.kd, h.torque_limit) for h in spec.held)]
-    for j, kp, kd, tmax in servos:
+    h = spec.timestep if spec.timestep is not None else float(mjs.option.timestep)
+    for j, kp, kd0, tmax in servos:
+        kd = servo_damping(kp, kd0, h, spec.stable_pd)
         act = mjs.add_actuator(name=f"robustgait_{j}", target=j, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
         act.biastype = mujoco.mjtBias.mjBIAS_AFFINE
@@ -154,10 +170,12 @@ class Robot:
         self.floor_geom_id = m.geom(self.floor_name).id
         self.sensor_adr = {name: int(m.sensor(name).adr[0]) for name in CONTACT_SENSORS}
         self.kp = np.asarray(spec.kp)
-        self.kd = np.asarray(spec.kd)
+        # the damping the servos realise (the spec's kd, or stable PD's kd + h kp: servo_damping)
+        dt = float(self.model.opt.timestep)
+        self.kd = np.asarray(servo_damping(self.kp, np.asarray(spec.kd), dt, spec.stable_pd))
         self.torque_limit = np.asarray(spec.torque_limit)
         self.servo_kp = np.concatenate([self.kp, [h.kp for h in spec.held]])
-        self.servo_kd = np.concatenate([self.kd, [h.kd for h in spec.held]])
+        self.servo_kd = np.concatenate([self.kd, [servo_damping(x.kp, x.kd, dt, spec.stable_pd) for x in spec.held]])
         self.servo_limit = np.concatenate([self.torque_limit, [h.torque_limit for h in spec.held]])
         self.joint_range = np.array([m.jnt_range[i] if m.jnt_limited[i] else (-np.inf, np.inf) for i in ids])
 

@@ -145,6 +145,7 @@ class RobotSpec:
     fall: FallCriteria = field(default_factory=FallCriteria)
     timestep: float | None = None
     integrator: str | None = None
+    stable_pd: bool = False
     description: str = ""
     source: Path | None = None
     gait_quality: GaitQuality = field(default_factory=GaitQuality)
