@@ -450,14 +450,17 @@ def _completed(db: Path) -> int:
 @pytest.mark.slow
 def test_status_reports_the_machine_use_of_a_run(reference_study):
     """Each evaluation records its worker's CPU time; `study status` divides their sum by the busy wall time and the
-    cores: two workers with a rollout thread per core keep the machine busy, so the share is well above one core's."""
+    cores. An evaluation's CPU time is measured inside its trial's interval, so the share cannot exceed 1; how close
+    to 1 it gets depends on what else the machine runs (another test process here), which this test does not
+    assert."""
     st = study_status(reference_study)
     use = st["utilisation"]
     assert use is not None and use["cores"] == (os.cpu_count() or 1)
-    assert all(t["seconds"] for t in st["trials"] if t["state"] == "COMPLETE")
-    assert 0.0 < use["share"] <= 1.05  # CPU time is counted a little beyond the trials' recorded wall intervals
-    if use["cores"] >= 2:
-        assert use["share"] > 1.0 / use["cores"]
+    done = [t for t in st["trials"] if t["state"] == "COMPLETE" and t["reused_from"] is None]
+    assert done and all(t["seconds"] for t in done)
+    # busy time covers the longest evaluation and at most the evaluations one after another
+    assert max(t["seconds"]["total"] for t in done) <= use["busy_seconds"] + 1.0
+    assert 0.0 < use["cpu_seconds"] and 0.0 < use["share"] <= 1.0 + 1e-6
     out = cli("study", "status", str(reference_study))
     assert out.returncode == 0 and "machine use: " in out.stdout
 
