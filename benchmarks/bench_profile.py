@@ -26,7 +26,6 @@ import numpy as np
 
 from robustgait import CertifyConfig, Config, GaitParams, SimConfig, certify_gait, load_gait, load_robot
 from robustgait.certificate import push as push_module
-from robustgait.certificate import search as search_module
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine
 
@@ -53,7 +52,7 @@ def raw_speed(robot: Robot, gait: Any, qpos: np.ndarray, qvel: np.ndarray) -> fl
 def profile_certify(robot: Robot, gait: Any) -> dict[str, Any]:
     calls: list[dict[str, Any]] = []
     stop_seconds = [0.0]
-    orig_call, orig_stop, orig_find = push_module.PushMap.__call__, push_module.recovery_stop, search_module.find_orbit
+    orig_call, orig_stop = push_module.PushMap.__call__, push_module.recovery_stop
 
     def call(self: Any, impulse: np.ndarray, progress: Any = None) -> Any:
         t0, p0 = time.perf_counter(), self.physics_steps
@@ -82,7 +81,6 @@ def profile_certify(robot: Robot, gait: Any) -> dict[str, Any]:
     finally:
         push_module.PushMap.__call__ = orig_call  # type: ignore[method-assign]
         push_module.recovery_stop = orig_stop
-        search_module.find_orbit = orig_find
     t0 = time.perf_counter()
     text = json.dumps(cert.to_dict())
     io_seconds = time.perf_counter() - t0

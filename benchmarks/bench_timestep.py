@@ -24,6 +24,7 @@ import json
 import math
 import subprocess
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +32,7 @@ import numpy as np
 
 from robustgait import CertifyConfig, SimConfig, certify_gait, load_gait, load_robot, walk
 from robustgait.certificate.band import band_coordinates
+from robustgait.io.robotfile import read_mjcf
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine
 from robustgait.sim.walk import walk_orbit
@@ -39,18 +41,10 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def at_timestep(spec: str, h: float, stable: bool) -> Robot:
-    """The robot of ``spec`` with its model's timestep set to ``h`` [s] (everything else as the spec says); with
-    ``stable`` its servos are discretised as stable PD (Tan, Liu & Turk 2011): u = kp (c − q − h q̇) − kd q̇, i.e. the
-    damping kd + h kp, which ``implicitfast`` integrates implicitly with the rest of the velocity terms, in the model's
-    actuators and in the references' feed-forward (c = y_d + ((kd + h kp) ẏ_d + u_ff) / kp)."""
-    robot = load_robot(spec)
-    robot.model.opt.timestep = h
-    if stable:
-        m = robot.model
-        m.actuator_biasprm[:, 2] -= h * m.actuator_gainprm[:, 0]
-        robot.kd = robot.kd + h * robot.kp
-        robot.servo_kd = robot.servo_kd + h * robot.servo_kp
-    return robot
+    """The robot of ``spec`` with its ``[sim]`` timestep set to ``h`` [s] and ``stable_pd`` to ``stable`` (stable PD
+    servos: :func:`robustgait.robots.model.servo_damping`); everything else as the spec says."""
+    s = replace(load_robot(spec).spec, timestep=h, stable_pd=stable)
+    return Robot(s, read_mjcf(s))
 
 
 def setting(text: str) -> tuple[float, bool]:
