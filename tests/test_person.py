@@ -17,8 +17,17 @@ from robustgait.errors import RobustGaitError
 from robustgait.learn import History
 from robustgait.learn.oracle import REQUIREMENT_PENALTY, Outcome, batch_comparisons, person_scores, score
 from robustgait.learn.person import SimulatedPerson
+from robustgait.study.ahead import Ahead
+from robustgait.study.executors import Executor
 from robustgait.study.pareto import non_dominated, pareto
-from robustgait.study.person import automatic_answer, floor_record, recommendation, simulated_answer
+from robustgait.study.person import (
+    answer_size,
+    automatic_answer,
+    floor_record,
+    predicted_answer,
+    recommendation,
+    simulated_answer,
+)
 from robustgait.study.ranking import Requirement, figure_names, label_comparisons, requirements, shown
 from robustgait.study.run import create_study
 from robustgait.study.storage import TrialRecord
@@ -165,7 +174,7 @@ def test_a_requirement_on_an_unrecorded_figure_is_refused_before_the_study_exist
     assert not (tmp_path / "s").exists()
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_require_on_the_command_line(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
     res = subprocess.run([sys.executable, "-m", "robustgait.cli", "study", "run", str(tmp_path / "s"), "--robot", "exo",
@@ -204,3 +213,45 @@ def test_pareto_over_certificate_speed_and_a_comfort_figure():
     assert [r["trial"] for r in out["front"]] == [0, 1, 3]  # 2 is beaten by 1 on all three
     with pytest.raises(RobustGaitError, match="not a comfort cost"):
         pareto(st, "speed")
+
+
+# ---- over-drawn batches, evaluations ahead ----------------------------------------------------------------
+def test_the_predicted_answer_ranks_shown_gaits_by_utility_then_certificate():
+    a = predicted_answer([0.2, 0.9, -0.1, 0.5], [10.0, 20.0, 30.0, 40.0], [True, True, False, True])
+    assert a["ranks"] == [2, 0, None, 1] and a["by"] == "predicted"
+    prior = predicted_answer([0.0, 0.0, 0.0], [10.0, 30.0, 20.0], [True, True, True])  # the prior: the certificate
+    assert prior["ranks"] == [2, 0, 1]
+
+
+def test_an_answer_ranks_the_evaluated_candidates_of_its_iteration():
+    assert answer_size({"proposals": [1, 2, 3, 4, 5], "pending": {"size": 4, "shown": [0, 1, 3]}}) == 4
+    assert answer_size({"proposals": [1, 2, 3]}) == 3  # a study written before over-drawn batches
+
+
+class Recording(Executor):
+    """An executor that records what it is given (the tests of :class:`Ahead`'s rule; nothing is evaluated)."""
+
+    def __init__(self, workers: int):
+        self.workers, self.submitted = workers, []  # type: ignore[var-annotated]
+
+    def submit(self, key: int, params: dict[str, float]) -> None:
+        self.submitted.append((key, params["i"]))
+
+    @property
+    def pending(self) -> int:
+        return 0
+
+
+def test_ahead_fills_idle_workers_in_order_until_a_batch_may_be_shown():
+    ex = Recording(workers=2)
+    good = {0: True, 1: False, 2: True, 3: True, 4: True, 5: True}
+    ahead = Ahead(ex, 3, lambda i: {"i": float(i)}, lambda i, r: r["ok"])
+    ahead.plan([5, 0, 1, 2, 3, 4], known={5: {"ok": True}})  # 5 is the study's own evaluation already
+    assert ahead.fill() == 2 and ex.submitted == [(-2, 0.0), (-3, 1.0)]  # two workers: two at a time
+    assert ahead.fill() == 0
+    assert ahead.finish(-3, {"ok": good[1]}) == 1 and ahead.fill() == 1 and ex.submitted[-1] == (-4, 2.0)
+    ahead.finish(-2, {"ok": good[0]})
+    assert ahead.fill() == 0  # 5 and 0 may be shown, 2 runs: three would fill the batch
+    ahead.finish(-4, {"ok": good[2]})
+    assert ahead.fill() == 0 and ahead.submitted == 3
+    assert ahead.key_of(3) is None and ahead.take(0) == {"ok": True} and ahead.take(0) is None and ahead.used == 1

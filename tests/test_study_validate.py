@@ -1,4 +1,4 @@
-"""``robustgait study validate`` (issue 12): every unique gait of a study under the same disturbances, the
+"""``robustgait study validate``: every unique gait of a study under the same disturbances, the
 Spearman correlations, stored and reused per gait, the scatter in the study report.
 
 Fast tests use a small study on exo written through the study's own storage and file writers (Optuna for
@@ -71,7 +71,7 @@ def small_study(tmp_path_factory):
                 continue
             ev = (Evaluation(params=params, status="generation_failed", reason="Infeasible_Parameters: test",
                              step_cap=CAP) if gait is None else _evaluation(robot, gait, params, certify))
-            runner._complete(store, trial, runner._write_files(trial, ev.to_dict()), bar)
+            runner._complete(store, trial, runner._write_files(trial.index, ev.to_dict()), bar)
     finally:
         store.close()
     return d
@@ -131,6 +131,7 @@ def test_every_unique_gait_meets_the_same_disturbances(small_study, first_run):
     validate_study(small_study, SMALL, progress=False)  # push.json back to seed 0 (stored: nothing runs)
 
 
+@pytest.mark.slow  # the study it reads takes seconds to build: plain pytest stays ≤ 60 s
 def test_correlations_have_n_and_p_or_a_reason(small_study, first_run):
     out, _ = first_run
     stored = json.loads((small_study / VALIDATION_DIR / "push.json").read_text())
@@ -149,6 +150,7 @@ def test_correlations_have_n_and_p_or_a_reason(small_study, first_run):
     assert stored["sim"] == {**to_dict(TINY.sim), "n_threads": 0}  # the study's simulation
 
 
+@pytest.mark.slow  # the study it reads takes seconds to build: plain pytest stays ≤ 60 s
 def test_rerun_reuses_stored_results(small_study, first_run):
     out, seconds = first_run
     t0 = time.perf_counter()
@@ -173,6 +175,7 @@ def test_config_key_ignores_threads_and_workers_only():
     assert key != config_key(SMALL, c, replace(s, step_cap=6), "push")
 
 
+@pytest.mark.slow  # the study it reads takes seconds to build: plain pytest stays ≤ 60 s
 def test_cli_errors_exit_2_with_one_line(tmp_path, capsys, small_study):
     (tmp_path / "plain").mkdir()
     empty = tmp_path / "empty"
@@ -192,6 +195,7 @@ def test_cli_errors_exit_2_with_one_line(tmp_path, capsys, small_study):
         validate_study(small_study, replace(SMALL, trials=20_000), progress=False)
 
 
+@pytest.mark.slow  # the study it reads takes seconds to build: plain pytest stays ≤ 60 s
 def test_cli_text_and_json(small_study, first_run, capsys):
     assert main(["study", "validate", str(small_study), "--trials", "8", "--steps-after", "3", "--quiet"]) == 0
     text = capsys.readouterr().out
@@ -246,7 +250,7 @@ def test_report_with_and_without_validation(small_study, first_run, tmp_path):
     assert "Validation:" not in page and (bare / "report" / "history.png").is_file()
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_a_changed_gait_file_is_validated_again(small_study, first_run):
     """The stored results are keyed by the files too (last in this module: it leaves one gait stored twice)."""
     g = next(r for r in first_run[0]["gaits"] if r["grid_index"] == 20)

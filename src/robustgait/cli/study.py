@@ -73,6 +73,10 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
         shown = "" if floor is None else f"robustness floor {_name(st)} ≥ {floor['value']:.4g} {st['unit']}; "
         waiting = "" if person["pending"] is None else f"; batch {person['pending'] + 1} waits for an answer " \
             f"(robustgait study serve {directory})"
+        ahead = person.get("ahead") or {}
+        if ahead.get("evaluated"):
+            waiting += (f"; {ahead['evaluated']} gaits evaluated ahead of an answer, {ahead['used']} of them then "
+                        "proposed")
         print(f"  person: {shown}{len(person['answers'])} batches answered{waiting}")
     if st["environment_changes"]:
         print("created with other library versions (" + ", ".join(st["environment_changes"]) + "): the learner "

@@ -81,6 +81,12 @@ class PersonConfig:
     figures: Annotated[tuple[Str, ...], Doc("comfort figures shown beside each gait (not in blind mode)")] = (
         "speed", "cadence", "pelvis_acc_vertical_rms", "pelvis_acc_lateral_rms", "impact_force_ratio",
         "cost_of_transport")
+    overdraw: Annotated[Int, Doc("candidates the learner proposes beyond the batch: they are evaluated in its order "
+                                 "only while fewer than study.batch gaits of the iteration may be shown, so that a "
+                                 "batch shown is full", ge=0, le=100)] = 5
+    ahead: Annotated[Bool, Doc("while a person answers, evaluate the candidates the learner would propose next if the "
+                               "answer were the one its model predicts (reused when they are proposed; discarded "
+                               "otherwise)")] = True
     video_steps: Annotated[Int, Doc("steps of each gait's looping video (after the comfort figures' skipped steps; "
                                     "2: one stride, which loops seamlessly)", ge=1, le=20)] = 2
     simulated: SimulatedPersonConfig = dataclasses.field(default_factory=SimulatedPersonConfig)

@@ -84,7 +84,7 @@ class StudyConfig:
     seed: Annotated[Int, Doc("seed of the learner", ge=0, le=SEED_LIMIT)] = 0
     uncertified_penalty: Annotated[Float, Doc(
         "push and robustness oracles: a gait that walked the step cap without a certificate scores cap − this, "
-        "below every certified gait (0: tied with a certified r* = 0, the rule of studies created before 2026-11-25)",
+        "below every certified gait (0: tied with a certified r* = 0, as a study written without this field ranks)",
         ge=0.0, lt=1.0)] = UNCERTIFIED_PENALTY
     storage: Annotated[Str | None, Doc(
         "SQLAlchemy URL of the Optuna database; not set: a SQLite file in the study directory")] = None

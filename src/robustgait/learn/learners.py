@@ -129,6 +129,12 @@ class Learner:
             mu = posterior_mean(m, self._x[visited])
         return int(visited[int(np.argmax(mu))])
 
+    def predicted_utility(self, history: History, indices: Sequence[int], iteration: int = 0) -> NDArray[np.float64]:
+        """The preference model's posterior mean utility (len(indices),) of the grid points ``indices`` given
+        ``history`` (the prior's, zeros, before any comparison)."""
+        with torch_threads(1):
+            return np.asarray(posterior_mean(self.model(history, iteration), self._x[list(indices)]), dtype=float)
+
     def propose(self, history: History, iteration: int, batch: int) -> list[int]:
         """The ``batch`` distinct grid indices to evaluate in iteration ``iteration`` given ``history`` (the
         iterations before it)."""

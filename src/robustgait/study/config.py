@@ -30,7 +30,7 @@ _CERTIFY_BEFORE_3 = {**STATE_CHOICE_DEFAULTS, "disturbance": "state"}
 
 def _without_unused_state_choice(raw: Any) -> Any:
     """A study whose certificate is J* (metric push, or a push certificate) with the state choice reset to the
-    defaults: one written before the two were exclusive (2026-11-25) may carry a state, set or horizon it never
+    defaults: one written before the two were exclusive may carry a state, set or horizon it never
     used — the push certificate ignored them — which now fails validation."""
     cfg = raw.get("config") if isinstance(raw, dict) else None
     if not isinstance(cfg, dict) or not isinstance(cfg.get("certify"), dict):
@@ -138,6 +138,11 @@ def load_config(directory: str | Path) -> StudySetup:
         certify = {k: v for k, v in certify.items() if k != "push_steps"} | {"push": push}
         raw = {**raw, "config": {**raw["config"], "certify": certify}}
     raw = _without_unused_state_choice(_retired_certify_fields(raw))
+    if isinstance(raw, dict) and isinstance(raw.get("config"), dict):
+        person = raw["config"].get("person")
+        person = dict(person) if isinstance(person, dict) else {}
+        if "overdraw" not in person:  # written before over-drawn batches: its iterations evaluate the batch alone
+            raw = {**raw, "config": {**raw["config"], "person": {**person, "overdraw": 0, "ahead": False}}}
     if not (isinstance(raw, dict) and raw.get("format_version") == FORMAT_VERSION and isinstance(raw.get("robot"), str)
             and "config" in raw):
         raise input_error(path, f"unsupported study file (format_version {FORMAT_VERSION} expected)")

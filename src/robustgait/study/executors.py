@@ -1,6 +1,6 @@
 """Where evaluations run (``docs/studies.md``): local worker processes (default) or Ray actors.
 
-Every worker loads the robot and builds the gait generator once (≈ 6.5 s on exo), then evaluates gait
+Every worker loads the robot and builds the gait generator once (seconds: docs/performance.md), then evaluates gait
 after gait with it. The study's driver process keeps the database: workers receive parameters and return
 :meth:`Evaluation.to_dict`, so they need no access to the study directory (Ray workers may run on other
 machines). Each local worker gets one MuJoCo rollout thread per core rather than a share of the cores
@@ -216,6 +216,17 @@ class Executor:
         raise NotImplementedError
 
     def next_result(self) -> tuple[int, dict[str, Any]]:
+        """The next finished evaluation (blocks; an error if none is pending)."""
+        got = self._next(None)
+        assert got is not None  # an untimed wait returns a finished evaluation
+        return got
+
+    def poll(self, timeout: float) -> tuple[int, dict[str, Any]] | None:
+        """The next finished evaluation, waiting at most ``timeout`` seconds for one (None: none finished or none is
+        pending)."""
+        return self._next(timeout) if self.pending else None
+
+    def _next(self, timeout: float | None) -> tuple[int, dict[str, Any]] | None:
         raise NotImplementedError
 
     @property
@@ -265,11 +276,13 @@ class LocalExecutor(Executor):
     def pending(self) -> int:
         return len(self._futures)
 
-    def next_result(self) -> tuple[int, dict[str, Any]]:
+    def _next(self, timeout: float | None) -> tuple[int, dict[str, Any]] | None:
         while True:
             if not self._futures:
                 raise RobustGaitError("no evaluation is pending")
-            done, _ = wait(list(self._futures), return_when=FIRST_COMPLETED)
+            done, _ = wait(list(self._futures), timeout=timeout, return_when=FIRST_COMPLETED)
+            if not done:
+                return None
             fut = next(iter(done))
             key, params = self._futures.pop(fut)
             try:
@@ -351,10 +364,12 @@ class RayExecutor(Executor):
     def pending(self) -> int:
         return len(self._queue) + len(self._running)
 
-    def next_result(self) -> tuple[int, dict[str, Any]]:
+    def _next(self, timeout: float | None) -> tuple[int, dict[str, Any]] | None:
         if not self._running:
             raise RobustGaitError("no evaluation is pending")
-        ready, _ = self.ray.wait(list(self._running), num_returns=1)
+        ready, _ = self.ray.wait(list(self._running), num_returns=1, timeout=timeout)
+        if not ready:
+            return None
         actor, key = self._running.pop(ready[0])
         try:
             result = self.ray.get(ready[0])

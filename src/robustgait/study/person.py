@@ -72,9 +72,10 @@ def hidden_reason(r: TrialRecord, floor: float, reqs: Sequence[Requirement], uni
 
 def pending_record(batch: Sequence[TrialRecord], floor: float, reqs: Sequence[Requirement],
                    unit: str) -> dict[str, Any]:
-    """What iteration k asks: the shown slots, and per hidden slot why."""
+    """What iteration k asks: the number of its evaluated candidates (slots 0 … size − 1), the shown slots, and per
+    hidden slot why."""
     reasons = {r.slot: hidden_reason(r, floor, reqs, unit) for r in batch}
-    return {"shown": [s for s, why in reasons.items() if why is None],
+    return {"size": len(batch), "shown": [s for s, why in reasons.items() if why is None],
             "hidden": {str(s): why for s, why in reasons.items() if why is not None}, "asked_at": time.time()}
 
 
@@ -128,11 +129,30 @@ def record_answer(store: StudyStore, k: int, answer: dict[str, Any]) -> dict[str
             waiting = pending_iteration(iterations)
             raise AnswerError(f"iteration {k + 1} does not wait for an answer"
                               + (f" (iteration {waiting + 1} does)" if waiting is not None else ""), 409)
-        batch_size = len(rec.get("proposals") or [])
+        batch_size = answer_size(rec)
         check_answer(pending, batch_size, answer["ranks"], answer["labels"])
         rec["answer"] = {**answer, "answered_at": time.time()}
         store.set_iteration(k, rec)
         return rec
+
+
+def answer_size(record: dict[str, Any]) -> int:
+    """How many slots an answer to this iteration ranks: its evaluated candidates (a study written before over-drawn
+    batches: its proposals)."""
+    pending = record.get("pending") or {}
+    return int(pending["size"]) if "size" in pending else len(record.get("proposals") or [])
+
+
+def predicted_answer(utilities: Sequence[float], fallback: Sequence[float], show: Sequence[bool]) -> dict[str, Any]:
+    """The answer a preference model predicts for a batch: the shown gaits ranked by their predicted utility, best
+    first (equal utilities, as under the prior: by the certificate's oracle ``fallback``), the hidden ones unranked.
+    Never stored: it is what :mod:`robustgait.study.ahead` evaluates the next proposals for."""
+    order = sorted((i for i, s in enumerate(show) if s),
+                   key=lambda i: (-round(float(utilities[i]), 9), -fallback[i], i))
+    ranks: list[int | None] = [None] * len(show)
+    for rank, i in enumerate(order):
+        ranks[i] = rank
+    return {"ranks": ranks, "labels": [None] * len(show), "by": "predicted"}
 
 
 def pending_iteration(iterations: dict[int, dict[str, Any]]) -> int | None:

@@ -116,12 +116,13 @@ def history_before(k: int, batches: Mapping[int, Sequence[TrialRecord]], config:
                    iterations: Mapping[int, Mapping[str, Any]] | None = None,
                    reqs: Sequence[Requirement] = ()) -> History:
     """The learner's history: iterations 0..k−1 (each must be complete), ranked by the study's oracle (a person study:
-    by the stored answers, with the comparisons of their labels)."""
+    by the stored answers, with the comparisons of their labels). A person study's iteration holds ``config.batch``
+    evaluated candidates or more (``person.overdraw``): every one of them is ranked."""
     iterations = iterations or {}
     ranked = []
     for i in range(k):
         batch = batches.get(i, [])
-        if len(batch) != config.batch:
+        if len(batch) < config.batch or (len(batch) > config.batch and not config.asks_a_person):
             raise RobustGaitError(f"iteration {i} has {len(batch)} of {config.batch} trials complete")
         scores = batch_scores(config, batch, iterations.get(i, {}), reqs)
         ranked.append([(r.index, s) for r, s in zip(batch, scores, strict=True)])

@@ -14,6 +14,12 @@ resume); it is recorded (all its trials WAITING) before any is dispatched; the n
 every trial of this one is COMPLETE. A gait proposed again later is not simulated again: its trial is
 completed with the stored result (``reused_from``), since an evaluation depends only on the parameters
 and the config (:mod:`robustgait.study.evaluate`).
+
+A study that asks a person (docs/person.md) proposes ``batch + person.overdraw`` candidates, in the learner's
+order, and records each trial only when it is dispatched: the next candidate is evaluated while fewer than
+``batch`` of the iteration's evaluated or running candidates may be shown, so its trials are slots 0 … n − 1 with
+n between ``batch`` and ``batch + overdraw``. While a person answers, idle workers evaluate ahead
+(:mod:`robustgait.study.ahead`).
 """
 
 from __future__ import annotations
@@ -24,10 +30,10 @@ import os
 import sys
 import time
 import uuid
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from tqdm import tqdm
@@ -44,6 +50,7 @@ from robustgait.learn.space import ActionSpace
 from robustgait.robots import Robot
 from robustgait.robots.spec import SHIPPED_DIR
 from robustgait.sim.walk import check_walk_work
+from robustgait.study.ahead import Ahead
 from robustgait.study.config import StudySetup, environment_changes, load_config, save_config
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.executors import Executor, WorkerSpec, make_executor
@@ -52,21 +59,33 @@ from robustgait.study.person import (
     automatic_answer,
     floor_record,
     pending_record,
+    predicted_answer,
     shown_flags,
     simulated_answer,
 )
-from robustgait.study.ranking import (  # history_before, study_score: also robustgait.study.run's, as before
+from robustgait.study.ranking import (  # history_before, study_score: re-exported by robustgait.study.run
     Requirement,
     batch_scores,
     history_before,
     requirements,
+    shown,
     study_score,
 )
 from robustgait.study.storage import StudyStore, TrialRecord, default_url
 
-# asked when a person study's batch k waits for answers: returns once the answer is
-# stored (robustgait.web serves the page that stores it)
-Asker = Callable[[int], None]
+
+class Asker(Protocol):
+    """How a person study asks (:class:`robustgait.web.server.PersonPage` serves the page that stores the answers)."""
+
+    def show(self, k: int) -> None:
+        """Show iteration k's pending batch to the person (its videos rendered)."""
+
+    def answered(self, k: int, timeout: float) -> bool:
+        """Whether iteration k's answer is stored, waiting up to ``timeout`` s for one."""
+        ...
+
+
+POLL = 0.5  # s: how often a study waiting for a person looks for the answer and its evaluations ahead
 
 LOCK_FILE = ".lock"
 GAITS_DIR = "gaits"
@@ -223,6 +242,7 @@ class StudyRunner:
         self.reqs: list[Requirement] = requirements(self.config, self.space.names)
         self.asker = asker
         self.floor = 0.0
+        self.ahead: Ahead | None = None  # evaluations ahead of a person's answer
 
     def executor(self) -> Executor:
         if self._executor is None:
@@ -253,10 +273,13 @@ class StudyRunner:
             for k in range(cfg.iterations):
                 batches = completed_batches(store.records())
                 iterations = store.iterations()
-                if len(batches.get(k, [])) == cfg.batch and "recommendation" in iterations.get(k, {}):
+                if len(batches.get(k, [])) >= cfg.batch and "recommendation" in iterations.get(k, {}):
                     continue
                 self._propose(store, k, history_before(k, batches, cfg, iterations, self.reqs))
-                self._evaluate(store, k, bar)
+                if cfg.asks_a_person:
+                    self._fill(store, k, bar)
+                else:
+                    self._evaluate(store, k, bar)
                 if cfg.asks_a_person:
                     self._ask(store, k)
                 self._close_iteration(store, k, bar)
@@ -277,7 +300,8 @@ class StudyRunner:
 
     def _ask(self, store: StudyStore, k: int) -> None:
         """Iteration k's answer: stored already (a resumed study), none needed (no gait above the floor), a simulated
-        person's, or a person's — the batch is recorded as pending, then the asker waits until the answer is stored."""
+        person's, or a person's — the batch is recorded as pending and shown, and the study evaluates ahead
+        (``person.ahead``) until the answer is stored."""
         rec = dict(store.iterations().get(k, {}))
         if "answer" in rec:
             return
@@ -295,33 +319,76 @@ class StudyRunner:
             if self.asker is None:
                 raise RobustGaitError(f"{self.directory}: iteration {k + 1} waits for a person's answers: "
                                       f"robustgait study serve {self.directory}")
-            self.asker(k)
-            if "answer" not in store.iterations().get(k, {}):
-                raise RobustGaitError(f"iteration {k + 1}: the person's answer was not stored")
+            if self.setup.config.person.ahead and k + 1 < self.config.iterations:
+                self._plan_ahead(store, k, batch, show)
+            self.asker.show(k)
+            while not self.asker.answered(k, 0.0 if self.ahead is not None and self.ahead.busy else POLL):
+                if self.ahead is not None and self.ahead.busy:
+                    got = self.executor().poll(POLL)
+                    if got is not None:
+                        self.ahead.finish(got[0], self._write_files(self.ahead.index_of(got[0]), got[1]))
+                    self.ahead.fill()
             return
         store.set_iteration(k, rec)
 
-    def _propose(self, store: StudyStore, k: int, history: History) -> None:
-        """Reproduce the proposals of iteration k and enqueue the slots not recorded yet; a stored slot that
-        differs from the reproduction is an error (another version or config wrote this study)."""
+    def _plan_ahead(self, store: StudyStore, k: int, batch: list[TrialRecord], show: list[bool]) -> None:
+        """Start evaluating iteration k + 1's candidates as the learner would propose them if the person answered as
+        its model predicts (:func:`~robustgait.study.person.predicted_answer`); recorded in iteration k's record."""
         cfg = self.config
+        records = store.records()
+        batches, iterations = completed_batches(records), store.iterations()
+        history = history_before(k, batches, cfg, iterations, self.reqs)
+        utilities = self.learner.predicted_utility(history, [r.index for r in batch], k)
+        fallback = [study_score(cfg, r, self.reqs) for r in batch]
+        guess = {**iterations[k], "answer": predicted_answer(list(utilities), fallback, show)}
         t0 = time.perf_counter()
-        proposal = self.learner.propose(history, k, cfg.batch)
+        candidates = self.learner.propose(history_before(k + 1, batches, cfg, {**iterations, k: guess}, self.reqs),
+                                          k + 1, self._candidates())
+        if self.ahead is None:
+            self.ahead = Ahead(self.executor(), cfg.batch, self.space.value, self._qualifies)
+        known = {r.index: r.result for r in records if r.state == "COMPLETE" and r.result is not None}
+        self.ahead.plan(candidates, known)
+        self.ahead.fill()
+        rec = dict(store.iterations()[k])
+        rec["ahead"] = {"candidates": candidates, "propose_seconds": time.perf_counter() - t0}
+        store.set_iteration(k, rec)
+
+    def _qualifies(self, index: int, result: dict[str, Any]) -> bool:
+        """Whether a person may be shown the evaluated gait ``index`` (:func:`~robustgait.study.ranking.shown`)."""
+        return shown(TrialRecord(-1, "COMPLETE", -1, -1, index, self.space.value(index), None, result, None, None, {}),
+                     self.floor, self.reqs)
+
+    def _candidates(self) -> int:
+        """Candidates an iteration proposes: the batch, and for a study that asks a person its over-draw."""
+        return self.config.batch + (self.setup.config.person.overdraw if self.config.asks_a_person else 0)
+
+    def _propose(self, store: StudyStore, k: int, history: History) -> None:
+        """Reproduce the proposals of iteration k and enqueue the slots not recorded yet (a study that asks a person:
+        none, :meth:`_fill` records each when it dispatches it); a stored slot that differs from the reproduction is
+        an error (another version or config wrote this study)."""
+        cfg = self.config
+        size = self._candidates()
+        t0 = time.perf_counter()
+        proposal = self.learner.propose(history, k, size)
         seconds = time.perf_counter() - t0
         stored = {r.slot: r.index for r in store.records() if r.iteration == k}
         for slot, index in stored.items():
-            if slot >= cfg.batch or proposal[slot] != index:
+            if slot >= size or proposal[slot] != index:
                 changes = environment_changes(self.setup.environment)
                 raise RobustGaitError(f"{self.directory}: iteration {k} slot {slot} holds grid index {index} but "
-                                      f"the learner reproduces {proposal[slot] if slot < cfg.batch else 'nothing'}"
+                                      f"the learner reproduces {proposal[slot] if slot < size else 'nothing'}"
                                       + (f" (created with other libraries: {', '.join(changes)})" if changes else ""))
         if k not in store.iterations():
             store.set_iteration(k, {"proposals": proposal, "learner_seed": iteration_seed(cfg.seed, k),
                                     "propose_seconds": seconds})
-        seeds = {"learner": cfg.seed, "certify": self.setup.config.certify.seed}
+        if cfg.asks_a_person:
+            return
         for slot, index in enumerate(proposal):
             if slot not in stored:
-                store.enqueue(k, slot, index, {"seeds": seeds})
+                store.enqueue(k, slot, index, self._trial_attrs())
+
+    def _trial_attrs(self) -> dict[str, Any]:
+        return {"seeds": {"learner": self.config.seed, "certify": self.setup.config.certify.seed}}
 
     def _evaluate(self, store: StudyStore, k: int, bar: tqdm) -> None:
         cache = {r.index: r for r in store.records() if r.state == "COMPLETE" and r.reused_from is None}
@@ -330,20 +397,77 @@ class StudyRunner:
             if trial.iteration != k:
                 raise RobustGaitError(f"trial {trial.number} of iteration {trial.iteration} is waiting while "
                                       f"iteration {k} runs")
-            earlier = cache.get(trial.index)
-            if earlier is not None and earlier.result is not None:
-                self._complete(store, trial, earlier.result, bar, reused_from=earlier.number)
-                continue
-            started[trial.number] = trial
-            self.executor().submit(trial.number, trial.params)
+            self._dispatch(store, trial, cache, started, bar)
         while started:
-            number, result = self.executor().next_result()
-            trial = started.pop(number)
-            self._complete(store, trial, self._write_files(trial, result), bar)
+            self._collect(store, started, bar)
 
-    def _write_files(self, trial: TrialRecord, result: dict[str, Any]) -> dict[str, Any]:
+    def _fill(self, store: StudyStore, k: int, bar: tqdm) -> None:
+        """Evaluate iteration k's candidates in the learner's order, each recorded when it is dispatched, while fewer
+        than ``batch`` of those evaluated or running may be shown (a study that asks a person)."""
+        cfg = self.config
+        proposals = store.iterations()[k]["proposals"]
+        cache = {r.index: r for r in store.records() if r.state == "COMPLETE" and r.reused_from is None}
+        started: dict[int, TrialRecord] = {}
+        while True:
+            while (trial := store.start()) is not None:  # a retried or recorded trial first
+                if trial.iteration != k:
+                    raise RobustGaitError(f"trial {trial.number} of iteration {trial.iteration} is waiting while "
+                                          f"iteration {k} runs")
+                self._dispatch(store, trial, cache, started, bar)
+            mine = [r for r in store.records() if r.iteration == k]
+            ready = sum(1 for r in mine if r.state == "COMPLETE" and shown(r, self.floor, self.reqs))
+            slots = len({r.slot for r in mine})
+            if ready + len(started) < cfg.batch and slots < len(proposals):
+                store.enqueue(k, slots, proposals[slots], self._trial_attrs())
+                if slots >= cfg.batch:
+                    bar.total += 1
+                    bar.refresh()
+                continue
+            if not started:
+                break
+            self._collect(store, started, bar)
+        before = store.iterations().get(k - 1, {})
+        if self.ahead is not None and "ahead" in before:  # what the evaluations ahead of this iteration gave
+            store.set_iteration(k - 1, {**before, "ahead": {**before["ahead"], "evaluated": self.ahead.submitted,
+                                                            "used": self.ahead.used}})
+
+    def _dispatch(self, store: StudyStore, trial: TrialRecord, cache: dict[int, TrialRecord],
+                  started: dict[int, TrialRecord], bar: tqdm) -> None:
+        """Complete ``trial`` from an earlier evaluation of its gait (stored, or made ahead), adopt the running
+        evaluation ahead of it, or submit it."""
+        earlier = cache.get(trial.index)
+        if earlier is not None and earlier.result is not None:
+            self._complete(store, trial, earlier.result, bar, reused_from=earlier.number)
+            return
+        made = self.ahead.take(trial.index) if self.ahead is not None else None
+        if made is not None:
+            self._complete(store, trial, made, bar, extra={"evaluated_ahead": True})
+            return
+        key = self.ahead.key_of(trial.index) if self.ahead is not None else None
+        if key is not None:
+            started[key] = trial
+            return
+        started[trial.number] = trial
+        self.executor().submit(trial.number, trial.params)
+
+    def _collect(self, store: StudyStore, started: dict[int, TrialRecord], bar: tqdm) -> None:
+        """Wait for the next finished evaluation: a trial's, or one made ahead (kept; completing the trial that
+        adopted it)."""
+        key, result = self.executor().next_result()
+        if self.ahead is not None and self.ahead.owns(key):
+            index = self.ahead.finish(key, self._write_files(self.ahead.index_of(key), result))
+            trial = started.pop(key, None)
+            if trial is not None:
+                made = self.ahead.take(index)
+                assert made is not None
+                self._complete(store, trial, made, bar, extra={"evaluated_ahead": True})
+            return
+        trial = started.pop(key)
+        self._complete(store, trial, self._write_files(trial.index, result), bar)
+
+    def _write_files(self, index: int, result: dict[str, Any]) -> dict[str, Any]:
         """gait.json and certificate.json (atomic writes) → the result without them, with their paths."""
-        rel = Path(GAITS_DIR) / gait_label(self.space, trial.index)
+        rel = Path(GAITS_DIR) / gait_label(self.space, index)
         (self.directory / rel).mkdir(parents=True, exist_ok=True)
         out = {k: v for k, v in result.items() if k not in ("gait", "certificate")}
         out["gait_file"] = out["certificate_file"] = None
@@ -359,10 +483,10 @@ class StudyRunner:
         return out
 
     def _complete(self, store: StudyStore, trial: TrialRecord, result: dict[str, Any], bar: tqdm,
-                  reused_from: int | None = None) -> None:
+                  reused_from: int | None = None, extra: dict[str, Any] | None = None) -> None:
         value = study_score(self.config, replace(trial, result=result), self.reqs)
-        extra: dict[str, Any] = {"reused_from": reused_from} if reused_from is not None else {}
-        store.complete(trial.number, result, value, extra)
+        attrs: dict[str, Any] = {"reused_from": reused_from} if reused_from is not None else {}
+        store.complete(trial.number, result, value, {**attrs, **(extra or {})})
         bar.update(1)
         bar.set_postfix_str(f"iteration {trial.iteration + 1}/{self.config.iterations}, last: "
                             f"{outcome_line(result, self.name)}")

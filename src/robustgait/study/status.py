@@ -20,7 +20,8 @@ _TRIAL_KEYS = ("status", "reason", "steps_taken", "step_cap", "fell", "fall_reas
 def trial_summary(r: TrialRecord) -> dict[str, Any]:
     out: dict[str, Any] = {"number": r.number, "state": r.state, "iteration": r.iteration, "slot": r.slot,
                            "grid_index": r.index, "params": r.params, "score": r.value,
-                           "reused_from": r.reused_from, "retry_of": r.retry_of}
+                           "reused_from": r.reused_from, "retry_of": r.retry_of,
+                           "evaluated_ahead": bool(r.attrs.get("evaluated_ahead"))}
     res = r.result or {}
     out.update({k: res.get(k) for k in _TRIAL_KEYS})
     cert = res.get("certificate") or {}
@@ -80,7 +81,8 @@ def utilisation(records: list[TrialRecord]) -> dict[str, float] | None:
 
 def study_status(directory: str | Path) -> dict[str, Any]:
     """JSON-ready: ``trials_done``, ``trials_planned``, ``state`` (complete | running | stopped),
-    ``person`` (a person study: its ``floor``, the ``pending`` iteration, every ``answer``; else None), ``require``,
+    ``person`` (a person study: its ``floor``, the ``pending`` iteration, every ``answer``, the gaits evaluated
+    ``ahead`` of an answer and how many of them were then proposed; else None), ``require``,
     ``best`` (the learner's recommendation after the last finished iteration: trial, params, r_star,
     steps_taken, comfort, gait file), ``best_observed`` (the evaluated gait with the highest oracle score), one
     record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs), each with its
@@ -124,7 +126,9 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     if cfg.asks_a_person:  # the floor, the batch waiting for answers, every answer (docs/person.md)
         person = {"floor": floor, "pending": pending_iteration(iterations),
                   "answers": [{"iteration": k, **iterations[k]["answer"]} for k in sorted(iterations)
-                              if "answer" in iterations[k]]}
+                              if "answer" in iterations[k]],
+                  "ahead": {key: sum(int(iterations[k].get("ahead", {}).get(key, 0)) for k in iterations)
+                            for key in ("evaluated", "used")}}
     return {"directory": str(d.resolve()), "state": state, "robot": setup.robot, "metric": cfg.metric,
             "require": list(cfg.require), "person": person,
             "unit": setup.config.study_certify.unit, "certificate": setup.config.study_certify.space,

@@ -1,4 +1,4 @@
-"""Every unique gait of a study under the same disturbances (issue 12, ``robustgait study validate DIR``): does
+"""Every unique gait of a study under the same disturbances (``robustgait study validate DIR``): does
 r* — or the steps taken — predict how often a gait survives disturbances it never met in the study?
 
 One :class:`~robustgait.config.ValidateConfig` for all gaits, so every gait meets the same draws (common

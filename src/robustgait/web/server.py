@@ -28,7 +28,14 @@ from robustgait.config import RunConfig, WebConfig, radius_name
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.sim.comfort import FIGURES
 from robustgait.study.config import load_config
-from robustgait.study.person import FLOOR_ATTR, AnswerError, pending_iteration, recommendation, record_answer
+from robustgait.study.person import (
+    FLOOR_ATTR,
+    AnswerError,
+    answer_size,
+    pending_iteration,
+    recommendation,
+    record_answer,
+)
 from robustgait.study.ranking import requirements
 from robustgait.study.run import GAITS_DIR, completed_batches, gait_label, open_store
 from robustgait.study.storage import TrialRecord
@@ -36,7 +43,6 @@ from robustgait.web.answers import parse_answer
 
 LOG = logging.getLogger("robustgait.web")
 VIDEO_FILE = "person.mp4"
-POLL = 0.5  # s: how often the waiting study looks for a stored answer besides the page's signal
 
 
 def gait_names(n: int) -> list[str]:
@@ -49,8 +55,9 @@ def _finite(v: Any) -> Any:
 
 
 class PersonPage:
-    """The state behind the page of one study directory; :meth:`ask` is the study's asker (it renders the pending
-    batch's videos, then waits until the page stores the person's answer)."""
+    """The state behind the page of one study directory, and the study's asker
+    (:class:`robustgait.study.run.Asker`): :meth:`show` renders the pending batch's videos and shows it,
+    :meth:`answered` says whether the page has stored its answer."""
 
     def __init__(self, directory: str | Path, token: str | None = None):
         self.directory = Path(directory)
@@ -63,7 +70,7 @@ class PersonPage:
         self.token = token or secrets.token_urlsafe(18)
         self.store = open_store(self.directory, self.setup, self.space)
         self.lock = threading.Lock()  # the page's threads share one database connection
-        self.answered = threading.Event()
+        self.answer_posted = threading.Event()
         self.final_seen = threading.Event()
         self.ready: int | None = None  # the pending iteration whose videos are rendered
         self.running = False  # a study runner in this process drives the study
@@ -72,17 +79,18 @@ class PersonPage:
         self._robot: Any = None
 
     # ---- the study's side --------------------------------------------------------------------------------
-    def ask(self, k: int) -> None:
-        """Render the videos of iteration k's shown gaits, show the batch, and wait until its answer is stored."""
+    def show(self, k: int) -> None:
+        """Render the videos of iteration k's shown gaits, then show the batch on the page."""
         self.prepare(k)
         self.ready = k
         LOG.info("iteration %d waits for the person's answer", k + 1)
-        while True:
-            self.answered.wait(POLL)
-            self.answered.clear()
-            with self.lock:
-                if "answer" in self.store.iterations().get(k, {}):
-                    return
+
+    def answered(self, k: int, timeout: float) -> bool:
+        """Whether iteration k's answer is stored, waiting up to ``timeout`` s for the page to post one."""
+        self.answer_posted.wait(timeout)
+        self.answer_posted.clear()
+        with self.lock:
+            return "answer" in self.store.iterations().get(k, {})
 
     def prepare(self, k: int) -> None:
         from robustgait.io.gaitfile import load_gait
@@ -208,14 +216,14 @@ class PersonPage:
         k = payload.get("iteration") if isinstance(payload, dict) else None
         if isinstance(k, int) and not isinstance(k, bool) and k not in iterations:
             raise AnswerError(f"iteration {k + 1} is unknown (the study has {len(iterations)} so far)", 409)
-        size = len(iterations.get(k, {}).get("proposals") or []) if isinstance(k, int) else 0
+        size = answer_size(iterations.get(k, {})) if isinstance(k, int) else 0
         posted = parse_answer(payload, size)
         if posted.iteration == pending_iteration(iterations) and self.ready != posted.iteration:
             raise AnswerError(f"iteration {posted.iteration + 1} is not shown yet", 409)
         with self.lock:
             record_answer(self.store, posted.iteration, {"ranks": posted.ranks, "labels": posted.labels,
                                                          "by": "person"})
-        self.answered.set()
+        self.answer_posted.set()
         LOG.info("iteration %d: answer stored", posted.iteration + 1)
         return {"ok": True, "iteration": posted.iteration}
 
@@ -382,7 +390,7 @@ def serve_study(directory: str | Path, run: RunConfig, web: WebConfig, *, progre
                      "can answer for the person (docs/person.md)")
         page.running = True
         try:
-            run_study(d, run, progress=progress, verbose=verbose, asker=page.ask)
+            run_study(d, run, progress=progress, verbose=verbose, asker=page)
         finally:
             page.running = False
         page.final_seen.wait(web.linger)

@@ -1,0 +1,99 @@
+"""A person study's batches (docs/person.md): candidates over-drawn so that each batch shown is full, evaluations made
+ahead while the person answers — on a tiny exo study run by the real runner and workers, answered by a person who
+takes their time (:class:`Patient`, the runner's :class:`~robustgait.study.run.Asker`); and a study written before
+over-drawn batches keeps its rule."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import pytest
+
+from robustgait.config import (
+    CertifyConfig,
+    ComfortConfig,
+    Config,
+    GaitParams,
+    PersonConfig,
+    SimConfig,
+    StudyConfig,
+)
+from robustgait.io.robotfile import load_robot
+from robustgait.study.config import load_config
+from robustgait.study.evaluate import evaluate
+from robustgait.study.person import record_answer
+from robustgait.study.run import create_study, open_store, run_study
+from robustgait.study.status import study_status
+
+BATCH, OVERDRAW = 3, 3
+# evaluations walk 5 steps and certify with 10 uniform samples; a gait is shown only if its step is 0.14 m or longer
+TINY = Config(study=StudyConfig(iterations=3, batch=BATCH, seed=0, metric="person", require=("step_length>=0.14",)),
+              sim=SimConfig(step_cap=5), certify=CertifyConfig(method="uniform", n_samples=10),
+              comfort=ComfortConfig(skip_steps=1, steps=3), person=PersonConfig(floor=0.0, overdraw=OVERDRAW))
+
+
+class Patient:
+    """A person who answers each batch ``seconds`` after it is shown, ranking the shown gaits in slot order."""
+
+    def __init__(self, directory: Path, seconds: float):
+        self.directory, self.seconds = directory, seconds
+        self.shown_at: dict[int, float] = {}
+
+    def show(self, k: int) -> None:
+        self.shown_at[k] = time.monotonic()
+
+    def answered(self, k: int, timeout: float) -> bool:
+        time.sleep(timeout)
+        if time.monotonic() - self.shown_at[k] < self.seconds:
+            return False
+        setup = load_config(self.directory)
+        store = open_store(self.directory, setup, setup.action_space())
+        try:
+            pending = store.iterations()[k]["pending"]
+            ranks: list[int | None] = [None] * pending["size"]
+            for rank, slot in enumerate(pending["shown"]):
+                ranks[slot] = rank
+            record_answer(store, k, {"ranks": ranks, "labels": [None] * pending["size"], "by": "test"})
+        finally:
+            store.close()
+        return True
+
+
+@pytest.mark.slow
+def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path):
+    d = create_study(tmp_path / "s", "exo", TINY)
+    run_study(d, progress=False, asker=Patient(d, seconds=12.0))
+    st = study_status(d)
+    assert st["state"] == "complete"
+    trials = [t for t in st["trials"] if t["state"] == "COMPLETE"]
+    sizes = []
+    for it in st["iterations"]:
+        mine = sorted((t for t in trials if t["iteration"] == it["iteration"]), key=lambda t: t["slot"])
+        n = len(mine)
+        sizes.append(n)
+        assert [t["slot"] for t in mine] == list(range(n)) and BATCH <= n <= BATCH + OVERDRAW
+        assert [t["grid_index"] for t in mine] == it["proposals"][:n]  # evaluated in the learner's order
+        may_show = [t["params"]["step_length"] >= 0.14 and t["status"] == "certified" for t in mine]
+        assert sum(may_show) <= BATCH and (sum(may_show) == BATCH or n == BATCH + OVERDRAW)
+        answer = next(a for a in st["person"]["answers"] if a["iteration"] == it["iteration"])
+        assert len(answer["ranks"]) == n and [r is not None for r in answer["ranks"]] == may_show
+    assert max(sizes) > BATCH, sizes  # some batch needed its over-drawn candidates
+    ahead = [t for t in trials if t["evaluated_ahead"]]
+    assert st["person"]["ahead"]["evaluated"] >= st["person"]["ahead"]["used"] == len(ahead) > 0
+    setup = load_config(d)
+    t = ahead[0]
+    fresh = evaluate(load_robot(setup.robot), GaitParams(**t["params"]), setup.config)  # ahead: the evaluation
+    assert (fresh.status, fresh.steps_taken, fresh.r_star) == (t["status"], t["steps_taken"], t["r_star"])
+
+
+def test_a_study_written_before_over_drawn_batches_evaluates_its_batch_alone(tmp_path):
+    d = create_study(tmp_path / "s", "exo", TINY)
+    assert load_config(d).config.person.overdraw == OVERDRAW and load_config(d).config.person.ahead
+    path = d / "study.json"
+    raw = json.loads(path.read_text())
+    raw["config"]["person"] = {k: v for k, v in raw["config"]["person"].items() if k not in ("overdraw", "ahead")}
+    path.write_text(json.dumps(raw))
+    person = load_config(d).config.person
+    assert person.overdraw == 0 and not person.ahead
