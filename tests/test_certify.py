@@ -53,7 +53,7 @@ def test_certificate_is_consistent(small_cert):
     assert small_cert.physics_steps > 24 * 500 and small_cert.orbit_physics_steps > 0
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_same_seed_same_json(robot_gait, small_cert):
     """Same seed, same certificate — also on one rollout thread instead of one per core (studies give every
     worker all cores and rely on it)."""
@@ -68,7 +68,7 @@ def test_same_seed_same_json(robot_gait, small_cert):
     assert other.to_dict()["samples"] != a["samples"]
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_sequential_certificate(robot_gait, seq_cert):
     c = seq_cert.certificate
     assert seq_cert.ok and c.method == "sequential" and c.rounds[-1].kind == "verify"
@@ -87,7 +87,7 @@ def test_sequential_certificate(robot_gait, seq_cert):
     assert res["config"]["sequential"]["epsilon"] == 0.2 and len(res["sample_round"]) == c.n_samples
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_paired_samples_across_gaits(robot_gait, seq_cert):
     # the same gait for the other stance has another fixed point (mirrored) and other images: with one seed the
     # perturbations x − x* of round 1 and the verification's directions and radius fractions are the same
@@ -106,7 +106,7 @@ def test_paired_samples_across_gaits(robot_gait, seq_cert):
     np.testing.assert_allclose(verification(a), verification(b), atol=1e-12)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
     stand = standing_gait(exo)  # a gait that holds its posture; rolled at 6 rad/s it falls in its first step
     qvel = stand.initial_state.qvel.copy()
@@ -172,7 +172,7 @@ def _cli(capsys, *argv):
     return code, out, err
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_cli_certify_json(capsys, tmp_path):
     code, out, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--method", "uniform", "--samples", "12",
                         "--json", "--plot", str(tmp_path / "c.png"), "-o", str(tmp_path / "c.json"))
@@ -207,7 +207,7 @@ def test_cli_certify_sequential(capsys, tmp_path):
     (["--override", "certify.orbit.probe_impulse=0.5", "--override", "certify.orbit.probe_doublings=0"], "unstable",
      "8 fell and 0 came back within 20 steps"),
 ])
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_cli_certify_gait_failure_is_a_result(capsys, tmp_path, extra, status, message):
     out_json = tmp_path / "c.json"
     code, out, err = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--method", "uniform", "--samples", "4",
@@ -218,7 +218,7 @@ def test_cli_certify_gait_failure_is_a_result(capsys, tmp_path, extra, status, m
     assert code == 1 and json.loads(out)["status"] == status
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_cli_certify_reports_the_orbit(capsys):
     """A certificate says on which orbit it stands (settled step, period, band, the probe), for the flat-foot gait
     and for the stored multi-contact gait, whose switching states scatter in a wider band."""
@@ -306,7 +306,7 @@ def test_stored_gaits_keep_their_r_star_for_seed_0(request, name, method):
 
 
 # ---- reduced states, shaped sets, horizons, pushes -----------------------------------------------------------
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 @pytest.mark.parametrize("state, dim", [("centroidal", 6), ("velocity", 12)])
 def test_energy_state_certificate(exo, exo_gait, state, dim):
     gc = certify_gait(exo, exo_gait, uniform(state=state, n_samples=12, seed=1))
@@ -340,7 +340,7 @@ def test_ellipsoid_certificate_with_its_ball(exo, exo_gait, tmp_path):
     assert out.stat().st_size > 10_000
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_horizon_certificate_reports_its_excursion(exo, exo_gait):
     gc = certify_gait(exo, exo_gait, uniform(horizon=2, n_samples=8, seed=1))
     assert gc.ok and len(gc.excursion) == 2 and gc.to_dict()["horizon"] == 2
@@ -350,7 +350,7 @@ def test_horizon_certificate_reports_its_excursion(exo, exo_gait):
     assert np.all(gc.certificate.fell[one.certificate.fell]) and gc.physics_steps > one.physics_steps
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_push_certificate(exo, exo_gait):
     # falls only (push.recovery false): the image of a push is then its fall (recovery: test_push.py)
     gc = certify_gait(exo, exo_gait, uniform(disturbance="push", n_samples=12, seed=1,
@@ -367,7 +367,7 @@ def test_push_certificate(exo, exo_gait):
     assert gc.to_dict()["push"]["duration"] == 0.1
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_gait):
     """The statement of a sequential J* names its passing batch (size and attempt, from the rounds) in pushes and
     the disk, not the state certificate's ball and r*."""
@@ -387,7 +387,7 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
     assert "ball" not in text and "r*" not in text
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_cli_validate_refuses_a_certificate_of_another_state(capsys, tmp_path):
     cert = tmp_path / "c.json"
     code, _, _ = _cli(capsys, "certify", str(EXO_GAIT), "--robot", "exo", "--state", "centroidal", "--method",

@@ -34,7 +34,7 @@ def test_robots_lists_shipped(capsys):
     assert code == 0 and exo["joints"] == 12 and 100 <= exo["mass_kg"] <= 135
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_walk_json(capsys, gait_robot):
     gait, robot, name = gait_robot
     code, out, _ = run(capsys, "walk", gait, "--robot", robot, "--steps", "5", "--json")
@@ -53,7 +53,7 @@ def test_walk_json(capsys, gait_robot):
     assert code == 0 and "comfort over steps 2–4" in out and "pelvis acceleration RMS/peak" in out
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_walk_reports_the_orbit_of_its_switching_events(capsys):
     code, out, _ = run(capsys, "walk", str(EXO_GAIT), "--robot", "exo", "--steps", "120")
     assert code == 0 and "orbit of the switching events: settled at step" in out and "period-1 orbit" in out
@@ -62,7 +62,7 @@ def test_walk_reports_the_orbit_of_its_switching_events(capsys):
     assert code == 0 and "64 are needed to see the band hold (walk at least" in out
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_gait_convert_round_trip(tmp_path, capsys, gait_robot):
     gait, robot, _ = gait_robot
     out = tmp_path / "g.json"
@@ -124,7 +124,7 @@ def test_bad_input_one_line_exit_2(bad_files, capsys, case):
     assert len(lines) == 1 and lines[0].startswith("robustgait: error: ") and filename in lines[0]
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_console_script_no_traceback(tmp_path):
     p = tmp_path / "bad.json"
     p.write_text("[")

@@ -255,7 +255,7 @@ def test_exo_gait_comfort_invariants(exo, exo_gait, exo_walk):
     assert set(FIGURES) <= set(c.to_dict())
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_comfort_is_deterministic_serialized_and_optional(exo, exo_gait, exo_walk):
     again = walk(exo, exo_gait, SimConfig(step_cap=30), comfort=ComfortConfig())
     assert again.comfort == exo_walk.comfort
@@ -271,7 +271,7 @@ def test_comfort_is_deterministic_serialized_and_optional(exo, exo_gait, exo_wal
         walk(exo, exo_gait, SimConfig(step_cap=8), comfort=ComfortConfig(cutoff=800.0))
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_multicontact_and_passivity_walks_have_comfort(exo, exo_gait, exo_mc_gait):
     """Heel strike ends single support and the impact lands in the double support; the passivity law's torques
     come from its own recorded controls."""

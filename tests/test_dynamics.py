@@ -136,7 +136,7 @@ def test_exo_frames_match_mujoco_frame_bodies() -> None:
             np.testing.assert_allclose(rot, d.xmat[b].reshape(3, 3), rtol=0, atol=1e-9)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 @pytest.mark.skipif(not ATALANTE_MJCF.is_file(), reason=f"Atalante model not found at {ATALANTE_MJCF}")
 def test_atalante_foot_frames_sit_on_the_sole_box() -> None:
     """Atalante has no frame bodies: they are added from the sole box (bottom face, toe/heel edges), placed as

@@ -205,7 +205,7 @@ def test_reduced_coriolis_is_christoffel(exo, exo_gait, passivity):
     assert np.abs(n + n.T).max() < 1e-6 * np.abs(mdot).max()
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_passivity_with_perturbed_plants(exo, exo_gait):
     """Per-sample models perturb the simulated plant; the law keeps the nominal model (its kinematics come
     from the robot's model), so a heavier pelvis changes the outcome but not the law's model."""
@@ -274,7 +274,7 @@ def test_pd_feedback_with_mujoco_stages_equals_rollout(exo, exo_gait):
         _assert_same(a, fb.step(q, v, "right", record=True), tol=0.0)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_pd_feedback_equals_rollout_with_inputs(exo, exo_gait):
     from robustgait.validate.disturbances import physics_model
 
@@ -355,7 +355,7 @@ def test_delay_line_of_a_central_law():
     assert tail[:, :, 0].tolist() == [[3.0, 4.0], [-3.0, 6.0]]
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_latency_delays_the_passivity_law_and_not_the_pd_servo(exo, exo_gait):
     k = 3
     q, v = _start_states(exo_gait, k, 4)

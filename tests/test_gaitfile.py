@@ -168,7 +168,7 @@ def test_bad_feedforward_keys(tmp_path, exo, exo_gait, mutate, message):
     one_error_line(err, f"{p}: {message}")
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 @needs_atalante
 def test_atalante_frost_to_json_to_frost_walks_bit_for_bit(tmp_path, atalante, atalante_gait):
     """AMBER's Atalante file → robustgait JSON → FROST YAML → read again: the same walk, and FROST's own

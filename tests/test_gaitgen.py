@@ -102,7 +102,7 @@ def _pelvis_roll_deg(trajectory):
 
 
 def _walks_like_an_exoskeleton(robot, gait, max_speed_error=0.03):
-    """50 steps, pelvis roll within ±6°, speed within ±3 % of L/T, ‖x̄*‖ ≤ 1 rad/s (issue: exoskeleton-grade)."""
+    """50 steps, pelvis roll within ±6°, speed within ±3 % of L/T, ‖x̄*‖ ≤ 1 rad/s."""
     res = walk(robot, gait, steps=50, keep_trajectory=True)
     assert res.steps_taken == 50 and not res.fell, (gait.params, res.fall_reason)
     assert np.abs(_pelvis_roll_deg(res.trajectory)).max() < 6.0, gait.params
@@ -279,7 +279,7 @@ def test_cli_multicontact_bad_rolling_fraction(tmp_path, capsys):
 
 
 def test_a_request_no_leg_of_that_size_walks_is_refused_before_any_solve(tmp_path, capsys):
-    """Step length in leg lengths, speed as a Froude number, swing height in leg lengths: the issue's request on exo
+    """Step length in leg lengths, speed as a Froude number, swing height in leg lengths: a request far beyond exo
     (0.7 m in 0.2 s, 0.3 m high: 3.5 m/s, Froude 1.36) is refused in one line, exit 2, nothing written, without
     building the problem; every point of exo's action spaces passes."""
     import time

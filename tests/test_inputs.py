@@ -1,4 +1,4 @@
-"""Property-based tests of every input (issue 11): valid gait JSON, FROST YAML, robot spec TOML and log files
+"""Property-based tests of every input: valid gait JSON, FROST YAML, robot spec TOML and log files
 (CSV, NPY, NPZ) are mutated — types swapped, keys and items deleted or added, NaN/huge/absurd values, text
 where numbers belong, truncation, bytes that are not UTF-8, wrong shapes and dtypes — and the command line
 runs in-process on them. Every outcome must be exit 0 with a valid result, or exit 2 with exactly one line

@@ -1,4 +1,4 @@
-"""The input layer and the output writer (robustgait.io): the defects of issue 11, one example each, run
+"""The input layer and the output writer (robustgait.io): each input defect, one example each, run
 through the command line in-process, plus the writer's guarantees. Property-based tests: test_inputs.py."""
 
 from __future__ import annotations

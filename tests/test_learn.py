@@ -157,7 +157,7 @@ def smooth_utility(space: ActionSpace, seed: int) -> np.ndarray:
     return sum(h * np.exp(-((x - c) ** 2).sum(1) / (2 * 0.3**2)) for h, c in zip(heights, centres, strict=True))
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 @pytest.mark.parametrize("name", ["polar", "eubo", "random"])
 def test_same_seed_same_proposals(name):
     space = grid_space(6, 5, 4)

@@ -50,7 +50,7 @@ def test_push_phase_is_a_function_of_the_impulse_uniform_over_the_range():
     assert counts.min() > 4000 / 6 * 0.85  # uniform within sampling noise (σ ≈ 3 %)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_multicontact_zero_push_walks_and_the_push_map_is_the_validation_walk(mc_pushes, exo, exo_mc_gait):
     """A multi-contact step is double support then single support: a zero impulse walks all four steps; pushes of
     the same impulse, direction (heading frame → world) and phase fall in the same step under the push map as under
@@ -84,7 +84,7 @@ def test_multicontact_zero_push_walks_and_the_push_map_is_the_validation_walk(mc
     np.testing.assert_array_equal(res.fall_step, falls)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_multicontact_push_certificate(exo, exo_mc_gait, tmp_path):
     gc = certify_gait(exo, exo_mc_gait, CertifyConfig(disturbance="push", method="uniform", n_samples=10, seed=2,
                                                       push={"horizon": 1}))

@@ -42,6 +42,7 @@ def test_the_exo_gait_settles_on_a_stable_period_one_orbit(exo, exo_gait, exo_or
     assert o.physics_steps > 0 and o.states is not None and len(o.states) == o.window + o.held
 
 
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_walk_and_the_certificate_report_the_same_orbit(exo, exo_gait, exo_orbit, capsys):
     """robustgait.walk (300 steps), `robustgait walk --json` and the certificate's search: one classification of the
     same switching states — the same settled step, period, band and x*."""

@@ -8,7 +8,7 @@ from robustgait import RobustGaitError, SimConfig, StepEngine, load_robot, walk
 from robustgait.sim import render_video
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_gait_walks_on_a_mirrored_period_one_orbit(robot_gait):
     robot, gait = robot_gait
     res = walk(robot, gait, steps=40, keep_trajectory=True)
@@ -46,7 +46,7 @@ def test_a_walk_says_whether_its_switching_events_settled_on_an_orbit(exo, exo_g
     assert short is not None and short.status == "undecided" and "are needed to see the band hold" in short.reason
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_generated_gait_keeps_the_pelvis_level(exo, exo_gait):
     """The exoskeleton-grade bounds of gait generation hold in simulation: pelvis roll within ±6°."""
     from robustgait.rotations import quat_to_mat
@@ -147,7 +147,7 @@ def test_a_diverging_sample_is_a_silent_fall(tmp_path, monkeypatch, capfd):
 @pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_multicontact_gait_rolls_both_feet(exo, exo_mc_gait):
     """Heel strike → rolling double support → foot-flat: in every double support of a 50-step walk the back sole
-    pitches toe-down and the front sole from toe-up to flat, each by ≥ 10° (issue acceptance), and double
+    pitches toe-down and the front sole from toe-up to flat, each by ≥ 10°, and double
     support ends at foot-flat by τ = 1."""
     res = walk(exo, exo_mc_gait, steps=50, keep_trajectory=True)
     assert res.steps_taken == 50 and not res.fell

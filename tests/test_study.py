@@ -235,7 +235,7 @@ def test_study_config_rejects_bad_values():
         RunConfig(workers=0)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_storage_contract_round_trip(tmp_path):
     """enqueue (WAITING, recorded) → start (RUNNING) → complete (attributes, then COMPLETE); a RUNNING trial
     left by a dead process is failed and enqueued again with the same parameters and attributes."""

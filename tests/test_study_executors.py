@@ -63,7 +63,7 @@ def kill_study_and_watch(tmp_path: Path, extra: list[str], ready: Callable[[dict
             os.killpg(proc.pid, signal.SIGKILL)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_a_sigkilled_study_leaves_no_worker_behind(tmp_path):
     """2 local workers (and multiprocessing's resource tracker) below the study; SIGKILL the study process alone:

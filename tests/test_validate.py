@@ -1,4 +1,4 @@
-"""Validation of a gait under disturbances (issue 12) on the shipped robot ``exo``, and its statistics."""
+"""Validation of a gait under disturbances on the shipped robot ``exo``, and its statistics."""
 
 from __future__ import annotations
 
@@ -189,7 +189,7 @@ def test_zero_slope_walks_like_the_floor_and_steep_slopes_fall(validator):
     assert math.degrees(math.acos(-up[2] / np.linalg.norm(up))) == pytest.approx(10.0)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_every_kind_runs_and_summarizes(validator):
     for kind in ("mass", "friction", "latency", "noise", "slope"):
         res = validator.run(kind)
@@ -199,7 +199,7 @@ def test_every_kind_runs_and_summarizes(validator):
         json.dumps(res.to_dict(), allow_nan=False)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_latency_under_the_passivity_law_delays_its_commands(exo, exo_gait, small_cert):
     """Under a central state-feedback law latency delays the law's command (the engine's delay line, with the
     commands carried from step to step), not the PD servos' reference: a zero delay walks like no delay, and the
@@ -246,7 +246,7 @@ def test_flat_terrain_walks_and_non_foot_contact_with_terrain_is_a_fall(validato
     assert d.sensordata[exo.sensor_adr["robustgait_contact_left"]] == 0
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_cert):
     p = tmp_path / "cert.json"
     p.write_text(json.dumps(small_cert.to_dict()))
@@ -273,7 +273,7 @@ def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_ce
     assert main(["validate", str(gait_path), "--robot", "exo", "--certificate", str(bad)]) == 2
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_a_push_certificate_with_an_unused_state_choice_still_loads(tmp_path, exo, exo_gait):
     """Before J* and a state choice were exclusive, `certify --disturbance push --state velocity` wrote the unused
     state into the certificate's config: it loads as the push certificate it is."""

@@ -1,6 +1,6 @@
 """The page of a person study (robustgait.web, docs/person.md), fast: a real server on a free port of 127.0.0.1 in
 this process, over a study whose first batch waits for an answer — its trials stored as a run would store them (the
-evaluations written as data: the page reads records, it does not evaluate). Every fault case of the issue: no or a
+evaluations written as data: the page reads records, it does not evaluate). Every fault case: no or a
 wrong token (403), an answer for a stale or unknown batch, a ranking that omits or repeats a gait or ranks a hidden
 one, a double submit (409, stored once), a port in use (one line, exit 2)."""
 
@@ -229,7 +229,7 @@ def test_parse_answer_tiers_are_ranks():
     assert a.iteration == 2 and a.ranks == [1, 2, 0, 1, None] and a.labels == [None, None, None, "neutral", None]
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_a_port_in_use_is_one_line_and_exit_2(tmp_path):
     busy = socket.socket()
     busy.bind(("127.0.0.1", 0))
@@ -256,7 +256,7 @@ def test_serve_refuses_a_study_that_is_not_ranked_by_a_person(tmp_path):
         PersonPage(d)
 
 
-@pytest.mark.slow  # ≥ 3.5 s (durations of 2026-11-26): plain pytest ≤ 60 s; CI runs it
+@pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_status_and_report_show_the_answers(served, capsys):
     from robustgait.cli.study import print_summary
     from robustgait.config import ReportConfig

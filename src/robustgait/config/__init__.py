@@ -168,10 +168,9 @@ class Config:
 # Named configurations shipped with the package: overrides of the defaults, as a config file would hold them.
 PRESETS: dict[str, dict[str, Any]] = {
     # `robustgait demo`: a study of exo ranked by J* (the default metric), 3 iterations × 4 gaits, with a lighter
-    # sequential certificate so that it ends in a few minutes on 2 cores (docs/studies.md): ε = 0.05 — J* of the
-    # default gait: 222 pushes and 4.7 s instead of 333 and 7.1 s, the same J* (22.95 and 23.09 N s for seeds 0 and 1),
-    # 2026-11-25. The state options (200 exploration samples: ≈ 470 samples instead of ≈ 980) serve
-    # `--override study.metric=robustness`.
+    # sequential certificate (ε = 0.05: fewer verification pushes for the same J* within its seeds' spread; cost and
+    # figures in docs/studies.md) so that it ends in minutes on 2 cores. The state options (fewer exploration
+    # samples) serve `--override study.metric=robustness`.
     "demo": {"study": {"iterations": 3, "batch": 4},
              "certify": {"sequential": {"epsilon": 0.05, "explore": 200, "explore_after_failure": 100,
                                         "budget": 1500}},

@@ -207,8 +207,8 @@ LINE_FORCE_FRACTION = 0.12
 SOLE_MARGIN_FRACTION = 1.0 / 3.0
 IMPACT_VELOCITY_FROUDE = (-0.13, -0.017)
 IMPACT_TANGENTIAL_FROUDE = 0.05
-# a robot spec's gait_quality.pelvis_angular_velocity when it sets none: × √(g / l) (1.5 rad/s at exo's 0.92 m leg,
-# the fixed default of before; 1.9 rad/s on a 0.55 m leg)
+# a robot spec's gait_quality.pelvis_angular_velocity when it sets none: × √(g / l) (1.5 rad/s at a 0.92 m leg,
+# 1.9 rad/s at a 0.55 m leg)
 PELVIS_RATE_FROUDE = 0.44
 
 

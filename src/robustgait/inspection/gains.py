@@ -189,10 +189,8 @@ def servo_timestep(model_dt: float, frequency: float, steps: float, time_scale: 
       one step of its motion, |ẋ| h; the rates x scale with √(g/l) and their changes |ẋ| with g/l (dynamic
       similarity), so the grid's resolution relative to the rates is the same for walkers at equal h / √(l/g).
 
-    exo: fastest servo 67 Hz (15 steps per period at 1 ms) and 0.0035 × 0.308 s = 1.08 ms: its 1 ms. Booster T1:
-    its model's 2 ms gives its 57 Hz ankles 8.7 steps, and 0.0035 × 0.238 s = 0.83 ms: 0.5 ms. Measured on T1's grid
-    (docs/robots.md, "Walking the grid"): at 2 ms its switching events were noisy; at 1 ms its walks cycled through
-    neighbouring touchdown grid offsets (period-four orbits, r1 ≈ 0.026 rad/s); at 0.5 ms more of them settle."""
+    What each robot gets and what other timesteps did to its walks: docs/robots.md ("Walking the grid") and
+    docs/performance.md."""
     return min(model_dt, nice_floor(min(1.0 / (steps * frequency), fraction * time_scale)))
 
 

@@ -126,8 +126,7 @@ def axis_range(axis: str, default: float, rule: tuple[float, float, int]) -> tup
 
     The grid stops at the grid point nearest high × default, with at most ``points`` steps: a nice step larger
     than (high − low) default / points must not stretch the range past the multiples, which were calibrated on
-    exo's grid. (Stretched, Booster T1's step durations reached 1.0 s = 4.2 √(l/g), past the 3.6 √(l/g) that
-    exo's grid ends at; the rule's 1.57 × its default is 0.86 s: its grid now ends at 0.9 s.)"""
+    exo's grid: a stretched grid would reach step durations past the 3.6 √(l/g) that exo's grid ends at."""
     lo_f, hi_f, points = rule
     lo, hi = default * lo_f, default * hi_f
     step = nice_step((hi - lo) / max(points, 1))

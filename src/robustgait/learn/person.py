@@ -22,7 +22,7 @@ import numpy as np
 from robustgait.config import SimulatedPersonConfig
 from robustgait.errors import RobustGaitError
 
-_STREAM = 29  # the seed stream of persons (issue 29), apart from every learner's
+_STREAM = 29  # the seed stream of persons: a value no learner's stream uses, so persons and learners draw apart
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,5 @@
 """Batched state-feedback engine: K samples stepped in lockstep at the physics rate with a torque law
-τ(q, q̇, t) evaluated for all K at once (issue 20, items 1–2).
+τ(q, q̇, t) evaluated for all K at once.
 
 :class:`~robustgait.sim.engine.StepEngine` rolls a step out open loop with :func:`mujoco.rollout`: its
 controls are a function of time only (the PD is folded into MuJoCo position servos), so no state-feedback law

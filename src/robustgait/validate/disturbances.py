@@ -1,4 +1,4 @@
-"""Disturbances of a validation (issue 12): what is drawn per trial, and how it enters the batched engine.
+"""Disturbances of a validation: what is drawn per trial, and how it enters the batched engine.
 
 Every kind draws one scalar *size* per trial (the x axis of "success against disturbance size") and the
 other parameters of the trial from ``numpy.random.default_rng((seed, kind index))`` alone — not from the
@@ -107,7 +107,7 @@ def push_wrench(draws: Draws, duration: float, period: float, dt: float, horizon
     force = draws.size / (width * dt)
     th = draws.params["direction"]
     start = np.round(draws.params["phase"] * period / dt).astype(int)
-    # math.cos/sin, as before the window was shared: the same forces to the last bit
+    # math.cos/sin per push, not numpy's: the forces stay bit-identical to every stored validation
     xy = np.array([[f * math.cos(t), f * math.sin(t)] for f, t in zip(force, th, strict=True)]).reshape(-1, 2)
     return wrench_window(xy, start, width, horizon)
 

@@ -1,4 +1,4 @@
-"""Validation trials of one gait (issue 12): disturbed walks from the certified fixed point, batched.
+"""Validation trials of one gait: disturbed walks from the certified fixed point, batched.
 
 A trial starts on the gait's periodic orbit — the fixed point x* of the certificate's return map (full
 state, canonical stance) — and walks ``period + steps_after`` steps (period = 1 for the step map, 2 for the

@@ -1,0 +1,44 @@
+"""Contracts in the code, history in git and docs: no file of src/robustgait (code, docstrings, comments, help text,
+the page) names an issue, carries a date, or tells what the code did before. Measurements and their dates belong in
+docs/ and benchmarks/."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+import robustgait
+
+SRC = Path(robustgait.__file__).parent
+HISTORY = {
+    "an issue number": re.compile(r"\bissues?\s+#?\d+|\(issue\b", re.IGNORECASE),
+    "a date": re.compile(r"\b20\d\d-[01]\d-[0-3]\d\b"),
+    "history phrasing": re.compile(r"\b(?:of before|as before|than before|the rule before|durations of "
+                                   r"20\d\d|before 20\d\d|used to be|formerly|previously)\b", re.IGNORECASE),
+}
+
+
+def findings(text: str) -> list[tuple[int, str, str]]:
+    """(line, what, the match) for every history pattern in ``text``."""
+    out = []
+    for n, line in enumerate(text.splitlines(), 1):
+        for what, rx in HISTORY.items():
+            out += [(n, what, m.group(0)) for m in rx.finditer(line)]
+    return out
+
+
+def test_the_patterns_catch_what_they_name():
+    assert [w for _, w, _ in findings('_STREAM = 29  # (issue 29)\n"the rule before 2026-11-25"')] == [
+        "an issue number", "a date", "history phrasing"]
+    assert [w for _, w, _ in findings("# ≥ 3.5 s (durations of 2026-11-26), as before")] == [
+        "a date", "history phrasing", "history phrasing"]
+    assert findings('a study written before over-drawn batches; "#fff" colour; issued 3 times; before the solve') == []
+
+
+@pytest.mark.parametrize("path", sorted(p for p in SRC.rglob("*") if p.suffix in (".py", ".html", ".toml")),
+                         ids=lambda p: str(p.relative_to(SRC)))
+def test_src_holds_contracts_not_history(path):
+    found = findings(path.read_text(encoding="utf-8"))
+    assert not found, "; ".join(f"{path.relative_to(SRC)}:{n}: {what} ({m!r})" for n, what, m in found)
