@@ -118,7 +118,7 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=REPO / "benchmarks" / "data" / "person_page")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
                             cwd=REPO).stdout.strip()
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.configs.split(","):
