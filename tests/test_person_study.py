@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -40,9 +41,13 @@ class Patient:
     def __init__(self, directory: Path, seconds: float):
         self.directory, self.seconds = directory, seconds
         self.shown_at: dict[int, float] = {}
+        self.rendered_ahead: list[int] = []
 
     def show(self, k: int) -> None:
         self.shown_at[k] = time.monotonic()
+
+    def render_ahead(self, index: int, result: dict[str, Any]) -> None:
+        self.rendered_ahead.append(index)  # this person watches no videos: nothing to render
 
     def answered(self, k: int, timeout: float) -> bool:
         time.sleep(timeout)
@@ -64,7 +69,8 @@ class Patient:
 @pytest.mark.slow
 def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path):
     d = create_study(tmp_path / "s", "exo", TINY)
-    run_study(d, progress=False, asker=Patient(d, seconds=12.0))
+    person = Patient(d, seconds=12.0)
+    run_study(d, progress=False, asker=person)
     st = study_status(d)
     assert st["state"] == "complete"
     trials = [t for t in st["trials"] if t["state"] == "COMPLETE"]
@@ -82,6 +88,8 @@ def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path):
     assert max(sizes) > BATCH, sizes  # some batch needed its over-drawn candidates
     ahead = [t for t in trials if t["evaluated_ahead"]]
     assert st["person"]["ahead"]["evaluated"] >= st["person"]["ahead"]["used"] == len(ahead) > 0
+    space = load_config(d).action_space()  # videos are made ahead only of gaits that may be shown
+    assert person.rendered_ahead and all(space.value(i)["step_length"] >= 0.14 for i in person.rendered_ahead)
     setup = load_config(d)
     t = ahead[0]
     fresh = evaluate(load_robot(setup.robot), GaitParams(**t["params"]), setup.config)  # ahead: the evaluation

@@ -84,6 +84,10 @@ class Asker(Protocol):
         """Whether iteration k's answer is stored, waiting up to ``timeout`` s for one."""
         ...
 
+    def render_ahead(self, index: int, result: dict[str, Any]) -> None:
+        """Prepare what showing grid point ``index`` needs (its video): it was evaluated ahead of an answer
+        (``result``, as stored) and may be shown in the next batch."""
+
 
 POLL = 0.5  # s: how often a study waiting for a person looks for the answer and its evaluations ahead
 
@@ -326,8 +330,11 @@ class StudyRunner:
                 if self.ahead is not None and self.ahead.busy:
                     got = self.executor().poll(POLL)
                     if got is not None:
-                        self.ahead.finish(got[0], self._write_files(self.ahead.index_of(got[0]), got[1]))
-                    self.ahead.fill()
+                        written = self._write_files(self.ahead.index_of(got[0]), got[1])
+                        index = self.ahead.finish(got[0], written)
+                        self.ahead.fill()
+                        if self._qualifies(index, written):
+                            self.asker.render_ahead(index, written)
             return
         store.set_iteration(k, rec)
 

@@ -93,29 +93,20 @@ class PersonPage:
             return "answer" in self.store.iterations().get(k, {})
 
     def prepare(self, k: int) -> None:
-        from robustgait.io.gaitfile import load_gait
-        from robustgait.io.robotfile import load_robot
-        from robustgait.web.media import render_person_video
-
+        """Render the videos of iteration k's shown gaits that are not rendered yet (a video that cannot be made: the
+        gait is shown without one, and the page says why)."""
         with self.lock:
             rec = self.store.iterations().get(k, {})
             batch = completed_batches(self.store.records()).get(k, [])
-        cfg = self.setup.config
         t0, rendered = time.perf_counter(), 0
         for r in batch:
-            if r.slot not in rec.get("pending", {}).get("shown", []):
+            if r.slot not in rec.get("pending", {}).get("shown", []) or self.video_path(r.index).is_file():
                 continue
-            path = self.video_path(r)
-            if path.is_file():
-                continue
-            if self._robot is None:
-                self._robot = load_robot(self.setup.robot)
             gait_file = (self._source(r).result or {}).get("gait_file")
             if gait_file is None:
                 raise RobustGaitError(f"trial {r.number}: a shown gait without a gait file")
-            gait = load_gait(self.directory / gait_file, self._robot)
             try:
-                render_person_video(self._robot, gait, path, cfg.person.video_steps, cfg.comfort, cfg.sim)
+                self._render(r.index, gait_file)
                 rendered += 1
             except Exception as exc:  # no offscreen GL, a gait that falls in the video's walk: shown without video
                 self.video_errors[(k, r.slot)] = f"{type(exc).__name__}: {exc}"
@@ -124,14 +115,38 @@ class PersonPage:
         if rendered:
             LOG.info("iteration %d: %d videos rendered in %.1f s", k + 1, rendered, time.perf_counter() - t0)
 
+    def render_ahead(self, index: int, result: dict[str, Any]) -> None:
+        """Render the video of grid point ``index``, evaluated ahead of an answer and fit to be shown (``result``: its
+        evaluation as the study stores it), so that the next batch shows it without waiting; a video that cannot be
+        made is left to :meth:`prepare`, which tells the page why."""
+        gait_file = result.get("gait_file")
+        if gait_file is None or self.video_path(index).is_file():
+            return
+        try:
+            self._render(index, gait_file)
+        except Exception as exc:
+            LOG.info("a gait evaluated ahead has no video yet (%s: %s)", type(exc).__name__, exc)
+
+    def _render(self, index: int, gait_file: str) -> None:
+        from robustgait.io.gaitfile import load_gait
+        from robustgait.io.robotfile import load_robot
+        from robustgait.web.media import render_person_video
+
+        if self._robot is None:
+            self._robot = load_robot(self.setup.robot)
+        cfg = self.setup.config
+        gait = load_gait(self.directory / gait_file, self._robot)
+        render_person_video(self._robot, gait, self.video_path(index), cfg.person.video_steps, cfg.comfort, cfg.sim)
+
     def _source(self, r: TrialRecord) -> TrialRecord:
         if r.reused_from is None:
             return r
         with self.lock:
             return next(t for t in self.store.records() if t.number == r.reused_from)
 
-    def video_path(self, r: TrialRecord) -> Path:
-        return self.directory / GAITS_DIR / gait_label(self.space, r.index) / VIDEO_FILE
+    def video_path(self, index: int) -> Path:
+        """Where the looping video of grid point ``index`` is rendered."""
+        return self.directory / GAITS_DIR / gait_label(self.space, index) / VIDEO_FILE
 
     # ---- what the page shows -----------------------------------------------------------------------------
     def state(self) -> dict[str, Any]:
@@ -185,7 +200,7 @@ class PersonPage:
         names = gait_names(len(batch))
         shown = rec["pending"]["shown"]
         cards = [{**self._gait_view(r, blind=blind), "name": names[r.slot],
-                  "video": f"/{self.token}/video/{k}/{r.slot}.mp4" if self.video_path(r).is_file() else None,
+                  "video": f"/{self.token}/video/{k}/{r.slot}.mp4" if self.video_path(r.index).is_file() else None,
                   "no_video": self.video_errors.get((k, r.slot))} for r in batch if r.slot in shown]
         hidden = [{"slot": int(s), "name": names[int(s)], "why": None if blind else why}
                   for s, why in rec["pending"]["hidden"].items()]
@@ -262,9 +277,10 @@ class PersonPage:
                 rec = self.store.iterations().get(k, {})
                 batch = completed_batches(self.store.records()).get(k, [])
             r = next((t for t in batch if t.slot == slot), None)
-            if r is None or slot not in rec.get("pending", {}).get("shown", []) or not self.video_path(r).is_file():
+            shown = rec.get("pending", {}).get("shown", [])
+            if r is None or slot not in shown or not self.video_path(r.index).is_file():
                 return PlainTextResponse("404: no such video", status_code=404)
-            return FileResponse(self.video_path(r), media_type="video/mp4")
+            return FileResponse(self.video_path(r.index), media_type="video/mp4")
 
         async def answer(request: Request) -> Response:
             bad = refuse(request)
