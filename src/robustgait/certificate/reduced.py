@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 from robustgait.certificate.shape import Shape
 from robustgait.config import CertifyConfig, Frame, Reconstruction
 from robustgait.robots import Robot
+from robustgait.robots.model import full_inertia
 from robustgait.rotations import quat_to_mat
 
 StateName = Literal["omega", "centroidal", "velocity"]
@@ -147,12 +148,7 @@ def mass_matrix(robot: Robot, qpos: FloatArray) -> FloatArray:
     d = mujoco.MjData(m)
     d.qpos[:] = qpos
     mujoco.mj_forward(m, d)
-    out = np.zeros((m.nv, m.nv))
-    if hasattr(d, "qM"):  # MuJoCo < 4.0
-        mujoco.mj_fullM(m, out, d.qM)
-    else:
-        mujoco.mj_fullM(m, d, out)
-    return out
+    return full_inertia(m, d)
 
 
 def holonomic_reconstruction(robot: Robot, qpos: FloatArray, stance: str) -> FloatArray:

@@ -33,11 +33,13 @@ MIN_SOLE = 1e-3  # [m]: a sole narrower than this has no area to stand on (one s
 
 
 @dataclass(frozen=True)
-class Sole:
+class FoundSole:
     """A leg's sole: the foot ``body`` and its sole ``geoms``; how the spec names it (``kind``: ``geom`` a named
     box, ``geoms`` named geoms, ``body`` every collision geom of the body — of ``sole_class`` when set); its
     footprint in the foot's frame (``length`` along the foot axis closest to forward, ``width`` along the one
-    closest to left, [m]) and the foot's bottom height at the posture (``bottom``, base at height 0)."""
+    closest to left, [m]) and the foot's bottom height at the posture (``bottom``, base at height 0). What a model
+    offers, before any spec exists; how a spec's sole is built into the robot's model is
+    :class:`robustgait.robots.soles.ResolvedSole`."""
 
     body: int
     geoms: tuple[int, ...]
@@ -54,7 +56,7 @@ class Leg:
 
     side: str
     joints: tuple[int, ...]
-    sole: Sole
+    sole: FoundSole
 
     @property
     def foot(self) -> int:
@@ -193,7 +195,7 @@ def footprint_points(m: mujoco.MjModel, d: mujoco.MjData, g: int) -> NDArray[np.
     return geom_lowest_point(m, d, g)[None, :]
 
 
-def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: float) -> Sole:
+def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: float) -> FoundSole:
     """The sole of a foot body (module docstring)."""
     m, src = robot.model, robot.path
     name = robot.body_name(foot) or f"#{foot}"
@@ -233,7 +235,7 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
     if min(length, width) < MIN_SOLE:
         raise input_error(src, f"no sole found for the {side} leg: the lowest geometry of body '{name}' spans "
                           f"{length:.3g} × {width:.3g} m, no area to stand on (add a box geom under the foot)")
-    return Sole(foot, geoms, kind, sole_class, length, width, bottom)
+    return FoundSole(foot, geoms, kind, sole_class, length, width, bottom)
 
 
 def find_floor(robot: RobotModel) -> Floor:

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.inspection.model import RobotModel
+from robustgait.robots.model import full_inertia
 
 # the largest spectral radius accepted as a contracting servo (a slow servo's is 1 − ζ ω h, just below 1: the bound
 # only refuses growth, not slowness)
@@ -48,14 +49,8 @@ class JointLoad:
 
 def mass_matrix(robot: RobotModel, qpos: NDArray[np.float64]) -> tuple[mujoco.MjData, NDArray[np.float64]]:
     """The kinematics at ``qpos`` and the joint-space mass matrix M (nv, nv), armature included."""
-    m = robot.model
     d = robot.kinematics(qpos)
-    full = np.zeros((m.nv, m.nv))
-    if hasattr(d, "qM"):  # MuJoCo < 4.0
-        mujoco.mj_fullM(m, full, d.qM)
-    else:
-        mujoco.mj_fullM(m, d, full)
-    return d, full
+    return d, full_inertia(robot.model, d)
 
 
 def body_jacobian(m: mujoco.MjModel, d: mujoco.MjData, body: int) -> NDArray[np.float64]:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robustgait.inspection.discover import SIDES, Sole
+from robustgait.inspection.discover import SIDES, FoundSole
 from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
 from robustgait.inspection.mirror import mass_asymmetry
 from robustgait.inspection.model import GEOM_TYPES
@@ -53,7 +53,7 @@ def _range_text(draft: Draft, j: int) -> str:
     return f"range [{lo:.3g}, {hi:.3g}]"
 
 
-def _sole_lines(draft: Draft, side: str, sole: Sole) -> list[str]:
+def _sole_lines(draft: Draft, side: str, sole: FoundSole) -> list[str]:
     r = draft.robot
     body = r.body_name(sole.body)
     shape = f"{sole.length:.3g} × {sole.width:.3g} m"

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from robustgait.config import GaitParams, RobotScale
 from robustgait.errors import input_error
 from robustgait.robots.held import weld_joints
-from robustgait.robots.soles import Sole, resolve_floor, resolve_soles
+from robustgait.robots.soles import ResolvedSole, resolve_floor, resolve_soles
 from robustgait.robots.spec import SIDES, RobotSpec
 
 INTEGRATORS = {
@@ -49,7 +49,18 @@ def _add_contact_sensor(spec: mujoco.MjSpec, name: str, obj: tuple[mujoco.mjtObj
     sensor.intprm = [1 << int(mujoco.mjtConDataField.mjCONDATA_FOUND), 0, 1]
 
 
-def resolve_model(spec: RobotSpec, mjs: mujoco.MjSpec) -> tuple[dict[str, Sole], str]:
+def full_inertia(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
+    """M(q) (nv, nv), dense: MuJoCo's joint-space inertia (armature included) at the configuration of ``data``, whose
+    forward pass (``mj_forward`` or at least ``mj_crb``) has run."""
+    out = np.zeros((model.nv, model.nv))
+    if hasattr(data, "qM"):  # MuJoCo < 4.0 takes the sparse qM
+        mujoco.mj_fullM(model, out, data.qM)
+    else:
+        mujoco.mj_fullM(model, data, out)
+    return out
+
+
+def resolve_model(spec: RobotSpec, mjs: mujoco.MjSpec) -> tuple[dict[str, ResolvedSole], str]:
     """Check the spec's names against the parsed MJCF ``mjs`` and resolve its soles and floor in it (edited in place;
     :mod:`robustgait.robots.soles`: virtual soles, an added or named floor). Returns the soles by side and the
     floor geom's name."""
@@ -85,7 +96,7 @@ def servo_damping(kp: float | NDArray[np.float64], kd: float | NDArray[np.float6
     return kd + h * kp if stable else kd
 
 
-def build_mjspec(spec: RobotSpec, mjs: mujoco.MjSpec, soles: dict[str, Sole], floor: str) -> mujoco.MjSpec:
+def build_mjspec(spec: RobotSpec, mjs: mujoco.MjSpec, soles: dict[str, ResolvedSole], floor: str) -> mujoco.MjSpec:
     """``mjs`` (resolved by :func:`resolve_model`; edited in place and returned) with our actuators — one servo per
     planned joint (output order), then per held joint — and our contact sensors, and the spec's simulation
     options; the MJCF's own actuators, sensors and keyframes are removed."""
@@ -129,7 +140,7 @@ class Robot:
     (:func:`resolve_model`), as for ``planned``."""
 
     def __init__(self, spec: RobotSpec, mjcf: mujoco.MjSpec,
-                 resolved: tuple[dict[str, Sole], str] | None = None):
+                 resolved: tuple[dict[str, ResolvedSole], str] | None = None):
         self.spec = spec
         self.soles, self.floor_name = resolved if resolved is not None else resolve_model(spec, mjcf)
         self._resolved = mjcf.copy()

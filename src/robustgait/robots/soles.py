@@ -39,9 +39,10 @@ def virtual_sole_name(side: str) -> str:
 
 
 @dataclass(frozen=True)
-class Sole:
+class ResolvedSole:
     """How one sole entered the model: ``geom`` the sole box's name (real or virtual); ``sensor`` the contact sensor's
-    object (type and name): the box geom itself, or the foot body for a virtual sole; ``geoms`` the real geoms."""
+    object (type and name): the box geom itself, or the foot body for a virtual sole; ``geoms`` the real geoms. (What
+    ``robot init`` finds in a model before a spec exists is :class:`robustgait.inspection.discover.FoundSole`.)"""
 
     geom: str
     sensor: tuple[mujoco.mjtObj, str]
@@ -138,7 +139,7 @@ def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int],
     return centre, np.column_stack([fwd, left, up]), half
 
 
-def resolve_soles(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel) -> dict[str, Sole]:
+def resolve_soles(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel) -> dict[str, ResolvedSole]:
     """Both soles (:func:`resolve_sole`); the geoms are found before ``mjs`` is edited (an edit renumbers it)."""
     src = spec.source or spec.mjcf
     ids = {side: _sole_geoms(mjs, model, spec.legs[side], side, src) for side in SIDES}
@@ -148,7 +149,7 @@ def resolve_soles(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel) ->
 
 
 def resolve_sole(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel, side: str, ids: list[int],
-                 geoms: dict[int, mujoco.MjsGeom], bodies: dict[int, mujoco.MjsBody]) -> Sole:
+                 geoms: dict[int, mujoco.MjsGeom], bodies: dict[int, mujoco.MjsBody]) -> ResolvedSole:
     """Make a leg's sole (its geoms ``ids`` in ``model``, ``mjs`` compiled before any edit; ``geoms``, ``bodies``:
     the spec's elements by those ids) a box geom of ``mjs`` (edited in place): the named box itself, or a virtual
     sole spanning the geoms (module docstring)."""
@@ -159,7 +160,7 @@ def resolve_sole(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel, sid
         if not name:  # an unnamed box (named by its body): our sensors need a name
             name = virtual_sole_name(side)
             geoms[ids[0]].name = name
-        return Sole(name, (mujoco.mjtObj.mjOBJ_GEOM, name), tuple(ids), virtual=False)
+        return ResolvedSole(name, (mujoco.mjtObj.mjOBJ_GEOM, name), tuple(ids), virtual=False)
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, spec.base_body)
@@ -176,7 +177,7 @@ def resolve_sole(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel, sid
     geom = body.add_geom(name=virtual_sole_name(side), type=mujoco.mjtGeom.mjGEOM_BOX, size=half, pos=centre,
                          quat=quat, contype=0, conaffinity=0, density=0.0, group=5, rgba=[0.2, 0.6, 1.0, 0.0])
     geom.mass = 0.0
-    return Sole(virtual_sole_name(side), (mujoco.mjtObj.mjOBJ_BODY, body.name), tuple(ids), virtual=True)
+    return ResolvedSole(virtual_sole_name(side), (mujoco.mjtObj.mjOBJ_BODY, body.name), tuple(ids), virtual=True)
 
 
 def resolve_floor(spec: RobotSpec, mjs: mujoco.MjSpec, soles: list[mujoco.MjsGeom]) -> str:

@@ -245,7 +245,7 @@ def excursion(angle: FloatArray, steps: list[tuple[int, int]]) -> float:
 
 def sole_contact_geoms(robot: Robot, side: str) -> frozenset[int]:
     """The geoms whose floor contacts are a sole's: those its contact sensor counts — the sole box, or every geom of
-    the foot body of a virtual sole over spheres or capsules (:class:`robustgait.robots.soles.Sole`)."""
+    the foot body of a virtual sole over spheres or capsules (:class:`robustgait.robots.soles.ResolvedSole`)."""
     kind, name = robot.soles[side].sensor
     m = robot.model
     if kind == mujoco.mjtObj.mjOBJ_BODY:
