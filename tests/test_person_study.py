@@ -12,6 +12,7 @@ from typing import Any
 
 import pytest
 
+from robustgait.cli.study import print_summary
 from robustgait.config import (
     CertifyConfig,
     ComfortConfig,
@@ -67,7 +68,7 @@ class Patient:
 
 
 @pytest.mark.slow
-def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path):
+def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path, capsys):
     d = create_study(tmp_path / "s", "exo", TINY)
     person = Patient(d, seconds=12.0)
     run_study(d, progress=False, asker=person)
@@ -90,6 +91,10 @@ def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path):
     assert st["person"]["ahead"]["evaluated"] >= st["person"]["ahead"]["used"] == len(ahead) > 0
     space = load_config(d).action_space()  # videos are made ahead only of gaits that may be shown
     assert person.rendered_ahead and all(space.value(i)["step_length"] >= 0.14 for i in person.rendered_ahead)
+    assert 0.0 < st["utilisation"]["share"] <= 1.05  # an evaluation made ahead counts when its worker ran it
+    print_summary(d)
+    out = capsys.readouterr().out
+    assert "over-drawn candidates" in out and "evaluated ahead of an answer" in out
     setup = load_config(d)
     t = ahead[0]
     fresh = evaluate(load_robot(setup.robot), GaitParams(**t["params"]), setup.config)  # ahead: the evaluation

@@ -33,3 +33,12 @@ def test_reused_failed_and_unrecorded_evaluations_do_not_count() -> None:
     assert (use["busy_seconds"], use["cpu_seconds"], use["share"]) == pytest.approx((10.0, 20.0, 1.0))
     assert utilisation([record(3, 0.0, 40.0, None)]) is None
     assert utilisation([]) is None
+
+
+def test_an_evaluation_made_ahead_counts_when_its_worker_ran_it() -> None:
+    """A trial that took an evaluation made ahead of it completes at once: its worker's interval is the busy time."""
+    ahead = record(1, 40.0, 40.1, 20.0)
+    ahead.result["worker"]["wall"] = [20.0, 30.0]  # type: ignore[index]
+    use = utilisation([record(0, 0.0, 10.0, 20.0), ahead])
+    assert use is not None
+    assert (use["busy_seconds"], use["share"]) == pytest.approx((20.0, 1.0))

@@ -43,8 +43,11 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
     st = study_status(directory)
     best = st["best"]
     took = f" in {seconds:.0f} s" if seconds is not None else ""
-    print(f"study {directory}: {st['trials_done']}/{st['trials_planned']} gaits evaluated{took} "
-          f"({st['unique_gaits']} unique), {st['iterations_done']}/{st['iterations_planned']} iterations, "
+    done, planned = st["trials_done"], st["trials_planned"]
+    count = f"{done}/{planned}" if done <= planned else str(done)
+    extra = f"; {planned} planned + {done - planned} over-drawn candidates" if done > planned else ""  # docs/person.md
+    print(f"study {directory}: {count} gaits evaluated{took} "
+          f"({st['unique_gaits']} unique{extra}), {st['iterations_done']}/{st['iterations_planned']} iterations, "
           f"{st['state']}")
     if st["outcomes"]:
         print("outcomes: " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in st["outcomes"].items()))

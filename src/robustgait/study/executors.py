@@ -77,12 +77,14 @@ class EvaluationWorker:
         from robustgait.config import GaitParams
         from robustgait.study.evaluate import evaluate
 
-        cpu = time.process_time()
+        cpu, wall = time.process_time(), time.time()
         ev = evaluate(self.robot, GaitParams(**params), self.config, generator=self.generator)
         out = ev.to_dict()
         # the worker runs one evaluation at a time, so its process CPU time (every thread) is this evaluation's
         out["cpu_seconds"] = time.process_time() - cpu
-        out["worker"] = {"pid": os.getpid(), "host": os.uname().nodename, "cores": os.cpu_count() or 1}
+        # when it ran (POSIX s): an evaluation made ahead of its trial ran before the trial started
+        out["worker"] = {"pid": os.getpid(), "host": os.uname().nodename, "cores": os.cpu_count() or 1,
+                         "wall": [wall, time.time()]}
         return out
 
     def pid(self) -> int:

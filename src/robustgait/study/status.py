@@ -60,14 +60,16 @@ def outcome_counts(records: list[TrialRecord]) -> dict[str, int]:
 def utilisation(records: list[TrialRecord]) -> dict[str, float] | None:
     """How much of the machine the study's evaluations used: ``cpu_seconds`` Σ of the evaluations' process CPU time
     (every thread; an evaluation reused from another trial counted once), ``busy_seconds`` the wall time during which
-    at least one evaluation ran (the union of the trials' start–complete intervals: time the study was stopped, or
-    spent between batches on the learner, is not counted), ``cores`` of the machine, and ``share`` = cpu_seconds /
-    (busy_seconds × cores) ∈ [0, 1]. None when no completed evaluation recorded its CPU time."""
+    at least one evaluation ran (the union of the evaluations' intervals as their workers recorded them — a trial's
+    start–complete interval when its worker did not: time the study was stopped, or spent between batches on the
+    learner, is not counted), ``cores`` of the machine, and ``share`` = cpu_seconds / (busy_seconds × cores) ∈ [0, 1].
+    None when no completed evaluation recorded its CPU time."""
     done = [r for r in records if r.state == "COMPLETE" and r.reused_from is None and r.started is not None
             and r.completed is not None and (r.result or {}).get("cpu_seconds") is not None]
     if not done:
         return None
-    spans = sorted((float(r.started or 0.0), float(r.completed or 0.0)) for r in done)
+    spans = sorted(tuple(map(float, (r.result or {}).get("worker", {}).get("wall") or (r.started, r.completed)))
+                   for r in done)
     busy, end = 0.0, -float("inf")
     for start, stop in spans:
         busy += max(0.0, stop - max(start, end))
