@@ -34,14 +34,14 @@ class Ahead:
         self.running: dict[int, int] = {}  # executor key → grid index
         self.planned: list[int] = []
         self.known: dict[int, Result] = {}  # the study's own evaluations, by grid index
-        self.submitted = 0  # evaluations started ahead for the current plan
-        self.used = 0  # evaluations made ahead that a trial took, since the current plan
+        self.submitted: set[int] = set()  # grid indices evaluated ahead for the current plan
+        self.used = 0  # of them, how many a trial took
         self._next_key = -2
 
     def plan(self, candidates: Sequence[int], known: dict[int, Result]) -> None:
         """Evaluate ``candidates`` next (in their order), skipping the gaits whose evaluation is ``known``."""
         self.planned, self.known = list(candidates), known
-        self.submitted = self.used = 0
+        self.submitted, self.used = set(), 0
 
     def _result(self, index: int) -> Result | None:
         return self.known.get(index, self.results.get(index))
@@ -60,7 +60,7 @@ class Ahead:
             self.running[self._next_key] = i
             running.add(i)
             self._next_key -= 1
-            self.submitted += 1
+            self.submitted.add(i)
             submitted += 1
         return submitted
 
@@ -87,6 +87,6 @@ class Ahead:
     def take(self, index: int) -> Result | None:
         """The evaluation made ahead of gait ``index`` for its trial (None: none was)."""
         result = self.results.pop(index, None)
-        if result is not None:
+        if result is not None and index in self.submitted:  # a result left from an earlier plan: not this one's
             self.used += 1
         return result

@@ -330,8 +330,7 @@ class StudyRunner:
                 if self.ahead is not None and self.ahead.busy:
                     got = self.executor().poll(POLL)
                     if got is not None:
-                        written = self._write_files(self.ahead.index_of(got[0]), got[1])
-                        index = self.ahead.finish(got[0], written)
+                        index, written = self._finish_ahead(*got)
                         self.ahead.fill()
                         if self._qualifies(index, written):
                             self.asker.render_ahead(index, written)
@@ -435,7 +434,7 @@ class StudyRunner:
             self._collect(store, started, bar)
         before = store.iterations().get(k - 1, {})
         if self.ahead is not None and "ahead" in before:  # what the evaluations ahead of this iteration gave
-            store.set_iteration(k - 1, {**before, "ahead": {**before["ahead"], "evaluated": self.ahead.submitted,
+            store.set_iteration(k - 1, {**before, "ahead": {**before["ahead"], "evaluated": len(self.ahead.submitted),
                                                             "used": self.ahead.used}})
 
     def _dispatch(self, store: StudyStore, trial: TrialRecord, cache: dict[int, TrialRecord],
@@ -462,7 +461,7 @@ class StudyRunner:
         adopted it)."""
         key, result = self.executor().next_result()
         if self.ahead is not None and self.ahead.owns(key):
-            index = self.ahead.finish(key, self._write_files(self.ahead.index_of(key), result))
+            index, _ = self._finish_ahead(key, result)
             trial = started.pop(key, None)
             if trial is not None:
                 made = self.ahead.take(index)
@@ -471,6 +470,13 @@ class StudyRunner:
             return
         trial = started.pop(key)
         self._complete(store, trial, self._write_files(trial.index, result), bar)
+
+    def _finish_ahead(self, key: int, result: dict[str, Any]) -> tuple[int, dict[str, Any]]:
+        """Write the files of the evaluation made ahead under executor ``key`` and keep it (:meth:`Ahead.finish`):
+        its grid index and the result as the study stores it."""
+        assert self.ahead is not None
+        written = self._write_files(self.ahead.index_of(key), result)
+        return self.ahead.finish(key, written), written
 
     def _write_files(self, index: int, result: dict[str, Any]) -> dict[str, Any]:
         """gait.json and certificate.json (atomic writes) → the result without them, with their paths."""
