@@ -23,7 +23,7 @@ from robustgait.config import (
     StudyConfig,
 )
 from robustgait.io.robotfile import load_robot
-from robustgait.study.config import load_config
+from robustgait.io.studyfile import load_config
 from robustgait.study.evaluate import evaluate
 from robustgait.study.person import record_answer
 from robustgait.study.run import create_study, open_store, run_study

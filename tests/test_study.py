@@ -34,9 +34,9 @@ from robustgait.config import (
     to_dict,
 )
 from robustgait.io.robotfile import read_mjcf
+from robustgait.io.studyfile import StudySetup, environment_changes, load_config, save_config
 from robustgait.learn import ActionSpace
 from robustgait.robots import FallCriteria
-from robustgait.study.config import StudySetup, environment_changes, load_config, save_config
 from robustgait.study.evaluate import evaluate
 from robustgait.study.run import create_study, run_study
 from robustgait.study.status import study_status

@@ -20,7 +20,7 @@ import pytest
 
 from robustgait.config import Config, PersonConfig, StudyConfig, WebConfig
 from robustgait.errors import RobustGaitError
-from robustgait.study.config import load_config
+from robustgait.io.studyfile import load_config
 from robustgait.study.person import FLOOR_ATTR, pending_record, record_answer
 from robustgait.study.ranking import requirements
 from robustgait.study.run import completed_batches, create_study, gait_label, open_store

@@ -7,7 +7,7 @@ import argparse
 import json
 import sys
 
-from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
+from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, command, inputs, naming_file
 from robustgait.cli.options import config_from, number_within, numbers_within, output_path
 from robustgait.config import CertifyConfig, radius_name
 from robustgait.errors import RobustGaitError
@@ -24,7 +24,7 @@ CERTIFY = {"--state": "certify.state", "--set": "certify.set", "--horizon": "cer
            "--orbit-steps": "certify.orbit.max_steps", "--rho": "certify.orbit.linearization"}
 
 
-def _what(cfg: CertifyConfig) -> str:
+def _certificate_kind(cfg: CertifyConfig) -> str:
     """The certificate's kind in a few words: state, set, horizon, map, reconstruction (or the push's steps)."""
     if cfg.disturbance == "push":
         return f"pushes, back in the band within {cfg.push.horizon} steps"
@@ -39,7 +39,7 @@ def _certify(args: argparse.Namespace) -> int:
 
     config, robot, gait = inputs(args)
     cfg = config.certify
-    with about(args.gait):
+    with naming_file(args.gait):
         gc = certify_gait(robot, gait, cfg, config.sim, validate=config.validate,
                           progress=not args.json and sys.stderr.isatty())
     c, fp, co = gc.certificate, gc.fixed_point, gc.coordinates
@@ -48,7 +48,8 @@ def _certify(args: argparse.Namespace) -> int:
         from robustgait.report import plot_certificate
 
         label = f"N = {c.n_samples}" + (f" in {len(c.rounds)} rounds" if cfg.method == "sequential" else "")
-        plot_certificate(c, args.plot, title=f"{robot.name}: {name} = {gc.r_star:.4g} {cfg.unit} ({_what(cfg)}, "
+        kind = _certificate_kind(cfg)
+        plot_certificate(c, args.plot, title=f"{robot.name}: {name} = {gc.r_star:.4g} {cfg.unit} ({kind}, "
                          f"{cfg.method}, {label}, α = {cfg.alpha:g})", coordinates=co, ball=gc.ball)
     if args.output is not None:
         from robustgait.io.output import write_json
@@ -63,7 +64,8 @@ def _certify(args: argparse.Namespace) -> int:
     else:
         assert fp is not None and co is not None and gc.orbit is not None
         energy = "" if gc.energy is None else f", E* = {gc.energy:.4g} J"
-        print(f"{name} = {c.r_star:.4g} {cfg.unit}{energy}  ({_what(cfg)}, {cfg.barrier} barrier, α = {cfg.alpha:g}, "
+        kind = _certificate_kind(cfg)
+        print(f"{name} = {c.r_star:.4g} {cfg.unit}{energy}  ({kind}, {cfg.barrier} barrier, α = {cfg.alpha:g}, "
               f"{cfg.method}: N = {c.n_samples}, seed {cfg.seed})")
         print(f"orbit: {gc.orbit.describe()}")
         print(f"x*: the switching state after step {fp.step}, ω* = [{', '.join(f'{v:.4f}' for v in fp.omega)}] rad/s"

@@ -30,7 +30,7 @@ def command(sub: argparse._SubParsersAction[argparse.ArgumentParser], name: str,
 
 
 @contextmanager
-def about(path: str) -> Iterator[None]:
+def naming_file(path: str) -> Iterator[None]:
     """Report a problem found while running an input (a gait that cannot start, has no fixed point, ...)
     against its file: every bad-input message names the file."""
     try:

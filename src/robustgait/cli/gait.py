@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
+from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, command, inputs, naming_file
 from robustgait.cli.options import config_from, output_path
 from robustgait.config import GAIT_FORMATS, Config
 from robustgait.errors import RobustGaitError
@@ -89,7 +89,7 @@ def _tiles(args: argparse.Namespace) -> int:
     from robustgait.report.tiles import render_tiles
 
     config, robot, gait = inputs(args)
-    with about(args.gait):
+    with naming_file(args.gait):
         shape = render_tiles(robot, gait, args.output, config.report, config.sim)
     print(f"wrote {args.output} ({shape[1]} x {shape[0]} px: {config.report.tile_frames} frames of one step, side "
           "and front)")

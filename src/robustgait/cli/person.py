@@ -19,7 +19,7 @@ WEB: FlagTable = {"--host": "web.host", "--port": "web.port"}
 
 def is_person_study(directory: str | Path) -> bool:
     """A study ranked on the page (``--metric person``)."""
-    from robustgait.study.config import load_config
+    from robustgait.io.studyfile import load_config
 
     return load_config(directory).config.study.metric == "person"
 

@@ -19,7 +19,7 @@ def _init(args: argparse.Namespace) -> int:
     from robustgait.cli.options import config_from
     from robustgait.inspection.draft import draft_spec
     from robustgait.inspection.writer import render, summary
-    from robustgait.io.robotinit import write_spec
+    from robustgait.io.robotfile import write_spec
 
     config = config_from(args)
     draft = draft_spec(args.model, config.robot)

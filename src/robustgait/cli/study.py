@@ -199,7 +199,7 @@ def _study_compare(args: argparse.Namespace) -> int:
 
 def _study_validate(args: argparse.Namespace) -> int:
     from robustgait.cli.validate import CERTIFICATE_KIND, given
-    from robustgait.study.config import load_config
+    from robustgait.io.studyfile import load_config
     from robustgait.study.validate import summary_path, validate_study
     from robustgait.validate.stats import correlation_text
 

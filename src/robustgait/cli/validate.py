@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
+from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, command, inputs, naming_file
 from robustgait.cli.options import output_path
 
 VALIDATE = {"--trials": "validate.trials", "--seed": "validate.seed", "--disturbance": "validate.disturbance",
@@ -27,7 +27,7 @@ def _validate(args: argparse.Namespace) -> int:
     cfg = config.validate
     # with --certificate the file says what was certified; --state/--set/--horizon given too must agree with it
     certify = config.certify if args.certificate is None or given(args, CERTIFICATE_KIND) else None
-    with about(args.gait):
+    with naming_file(args.gait):
         res = validate_gait(robot, gait, cfg, certify=certify, sim=config.sim, certificate=args.certificate,
                             progress=not args.json and sys.stderr.isatty())
     if args.output is not None:  # the results first: they took minutes, the figure is redrawn from them

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, about, command, inputs
+from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, command, inputs, naming_file
 from robustgait.cli.options import output_path
 
 SIM = {"--controller": "sim.controller", "--switching": "sim.switching", "--feedforward": "sim.feedforward"}
@@ -18,7 +18,7 @@ def _walk(args: argparse.Namespace) -> int:
     from robustgait.sim.walk import canonical_event_states
 
     config, robot, gait = inputs(args)
-    with about(args.gait):
+    with naming_file(args.gait):
         result = walk(robot, gait, config.sim, video=args.video, comfort=config.comfort, certify=config.certify)
     orbit = result.orbit
     if args.log is not None:

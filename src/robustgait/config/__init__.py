@@ -194,7 +194,7 @@ def preset(name: str) -> Config:
 STATE_CERTIFICATE_FIELDS = ("state", "set", "horizon")
 
 
-def implied(overrides: dict[str, Any]) -> dict[str, Any]:
+def with_implied_choices(overrides: dict[str, Any]) -> dict[str, Any]:
     """``overrides`` with ``certify.disturbance = "state"`` (and ``study.metric = "robustness"``) when its
     ``certify`` table names a field of a state certificate (:data:`STATE_CERTIFICATE_FIELDS`) but not the
     disturbance (nor the metric): ``--state velocity`` or a config file's ``[certify] state = "velocity"`` means a
@@ -212,9 +212,9 @@ def implied(overrides: dict[str, Any]) -> dict[str, Any]:
 
 
 def with_overrides(base: Config, overrides: dict[str, Any], source: str | None = None) -> Config:
-    """``base`` with the values of ``overrides`` (nested dicts, as in a config file; :func:`implied`) on top,
-    validated."""
-    return from_dict(Config, merge(to_dict(base), implied(overrides)), source, "toml")
+    """``base`` with the values of ``overrides`` (nested dicts, as in a config file; :func:`with_implied_choices`) on
+    top, validated."""
+    return from_dict(Config, merge(to_dict(base), with_implied_choices(overrides)), source, "toml")
 
 
 __all__ = [
@@ -281,7 +281,6 @@ __all__ = [
     "field_at",
     "fields_of",
     "from_dict",
-    "implied",
     "merge",
     "nest",
     "parse_requirement",
@@ -294,5 +293,6 @@ __all__ = [
     "to_toml",
     "verification_beta",
     "verification_size",
+    "with_implied_choices",
     "with_overrides",
 ]

@@ -28,7 +28,7 @@ STATE_CHOICE_DEFAULTS: dict[str, str | int] = {"state": "omega", "set": "ball", 
 
 
 # the fields of the fixed-point search and of the fixed push horizon that the orbit search and the recovery band
-# replaced: a study or a certificate file that has them is read back without them (study/config.py,
+# replaced: a study or a certificate file that has them is read back without them (io/studyfile.py,
 # io/certfile.py), and its orbit is found again by the orbit search
 RETIRED_FIELDS = ("fp_tol", "fp_window", "fp_metric", "fp_min_steps", "fp_max_steps", "fp_newton_iterations",
                   "fp_newton_tol", "fp_fd_step", "fp_fd_jump", "fp_rho_max", "stride_fallback")

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.errors import input_error
-from robustgait.io.robotinit import ModelKind, read_model
+from robustgait.io.robotfile import ModelKind, read_model
 
 FREE = int(mujoco.mjtJoint.mjJNT_FREE)
 HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)

@@ -1,5 +1,8 @@
-"""Robots from files: the robot spec TOML (its schema and the builder of :class:`~robustgait.robots.RobotSpec`),
-the MJCF it names (parsed by MuJoCo), and :func:`load_robot` (``docs/robots.md``, limits in ``docs/inputs.md``).
+"""Robots from files, the one module that reads and writes them: the robot spec TOML (its schema and the builder of
+:class:`~robustgait.robots.RobotSpec`), the MJCF it names (parsed by MuJoCo), :func:`load_robot` (``docs/robots.md``,
+limits in ``docs/inputs.md``), and the files of ``robot init``: the MJCF or URDF it reads (:func:`read_model`) and the
+spec it writes only once the loader accepts it (:func:`write_spec`; its text is rendered by
+:mod:`robustgait.inspection.writer`).
 Names (joints, geoms, bodies) are checked against the MJCF when the robot is compiled
 (:func:`robustgait.robots.model.build_mjspec`); everything else is checked here."""
 
@@ -8,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import annotated_types as at
 import mujoco
@@ -19,6 +22,7 @@ from robustgait.config.base import Doc, Float, Int, Str, explain, validator
 from robustgait.config.gait import GAIT_PARAM_NAMES
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io import limits as L
+from robustgait.io.output import atomic_output
 from robustgait.io.schema import field_error, read_toml, table, validate
 from robustgait.robots.model import INTEGRATORS, Robot
 from robustgait.robots.spec import (
@@ -406,3 +410,47 @@ def load_robot(robot: str | Path | Robot) -> Robot:
             f"{text}: unknown robot (shipped: {', '.join(shipped_robots()) or 'none'}; or give a spec .toml path)")
     spec = read_spec(path)
     return Robot(spec, read_mjcf(spec))
+
+
+# --- the files of `robot init`: the model it reads and the spec it writes ---
+
+ModelKind = Literal["mjcf", "urdf"]
+MODEL_SUFFIXES: dict[str, ModelKind] = {".xml": "mjcf", ".mjcf": "mjcf", ".urdf": "urdf"}
+
+
+def model_kind(path: str | Path) -> ModelKind:
+    """``mjcf`` or ``urdf`` from the file's extension (a one-line error for any other)."""
+    p = Path(path)
+    kind = MODEL_SUFFIXES.get(p.suffix.lower())
+    if kind is None:
+        raise input_error(p, f"unknown robot model format {p.suffix or '(no extension)'!r} (robustgait reads an "
+                          "MJCF .xml or a URDF .urdf)")
+    return kind
+
+
+def read_model(path: str | Path) -> tuple[mujoco.MjSpec, ModelKind]:
+    """The model file parsed by MuJoCo (MuJoCo compiles a URDF with its own defaults: ``fusestatic`` merges every
+    link attached by a fixed joint into its parent, visual geometry is discarded, a joint's ``effort`` becomes its
+    ``actuatorfrcrange``). Returns the parsed spec and the file's kind."""
+    p = Path(path)
+    kind = model_kind(p)
+    if p.is_dir():
+        raise input_error(p, "is a directory: give the robot's MJCF or URDF file")
+    if not p.is_file():
+        raise input_error(p, "robot model file not found")
+    return parse_model(p), kind
+
+
+def write_spec(path: str | Path, text: str) -> Path:
+    """Write a spec TOML atomically (:mod:`robustgait.io.output`), after loading it with :func:`load_robot` from
+    its temporary file beside the target (so that the model's relative path resolves the same): a spec the loader
+    refuses is not written."""
+    target = Path(path)
+    with atomic_output(target, "toml") as tmp:
+        tmp.write_text(text, encoding="utf-8")
+        try:
+            load_robot(tmp)
+        except RobustGaitError as exc:
+            raise RobustGaitError(f"{target}: the written spec does not load (nothing written): "
+                                  f"{str(exc).replace(str(tmp), target.name)}") from None
+    return target

@@ -132,9 +132,9 @@ def plot_explored(status: dict[str, Any], path: Path) -> Path:
 def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[str, str], path: Path) -> Path:
     """Posterior mean of the learner's preference model over two parameters; the others at the best gait's
     grid values; evaluated gaits on that slice marked."""
+    from robustgait.io.studyfile import load_config
     from robustgait.learn.learners import make_learner
     from robustgait.learn.model import posterior_mean
-    from robustgait.study.config import load_config
     from robustgait.study.ranking import history_before, requirements
     from robustgait.study.run import completed_batches, open_store
 

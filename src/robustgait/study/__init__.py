@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from robustgait._lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from robustgait.study.config import StudySetup, load_config
+    from robustgait.io.studyfile import StudySetup, load_config
     from robustgait.study.evaluate import Evaluation, evaluate
     from robustgait.study.run import create_study, run_study
     from robustgait.study.status import study_status

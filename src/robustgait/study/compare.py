@@ -17,9 +17,9 @@ from robustgait.errors import input_error
 from robustgait.gait import Gait
 from robustgait.io.gaitfile import load_gait
 from robustgait.io.robotfile import load_robot
+from robustgait.io.studyfile import load_config
 from robustgait.robots import Robot
 from robustgait.sim import walk
-from robustgait.study.config import load_config
 from robustgait.study.status import study_status
 
 

@@ -44,6 +44,7 @@ from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait
 from robustgait.io.output import write_json
 from robustgait.io.robotfile import load_robot
+from robustgait.io.studyfile import StudySetup, environment_changes, load_config, save_config
 from robustgait.learn.learners import History, Learner, iteration_seed, make_learner
 from robustgait.learn.oracle import batch_comparisons
 from robustgait.learn.space import ActionSpace
@@ -51,7 +52,6 @@ from robustgait.robots import Robot
 from robustgait.robots.spec import SHIPPED_DIR
 from robustgait.sim.walk import check_walk_work
 from robustgait.study.ahead import Ahead
-from robustgait.study.config import StudySetup, environment_changes, load_config, save_config
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.executors import Executor, WorkerSpec, make_executor
 from robustgait.study.person import (

@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from robustgait.study.config import environment_changes, load_config
+from robustgait.io.studyfile import environment_changes, load_config
 from robustgait.study.person import FLOOR_ATTR, pending_iteration
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord

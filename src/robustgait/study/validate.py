@@ -54,7 +54,7 @@ from robustgait.config.certify import orbit_options
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
-from robustgait.study.config import load_config
+from robustgait.io.studyfile import load_config
 from robustgait.validate.disturbances import SIZE_LABELS
 from robustgait.validate.stats import Correlation, spearman
 

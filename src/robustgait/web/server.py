@@ -27,7 +27,7 @@ from typing import Any
 from robustgait.config import RunConfig, WebConfig, radius_name
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.sim.comfort import FIGURES
-from robustgait.study.config import load_config
+from robustgait.io.studyfile import load_config
 from robustgait.study.person import (
     FLOOR_ATTR,
     AnswerError,

@@ -1,5 +1,5 @@
-"""What a study directory holds about itself: the robot and the whole configuration it was created with
-(``study.json``), read back on resume, status, report, compare and validate. Nested sections are saved whole,
+"""The study file ``study.json``: what a study directory holds about itself, the robot and the whole configuration it
+was created with, read back on resume, status, report, compare and validate. Nested sections are saved whole,
 so a field added to any section is saved and restored without changes here."""
 
 from __future__ import annotations
