@@ -4,15 +4,17 @@ The page posts ``{"iteration": k, "ranking": [[slot, …], …], "labels": {"slo
 tiers, best first (a tier of several: "cannot tell" them apart), and optionally a label per gait. Every problem is
 one line the page shows and the log records; :func:`robustgait.study.person.record_answer` then checks the answer
 against the pending batch (stale or unknown iteration, a gait omitted or not shown, a second answer) and stores it
-once."""
+once. :func:`store_answer` does both, in that order, for the page."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from robustgait.study.person import AnswerError
+from robustgait.study.person import AnswerError, answer_size, pending_iteration
 from robustgait.study.ranking import LABELS
+from robustgait.web.records import StudyRecords
 
 
 @dataclass(frozen=True)
@@ -72,3 +74,22 @@ def parse_answer(payload: Any, batch_size: int) -> PostedAnswer:
             raise AnswerError(f"labels: gait {s + 1}: {lab!r} is not one of {', '.join(LABELS)}")
         labels[s] = lab
     return PostedAnswer(k, ranks, labels)
+
+
+def store_answer(records: StudyRecords, payload: Any, shown: Callable[[], int | None]) -> PostedAnswer:
+    """Check the posted JSON ``payload`` and store it as its iteration's answer, ``by`` the person; returns the
+    answer stored. ``shown()``: the pending iteration the page shows (its videos rendered), None while none is;
+    asked once the payload is parsed. Raises :class:`AnswerError`, nothing stored: 409 for an iteration the study
+    does not have or the pending one not shown yet, 400 for a malformed answer (:func:`parse_answer`), and what
+    :func:`robustgait.study.person.record_answer` refuses (a stale iteration, a second answer: 409; a gait omitted
+    or not shown: 400)."""
+    iterations = records.iterations()
+    k = payload.get("iteration") if isinstance(payload, dict) else None
+    if isinstance(k, int) and not isinstance(k, bool) and k not in iterations:
+        raise AnswerError(f"iteration {k + 1} is unknown (the study has {len(iterations)} so far)", 409)
+    size = answer_size(iterations.get(k, {})) if isinstance(k, int) else 0
+    posted = parse_answer(payload, size)
+    if posted.iteration == pending_iteration(iterations) and shown() != posted.iteration:
+        raise AnswerError(f"iteration {posted.iteration + 1} is not shown yet", 409)
+    records.record_answer(posted.iteration, {"ranks": posted.ranks, "labels": posted.labels, "by": "person"})
+    return posted
