@@ -14,7 +14,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 ATALANTE_DIR = REPO.parent / "shared" / "atalante"
-ATALANTE_SPEC = REPO / "examples" / "atalante.toml"
+ATALANTE_SPEC = REPO / "robots" / "atalante" / "spec.toml"
 ATALANTE_GAIT = ATALANTE_DIR / "jt_bez_2023-09-10.yaml"
 EXO_GAIT = REPO / "tests" / "data" / "exo_gait.json"
 EXO_MC_GAIT = REPO / "tests" / "data" / "exo_multicontact_gait.json"

@@ -66,6 +66,19 @@ def test_a_band_is_a_box_of_half_widths_max_nu_kappa_sigma_per_phase():
     assert band.to_dict() == {"radius": 0.03, "multiple": 3.0, "sigma": 0.02, "period": 2, "phase_sigma": [0.02, 0.0]}
 
 
+def test_the_floor_needed_is_the_smallest_nu_that_puts_a_state_in_the_band():
+    c = np.array([[0.0, 0.0], [1.0, 1.0]])
+    sigma = np.array([[0.0, 0.02], [0.0, 0.0]])
+    z = np.array([[0.029, 0.059], [0.031, 0.07], [1.0, 1.029], [0.0, 0.0], [np.nan, 0.0]])
+    phase = np.array([0, 0, 1, 1, 0])
+    need = Band(c, sigma, radius=0.03, multiple=3.0).floor_needed(z, phase)
+    # coordinates within κσ count as 0; the others by their deviation, whatever the band's own ν
+    np.testing.assert_allclose(need[:4], [0.029, 0.07, 0.029, 1.0])
+    assert np.isnan(need[4])
+    for nu in (0.02, 0.03, 0.05, 0.08):
+        band = Band(c, sigma, radius=nu, multiple=3.0)
+        np.testing.assert_array_equal(band.inside(z, phase), need <= nu)
+
 def test_recovery_refuses_the_late_falls_a_fall_only_certificate_certifies():
     model = DivergingPush()
     cfg = CertifyConfig(disturbance="push", seed=0, r_max=60.0, sequential=SequentialConfig(budget=3000))

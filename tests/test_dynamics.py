@@ -21,7 +21,7 @@ from robustgait.io.robotfile import load_robot
 from robustgait.robots import Robot
 
 REPO = Path(__file__).resolve().parents[1]
-ATALANTE_SPEC = REPO / "examples" / "atalante.toml"
+ATALANTE_SPEC = REPO / "robots" / "atalante" / "spec.toml"
 ATALANTE_MJCF = REPO.parent / "shared" / "atalante" / "loadedExo.xml"
 EXO_DIR = REPO / "src" / "robustgait" / "robots" / "exo"
 SIDES = ("left", "right")

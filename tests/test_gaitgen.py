@@ -146,7 +146,8 @@ def test_warm_start_converges_faster(gen, default):
 def test_grid_over_the_action_space_walks(exo, gen):
     """The corners of the action space — step length × duration (default width, height), then width × height —
     every gait solves, passes the physics check and walks like an exoskeleton. (The whole 4 × 4 + 4 grid is
-    benchmarks/bench_gaitgen.py's; the corners, where gaits are most extreme, keep CI within its time.)"""
+    benchmarks/experiments/gait_generation/run.py's; the corners, where gaits are most extreme, keep CI within its
+    time.)"""
     a = exo.spec.action_space
     grid = [GaitParams(step_length=float(L), step_duration=float(T))
             for L in (a["step_length"].low, a["step_length"].high)
@@ -214,7 +215,7 @@ def test_atalante_generated_gait_walks(tmp_path, capsys):
 @needs_atalante
 def test_atalante_multicontact_gait_walks_and_is_certified_with_its_falling_probes_below_j_star():
     """Atalante rolls heel-to-toe only with its swing sole free to leave toe-off toe-down
-    (gait_quality.swing_toe_down_until = 0.5 in examples/atalante.toml): then the T = 1.0 s gait walks 50 steps,
+    (gait_quality.swing_toe_down_until = 0.5 in robots/atalante/spec.toml): then the T = 1.0 s gait walks 50 steps,
     striking at the planned time, at L/T, and 300 steps undisturbed in a band it holds (σ 0.017). Some of the orbit
     search's eight probing pushes of 4 N s fell it and the others came back to the band: the falls measure its basin,
     not the orbit, so it is certified (docs/gaitgen.md), and its orbit line says that J* lies below the probe."""

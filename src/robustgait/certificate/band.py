@@ -90,6 +90,17 @@ class Band:
         states within distance 1 under one shift is a return (:func:`advance_runs`)."""
         return np.stack([self.distance(z, step + s) for s in range(self.period)], axis=1)
 
+    def floor_needed(self, z: FloatArray, phase: int | NDArray[np.int64]) -> FloatArray:
+        """The smallest floor ν (K,) under which states z (K, d) of phase(s) p lie in the band: the largest
+        |z_i − c_p,i| over the coordinates outside κ σ_p,i (0 when none), since z is inside iff every such deviation is
+        ≤ ν. Independent of this band's own ν, so one walk can be judged under every floor; NaN for a NaN state."""
+        z = np.atleast_2d(z)
+        p = np.broadcast_to(np.asarray(phase, dtype=np.int64) % self.period, (z.shape[0],))
+        dev = np.abs(z - self.centres[p])
+        with np.errstate(invalid="ignore"):
+            outside = np.where(dev <= self.multiple * self.scatter[p], 0.0, dev)
+            return np.asarray(outside.max(axis=1, initial=0.0) * np.where(np.isfinite(z).all(axis=1), 1.0, np.nan))
+
     def inside(self, z: FloatArray, phase: int | NDArray[np.int64]) -> NDArray[np.bool_]:
         """Whether states z (K, d) of phase(s) p lie in the band (a NaN state does not)."""
         with np.errstate(invalid="ignore"):

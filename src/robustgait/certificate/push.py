@@ -129,7 +129,7 @@ class PushMap:
         (None: none), the 1-based step it fell in (0: none) and the step it was back in the band for
         ``recovery_steps`` steps (0: it was not; without a band, 0). The map (:meth:`__call__`) is this walk at
         the phases of :func:`push_phase`; an explicit φ maps a gait's failing set over direction and phase
-        (``benchmarks/bench_certify.py push-sweep``)."""
+        (``benchmarks/experiments/push_cost/run.py push-sweep``)."""
         j = np.atleast_2d(np.asarray(impulse, dtype=float))
         n = j.shape[0]
         eng, cfg = self.engine, self.validate

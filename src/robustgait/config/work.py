@@ -20,7 +20,7 @@ robot's steps are:
   may simulate 4 × what the defaults do, so the defaults pass on every robot and domain graph, and a setting that
   multiplies the steps beyond that — ``certify.push.horizon`` 100 with the default budget, ``validate --trials
   10000 --steps-after 1000`` — is refused before any work. The 2e7 floor keeps small jobs on small robots passing.
-  The defaults' worst cases: ``docs/inputs.md`` (``benchmarks/bench_work.py``).
+  The defaults' worst cases: ``docs/inputs.md`` (``benchmarks/perf/work.py``).
 
 Memory, not time, bounds a video: every state of the walk is kept for the renderer, and an animated .gif keeps
 every frame until it is written; those limits are absolute.
