@@ -241,15 +241,57 @@ def gait_quality(robot: Robot) -> GaitQuality:
     return q
 
 
+@dataclass(frozen=True)
+class NodeSymbols:
+    """One node's NLP symbols, unscaled: joints s, ṡ, s̈ (m,) [rad, rad/s, rad/s²]; base pose H (4 × 4, from the
+    position p [m] and roll-pitch-yaw [rad]), velocity ν_b = (ṗ, ω) and acceleration ν̇_b (6,); ν = (ν_b, ṡ)
+    (6 + m,); torques u (m,) [N m]; contact wrenches λ (the domain's contact rows) [N, N m]."""
+
+    s: cs.SX
+    sd: cs.SX
+    sdd: cs.SX
+    pb: cs.SX
+    rpy: cs.SX
+    vb: cs.SX
+    ab: cs.SX
+    u: cs.SX
+    lam: cs.SX
+    H: cs.SX
+    nu: cs.SX
+
+
 class GaitProblem:
     """The NLP of a domain graph (``config.domains``), built once for a robot and stance, solved for any
-    essential constraints. See the module docstring for the formulation."""
+    essential constraints. See the module docstring for the formulation.
+
+    g's rows run over domains, then nodes (:meth:`_add_node` gives a node's order), then position periodicity;
+    the order fixes the NLP, hence the solution."""
 
     def __init__(self, dyn: Dynamics, config: GenerationConfig):
-        robot = dyn.robot
         # robot-scaled options resolved (idempotent: GaitGenerator passes them resolved)
-        config = config.for_robot(robot.scale, robot.spec.generation)
-        self.dyn, self.config = dyn, config
+        self.dyn, self.config = dyn, config.for_robot(dyn.robot.scale, dyn.robot.spec.generation)
+        self._set_domains()
+        self._set_model_functions()
+        self._declare_variables()
+        self._g: list[cs.SX] = []
+        self._lbg: list[float] = []
+        self._ubg: list[float] = []
+        self.rows: dict[str, list[int]] = {}
+        for d in range(len(self.graph)):
+            for i in range(len(self.domain_taus[d])):
+                self._add_node(d, i)
+        self._add_position_periodicity()
+        self.g = cs.vertcat(*self._g)
+        self.lbg, self.ubg = np.array(self._lbg), np.array(self._ubg)
+        self.cost = self._cost()
+        self.lbx, self.ubx = self._bounds()
+
+    def _set_domains(self) -> None:
+        """The domain graph and its node grids (``config.nodes`` in single support, ``config.ds_nodes`` in each
+        further domain), the NLP layout, stance and swing legs, each domain's Bézier outputs (all m joints in
+        single support, all but the 4 :func:`double_support_free_joints` in double support), the stance sole's
+        half extents [m] and the mirror R (m × m: permutation and signs)."""
+        dyn, config, robot = self.dyn, self.config, self.dyn.robot
         self.graph = graph = domain_graph(config.domains)
         self.quality = gait_quality(robot)
         self.m = m = robot.n_joints
@@ -257,7 +299,7 @@ class GaitProblem:
         self.domain_taus = [np.linspace(0.0, 1.0, n) for n in counts]
         self.taus = self.domain_taus[0]
         self.n = counts[0]
-        self.layout = lay = make_layout(
+        self.layout = make_layout(
             m, counts, [sum(c.n_rows for c in dom.contacts) for dom in graph.domains],
             [sum(c.n_rows for c in graph.target_contacts(d)) for d in range(len(graph))])
         st, sw = config.stance, other_side(config.stance)
@@ -270,193 +312,258 @@ class GaitProblem:
         self.half_length, self.half_width = sole_half_extents(dyn, st)
         self.mirror = np.zeros((m, m))
         self.mirror[np.arange(m), list(robot.spec.mirror_perm)] = robot.spec.mirror_sign
-        kd = dyn.kindyn
+
+    def _set_model_functions(self) -> None:
+        """CasADi functions of the model, each of (H, s) and, for J̇ and the bias, (ν_b, ṡ): the pose (4 × 4),
+        Jacobian (6 × (6 + m)) and its time derivative of the sole, toe and heel frames of both feet; the mass
+        matrix and bias forces; the joints' armature, added to the mass matrix's diagonal."""
+        dyn, st, sw, kd = self.dyn, self.stance, self.swing, self.dyn.kindyn
         frames = {(side, kind): foot_frame(side, kind) for side in (st, sw) for kind in ("sole", "toe", "heel")}
-        fk = {key: dyn.frame_fun(f) for key, f in frames.items()}
-        jac = {key: kd.jacobian_fun(f) for key, f in frames.items()}
-        jdot = {key: kd.jacobian_dot_fun(f) for key, f in frames.items()}
-        mass, bias = dyn.mass_matrix_fun, dyn.bias_force_fun
-        arm = np.zeros(6 + m)
-        arm[6:] = dyn.armature[robot.dof_idx]
+        self._fk: dict[tuple[str, str], Any] = {key: dyn.frame_fun(f) for key, f in frames.items()}
+        self._jac: dict[tuple[str, str], Any] = {key: kd.jacobian_fun(f) for key, f in frames.items()}
+        self._jdot: dict[tuple[str, str], Any] = {key: kd.jacobian_dot_fun(f) for key, f in frames.items()}
+        self._mass, self._bias = dyn.mass_matrix_fun, dyn.bias_force_fun
+        self._armature = np.zeros(6 + self.m)
+        self._armature[6:] = dyn.armature[dyn.robot.dof_idx]
 
-        x = cs.SX.sym("x", lay.size)
-        p = cs.SX.sym("p", 5)  # step length, duration, width, height, rolling fraction
-        L, T, W, h, rho = p[0], p[1], p[2], p[3], p[4]
-        durations = [T] if len(graph) == 1 else [T * (1 - rho), T * rho]
+    def _declare_variables(self) -> None:
+        """The decision variables x (``layout.size``; torques and impulses /100, wrenches /1000), parameters p = (L
+        [m], T [s], W [m], h [m], ρ): step length, duration, width, height, rolling fraction; per domain T_d (T, or
+        T (1 − ρ), T ρ), β_d (m × 8) from x, Bernstein bases (N_d × 8, × 7, × 6); maps d1 (8 × 7), d2 (8 × 6)."""
+        self.x = x = cs.SX.sym("x", self.layout.size)
+        self.p = p = cs.SX.sym("p", 5)  # step length, duration, width, height, rolling fraction
+        self._length, T, self._width, self._height, rho = p[0], p[1], p[2], p[3], p[4]
+        self._durations = [T] if len(self.graph) == 1 else [T * (1 - rho), T * rho]
         self.n_params = 5
-        d1 = bezier_derivative_coeffs(np.eye(BEZIER_DEGREE + 1), 1)  # (8, 7): β d1 = first-derivative coeffs
-        d2 = bezier_derivative_coeffs(np.eye(BEZIER_DEGREE + 1), 2)
-        side_sign = 1.0 if sw == "left" else -1.0
-        multi = graph.name == "multicontact"
-        a_len, b_wid = self.half_length, self.half_width
-        g: list[cs.SX] = []
-        lbg: list[float] = []
-        ubg: list[float] = []
-        self.rows: dict[str, list[int]] = {}
+        self._d1 = bezier_derivative_coeffs(np.eye(BEZIER_DEGREE + 1), 1)  # (8, 7): β d1 = first-derivative coeffs
+        self._d2 = bezier_derivative_coeffs(np.eye(BEZIER_DEGREE + 1), 2)
+        self._side_sign = 1.0 if self.swing == "left" else -1.0
+        self._multi = self.graph.name == "multicontact"
+        self._betas = [cs.reshape(x[dl.beta], self.m, BEZIER_DEGREE + 1) for dl in self.layout.domains]
+        self._bases = [tuple(bernstein_basis(BEZIER_DEGREE - k, taus) for k in range(3)) for taus in self.domain_taus]
 
-        def add(name: str, expr: cs.SX, lo: float | list[float], hi: float | list[float]) -> None:
-            e = cs.vec(expr)
-            start = sum(int(gi.numel()) for gi in g)
-            self.rows.setdefault(name, []).extend(range(start, start + int(e.numel())))
-            g.append(e)
-            lbg.extend(np.broadcast_to(lo, (int(e.numel()),)).tolist())
-            ubg.extend(np.broadcast_to(hi, (int(e.numel()),)).tolist())
+    def _add(self, name: str, expr: cs.SX, lo: float | list[float], hi: float | list[float]) -> None:
+        """Append the rows lo ≤ vec(expr) ≤ hi to g (bounds broadcast) and record their indices under ``name``."""
+        e = cs.vec(expr)
+        start = sum(int(gi.numel()) for gi in self._g)
+        self.rows.setdefault(name, []).extend(range(start, start + int(e.numel())))
+        self._g.append(e)
+        self._lbg.extend(np.broadcast_to(lo, (int(e.numel()),)).tolist())
+        self._ubg.extend(np.broadcast_to(hi, (int(e.numel()),)).tolist())
 
-        def stacked_jacobian(contacts: tuple[Contact, ...], H: cs.SX, s: cs.SX) -> cs.SX:
-            return cs.vertcat(*(jac[(c.side(st), c.frame_kind())](H, s)[list(c.rows), :] for c in contacts))
+    def _node_symbols(self, d: int, i: int) -> NodeSymbols:
+        """Node i of domain d's symbols (:class:`NodeSymbols`), torques and wrenches unscaled (×100, ×1000)."""
+        node, x = self.layout.domains[d].nodes[i], self.x
+        pb, rpy, vb, sd = x[node["p"]], x[node["rpy"]], x[node["vb"]], x[node["sd"]]
+        H = cs.vertcat(cs.horzcat(rpy_to_matrix(rpy), pb), cs.horzcat(cs.SX.zeros(1, 3), cs.SX.ones(1, 1)))
+        return NodeSymbols(s=x[node["s"]], sd=sd, sdd=x[node["sdd"]], pb=pb, rpy=rpy, vb=vb, ab=x[node["ab"]],
+                           u=U_SCALE * x[node["u"]], lam=F_SCALE * x[node["lam"]], H=H, nu=cs.vertcat(vb, sd))
 
-        # where each contact of a domain is held: its frame's target position in the stance sole's frame
-        def contact_target(c: Contact) -> cs.SX:
-            if c.leg == "stance":
-                return cs.SX([a_len if c.kind == "toe" else -a_len if c.kind == "heel" else 0.0, 0.0, 0.0])
-            return cs.vertcat(L - a_len if c.kind == "heel" else L, side_sign * W, 0.0)
+    def _add_node(self, d: int, i: int) -> None:
+        """All rows of node i of domain d, in this order: Bézier outputs, continuity (first node of a later domain),
+        holonomic contacts, dynamics, contact wrenches, the swing foot (single support), and at the domain's last
+        node foot-flat (double support), the impact and velocity periodicity (last domain)."""
+        dom, n = self.graph.domains[d], len(self.domain_taus[d])
+        v = self._node_symbols(d, i)
+        self._add_bezier_outputs(d, i, v)
+        if d > 0 and i == 0:
+            self._add_continuity(d, v)
+        Jc = self._add_holonomic_contacts(d, i, v)
+        M = self._add_dynamics(v, Jc)
+        self._add_contact_wrenches(d, v)
+        if dom.guard == "touchdown":
+            self._add_swing_foot(v, i, n)
+        if i == n - 1:
+            if dom.guard == "foot_flat":
+                self._add_foot_flat(v)
+            nup = self._add_impact(d, v, M)
+            if d == len(self.graph) - 1:
+                self._add_velocity_periodicity(nup)
 
-        cost: Any = 0.0
-        betas = [cs.reshape(x[dl.beta], m, BEZIER_DEGREE + 1) for dl in lay.domains]
-        for d, dom in enumerate(graph.domains):
-            dl, beta, Td, taus = lay.domains[d], betas[d], durations[d], self.domain_taus[d]
-            n = len(taus)
-            b0 = bernstein_basis(BEZIER_DEGREE, taus)  # (n, 8)
-            b1 = bernstein_basis(BEZIER_DEGREE - 1, taus)
-            b2 = bernstein_basis(BEZIER_DEGREE - 2, taus)
-            wts = np.full(n, 1.0 / (n - 1))
-            wts[[0, -1]] *= 0.5
-            last = d == len(graph) - 1
-            domain_cost: Any = 0.0
-            for i, node in enumerate(dl.nodes):
-                # the joints are node variables tied to β by linear rows: the nonlinear dynamics then stay local
-                # to a node and the Lagrangian's Hessian block-diagonal (≈ 3× faster to build and evaluate)
-                s, sd, sdd = x[node["s"]], x[node["sd"]], x[node["sdd"]]
-                out = self.outputs[d]
-                if len(out) == m:
-                    add("bezier", cs.vertcat(s - cs.mtimes(beta, cs.DM(b0[i])),
-                                             sd * Td - cs.mtimes(beta, cs.DM(d1 @ b1[i])),
-                                             sdd * Td**2 - cs.mtimes(beta, cs.DM(d2 @ b2[i]))), 0.0, 0.0)
-                else:
-                    bo = beta[out, :]
-                    add("bezier", cs.vertcat(s[out] - cs.mtimes(bo, cs.DM(b0[i])),
-                                             sd[out] * Td - cs.mtimes(bo, cs.DM(d1 @ b1[i])),
-                                             sdd[out] * Td**2 - cs.mtimes(bo, cs.DM(d2 @ b2[i]))), 0.0, 0.0)
-                pb, rpy, vb, ab = x[node["p"]], x[node["rpy"]], x[node["vb"]], x[node["ab"]]
-                u, lam = U_SCALE * x[node["u"]], F_SCALE * x[node["lam"]]
-                H = cs.vertcat(cs.horzcat(rpy_to_matrix(rpy), pb), cs.horzcat(cs.SX.zeros(1, 3), cs.SX.ones(1, 1)))
-                nu = cs.vertcat(vb, sd)
-                if d > 0 and i == 0:
-                    # continuity with the previous domain: joints through β, base pose, and the velocity
-                    # after the impact; the contacts' pose and velocity then hold already (not imposed again)
-                    prev = lay.domains[d - 1]
-                    add("continuity", cs.vertcat(s - x[prev.nodes[-1]["s"]],
-                                                 pb - x[prev.nodes[-1]["p"]], rpy - x[prev.nodes[-1]["rpy"]],
-                                                 vb - x[prev.nu_plus][:6], sd - x[prev.nu_plus][6:]), 0.0, 0.0)
-                Js = []
-                for c in dom.contacts:
-                    key = (c.side(st), c.frame_kind())
-                    Hc = fk[key](H, s)
-                    J = jac[key](H, s)[list(c.rows), :]
-                    name = "stance" if c.leg == "stance" and c.kind == "flat" else f"{c.leg}_{c.kind}"
-                    if not (d > 0 and i == 0):
-                        add(f"{name}_position", Hc[:3, 3] - contact_target(c), 0.0, 0.0)
-                        orient = (cs.vertcat(Hc[1, 0], Hc[2, 0], Hc[2, 1]) if c.kind == "flat"
-                                  else cs.vertcat(Hc[0, 1], Hc[2, 1]))
-                        add(f"{name}_orientation", orient, 0.0, 0.0)
-                        add(f"{name}_velocity", J @ nu, 0.0, 0.0)
-                    add(f"{name}_acceleration", J @ cs.vertcat(ab, sdd) + jdot[key](H, s, vb, sd)[list(c.rows), :] @ nu,
-                        0.0, 0.0)
-                    Js.append(J)
-                Jc = cs.vertcat(*Js)
-                M = mass(H, s) + cs.diag(arm)
-                tau = cs.vertcat(cs.SX.zeros(6), u)
-                dyn_res = M @ cs.vertcat(ab, sdd) + bias(H, s, vb, sd) - tau - Jc.T @ lam
-                add("dynamics", dyn_res / ROW_SCALE, 0.0, 0.0)
-                k = 0
-                for c in dom.contacts:
-                    for rname, expr, lo, hi in wrench_rows(c, lam[k:k + c.n_rows], config, a_len, b_wid):
-                        add(rname, expr, lo, hi)
-                    k += c.n_rows
-                if dom.guard == "touchdown":
-                    self._single_support_rows(add, H, s, nu, i, n, h, side_sign, fk, jac, multi, L, W)
-                if i == n - 1:
-                    if dom.guard == "foot_flat":
-                        Hf, Hb = fk[(sw, "sole")](H, s), fk[(st, "sole")](H, s)
-                        add("foot_flat", Hf[2, 0], 0.0, 0.0)
-                        add("toe_off_pitch", -Hb[2, 0], math.sin(config.toe_off_pitch[0]),
-                            math.sin(config.toe_off_pitch[1]))
-                        add("foot_flat_rate", (jac[(sw, "sole")](H, s) @ nu)[4], -config.foot_flat_rate,
-                            config.foot_flat_rate)
-                    # the impact onto the next domain's contacts (M and the pre-impact ν of this node)
-                    target = graph.target_contacts(d)
-                    Jt = stacked_jacobian(target, H, s)
-                    nup, imp = x[dl.nu_plus], U_SCALE * x[dl.impulse]
-                    momentum, contact = impact_residual(M, Jt, nu, nup, imp)
-                    add("impact_map", momentum / ROW_SCALE, 0.0, 0.0)
-                    add("impact_contact", contact, 0.0, 0.0)
-                    add("impact_impulse", impulse_rows(target, imp, config.friction), 0.0, cs.inf)
-                    if dom.guard == "touchdown" and not multi:
-                        add("liftoff", (jac[(st, "sole")](H, s) @ nup)[2], 0.0, cs.inf)
-                    elif dom.guard == "foot_flat":
-                        add("liftoff", (jac[(st, "toe")](H, s) @ nup)[2], 0.0, cs.inf)
-                    if last:
-                        sd0 = x[lay.domains[0].nodes[0]["sd"]]
-                        add("velocity_periodicity", sd0 - cs.mtimes(cs.DM(self.mirror), nup[6:]), 0.0, 0.0)
-                domain_cost = domain_cost + wts[i] * cs.sumsqr(x[node["u"]])
-            cost = domain_cost * Td if d == 0 else cost + domain_cost * Td
-        if len(graph) == 1:
-            add("position_periodicity", betas[0][:, 0] - cs.mtimes(cs.DM(self.mirror), betas[-1][:, BEZIER_DEGREE]),
-                0.0, 0.0)
-        else:  # through the node joints: the last domain's free joints are not Bézier outputs
-            add("position_periodicity", x[lay.domains[0].nodes[0]["s"]]
-                - cs.mtimes(cs.DM(self.mirror), x[lay.domains[-1].nodes[-1]["s"]]), 0.0, 0.0)
-        self.g = cs.vertcat(*g)
-        self.lbg, self.ubg = np.array(lbg), np.array(ubg)
-        self.x, self.p = x, p
-        self.cost = cost
-        self.lbx, self.ubx = self._bounds()
+    def _add_bezier_outputs(self, d: int, i: int, v: NodeSymbols) -> None:
+        """The virtual constraints (3 |O_d| rows, ``bezier``): the output joints O_d of domain d follow its Bézier
+        polynomial at τ_i, s_O = β_O b(τ_i) [rad], ṡ_O T_d = β_O b'(τ_i) [rad], s̈_O T_d² = β_O b''(τ_i) [rad]
+        (b' = d1 b₇, b'' = d2 b₆). The joints are node variables tied to β by these linear rows: the nonlinear
+        dynamics then stay local to a node and the Lagrangian's Hessian block-diagonal."""
+        out, Td = self.outputs[d], self._durations[d]
+        b0, b1, b2 = self._bases[d]
+        bo = self._betas[d][out, :]
+        self._add("bezier", cs.vertcat(v.s[out] - cs.mtimes(bo, cs.DM(b0[i])),
+                                       v.sd[out] * Td - cs.mtimes(bo, cs.DM(self._d1 @ b1[i])),
+                                       v.sdd[out] * Td**2 - cs.mtimes(bo, cs.DM(self._d2 @ b2[i]))), 0.0, 0.0)
 
-    def _single_support_rows(self, add: Any, H: cs.SX, s: cs.SX, nu: cs.SX, i: int, n: int, h: cs.SX,
-                             side_sign: float, fk: dict[tuple[str, str], cs.Function],
-                             jac: dict[tuple[str, str], cs.Function], multi: bool, L: cs.SX, W: cs.SX) -> None:
-        """The swing foot in single support: clearance, attitude, the essential constraints, and its landing
-        at τ = 1 — flat at (L, ±W, 0) (flat graph) or heel first, toe up, heel edge at (L − a, ±W, 0)
-        (multi-contact) — with bounded velocities at the guard."""
-        config, quality, sw = self.config, self.quality, self.swing
-        Hsw = fk[(sw, "sole")](H, s)
+    def _add_continuity(self, d: int, v: NodeSymbols) -> None:
+        """The first node of domain d > 0 starts where domain d − 1 left (2m + 12 rows, ``continuity``): joints s,
+        base position [m] and roll-pitch-yaw [rad] of its last node, and its post-impact velocity ν⁺ = (ν_b, ṡ).
+        The contacts' pose and velocity then hold already and are not imposed again at this node."""
+        x, prev = self.x, self.layout.domains[d - 1]
+        self._add("continuity", cs.vertcat(v.s - x[prev.nodes[-1]["s"]],
+                                           v.pb - x[prev.nodes[-1]["p"]], v.rpy - x[prev.nodes[-1]["rpy"]],
+                                           v.vb - x[prev.nu_plus][:6], v.sd - x[prev.nu_plus][6:]), 0.0, 0.0)
+
+    def _contact_target(self, c: Contact) -> cs.SX:
+        """Where contact c's frame is held (3,) [m], in the stance sole's frame: the stance sole's centre, toe
+        (+a) or heel (−a) edge; the swing foot's sole at (L, ±W, 0) or heel edge at (L − a, ±W, 0)."""
+        a_len, L = self.half_length, self._length
+        if c.leg == "stance":
+            return cs.SX([a_len if c.kind == "toe" else -a_len if c.kind == "heel" else 0.0, 0.0, 0.0])
+        return cs.vertcat(L - a_len if c.kind == "heel" else L, self._side_sign * self._width, 0.0)
+
+    def _add_holonomic_contacts(self, d: int, i: int, v: NodeSymbols) -> cs.SX:
+        """Each contact c of domain d held (``<name>_position``, ``_orientation``, ``_velocity``,
+        ``_acceleration``): its frame at :meth:`_contact_target` (3 rows [m]); flat: R[1,0] = R[2,0] = R[2,1] = 0,
+        line: R[0,1] = R[2,1] = 0 (edge along world y, pitch free); J_c ν = 0 (6 or 5 rows); J_c ν̇ + J̇_c ν = 0, alone
+        at a later domain's first node (:meth:`_add_continuity`). Returns J_c stacked (contact rows × (6 + m))."""
+        st, H, s, nu = self.stance, v.H, v.s, v.nu
+        Js = []
+        for c in self.graph.domains[d].contacts:
+            key = (c.side(st), c.frame_kind())
+            Hc = self._fk[key](H, s)
+            J = self._jac[key](H, s)[list(c.rows), :]
+            name = "stance" if c.leg == "stance" and c.kind == "flat" else f"{c.leg}_{c.kind}"
+            if not (d > 0 and i == 0):
+                self._add(f"{name}_position", Hc[:3, 3] - self._contact_target(c), 0.0, 0.0)
+                orient = (cs.vertcat(Hc[1, 0], Hc[2, 0], Hc[2, 1]) if c.kind == "flat"
+                          else cs.vertcat(Hc[0, 1], Hc[2, 1]))
+                self._add(f"{name}_orientation", orient, 0.0, 0.0)
+                self._add(f"{name}_velocity", J @ nu, 0.0, 0.0)
+            self._add(f"{name}_acceleration",
+                      J @ cs.vertcat(v.ab, v.sdd) + self._jdot[key](H, s, v.vb, v.sd)[list(c.rows), :] @ nu, 0.0, 0.0)
+            Js.append(J)
+        return cs.vertcat(*Js)
+
+    def _add_dynamics(self, v: NodeSymbols, Jc: cs.SX) -> cs.SX:
+        """The equations of motion (6 + m rows [N, N m] / 100, ``dynamics``): (M(q) + diag(armature)) ν̇ + h(q, ν)
+        = (0, u) + J_cᵀ λ. Returns the mass matrix with armature ((6 + m) × (6 + m)) for the impact."""
+        M = self._mass(v.H, v.s) + cs.diag(self._armature)
+        tau = cs.vertcat(cs.SX.zeros(6), v.u)
+        dyn_res = M @ cs.vertcat(v.ab, v.sdd) + self._bias(v.H, v.s, v.vb, v.sd) - tau - Jc.T @ v.lam
+        self._add("dynamics", dyn_res / ROW_SCALE, 0.0, 0.0)
+        return M
+
+    def _add_contact_wrenches(self, d: int, v: NodeSymbols) -> None:
+        """Each contact's wrench conditions (:func:`wrench_rows`: normal force, friction pyramid, centre of
+        pressure, yaw moment; [N, N m]) on its slice of λ, contacts in domain order."""
+        k = 0
+        for c in self.graph.domains[d].contacts:
+            for rname, expr, lo, hi in wrench_rows(c, v.lam[k:k + c.n_rows], self.config, self.half_length,
+                                                   self.half_width):
+                self._add(rname, expr, lo, hi)
+            k += c.n_rows
+
+    def _add_swing_foot(self, v: NodeSymbols, i: int, n: int) -> None:
+        """The swing sole S in single support (p_S [m], R_S). Inner nodes: 0 ≤ z_S ≤ h, corners ≥ flat_approach z_S
+        (0 multi-contact), R_S[2,0], R_S[2,1] within the swing tilt (multi-contact: toe up to the heel-strike pitch,
+        down per :func:`swing_toe_down`), |R_S[1,0]| ≤ sin(swing_yaw), ±y_S ≥ 2b + foot_gap. τ = ½: z_S = h. τ = 1:
+        flat at (L, ±W, 0), R_S[1,0] = R_S[2,0] = R_S[2,1] = 0 (flat graph) or heel edge at (L − a, ±W, 0),
+        R_S[0,1] = R_S[2,1] = 0, R_S[2,0] within the heel-strike pitch (multi-contact); touchdown velocity bounded
+        (vertical, tangential [m/s], angular [rad/s])."""
+        config, quality, sw, multi = self.config, self.quality, self.swing, self._multi
+        H, s, nu, h, side_sign = v.H, v.s, v.nu, self._height, self._side_sign
+        Hsw = self._fk[(sw, "sole")](H, s)
         psw = Hsw[:3, 3]
         if 0 < i < n - 1:
-            add("swing_height", cs.vertcat(psw[2], psw[2] - h), [0.0, -cs.inf], [cs.inf, 0.0])
+            self._add("swing_height", cs.vertcat(psw[2], psw[2] - h), [0.0, -cs.inf], [cs.inf, 0.0])
             corners = cs.vertcat(*(psw[2] + sx * self.half_length * Hsw[2, 0] + sy * self.half_width * Hsw[2, 1]
                                    for sx in (-1, 1) for sy in (-1, 1)))
             # flat graph: the nearer the ground, the flatter the foot; multi-contact: heel first, any corner ≥ 0
-            add("swing_flat_approach", corners - (0.0 if multi else config.flat_approach) * psw[2], 0.0, cs.inf)
+            self._add("swing_flat_approach", corners - (0.0 if multi else config.flat_approach) * psw[2], 0.0, cs.inf)
             tilt = math.sin(quality.swing_tilt)
             # R[2, 0] = −sin(pitch): multi-contact lets the toe come up to the heel-strike pitch and, on robots
             # that ask for it, the foot leave toe-off toe-down
             pitch_hi = math.sin(config.heel_strike_pitch[1]) if multi else tilt
             pitch_lo = -math.sin(swing_toe_down(quality.swing_tilt, config.toe_off_pitch[1],
                                                 quality.swing_toe_down_until, i / (n - 1))) if multi else -tilt
-            add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [pitch_lo, -tilt], [pitch_hi, tilt])
-            add("swing_yaw", Hsw[1, 0], -math.sin(quality.swing_yaw), math.sin(quality.swing_yaw))
-            add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.scaled("foot_gap")), 0.0, cs.inf)
+            self._add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [pitch_lo, -tilt], [pitch_hi, tilt])
+            self._add("swing_yaw", Hsw[1, 0], -math.sin(quality.swing_yaw), math.sin(quality.swing_yaw))
+            self._add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.scaled("foot_gap")), 0.0,
+                      cs.inf)
         if i == (n - 1) // 2:
-            add("step_height", psw[2] - h, 0.0, 0.0)
+            self._add("step_height", psw[2] - h, 0.0, 0.0)
         if i == n - 1:
+            L, W = self._length, self._width
             if not multi:
-                add("landing_position", psw - cs.vertcat(L, side_sign * W, 0.0), 0.0, 0.0)
-                add("landing_orientation", cs.vertcat(Hsw[1, 0], Hsw[2, 0], Hsw[2, 1]), 0.0, 0.0)
-                Jsw = jac[(sw, "sole")](H, s)
+                self._add("landing_position", psw - cs.vertcat(L, side_sign * W, 0.0), 0.0, 0.0)
+                self._add("landing_orientation", cs.vertcat(Hsw[1, 0], Hsw[2, 0], Hsw[2, 1]), 0.0, 0.0)
+                Jsw = self._jac[(sw, "sole")](H, s)
                 ang = Jsw[3:, :] @ nu
             else:
-                Hh = fk[(sw, "heel")](H, s)
-                add("landing_position", Hh[:3, 3] - cs.vertcat(L - self.half_length, side_sign * W, 0.0), 0.0, 0.0)
-                add("landing_orientation", cs.vertcat(Hsw[0, 1], Hsw[2, 1]), 0.0, 0.0)
-                add("heel_strike_pitch", Hsw[2, 0], math.sin(config.heel_strike_pitch[0]),
-                    math.sin(config.heel_strike_pitch[1]))
-                Jsw = jac[(sw, "heel")](H, s)
+                Hh = self._fk[(sw, "heel")](H, s)
+                self._add("landing_position", Hh[:3, 3] - cs.vertcat(L - self.half_length, side_sign * W, 0.0),
+                          0.0, 0.0)
+                self._add("landing_orientation", cs.vertcat(Hsw[0, 1], Hsw[2, 1]), 0.0, 0.0)
+                self._add("heel_strike_pitch", Hsw[2, 0], math.sin(config.heel_strike_pitch[0]),
+                          math.sin(config.heel_strike_pitch[1]))
+                Jsw = self._jac[(sw, "heel")](H, s)
                 ang = (Jsw[3:, :] @ nu)[[0, 2]]
             vsw = Jsw[:3, :] @ nu
-            add("impact_velocity", vsw[2], *config.scaled("impact_velocity"))
+            self._add("impact_velocity", vsw[2], *config.scaled("impact_velocity"))
             tangential = config.scaled("max_impact_tangential")
-            add("impact_tangential", vsw[:2], -tangential, tangential)
-            add("impact_angular", ang, -config.max_impact_angular, config.max_impact_angular)
+            self._add("impact_tangential", vsw[:2], -tangential, tangential)
+            self._add("impact_angular", ang, -config.max_impact_angular, config.max_impact_angular)
+
+    def _add_foot_flat(self, v: NodeSymbols) -> None:
+        """The end of double support: the front (swing) sole flat, R[2,0] = 0 (``foot_flat``); the back (stance)
+        sole toe-down, −R[2,0] = sin(pitch) within sin(toe_off_pitch) (``toe_off_pitch``); the front sole's pitch
+        rate within ±foot_flat_rate [rad/s] (``foot_flat_rate``)."""
+        config, st, sw, H, s = self.config, self.stance, self.swing, v.H, v.s
+        Hf, Hb = self._fk[(sw, "sole")](H, s), self._fk[(st, "sole")](H, s)
+        self._add("foot_flat", Hf[2, 0], 0.0, 0.0)
+        self._add("toe_off_pitch", -Hb[2, 0], math.sin(config.toe_off_pitch[0]), math.sin(config.toe_off_pitch[1]))
+        self._add("foot_flat_rate", (self._jac[(sw, "sole")](H, s) @ v.nu)[4], -config.foot_flat_rate,
+                  config.foot_flat_rate)
+
+    def _add_impact(self, d: int, v: NodeSymbols, M: cs.SX) -> cs.SX:
+        """The rigid impact at the end of domain d onto the next domain's contacts (Jacobian J, impulse Λ [N s],
+        :func:`robustgait.dynamics.impact_residual`): M (ν⁺ − ν⁻) = Jᵀ Λ (6 + m rows / 100, ``impact_map``),
+        J ν⁺ = 0 (``impact_contact``), Λ inside the friction pyramid (:func:`impulse_rows`, ``impact_impulse``),
+        and the leaving contact lifting off, ż⁺ ≥ 0 [m/s] (``liftoff``: the stance sole on the flat graph, the
+        stance toe after double support). Returns ν⁺ (6 + m,)."""
+        x, dl, dom, st = self.x, self.layout.domains[d], self.graph.domains[d], self.stance
+        H, s, nu = v.H, v.s, v.nu
+        target = self.graph.target_contacts(d)  # J: their Jacobian rows stacked (Σ rows × (6 + m))
+        Jt = cs.vertcat(*(self._jac[(c.side(st), c.frame_kind())](H, s)[list(c.rows), :] for c in target))
+        nup, imp = x[dl.nu_plus], U_SCALE * x[dl.impulse]
+        momentum, contact = impact_residual(M, Jt, nu, nup, imp)
+        self._add("impact_map", momentum / ROW_SCALE, 0.0, 0.0)
+        self._add("impact_contact", contact, 0.0, 0.0)
+        self._add("impact_impulse", impulse_rows(target, imp, self.config.friction), 0.0, cs.inf)
+        if dom.guard == "touchdown" and not self._multi:
+            self._add("liftoff", (self._jac[(st, "sole")](H, s) @ nup)[2], 0.0, cs.inf)
+        elif dom.guard == "foot_flat":
+            self._add("liftoff", (self._jac[(st, "toe")](H, s) @ nup)[2], 0.0, cs.inf)
+        return nup
+
+    def _add_velocity_periodicity(self, nup: cs.SX) -> None:
+        """Joint velocities periodic after relabeling (m rows [rad/s], ``velocity_periodicity``): ṡ_0(0) = R ṡ⁺
+        with ṡ⁺ the last domain's post-impact joint velocities."""
+        sd0 = self.x[self.layout.domains[0].nodes[0]["sd"]]
+        self._add("velocity_periodicity", sd0 - cs.mtimes(cs.DM(self.mirror), nup[6:]), 0.0, 0.0)
+
+    def _add_position_periodicity(self) -> None:
+        """Joint positions periodic after relabeling (m rows [rad], ``position_periodicity``): β_0[:, 0] =
+        R β_0[:, 7] with one domain; otherwise s_0(0) = R s_last(1) through the node joints (the last domain's
+        free joints are not Bézier outputs)."""
+        lay, R = self.layout, cs.DM(self.mirror)
+        if len(self.graph) == 1:
+            self._add("position_periodicity", self._betas[0][:, 0] - cs.mtimes(R, self._betas[-1][:, BEZIER_DEGREE]),
+                      0.0, 0.0)
+        else:
+            self._add("position_periodicity", self.x[lay.domains[0].nodes[0]["s"]]
+                      - cs.mtimes(R, self.x[lay.domains[-1].nodes[-1]["s"]]), 0.0, 0.0)
+
+    def _cost(self) -> Any:
+        """The cost Σ_d T_d Σ_i w_i ‖u_i / 100‖² (scaled torques; trapezoid weights w on the nodes of domain d)."""
+        cost: Any = 0.0
+        for d, (dl, taus, Td) in enumerate(zip(self.layout.domains, self.domain_taus, self._durations, strict=True)):
+            n = len(taus)
+            wts = np.full(n, 1.0 / (n - 1))
+            wts[[0, -1]] *= 0.5
+            domain_cost: Any = 0.0
+            for i, node in enumerate(dl.nodes):
+                domain_cost = domain_cost + wts[i] * cs.sumsqr(self.x[node["u"]])
+            cost = domain_cost * Td if d == 0 else cost + domain_cost * Td
+        return cost
 
     def _bounds(self) -> tuple[FloatArray, FloatArray]:
         """Variable bounds: joint range on β, torque limits, and the gait-quality bands on the node variables
@@ -488,6 +595,3 @@ class GaitProblem:
                 lo[a], hi[a] = -q.pelvis_acceleration, q.pelvis_acceleration
                 lo[node["sd"]], hi[node["sd"]] = -jv, jv
         return lo, hi
-
-
-FlatFootProblem = GaitProblem  # the name of the one-domain problem before the domain graph was generalized
