@@ -32,11 +32,10 @@ the step), so of a torque law computed at the start of the step the −D q̇ par
 with D = kd exactly as in the rollout engine. A controller may choose D
 (:meth:`FeedbackController.servo_damping`; the engine then steps copies of the models with that damping):
 the passivity law sets D = K_D, which makes its own damping implicit; with the spec's kd instead
-(``implicit_damping=False``) its extra damping K_D − kd is explicit, and it tracked 3× worse (50 steps: RMS
-0.72 vs 0.22 mrad, max 12.6 vs 2.2 mrad, 3× the saturation; benchmarks/bench_feedback.py --variants).
-``actuation="motor"`` makes the actuators direct torque motors (gain 1, bias 0, same force range): every
-torque acts explicitly, as computed from the sampled state (a 1 kHz zero-order hold); the PD law then no
-longer matches the rollout engine, and the passivity law with the spec gains falls within a step (measured).
+(``implicit_damping=False``) its extra damping K_D − kd is explicit, which tracks worse (docs/feedback.md;
+``benchmarks/perf/feedback.py --variants``). ``actuation="motor"`` makes the actuators direct torque motors
+(gain 1, bias 0, same force range): every torque acts explicitly, as computed from the sampled state (a zero-order
+hold over the physics step); the PD law then no longer matches the rollout engine (docs/feedback.md).
 Torques beyond the limit are counted per joint and step (``saturation``).
 """
 
@@ -44,7 +43,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -227,6 +226,116 @@ def _one_blas_thread() -> contextlib.AbstractContextManager[object]:
     return _THREADPOOLS[0].limit(limits=1, user_api="blas")  # type: ignore[attr-defined]
 
 
+# -- the disturbances and the actuation of one physics step ---------------------------------------------------
+# Each factory binds what is fixed over a chunk and returns the function the closed loop calls at physics step k
+# of the domain: one call per step and active disturbance, no allocation beyond the arithmetic itself.
+
+Observe = Callable[[int], Observation]  # physics step k → the state the law reads
+Command = Callable[[int, Array], Array]  # (k, an (A, m) torque or control) → the (A, m) one applied
+Push = Callable[[int], None]  # physics step k → writes the applied forces
+
+
+def encoder_noise(obs: Observation, noise: Array, active: NDArray[np.int64], qpos_idx: NDArray[np.int64],
+                  dof_idx: NDArray[np.int64]) -> Observe:
+    """Sensor noise: the law reads noisy encoders. At physics step k the law sees ``obs`` (the true state: qpos
+    (A, nq), qvel (A, nv), live views of the batch) with the encoder noise ``noise[active, k]`` added on the actuated
+    joints — n_q [rad] to their positions (``qpos_idx``), n_v [rad/s] to their velocities (``dof_idx``); ``noise``:
+    (K, n, 2, m) per sample of the engine's batch, physics step and actuated joint, none from step n on (the law then
+    sees ``obs``). The servo conversion keeps reading the true state. The noisy state is written into two arrays
+    made here, so its observation is valid until the next call (as :class:`Observation` promises)."""
+    pq, pv = np.empty(obs.qpos.shape), np.empty(obs.qvel.shape)
+    seen = Observation(qpos=pq, qvel=pv, samples=obs.samples, fields=obs.fields)
+    horizon = noise.shape[1]
+
+    def observe(k: int) -> Observation:
+        if k >= horizon:
+            return obs
+        np.copyto(pq, obs.qpos)
+        np.copyto(pv, obs.qvel)
+        pq[:, qpos_idx] += noise[active, k, 0]
+        pv[:, dof_idx] += noise[active, k, 1]
+        return seen
+
+    return observe
+
+
+def command_latency(hist: Array, inputs: StepInputs, active: NDArray[np.int64], damping: Array, qvel: Array,
+                    dof_idx: NDArray[np.int64]) -> Command:
+    """Command latency of a law computed centrally (``inputs.delay_steps`` (K,) physics steps per sample). At physics
+    step k the central command — the law's torque τ (A, m) [N m] plus the drives' local damping D q̇ (``damping`` D
+    (m,) [N m s/rad], q̇ the true joint velocities from ``qvel`` (A, nv), a live view) — is recorded in ``hist``
+    (K, H, m), and the torque applied is the command computed ``delay_steps`` earlier
+    (:meth:`FeedbackEngine._delayed`) minus the current D q̇: the drives' damping acts on the current velocity, as
+    the PD servos' own loop does under command latency."""
+
+    def delay(k: int, tau: Array) -> Array:
+        local = damping * qvel[:, dof_idx]
+        hist[active, k] = tau + local
+        return FeedbackEngine._delayed(hist, inputs, active, k) - local
+
+    return delay
+
+
+def servo_command(kp: Array, damping: Array, qpos: Array, qvel: Array, qpos_idx: NDArray[np.int64],
+                  dof_idx: NDArray[np.int64]) -> Command:
+    """Torque to servo control: the position command c = τ/kp + q + (D/kp) q̇ (A, m) [rad] for which the affine servo
+    u = kp (c − q) − D q̇ produces the torque τ (A, m) [N m] at the true state q, q̇ (the actuated joints of ``qpos``
+    (A, nq), ``qvel`` (A, nv), live views); kp (m,) [N m/rad], D = ``damping`` (m,) [N m s/rad]."""
+    ratio = damping / kp
+
+    def command(k: int, tau: Array) -> Array:
+        return tau / kp + qpos[:, qpos_idx] + ratio * qvel[:, dof_idx]
+
+    return command
+
+
+def motor_command(k: int, tau: Array) -> Array:
+    """Torque to direct-torque motor control: the torque τ (A, m) [N m] itself."""
+    return tau
+
+
+def exact_servo_command(controller: PDController, shape: tuple[int, int]) -> Command:
+    """The PD's own servo control (``servo_exact``): at physics step k the rollout engine's control
+    :meth:`PDController.servo_control` (m,) [rad], the same for all samples, as a fresh (A, m) array; the torque is
+    not used."""
+
+    def command(k: int, tau: Array) -> Array:
+        control = controller.servo_control(k)
+        assert control is not None
+        return np.broadcast_to(control, shape).copy()
+
+    return command
+
+
+def control_offset(offset: Array, active: NDArray[np.int64], kp: Array | None) -> Command:
+    """The control offset (``StepInputs.ctrl_offset`` (K, n, m) [rad], none from physics step n on) added to the
+    control c (A, m) at physics step k: ``offset[active, k]`` as is for servos (``kp`` None: it shifts their position
+    command), or as the servo would apply it, kp·offset [N m] with kp (m,) [N m/rad], for torque motors."""
+    horizon = offset.shape[1]
+    if kp is None:
+        def shift(k: int, c: Array) -> Array:
+            return c + offset[active, k] if k < horizon else c
+    else:
+        gain = kp
+
+        def shift(k: int, c: Array) -> Array:
+            return c + gain * offset[active, k] if k < horizon else c
+
+    return shift
+
+
+def base_push(xfrc: Array, body: int, wrench: Array, active: NDArray[np.int64]) -> Push:
+    """The base wrench (pushes): at physics step k writes ``wrench[active, k]`` (K, n, 6 per sample: world-frame
+    force [N] and torque [N m] at the base's centre of mass) into the applied forces ``xfrc`` (A, nbody, 6, the batch's
+    ``xfrc_applied``) of body ``body``; zero from step n on."""
+    horizon = wrench.shape[1]
+
+    def push(k: int) -> None:
+        xfrc[:, body] = wrench[active, k] if k < horizon else 0.0
+
+    return push
+
+
 class FeedbackEngine(StepEngine):
     """:class:`StepEngine` whose steps run a state-feedback :class:`FeedbackController` (module docstring).
 
@@ -406,6 +515,35 @@ class FeedbackEngine(StepEngine):
         with _one_blas_thread():
             return self._closed_loop(active, current, k0, n, inputs)
 
+    def _step_functions(self, active: NDArray[np.int64], obs: Observation, xfrc: Array, inputs: StepInputs | None
+                        ) -> tuple[Observe | None, Command | None, Command, Command | None, Push | None]:
+        """What the closed loop calls at each physics step for the samples ``active`` (``obs``: their true state, live
+        views of the batch; ``xfrc``: their applied forces), chosen once per chunk: the sensor noise
+        (:func:`encoder_noise`), the command latency (:func:`command_latency`), the torque → control conversion
+        (:func:`exact_servo_command`, :func:`motor_command` or :func:`servo_command`), the control offset
+        (:func:`control_offset`) and the base wrench (:func:`base_push`); None for a disturbance not given."""
+        robot, ctl = self.robot, self.controller
+        observe = delay = offset = push = None
+        if inputs is not None and inputs.sensor_noise is not None:
+            observe = encoder_noise(obs, inputs.sensor_noise, active, robot.qpos_idx, robot.dof_idx)
+        hist = self._step_ctx.get("torques") if self._step_ctx is not None else None  # latency: computed torques
+        assert hist is None or isinstance(hist, np.ndarray)
+        if hist is not None:
+            assert inputs is not None
+            delay = command_latency(hist, inputs, active, self.damping, obs.qvel, robot.dof_idx)
+        command: Command
+        if isinstance(ctl, PDController) and ctl.servo_exact:
+            command = exact_servo_command(ctl, (active.size, robot.model.nu))
+        elif self.motor:
+            command = motor_command
+        else:
+            command = servo_command(robot.kp, self.damping, obs.qpos, obs.qvel, robot.qpos_idx, robot.dof_idx)
+        if inputs is not None and inputs.ctrl_offset is not None:
+            offset = control_offset(inputs.ctrl_offset, active, robot.kp if self.motor else None)
+        if inputs is not None and inputs.base_wrench is not None:
+            push = base_push(xfrc, robot.base_body_id, inputs.base_wrench, active)
+        return observe, delay, command, offset, push
+
     def _closed_loop(self, active: NDArray[np.int64], current: NDArray[np.float64], k0: int, n: int,
                      inputs: StepInputs | None
                      ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -439,54 +577,30 @@ class FeedbackEngine(StepEngine):
         ctrls = np.zeros((na, n, robot.model.nu))  # the controls written, as StepEngine._rollout returns them
         sat = np.zeros((na, n, nu), dtype=bool)
         err = np.zeros((na, n, nu))
-        off = inputs.ctrl_offset if inputs is not None else None
-        wr = inputs.base_wrench if inputs is not None else None
-        col = self.robot.base_body_id
-        kp, kd, limit = robot.kp, self.damping, robot.torque_limit
+        full = self._full_slice if self._full_slice is not None else self._full_cols
+        limit = robot.torque_limit
         frozen_at = np.full(na, -1)
-        noise = inputs.sensor_noise if inputs is not None else None
-        hist = self._step_ctx.get("torques") if self._step_ctx is not None else None  # latency: computed torques
-        assert hist is None or isinstance(hist, np.ndarray)
         obs = Observation(qpos=qpos, qvel=qvel, samples=active, fields=fields)
+        observe, delay, command, offset, push = self._step_functions(active, obs, xfrc, inputs)
         step_ids = ids
         for j in range(n):
             k = k0 + j
-            if noise is not None and k < noise.shape[1]:
-                # the law reads the encoders: its state is the noisy one, the servo conversion below the true one
-                nq, nv = noise[active, k, 0], noise[active, k, 1]
-                pq, pv = qpos.copy(), qvel.copy()
-                pq[:, robot.qpos_idx] += nq
-                pv[:, robot.dof_idx] += nv
-                seen = Observation(qpos=pq, qvel=pv, samples=active, fields=fields)
-            else:
-                seen = obs
-            tau, e = ctl.torque(k, seen)
-            if hist is not None:
-                # the central command (law + the drives' local damping D q̇) arrives late; the drives' damping
-                # acts on the current velocity, as the PD servos' own loop does under command latency
-                assert inputs is not None
-                local = self.damping * qvel[:, robot.dof_idx]
-                hist[active, k] = tau + local
-                tau = self._delayed(hist, inputs, active, k) - local
+            tau, e = ctl.torque(k, obs if observe is None else observe(k))
+            if delay is not None:
+                tau = delay(k, tau)
             err[:, j] = e
             sat[:, j] = np.abs(tau) > limit
-            exact = ctl.servo_control(k) if isinstance(ctl, PDController) else None
-            if exact is not None:
-                c = np.broadcast_to(exact, (na, nu)).copy()
-            elif self.motor:
-                c = tau
-            else:
-                c = tau / kp + qpos[:, robot.qpos_idx] + (kd / kp) * qvel[:, robot.dof_idx]
-            if off is not None and k < off.shape[1]:
-                c = c + (kp * off[active, k] if self.motor else off[active, k])
+            c = command(k, tau)
+            if offset is not None:
+                c = offset(k, c)
             ctrl_b[:] = c
             ctrls[:, j] = c
-            if wr is not None:
-                xfrc[:, col] = wr[active, k] if k < wr.shape[1] else 0.0
+            if push is not None:
+                push(k)
             if stage > STAGE_NONE:
                 sens[:, j] = sd  # the sensors of the state this step starts from, as mj_step records them
             b.step(step_ids, nstep=1, stage=stage)
-            st[:, j] = rows[:, self._full_slice] if self._full_slice is not None else rows[:, self._full_cols]
+            st[:, j] = rows[:, full]
             if stage == STAGE_NONE:
                 sens[:, j] = sd
             # a simulation whose warning counters rose stops for the rest of the chunk (as mujoco.rollout)
