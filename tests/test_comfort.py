@@ -292,9 +292,9 @@ def test_report_figure_and_table_of_a_studys_comfort(tmp_path, exo_walk):
     c = exo_walk.comfort.to_dict()
     slower = {**c, "speed": 0.1, "pelvis_acc_vertical_rms": 2.0, "cost_of_transport": None}
     trial = {"state": "COMPLETE", "reused_from": None, "params": {"step_length": 0.15}, "status": "certified",
-             "r_star": 20.0, "comfort": c}
+             "certificate_value": 20.0, "comfort": c}
     status = {"certificate": "push", "unit": "N s", "config": to_dict(Config()),
-              "trials": [{**trial, "number": 0}, {**trial, "number": 1, "status": "fell", "r_star": 0.0,
+              "trials": [{**trial, "number": 0}, {**trial, "number": 1, "status": "fell", "certificate_value": 0.0,
                                                    "comfort": slower},
                          {**trial, "number": 2, "reused_from": 0}, {**trial, "number": 3, "comfort": None}]}
     assert [t["number"] for t in measured_trials(status)] == [0, 1]

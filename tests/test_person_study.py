@@ -98,7 +98,8 @@ def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path, ca
     setup = load_config(d)
     t = ahead[0]
     fresh = evaluate(load_robot(setup.robot), GaitParams(**t["params"]), setup.config)  # ahead: the evaluation
-    assert (fresh.status, fresh.steps_taken, fresh.r_star) == (t["status"], t["steps_taken"], t["r_star"])
+    assert (fresh.status, fresh.steps_taken, fresh.certificate_value) == (t["status"], t["steps_taken"],
+                                                                          t["certificate_value"])
 
 
 def test_a_study_written_before_over_drawn_batches_evaluates_its_batch_alone(tmp_path):

@@ -32,10 +32,10 @@ COMFORT = {"speed": 0.2, "cadence": 86.0, "pelvis_acc_vertical_rms": 1.4, "pelvi
            "impact_force_ratio": 5.5, "cost_of_transport": 0.24}
 
 
-def result(r_star: float, status: str = "certified") -> dict:  # type: ignore[type-arg]
+def result(value: float, status: str = "certified") -> dict:  # type: ignore[type-arg]
     return {"status": status, "reason": "", "steps_taken": 50, "step_cap": 50, "fell": False, "fall_reason": None,
-            "mean_speed": 0.2, "r_star": r_star, "comfort": COMFORT, "gait_file": None, "certificate_file": None,
-            "seconds": {}}
+            "mean_speed": 0.2, "certificate_value": value, "comfort": COMFORT, "gait_file": None,
+            "certificate_file": None, "seconds": {}}
 
 
 def pending_study(d: Path, r_stars: tuple[float, ...] = (20.0, 15.0, 5.0), floor: float = 10.0) -> Path:
@@ -126,7 +126,7 @@ def test_the_pending_batch_shows_only_gaits_above_the_floor(served):
     assert status == 200 and st["phase"] == "waiting" and st["iteration"] == 0
     assert [g["name"] for g in st["batch"]] == ["A", "B"]  # C (J* 5 < floor 10) is not shown
     assert st["hidden"] == [{"slot": 2, "name": "C", "why": "certified 5 N s, below the floor 10 N s"}]
-    assert st["batch"][0]["r_star"] == 20.0 and st["batch"][0]["figures"][0]["name"] == "speed"
+    assert st["batch"][0]["certificate_value"] == 20.0 and st["batch"][0]["figures"][0]["name"] == "speed"
     assert st["batch"][0]["video"] is None  # not rendered (the fixture renders none)
     video = page.directory / "gaits" / gait_label(page.space, 3) / "person.mp4"
     video.parent.mkdir(parents=True)

@@ -244,7 +244,8 @@ def main() -> None:
             gif = args.out / f"{args.robot}_best_{name}.gif"
             walk(robot, gait, steps=args.gif_steps, video=gif)
             media = {"tiles": tiles.name, "video": gif.name}
-        record["gaits"][name] = {"params": best["params"], "study_r_star": best["r_star"], "r_star": r["r_star"],
+        record["gaits"][name] = {"params": best["params"], "study_r_star": best["certificate_value"],
+                                 "r_star": r["certificate_values"],
                                  "walk": wf, "validation": {k: kr.summary() for k, kr in v.kinds.items()},
                                  "certificate_r_star": v.certificate.r_star, "media": media}
     (args.out / f"compare_{args.robot}.json").write_text(json.dumps(record, indent=1, default=float))

@@ -35,6 +35,7 @@ from robustgait.learn.space import ActionSpace
 from robustgait.study.evaluate import Evaluation, certify_evaluation, generate_and_walk
 from robustgait.study.executors import Executor
 from robustgait.study.run import params_label
+from robustgait.study.storage import current_names
 
 _WORKER: dict[str, Any] = {}
 
@@ -69,11 +70,11 @@ class EvaluationCache:
 
     def walked(self, params: dict[str, float]) -> dict[str, Any] | None:
         p = self.dir / f"{self.key(params)}.walk.json"
-        return json.loads(p.read_text()) if p.is_file() else None
+        return current_names(json.loads(p.read_text())) if p.is_file() else None
 
     def full(self, params: dict[str, float]) -> dict[str, Any] | None:
         p = self.dir / f"{self.key(params)}.json"
-        return json.loads(p.read_text()) if p.is_file() else None
+        return current_names(json.loads(p.read_text())) if p.is_file() else None
 
     def import_study(self, directory: str | Path) -> int:
         """Store the evaluations of a study run with this configuration (its database's results with its gait and

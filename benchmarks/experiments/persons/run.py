@@ -46,7 +46,8 @@ def known(cache: EvaluationCache) -> list[dict[str, Any]]:
     for i in range(cache.space.size):
         ev = cache.full(cache.params(i))
         if ev is not None:
-            out.append({"index": i, "params": cache.params(i), "status": ev["status"], "r_star": ev["r_star"],
+            out.append({"index": i, "params": cache.params(i), "status": ev["status"],
+                        "r_star": ev["certificate_value"],
                         "comfort": ev.get("comfort")})
     return out
 
@@ -81,9 +82,9 @@ def run_person(cache: EvaluationCache, out: Path, seed: int, learner: str, args:
     by_number = {t["number"]: t for t in st["trials"]}
     shown_below = sum(1 for a in st["person"]["answers"] for n, rank in zip(st["iterations"][a["iteration"]]["trials"],
                                                                              a["ranks"], strict=True)
-                      if rank is not None and by_number[n]["r_star"] < floor)
+                      if rank is not None and by_number[n]["certificate_value"] < floor)
     return {"person": seed, "learner": learner, "floor": floor, "recommendation": st["best"]["params"],
-            "rec_r_star": st["best"]["r_star"], "shown_below_floor": shown_below,
+            "rec_r_star": st["best"]["certificate_value"], "shown_below_floor": shown_below,
             "shown": sum(r is not None for a in st["person"]["answers"] for r in a["ranks"]),
             "wall": wall, "computed": {k: cache.computed[k] - before[k] for k in before}}
 

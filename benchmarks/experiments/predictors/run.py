@@ -79,7 +79,7 @@ def gaits_of(studies: list[Path]) -> list[dict[str, Any]]:
             if g.status == "certified" and g.gait_file is not None and key not in seen:
                 seen.add(key)
                 out.append({"label": g.label, "params": g.params, "gait": str(d / g.gait_file), "study": d.name,
-                            "study_r_star": g.r_star})
+                            "study_r_star": g.certificate_value})
     return out
 
 

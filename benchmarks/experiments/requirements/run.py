@@ -43,9 +43,9 @@ def one(d: Path, require: tuple[str, ...], workers: int) -> dict:  # type: ignor
             "load": [load0, os.getloadavg()[0]],
             "unique": len(done), "meet_requirements": len(meets),
             "certified": sum(t["status"] == "certified" for t in done),
-            "best": {"params": best["params"], "r_star": best["r_star"],
+            "best": {"params": best["params"], "r_star": best["certificate_value"],
                      "comfort": {k: (best["comfort"] or {}).get(k) for k in FIGURES}},
-            "front": [{"params": r["params"], "r_star": r["r_star"], "speed": r["speed"],
+            "front": [{"params": r["params"], "r_star": r["certificate_value"], "speed": r["speed"],
                        "pelvis_acc_vertical_rms": r["pelvis_acc_vertical_rms"]} for r in front["front"]]}
 
 

@@ -100,24 +100,27 @@ def main() -> None:
         for it in st["iterations"]:
             b = it["best"]
             if b:
-                print(f"  iteration {it['iteration'] + 1:2d}: best {b['r_star']:.4f}, {b['steps_taken']} steps, "
-                      f"{', '.join(f'{v:g}' for v in b['params'].values())}")
+                print(f"  iteration {it['iteration'] + 1:2d}: best {b['certificate_value']:.4f}, "
+                      f"{b['steps_taken']} steps, {', '.join(f'{v:g}' for v in b['params'].values())}")
         if best:
             gait = load_gait(Path(run["directory"]) / best["gait_file"], robot)
-            r = np.array([c["r_star"] for c in recertify(robot, gait, cert0, fresh, cfg0.sim, cfg0.validate)])
-            print(f"  best gait: {best['r_star']:.4f} (study seed), {best['steps_taken']} steps; fresh seeds "
-                  f"{fresh[0]}–{fresh[-1]}: {name} {r.mean():.4f} ± {r.std(ddof=1) if r.size > 1 else 0:.4f} {unit}")
-    rd = np.array([c["r_star"] for c in default_fresh]) if default_fresh else np.zeros(1)
+            again = recertify(robot, gait, cert0, fresh, cfg0.sim, cfg0.validate)
+            r = np.array([c["certificate_value"] for c in again])
+            print(f"  best gait: {best['certificate_value']:.4f} (study seed), {best['steps_taken']} steps; "
+                  f"fresh seeds {fresh[0]}–{fresh[-1]}: {name} {r.mean():.4f} ± "
+                  f"{r.std(ddof=1) if r.size > 1 else 0:.4f} {unit}")
+    rd = np.array([c["certificate_value"] for c in default_fresh]) if default_fresh else np.zeros(1)
     sd = rd.std(ddof=1) if rd.size > 1 else 0.0
     print(f"\ndefault gait {cfg0.params.to_dict()}: {default.status}, {default.steps_taken} steps, {name} "
-          f"{default.r_star:.4f} (study seed); fresh seeds: {rd.mean():.4f} ± {sd:.4f}")
+          f"{default.certificate_value:.4f} (study seed); fresh seeds: {rd.mean():.4f} ± {sd:.4f}")
     if len(runs) == 2:
         cmp = compare_studies(runs[0]["directory"], runs[1]["directory"],
                               CompareConfig(seeds=args.compare_seeds, seed_base=args.seed + 1000))
         print("\nstudy compare (A = " + runs[0]["metric"] + ", B = " + runs[1]["metric"] + "):")
         for ab, s in zip("AB", cmp["studies"], strict=True):
-            print(f"  {ab}: {', '.join(f'{v:g}' for v in s['params'].values())}: {name} {s['r_star_mean']:.4f} ± "
-                  f"{s['r_star_sd']:.4f} [{', '.join(f'{v:.3f}' for v in s['r_star'])}], {s['steps_taken']} steps")
+            print(f"  {ab}: {', '.join(f'{v:g}' for v in s['params'].values())}: {name} "
+                  f"{s['certificate_value_mean']:.4f} ± {s['certificate_value_sd']:.4f} "
+                  f"[{', '.join(f'{v:.3f}' for v in s['certificate_values'])}], {s['steps_taken']} steps")
         w = cmp["winner"]
         print(f"  higher mean {name}: " + ("tie" if w is None else runs[w]["metric"]) +
               f" (per seed: {cmp['wins_per_seed'][0]} vs {cmp['wins_per_seed'][1]})")

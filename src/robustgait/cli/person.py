@@ -53,7 +53,7 @@ def _study_pareto(args: argparse.Namespace) -> int:
           f"{'speed [m/s]':>11}  {fig} [{out['unit']}]")
     for r in out["front"]:
         params = ", ".join(f"{v:g}" for v in r["params"].values())
-        print(f"  {r['trial']:>5}  {params:<24} {r['r_star']:>10.3f} {r['speed']:>11.3f}  {r[fig]:.3g}")
+        print(f"  {r['trial']:>5}  {params:<24} {r['certificate_value']:>10.3f} {r['speed']:>11.3f}  {r[fig]:.3g}")
     return 0
 
 

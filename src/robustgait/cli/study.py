@@ -57,7 +57,8 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
               f"CPU s over {use['busy_seconds']:.0f} s)")
     if best is not None:
         params = ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())
-        print(f"best gait (trial {best['trial']}): {params}; {_name(st)} = {best['r_star']:.4g} {st['unit']}, "
+        print(f"best gait (trial {best['trial']}): {params}; {_name(st)} = {best['certificate_value']:.4g} "
+              f"{st['unit']}, "
               f"{best['steps_taken']} steps; {best['gait_file'] or 'no gait file'}")
         c = best.get("comfort")
         if c:
@@ -69,7 +70,7 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
     if obs is not None and not st.get("person") and (best is None or obs["score"] != best["score"]):
         params = ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
         print(f"best evaluated gait (trial {obs['trial']}; the best gait above is the learner's highest posterior "
-              f"mean): {params}; {_name(st)} = {obs['r_star']:.4g} {st['unit']}, {obs['steps_taken']} steps")
+              f"mean): {params}; {_name(st)} = {obs['certificate_value']:.4g} {st['unit']}, {obs['steps_taken']} steps")
     person = st.get("person")
     if person:  # docs/person.md
         floor = person["floor"]
@@ -159,7 +160,7 @@ def _study_status(args: argparse.Namespace) -> int:
         if b is None:
             print(f"{it['iteration'] + 1:>9}  {'—':>8}  {'—':>5}  {'running' if it['trials'] else 'not started'}")
         else:
-            print(f"{it['iteration'] + 1:>9}  {b['r_star']:>8.4f}  {b['steps_taken']:>5}  "
+            print(f"{it['iteration'] + 1:>9}  {b['certificate_value']:>8.4f}  {b['steps_taken']:>5}  "
                   + ", ".join(f"{v:g}" for v in b["params"].values()))
     return 0
 
@@ -187,8 +188,9 @@ def _study_compare(args: argparse.Namespace) -> int:
     for name, s in zip("AB", res["studies"], strict=True):
         params = ", ".join(f"{v:g}" for v in s["params"].values())
         print(f"{name} {s['directory']} ({s['learner']}, {s['metric']}): gait ({params}), {s['steps_taken']} steps, "
-              f"{_name(res)} = {s['r_star_mean']:.4g} ± {s['r_star_sd']:.4g} {res['unit']}  "
-              f"[{', '.join(f'{r:.3f}' for r in s['r_star'])}] (study: {s['study_r_star']:.4f})")
+              f"{_name(res)} = {s['certificate_value_mean']:.4g} ± {s['certificate_value_sd']:.4g} {res['unit']}  "
+              f"[{', '.join(f'{r:.3f}' for r in s['certificate_values'])}] "
+              f"(study: {s['study_certificate_value']:.4f})")
     w = res["winner"]
     print(f"equal mean {_name(res)}" if w is None else f"higher mean {_name(res)}: {'AB'[w]} (per seed: A wins "
           f"{res['wins_per_seed'][0]}, B wins {res['wins_per_seed'][1]})")
@@ -230,7 +232,8 @@ def _study_validate(args: argparse.Namespace) -> int:
             c = r["critical"]
             crit = (f"{c['s50']:.4g} ± {c['s50_se'] or 0:.2g} {unit}" if c["s50"] is not None else f"— ({c['note']})")
             sr = r["success"]
-            print(f"  {r['label']:<26} {r['status']:<13} {r['r_star']:>7.4f} {r['steps_taken']:>3}/{r['step_cap']:<3}  "
+            print(f"  {r['label']:<26} {r['status']:<13} {r['certificate_value']:>7.4f} "
+                  f"{r['steps_taken']:>3}/{r['step_cap']:<3}  "
                   f"{sr['k']}/{sr['n']} = {sr['rate']:.2f} [{sr['low']:.2f}, {sr['high']:.2f}]{'':<4} {crit}")
         for sk in s["skipped"]:
             print(f"  {sk['label']:<26} skipped: {sk['why']}")

@@ -75,9 +75,9 @@ class StudyConfig:
                                   "cap, r* (robustness: the state certificate), steps only (stability), a person on a "
                                   "web page (person) or a simulated one (simulated-person)")] = "push"
     require: Annotated[tuple[Str, ...], Doc(
-        "requirements FIGURE OP NUMBER on recorded figures (speed>=0.2; OP >= <= > <; a comfort figure, r_star, "
-        "steps_taken, mean_speed or a gait parameter), comma-separated: a gait failing one ranks below all that "
-        "meet them")] = ()
+        "requirements FIGURE OP NUMBER on recorded figures (speed>=0.2; OP >= <= > <; a comfort figure, "
+        "certificate_value (the study's J* or r*; also named r_star or j_star), steps_taken, mean_speed or a gait "
+        "parameter), comma-separated: a gait failing one ranks below all that meet them")] = ()
     learner: Annotated[LearnerName, Doc("polar (Thompson sampling), eubo (qEUBO) or random")] = "polar"
     iterations: Annotated[Int, Doc("batches", ge=1, le=1000)] = 10
     batch: Annotated[Int, Doc("gaits per batch (a batch is ranked: at least 2)", ge=2, le=100)] = 5

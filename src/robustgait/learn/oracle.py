@@ -33,12 +33,13 @@ from robustgait.errors import RobustGaitError
 @dataclass(frozen=True)
 class Outcome:
     """What an oracle sees of one evaluated gait: steps completed (0 if generation failed), the step cap
-    of the walk, r* (J* for the push metric; 0 when the gait was not certified), and whether it was certified (a
-    gait that fell is never certified; only a walker's flag counts)."""
+    of the walk, the certificate's figure (``certificate_value``: r* for the robustness metric, J* for the push metric;
+    0 when the gait was not certified), and whether it was certified (a gait that fell is never certified; only a
+    walker's flag counts)."""
 
     steps_taken: int
     step_cap: int
-    r_star: float = 0.0
+    certificate_value: float = 0.0
     certified: bool = True
     meets: bool = True  # the study's requirements (study.require) hold
 
@@ -58,7 +59,8 @@ def score(metric: Metric | str, outcome: Outcome, penalty: float = UNCERTIFIED_P
         if not outcome.walked_cap:
             base = float(outcome.steps_taken)
         else:
-            base = float(outcome.step_cap + outcome.r_star) if outcome.certified else float(outcome.step_cap) - penalty
+            base = (float(outcome.step_cap + outcome.certificate_value) if outcome.certified
+                    else float(outcome.step_cap) - penalty)
     elif metric == "stability":
         base = float(outcome.steps_taken)
     else:

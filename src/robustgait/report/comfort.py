@@ -48,7 +48,7 @@ def comfort_rows(status: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
     for t in measured_trials(status):
         c = t["comfort"]
         rows.append([str(t["number"]), ", ".join(f"{v:g}" for v in t["params"].values()), str(t["status"]),
-                     f"{t['r_star']:.4g}" if t["status"] == "certified" else "—",
+                     f"{t['certificate_value']:.4g}" if t["status"] == "certified" else "—",
                      *(_cell(c, key, scale, digits) for _, key, scale, digits in COLUMNS)])
     return header, rows
 
@@ -70,7 +70,8 @@ def plot_comfort(status: dict[str, Any], path: str | Path) -> Path:
             if not pts:
                 continue
             colors = [t["comfort"].get(c_key) for t in pts]
-            sc = ax.scatter([t["comfort"][x_key] for t in pts], [t["r_star"] if certified else 0.0 for t in pts],
+            sc = ax.scatter([t["comfort"][x_key] for t in pts],
+                            [t["certificate_value"] if certified else 0.0 for t in pts],
                             c=[math.nan if v is None else v for v in colors], cmap="viridis", marker=marker, s=36,
                             label="certified" if certified else "not certified (0)")
         if trials:

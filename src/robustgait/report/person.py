@@ -24,12 +24,12 @@ def plot_pareto(front: dict[str, Any], path: Path) -> Path:
     """Certificate against speed, coloured by the comfort figure; the non-dominated gaits circled."""
     rows = front["gaits"]
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    sc = ax.scatter([r["speed"] for r in rows], [r["r_star"] for r in rows], c=[r[front["figure"]] for r in rows],
-                    cmap="viridis_r", s=30)
+    sc = ax.scatter([r["speed"] for r in rows], [r["certificate_value"] for r in rows],
+                    c=[r[front["figure"]] for r in rows], cmap="viridis_r", s=30)
     fig.colorbar(sc, ax=ax, label=f"{front['figure'].replace('_', ' ')} [{front['unit']}]")
     on = [r for r in rows if r["front"]]
-    ax.scatter([r["speed"] for r in on], [r["r_star"] for r in on], s=140, facecolors="none", edgecolors="tab:red",
-               label=f"non-dominated ({len(on)})")
+    ax.scatter([r["speed"] for r in on], [r["certificate_value"] for r in on], s=140, facecolors="none",
+               edgecolors="tab:red", label=f"non-dominated ({len(on)})")
     name = radius_name(front["certificate"])
     ax.set_xlabel("speed [m/s]")
     ax.set_ylabel(f"{name} [{front['certificate_unit']}]")
@@ -42,7 +42,7 @@ def pareto_table(front: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
     name = radius_name(front["certificate"])
     header = ["trial", "gait (L, T, W, h)", f"{name} [{front['certificate_unit']}]", "speed [m/s]",
               f"{front['figure']} [{front['unit']}]"]
-    return header, [[str(r["trial"]), _params(r["params"]), f"{r['r_star']:.3f}", f"{r['speed']:.3f}",
+    return header, [[str(r["trial"]), _params(r["params"]), f"{r['certificate_value']:.3f}", f"{r['speed']:.3f}",
                      f"{r[front['figure']]:.3g}"] for r in front["front"]]
 
 
@@ -87,7 +87,7 @@ def person_parts(status: dict[str, Any], table: Any) -> list[str]:
     floor = p.get("floor") or {}
     text = (f"<h2>The person's answers</h2><p>Shown: gaits certified at or above the floor {name} ≥ "
             f"{floor.get('value', 0):.4g} {unit} ({html.escape(str(floor.get('source')))}"
-            + (f": {floor.get('fraction')} × the default gait's {floor['reference']['r_star']:.4g}"
+            + (f": {floor.get('fraction')} × the default gait's {floor['reference']['certificate_value']:.4g}"
                if floor.get("reference") else "") + ")"
             + (f" meeting {html.escape(', '.join(status['require']))}" if status["require"] else "")
             + "; the others ranked below every shown gait without asking."
@@ -97,7 +97,7 @@ def person_parts(status: dict[str, Any], table: Any) -> list[str]:
     best = status.get("best")
     if best is not None:
         c = best.get("comfort") or {}
-        rows = [[f"{name} [{unit}]", f"{best['r_star']:.4g}"]] + [
+        rows = [[f"{name} [{unit}]", f"{best['certificate_value']:.4g}"]] + [
             [f"{n} [{FIGURES[n][0]}]", "—" if c.get(n) is None else f"{c[n]:.4g}"] for n in FIGURES if n in c]
         parts.append(f"<h3>The recommendation: {_params(best['params'])} (trial {best['trial']})</h3>"
                      + table(rows, ["figure", "value"]))

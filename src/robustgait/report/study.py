@@ -68,11 +68,11 @@ def plot_history(status: dict[str, Any], path: Path) -> Path:
             continue
         st = t["status"]
         kw = {"c": OUTCOME_COLORS.get(st, "k"), "marker": OUTCOME_MARKERS.get(st, "o"), "s": 18, "alpha": 0.7}
-        a1.scatter(t["iteration"] + 1, t["r_star"], **kw)
+        a1.scatter(t["iteration"] + 1, t["certificate_value"], **kw)
         a2.scatter(t["iteration"] + 1, t["steps_taken"], **kw)
     its = [it for it in status["iterations"] if it["best"] is not None]
     x = [it["iteration"] + 1 for it in its]
-    a1.plot(x, [it["best"]["r_star"] for it in its], "-", color="tab:blue", lw=2,
+    a1.plot(x, [it["best"]["certificate_value"] for it in its], "-", color="tab:blue", lw=2,
             label="learner's best (posterior mean)")
     a2.plot(x, [it["best"]["steps_taken"] for it in its], "-", color="tab:blue", lw=2)
     observed, best_so_far = [], None  # the highest oracle score evaluated up to each iteration
@@ -82,7 +82,7 @@ def plot_history(status: dict[str, Any], path: Path) -> Path:
             best_so_far = b
         if best_so_far is not None and it["best"] is not None:
             observed.append((it["iteration"] + 1, best_so_far))
-    a1.plot([i for i, _ in observed], [b["r_star"] for _, b in observed], "--", color="0.4", lw=1.2,
+    a1.plot([i for i, _ in observed], [b["certificate_value"] for _, b in observed], "--", color="0.4", lw=1.2,
             label="best evaluated so far")
     a2.plot([i for i, _ in observed], [b["steps_taken"] for _, b in observed], "--", color="0.4", lw=1.2)
     for name, c in OUTCOME_COLORS.items():
@@ -102,7 +102,7 @@ def plot_explored(status: dict[str, Any], path: Path) -> Path:
     """Every pair of parameters: the evaluated gaits coloured by outcome (marker size ∝ r* or J*, the largest the
     study's largest)."""
     trials = [t for t in status["trials"] if t["state"] == "COMPLETE" and t["reused_from"] is None]
-    top = max((float(t["r_star"] or 0) for t in trials), default=0.0) or 1.0
+    top = max((float(t["certificate_value"] or 0) for t in trials), default=0.0) or 1.0
     names = list(trials[0]["params"]) if trials else []
     pairs = list(combinations(range(len(names)), 2))
     cols = min(3, max(1, len(pairs)))
@@ -113,7 +113,8 @@ def plot_explored(status: dict[str, Any], path: Path) -> Path:
         for t in trials:
             st = t["status"]
             ax.scatter(t["params"][names[i]], t["params"][names[j]], c=OUTCOME_COLORS.get(st, "k"),
-                       marker=OUTCOME_MARKERS.get(st, "o"), s=20 + 120 * float(t["r_star"] or 0) / top, alpha=0.6)
+                       marker=OUTCOME_MARKERS.get(st, "o"), s=20 + 120 * float(t["certificate_value"] or 0) / top,
+                       alpha=0.6)
         if best is not None:
             ax.scatter(best["params"][names[i]], best["params"][names[j]], s=260, facecolors="none",
                        edgecolors="tab:blue", linewidths=2)
@@ -309,7 +310,7 @@ def _validation_parts(d: Path, status: dict[str, Any], out: Path, notes: list[st
     for kind, s in summaries.items():
         png = plot_study_validation(s, out / f"validation_{kind}.png")
         cfg = s["config"]
-        rows = [[r["label"], r["status"], _fmt(r["r_star"], 4), f"{r['steps_taken']}/{r['step_cap']}",
+        rows = [[r["label"], r["status"], _fmt(r["certificate_value"], 4), f"{r['steps_taken']}/{r['step_cap']}",
                  f"{r['success']['k']}/{r['success']['n']} = {r['success']['rate']:.2f} [{r['success']['low']:.2f}, "
                  f"{r['success']['high']:.2f}]",
                  "—" if r["critical"]["s50"] is None else f"{r['critical']['s50']:.4g} {s['unit']}"]
@@ -354,21 +355,22 @@ def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
                ["certificate", _certify_text(cfg)]]
     if best is not None:
         summary += [["best gait (learner)", ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())],
-                    [f"best {name} / steps", f"{_fmt(best['r_star'], 4)} {status.get('unit', 'rad/s')} / "
+                    [f"best {name} / steps", f"{_fmt(best['certificate_value'], 4)} {status.get('unit', 'rad/s')} / "
                                         f"{best['steps_taken']}"],
                     ["best gait file", best["gait_file"] or "—"]]
     obs = status["best_observed"]
     if obs is not None and (best is None or obs["trial"] != best["trial"]):
         summary += [["best evaluated gait", ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
-                     + f": {name} {_fmt(obs['r_star'], 4)} {status.get('unit', 'rad/s')}, {obs['steps_taken']} steps "
-                     f"(trial {obs['trial']}; the "
+                     + f": {name} {_fmt(obs['certificate_value'], 4)} {status.get('unit', 'rad/s')}, "
+                     f"{obs['steps_taken']} steps (trial {obs['trial']}; the "
                      "learner's best is the highest posterior mean, from comparisons only)"]]
-    it_rows = [[it["iteration"] + 1, _fmt(it["best"]["r_star"], 4) if it["best"] else "—",
+    it_rows = [[it["iteration"] + 1, _fmt(it["best"]["certificate_value"], 4) if it["best"] else "—",
                 it["best"]["steps_taken"] if it["best"] else "—",
                 ", ".join(f"{v:g}" for v in it["best"]["params"].values()) if it["best"] else "—",
                 len(it["comparisons"] or [])] for it in status["iterations"]]
     tr_rows = [[t["number"], t["iteration"] + 1, t["state"], ", ".join(f"{v:g}" for v in t["params"].values()),
-                t["status"] or "—", t["steps_taken"] if t["steps_taken"] is not None else "—", _fmt(t["r_star"], 4),
+                t["status"] or "—", t["steps_taken"] if t["steps_taken"] is not None else "—",
+                _fmt(t["certificate_value"], 4),
                 (t["reason"] or "")[:90] + (f" (same gait as trial {t['reused_from']})" if t["reused_from"] is not None
                                             else "")] for t in status["trials"]]
     note_html = "".join(f"<p class=note>{html.escape(n)}</p>" for n in notes)

@@ -94,7 +94,7 @@ def plot_study_validation(summary: dict[str, Any], path: str | Path) -> Path:
     cmap = plt.get_cmap("viridis")
     cert = CertifyConfig(**{k: v for k, v in summary["certify"].items() if k in ("state", "disturbance")})
     star = radius_name(cert.space)
-    panels = ((axes[0], "r_star", f"{star} ({cert.space}) [{cert.unit}]"),
+    panels = ((axes[0], "certificate_value", f"{star} ({cert.space}) [{cert.unit}]"),
               (axes[1], "steps_taken", f"steps taken in the study (cap {cap})"))
     for ax, key, label in panels:
         x = np.array([r[key] for r in rows], dtype=float)

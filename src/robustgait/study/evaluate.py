@@ -11,6 +11,7 @@ resumable, and lets a study reuse the result of a gait it already evaluated.
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -22,6 +23,7 @@ from robustgait.io.gaitfile import gait_from_dict
 from robustgait.learn.oracle import Outcome
 from robustgait.robots import Robot
 from robustgait.sim import walk
+from robustgait.study.storage import current_names
 
 if TYPE_CHECKING:
     from robustgait.gaitgen import GaitGenerator
@@ -34,15 +36,17 @@ STATUSES: tuple[Status, ...] = ("certified", "generation_failed", "fell", "not_c
 class Evaluation:
     """The outcome of :func:`evaluate`.
 
-    status: ``certified`` (walked the cap, r* computed), ``generation_failed``, ``fell`` (before the cap),
+    status: ``certified`` (walked the cap, its certificate computed), ``generation_failed``, ``fell`` (before the cap),
     ``not_certified`` (walked the cap but the certificate refused it: ``unsettled``, ``unstable``, ``fell`` in the
     orbit search, ``unstable_fixed_point`` (:class:`robustgait.certificate.orbit.Status`); the reason starts with it —
     the oracles rank it below every certified gait);
-    reason: why, in one line ('' when certified). generation: :meth:`GaitGenResult.summary`. r_star: 0
-    unless certified. certificate: :meth:`GaitCertificate.to_dict` with the samples (None unless
-    certified). comfort: what a passenger feels on the walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`,
-    ``config.comfort``; None when the walk completed no measured step or the gait was not generated). seconds: per
-    stage (generate, walk, certify; build when :func:`evaluate` built the generator itself; total).
+    reason: why, in one line ('' when certified). generation: :meth:`GaitGenResult.summary`. certificate_value: the
+    figure of the study's certificate (``config.study_certify``: J* in N s for a push certificate, r* in the state's
+    unit for a state certificate; :func:`robustgait.config.radius_name` names it), 0 unless certified. certificate:
+    :meth:`GaitCertificate.to_dict` with the samples (None unless certified). comfort: what a passenger feels on the
+    walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`, ``config.comfort``; None when the walk completed no measured
+    step or the gait was not generated). seconds: per stage (generate, walk, certify; build when :func:`evaluate`
+    built the generator itself; total).
     """
 
     params: GaitParams
@@ -53,7 +57,7 @@ class Evaluation:
     fell: bool = False
     fall_reason: str | None = None
     mean_speed: float | None = None
-    r_star: float = 0.0
+    certificate_value: float = 0.0
     generation: dict[str, Any] = field(default_factory=dict)
     certificate: dict[str, Any] | None = None
     comfort: dict[str, Any] | None = None
@@ -61,7 +65,7 @@ class Evaluation:
     seconds: dict[str, float] = field(default_factory=dict)
 
     def outcome(self) -> Outcome:
-        return Outcome(self.steps_taken, self.step_cap, self.r_star, self.status == "certified")
+        return Outcome(self.steps_taken, self.step_cap, self.certificate_value, self.status == "certified")
 
     def certificate_summary(self) -> dict[str, Any] | None:
         """The certificate without its samples (what a study keeps in its database)."""
@@ -74,9 +78,9 @@ class Evaluation:
         """JSON-ready, without the gait and the certificate's samples."""
         return {"params": self.params.to_dict(), "status": self.status, "reason": self.reason,
                 "step_cap": self.step_cap, "steps_taken": self.steps_taken, "fell": self.fell,
-                "fall_reason": self.fall_reason, "mean_speed": self.mean_speed, "r_star": self.r_star,
-                "generation": self.generation, "certificate": self.certificate_summary(), "comfort": self.comfort,
-                "seconds": self.seconds}
+                "fall_reason": self.fall_reason, "mean_speed": self.mean_speed,
+                "certificate_value": self.certificate_value, "generation": self.generation,
+                "certificate": self.certificate_summary(), "comfort": self.comfort, "seconds": self.seconds}
 
     def to_dict(self) -> dict[str, Any]:
         """Everything, JSON-ready (what a worker sends back)."""
@@ -84,10 +88,14 @@ class Evaluation:
                 "gait": self.gait.to_dict() if self.gait is not None else None}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> Evaluation:
+    def from_dict(cls, d: Mapping[str, Any]) -> Evaluation:
+        """An evaluation from :meth:`to_dict` or a study's stored record (read by
+        :func:`~robustgait.study.storage.current_names`)."""
+        d = current_names(d)
         return cls(params=GaitParams(**d["params"]), status=d["status"], reason=d["reason"], step_cap=d["step_cap"],
                    steps_taken=d["steps_taken"], fell=d["fell"], fall_reason=d["fall_reason"],
-                   mean_speed=d["mean_speed"], r_star=d["r_star"], generation=d["generation"],
+                   mean_speed=d["mean_speed"], certificate_value=d["certificate_value"],
+                   generation=d["generation"],
                    certificate=d["certificate"], comfort=d.get("comfort"),  # absent: evaluated before comfort
                    gait=gait_from_dict(d["gait"]) if d.get("gait") else None, seconds=d["seconds"])
 
@@ -155,7 +163,7 @@ def certify_evaluation(robot: Robot, ev: Evaluation, config: Config | None = Non
     gc = certify_gait(robot, ev.gait, cfg.study_certify, cfg.sim, validate=cfg.validate)
     if gc.ok:
         ev.status, ev.reason = "certified", ""
-        ev.r_star = float(gc.r_star)
+        ev.certificate_value = float(gc.r_star)
         ev.certificate = gc.to_dict(samples=True)
     else:
         ev.status, ev.reason = "not_certified", f"{gc.status}: {gc.reason}"

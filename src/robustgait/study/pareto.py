@@ -29,7 +29,8 @@ def non_dominated(objectives: NDArray[np.float64]) -> NDArray[np.bool_]:
 
 def pareto(status: dict[str, Any], figure: str) -> dict[str, Any]:
     """From :func:`robustgait.study.status.study_status`: every certified unique gait with its certificate, speed and
-    ``figure``, whether it is on the front, sorted by the certificate (descending)."""
+    ``figure``, whether it is on the front, sorted by the certificate (descending): per gait ``trial``, ``params``,
+    ``certificate_value`` (in ``certificate_unit``), ``speed``, ``figure``, ``gait_file``, ``front``."""
     if figure not in FIGURES or figure in HIGHER_IS_BETTER:
         costs = ", ".join(n for n in FIGURES if n not in HIGHER_IS_BETTER)
         raise RobustGaitError(f"report.pareto_figure: {figure!r} is not a comfort cost (one of {costs})")
@@ -42,13 +43,14 @@ def pareto(status: dict[str, Any], figure: str) -> dict[str, Any]:
         if c.get(figure) is None or c.get("speed") is None:
             continue
         seen.add(t["grid_index"])
-        rows.append({"trial": t["number"], "params": t["params"], "r_star": t["r_star"], "speed": c["speed"],
+        rows.append({"trial": t["number"], "params": t["params"],
+                     "certificate_value": t["certificate_value"], "speed": c["speed"],
                      figure: c[figure], "gait_file": t["gait_file"]})
-    obj = np.array([[r["r_star"], r["speed"], -r[figure]] for r in rows]).reshape(-1, 3)
+    obj = np.array([[r["certificate_value"], r["speed"], -r[figure]] for r in rows]).reshape(-1, 3)
     front = non_dominated(obj) if rows else np.zeros(0, dtype=bool)
     for r, f in zip(rows, front, strict=True):
         r["front"] = bool(f)
-    rows.sort(key=lambda r: -r["r_star"])
+    rows.sort(key=lambda r: -r["certificate_value"])
     return {"figure": figure, "unit": FIGURES[figure][0], "certificate_unit": status["unit"],
             "certificate": status["certificate"], "gaits": rows, "front": [r for r in rows if r["front"]]}
 

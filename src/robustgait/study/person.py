@@ -24,7 +24,7 @@ from robustgait.config import Config
 from robustgait.errors import RobustGaitError
 from robustgait.learn.person import SimulatedPerson
 from robustgait.study.ranking import LABELS, Requirement, shown
-from robustgait.study.storage import StudyStore, TrialRecord
+from robustgait.study.storage import StudyStore, TrialRecord, current_names
 
 FLOOR_ATTR = "floor"
 _ANSWER_LOCK = threading.Lock()  # one answer at a time in this process (the page's server threads, the runner)
@@ -47,14 +47,23 @@ def floor_record(config: Config, reference: dict[str, Any] | None) -> dict[str, 
         return {"value": float(p.floor), "source": "person.floor"}
     if reference is None:
         raise RobustGaitError("the floor needs the default gait's evaluation")
-    r_star = float(reference.get("r_star") or 0.0)
-    rec = {"value": p.floor_fraction * r_star, "source": "person.floor_fraction", "fraction": p.floor_fraction,
+    value = float(reference.get("certificate_value") or 0.0)
+    rec = {"value": p.floor_fraction * value, "source": "person.floor_fraction", "fraction": p.floor_fraction,
            "reference": {"params": reference.get("params"), "status": reference.get("status"),
-                         "r_star": r_star, "comfort": reference.get("comfort")}}
+                         "certificate_value": value, "comfort": reference.get("comfort")}}
     if reference.get("status") != "certified":
         rec["note"] = (f"the default gait was not certified ({reference.get('status')}: {reference.get('reason')}): "
                        "floor 0, every certified gait is shown")
     return rec
+
+
+def stored_floor(store: StudyStore) -> dict[str, Any] | None:
+    """The study's floor as stored (the study attribute ``floor``, :func:`floor_record`; None while not set), its
+    reference evaluation read by :func:`~robustgait.study.storage.current_names`."""
+    rec = store.user_attrs().get(FLOOR_ATTR)
+    if not isinstance(rec, dict) or not isinstance(rec.get("reference"), dict):
+        return rec
+    return {**rec, "reference": current_names(rec["reference"])}
 
 
 def hidden_reason(r: TrialRecord, floor: float, reqs: Sequence[Requirement], unit: str) -> str | None:
@@ -64,8 +73,8 @@ def hidden_reason(r: TrialRecord, floor: float, reqs: Sequence[Requirement], uni
     res = r.result or {}
     if res.get("status") != "certified":
         return f"{res.get('status')}: {res.get('reason') or ''}".strip(": ")
-    if float(res["r_star"]) < floor:
-        return f"certified {float(res['r_star']):.3g} {unit}, below the floor {floor:.3g} {unit}"
+    if float(res["certificate_value"]) < floor:
+        return f"certified {float(res['certificate_value']):.3g} {unit}, below the floor {floor:.3g} {unit}"
     failed = [q.text for q in reqs if not q.holds(r.params, res)]
     return "fails " + ", ".join(failed)
 

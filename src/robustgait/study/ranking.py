@@ -20,19 +20,24 @@ from robustgait.sim.comfort import FIGURES
 from robustgait.study.storage import TrialRecord
 
 LABELS = ("bad", "neutral", "good")  # a person's ordinal labels, worst first (ROIAL's)
-OUTCOME_FIGURES = ("r_star", "steps_taken", "mean_speed")
+OUTCOME_FIGURES = ("certificate_value", "steps_taken", "mean_speed")
+FIGURE_ALIASES = {"r_star": "certificate_value", "j_star": "certificate_value"}
+"""Other names a requirement may give an outcome figure: ``r_star`` and ``j_star`` name the study's certificate figure
+(a requirement's ``text`` keeps the name it was written with)."""
 _OPS: dict[str, Callable[[float, float], bool]] = {">=": operator.ge, "<=": operator.le, ">": operator.gt,
                                                    "<": operator.lt}
 
 
 def figure_names(param_names: Sequence[str]) -> tuple[str, ...]:
-    """What a requirement may name: the comfort figures, the outcome's and the gait parameters."""
+    """What a requirement may name: the comfort figures, the outcome's and the gait parameters
+    (:meth:`Requirement.parse` also takes the names of :data:`FIGURE_ALIASES`)."""
     return (*FIGURES, *OUTCOME_FIGURES, *param_names)
 
 
 @dataclass(frozen=True)
 class Requirement:
-    """``figure op value`` (``speed >= 0.2``)."""
+    """``figure op value`` (``speed >= 0.2``); ``figure`` is the recorded figure's name (an alias of
+    :data:`FIGURE_ALIASES` resolved: ``r_star >= 10`` checks ``certificate_value``)."""
 
     text: str
     figure: str
@@ -42,6 +47,8 @@ class Requirement:
     @classmethod
     def parse(cls, text: str, names: Sequence[str]) -> Requirement:
         figure, op, value = parse_requirement(text)
+        if figure not in names:
+            figure = FIGURE_ALIASES.get(figure, figure)
         if figure not in names:
             raise RobustGaitError(f"study.require: {text!r}: no figure {figure!r} is recorded (one of "
                                   f"{', '.join(names)})")
@@ -60,7 +67,8 @@ def requirements(config: StudyConfig, param_names: Sequence[str]) -> list[Requir
 
 
 def figure_value(name: str, params: Mapping[str, float], result: Mapping[str, Any]) -> float | None:
-    """A recorded figure of an evaluated gait: a comfort figure, r_star/steps_taken/mean_speed, a gait parameter."""
+    """A recorded figure of an evaluated gait: a comfort figure, certificate_value/steps_taken/mean_speed, a gait
+    parameter."""
     if name in params:
         return float(params[name])
     if name in OUTCOME_FIGURES:
@@ -73,7 +81,7 @@ def figure_value(name: str, params: Mapping[str, float], result: Mapping[str, An
 def outcome_of(r: TrialRecord, reqs: Sequence[Requirement] = ()) -> Outcome:
     """The oracle's view of a stored evaluation (certified: its ``status``; meets: the requirements)."""
     res = r.result or {}
-    return Outcome(int(res["steps_taken"]), int(res["step_cap"]), float(res["r_star"]),
+    return Outcome(int(res["steps_taken"]), int(res["step_cap"]), float(res["certificate_value"]),
                    res.get("status") == "certified", all(q.holds(r.params, res) for q in reqs))
 
 
@@ -86,7 +94,7 @@ def study_score(config: StudyConfig, r: TrialRecord, reqs: Sequence[Requirement]
 def shown(r: TrialRecord, floor: float, reqs: Sequence[Requirement]) -> bool:
     """Whether a person may be shown this gait: certified, its certificate at or above the floor, requirements met."""
     res = r.result or {}
-    return res.get("status") == "certified" and float(res["r_star"]) >= floor and outcome_of(r, reqs).meets
+    return res.get("status") == "certified" and float(res["certificate_value"]) >= floor and outcome_of(r, reqs).meets
 
 
 def batch_scores(config: StudyConfig, batch: Sequence[TrialRecord], record: Mapping[str, Any],

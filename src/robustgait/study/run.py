@@ -529,7 +529,7 @@ def outcome_line(result: dict[str, Any], name: str) -> str:
     refusal's status (a gait without a stable orbit is refused, not a zero), a fall, a failed generation."""
     status = result.get("status")
     if status == "certified":
-        return f"{name} {result['r_star']:.3f}, steps {result['steps_taken']}"
+        return f"{name} {result['certificate_value']:.3f}, steps {result['steps_taken']}"
     if status == "not_certified":
         return f"refused ({str(result.get('reason', '')).split(':', 1)[0]}), steps {result['steps_taken']}"
     if status == "fell":

@@ -8,13 +8,13 @@ from pathlib import Path
 from typing import Any
 
 from robustgait.io.studyfile import environment_changes, load_config
-from robustgait.study.person import FLOOR_ATTR, pending_iteration
+from robustgait.study.person import pending_iteration, stored_floor
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord
 
 # comfort: the walk's comfort figures (robustgait.sim.comfort.Comfort.to_dict; None for a study evaluated before them)
-_TRIAL_KEYS = ("status", "reason", "steps_taken", "step_cap", "fell", "fall_reason", "mean_speed", "r_star",
-               "comfort", "gait_file", "certificate_file", "seconds")
+_TRIAL_KEYS = ("status", "reason", "steps_taken", "step_cap", "fell", "fall_reason", "mean_speed",
+               "certificate_value", "comfort", "gait_file", "certificate_file", "seconds")
 
 
 def trial_summary(r: TrialRecord) -> dict[str, Any]:
@@ -36,8 +36,8 @@ def _best_entry(r: TrialRecord | None, records: dict[int, TrialRecord]) -> dict[
     src = records.get(r.reused_from, r) if r.reused_from is not None else r
     s = trial_summary(r)
     return {"trial": r.number, "iteration": r.iteration, "params": r.params, "grid_index": r.index,
-            "r_star": s["r_star"], "steps_taken": s["steps_taken"], "status": s["status"], "score": r.value,
-            "comfort": s["comfort"], "gait_file": (src.result or {}).get("gait_file"),
+            "certificate_value": s["certificate_value"], "steps_taken": s["steps_taken"], "status": s["status"],
+            "score": r.value, "comfort": s["comfort"], "gait_file": (src.result or {}).get("gait_file"),
             "certificate_file": (src.result or {}).get("certificate_file")}
 
 
@@ -85,9 +85,10 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     """JSON-ready: ``trials_done``, ``trials_planned``, ``state`` (complete | running | stopped),
     ``person`` (a person study: its ``floor``, the ``pending`` iteration, every ``answer``, the gaits evaluated
     ``ahead`` of an answer and how many of them were then proposed; else None), ``require``,
-    ``best`` (the learner's recommendation after the last finished iteration: trial, params, r_star,
-    steps_taken, comfort, gait file), ``best_observed`` (the evaluated gait with the highest oracle score), one
-    record per iteration and one per trial (``trials``, including FAIL trials of interrupted runs), each with its
+    ``best`` (the learner's recommendation after the last finished iteration: trial, params, certificate_value — the
+    study's certificate figure, J* or r* as ``certificate`` names it, in ``unit`` —, steps_taken, comfort, gait file),
+    ``best_observed`` (the evaluated gait with the highest oracle score), one record per iteration and one per trial
+    (``trials``, including FAIL trials of interrupted runs, each with its ``certificate_value``), each with its
     ``comfort`` figures (``docs/comfort.md``; None when not measured or evaluated before they existed), and
     ``outcomes`` (:func:`outcome_counts`), ``utilisation`` (:func:`utilisation`)."""
     d = Path(directory)
@@ -98,7 +99,7 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     try:
         records = store.records()
         iterations = store.iterations()
-        floor = store.user_attrs().get(FLOOR_ATTR)
+        floor = stored_floor(store)
     finally:
         store.close()
     by_number = {r.number: r for r in records}

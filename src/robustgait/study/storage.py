@@ -20,6 +20,7 @@ Per-iteration records (proposals, learner seed, comparisons, recommendation) are
 from __future__ import annotations
 
 import logging
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,6 +29,26 @@ from robustgait.errors import RobustGaitError
 from robustgait.learn.space import ActionSpace
 
 DB_FILE = "study.db"
+
+STORED_NAMES = {"r_star": "certificate_value", "study_r_star": "study_certificate_value",
+                "r_star_critical": "certificate_value_critical"}
+"""Keys a stored study record may hold → the names this package reads them by (the certificate figure, J* [N s] of a
+push certificate or r* of a state certificate, is ``certificate_value``)."""
+
+
+def current_names(record: Mapping[str, Any]) -> dict[str, Any]:
+    """``record`` (a trial's attributes, a stored evaluation, the floor's reference evaluation, a row or the
+    correlations of a study validation summary) with its top-level keys named as this package reads them
+    (:data:`STORED_NAMES`): ``r_star`` is read as ``certificate_value``; a key already under its current name wins.
+    Nested records keep their keys (a certificate's own ``r_star`` is the certificate's field)."""
+    out: dict[str, Any] = {}
+    for key, value in record.items():
+        name = STORED_NAMES.get(key)
+        if name is None:
+            out[key] = value
+        elif name not in record:
+            out[name] = value
+    return out
 
 
 def default_url(directory: Path) -> str:
@@ -109,7 +130,7 @@ class StudyStore:
         from optuna.trial import TrialState
 
         trial = self._running.pop(number)
-        for key in ("status", "steps_taken", "r_star"):
+        for key in ("status", "steps_taken", "certificate_value"):
             trial.set_user_attr(key, result[key])
         for key, v in extra.items():
             trial.set_user_attr(key, v)
@@ -133,14 +154,16 @@ class StudyStore:
     def records(self) -> list[TrialRecord]:
         out = []
         for t in self.study.get_trials(deepcopy=False):
-            a = t.user_attrs
+            a = current_names(t.user_attrs)
             if "iteration" not in a:
                 continue  # not one of ours
+            if isinstance(a.get("result"), Mapping):
+                a["result"] = current_names(a["result"])
             params = dict(t.params) or dict(t.system_attrs.get("fixed_params", {}))
             out.append(TrialRecord(t.number, t.state.name, a["iteration"], a["slot"], a["grid_index"], params,
                                    t.value if t.state.name == "COMPLETE" else None,
                                    a.get("result") if t.state.name == "COMPLETE" else None,
-                                   a.get("reused_from"), a.get("retry_of"), dict(a),
+                                   a.get("reused_from"), a.get("retry_of"), a,
                                    t.datetime_start.timestamp() if t.datetime_start else None,
                                    t.datetime_complete.timestamp() if t.datetime_complete else None))
         return out

@@ -55,6 +55,7 @@ from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
 from robustgait.io.studyfile import load_config
+from robustgait.study.storage import current_names
 from robustgait.validate.disturbances import SIZE_LABELS
 from robustgait.validate.stats import Correlation, spearman
 
@@ -66,8 +67,8 @@ FORMAT_VERSION = 2
 @dataclass(frozen=True)
 class StudyGait:
     """One unique gait of a study as the study saw it: the trials that proposed it, its parameters and
-    outcome (``status``, ``r_star``, ``steps_taken`` of ``step_cap``), and its files (relative to the study
-    directory; None when not written)."""
+    outcome (``status``, ``certificate_value`` — J* or r*, 0 unless certified —, ``steps_taken`` of ``step_cap``), and
+    its files (relative to the study directory; None when not written)."""
 
     label: str
     trials: tuple[int, ...]
@@ -75,7 +76,7 @@ class StudyGait:
     params: dict[str, float]
     status: str
     reason: str
-    r_star: float
+    certificate_value: float
     steps_taken: int
     step_cap: int
     gait_file: str | None
@@ -103,7 +104,8 @@ def study_gaits(directory: Path) -> tuple[dict[str, Any], list[StudyGait]]:
         gait_file = t["gait_file"]
         label = Path(gait_file).parent.name if gait_file else params_label(t["params"])
         out.append(StudyGait(label, tuple(x["number"] for x in ts), int(t["grid_index"]), dict(t["params"]),
-                             str(t["status"]), str(t["reason"] or ""), float(t["r_star"] or 0.0),
+                             str(t["status"]), str(t["reason"] or ""),
+                             float(t["certificate_value"] or 0.0),
                              int(t["steps_taken"] or 0), int(t["step_cap"] or st["config"]["sim"]["step_cap"]),
                              gait_file, t["certificate_file"] if t["status"] == "certified" else None))
     return st, sorted(out, key=lambda g: g.trials[0])
@@ -339,18 +341,21 @@ def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim:
                  stored: dict[str, dict[str, Any]], cached: set[str], errors: dict[str, str],
                  seconds: float) -> dict[str, Any]:
     """JSON-ready summary of one kind: ``gaits`` (one row per validated gait: the study's view of it — params,
-    status, r*, steps — and its success rate with the 95 % Wilson interval, the size at which half fail, the
-    certificate check, where its trials started, whether it came from an earlier run), ``skipped`` (with
-    the reason) and ``skipped_counts``, and ``correlations`` (Spearman ρ, p, n of r* and of steps taken with
-    the success rate, or undefined with the reason)."""
+    status, ``study_certificate_value``, steps — the ``certificate_value`` its trials were checked against (J* or r*
+    of its certificate file, 0 without one) and its success rate with the 95 % Wilson interval, the size at which half
+    fail, the certificate check, where its trials started, whether it came from an earlier run), ``skipped`` (with
+    the reason) and ``skipped_counts``, and ``correlations`` (Spearman ρ, p, n of the certificate value with the
+    success rate (``certificate_value``) and with s₅₀ (``certificate_value_critical``), of steps taken with the
+    success rate (``steps_taken``), or undefined with the reason)."""
     name, unit = SIZE_LABELS[kind]
     rows, skipped = [], []
     for g in gaits:
         if g.label in stored:
             res = stored[g.label]["result"]
             cert = stored[g.label]["certificate"]
-            rows.append({**g.row(), "r_star": float(cert["r_star"]) if g.certificate_file else 0.0,
-                         "study_r_star": g.r_star, "start": "fixed_point" if g.certificate_file else "initial_state",
+            rows.append({**g.row(), "certificate_value": float(cert["r_star"]) if g.certificate_file else 0.0,
+                         "study_certificate_value": g.certificate_value,
+                         "start": "fixed_point" if g.certificate_file else "initial_state",
                          "certificate": stored[g.label]["certificate"], "success": res["success"],
                          "critical": res["critical"], "size_range": res["size_range"],
                          "certificate_check": res["certificate_check"] if g.certificate_file else None,
@@ -371,13 +376,13 @@ def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim:
     corr_steps = spearman(steps, success, "steps taken", y)
     if corr_steps.reason.startswith("steps taken is the same") and steps[0] == cap:
         corr_steps = replace(corr_steps, reason=f"{corr_steps.reason}: every validated gait walked the step cap")
-    r_star = np.array([r["r_star"] for r in rows], dtype=float)
+    value = np.array([r["certificate_value"] for r in rows], dtype=float)
     s50 = np.array([np.nan if r["critical"]["s50"] is None else r["critical"]["s50"] for r in rows], dtype=float)
     has = np.isfinite(s50)
     star = radius_name(certify.space)  # the certificate the gaits carry
     correlations: dict[str, Correlation] = {
-        "r_star": spearman(r_star, success, star, y),
-        "r_star_critical": spearman(r_star[has], s50[has], star, f"{kind} s₅₀ (gaits with a fit)"),
+        "certificate_value": spearman(value, success, star, y),
+        "certificate_value_critical": spearman(value[has], s50[has], star, f"{kind} s₅₀ (gaits with a fit)"),
         "steps_taken": corr_steps}
     return {"format_version": FORMAT_VERSION, "kind": kind, "size": name, "unit": unit, "config": to_dict(config),
             "certify": to_dict(certify), "sim": to_dict(sim), "config_key": key,
@@ -390,7 +395,8 @@ def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim:
 
 def load_summaries(directory: str | Path) -> dict[str, dict[str, Any]]:
     """The stored summaries of ``study validate`` in ``DIR/validation/`` ({kind: summary}, kinds in
-    :data:`KINDS` order; none: {}). A file that cannot be read raises a one-line error naming it."""
+    :data:`KINDS` order; none: {}), the gaits' and correlations' keys read by
+    :func:`~robustgait.study.storage.current_names`. A file that cannot be read raises a one-line error naming it."""
     out = {}
     for k in KINDS:
         p = summary_path(directory, k)
@@ -398,5 +404,7 @@ def load_summaries(directory: str | Path) -> dict[str, dict[str, Any]]:
             raw = read_json(p, "study validation summary")
             if not isinstance(raw, dict) or raw.get("format_version") != FORMAT_VERSION:
                 raise input_error(p, f"unsupported study validation file (format_version {FORMAT_VERSION} expected)")
-            out[k] = raw
+            out[k] = {**raw, "gaits": [current_names(g) for g in raw.get("gaits", [])],
+                      "skipped": [current_names(g) for g in raw.get("skipped", [])],
+                      "correlations": current_names(raw.get("correlations", {}))}
     return out

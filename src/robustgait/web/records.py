@@ -8,7 +8,7 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
-from robustgait.study.person import FLOOR_ATTR, record_answer
+from robustgait.study.person import record_answer, stored_floor
 from robustgait.study.run import completed_batches
 from robustgait.study.storage import StudyStore, TrialRecord
 
@@ -38,7 +38,7 @@ class StudyRecords:
         with self.lock:
             records = self.store.records()
             iterations = self.store.iterations()
-            floor = self.store.user_attrs().get(FLOOR_ATTR)
+            floor = stored_floor(self.store)
         return StudySnapshot(records, iterations, floor)
 
     def iterations(self) -> dict[int, dict[str, Any]]:
