@@ -194,3 +194,22 @@ def test_mistaken_settings_are_one_line_exit_2_before_any_work(tmp_path, exo_gai
     assert code == 2 and out == "" and time.perf_counter() - t0 < 10
     one_error_line(err, message)
     assert not (tmp_path / "s").exists()
+
+
+@pytest.mark.parametrize("config", [CertifyConfig(),
+                                    CertifyConfig(disturbance="state", method="uniform", n_samples=300, horizon=2),
+                                    CertifyConfig(disturbance="state", set="ellipsoid")])
+def test_a_certificates_work_is_its_formula(config):
+    """certify_steps = the orbit search's walk, hold and probe (+ ρ's batches when asked) + a state certificate's map
+    at x* + every planned sample walking to its horizon (config/work.py): the count is the formula, not a number."""
+    o, dim = config.orbit, 40
+    probe = (1 + o.probe_doublings) * o.probe_pushes * (1 + o.probe_horizon) if o.probe_impulse > 0 else 0
+    orbit = o.max_steps + o.hold_steps + probe
+    per = 1 + config.push.horizon if config.disturbance == "push" else config.horizon * o.max_period
+    at_x_star = 0 if config.disturbance == "push" else config.horizon * o.max_period
+    n = config.n_samples if config.method == "uniform" else config.estimator.budget
+    if config.set == "ellipsoid" and config.disturbance == "state":
+        n += config.ellipsoid.fit_samples + (n if config.ellipsoid.compare_ball else 0)
+    assert not o.linearization
+    assert certify_steps(config, "flat", dim) == orbit + at_x_star + n * per
+    assert certify_steps(config, "multicontact", dim) == certify_steps(config, "flat", dim)

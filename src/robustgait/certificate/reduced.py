@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from robustgait.certificate.shape import Shape
 from robustgait.config import CertifyConfig, Frame, Reconstruction
 from robustgait.robots import Robot
-from robustgait.robots.model import full_inertia
+from robustgait.robots.model import mass_matrix
 from robustgait.rotations import quat_to_mat
 
 StateName = Literal["omega", "centroidal", "velocity"]
@@ -140,15 +140,6 @@ def stance_jacobian(robot: Robot, qpos: FloatArray, stance: str) -> FloatArray:
     jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
     mujoco.mj_jacGeom(m, d, jp, jr, robot.sole_geom_id[stance])
     return np.vstack([jp, jr])
-
-
-def mass_matrix(robot: Robot, qpos: FloatArray) -> FloatArray:
-    """M(q) (nv, nv), MuJoCo's joint-space inertia (armature included)."""
-    m = robot.model
-    d = mujoco.MjData(m)
-    d.qpos[:] = qpos
-    mujoco.mj_forward(m, d)
-    return full_inertia(m, d)
 
 
 def holonomic_reconstruction(robot: Robot, qpos: FloatArray, stance: str) -> FloatArray:
@@ -280,7 +271,7 @@ class ReducedState:
                 g = holonomic_reconstruction(robot, q, self.stance)
             self._iota = g @ a_inv
             return
-        mass = mass_matrix(robot, q)
+        mass = mass_matrix(robot.model, q)[1]
         h = np.eye(nv)
         h[0:3, 0:3] = heading_rotation(q[None])[0]  # H(q*): heading representation, orthogonal
         if self.name == "centroidal":
@@ -327,7 +318,7 @@ class ReducedState:
     def kinetic_energy(self, qpos: FloatArray, qvel: FloatArray) -> FloatArray:
         """½ dᵀ M̂(q*) d (K,) [J], d = H(q) q̇ − H(q*) q̇* (heading representations, each state's own yaw): the
         kinetic energy a perturbation of the velocities adds, measured with the fixed point's inertia."""
-        mass = mass_matrix(self.robot, self.qpos)
+        mass = mass_matrix(self.robot.model, self.qpos)[1]
         h = np.eye(len(self.qvel))
         h[0:3, 0:3] = heading_rotation(self.qpos[None])[0]
         m_h = h @ mass @ h.T

@@ -37,7 +37,6 @@ from robustgait.inspection.gains import (
     coupled_radius,
     estimated_torque_limits,
     joint_loads,
-    mass_matrix,
     pd_gains,
     servo_gains,
     servo_timestep,
@@ -45,6 +44,7 @@ from robustgait.inspection.gains import (
 from robustgait.inspection.mirror import Mirror, Residual, find_mirror, fk_residual, name_partner
 from robustgait.inspection.model import RobotModel, clip_to_range, open_model
 from robustgait.inspection.scale import RobotSize, Scaled, scale
+from robustgait.robots.model import mass_matrix
 
 INTEGRATOR_NAMES = {int(mujoco.mjtIntegrator.mjINT_EULER): "euler",
                     int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST): "implicitfast",
@@ -136,7 +136,7 @@ def coupled_gains(robot: RobotModel, qpos: NDArray[np.float64], gains: dict[int,
     all lowered by the same factor until that system contracts (:func:`coupled_radius`); and its radius."""
     m = robot.model
     dofs = [int(m.jnt_dofadr[j]) for j in robot.joints]
-    _, full = mass_matrix(robot, qpos)
+    _, full = mass_matrix(robot.model, qpos)
     mass = full[np.ix_(dofs, dofs)]
     kp = np.array([gains[j].kp for j in robot.joints])
     kd = np.array([gains[j].kd for j in robot.joints])

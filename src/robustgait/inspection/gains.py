@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.inspection.model import RobotModel
-from robustgait.robots.model import full_inertia
+from robustgait.robots.model import mass_matrix
 
 # the largest spectral radius accepted as a contracting servo (a slow servo's is 1 − ζ ω h, just below 1: the bound
 # only refuses growth, not slowness)
@@ -45,12 +45,6 @@ class JointLoad:
     swing: float
     stance: float
     stance_side: str
-
-
-def mass_matrix(robot: RobotModel, qpos: NDArray[np.float64]) -> tuple[mujoco.MjData, NDArray[np.float64]]:
-    """The kinematics at ``qpos`` and the joint-space mass matrix M (nv, nv), armature included."""
-    d = robot.kinematics(qpos)
-    return d, full_inertia(robot.model, d)
 
 
 def body_jacobian(m: mujoco.MjModel, d: mujoco.MjData, body: int) -> NDArray[np.float64]:
@@ -78,7 +72,7 @@ def welded_inertia(full: NDArray[np.float64], jac: NDArray[np.float64], base: ND
 def joint_loads(robot: RobotModel, qpos: NDArray[np.float64], feet: dict[str, int]) -> dict[int, JointLoad]:
     """Every non-base joint's swing and stance inertias at ``qpos`` (``feet``: side → foot body)."""
     m = robot.model
-    d, full = mass_matrix(robot, qpos)
+    d, full = mass_matrix(robot.model, qpos)
     base_joint = int(m.body_jntadr[robot.base])
     base = np.arange(int(m.jnt_dofadr[base_joint]), int(m.jnt_dofadr[base_joint]) + 6)
     jacs = {side: body_jacobian(m, d, foot) for side, foot in feet.items()}

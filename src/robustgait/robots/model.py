@@ -49,6 +49,15 @@ def _add_contact_sensor(spec: mujoco.MjSpec, name: str, obj: tuple[mujoco.mjtObj
     sensor.intprm = [1 << int(mujoco.mjtConDataField.mjCONDATA_FOUND), 0, 1]
 
 
+def mass_matrix(model: mujoco.MjModel, qpos: NDArray[np.float64]) -> tuple[mujoco.MjData, NDArray[np.float64]]:
+    """The forward pass at ``qpos`` (nq,) — fresh data, ``mj_forward`` — and the joint-space mass matrix M(q) (nv, nv)
+    there, armature included (:func:`full_inertia`)."""
+    d = mujoco.MjData(model)
+    d.qpos[:] = qpos
+    mujoco.mj_forward(model, d)
+    return d, full_inertia(model, d)
+
+
 def full_inertia(model: mujoco.MjModel, data: mujoco.MjData) -> NDArray[np.float64]:
     """M(q) (nv, nv), dense: MuJoCo's joint-space inertia (armature included) at the configuration of ``data``, whose
     forward pass (``mj_forward`` or at least ``mj_crb``) has run."""
