@@ -50,7 +50,7 @@ def spec_text(robot: str) -> str:
     if robot == "exo":
         return (SHIPPED_DIR / "exo" / "spec.toml").read_text().replace(
             'mjcf = "exo.xml"', f'mjcf = "{SHIPPED_DIR / "exo" / "exo.xml"}"')
-    return ATALANTE_SPEC.read_text().replace("../../shared/atalante/", f"{ATALANTE_DIR}/")
+    return ATALANTE_SPEC.read_text().replace("../../../shared/atalante/", f"{ATALANTE_DIR}/")
 
 
 BAD_SPECS = {
