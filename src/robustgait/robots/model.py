@@ -16,6 +16,7 @@ The MJCF is read by :mod:`robustgait.io.robotfile` (``load_robot``), which hands
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from functools import cached_property
 
@@ -308,3 +309,20 @@ class Robot:
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, joints={self.n_joints}, mass={self.mass:.1f} kg)"
+
+
+def actuated_model(model: mujoco.MjModel, actuation: str, damping: NDArray[np.float64] | None = None) -> mujoco.MjModel:
+    """The model the feedback engine steps for a robot model: itself for ``servo`` with the spec's damping
+    (``damping`` None); else a copy whose affine servos have the servo damping ``damping`` (``servo``: u =
+    kp (c − q) − damping q̇) or are direct torque motors (``motor``: gain 1, bias 0). Force ranges are kept."""
+    if actuation == "servo" and damping is None:
+        return model
+    out = copy.copy(model)
+    if actuation == "motor":
+        out.actuator_gainprm[:, :] = 0.0
+        out.actuator_gainprm[:, 0] = 1.0
+        out.actuator_biasprm[:, :] = 0.0
+    else:
+        assert damping is not None
+        out.actuator_biasprm[:, 2] = -np.asarray(damping, dtype=float)
+    return out

@@ -42,7 +42,6 @@ Torques beyond the limit are counted per joint and step (``saturation``).
 from __future__ import annotations
 
 import contextlib
-import copy
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Literal
@@ -56,6 +55,7 @@ from robustgait.config import SimConfig
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
+from robustgait.robots.model import actuated_model
 from robustgait.sim.controller import TrackingStats, desired_outputs, feedforward_torque, step_controls
 from robustgait.sim.engine import StepBatch, StepEngine, StepInputs
 
@@ -193,23 +193,6 @@ class FeedbackStepBatch(StepBatch):
     saturation: NDArray[np.int64] = field(default_factory=lambda: np.zeros((0, 0), dtype=np.int64))
     error_sq: Array = field(default_factory=lambda: np.zeros((0, 0)))
     error_max: Array = field(default_factory=lambda: np.zeros((0, 0)))
-
-
-def actuated_model(model: mujoco.MjModel, actuation: str, damping: Array | None = None) -> mujoco.MjModel:
-    """The model the feedback engine steps for a robot model: itself for ``servo`` with the spec's damping
-    (``damping`` None); else a copy whose affine servos have the servo damping ``damping`` (``servo``: u =
-    kp (c − q) − damping q̇) or are direct torque motors (``motor``: gain 1, bias 0). Force ranges are kept."""
-    if actuation == "servo" and damping is None:
-        return model
-    out = copy.copy(model)
-    if actuation == "motor":
-        out.actuator_gainprm[:, :] = 0.0
-        out.actuator_gainprm[:, 0] = 1.0
-        out.actuator_biasprm[:, :] = 0.0
-    else:
-        assert damping is not None
-        out.actuator_biasprm[:, 2] = -np.asarray(damping, dtype=float)
-    return out
 
 
 _THREADPOOLS: list[object] = []
