@@ -75,7 +75,7 @@ def main() -> None:
     commit = git_commit()
     before = subprocess.run(["git", "-C", str(Path(args.before).parent), "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
-    print(f"# bench_before_after {time.strftime('%Y-%m-%d %H:%M')}: after = {commit}, before = {before}; "
+    print(f"# before_after {time.strftime('%Y-%m-%d %H:%M')}: after = {commit}, before = {before}; "
           f"load {os.getloadavg()[0]:.1f}")
     sides = {"before": args.before, "after": str(REPO / "src")}
     with tempfile.TemporaryDirectory(prefix="bench_before_after_") as d:

@@ -220,8 +220,8 @@ def main() -> None:
         ap.error("--robot, --flat, --mc and --out are required (or --table)")
     args.out.mkdir(parents=True, exist_ok=True)
     commit = git_commit()
-    print(f"# bench_compare {args.robot}: {datetime.date.today()}, main {commit}, {platform.processor() or 'cpu'}, "
-          f"{os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}", flush=True)
+    print(f"# flat_vs_multicontact {args.robot}: {datetime.date.today()}, main {commit}, "
+          f"{platform.processor() or 'cpu'}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}", flush=True)
 
     t = time.perf_counter()
     cmp = compare_studies(args.flat, args.mc, CompareConfig(seeds=args.seeds, seed_base=args.seed_base))

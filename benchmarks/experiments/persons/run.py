@@ -98,7 +98,7 @@ def main() -> None:
     ap.add_argument("--iterations", type=int, default=10)
     ap.add_argument("--batch", type=int, default=5)
     ap.add_argument("--jstar-study", default=None)
-    ap.add_argument("--out", default="benchmarks/data/bench_person")
+    ap.add_argument("--out", default=str(Path(__file__).parent / "data" / "studies"))
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

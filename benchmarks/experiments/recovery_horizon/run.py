@@ -106,7 +106,7 @@ def cmd_recheck(args: argparse.Namespace) -> None:
     wanted = set(args.status.split(","))
     todo = [i for i, r in enumerate(rows) if r.get("status") in wanted and "params" in r]
     commit = git_commit()
-    print(f"# bench_recovery recheck {date.today()} commit {commit}: {len(todo)} rows of {path} ({args.status})",
+    print(f"# recovery_horizon recheck {date.today()} commit {commit}: {len(todo)} rows of {path} ({args.status})",
           flush=True)
     with ProcessPoolExecutor(args.workers) as pool:
         futures = {pool.submit(recheck_gait, {"robot": args.robot, "row": rows[i]}): i for i in todo}
@@ -279,7 +279,7 @@ def cmd_run(args: argparse.Namespace) -> None:
     if args.gait_dir:
         Path(args.gait_dir).mkdir(parents=True, exist_ok=True)
     commit = git_commit()
-    print(f"# bench_recovery run {date.today()} commit {commit} robot {args.robot}: {len(jobs)} gaits to do "
+    print(f"# recovery_horizon run {date.today()} commit {commit} robot {args.robot}: {len(jobs)} gaits to do "
           f"({len(done)} done), {args.workers} workers", flush=True)
     t0 = time.perf_counter()
     with ProcessPoolExecutor(args.workers) as pool, out.open("a") as fh:

@@ -51,7 +51,7 @@ def one(d: Path, require: tuple[str, ...], workers: int) -> dict:  # type: ignor
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", default="benchmarks/data/bench_require")
+    ap.add_argument("--out", default=str(Path(__file__).parent / "data" / "studies"))
     ap.add_argument("--require", default="speed>=0.2")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--only", choices=("unconstrained", "required"), default=None, help="run one of the two studies")

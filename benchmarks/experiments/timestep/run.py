@@ -92,7 +92,7 @@ def main() -> None:
     ap.add_argument("--out", default="")
     args = ap.parse_args()
     commit = git_commit()
-    print(f"# bench_timestep {time.strftime('%Y-%m-%d %H:%M')} at {commit}: {args.robot}")
+    print(f"# timestep {time.strftime('%Y-%m-%d %H:%M')} at {commit}: {args.robot}")
     sim = SimConfig()
     rows: list[dict[str, Any]] = []
     for gpath in args.gait:

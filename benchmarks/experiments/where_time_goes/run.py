@@ -123,7 +123,7 @@ def main() -> None:
     ap.add_argument("--out", default="")
     args = ap.parse_args()
     commit = git_commit()
-    print(f"# bench_profile {time.strftime('%Y-%m-%d %H:%M')} at {commit}, load {os.getloadavg()[0]:.1f}: "
+    print(f"# where_time_goes {time.strftime('%Y-%m-%d %H:%M')} at {commit}, load {os.getloadavg()[0]:.1f}: "
           f"{args.robot}, {Path(args.gait).name}")
     robot = load_robot(args.robot)
     gait = load_gait(args.gait, robot)
