@@ -143,15 +143,15 @@ def fd_check(robot: Robot, gait: Gait, orbit: Orbit, cfg: OrbitConfig, sim: SimC
             v = vectors[:, int(np.argmax(np.abs(values)))]
             u = np.real(v) if np.linalg.norm(np.real(v)) >= np.linalg.norm(np.imag(v)) else np.imag(v)
             starts.append(x + 10.0 * h * u / np.linalg.norm(u))
-            rows.append((h, rho, spectral_radius(j.matrix)[0], len(j.one_sided)))
+            rows.append((h, rho, spectral_radius(j.matrix)[0], len(j.one_sided)))  # a count of one-sided columns
         # the perturbations along each step's leading eigenvector, iterated beside x* in one batch
         xs = np.vstack(starts)
         for _ in range(cfg.confirm_steps):
             xs = F(xs)
-        for i, (h, rho, rho_fixed, one_sided) in enumerate(rows, start=1):
+        for i, (h, rho, rho_fixed, n_one_sided) in enumerate(rows, start=1):
             sep = float(np.linalg.norm(xs[i] - xs[0]))
             rate = (sep / (10.0 * h)) ** (1.0 / cfg.confirm_steps) if np.isfinite(sep) else float("nan")
-            lines.append(f"  h = {h:g}: ρ = {rho:.4f} (at a fixed touchdown step {rho_fixed:.4f}), {one_sided} "
+            lines.append(f"  h = {h:g}: ρ = {rho:.4f} (at a fixed touchdown step {rho_fixed:.4f}), {n_one_sided} "
                          f"one-sided columns; a perturbation of {10 * h:g} along its leading eigenvector: "
                          + (f"×{rate:.4f}/map over {cfg.confirm_steps} maps" if np.isfinite(rate) else "fell"))
         lines.append(f"  ({'touchdown projection' if proj is not None else 'no touchdown projection'}; "
