@@ -385,6 +385,10 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
     assert "make the robot fall within that step and 6 more (a pushed walk stops once recovered: 2 consecutive" in text
     assert "every coordinate of the switching state within 0.03 of its orbit's band" in text
     assert "ball" not in text and "r*" not in text
+    # the JSON's basis is the statement's, in pushes and J*, not the estimator's samples and r*
+    basis = gc.to_dict()["basis"]
+    assert basis.startswith(f"a batch of {verify[-1].n_samples} fresh pushes") and basis in text
+    assert "ball" not in basis and "r*" not in basis
 
 
 @pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it

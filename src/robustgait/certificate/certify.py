@@ -29,7 +29,7 @@ from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
 from robustgait.certificate.search import find_orbit
 from robustgait.certificate.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
-from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, to_dict
+from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
 from robustgait.config.work import Work, check_work
 from robustgait.gait import Gait
 from robustgait.robots import Robot
@@ -109,10 +109,26 @@ class GaitCertificate:
             return None
         return volume_ratio(self.certificate.r_star, self.ball.r_star, self.coordinates.dim)
 
+    def _push_basis(self) -> str:
+        """Why a push certificate's bound holds, in pushes and J*: the verification batch (sequential) or the union
+        bound over the samples (uniform)."""
+        c = self.certificate
+        assert c is not None
+        inside = "≤" if c.attained else "<"
+        if c.method == "sequential":
+            verify = [r for r in c.rounds if r.kind == "verify"]
+            n_a, attempt = verify[-1].n_samples, len(verify)
+            return (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed: none fell "
+                    f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}), and none of the "
+                    f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* failed")
+        return (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
+                f"with |J| {inside} J* did not fall (union bound over the {c.n_samples + 1} possible choices of J*)")
+
     def statement(self) -> str:
         """The certificate in words: what it promises, with its confidence, its horizon and its basis."""
         if self.certificate is None:
-            return f"No certificate ({self.status}): {self.reason}; r* = 0 after {self.steps_walked} steps."
+            return (f"No certificate ({self.status}): {self.reason}; {radius_name(self.config.space)} = 0 after "
+                    f"{self.steps_walked} steps.")
         c, cfg = self.certificate, self.config
         if cfg.disturbance != "push":
             return c.statement() + self._scatter_clause()
@@ -120,16 +136,7 @@ class GaitCertificate:
             return c.statement()
         v = self.validate or ValidateConfig()
         inside = "≤" if c.attained else "<"
-        if c.method == "sequential":
-            verify = [r for r in c.rounds if r.kind == "verify"]
-            n_a, attempt = verify[-1].n_samples, len(verify)
-            basis = (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed: none fell "
-                     f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}), and none of the "
-                     f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* failed")
-        else:
-            basis = (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
-                     f"with |J| {inside} J* did not fall (union bound over the {c.n_samples + 1} possible choices of "
-                     "J*)")
+        basis = self._push_basis()
         p = cfg.push
         fail = f"make the robot fall within that step and {p.horizon} more"
         if p.recovery:
@@ -189,6 +196,8 @@ class GaitCertificate:
                 for key in ("samples", "images", "fell", "margins", "sample_round"):
                     c.pop(key)
             c["statement"] = self.statement()
+            if cfg.disturbance == "push" and c.get("basis"):
+                c["basis"] = self._push_basis()  # the estimator words it in samples and r*
             out.update(c)
             out["vacuous"] = self.vacuous
         if self.coordinates is not None:
