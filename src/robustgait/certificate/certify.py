@@ -37,6 +37,20 @@ from robustgait.sim.engine import step_physics_steps
 from robustgait.sim.factory import make_engine
 
 
+def push_basis(c: Certificate) -> str:
+    """Why a push certificate's bound holds, in pushes and J* (the estimator words it in samples and r*): the
+    verification batch (sequential) or the union bound over the samples (uniform)."""
+    inside = "≤" if c.attained else "<"
+    if c.method == "sequential":
+        verify = [r for r in c.rounds if r.kind == "verify"]
+        n_a, attempt = verify[-1].n_samples, len(verify)
+        return (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed: none fell "
+                f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}), and none of the "
+                f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* failed")
+    return (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
+            f"with |J| {inside} J* did not fall (union bound over the {c.n_samples + 1} possible choices of J*)")
+
+
 @dataclass
 class GaitCertificate:
     """A gait's certificate.
@@ -109,21 +123,6 @@ class GaitCertificate:
             return None
         return volume_ratio(self.certificate.r_star, self.ball.r_star, self.coordinates.dim)
 
-    def _push_basis(self) -> str:
-        """Why a push certificate's bound holds, in pushes and J*: the verification batch (sequential) or the union
-        bound over the samples (uniform)."""
-        c = self.certificate
-        assert c is not None
-        inside = "≤" if c.attained else "<"
-        if c.method == "sequential":
-            verify = [r for r in c.rounds if r.kind == "verify"]
-            n_a, attempt = verify[-1].n_samples, len(verify)
-            return (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed: none fell "
-                    f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}), and none of the "
-                    f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* failed")
-        return (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
-                f"with |J| {inside} J* did not fall (union bound over the {c.n_samples + 1} possible choices of J*)")
-
     def statement(self) -> str:
         """The certificate in words: what it promises, with its confidence, its horizon and its basis."""
         if self.certificate is None:
@@ -136,7 +135,7 @@ class GaitCertificate:
             return c.statement()
         v = self.validate or ValidateConfig()
         inside = "≤" if c.attained else "<"
-        basis = self._push_basis()
+        basis = push_basis(c)
         p = cfg.push
         fail = f"make the robot fall within that step and {p.horizon} more"
         if p.recovery:
@@ -196,8 +195,6 @@ class GaitCertificate:
                 for key in ("samples", "images", "fell", "margins", "sample_round"):
                     c.pop(key)
             c["statement"] = self.statement()
-            if cfg.disturbance == "push" and c.get("basis"):
-                c["basis"] = self._push_basis()  # the estimator words it in samples and r*
             out.update(c)
             out["vacuous"] = self.vacuous
         if self.coordinates is not None:
@@ -357,6 +354,8 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
             coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
             pushes = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push)
             cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}")
+            if cert.basis:
+                cert = dataclasses.replace(cert, basis=push_basis(cert))
             steps = pushes.physics_steps
         else:
             fmap = FullStateMap(robot, gait, orbit.period, engine=engine)
