@@ -74,14 +74,20 @@ class Band:
         """σ: the orbit's largest scatter over phases and coordinates (band coordinates)."""
         return float(self.scatter.max(initial=0.0))
 
+    def _deviation(self, z: FloatArray, phase: int | NDArray[np.int64]
+                   ) -> tuple[FloatArray, NDArray[np.int64], FloatArray]:
+        """|z − c_p| (K, d) of states z (K, d) in phase(s) p (an int, or (K,)), the phases (K,), and a factor (K,): 1,
+        or NaN for a state with a NaN coordinate."""
+        z = np.atleast_2d(z)
+        p = np.broadcast_to(np.asarray(phase, dtype=np.int64) % self.period, (z.shape[0],))
+        return np.abs(z - self.centres[p]), p, np.where(np.isfinite(z).all(axis=1), 1.0, np.nan)
+
     def distance(self, z: FloatArray, phase: int | NDArray[np.int64]) -> FloatArray:
         """max_i |z_i − c_p,i| / w_p,i (K,) of states z (K, d) in phase(s) p (an int, or (K,)): ≤ 1 inside the band;
         NaN for a NaN state."""
-        z = np.atleast_2d(z)
-        p = np.broadcast_to(np.asarray(phase, dtype=np.int64) % self.period, (z.shape[0],))
+        dev, p, nan = self._deviation(z, phase)
         with np.errstate(invalid="ignore"):
-            return np.asarray(np.max(np.abs(z - self.centres[p]) / self.half_width[p], axis=1, initial=0.0)
-                              * np.where(np.isfinite(z).all(axis=1), 1.0, np.nan))
+            return np.asarray(np.max(dev / self.half_width[p], axis=1, initial=0.0) * nan)
 
     def distance_shifted(self, z: FloatArray, step: int) -> FloatArray:
         """The band distance (K, k) of states z (K, d) after ``step`` steps from the band of phase (step + s) mod k,
@@ -94,12 +100,10 @@ class Band:
         """The smallest floor ν (K,) under which states z (K, d) of phase(s) p lie in the band: the largest
         |z_i − c_p,i| over the coordinates outside κ σ_p,i (0 when none), since z is inside iff every such deviation is
         ≤ ν. Independent of this band's own ν, so one walk can be judged under every floor; NaN for a NaN state."""
-        z = np.atleast_2d(z)
-        p = np.broadcast_to(np.asarray(phase, dtype=np.int64) % self.period, (z.shape[0],))
-        dev = np.abs(z - self.centres[p])
+        dev, p, nan = self._deviation(z, phase)
         with np.errstate(invalid="ignore"):
             outside = np.where(dev <= self.multiple * self.scatter[p], 0.0, dev)
-            return np.asarray(outside.max(axis=1, initial=0.0) * np.where(np.isfinite(z).all(axis=1), 1.0, np.nan))
+            return np.asarray(outside.max(axis=1, initial=0.0) * nan)
 
     def inside(self, z: FloatArray, phase: int | NDArray[np.int64]) -> NDArray[np.bool_]:
         """Whether states z (K, d) of phase(s) p lie in the band (a NaN state does not)."""

@@ -67,7 +67,6 @@ class PersonPage:
         self.reqs = requirements(self.setup.config.study, self.space.names)
         self.token = token or secrets.token_urlsafe(18)
         self.records = StudyRecords(open_store(self.directory, self.setup, self.space))
-        self.store, self.lock = self.records.store, self.records.lock
         self.answer_posted = threading.Event()
         self.final_seen = threading.Event()
         self.ready: int | None = None  # the pending iteration whose videos are rendered
