@@ -73,8 +73,7 @@ def main() -> None:
     ap.add_argument("--limit", type=int, default=10)
     args = ap.parse_args()
     commit = git_commit()
-    before = subprocess.run(["git", "-C", str(Path(args.before).parent), "rev-parse", "--short", "HEAD"],
-                            capture_output=True, text=True).stdout.strip()
+    before = git_commit(Path(args.before).parent)
     print(f"# before_after {time.strftime('%Y-%m-%d %H:%M')}: after = {commit}, before = {before}; "
           f"load {os.getloadavg()[0]:.1f}")
     sides = {"before": args.before, "after": str(REPO / "src")}

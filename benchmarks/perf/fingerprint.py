@@ -26,8 +26,9 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[2]
-T1_SPEC = ROOT / "robots" / "t1" / "spec.toml"
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/common.py
+from common import SHARED, T1_SPEC
+
 DROP = ("seconds", "wall", "time_s", "elapsed", "path", "file", "created", "date", "commit", "version", "cpu")
 
 
@@ -105,7 +106,7 @@ def main() -> None:
     ap.add_argument("--no-t1", action="store_true")
     ap.add_argument("--t1-spec", type=Path, default=T1_SPEC, help="T1's spec (default: robots/t1/spec.toml)")
     args = ap.parse_args()
-    t1 = None if args.no_t1 or not args.t1_spec.exists() or not (ROOT.parent / "shared" / "robots").exists() \
+    t1 = None if args.no_t1 or not args.t1_spec.exists() or not (SHARED / "robots").exists() \
         else args.t1_spec
     rec = record(t1)
     args.out.write_text(json.dumps(rec, indent=1, sort_keys=True) + "\n")

@@ -25,9 +25,9 @@ from mujoco import rollout
 from robustgait import SimConfig, StepEngine, load_gait, load_robot, walk
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/common.py
-from common import ATALANTE_SPEC, REPO, start_states
+from common import ATALANTE_SPEC, SHARED, start_states
 
-ATALANTE = REPO.parent / "shared" / "atalante"
+ATALANTE = SHARED / "atalante"
 
 
 def main() -> None:

@@ -28,9 +28,9 @@ from robustgait.config import ValidateConfig
 from robustgait.validate import Validator
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/common.py
-from common import ATALANTE_SPEC, REPO
+from common import ATALANTE_SPEC, SHARED
 
-ATALANTE = REPO.parent / "shared" / "atalante"
+ATALANTE = SHARED / "atalante"
 
 
 def main() -> None:

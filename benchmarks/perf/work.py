@@ -33,12 +33,11 @@ from robustgait.study.run import check_evaluation_work, longest_gaits
 from robustgait.validate.run import check_validate_work, validate_steps
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/common.py
-from common import ATALANTE_SPEC, EXO_GAIT, EXO_MULTICONTACT_GAIT, REPO, git_commit
+from common import ATALANTE_GAIT, ATALANTE_SPEC, EXO_GAIT, EXO_MULTICONTACT_GAIT, git_commit
 
-ATALANTE = ATALANTE_SPEC
 STORED = {("exo", "flat"): EXO_GAIT,
           ("exo", "multicontact"): EXO_MULTICONTACT_GAIT,
-          ("atalante", "flat"): REPO.parent / "shared" / "atalante" / "jt_bez_2023-09-10.yaml"}
+          ("atalante", "flat"): ATALANTE_GAIT}
 
 
 def defaults_of(*argv: str, base: Config | None = None) -> Config:
@@ -83,7 +82,7 @@ def main() -> None:
     print("| robot | graph | gait | physics steps / step | command (defaults) | simulated steps | worst case "
           "| limit |")
     print("|---|---|---|---|---|---|---|---|")
-    robots = [("exo", "exo")] + ([("atalante", str(ATALANTE))] if STORED[("atalante", "flat")].is_file() else [])
+    robots = [("exo", "exo")] + ([("atalante", str(ATALANTE_SPEC))] if STORED[("atalante", "flat")].is_file() else [])
     for name, spec in robots:
         robot = load_robot(spec)
         for graph in ("flat", "multicontact"):

@@ -31,20 +31,18 @@ from robustgait.rotations import roll_pitch_yaw
 from robustgait.sim.comfort import FIGURES, lowpass, peak, rms
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py
-from common import ATALANTE_SPEC, EXO_GAIT, EXO_MULTICONTACT_GAIT, REPO, git_commit
-
-ATALANTE = REPO.parent / "shared" / "atalante" / "jt_bez_2023-09-10.yaml"
+from common import ATALANTE_GAIT, ATALANTE_SPEC, EXO_GAIT, EXO_MULTICONTACT_GAIT, git_commit
 
 
 def gaits() -> list[tuple[str, Robot, Gait]]:
     out = []
     exo = load_robot("exo")
     out.append(("exo, default gait", exo, load_gait(EXO_GAIT, exo)))
-    if ATALANTE.is_file():
+    if ATALANTE_GAIT.is_file():
         atalante = load_robot(ATALANTE_SPEC)
-        out.append(("Atalante, FROST gait", atalante, load_gait(ATALANTE, atalante)))
+        out.append(("Atalante, FROST gait", atalante, load_gait(ATALANTE_GAIT, atalante)))
     else:
-        print(f"({ATALANTE} absent: Atalante skipped)")
+        print(f"({ATALANTE_GAIT} absent: Atalante skipped)")
     return out
 
 

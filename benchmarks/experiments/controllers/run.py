@@ -25,9 +25,9 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py
-from common import ATALANTE_SPEC, REPO, git_commit
+from common import ATALANTE_SPEC, SHARED, git_commit
 
-ATALANTE = REPO.parent / "shared" / "atalante"
+ATALANTE = SHARED / "atalante"
 CONTROLLERS = ("pd", "passivity")
 
 

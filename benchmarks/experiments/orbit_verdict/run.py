@@ -53,9 +53,9 @@ from robustgait.gait import Gait
 from robustgait.robots import Robot
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py
-from common import ATALANTE_SPEC, EXO_GAIT, EXO_MULTICONTACT_GAIT, REPO
+from common import ATALANTE_SPEC, EXO_GAIT, EXO_MULTICONTACT_GAIT, SHARED
 
-ATALANTE = REPO.parent / "shared" / "atalante"
+ATALANTE = SHARED / "atalante"
 
 
 def named_gaits(items: list[str]) -> dict[str, tuple[Robot, Gait]]:

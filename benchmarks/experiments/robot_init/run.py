@@ -28,9 +28,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py
-from common import ATALANTE_SPEC, REPO
+from common import ATALANTE_SPEC, REPO, SHARED
 
-T1 = REPO.parent / "shared" / "robots" / "booster_t1" / "t1.xml"
+T1 = SHARED / "robots" / "booster_t1" / "t1.xml"
 ROBOTS = {"exo": ("exo", REPO / "src" / "robustgait" / "robots" / "exo" / "spec.toml"),
           "atalante": (str(ATALANTE_SPEC), ATALANTE_SPEC)}
 
@@ -116,7 +116,7 @@ def scale_rules(name: str, ref: str, spec_path: Path) -> None:
 
 def rules(_: argparse.Namespace) -> None:
     for name, (ref, path) in ROBOTS.items():
-        if name == "atalante" and not (REPO.parent / "shared" / "atalante" / "loadedExo.xml").is_file():
+        if name == "atalante" and not (SHARED / "atalante" / "loadedExo.xml").is_file():
             print("atalante: ../shared/atalante is not beside the repository: skipped")
             continue
         gain_rule(name, ref)
