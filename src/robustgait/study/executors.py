@@ -155,20 +155,30 @@ def descendants(root: int) -> dict[int, int]:
 
 def _guard(driver: int) -> None:
     """The guard process (:func:`start_guard`): while the driver lives, note the processes below it every
-    :data:`GUARD_INTERVAL`; when it dies, SIGKILL those of them still running (the same pid and start time)."""
+    :data:`GUARD_INTERVAL`; when it dies, SIGKILL those of them still running (the same pid and start time).
+
+    Every process once seen below the driver is kept until it is gone, not only those of the last look: a look taken
+    while the driver dies reads /proc as its children are re-parented, and finds only part of the tree (a raylet's
+    agents are then no longer below the driver)."""
     parent = multiprocessing.parent_process()
     assert parent is not None
     me = os.getpid()
     seen: dict[int, int] = {}
     while True:
-        seen = {pid: start for pid, start in descendants(driver).items() if pid != me} or seen
+        seen = {pid: start for pid, start in seen.items() if _same_process(pid, start)}
+        seen.update((pid, start) for pid, start in descendants(driver).items() if pid != me)
         if multiprocessing.connection.wait([parent.sentinel], timeout=GUARD_INTERVAL):
             break
     for pid, start in seen.items():
-        s = proc_stat(pid)
-        if s is not None and s[2] == start:
+        if _same_process(pid, start):
             with contextlib.suppress(ProcessLookupError):
                 os.kill(pid, signal.SIGKILL)
+
+
+def _same_process(pid: int, start: int) -> bool:
+    """Whether process ``pid`` still runs and is the one that started at ``start`` (a pid is reused only later)."""
+    s = proc_stat(pid)
+    return s is not None and s[1] != "Z" and s[2] == start
 
 
 def start_guard() -> multiprocessing.process.BaseProcess | None:
