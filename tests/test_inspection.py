@@ -228,6 +228,24 @@ def test_mirror_signs_follow_the_axes_and_reflect_the_model(tmp_path: Path) -> N
     assert fk_residual(r, bad, 10, 0).position > 0.05
 
 
+def test_a_joint_on_the_plane_is_its_own_partner_wherever_its_frame_sits(tmp_path: Path) -> None:
+    """A head's tilt hinge mounted on one side of its bracket (Robotis OP3): its frame 2 cm off the sagittal plane,
+    its axis along y — the line S maps onto itself, so the joint is its own partner, and the reflection is verified
+    (the frame's offset is a constant of the body); a wrong sign is still caught. The neck's yaw shares its vertical
+    line with the waist's: each is its own partner, not the other's."""
+    tilt = body("head_tilt_link", "head_tilt", "0 -1 0", "-1 1", 0.3, "0 -0.019 0.03", "0.001 0.001 0.001",
+                '<geom type="sphere" size="0.06" pos="0 -0.019 0.03"/>', pos="0.01 0.019 0.03")
+    r = open_model(write(tmp_path, biped_xml().replace('<geom type="sphere" size="0.08" pos="0 0 0.08"/>', tilt)))
+    mirror = find_mirror(r, 1e-3)
+    ids = {r.joint_name(j): j for j in r.joints}
+    assert mirror.partner[ids["head_tilt"]] == ids["head_tilt"] and mirror.sign[ids["head_tilt"]] == 1
+    assert mirror.partner[ids["neck_yaw"]] == ids["neck_yaw"] and mirror.partner[ids["waist_yaw"]] == ids["waist_yaw"]
+    res = fk_residual(r, mirror, 10, 0)
+    assert res.position < 1e-9 and res.angle < 1e-6
+    bad = Mirror(mirror.partner, {**mirror.sign, ids["head_tilt"]: -1.0}, mirror.body_partner)
+    assert fk_residual(r, bad, 10, 0).angle > 0.1                   # tilted the other way
+
+
 def test_mass_asymmetry_finds_the_side_that_differs(tmp_path: Path) -> None:
     """A model whose kinematics reflect exactly can still differ left to right in its masses (T1's shanks, 60 g):
     found pair by pair, the lighter body named — and a difference at the level of a model file's rounding (half a

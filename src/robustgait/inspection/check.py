@@ -250,7 +250,8 @@ def check_tracking(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     lo, hi = robot.joint_range[:, 0], robot.joint_range[:, 1]
     a = config.track_amplitude
     centre = np.clip(np.asarray(robot.spec.posture), lo + a, hi - a)
-    centre = np.where(hi - lo < 2 * a, (lo + hi) / 2, centre)
+    narrow = hi - lo < 2 * a  # a range narrower than the sinusoid: its middle (an unlimited joint is never narrow)
+    centre[narrow] = (lo[narrow] + hi[narrow]) / 2
     amp = np.minimum(a, (hi - lo) / 2)
     phase = 2 * np.pi * np.arange(len(names)) / len(names)
     w = 2 * np.pi * config.track_frequency

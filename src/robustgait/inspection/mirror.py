@@ -3,16 +3,21 @@ reflecting the model.
 
 A reflection S = diag(1, −1, 1) about the base's sagittal (x–z) plane maps a point p to S p and a hinge's axis
 a to −S a (an axis is a pseudo-vector: det S = −1), a slide's direction d to S d. Each joint's *partner* is the
-joint its mirror image lands on: found by name (left ↔ right, l ↔ r, L ↔ R, ...) and confirmed by geometry (its
-anchor at S p and its axis ±S a with every joint at 0), or by geometry alone when no name pairs it; a joint on
-the sagittal plane whose axis S maps onto its own line is its own partner. The sign makes the partner's angle
-reproduce the reflected motion: a hinge's sign is +1 when the partner's axis is −S a and −1 when it is +S a
-(a slide's, +1 when it is +S d). The relabeled configuration is q'[partner(j)] = sign(j) · q[j].
+joint its mirror image lands on: found by name (left ↔ right, l ↔ r, L ↔ R, ...) and confirmed by geometry, or by
+geometry alone when no name pairs it. For a hinge the geometry is its axis *line* (:func:`line_offset`): the
+partner's axis is ±S a and passes within the tolerance of the reflected anchor S p, wherever along the line the
+model put its anchor — so a joint on the sagittal plane whose line S maps onto itself is its own partner even when
+its frame sits off the plane (a head's tilt joint mounted on one side of its bracket). A slide's anchor must be at
+S p. The sign makes the partner's angle reproduce the reflected motion: a hinge's sign is +1 when the partner's axis
+is −S a and −1 when it is +S a (a slide's, +1 when it is +S d). The relabeled configuration is
+q'[partner(j)] = sign(j) · q[j].
 
 **Verification** (:func:`fk_residual`): for random configurations q, forward kinematics of the relabeled q' must
-put every body b's partner b' at the reflection of b: x_b'(q') = S x_b(q), and its orientation R_b'(q') = S R_b(q)
-S C_b with a constant C_b (the two sides' frame conventions may differ by a fixed rotation; C_b is measured at
-q = 0). The residual is the largest position [m] and orientation [rad] error over bodies and samples.
+move every body b's partner b' as the reflection moves b: its frame x_b'(q') = S x_b(q) + R_b'(q') d_b and
+R_b'(q') = S R_b(q) S C_b, with a constant offset d_b and rotation C_b measured at q = 0 (where a frame sits on its
+body, and the two sides' frame conventions, are modelling choices: a wrong partner or sign moves the body another
+way, which no constant absorbs). The residual is the largest position [m] and orientation [rad] error over bodies
+and samples.
 """
 
 from __future__ import annotations
@@ -78,16 +83,28 @@ def _sign(m: mujoco.MjModel, j: int, a: NDArray[np.float64], b: NDArray[np.float
     return -float(np.sign(dot)) if int(m.jnt_type[j]) == HINGE else float(np.sign(dot))
 
 
+def line_offset(point: NDArray[np.float64], direction: NDArray[np.float64], other: NDArray[np.float64]) -> float:
+    """Distance [m] from the point ``other`` (3,) to the line through ``point`` (3,) along the unit ``direction``
+    (3,): ‖(o − p) − ((o − p)·d) d‖."""
+    r = other - point
+    return float(np.linalg.norm(r - float(r @ direction) * direction))
+
+
 def find_mirror(robot: RobotModel, tolerance: float) -> Mirror:
     """Every non-base joint's partner and sign, and every body's partner (module docstring). ``tolerance`` [m]:
-    how far a partner's anchor may lie from the reflected anchor with every joint at 0."""
+    how far a hinge partner's axis line may pass from the reflected anchor (a slide's anchor from the reflected
+    one) with every joint at 0."""
     m, src = robot.model, robot.path
     d, anchor, axis = _axes(robot)
     by_name = {robot.joint_name(j): j for j in robot.joints if robot.joint_name(j)}
 
+    def offset(j: int, k: int) -> float:
+        if int(m.jnt_type[j]) == HINGE:
+            return line_offset(S @ anchor[j], S @ axis[j], anchor[k])
+        return float(np.linalg.norm(anchor[k] - S @ anchor[j]))
+
     def matches(j: int, k: int) -> bool:
-        return (int(m.jnt_type[j]) == int(m.jnt_type[k])
-                and float(np.linalg.norm(anchor[k] - S @ anchor[j])) <= tolerance
+        return (int(m.jnt_type[j]) == int(m.jnt_type[k]) and offset(j, k) <= tolerance
                 and abs(abs(float(axis[k] @ (S @ axis[j]))) - 1.0) <= AXIS_TOLERANCE)
 
     partner: dict[int, int] = {}
@@ -97,13 +114,15 @@ def find_mirror(robot: RobotModel, tolerance: float) -> Mirror:
         if named is not None:
             k = by_name[named[0]]
             if not matches(j, k):
-                off = float(np.linalg.norm(anchor[k] - S @ anchor[j]))
+                off = offset(j, k)
                 raise input_error(src, f"the mirror does not reflect the model: joint '{name}' and its name partner "
                                   f"'{named[0]}' are not mirror images (anchor {off:.4f} m from the reflected one, "
                                   f"axes {axis[j].round(3).tolist()} and {axis[k].round(3).tolist()})")
             partner[j] = k
             continue
         found = [k for k in robot.joints if matches(j, k)]
+        if j in found:  # its own line reflects onto itself: on the plane (another joint may share that line)
+            found = [j]
         if len(found) != 1:
             what = "no joint" if not found else f"{len(found)} joints ({', '.join(robot.joint_name(k) for k in found)})"
             raise input_error(src, f"the mirror does not reflect the model: joint '{name}' has {what} at its mirror "
@@ -161,8 +180,9 @@ def fk_residual(robot: RobotModel, mirror: Mirror, samples: int, seed: int) -> R
         d = robot.kinematics(robot.qpos(dict(angles)))
         return d.xpos.copy(), d.xmat.reshape(-1, 3, 3).copy()
 
-    _, r0 = frames(zero)
+    x0, r0 = frames(zero)
     const = {b: r0[c].T @ S @ r0[b] @ S for b, c in bodies}
+    shift = {b: r0[c].T @ (x0[c] - S @ x0[b]) for b, c in bodies}
     position = angle = 0.0
     body, worst = robot.base, -1.0
     for _ in range(samples):
@@ -173,7 +193,7 @@ def fk_residual(robot: RobotModel, mirror: Mirror, samples: int, seed: int) -> R
         x, r = frames(q)
         xm, rm = frames(mirrored_angles(mirror, q))
         for b, c in bodies:
-            e_pos = float(np.linalg.norm(xm[c] - S @ x[b]))
+            e_pos = float(np.linalg.norm(xm[c] - S @ x[b] - rm[c] @ shift[b]))
             e_rot = _rotation_angle(const[b].T @ rm[c].T @ S @ r[b] @ S)
             position, angle = max(position, e_pos), max(angle, e_rot)
             if e_pos + e_rot > worst:
