@@ -39,6 +39,17 @@ def git_commit(where: Path = REPO) -> str:
     return out.stdout.strip() or "?"
 
 
+def cli(*args: str, cwd: Path = REPO) -> tuple[int, str, float]:
+    """Run ``robustgait ARGS`` in a fresh process, as a user would: (exit code, stdout + stderr, wall seconds)."""
+    import sys
+    import time
+
+    t0 = time.perf_counter()
+    p = subprocess.run([sys.executable, "-c", "import sys; from robustgait.cli import main; sys.exit(main())",
+                        *args], capture_output=True, text=True, cwd=cwd)
+    return p.returncode, p.stdout + p.stderr, time.perf_counter() - t0
+
+
 def start_states(qpos: np.ndarray, qvel: np.ndarray, k: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """K certificate-like start states (K, nq), (K, nv): the section state ``qpos`` (nq,), ``qvel`` (nv,) with its
     base angular velocity perturbed uniformly in a ball of 0.3 rad/s."""

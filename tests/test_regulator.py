@@ -132,6 +132,20 @@ def test_robot_init_says_whether_it_is_on(t1_narrow, t1):  # type: ignore[no-unt
     assert not regulator_rule(RegulatorConfig(), 2 * t1.scale.sole_half_width, t1.leg_length, 1)[0]
 
 
+def test_a_tipping_sole_under_part_of_the_gain_is_told_to_try_all_of_it(t1_narrow, t1, exo_gait):  # type: ignore[no-untyped-def]
+    """The walk check's advice: a narrow sole that tipped under the share κ its width gives (0.22 on the narrow T1) is
+    told to try the H-LIP's whole gain; with κ = 1 already, or a wide sole (the regulator off), it is not."""
+    from robustgait.gaitgen.walkcheck import advice
+
+    tipped = "the left stance sole tipped over its outer edge (3°; the sole is 3.0 cm wide)"
+    tips = advice(t1_narrow, exo_gait, Config(), tipped)
+    assert any("sim.regulator.gain_scale=1; the sole's rule gives 0.22" in a for a in tips)
+    whole = Config(sim=SimConfig(regulator=RegulatorConfig(gain_scale=1.0)))
+    assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, whole, tipped))
+    assert not any("gain_scale" in a for a in advice(t1, exo_gait, Config(), tipped))
+    assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, Config(), "no_touchdown"))
+
+
 @pytest.fixture(scope="module")
 def narrow_gait(t1_narrow):  # type: ignore[no-untyped-def]
     from robustgait.gaitgen import GaitGenerator

@@ -35,25 +35,15 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
-import time
 from datetime import date
 from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py
-from common import EXO_GAIT, REPO, SHARED, git_commit, grid_params
+from common import EXO_GAIT, REPO, SHARED, cli, git_commit, grid_params
 
 T1 = SHARED / "robots" / "booster_t1" / "t1.xml"
-
-
-def _cli(*args: str) -> tuple[int, str, float]:
-    """Run ``robustgait ARGS``: (exit code, stdout + stderr, seconds)."""
-    t0 = time.perf_counter()
-    p = subprocess.run([sys.executable, "-c", "import sys; from robustgait.cli import main; sys.exit(main())",
-                        *args], capture_output=True, text=True, cwd=REPO)
-    return p.returncode, p.stdout + p.stderr, time.perf_counter() - t0
 
 
 def _stamp() -> dict[str, str]:
@@ -68,7 +58,7 @@ def build(out: Path, width: float) -> None:
     if not T1.is_file():
         raise SystemExit(f"{T1} is absent: the benchmark needs ../shared/robots/booster_t1")
     xml = narrow_t1_xml(T1, out, width)
-    code, text, _ = _cli("robot", "init", str(xml), "-o", str(out / "t1.toml"))
+    code, text, _ = cli("robot", "init", str(xml), "-o", str(out / "t1.toml"))
     print(text, end="")
     if code:
         raise SystemExit(code)
@@ -77,17 +67,17 @@ def build(out: Path, width: float) -> None:
 def default(d: Path, steps: int) -> dict[str, Any]:
     robot = str(d / "t1.toml")
     row: dict[str, Any] = {**_stamp(), "robot": robot}
-    code, text, sec = _cli("gait", "generate", "--robot", robot, "-o", str(d / "gait.json"))
+    code, text, sec = cli("gait", "generate", "--robot", robot, "-o", str(d / "gait.json"))
     row["generate"] = {"exit": code, "seconds": round(sec, 1), "walk_check": _line(text, "walk check")}
-    code, text, sec = _cli("walk", "--robot", robot, str(d / "gait.json"), "--steps", str(steps), "--json")
+    code, text, sec = cli("walk", "--robot", robot, str(d / "gait.json"), "--steps", str(steps), "--json")
     w = json.loads(text.strip().splitlines()[-1]) if code == 0 else {}
     row["walk"] = {"exit": code, "seconds": round(sec, 1), "steps_taken": w.get("steps_taken"),
                    "fell": w.get("fell"), "controller": w.get("controller")}
-    code, text, sec = _cli("certify", "--robot", robot, str(d / "gait.json"), "--json")
+    code, text, sec = cli("certify", "--robot", robot, str(d / "gait.json"), "--json")
     c = json.loads(text.strip().splitlines()[-1]) if code == 0 else {}
     row["certify"] = {"exit": code, "seconds": round(sec, 1), "status": c.get("status"), "j_star": c.get("r_star"),
                       "error": None if code == 0 else text.strip().splitlines()[-1]}
-    code, text, sec = _cli("gait", "generate", "--robot", robot, "-o", str(d / "gait_off.json"), "--override",
+    code, text, sec = cli("gait", "generate", "--robot", robot, "-o", str(d / "gait_off.json"), "--override",
                            "sim.regulator.mode=off")
     row["generate_off"] = {"exit": code, "seconds": round(sec, 1), "message": text.strip().splitlines()[-1],
                            "file_written": (d / "gait_off.json").exists()}
@@ -103,7 +93,7 @@ def exo(seeds: int) -> dict[str, Any]:
     for mode in ("off", "on"):
         runs = []
         for seed in range(seeds):
-            code, text, sec = _cli("certify", "--robot", "exo", str(EXO_GAIT), "--json", "--override",
+            code, text, sec = cli("certify", "--robot", "exo", str(EXO_GAIT), "--json", "--override",
                                    f"sim.regulator.mode={mode}", "--override", f"certify.seed={seed}")
             c = json.loads(text.strip().splitlines()[-1]) if code == 0 else {}
             runs.append({"seed": seed, "exit": code, "status": c.get("status"), "j_star": c.get("r_star"),

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.config import Config
-from robustgait.config.regulator import regulator_rule
+from robustgait.config.regulator import placement_share, regulator_rule
 from robustgait.gait import Gait
 from robustgait.gaitgen.check import PhysicsCheck
 from robustgait.robots import Robot
@@ -109,9 +109,16 @@ def advice(robot: Robot, gait: Gait, config: Config, cause: str) -> list[str]:
     out = []
     reg = config.sim.regulator
     width = 2.0 * robot.scale.sole_half_width
-    if len(gait.domains) == 1 and not regulator_rule(reg, width, robot.leg_length, 1)[0]:
+    flat = len(gait.domains) == 1
+    on = flat and regulator_rule(reg, width, robot.leg_length, 1)[0]
+    if flat and not on:
         out.append(f"the H-LIP step regulator (--override sim.regulator.mode=on; sole/leg "
                    f"{width / robot.leg_length:.3f})")
+    share = placement_share(reg, width, robot.leg_length)
+    if on and share < 1.0 and "tipped" in cause:
+        # a sole that tips is not holding the CoM through the ankle: the stepping may need all of the H-LIP's gain
+        out.append(f"the H-LIP's whole stepping gain (--override sim.regulator.gain_scale=1; the sole's rule "
+                   f"gives {share:.2f})")
     if "tipped" in cause or "centre of pressure" in cause:
         out.append("shorter, slower steps (--step-length, --step-duration)")
         out.append("a wider step (--step-width)")

@@ -1,0 +1,215 @@
+"""Humanoids nobody on this project tuned: MuJoCo Menagerie models through the whole pipeline, as a user would.
+
+The Menagerie's models reference mesh files that this machine cannot download; ``strip`` makes the copy a user
+without the meshes would make, the way ``../shared/robots/booster_t1`` was made: every mesh asset and mesh geom
+removed (each body's inertial is explicit in these models, so the dynamics are the original's; the collision geometry
+left is the original's primitives), a plane ``floor`` added if the model has none. Actuators, keyframes and sensors
+stay: ``robot init`` reads torque limits from the actuators. No model is kept in the repository.
+
+``strip SRC OUT``: the mesh-free copy of a Menagerie MJCF (``unitree_g1/g1.xml``, ``unitree_h1/h1.xml``,
+``robotis_op3/op3.xml``, ``berkeley_humanoid/berkeley_humanoid.xml``, …), read with ``mujoco.MjSpec``.
+
+``run MODEL DIR``: with the CLI, in DIR: ``robot init``, ``robot check``, ``gait generate`` (the defaults),
+``walk --steps`` (300), ``certify``, ``validate --certificate`` (200 pushes); each stage's exit code, wall time and
+outcome (or its one-line error), as one JSON line.
+
+``sweep SPEC``: why a narrow-footed robot falls — the default gait with its step duration set to each of
+``--durations`` (or its step width to each of ``--widths``), generated, then walked ``--steps`` steps under each share
+κ of the H-LIP stepping gain in ``--shares`` (``sim.regulator.gain_scale``): steps walked, one JSON line per point.
+
+``growth SPEC GAIT``: the lateral step-to-step error of the walk without foot placement (κ = 0): the gait started
+with its base's lateral velocity changed by 0, ±``--dv`` m/s, and the CoM state (position, velocity relative to the
+stance sole, in its heading frame) at each switching event minus the gait's own: does an error die out through the
+ankle, or grow step by step as on a point foot (e^{λT} per step)?
+
+    python benchmarks/experiments/menagerie_humanoids/run.py strip ~/mujoco_menagerie/unitree_g1/g1.xml /tmp/g1.xml
+    python benchmarks/experiments/menagerie_humanoids/run.py run /tmp/g1.xml /tmp/g1 >> \\
+        benchmarks/experiments/menagerie_humanoids/data/pipeline.jsonl
+    python benchmarks/experiments/menagerie_humanoids/run.py sweep /tmp/g1/spec.toml --durations 0.45 0.5 0.55 0.6
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+from datetime import date
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py
+from common import cli, git_commit
+
+
+def strip(src: Path, out: Path) -> dict[str, Any]:
+    import mujoco
+
+    spec = mujoco.MjSpec.from_file(str(src))
+    meshes = [g for g in spec.geoms if g.type == mujoco.mjtGeom.mjGEOM_MESH]
+    for g in meshes:
+        spec.delete(g)
+    for m in list(spec.meshes):
+        spec.delete(m)
+    for t in list(spec.textures):  # image files that are not here either
+        spec.delete(t)
+    spec.meshdir = ""
+    spec.texturedir = ""
+    floor = any(g.type == mujoco.mjtGeom.mjGEOM_PLANE for g in spec.worldbody.geoms)
+    if not floor:
+        spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 0.05])
+    model = spec.compile()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(spec.to_xml())
+    return {"source": str(src), "out": str(out), "mesh_geoms_removed": len(meshes), "floor_added": not floor,
+            "nq": model.nq, "nu": model.nu, "mass": round(float(model.body_mass.sum()), 3)}
+
+
+def _last(text: str) -> str:
+    lines = text.strip().splitlines()
+    return lines[-1] if lines else ""
+
+
+def _json(code: int, text: str) -> dict[str, Any]:
+    return json.loads(_last(text)) if code == 0 else {}
+
+
+def run(model: Path, d: Path, steps: int) -> dict[str, Any]:
+    d.mkdir(parents=True, exist_ok=True)
+    spec, gait, cert = d / "spec.toml", d / "gait.json", d / "certificate.json"
+    row: dict[str, Any] = {"commit": git_commit(), "date": str(date.today()), "model": model.name}
+
+    def stage(name: str, *args: str, parse: bool = False) -> dict[str, Any]:
+        code, text, sec = cli(*args)
+        out: dict[str, Any] = {"exit": code, "seconds": round(sec, 1)}
+        if code:
+            out["error"] = _last(text)
+        row[name] = out
+        return _json(code, text) if parse else {"text": text}
+
+    init = stage("init", "robot", "init", str(model), "-o", str(spec))
+    if row["init"]["exit"]:
+        return row
+    row["init"]["balance"] = next((ln for ln in init["text"].splitlines() if ln.startswith("balance")), None)
+    check = stage("check", "robot", "check", str(spec))
+    row["check"]["failed"] = [ln.split(":")[0] for ln in check["text"].splitlines() if ": FAIL" in ln or "FELL" in ln]
+    g = stage("generate", "gait", "generate", "--robot", str(spec), "-o", str(gait), "--json", parse=True)
+    if row["generate"]["exit"]:
+        return row
+    row["generate"]["params"] = g.get("params")
+    w = stage("walk", "walk", str(gait), "--robot", str(spec), "--steps", str(steps), "--json", parse=True)
+    row["walk"] |= {"steps_taken": w.get("steps_taken"), "fell": w.get("fell"), "controller": w.get("controller"),
+                    "orbit": (w.get("orbit") or {}).get("status")}
+    c = stage("certify", "certify", str(gait), "--robot", str(spec), "-o", str(cert), "--json", parse=True)
+    row["certify"] |= {"status": c.get("status"), "j_star": c.get("r_star")}
+    if row["certify"]["exit"] == 0 and c.get("status") == "ok":
+        v = stage("validate", "validate", str(gait), "--robot", str(spec), "--certificate", str(cert),
+                  "--disturbance", "push", "--json", parse=True)
+        push = (v.get("kinds") or {}).get("push") or {}
+        inside = (push.get("certificate_check") or {}).get("inside") or {}
+        row["validate"] |= {"s50": (push.get("critical") or {}).get("s50"),
+                            "success": (push.get("success") or {}).get("rate"),
+                            "inside_fell": inside.get("k"), "inside": inside.get("n"),
+                            "inside_fell_upper": inside.get("high")}
+    return row
+
+
+def sweep(spec: Path, durations: list[float], widths: list[float], shares: list[float], steps: int
+          ) -> list[dict[str, Any]]:
+    from robustgait import Config, load_robot
+    from robustgait.gaitgen import GaitGenerator
+    from robustgait.sim.walk import walk
+
+    robot = load_robot(spec)
+    cfg = Config(gait=robot.default_params)
+    gen = GaitGenerator(robot, cfg.generate)
+    points = [("step_duration", t) for t in durations] + [("step_width", w) for w in widths]
+    rows = []
+    for axis, value in points or [("step_duration", robot.default_params.step_duration)]:
+        params = dataclasses.replace(robot.default_params, **{axis: value})
+        res = gen.solve(params)
+        row: dict[str, Any] = {"commit": git_commit(), "robot": robot.name, axis: value, "status": res.status}
+        if res.gait is not None:
+            for k in shares:
+                sim = dataclasses.replace(cfg.sim, regulator=dataclasses.replace(cfg.sim.regulator, gain_scale=k))
+                row[f"steps_k{k:g}"] = walk(robot, res.gait, sim, steps=steps).steps_taken
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+    return rows
+
+
+def growth(spec: Path, gait_path: Path, dv: float, steps: int) -> list[dict[str, Any]]:
+    import mujoco
+
+    from robustgait import Config, load_gait, load_robot
+    from robustgait.sim.regulator import nominal_com, sole_frame
+    from robustgait.sim.walk import walk
+
+    robot = load_robot(spec)
+    gait = load_gait(gait_path, robot)
+    cfg = Config().sim
+    sim = dataclasses.replace(cfg, regulator=dataclasses.replace(cfg.regulator, mode="on", gain_scale=0.0))
+    x_star, _ = nominal_com(robot, gait, np.array([1.0]))
+    m, data = robot.model, mujoco.MjData(robot.model)
+    rows = []
+    for change in (0.0, dv, -dv):
+        start = gait.initial_state
+        qvel = start.qvel.copy()
+        qvel[1] += change
+        walked = walk(robot, dataclasses.replace(gait, initial_state=dataclasses.replace(start, qvel=qvel)), sim,
+                      steps=steps)
+        errors = []
+        for e in walked.events:
+            data.qpos[:], data.qvel[:] = e.qpos, e.qvel
+            mujoco.mj_kinematics(m, data)
+            mujoco.mj_comPos(m, data)
+            mujoco.mj_comVel(m, data)
+            mujoco.mj_subtreeVel(m, data)
+            centre, rot = sole_frame(data, robot.sole_geom_id[e.stance])
+            p = rot @ (data.subtree_com[0, :2] - centre[:2])
+            v = rot @ data.subtree_linvel[0, :2]
+            side = 1.0 if e.stance == gait.stance else -1.0  # the other stance's lateral axis, mirrored
+            errors.append([round(side * p[1] - x_star[0][1, 0], 4), round(side * v[1] - x_star[0][1, 1], 4)])
+        row = {"commit": git_commit(), "robot": robot.name, "dv": change, "steps_taken": walked.steps_taken,
+               "lateral_error": errors}
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    s = sub.add_parser("strip")
+    s.add_argument("src", type=Path)
+    s.add_argument("out", type=Path)
+    r = sub.add_parser("run")
+    r.add_argument("model", type=Path)
+    r.add_argument("dir", type=Path)
+    r.add_argument("--steps", type=int, default=300)
+    w = sub.add_parser("sweep")
+    w.add_argument("spec", type=Path)
+    w.add_argument("--durations", type=float, nargs="*", default=[])
+    w.add_argument("--widths", type=float, nargs="*", default=[])
+    w.add_argument("--shares", type=float, nargs="+", default=[0.0, 0.25, 0.5, 0.75, 1.0])
+    w.add_argument("--steps", type=int, default=300)
+    g = sub.add_parser("growth")
+    g.add_argument("spec", type=Path)
+    g.add_argument("gait", type=Path)
+    g.add_argument("--dv", type=float, default=0.03)
+    g.add_argument("--steps", type=int, default=8)
+    args = ap.parse_args()
+    if args.cmd == "strip":
+        print(json.dumps(strip(args.src, args.out)))
+    elif args.cmd == "run":
+        print(json.dumps(run(args.model, args.dir, args.steps)))
+    elif args.cmd == "sweep":
+        sweep(args.spec, args.durations, args.widths, args.shares, args.steps)
+    else:
+        growth(args.spec, args.gait, args.dv, args.steps)
+
+
+if __name__ == "__main__":
+    main()
