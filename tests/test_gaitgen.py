@@ -305,3 +305,16 @@ def test_a_request_no_leg_of_that_size_walks_is_refused_before_any_solve(tmp_pat
     for graph in ("flat", "multicontact"):
         space = ActionSpace.from_robot(exo, graph)
         assert all(reach_problem(space.params(i).resolved(graph), exo.scale, cfg) is None for i in range(space.size))
+
+
+def test_the_joint_margin_keeps_trajectories_inside_their_ranges() -> None:
+    """μ = min(margin, range/4) off each finite end; an unlimited end stays infinite; no margin, the range itself."""
+    from robustgait.gaitgen.problem import inner_range
+
+    rng = np.array([[-0.26, 2.53], [-0.3, 0.3], [-np.inf, np.inf], [-1.0, np.inf]])
+    out = inner_range(rng, 0.1)
+    np.testing.assert_allclose(out[0], [-0.16, 2.43])
+    np.testing.assert_allclose(out[1], [-0.2, 0.2])          # 0.6 wide: 0.1 ≤ 0.15
+    np.testing.assert_allclose(inner_range(np.array([[-0.1, 0.1]]), 0.1)[0], [-0.05, 0.05])  # a quarter at most
+    assert np.isinf(out[2]).all() and out[3, 0] == pytest.approx(-0.9) and np.isinf(out[3, 1])
+    assert np.array_equal(inner_range(rng, 0.0), rng)

@@ -46,6 +46,33 @@ def test_the_share_of_the_hlip_gain_fades_as_the_sole_widens() -> None:
     assert np.all(np.diff(shares) <= 0)
 
 
+def test_a_walk_whose_lateral_error_grows_gets_the_whole_gain() -> None:
+    cfg = RegulatorConfig()
+    narrow = placement_share(cfg, 0.03, 0.567)                                  # the sole's rule alone
+    assert placement_share(cfg, 0.03, 0.567, growth=1.1) == narrow              # its ankle holds the error
+    assert placement_share(cfg, 0.04, 0.648, growth=float("inf")) == 1.0        # fell without foot placement (G1)
+    assert placement_share(cfg, 0.04, 0.648, growth=cfg.growth_limit + 0.01) == 1.0
+    assert placement_share(replace(cfg, gain_scale=0.3), 0.04, 0.648, growth=float("inf")) == 0.3  # given: kept
+
+
+def test_the_growth_probe_measures_the_walk_once_and_leaves_no_trace(t1_narrow, narrow_gait):  # type: ignore[no-untyped-def]
+    """The narrow T1's ankle holds a lateral error (it grows ×1.1 a step without foot placement, under the limit of
+    2): κ stays the sole's share. The probe runs once per gait in a process, and its steps are not counted as the
+    walk's corrections."""
+    from robustgait.sim import regulator as reg_module
+
+    eng = make_engine(t1_narrow, narrow_gait)
+    reg = eng.regulator
+    assert reg is not None and reg.growth is not None and 0.5 < reg.growth < 2.0
+    assert reg.share == pytest.approx(placement_share(RegulatorConfig(), 0.03, t1_narrow.leg_length))
+    assert reg.updates == 0 and reg.largest == 0.0
+    cached = len(reg_module._GROWTH)
+    again = make_engine(t1_narrow, narrow_gait).regulator
+    assert again is not None and again.growth == reg.growth and len(reg_module._GROWTH) == cached
+    given = make_engine(t1_narrow, narrow_gait, SimConfig(regulator=RegulatorConfig(gain_scale=0.5))).regulator
+    assert given is not None and given.growth is None and given.share == 0.5
+
+
 def test_robots_with_wide_soles_run_without_it_bit_for_bit(exo, exo_gait, exo_mc_gait, t1):  # type: ignore[no-untyped-def]
     """auto leaves exo and T1 alone: no regulator object, the engine's code path is the one without it, and a walk
     with mode = off is the same walk to the last bit."""
@@ -191,8 +218,9 @@ def test_the_narrow_footed_humanoid_is_certified_with_the_defaults(t1_narrow, na
 
 @pytest.mark.slow
 def test_a_line_footed_humanoid_walks_with_the_hlip_gain_its_sole_leaves_to_the_foot(tmp_path_factory):  # type: ignore[no-untyped-def]
-    """Spheres 5 mm apart: nearly a line foot (sole width / leg 0.009), so the rule applies 98 % of the H-LIP gain,
-    and the default gait walks 100 steps; with the share the 3 cm sole gets (0.22) it falls."""
+    """Spheres 5 mm apart: nearly a line foot (sole width / leg 0.009): without foot placement it falls within the
+    probe's 3 steps, so the regulator applies the H-LIP's whole gain, and the default gait walks 100 steps; with the
+    share the 3 cm sole gets (0.22) it falls."""
     from robustgait import load_robot
     from robustgait.gaitgen import GaitGenerator
     from tests.conftest import T1_MODEL

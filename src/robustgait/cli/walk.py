@@ -38,7 +38,13 @@ def _walk(args: argparse.Namespace) -> int:
               + (f"  ({result.controller_note})" if result.controller_note else ""))
         reg = result.regulator
         if reg is not None:
-            print(f"step regulator (H-LIP, z0 {reg['z0']:.3g} m, T_S {reg['t_ssp']:.3g} s, gain {reg['gain']}): "
+            growth = reg.get("growth")
+            why = ""
+            if growth is not None:  # κ came from how the walk's lateral error grows without foot placement
+                grows = "it fell within 3 steps" if growth == "fell" else f"its lateral error grows ×{growth:.3g}/step"
+                why = f"; without foot placement {grows}"
+            print(f"step regulator (H-LIP, z0 {reg['z0']:.3g} m, T_S {reg['t_ssp']:.3g} s, κ {reg['share']:.3g}{why},"
+                  f" gain {reg['gain']}): "
                   f"{reg['updates']} corrections, largest landing change {100 * reg['largest_step_change']:.3g} cm, "
                   f"{reg['clipped']} clipped (tracking errors include its corrections)")
         if orbit is not None:

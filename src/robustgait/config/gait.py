@@ -89,6 +89,10 @@ class GenerationConfig:
     cop_margin: Annotated[Float | None, Doc(
         "centre of pressure margin inside the sole edges; not set: the robot spec's [generation] value, else a third "
         "of the sole's half-width", unit="m", ge=0.0, le=0.2)] = None
+    joint_margin: Annotated[Float | None, Doc(
+        "kept between each planned joint's trajectory and its range limits, at most a quarter of the range (room for "
+        "the tracking errors and the step regulator's landing corrections); not set: the robot spec's [generation] "
+        "value, else 0", unit="rad", ge=0.0, le=0.5)] = None
     impact_velocity: Annotated[tuple[Velocity, Velocity] | None, Doc(
         "[low, high] vertical velocity of the swing sole at the guard; not set: the robot spec's [generation] value, "
         "else [-0.13, -0.017] √(g l) (l: leg length)", unit="m/s")] = None
@@ -174,7 +178,7 @@ def reach_problem(params: GaitParams, scale: RobotScale, config: GenerationConfi
     return None
 
 
-ROBOT_SCALED = ("min_normal_force", "min_line_force", "cop_margin", "foot_gap", "impact_velocity",
+ROBOT_SCALED = ("min_normal_force", "min_line_force", "cop_margin", "foot_gap", "joint_margin", "impact_velocity",
                 "max_impact_tangential")
 """The generation options whose defaults scale with the robot (:meth:`GenerationConfig.for_robot`)."""
 
@@ -214,7 +218,8 @@ PELVIS_RATE_FROUDE = 0.44
 
 def relative_generation_defaults(scale: RobotScale) -> dict[str, Any]:
     """The robot-relative defaults of :data:`ROBOT_SCALED`: normal forces as fractions of the weight m g (flat sole
-    4 %, each line contact 12 %), the CoP margin and the feet's clearance a third of the sole's half-width, the
+    4 %, each line contact 12 %), the CoP margin and the feet's clearance a third of the sole's half-width, no joint
+    margin (``robot init`` writes one for narrow soles: ``robot.scale.joint_margin_narrow``), the
     swing sole's landing velocity bounds as multiples of √(g l) (Froude scaling: dynamically similar walkers of
     different sizes land at the same fraction of their pendulum speed)."""
     v = scale.speed
@@ -222,5 +227,6 @@ def relative_generation_defaults(scale: RobotScale) -> dict[str, Any]:
             "min_line_force": LINE_FORCE_FRACTION * scale.weight,
             "cop_margin": SOLE_MARGIN_FRACTION * scale.sole_half_width,
             "foot_gap": SOLE_MARGIN_FRACTION * scale.sole_half_width,
+            "joint_margin": 0.0,
             "impact_velocity": (IMPACT_VELOCITY_FROUDE[0] * v, IMPACT_VELOCITY_FROUDE[1] * v),
             "max_impact_tangential": IMPACT_TANGENTIAL_FROUDE * v}

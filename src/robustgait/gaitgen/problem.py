@@ -260,6 +260,16 @@ class NodeSymbols:
     nu: cs.SX
 
 
+def inner_range(joint_range: FloatArray, margin: float) -> FloatArray:
+    """Each joint's range (m, 2) [rad] less ``margin`` at each finite end, the margin at most a quarter of the range
+    (a narrow range keeps half of itself): [lo + μ, hi − μ], μ = min(margin, (hi − lo)/4); an unlimited end stays
+    infinite."""
+    lo, hi = joint_range[:, 0], joint_range[:, 1]
+    width = np.where(np.isfinite(lo) & np.isfinite(hi), hi - lo, np.inf)
+    mu = np.minimum(margin, width / 4.0)
+    return np.stack([lo + mu, hi - mu], axis=1)
+
+
 class GaitProblem:
     """The NLP of a domain graph (``config.domains``), built once for a robot and stance, solved for any
     essential constraints. See the module docstring for the formulation.
@@ -566,11 +576,12 @@ class GaitProblem:
         return cost
 
     def _bounds(self) -> tuple[FloatArray, FloatArray]:
-        """Variable bounds: joint range on β, torque limits, and the gait-quality bands on the node variables
-        (pelvis roll-pitch-yaw and height relative to the stance sole, its angular velocity, joint speeds)."""
+        """Variable bounds: joint range on β (less ``joint_margin``: :func:`inner_range`), torque limits, and the
+        gait-quality bands on the node variables (pelvis roll-pitch-yaw and height relative to the stance sole, its
+        angular velocity, joint speeds)."""
         lay, robot, q = self.layout, self.dyn.robot, self.quality
         lo, hi = np.full(lay.size, -np.inf), np.full(lay.size, np.inf)
-        rng = robot.joint_range
+        rng = inner_range(robot.joint_range, self.config.scaled("joint_margin"))
         rpy_lo = np.array([-q.pelvis_roll, q.pelvis_pitch[0], -q.pelvis_yaw])
         rpy_hi = np.array([q.pelvis_roll, q.pelvis_pitch[1], q.pelvis_yaw])
         jv = np.asarray(q.joint_velocity)

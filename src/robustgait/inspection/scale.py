@@ -87,10 +87,14 @@ def fall_height(size: RobotSize, rules: ScaleRules) -> float:
     return rules.fall_height * size.standing_height
 
 
-def generation(size: RobotSize) -> dict[str, float]:
-    """The spec's ``[generation]`` values (:data:`GENERATION_KEYS`): the loader's robot-relative rules."""
-    rules = relative_generation_defaults(size.robot_scale)
-    return {k: float(rules[k]) for k in GENERATION_KEYS}
+def generation(size: RobotSize, rules: ScaleRules) -> dict[str, float]:
+    """The spec's ``[generation]`` values (:data:`GENERATION_KEYS`): the loader's robot-relative rules, and for
+    narrow soles (:func:`narrow_soles`) a joint margin of ``joint_margin_narrow``."""
+    loader = relative_generation_defaults(size.robot_scale)
+    out = {k: float(loader[k]) for k in GENERATION_KEYS}
+    if narrow_soles(size):
+        out["joint_margin"] = rules.joint_margin_narrow
+    return out
 
 
 def balance(size: RobotSize) -> tuple[bool, str]:
@@ -177,4 +181,4 @@ def scale(size: RobotSize, rules: ScaleRules) -> Scaled:
         joint_velocity=sig(joint_velocity_bound(size, rules)),
         pelvis_height=(sig(band[0]), sig(band[1])),
         fall_height=sig(fall_height(size, rules)),
-        generation={k: sig(v) for k, v in generation(size).items()})
+        generation={k: sig(v) for k, v in generation(size, rules).items()})

@@ -273,6 +273,8 @@ def _generation(draft: Draft) -> list[str]:
         f"cop_margin = {num(g['cop_margin'], 3)}  # {g['cop_margin'] / (size.sole_width / 2):.2g} × the sole's "
         f"half-width {size.sole_width / 2:.3g} m",
         f"foot_gap = {num(g['foot_gap'], 3)}  # {g['foot_gap'] / (size.sole_width / 2):.2g} × the sole's half-width",
+        *([f"joint_margin = {num(g['joint_margin'], 3)}  # narrow soles: room at each joint limit for the step "
+           "regulator's corrections (robot.scale.joint_margin_narrow)"] if "joint_margin" in g else []),
     ]
 
 

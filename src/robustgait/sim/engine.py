@@ -35,7 +35,7 @@ from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.robots.model import CONTACT_SENSORS
 from robustgait.sim.controller import step_controls
-from robustgait.sim.regulator import regulator_for
+from robustgait.sim.regulator import lateral_growth, regulator_for
 
 FALL_REASONS = ("base_low", "tilt", "non_foot_contact", "diverged", "no_touchdown")
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
@@ -189,6 +189,8 @@ class StepEngine:
                                        self.horizons[0])
         if self.regulator is not None:
             self.controller_name = f"{self.controller_name}+{self.regulator.name}"
+            if self.regulator.needs_growth:  # its share of the H-LIP gain depends on how this walk's error grows
+                self.regulator.set_growth(lateral_growth(self, repr(self.config)))
 
     @property
     def physics_model(self) -> mujoco.MjModel:

@@ -52,6 +52,7 @@ from numpy.typing import NDArray
 
 from robustgait.bezier import bezier_derivative
 from robustgait.config import SimConfig
+from robustgait.config.regulator import regulator_rule
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
@@ -334,10 +335,13 @@ class FeedbackEngine(StepEngine):
         except ImportError:  # pragma: no cover - MuJoCo < 4.0
             raise RobustGaitError("the feedback engine needs MuJoCo ≥ 4.0 (mujoco.batch)") from None
         self._mjbatch = mjbatch
-        super().__init__(robot, gait, config)
-        if self.regulator is not None:
+        cfg = config or SimConfig()
+        on, reason = regulator_rule(cfg.regulator, 2.0 * robot.scale.sole_half_width, robot.leg_length,
+                                    len(gait.domains))
+        if on:  # before the engine is built: the regulator would measure its walk on this engine's laws
             raise RobustGaitError(f"the H-LIP step regulator runs with the pd controller, not the feedback engine's "
-                                  f"laws ({self.regulator.reason}): use sim.controller pd, or sim.regulator.mode off")
+                                  f"laws ({reason}): use sim.controller pd, or sim.regulator.mode off")
+        super().__init__(robot, gait, config)
         self.controller = controller if controller is not None else PDController(
             feedforward=self.config.feedforward)
         self.controller_name = self.controller.name
