@@ -46,13 +46,24 @@ def test_the_share_of_the_hlip_gain_fades_as_the_sole_widens() -> None:
     assert np.all(np.diff(shares) <= 0)
 
 
-def test_a_walk_whose_lateral_error_grows_gets_the_whole_gain() -> None:
-    cfg = RegulatorConfig()
-    narrow = placement_share(cfg, 0.03, 0.567)                                  # the sole's rule alone
-    assert placement_share(cfg, 0.03, 0.567, growth=1.1) == narrow              # its ankle holds the error
-    assert placement_share(cfg, 0.04, 0.648, growth=float("inf")) == 1.0        # fell without foot placement (G1)
-    assert placement_share(cfg, 0.04, 0.648, growth=cfg.growth_limit + 0.01) == 1.0
-    assert placement_share(replace(cfg, gain_scale=0.3), 0.04, 0.648, growth=float("inf")) == 0.3  # given: kept
+def test_the_whole_gain_is_taken_only_where_the_error_grows_and_it_helps(exo, exo_gait) -> None:  # type: ignore[no-untyped-def]
+    """settle_share: the width rule's κ when the walk's lateral error grows ≤ growth_limit under it; κ = 1 when it grows
+    more (or falls) and grows less under κ = 1; the rule's κ when κ = 1 is no better."""
+    reg = StepEngine(exo, exo_gait, SimConfig(regulator=RegulatorConfig(mode="on", gain_scale=0.25))).regulator
+    assert reg is not None
+    inf = float("inf")
+    for under_rule, under_whole, share in ((1.1, None, 0.25), (inf, 0.8, 1.0), (3.0, 2.5, 1.0), (inf, inf, 0.25),
+                                           (3.0, 4.0, 0.25)):
+        reg.set_share(0.25)
+        reg.growth_whole = None
+        asked: list[float] = []
+
+        def measure(k: float, a: float = under_rule, b: float | None = under_whole) -> float:
+            asked.append(k)
+            return a if k == 0.25 else (inf if b is None else b)
+        reg.settle_share(measure)
+        assert reg.share == share and reg.growth == under_rule
+        assert asked == ([0.25] if under_whole is None else [0.25, 1.0])
 
 
 def test_the_growth_probe_measures_the_walk_once_and_leaves_no_trace(t1_narrow, narrow_gait):  # type: ignore[no-untyped-def]

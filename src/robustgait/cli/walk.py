@@ -38,11 +38,12 @@ def _walk(args: argparse.Namespace) -> int:
               + (f"  ({result.controller_note})" if result.controller_note else ""))
         reg = result.regulator
         if reg is not None:
-            growth = reg.get("growth")
-            why = ""
-            if growth is not None:  # κ came from how the walk's lateral error grows without foot placement
-                grows = "it fell within 3 steps" if growth == "fell" else f"its lateral error grows ×{growth:.3g}/step"
-                why = f"; without foot placement {grows}"
+            why = ""  # κ came from how the walk's lateral error grows: under the sole's share, then the whole gain
+            for key, under in (("growth", "under the sole's share"), ("growth_whole", "under the whole gain")):
+                g = reg.get(key)
+                if g is not None:
+                    grows = "it fell within the probe's steps" if g == "fell" else f"its error grows ×{g:.3g}/step"
+                    why += f"; {under} {grows}"
             print(f"step regulator (H-LIP, z0 {reg['z0']:.3g} m, T_S {reg['t_ssp']:.3g} s, κ {reg['share']:.3g}{why},"
                   f" gain {reg['gain']}): "
                   f"{reg['updates']} corrections, largest landing change {100 * reg['largest_step_change']:.3g} cm, "

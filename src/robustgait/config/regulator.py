@@ -31,9 +31,10 @@ class RegulatorConfig:
         "share of the H-LIP gain applied, overriding placement_width's rule (0: no foot placement, only the "
         "step-start blend)", ge=0.0, le=1.0)] = None
     growth_limit: Annotated[Float, Doc(
-        "a walk whose lateral CoM error grows more than this factor per step without foot placement "
-        "(:func:`robustgait.sim.regulator.lateral_growth`, measured once per gait) is not held through its ankle: "
-        "it gets the H-LIP's whole gain (κ = 1) instead of placement_width's share", gt=1.0, le=100.0)] = 2.0
+        "a walk whose lateral CoM error grows more than this factor per step under placement_width's share, or "
+        "falls (:func:`robustgait.sim.regulator.lateral_growth`, measured once per gait), is not held through its "
+        "ankle: it gets the H-LIP's whole gain (κ = 1) instead if the error grows less under it", gt=1.0,
+        le=100.0)] = 2.0
     predict: Annotated[Bool, Doc(
         "predict the CoM error at touchdown with the H-LIP's pendulum flow (a point-foot model); off: the error "
         "measured now is the estimate (a flat foot the joint PD holds does not let it grow that way)")] = False
@@ -50,17 +51,13 @@ class RegulatorConfig:
                                    "of the leg length", ge=0.0, le=1.0)] = 0.02
 
 
-def placement_share(config: RegulatorConfig, sole_width: float, leg_length: float, growth: float | None = None
-                    ) -> float:
-    """κ, the share of the H-LIP stepping gain the regulator applies: ``gain_scale`` if set; else 1 when the walk's
-    measured lateral error ``growth`` per step without foot placement exceeds ``growth_limit`` (its ankle does not
-    hold it: the point-foot case the H-LIP's gain is for); else max(0, 1 − (r / ``placement_width``)²) with
-    r = sole_width / leg_length. A point-foot pendulum (r → 0) needs all of it; a flat foot that the joint PD holds
-    keeps part of the CoM error from growing, and a wide one all of it."""
+def placement_share(config: RegulatorConfig, sole_width: float, leg_length: float) -> float:
+    """κ by the sole's width, the share of the H-LIP stepping gain the regulator applies before the walk is measured
+    (:meth:`robustgait.sim.regulator.StepRegulator.settle_share` may raise it to 1): ``gain_scale`` if set, else
+    max(0, 1 − (r / ``placement_width``)²) with r = sole_width / leg_length. A point-foot pendulum (r → 0) needs all
+    of it; a flat foot that the joint PD holds keeps part of the CoM error from growing, and a wide one all of it."""
     if config.gain_scale is not None:
         return config.gain_scale
-    if growth is not None and growth > config.growth_limit:
-        return 1.0
     return max(0.0, 1.0 - (sole_width / leg_length / config.placement_width) ** 2)
 
 

@@ -190,7 +190,8 @@ class StepEngine:
         if self.regulator is not None:
             self.controller_name = f"{self.controller_name}+{self.regulator.name}"
             if self.regulator.needs_growth:  # its share of the H-LIP gain depends on how this walk's error grows
-                self.regulator.set_growth(lateral_growth(self, repr(self.config)))
+                options = repr(self.config)
+                self.regulator.settle_share(lambda share: lateral_growth(self, options, share))
 
     @property
     def physics_model(self) -> mujoco.MjModel:

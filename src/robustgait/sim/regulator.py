@@ -228,7 +228,8 @@ class StepRegulator:
         self.rho = hlip.closed_loop_radius(a, b, self.hlip_gain)
         self.share = placement_share(config, 2.0 * robot.scale.sole_half_width, robot.leg_length)
         self.gain = self.share * self.hlip_gain
-        self.growth: float | None = None  # the walk's lateral error growth per step without placement, if measured
+        self.growth: float | None = None        # the walk's lateral growth per step under the rule's κ, if measured
+        self.growth_whole: float | None = None  # and under κ = 1, when the first was above the limit
         self.max_change = config.max_step_change * leg
         self._data = mujoco.MjData(robot.model)
         self._ratio = robot.kd / robot.kp
@@ -243,8 +244,8 @@ class StepRegulator:
 
     @property
     def needs_growth(self) -> bool:
-        """Whether the share κ depends on the walk's measured lateral growth (:func:`lateral_growth`): no
-        ``gain_scale`` given and the sole's width rule leaves part of the gain out."""
+        """Whether κ depends on the walk's measured lateral growth (:meth:`settle_share`): no ``gain_scale`` given and
+        the sole's width rule leaves part of the gain out."""
         return self.config.gain_scale is None and self.share < 1.0
 
     def set_share(self, share: float) -> None:
@@ -252,24 +253,33 @@ class StepRegulator:
         self.share = share
         self.gain = share * self.hlip_gain
 
-    def set_growth(self, growth: float) -> None:
-        """The share κ for the walk's measured lateral ``growth`` per step
-        (:func:`~robustgait.config.regulator.placement_share`)."""
-        self.growth = growth
-        self.set_share(placement_share(self.config, 2.0 * self.robot.scale.sole_half_width, self.robot.leg_length,
-                                       growth))
+    def settle_share(self, measure: Callable[[float], float]) -> None:
+        """κ from the walk itself, ``measure(κ)`` its lateral growth per step under κ (:func:`lateral_growth`): the
+        width rule's share if the error grows at most ``growth_limit`` under it; otherwise the H-LIP's whole gain
+        (κ = 1) if the error grows less under that — the ankle does not hold the CoM, the point-foot case the
+        H-LIP's gain is for — else still the rule's (more gain would not help)."""
+        rule = self.share
+        self.growth = measure(rule)
+        if self.growth > self.config.growth_limit:
+            self.growth_whole = measure(1.0)
+            if self.growth_whole < self.growth:
+                self.set_share(1.0)
+                return
+        self.set_share(rule)
 
     def summary(self) -> dict[str, float | int | str]:
         """What the regulator did so far: corrections computed, how many were clipped, the largest |Δu| [m], and its
         model (z0 [m], λ [1/s], T_S [s], the share κ of the H-LIP gain and the gain applied, the spectral radius of
-        the H-LIP closed loop with the H-LIP's own gain, and the measured lateral growth when κ depended on it)."""
+        the H-LIP closed loop with the H-LIP's own gain, and the measured lateral growth when κ depended on it: under
+        the width rule's κ, and under κ = 1 when that was measured)."""
         out: dict[str, float | int | str] = {
             "regulator": self.name, "updates": self.updates, "clipped": self.clipped,
             "largest_step_change": round(self.largest, 4), "z0": round(self.z0, 4), "lambda": round(self.lam, 3),
             "t_ssp": self.period, "share": round(self.share, 3), "gain": f"[{self.gain[0]:.3f}, {self.gain[1]:.3f}]",
             "hlip_rho": round(self.rho, 3)}
-        if self.growth is not None:
-            out["growth"] = round(self.growth, 3) if math.isfinite(self.growth) else "fell"
+        for key, g in (("growth", self.growth), ("growth_whole", self.growth_whole)):
+            if g is not None:
+                out[key] = round(g, 3) if math.isfinite(g) else "fell"
         return out
 
     def begin(self, stance: str, states: Array) -> None:
@@ -370,8 +380,8 @@ class _Walker(Protocol):
 
 # measured growths, one per robot, gait and simulation options: an engine is built many times for one gait
 _GROWTH: dict[tuple[str, ...], float] = {}
-GROWTH_STEPS = 3        # steps walked: the growth is the mean ratio over the last two
-GROWTH_VELOCITY = 0.02  # the lateral velocity change, × √(g l)
+GROWTH_STEPS = 6        # steps walked: the growth is the mean ratio from the first to the last
+GROWTH_VELOCITY = 0.01  # the lateral velocity change, × √(g l)
 
 
 def _gait_key(gait: Gait) -> str:
@@ -380,24 +390,25 @@ def _gait_key(gait: Gait) -> str:
     return hashlib.sha256(json.dumps(d, sort_keys=True, default=str).encode()).hexdigest()
 
 
-def lateral_growth(engine: _Walker, options: str, on_step: Callable[[int], None] | None = None) -> float:
-    """μ, how much a lateral error of the CoM grows per step when the regulator places no foot (κ = 0, the
-    step-start blend on): the gait's initial state with its base's lateral velocity changed by ±δ
+def lateral_growth(engine: _Walker, options: str, share: float) -> float:
+    """μ, how much a lateral error of the CoM grows per step under ``share`` κ of the H-LIP gain (the step-start blend
+    on): the gait's initial state with its base's lateral velocity changed by ±δ
     (δ = ``GROWTH_VELOCITY`` √(g l)), walked ``GROWTH_STEPS`` steps on ``engine``; e_k (2,) = half the difference of
     the two walks' CoM states [λ p, v] (lateral, stance sole frame, λ = the H-LIP's rate) at the k-th switching event
     — the response to the change, the gait's own offsets cancelled — and μ = (‖e_K‖ / ‖e_1‖)^(1/(K − 1)); ∞ if either
-    walk falls. An ankle that holds the CoM keeps μ near 1 or below; a point foot's is e^(λT) (6.5 for λT = 1.9).
-    Measured once per robot, gait and ``options`` (the simulation options' text) in a process, then reused."""
+    walk falls. An ankle that holds the CoM with that share's help keeps μ near 1 or below; a point foot's grows like
+    e^(λT) (6.5 for λT = 1.9) without foot placement. Measured once per robot, gait, share and ``options`` (the
+    simulation options' text) in a process, then reused."""
     reg = engine.regulator
     if reg is None:
         raise ValueError("lateral_growth needs an engine whose step regulator runs")
     robot = engine.robot
     gait = engine.gaits[next(iter(engine.gaits))]
-    key = (robot.name, str(robot.spec.source), repr(robot.dt), _gait_key(gait), options)
+    key = (robot.name, str(robot.spec.source), repr(robot.dt), _gait_key(gait), options, repr(share))
     if key in _GROWTH:
         return _GROWTH[key]
-    share = reg.share
-    reg.set_share(0.0)
+    kept = reg.share
+    reg.set_share(share)
     try:
         st = gait.initial_state
         if st is None:
@@ -406,7 +417,7 @@ def lateral_growth(engine: _Walker, options: str, on_step: Callable[[int], None]
         qpos, qvel = np.repeat(st.qpos[None], 2, axis=0), np.repeat(st.qvel[None], 2, axis=0)
         qvel[:, 1] += [dv, -dv]
         stance, norms, data = gait.stance, [], mujoco.MjData(robot.model)
-        for k in range(GROWTH_STEPS):
+        for _ in range(GROWTH_STEPS):
             b = engine.step(qpos, qvel, stance)
             if np.any(b.fell):
                 _GROWTH[key] = math.inf
@@ -416,11 +427,9 @@ def lateral_growth(engine: _Walker, options: str, on_step: Callable[[int], None]
             e = (x[0] - x[1]) / 2.0
             norms.append(math.hypot(reg.lam * e[0], e[1]))
             stance = "left" if stance == "right" else "right"
-            if on_step is not None:
-                on_step(k)
         growth = (norms[-1] / max(norms[0], 1e-12)) ** (1.0 / (GROWTH_STEPS - 1))
     finally:
-        reg.set_share(share)
+        reg.set_share(kept)
         reg.updates, reg.clipped, reg.largest = 0, 0, 0.0  # the probe's steps are not the walk's
     _GROWTH[key] = growth
     return growth
