@@ -58,8 +58,9 @@ def test_the_whole_gain_is_taken_only_where_the_error_grows_and_it_helps(exo, ex
         reg.growth_whole = None
         asked: list[float] = []
 
-        def measure(k: float, a: float = under_rule, b: float | None = under_whole) -> float:
-            asked.append(k)
+        def measure(k: float, a: float = under_rule, b: float | None = under_whole, log: list[float] = asked
+                    ) -> float:
+            log.append(k)
             return a if k == 0.25 else (inf if b is None else b)
         reg.settle_share(measure)
         assert reg.share == share and reg.growth == under_rule
