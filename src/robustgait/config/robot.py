@@ -41,8 +41,9 @@ class ScaleRules:
         gt=0.0, le=20.0)] = 3.0
     joint_margin_narrow: Annotated[Float, Doc(
         "generate.joint_margin written when the soles are narrow (sole width / leg length < "
-        "sim.regulator.narrow_ratio): the step regulator moves the swing foot by joint offsets, which a trajectory "
-        "on a joint's limit cannot take", unit="rad", ge=0.0, le=0.5)] = 0.1
+        "sim.regulator.narrow_ratio), if above 0: the step regulator moves the swing foot by joint offsets, which a "
+        "trajectory on a joint's limit cannot take (0.1 lets Menagerie's G1 walk its default gait, and makes the "
+        "narrow T1's widest steps fall: docs/your-robot.md)", unit="rad", ge=0.0, le=0.5)] = 0.0
     action_step_length: AxisRule = (0.67, 1.47, 6)
     action_step_duration: AxisRule = (0.86, 1.57, 5)
     action_step_width: AxisRule = (0.88, 1.2, 4)

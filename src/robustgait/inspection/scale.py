@@ -89,10 +89,10 @@ def fall_height(size: RobotSize, rules: ScaleRules) -> float:
 
 def generation(size: RobotSize, rules: ScaleRules) -> dict[str, float]:
     """The spec's ``[generation]`` values (:data:`GENERATION_KEYS`): the loader's robot-relative rules, and for
-    narrow soles (:func:`narrow_soles`) a joint margin of ``joint_margin_narrow``."""
+    narrow soles (:func:`narrow_soles`) a joint margin of ``joint_margin_narrow`` when it is above 0."""
     loader = relative_generation_defaults(size.robot_scale)
     out = {k: float(loader[k]) for k in GENERATION_KEYS}
-    if narrow_soles(size):
+    if narrow_soles(size) and rules.joint_margin_narrow > 0:
         out["joint_margin"] = rules.joint_margin_narrow
     return out
 
