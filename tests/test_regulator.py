@@ -181,6 +181,7 @@ def test_a_tipping_sole_under_part_of_the_gain_is_told_to_try_all_of_it(t1_narro
     assert any("sim.regulator.gain_scale=1; the sole's rule gives 0.22" in a for a in tips)
     whole = Config(sim=SimConfig(regulator=RegulatorConfig(gain_scale=1.0)))
     assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, whole, tipped))
+    assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, Config(), tipped, share=1.0))  # measured
     assert not any("gain_scale" in a for a in advice(t1, exo_gait, Config(), tipped))
     assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, Config(), "no_touchdown"))
 

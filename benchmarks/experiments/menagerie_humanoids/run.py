@@ -17,10 +17,9 @@ outcome (or its one-line error), as one JSON line.
 ``--durations`` (or its step width to each of ``--widths``), generated, then walked ``--steps`` steps under each share
 κ of the H-LIP stepping gain in ``--shares`` (``sim.regulator.gain_scale``): steps walked, one JSON line per point.
 
-``growth SPEC GAIT``: the lateral step-to-step error of the walk without foot placement (κ = 0): the gait started
-with its base's lateral velocity changed by 0, ±``--dv`` m/s, and the CoM state (position, velocity relative to the
-stance sole, in its heading frame) at each switching event minus the gait's own: does an error die out through the
-ankle, or grow step by step as on a point foot (e^{λT} per step)?
+``growth SPEC GAIT``: the regulator's own growth probe (:func:`robustgait.sim.regulator.lateral_growth`) under
+each share κ of ``--shares``: how much a lateral CoM error grows per step (``fell``: a probe walk fell) — does the
+ankle hold it, or does it grow as on a point foot (e^{λT} per step)?
 
     python benchmarks/experiments/menagerie_humanoids/run.py strip ~/mujoco_menagerie/unitree_g1/g1.xml /tmp/g1.xml
     python benchmarks/experiments/menagerie_humanoids/run.py run /tmp/g1.xml /tmp/g1 >> \\
@@ -140,40 +139,20 @@ def sweep(spec: Path, durations: list[float], widths: list[float], shares: list[
     return rows
 
 
-def growth(spec: Path, gait_path: Path, dv: float, steps: int) -> list[dict[str, Any]]:
-    import mujoco
-
+def growth(spec: Path, gait_path: Path, shares: list[float]) -> list[dict[str, Any]]:
     from robustgait import Config, load_gait, load_robot
-    from robustgait.sim.regulator import nominal_com, sole_frame
-    from robustgait.sim.walk import walk
+    from robustgait.sim.factory import make_engine
+    from robustgait.sim.regulator import lateral_growth
 
     robot = load_robot(spec)
     gait = load_gait(gait_path, robot)
     cfg = Config().sim
-    sim = dataclasses.replace(cfg, regulator=dataclasses.replace(cfg.regulator, mode="on", gain_scale=0.0))
-    x_star, _ = nominal_com(robot, gait, np.array([1.0]))
-    m, data = robot.model, mujoco.MjData(robot.model)
     rows = []
-    for change in (0.0, dv, -dv):
-        start = gait.initial_state
-        qvel = start.qvel.copy()
-        qvel[1] += change
-        walked = walk(robot, dataclasses.replace(gait, initial_state=dataclasses.replace(start, qvel=qvel)), sim,
-                      steps=steps)
-        errors = []
-        for e in walked.events:
-            data.qpos[:], data.qvel[:] = e.qpos, e.qvel
-            mujoco.mj_kinematics(m, data)
-            mujoco.mj_comPos(m, data)
-            mujoco.mj_comVel(m, data)
-            mujoco.mj_subtreeVel(m, data)
-            centre, rot = sole_frame(data, robot.sole_geom_id[e.stance])
-            p = rot @ (data.subtree_com[0, :2] - centre[:2])
-            v = rot @ data.subtree_linvel[0, :2]
-            side = 1.0 if e.stance == gait.stance else -1.0  # the other stance's lateral axis, mirrored
-            errors.append([round(side * p[1] - x_star[0][1, 0], 4), round(side * v[1] - x_star[0][1, 1], 4)])
-        row = {"commit": git_commit(), "robot": robot.name, "dv": change, "steps_taken": walked.steps_taken,
-               "lateral_error": errors}
+    for share in shares:  # a given share: the engine does not settle its own
+        sim = dataclasses.replace(cfg, regulator=dataclasses.replace(cfg.regulator, mode="on", gain_scale=share))
+        with make_engine(robot, gait, sim) as engine:
+            mu = lateral_growth(engine, repr(engine.config), share)
+        row = {"commit": git_commit(), "robot": robot.name, "share": share, "growth": mu if np.isfinite(mu) else "fell"}
         rows.append(row)
         print(json.dumps(row), flush=True)
     return rows
@@ -198,8 +177,7 @@ def main() -> None:
     g = sub.add_parser("growth")
     g.add_argument("spec", type=Path)
     g.add_argument("gait", type=Path)
-    g.add_argument("--dv", type=float, default=0.03)
-    g.add_argument("--steps", type=int, default=8)
+    g.add_argument("--shares", type=float, nargs="+", default=[0.0, 1.0])
     args = ap.parse_args()
     if args.cmd == "strip":
         print(json.dumps(strip(args.src, args.out)))
@@ -208,7 +186,7 @@ def main() -> None:
     elif args.cmd == "sweep":
         sweep(args.spec, args.durations, args.widths, args.shares, args.steps)
     else:
-        growth(args.spec, args.gait, args.dv, args.steps)
+        growth(args.spec, args.gait, args.shares)
 
 
 if __name__ == "__main__":

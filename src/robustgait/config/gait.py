@@ -219,7 +219,7 @@ PELVIS_RATE_FROUDE = 0.44
 def relative_generation_defaults(scale: RobotScale) -> dict[str, Any]:
     """The robot-relative defaults of :data:`ROBOT_SCALED`: normal forces as fractions of the weight m g (flat sole
     4 %, each line contact 12 %), the CoP margin and the feet's clearance a third of the sole's half-width, no joint
-    margin (``robot init`` writes one for narrow soles: ``robot.scale.joint_margin_narrow``), the
+    margin (``robot init`` writes one for narrow soles only if ``robot.scale.joint_margin_narrow`` > 0), the
     swing sole's landing velocity bounds as multiples of √(g l) (Froude scaling: dynamically similar walkers of
     different sizes land at the same fraction of their pendulum speed)."""
     v = scale.speed

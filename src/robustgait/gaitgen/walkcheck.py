@@ -104,8 +104,9 @@ def probable_cause(robot: Robot, result: WalkResult, check: PhysicsCheck | None)
     return f"{result.fall_reason} without a tipping sole or saturation"
 
 
-def advice(robot: Robot, gait: Gait, config: Config, cause: str) -> list[str]:
-    """What to try after a fall, from the robot and the configuration."""
+def advice(robot: Robot, gait: Gait, config: Config, cause: str, share: float | None = None) -> list[str]:
+    """What to try after a fall, from the robot and the configuration; ``share``: the κ the walk's regulator ran with
+    (it may have measured the walk and taken the whole gain), None: the sole's width rule's."""
     out = []
     reg = config.sim.regulator
     width = 2.0 * robot.scale.sole_half_width
@@ -114,7 +115,8 @@ def advice(robot: Robot, gait: Gait, config: Config, cause: str) -> list[str]:
     if flat and not on:
         out.append(f"the H-LIP step regulator (--override sim.regulator.mode=on; sole/leg "
                    f"{width / robot.leg_length:.3f})")
-    share = placement_share(reg, width, robot.leg_length)
+    if share is None:
+        share = placement_share(reg, width, robot.leg_length)
     if on and share < 1.0 and "tipped" in cause:
         # a sole that tips is not holding the CoM through the ankle: the stepping may need all of the H-LIP's gain
         out.append(f"the H-LIP's whole stepping gain (--override sim.regulator.gain_scale=1; the sole's rule "
@@ -139,5 +141,6 @@ def walk_check(robot: Robot, gait: Gait, config: Config, check: PhysicsCheck | N
     out = WalkCheck(steps, result.steps_taken, result.fell, result.fall_reason, result.controller)
     if result.fell:
         out.cause = probable_cause(robot, result, check)
-        out.advice = advice(robot, gait, config, out.cause)
+        ran = result.regulator.get("share") if result.regulator is not None else None
+        out.advice = advice(robot, gait, config, out.cause, None if ran is None else float(ran))
     return out
