@@ -194,7 +194,7 @@ def test_cli_generate_prints_ipopt_log_only_with_verbose(tmp_path, capfd):
         assert main(["gait", "generate", "--robot", "exo", "-o", str(out), *(["--verbose"] if verbose else [])]) == 0
         printed = capfd.readouterr().out  # IPOPT writes to the C-level stdout
         assert ("iter    objective" in printed) is verbose and "physics check passed" in printed
-        assert "walk check passed: the gait walked 20 steps under pd" in printed
+        assert "walk check passed: the gait walked" in printed and "under pd; its switching states settled" in printed
 
 
 @pytest.mark.slow

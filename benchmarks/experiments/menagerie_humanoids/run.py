@@ -17,6 +17,11 @@ outcome (or its one-line error), as one JSON line.
 ``--durations`` (or its step width to each of ``--widths``), generated, then walked ``--steps`` steps under each share
 κ of the H-LIP stepping gain in ``--shares`` (``sim.regulator.gain_scale``): steps walked, one JSON line per point.
 
+``checkgrid SPEC DIR``: does the walk check's verdict hold at 300 steps? For ``--grid`` points of the robot's
+action space (the studies' grid, ``benchmarks/common.grid_params``; 0: the default gait), with the CLI: ``gait
+generate`` (the walk check, and its one retry with a joint margin), then, for a gait it wrote, ``walk --steps`` (300):
+the check's outcome, whether it solved again and why, and the steps the written gait walks, one JSON line per point.
+
 ``growth SPEC GAIT``: the regulator's own growth probe (:func:`robustgait.sim.regulator.lateral_growth`) under
 each share κ of ``--shares``: how much a lateral CoM error grows per step (``fell``: a probe walk fell) — does the
 ankle hold it, or does it grow as on a point foot (e^{λT} per step)?
@@ -25,6 +30,7 @@ ankle hold it, or does it grow as on a point foot (e^{λT} per step)?
     python benchmarks/experiments/menagerie_humanoids/run.py run /tmp/g1.xml /tmp/g1 >> \\
         benchmarks/experiments/menagerie_humanoids/data/pipeline.jsonl
     python benchmarks/experiments/menagerie_humanoids/run.py sweep /tmp/g1/spec.toml --durations 0.45 0.5 0.55 0.6
+    python benchmarks/experiments/menagerie_humanoids/run.py checkgrid /tmp/g1/spec.toml /tmp/g1/grid --grid 12
 """
 
 from __future__ import annotations
@@ -40,7 +46,7 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py
-from common import cli, git_commit
+from common import cli, git_commit, grid_params
 
 
 def strip(src: Path, out: Path) -> dict[str, Any]:
@@ -139,6 +145,38 @@ def sweep(spec: Path, durations: list[float], widths: list[float], shares: list[
     return rows
 
 
+def checkgrid(spec: Path, d: Path, n: int, steps: int) -> list[dict[str, Any]]:
+    d.mkdir(parents=True, exist_ok=True)
+    points: list[dict[str, float] | None] = list(grid_params(str(spec), n, "flat")) if n else [None]
+    flags = {"step_length": "--step-length", "step_duration": "--step-duration", "step_width": "--step-width",
+             "step_height": "--step-height"}
+    rows = []
+    for p in points:
+        label = "default" if p is None else "_".join(f"{k[5]}{v:g}" for k, v in p.items() if k in flags)
+        gait = d / f"{label}.json"
+        args = [f for k, v in (p or {}).items() if k in flags for f in (flags[k], f"{v:g}")]
+        code, text, sec = cli("gait", "generate", "--robot", str(spec), "-o", str(gait), *args, "--json")
+        lines = reversed(text.strip().splitlines())
+        summary: dict[str, Any] = next((json.loads(ln) for ln in lines if ln.startswith("{")), {})
+        check = summary.get("walk_check") or {}
+        retried = summary.get("retried")
+        row: dict[str, Any] = {
+            "commit": git_commit(), "robot": spec.stem, "label": label, "params": p, "exit": code,
+            "seconds": round(sec, 1), "error": _last(text) if code else None,
+            "check": {k: check.get(k) for k in ("taken", "fell", "orbit", "limit_joint", "cause")},
+            "retried": None if retried is None else {
+                "joint_margin": retried["joint_margin"],
+                "first": {k: retried["first_walk_check"].get(k) for k in ("taken", "limit_joint", "cause")}}}
+        if code == 0:
+            code, text, sec = cli("walk", str(gait), "--robot", str(spec), "--steps", str(steps), "--json")
+            w = _json(code, text)
+            row["walk"] = {"steps_taken": w.get("steps_taken"), "fell": w.get("fell"),
+                           "orbit": (w.get("orbit") or {}).get("status"), "seconds": round(sec, 1)}
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+    return rows
+
+
 def growth(spec: Path, gait_path: Path, shares: list[float]) -> list[dict[str, Any]]:
     from robustgait import Config, load_gait, load_robot
     from robustgait.sim.factory import make_engine
@@ -174,6 +212,11 @@ def main() -> None:
     w.add_argument("--widths", type=float, nargs="*", default=[])
     w.add_argument("--shares", type=float, nargs="+", default=[0.0, 0.25, 0.5, 0.75, 1.0])
     w.add_argument("--steps", type=int, default=300)
+    c = sub.add_parser("checkgrid")
+    c.add_argument("spec", type=Path)
+    c.add_argument("dir", type=Path)
+    c.add_argument("--grid", type=int, default=12)
+    c.add_argument("--steps", type=int, default=300)
     g = sub.add_parser("growth")
     g.add_argument("spec", type=Path)
     g.add_argument("gait", type=Path)
@@ -183,6 +226,8 @@ def main() -> None:
         print(json.dumps(strip(args.src, args.out)))
     elif args.cmd == "run":
         print(json.dumps(run(args.model, args.dir, args.steps)))
+    elif args.cmd == "checkgrid":
+        checkgrid(args.spec, args.dir, args.grid, args.steps)
     elif args.cmd == "sweep":
         sweep(args.spec, args.durations, args.widths, args.shares, args.steps)
     else:

@@ -126,8 +126,16 @@ class GenerationConfig:
     max_step_height: Annotated[Float, Doc("highest swing clearance a robot is asked for, in leg lengths (checked "
                                           "before any solve)", gt=0.0, le=1.0)] = 0.3
     max_iter: Annotated[Int, Doc("IPOPT iteration limit", ge=1, le=100_000)] = 300
-    walk_steps: Annotated[Int, Doc("steps the generated gait must walk in MuJoCo under the configured controller "
-                                   "before gait generate calls it good (0: no walk check)", ge=0, le=1000)] = 20
+    walk_steps: Annotated[Int, Doc("least steps the generated gait must walk in MuJoCo under the configured "
+                                   "controller before gait generate calls it good (0: no walk check)", ge=0,
+                                   le=1000)] = 20
+    walk_settle: Annotated[bool, Doc("the walk check goes on until the orbit rule (certify.orbit) has its answer: "
+                                     "the switching states settled and held their band, or did not settle by "
+                                     "orbit.max_steps; a fall before then fails the check")] = True
+    retry_joint_margin: Annotated[Float, Doc(
+        "when the walk check's gait fell after one of its joints reached the end of its range and its joint_margin "
+        "is below this, gait generate solves once more with this margin (0: never)", unit="rad", ge=0.0,
+        le=0.5)] = 0.1
     tol: Annotated[Float, Doc("IPOPT convergence tolerance", gt=0.0, le=1.0)] = 1e-8
 
     def __post_init__(self) -> None:

@@ -350,6 +350,9 @@ class GaitGenerator:
                   "build_seconds": self.build_seconds, "objective": res.objective,
                   "nodes": sum(len(ns.s) for ns in states), "variables": self.n_variables,
                   "constraints": self.n_constraints, "physics_check": res.check.to_dict() if res.check else None}
+        margin = float(prob.config.scaled("joint_margin"))
+        if margin > 0:  # provenance of a gait planned inside its joint ranges (without one, the file is unchanged)
+            solver["joint_margin"] = margin
         fitted = []
         for beta, out, taus, ns, duration in zip(betas, prob.outputs, prob.domain_taus, states, durations, strict=True):
             b = beta.copy()

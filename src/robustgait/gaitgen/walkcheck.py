@@ -1,8 +1,9 @@
 """Does a generated gait walk? (``docs/gaitgen.md``, "The walk check"). A gait whose optimization converged and whose
-physics check passed can still fall within a few steps in MuJoCo — a joint-space tracking controller has no balance
-feedback of its own, and a narrow sole tips. ``gait generate`` walks it ``generate.walk_steps`` steps under the
-configured controller before it calls it good; when it falls, the walk's record gives the probable cause and what
-to try.
+physics check passed can still fall in MuJoCo — a joint-space tracking controller has no balance feedback of its
+own, a narrow sole tips, and a walk whose corrections drive a joint to the end of its range falls tens of steps
+later. ``gait generate`` walks it under the configured controller until the certificate's orbit rule has its answer
+(the switching states settled and held their band, or did not settle), at least ``generate.walk_steps`` steps, before
+it calls it good; when it falls, the walk's record gives the probable cause and what to try.
 """
 
 from __future__ import annotations
@@ -14,30 +15,39 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.certificate.orbit import Orbit, SettlingWatch, Status
 from robustgait.config import Config
 from robustgait.config.regulator import placement_share, regulator_rule
 from robustgait.gait import Gait
 from robustgait.gaitgen.check import PhysicsCheck
 from robustgait.robots import Robot
-from robustgait.sim.walk import WalkResult, walk
+from robustgait.sim.controller import desired_outputs
+from robustgait.sim.walk import SwitchEvent, WalkResult, walk
 
 # a stance sole tilted more than this [rad] while the other foot is off the floor is tipping over an edge
 TIP_ANGLE = 0.05
 # a walk whose servos clamp their torque in more than this fraction of joint-steps is short of torque
 SATURATION_FRACTION = 0.01
+# a joint closer than this [rad] to an end of its range has reached it: the limit's constraint takes over
+LIMIT_ROOM = 0.01
 
 
 @dataclass
 class WalkCheck:
-    """Outcome of the walk check: ``steps`` asked, ``taken``, ``fell`` with ``fall_reason`` (engine codes),
-    ``controller`` that ran; when it fell, ``cause`` (one clause) and ``advice`` (what to try)."""
+    """Outcome of the walk check: ``steps`` asked at least, ``taken``, ``fell`` with ``fall_reason`` (engine codes),
+    ``controller`` that ran; ``orbit``: the orbit rule's status and ``orbit_text`` its summary (empty when the walk
+    was not watched); when it fell, ``cause`` (one clause), ``limit_joint`` (the joint whose range end it reached
+    first, if that came before any tipping sole) and ``advice`` (what to try)."""
 
     steps: int
     taken: int
     fell: bool
     fall_reason: str | None
     controller: str
+    orbit: str = ""
+    orbit_text: str = ""
     cause: str = ""
+    limit_joint: str | None = None
     advice: list[str] = field(default_factory=list)
 
     @property
@@ -46,26 +56,39 @@ class WalkCheck:
 
     def to_dict(self) -> dict[str, object]:
         return {"steps": self.steps, "taken": self.taken, "fell": self.fell, "fall_reason": self.fall_reason,
-                "controller": self.controller, "cause": self.cause, "advice": self.advice}
+                "controller": self.controller, "orbit": self.orbit, "orbit_text": self.orbit_text,
+                "cause": self.cause, "limit_joint": self.limit_joint, "advice": self.advice}
 
     def text(self) -> str:
         """One line: what the walk did, and when it fell why and what to try."""
         if not self.fell:
-            return f"walked {self.taken} steps under {self.controller}"
+            return f"walked {self.taken} steps under {self.controller}" + (f"; {self.orbit_text}"
+                                                                            if self.orbit_text else "")
         tries = "; ".join(self.advice)
-        return (f"the gait fell in step {self.taken + 1} of {self.steps} under {self.controller} ({self.fall_reason}): "
+        return (f"the gait fell in step {self.taken + 1} under {self.controller} ({self.fall_reason}): "
                 f"{self.cause}" + (f"; try: {tries}" if tries else ""))
 
 
+def orbit_summary(orbit: Orbit) -> str:
+    """One clause on a walk's orbit for the walk check: settled and held (period, scatter σ in band coordinates), or
+    not settled with the rule's reason and the certificate's verdict to expect."""
+    if orbit.status == Status.OK:
+        assert orbit.band is not None
+        return (f"its switching states settled by step {orbit.settled} and held their band {orbit.held} steps "
+                f"(period {orbit.period}, σ {orbit.band.sigma:.2g})")
+    return f"its switching states did not settle, so robustgait certify will refuse it: {orbit.reason}"
+
+
 def sole_tipping(robot: Robot, trajectory: NDArray[np.float64], every: int = 5
-                 ) -> tuple[str, float, str] | None:
+                 ) -> tuple[str, float, str, int] | None:
     """The first stance sole that tipped over an edge in a recorded walk (n, nstate): (side, tilt [rad], which edge:
-    outer, inner, toe or heel), or None. A sole is the stance sole while the other is ≥ 1 cm higher; it tips when its
-    tilt from the floor plane exceeds :data:`TIP_ANGLE`."""
+    outer, inner, toe or heel, the trajectory's row), or None. A sole is the stance sole while the other is ≥ 1 cm
+    higher; it tips when its tilt from the floor plane exceeds :data:`TIP_ANGLE`."""
     m = robot.model
     data = mujoco.MjData(m)
     nq = m.nq
-    for st in trajectory[::every]:
+    for row in range(0, len(trajectory), every):
+        st = trajectory[row]
         data.qpos[:] = st[1:1 + nq]
         mujoco.mj_kinematics(m, data)
         z = {s: data.geom_xpos[g][2] for s, g in robot.sole_geom_id.items()}
@@ -82,32 +105,81 @@ def sole_tipping(robot: Robot, trajectory: NDArray[np.float64], every: int = 5
                     edge = "inner" if down_left == (side == "left") else "outer"
                 else:
                     edge = "toe" if pitch > 0 else "heel"
-                return side, tilt, edge
+                return side, tilt, edge, row
     return None
 
 
-def probable_cause(robot: Robot, result: WalkResult, check: PhysicsCheck | None) -> str:
-    """The likeliest cause of a fall, from the walk's record, most specific first: a stance sole tipping over an
-    edge, the gait's centre of pressure on its bound, torque saturation, else the fall reason."""
+def planned_envelope(robot: Robot, gait: Gait, samples: int = 101) -> NDArray[np.float64]:
+    """The least and largest angle (m, 2) [rad] each joint is planned at, over every domain of the gait and its
+    mirror image (both stances), at ``samples`` phases per domain."""
+    tau = np.linspace(0.0, 1.0, samples)
+    ys = [desired_outputs(g, tau, d)[0] for g in (gait, gait.mirrored(robot)) for d in range(len(g.domains))]
+    y = np.concatenate(ys)
+    return np.stack([y.min(axis=0), y.max(axis=0)], axis=1)
+
+
+def joint_at_limit(robot: Robot, trajectory: NDArray[np.float64], planned: NDArray[np.float64] | None = None
+                   ) -> tuple[str, str, int] | None:
+    """The first of the gait's joints to come within :data:`LIMIT_ROOM` of an end of its range in a recorded walk
+    (n, nstate): (joint name, "lower" or "upper", the trajectory's row), or None. With ``planned`` (m, 2)
+    (:func:`planned_envelope`), an end the plan itself reaches (by the same measure) is not counted: a knee planned
+    straight rests on its stop by design. Held joints are not the gait's and may rest on a limit too."""
+    lo, hi = robot.joint_range[:, 0], robot.joint_range[:, 1]
+    q = trajectory[:, 1 + robot.qpos_idx]                                    # (n, m)
+    low, high = q - lo < LIMIT_ROOM, hi - q < LIMIT_ROOM
+    if planned is not None:
+        low &= planned[:, 0] - lo >= LIMIT_ROOM
+        high &= hi - planned[:, 1] >= LIMIT_ROOM
+    hit = (low | high).any(axis=1)
+    if not hit.any():
+        return None
+    row = int(np.argmax(hit))
+    j = int(np.argmax(low[row] | high[row]))
+    return robot.spec.joints[j], "lower" if low[row, j] else "upper", row
+
+
+def step_of(result: WalkResult, time: float) -> int:
+    """The step (1-based) in progress at ``time`` [s] of a walk: one more than the switching events before it."""
+    return 1 + sum(1 for e in result.events if e.time < time)
+
+
+def probable_cause(robot: Robot, gait: Gait, result: WalkResult, check: PhysicsCheck | None
+                   ) -> tuple[str, str | None]:
+    """The likeliest cause of the fall of ``gait``'s walk, from the walk's record, most specific first, and the joint
+    that reached the end of its range when that is the cause (else None): whichever came first of a joint reaching an
+    end of its range the plan keeps away from (:func:`joint_at_limit`) and a stance sole tipping over an edge; else
+    the gait's centre of pressure on its bound, torque saturation, or the fall reason."""
     if result.trajectory is not None:
-        tip = sole_tipping(robot, result.trajectory)
+        tr = result.trajectory
+        tip, limit = sole_tipping(robot, tr), joint_at_limit(robot, tr, planned_envelope(robot, gait))
+        if limit is not None and (tip is None or limit[2] < tip[3]):
+            name, end, row = limit
+            return (f"{name} reached the {end} end of its range in step {step_of(result, float(tr[row, 0]))} "
+                    "(the tracking and the step corrections have no room left there)"), name
         if tip is not None:
-            side, tilt, edge = tip
+            side, tilt, edge, _ = tip
             width = 2.0 * robot.scale.sole_half_width
             return (f"the {side} stance sole tipped over its {edge} edge ({math.degrees(tilt):.0f}°; the sole is "
-                    f"{width * 100:.1f} cm wide)")
+                    f"{width * 100:.1f} cm wide)"), None
     if check is not None and check.on_cop_bound:
-        return f"the gait's centre of pressure sits on its bound ({check.cop_text()})"
+        return f"the gait's centre of pressure sits on its bound ({check.cop_text()})", None
     sat = result.tracking.get("saturation_fraction", 0.0)
     if sat > SATURATION_FRACTION:
-        return f"the servos clamp their torque in {sat:.1%} of joint-steps"
-    return f"{result.fall_reason} without a tipping sole or saturation"
+        return f"the servos clamp their torque in {sat:.1%} of joint-steps", None
+    return f"{result.fall_reason} without a tipping sole, a joint at its limit or saturation", None
 
 
-def advice(robot: Robot, gait: Gait, config: Config, cause: str, share: float | None = None) -> list[str]:
+def advice(robot: Robot, gait: Gait, config: Config, cause: str, share: float | None = None,
+           limit_joint: str | None = None) -> list[str]:
     """What to try after a fall, from the robot and the configuration; ``share``: the κ the walk's regulator ran with
-    (it may have measured the walk and taken the whole gain), None: the sole's width rule's."""
+    (it may have measured the walk and taken the whole gain), None: the sole's width rule's; ``limit_joint``: the
+    joint whose range end the walk reached (:func:`probable_cause`)."""
     out = []
+    if limit_joint is not None:
+        margin = config.generate.for_robot(robot.scale, robot.spec.generation).scaled("joint_margin")
+        more = max(2.0 * margin, config.generate.retry_joint_margin, 0.05)
+        out.append(f"a gait planned further inside the joint ranges (--override generate.joint_margin={more:g}; "
+                   f"now {margin:g} rad)")
     reg = config.sim.regulator
     width = 2.0 * robot.scale.sole_half_width
     flat = len(gait.domains) == 1
@@ -132,15 +204,56 @@ def advice(robot: Robot, gait: Gait, config: Config, cause: str, share: float | 
 
 
 def walk_check(robot: Robot, gait: Gait, config: Config, check: PhysicsCheck | None = None) -> WalkCheck:
-    """Walk ``gait`` ``config.generate.walk_steps`` steps with ``config.sim`` (its controller and regulator) from
-    its initial state; when it falls, say why and what to try. A ``walk_steps`` of 0 skips the walk (a pass)."""
-    steps = config.generate.walk_steps
-    if steps == 0:
+    """Walk ``gait`` with ``config.sim`` (its controller and regulator) from its initial state, at least
+    ``config.generate.walk_steps`` steps and, with ``generate.walk_settle``, on until the orbit rule of
+    ``config.certify`` has its answer (:class:`~robustgait.certificate.orbit.SettlingWatch`: at most
+    ``orbit.max_steps`` + ``orbit.hold_steps`` steps); when it falls, walk it again to its fall with its trajectory
+    kept, and say why and what to try. A ``walk_steps`` of 0 skips the walk (a pass)."""
+    least = config.generate.walk_steps
+    if least == 0:
         return WalkCheck(0, 0, False, None, config.sim.controller)
-    result = walk(robot, gait, config.sim, steps=steps, keep_trajectory=True)
-    out = WalkCheck(steps, result.steps_taken, result.fell, result.fall_reason, result.controller)
+    until = None
+    steps = least
+    if config.generate.walk_settle:
+        orbit_cfg = config.certify.orbit
+        steps = max(least, orbit_cfg.max_steps + orbit_cfg.hold_steps)
+        watch = SettlingWatch(robot, gait.stance, config.certify)
+
+        def until(events: list[SwitchEvent]) -> bool:
+            done = watch(events)  # fed every event, whatever the least steps
+            return done and len(events) >= least
+
+    result = walk(robot, gait, config.sim, steps=steps, certify=config.certify, until=until)
+    out = WalkCheck(least, result.steps_taken, result.fell, result.fall_reason, result.controller)
+    if result.orbit is not None and until is not None:
+        out.orbit = result.orbit.status.value
+        out.orbit_text = orbit_summary(result.orbit) if not result.fell else result.orbit.reason
     if result.fell:
-        out.cause = probable_cause(robot, result, check)
-        ran = result.regulator.get("share") if result.regulator is not None else None
-        out.advice = advice(robot, gait, config, out.cause, None if ran is None else float(ran))
+        # the record of the fall: the same walk (deterministic) to its fall, every physics step kept
+        record = walk(robot, gait, config.sim, steps=result.steps_taken + 1, keep_trajectory=True)
+        out.cause, out.limit_joint = probable_cause(robot, gait, record, check)
+        ran = record.regulator.get("share") if record.regulator is not None else None
+        out.advice = advice(robot, gait, config, out.cause, None if ran is None else float(ran), out.limit_joint)
     return out
+
+
+def walk_plan(config: Config) -> str:
+    """The walk check's length, in words: fixed, or from the least steps on until the orbit rule's answer."""
+    least = config.generate.walk_steps
+    if not config.generate.walk_settle:
+        return f"{least} steps"
+    o = config.certify.orbit
+    return (f"at least {least} steps, on until its switching states settle and hold {o.hold_steps} steps: at most "
+            f"{max(least, o.max_steps + o.hold_steps)}")
+
+
+def retry_margin(robot: Robot, config: Config, walked: WalkCheck) -> float | None:
+    """The joint margin [rad] to solve the gait again with after a failed walk check, or None: the gait fell after one
+    of its joints reached the end of its range (:func:`probable_cause`) and its joint margin is below
+    ``generate.retry_joint_margin`` — planned further inside the ranges, the tracking and the step regulator's
+    corrections have room there."""
+    if not walked.fell or walked.limit_joint is None:
+        return None
+    margin = config.generate.for_robot(robot.scale, robot.spec.generation).scaled("joint_margin")
+    retry = config.generate.retry_joint_margin
+    return retry if margin < retry else None

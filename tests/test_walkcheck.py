@@ -1,0 +1,90 @@
+"""The walk check of gait generate (robustgait.gaitgen.walkcheck): how long it walks, what it blames a fall on, and
+when it solves again with room at the joint limits."""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from robustgait.config import Config
+from robustgait.gaitgen.walkcheck import (
+    LIMIT_ROOM,
+    WalkCheck,
+    advice,
+    joint_at_limit,
+    planned_envelope,
+    probable_cause,
+    retry_margin,
+    walk_check,
+    walk_plan,
+)
+from robustgait.sim import walk
+
+
+@pytest.fixture(scope="module")
+def exo_record(exo, exo_gait):  # type: ignore[no-untyped-def]
+    """Three steps of exo's gait with every physics step kept."""
+    return walk(exo, exo_gait, steps=3, keep_trajectory=True)
+
+
+def test_a_joint_near_its_range_end_is_found_first_and_named(exo, exo_gait, exo_record):  # type: ignore[no-untyped-def]
+    tr = exo_record.trajectory
+    plan = planned_envelope(exo, exo_gait)
+    # exo's knees are planned straight, on their stops: that is not a joint running out of room
+    knee, end, _ = joint_at_limit(exo, tr)  # type: ignore[misc]
+    k = exo.spec.joints.index(knee)
+    assert "knee" in knee and end == "lower" and plan[k, 0] - exo.joint_range[k, 0] < LIMIT_ROOM
+    assert joint_at_limit(exo, tr, plan) is None
+    # a joint the plan keeps 3 LIMIT_ROOM from its upper end, driven to it in one row of the second step
+    q = tr[:, 1 + exo.qpos_idx]
+    j = int(np.argmax(q.max(axis=0) - q.min(axis=0)))  # the joint that moves most
+    robot = copy.copy(exo)
+    robot.joint_range = exo.joint_range.copy()
+    robot.joint_range[j, 1] = max(plan[j, 1], q[:, j].max()) + 3 * LIMIT_ROOM
+    row = int(np.searchsorted(tr[:, 0], exo_record.events[0].time)) + 50
+    drifted = tr.copy()
+    drifted[row, 1 + exo.qpos_idx[j]] = robot.joint_range[j, 1] - LIMIT_ROOM / 2
+    assert joint_at_limit(robot, drifted, plan) == (exo.spec.joints[j], "upper", row)
+    # the cause names it with the step it happened in, and the advice is the joint margin
+    cause, joint = probable_cause(robot, exo_gait, replace(exo_record, trajectory=drifted), None)
+    assert joint == exo.spec.joints[j]
+    assert f"{joint} reached the upper end of its range in step 2" in cause
+    tips = advice(robot, exo_gait, Config(), cause, limit_joint=joint)
+    assert any("--override generate.joint_margin=0.1; now 0 rad" in a for a in tips)
+
+
+def test_the_gait_is_solved_again_only_after_a_joint_reached_its_limit(exo):  # type: ignore[no-untyped-def]
+    fell = WalkCheck(20, 31, True, "tilt", "pd", cause="hip_roll reached ...", limit_joint="hip_roll")
+    assert retry_margin(exo, Config(), fell) == pytest.approx(0.1)
+    assert retry_margin(exo, Config(), replace(fell, limit_joint=None)) is None  # tipped, saturated, ...
+    assert retry_margin(exo, Config(), replace(fell, fell=False)) is None
+    cfg = Config()
+    for margin, expected in ((0.1, None), (0.2, None), (0.05, 0.1)):
+        given = replace(cfg, generate=replace(cfg.generate, joint_margin=margin))
+        assert retry_margin(exo, given, fell) == expected
+    never = replace(cfg, generate=replace(cfg.generate, retry_joint_margin=0.0))
+    assert retry_margin(exo, never, fell) is None
+
+
+def test_the_walk_plan_says_how_far_it_walks() -> None:
+    cfg = Config()
+    assert walk_plan(cfg) == "at least 20 steps, on until its switching states settle and hold 64 steps: at most 164"
+    fixed = replace(cfg, generate=replace(cfg.generate, walk_settle=False, walk_steps=30))
+    assert walk_plan(fixed) == "30 steps"
+
+
+@pytest.mark.slow
+def test_the_walk_check_walks_until_the_orbit_rule_has_its_answer(exo, exo_gait):  # type: ignore[no-untyped-def]
+    """exo's gait: the check walks until its band has held, and reports the orbit the certificate's search finds."""
+    from robustgait.certificate.search import find_orbit
+
+    cfg = Config()
+    checked = walk_check(exo, exo_gait, cfg)
+    assert checked.passed and checked.orbit == "ok"
+    orbit = find_orbit(exo, exo_gait, cfg.certify)
+    assert checked.taken == orbit.steps and f"settled by step {orbit.settled}" in checked.orbit_text
+    short = walk_check(exo, exo_gait, replace(cfg, generate=replace(cfg.generate, walk_settle=False)))
+    assert short.taken == 20 and short.orbit == ""
