@@ -145,14 +145,19 @@ def sweep(spec: Path, durations: list[float], widths: list[float], shares: list[
     return rows
 
 
+LETTER = {"step_length": "L", "step_duration": "T", "step_width": "W", "step_height": "H"}
+
+
 def checkgrid(spec: Path, d: Path, n: int, steps: int) -> list[dict[str, Any]]:
+    spec = spec.resolve() if spec.suffix else spec  # the CLI runs in the repository; a name (exo) stays one
+    d = d.resolve()
     d.mkdir(parents=True, exist_ok=True)
     points: list[dict[str, float] | None] = list(grid_params(str(spec), n, "flat")) if n else [None]
     flags = {"step_length": "--step-length", "step_duration": "--step-duration", "step_width": "--step-width",
              "step_height": "--step-height"}
     rows = []
     for p in points:
-        label = "default" if p is None else "_".join(f"{k[5]}{v:g}" for k, v in p.items() if k in flags)
+        label = "default" if p is None else "_".join(f"{LETTER[k]}{v:g}" for k, v in p.items() if k in flags)
         gait = d / f"{label}.json"
         args = [f for k, v in (p or {}).items() if k in flags for f in (flags[k], f"{v:g}")]
         code, text, sec = cli("gait", "generate", "--robot", str(spec), "-o", str(gait), *args, "--json")
