@@ -88,3 +88,32 @@ def test_the_walk_check_walks_until_the_orbit_rule_has_its_answer(exo, exo_gait)
     assert checked.taken == orbit.steps and f"settled by step {orbit.settled}" in checked.orbit_text
     short = walk_check(exo, exo_gait, replace(cfg, generate=replace(cfg.generate, walk_settle=False)))
     assert short.taken == 20 and short.orbit == ""
+
+
+@pytest.mark.slow
+def test_a_gait_felled_at_a_joint_limit_is_solved_again_with_room_there(exo, monkeypatch):  # type: ignore[no-untyped-def]
+    """The retry's control flow on exo, whose gaits walk: the first walk check is replaced by a fall at a joint limit;
+    the second solve keeps generate.retry_joint_margin inside the ranges, says so in its file, and is checked."""
+    from robustgait.gaitgen import GaitGenerator
+    from robustgait.gaitgen import walkcheck
+
+    real, calls = walkcheck.walk_check, []
+
+    def first_falls(robot, gait, config, check=None):  # type: ignore[no-untyped-def]
+        calls.append(config.generate.joint_margin)
+        if len(calls) == 1:
+            return WalkCheck(20, 30, True, "tilt", "pd", cause="left_knee reached ...", limit_joint="left_knee")
+        return real(robot, gait, config, check)
+
+    monkeypatch.setattr(walkcheck, "walk_check", first_falls)
+    cfg = Config(gait=exo.default_params)
+    said: list[str] = []
+    done = walkcheck.generate_walking(exo, cfg.params, cfg, GaitGenerator(exo, cfg.generate), say=said.append)
+    assert calls == [None, pytest.approx(0.1)] and done.margin == pytest.approx(0.1)
+    assert done.first is not None and done.first.limit_joint == "left_knee"
+    assert done.passed and done.result.gait is not None
+    assert done.result.gait.solver["joint_margin"] == pytest.approx(0.1)
+    assert any("solving again with 0.1 rad" in line for line in said)
+    lo, hi = exo.joint_range[:, 0], exo.joint_range[:, 1]
+    plan = planned_envelope(exo, done.result.gait)
+    assert np.all(plan[:, 0] >= lo + 0.1 - 1e-3) and np.all(plan[:, 1] <= hi - 0.1 + 1e-3)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-from dataclasses import replace
 
 from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, command, inputs, naming_file
 from robustgait.cli.options import config_from, output_path
@@ -35,7 +34,7 @@ def _convert(args: argparse.Namespace) -> int:
 def _generate(args: argparse.Namespace) -> int:
     from robustgait.config.gait import reach_problem
     from robustgait.gaitgen import GaitGenerator
-    from robustgait.gaitgen.walkcheck import retry_margin, walk_check, walk_plan
+    from robustgait.gaitgen.walkcheck import generate_walking
     from robustgait.io.gaitfile import load_gait, save_gait
     from robustgait.io.robotfile import load_robot
 
@@ -54,39 +53,24 @@ def _generate(args: argparse.Namespace) -> int:
     if live:
         print(f"built in {gen.build_seconds:.1f} s: {gen.n_variables} variables, {gen.n_constraints} constraints; "
               + ("IPOPT iterations:" if args.verbose else f"solving T = {params.duration:g} s ..."), flush=True)
-    res = gen.solve(params, warm)
-    summary = {**res.summary(), "build_seconds": gen.build_seconds, "output": args.output if res.gait else None}
-    if res.gait is None:
+    done = generate_walking(robot, params, config, gen, warm=warm,
+                            say=(lambda line: print(line, flush=True)) if live else None)
+    res, walked = done.result, done.walked
+    summary = {**res.summary(), "build_seconds": gen.build_seconds, "output": args.output if done.passed else None}
+    if done.first is not None:
+        summary["retried"] = {"joint_margin": done.margin, "first_walk_check": done.first.to_dict()}
+    if walked is not None:
+        summary["walk_check"] = walked.to_dict()
+    if not done.passed:
         if args.json:
             print(json.dumps(summary, allow_nan=False))
-        raise RobustGaitError(f"gait generation failed ({res.status}): {res.reason}")
-    if live and config.generate.walk_steps:
-        print(f"solved; walking it in MuJoCo ({walk_plan(config)}) ...", flush=True)
-    walked = walk_check(robot, res.gait, config, res.check)
-    margin = retry_margin(robot, config, walked)
-    if margin is not None:  # a joint at its range's end felled it: once more, planned further inside the ranges
-        if live:
-            print(f"the walk check failed: {walked.text()}\nsolving again with {margin:g} rad between the planned "
-                  "joints and their range ends (generate.retry_joint_margin) ...", flush=True)
-        config = replace(config, generate=replace(config.generate, joint_margin=margin))
-        retry = GaitGenerator(robot, config.generate).solve(params, warm)
-        summary = {**retry.summary(), "build_seconds": gen.build_seconds,
-                   "retried": {"joint_margin": margin, "first_walk_check": walked.to_dict()},
-                   "output": args.output if retry.gait else None}
-        if retry.gait is None:
-            if args.json:
-                print(json.dumps(summary, allow_nan=False))
-            raise RobustGaitError(f"gait generation failed ({retry.status}) when solved again with joint margin "
-                                  f"{margin:g} rad after its walk check fell ({walked.cause}): {retry.reason}")
-        res = retry
-        walked = walk_check(robot, retry.gait, config, res.check)
-    summary["walk_check"] = walked.to_dict()
-    if not walked.passed:
-        summary["output"] = None
-        if args.json:
-            print(json.dumps(summary, allow_nan=False))
+        if res.gait is None:
+            again = (f" when solved again with joint margin {done.margin:g} rad after its walk check fell "
+                     f"({done.first.cause})" if done.first is not None and done.margin is not None else "")
+            raise RobustGaitError(f"gait generation failed ({res.status}){again}: {res.reason}")
+        assert walked is not None
         raise RobustGaitError(f"gait generation failed (Walk_Check_Failed): {walked.text()}")
-    assert res.gait is not None
+    assert res.gait is not None and walked is not None
     save_gait(res.gait, args.output)
     if args.json:
         print(json.dumps(summary, allow_nan=False))

@@ -8,7 +8,9 @@ it calls it good; when it falls, the walk's record gives the probable cause and 
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import mujoco
@@ -16,10 +18,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.certificate.orbit import Orbit, SettlingWatch, Status
-from robustgait.config import Config
+from robustgait.config import Config, GaitParams
 from robustgait.config.regulator import placement_share, regulator_rule
 from robustgait.gait import Gait
 from robustgait.gaitgen.check import PhysicsCheck
+from robustgait.gaitgen.solve import GaitGenerator, GaitGenResult
 from robustgait.robots import Robot
 from robustgait.sim.controller import desired_outputs
 from robustgait.sim.walk import SwitchEvent, WalkResult, walk
@@ -257,3 +260,44 @@ def retry_margin(robot: Robot, config: Config, walked: WalkCheck) -> float | Non
     margin = config.generate.for_robot(robot.scale, robot.spec.generation).scaled("joint_margin")
     retry = config.generate.retry_joint_margin
     return retry if margin < retry else None
+
+
+@dataclass
+class CheckedGait:
+    """What :func:`generate_walking` did: ``result``, the solve whose gait it stands by (the second after a retry);
+    ``walked``, that gait's walk check (None when the solve failed); ``first``, the first gait's walk check and
+    ``margin`` [rad] the joint margin of the second solve, when it solved again."""
+
+    result: GaitGenResult
+    walked: WalkCheck | None
+    first: WalkCheck | None = None
+    margin: float | None = None
+
+    @property
+    def passed(self) -> bool:
+        return self.result.gait is not None and self.walked is not None and self.walked.passed
+
+
+def generate_walking(robot: Robot, params: GaitParams, config: Config, generator: GaitGenerator, *,
+                     warm: Gait | None = None, say: Callable[[str], None] | None = None) -> CheckedGait:
+    """Solve ``params`` with ``generator`` (built for ``robot`` with ``config.generate``), walk-check the gait
+    (:func:`walk_check`) and, when the walk fell after a joint reached an end of its range (:func:`retry_margin`),
+    solve once more planned that much further inside the ranges and walk-check that gait. ``say(line)`` is told each
+    stage as it starts. Never raises for a failed solve or walk: the result says so."""
+    tell = say or (lambda line: None)
+    res = generator.solve(params, warm)
+    if res.gait is None:
+        return CheckedGait(res, None)
+    if config.generate.walk_steps:
+        tell(f"solved; walking it in MuJoCo ({walk_plan(config)}) ...")
+    walked = walk_check(robot, res.gait, config, res.check)
+    margin = retry_margin(robot, config, walked)
+    if margin is None:
+        return CheckedGait(res, walked)
+    tell(f"the walk check failed: {walked.text()}\nsolving again with {margin:g} rad between the planned joints and "
+         "their range ends (generate.retry_joint_margin) ...")
+    again = dataclasses.replace(config, generate=dataclasses.replace(config.generate, joint_margin=margin))
+    retry = GaitGenerator(robot, again.generate).solve(params, warm)
+    if retry.gait is None:
+        return CheckedGait(retry, None, walked, margin)
+    return CheckedGait(retry, walk_check(robot, retry.gait, again, retry.check), walked, margin)
