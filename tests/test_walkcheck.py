@@ -94,8 +94,7 @@ def test_the_walk_check_walks_until_the_orbit_rule_has_its_answer(exo, exo_gait)
 def test_a_gait_felled_at_a_joint_limit_is_solved_again_with_room_there(exo, monkeypatch):  # type: ignore[no-untyped-def]
     """The retry's control flow on exo, whose gaits walk: the first walk check is replaced by a fall at a joint limit;
     the second solve keeps generate.retry_joint_margin inside the ranges, says so in its file, and is checked."""
-    from robustgait.gaitgen import GaitGenerator
-    from robustgait.gaitgen import walkcheck
+    from robustgait.gaitgen import GaitGenerator, walkcheck
 
     real, calls = walkcheck.walk_check, []
 
