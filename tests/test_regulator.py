@@ -182,6 +182,8 @@ def test_a_tipping_sole_under_part_of_the_gain_is_told_to_try_all_of_it(t1_narro
     whole = Config(sim=SimConfig(regulator=RegulatorConfig(gain_scale=1.0)))
     assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, whole, tipped))
     assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, Config(), tipped, share=1.0))  # measured
+    # the probe measured the whole gain too and it did not help: not advised
+    assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, Config(), tipped, whole_tried=True))
     assert not any("gain_scale" in a for a in advice(t1, exo_gait, Config(), tipped))
     assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, Config(), "no_touchdown"))
 

@@ -173,10 +173,11 @@ def probable_cause(robot: Robot, gait: Gait, result: WalkResult, check: PhysicsC
 
 
 def advice(robot: Robot, gait: Gait, config: Config, cause: str, share: float | None = None,
-           limit_joint: str | None = None) -> list[str]:
+           limit_joint: str | None = None, whole_tried: bool = False) -> list[str]:
     """What to try after a fall, from the robot and the configuration; ``share``: the κ the walk's regulator ran with
     (it may have measured the walk and taken the whole gain), None: the sole's width rule's; ``limit_joint``: the
-    joint whose range end the walk reached (:func:`probable_cause`)."""
+    joint whose range end the walk reached (:func:`probable_cause`); ``whole_tried``: the regulator's probe measured
+    the whole gain too and kept the rule's share (the whole gain is then not advised)."""
     out = []
     if limit_joint is not None:
         margin = config.generate.for_robot(robot.scale, robot.spec.generation).scaled("joint_margin")
@@ -192,7 +193,7 @@ def advice(robot: Robot, gait: Gait, config: Config, cause: str, share: float | 
                    f"{width / robot.leg_length:.3f})")
     if share is None:
         share = placement_share(reg, width, robot.leg_length)
-    if on and share < 1.0 and "tipped" in cause:
+    if on and share < 1.0 and "tipped" in cause and not whole_tried:
         # a sole that tips is not holding the CoM through the ankle: the stepping may need all of the H-LIP's gain
         out.append(f"the H-LIP's whole stepping gain (--override sim.regulator.gain_scale=1; the sole's rule "
                    f"gives {share:.2f})")
@@ -235,8 +236,10 @@ def walk_check(robot: Robot, gait: Gait, config: Config, check: PhysicsCheck | N
         # the record of the fall: the same walk (deterministic) to its fall, every physics step kept
         record = walk(robot, gait, config.sim, steps=result.steps_taken + 1, keep_trajectory=True)
         out.cause, out.limit_joint = probable_cause(robot, gait, record, check)
-        ran = record.regulator.get("share") if record.regulator is not None else None
-        out.advice = advice(robot, gait, config, out.cause, None if ran is None else float(ran), out.limit_joint)
+        reg = record.regulator or {}
+        ran = reg.get("share")
+        out.advice = advice(robot, gait, config, out.cause, None if ran is None else float(ran), out.limit_joint,
+                            whole_tried="growth_whole" in reg)
     return out
 
 
