@@ -22,6 +22,10 @@ action space (the studies' grid, ``benchmarks/common.grid_params``; 0: the defau
 generate`` (the walk check, and its one retry with a joint margin), then, for a gait it wrote, ``walk --steps`` (300):
 the check's outcome, whether it solved again and why, and the steps the written gait walks, one JSON line per point.
 
+``evaluate SPEC --params L T W H [L T W H ...]``: a study's evaluation of each point
+(:func:`robustgait.study.evaluate.evaluate`, the defaults: generate, walk to the cap, certify, and the one retry with a
+joint margin after a fall at a joint limit): status, reason, J*, whether it was generated again and why, seconds.
+
 ``growth SPEC GAIT``: the regulator's own growth probe (:func:`robustgait.sim.regulator.lateral_growth`) under
 each share κ of ``--shares``: how much a lateral CoM error grows per step (``fell``: a probe walk fell) — does the
 ankle hold it, or does it grow as on a point foot (e^{λT} per step)?
@@ -182,6 +186,29 @@ def checkgrid(spec: Path, d: Path, n: int, steps: int) -> list[dict[str, Any]]:
     return rows
 
 
+def study_evaluate(spec: Path, points: list[float]) -> list[dict[str, Any]]:
+    from robustgait import Config, GaitParams, load_robot
+    from robustgait.gaitgen import GaitGenerator
+    from robustgait.study.evaluate import evaluate
+
+    robot = load_robot(spec)
+    cfg = Config(gait=robot.default_params)
+    gen = GaitGenerator(robot, cfg.generate)
+    rows = []
+    for i in range(0, len(points), 4):
+        length, duration, width, height = points[i:i + 4]
+        params = GaitParams(step_length=length, step_duration=duration, step_width=width, step_height=height)
+        ev = evaluate(robot, params, cfg, generator=gen)
+        row = {"commit": git_commit(), "date": str(date.today()), "robot": robot.name, "params": params.to_dict(),
+               "status": ev.status, "reason": ev.reason, "j_star": ev.certificate_value, "steps_taken": ev.steps_taken,
+               "retried": ev.retried,
+               "joint_margin": (ev.gait.solver or {}).get("joint_margin") if ev.gait is not None else None,
+               "seconds": {k: round(v, 1) for k, v in ev.seconds.items()}}
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+    return rows
+
+
 def growth(spec: Path, gait_path: Path, shares: list[float]) -> list[dict[str, Any]]:
     from robustgait import Config, load_gait, load_robot
     from robustgait.sim.factory import make_engine
@@ -222,6 +249,9 @@ def main() -> None:
     c.add_argument("dir", type=Path)
     c.add_argument("--grid", type=int, default=12)
     c.add_argument("--steps", type=int, default=300)
+    e = sub.add_parser("evaluate")
+    e.add_argument("spec", type=Path)
+    e.add_argument("--params", type=float, nargs="+", required=True, help="L T W H per point")
     g = sub.add_parser("growth")
     g.add_argument("spec", type=Path)
     g.add_argument("gait", type=Path)
@@ -233,6 +263,10 @@ def main() -> None:
         print(json.dumps(run(args.model, args.dir, args.steps)))
     elif args.cmd == "checkgrid":
         checkgrid(args.spec, args.dir, args.grid, args.steps)
+    elif args.cmd == "evaluate":
+        if len(args.params) % 4:
+            ap.error("--params takes L T W H per point")
+        study_evaluate(args.spec, args.params)
     elif args.cmd == "sweep":
         sweep(args.spec, args.durations, args.widths, args.shares, args.steps)
     else:

@@ -233,14 +233,25 @@ def walk_check(robot: Robot, gait: Gait, config: Config, check: PhysicsCheck | N
         out.orbit = result.orbit.status.value
         out.orbit_text = orbit_summary(result.orbit) if not result.fell else result.orbit.reason
     if result.fell:
-        # the record of the fall: the same walk (deterministic) to its fall, every physics step kept
-        record = walk(robot, gait, config.sim, steps=result.steps_taken + 1, keep_trajectory=True)
-        out.cause, out.limit_joint = probable_cause(robot, gait, record, check)
-        reg = record.regulator or {}
-        ran = reg.get("share")
-        out.advice = advice(robot, gait, config, out.cause, None if ran is None else float(ran), out.limit_joint,
-                            whole_tried="growth_whole" in reg)
+        diagnosis = diagnose_fall(robot, gait, config, result.steps_taken + 1, check)
+        assert diagnosis is not None  # the same walk: it falls again
+        out.cause, out.limit_joint, out.advice = diagnosis
     return out
+
+
+def diagnose_fall(robot: Robot, gait: Gait, config: Config, steps: int, check: PhysicsCheck | None = None
+                  ) -> tuple[str, str | None, list[str]] | None:
+    """Why ``gait``'s undisturbed walk under ``config.sim`` falls within ``steps`` steps: walked again (the walk is
+    deterministic) with every physics step kept, its probable cause, the joint at its range's end when that is the
+    cause (:func:`probable_cause`), and what to try (:func:`advice`); None when it walks them all."""
+    record = walk(robot, gait, config.sim, steps=steps, keep_trajectory=True)
+    if not record.fell:
+        return None
+    cause, joint = probable_cause(robot, gait, record, check)
+    reg = record.regulator or {}
+    ran = reg.get("share")
+    return cause, joint, advice(robot, gait, config, cause, None if ran is None else float(ran), joint,
+                                whole_tried="growth_whole" in reg)
 
 
 def walk_plan(config: Config) -> str:
@@ -258,7 +269,15 @@ def retry_margin(robot: Robot, config: Config, walked: WalkCheck) -> float | Non
     of its joints reached the end of its range (:func:`probable_cause`) and its joint margin is below
     ``generate.retry_joint_margin`` — planned further inside the ranges, the tracking and the step regulator's
     corrections have room there."""
-    if not walked.fell or walked.limit_joint is None:
+    if not walked.fell:
+        return None
+    return margin_after(robot, config, walked.limit_joint)
+
+
+def margin_after(robot: Robot, config: Config, limit_joint: str | None) -> float | None:
+    """:func:`retry_margin`'s rule for a fall whose cause is known: ``generate.retry_joint_margin`` when a joint
+    (``limit_joint``) reached the end of its range and the gait's joint margin is below it, else None."""
+    if limit_joint is None:
         return None
     margin = config.generate.for_robot(robot.scale, robot.spec.generation).scaled("joint_margin")
     retry = config.generate.retry_joint_margin

@@ -11,11 +11,13 @@ resumable, and lets a study reuse the result of a gait it already evaluated.
 from __future__ import annotations
 
 import time
+import weakref
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Literal
 
 from robustgait.certificate.certify import certify_gait
+from robustgait.certificate.orbit import Status as OrbitStatus
 from robustgait.config import Config, GaitParams
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
@@ -46,7 +48,9 @@ class Evaluation:
     :meth:`GaitCertificate.to_dict` with the samples (None unless certified). comfort: what a passenger feels on the
     walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`, ``config.comfort``; None when the walk completed no measured
     step or the gait was not generated). seconds: per stage (generate, walk, certify; build when :func:`evaluate`
-    built the generator itself; total).
+    built the generator itself; first: the evaluation a retry replaced; total). retried: None, or why the gait was
+    generated again with a joint margin (:func:`retry_after_fall`: ``joint_margin``, the first evaluation's
+    ``status``, ``reason``, ``cause`` and ``limit_joint``).
     """
 
     params: GaitParams
@@ -63,6 +67,7 @@ class Evaluation:
     comfort: dict[str, Any] | None = None
     gait: Gait | None = None
     seconds: dict[str, float] = field(default_factory=dict)
+    retried: dict[str, Any] | None = None
 
     def outcome(self) -> Outcome:
         return Outcome(self.steps_taken, self.step_cap, self.certificate_value, self.status == "certified")
@@ -80,7 +85,8 @@ class Evaluation:
                 "step_cap": self.step_cap, "steps_taken": self.steps_taken, "fell": self.fell,
                 "fall_reason": self.fall_reason, "mean_speed": self.mean_speed,
                 "certificate_value": self.certificate_value, "generation": self.generation,
-                "certificate": self.certificate_summary(), "comfort": self.comfort, "seconds": self.seconds}
+                "certificate": self.certificate_summary(), "comfort": self.comfort, "seconds": self.seconds,
+                "retried": self.retried}
 
     def to_dict(self) -> dict[str, Any]:
         """Everything, JSON-ready (what a worker sends back)."""
@@ -97,7 +103,8 @@ class Evaluation:
                    mean_speed=d["mean_speed"], certificate_value=d["certificate_value"],
                    generation=d["generation"],
                    certificate=d["certificate"], comfort=d.get("comfort"),  # absent: evaluated before comfort
-                   gait=gait_from_dict(d["gait"]) if d.get("gait") else None, seconds=d["seconds"])
+                   gait=gait_from_dict(d["gait"]) if d.get("gait") else None, seconds=d["seconds"],
+                   retried=d.get("retried"))  # absent: evaluated before the retry
 
 
 def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
@@ -106,9 +113,72 @@ def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
     steps and, if it walked the cap, certify it (``config.certify``). Pass a ``generator`` built for ``robot`` with
     ``config.generate`` to reuse it (building costs seconds). The certificate is ``config.study_certify`` (J* for the
     ``push`` metric). Never raises for a bad gait (see :class:`Evaluation`). The two stages are
-    :func:`generate_and_walk` and :func:`certify_evaluation`: ``evaluate`` is exactly one after the other."""
+    :func:`generate_and_walk` and :func:`certify_evaluation`, one after the other; a gait whose undisturbed walk fell
+    (in the walk, or in the certificate's orbit search) after one of its joints reached the end of its range is
+    generated again with ``generate.retry_joint_margin`` and evaluated once more, as ``gait generate`` does
+    (:func:`retry_after_fall`)."""
     cfg = config or Config()
-    return certify_evaluation(robot, generate_and_walk(robot, params, cfg, generator=generator), cfg)
+    first = certify_evaluation(robot, generate_and_walk(robot, params, cfg, generator=generator), cfg)
+    return retry_after_fall(robot, params, cfg, first, generator)
+
+
+def fell_undisturbed(ev: Evaluation, config: Config) -> int | None:
+    """Steps within which ``ev``'s gait fell undisturbed — in the walk to the cap, or in the certificate's orbit
+    search (``config.study_certify.orbit``: at most ``max_steps`` + ``hold_steps``) —, or None if it did not."""
+    if ev.gait is None:
+        return None
+    if ev.status == "fell":
+        return ev.steps_taken + 1
+    if ev.status == "not_certified" and ev.reason.startswith(f"{OrbitStatus.FELL.value}:"):
+        o = config.study_certify.orbit
+        return o.max_steps + o.hold_steps
+    return None
+
+
+_MARGINED: weakref.WeakKeyDictionary[GaitGenerator, dict[float, GaitGenerator]] = weakref.WeakKeyDictionary()
+
+
+def margin_generator(robot: Robot, config: Config, base: GaitGenerator | None) -> GaitGenerator:
+    """A generator for ``config.generate`` (its joint margin set), built once per ``base`` generator (a study worker's)
+    and margin."""
+    from robustgait.gaitgen import GaitGenerator
+
+    margin = float(config.generate.joint_margin or 0.0)
+    if base is None:
+        return GaitGenerator(robot, config.generate)
+    built = _MARGINED.setdefault(base, {})
+    if margin not in built:
+        built[margin] = GaitGenerator(robot, config.generate)
+    return built[margin]
+
+
+def retry_after_fall(robot: Robot, params: GaitParams, config: Config, ev: Evaluation,
+                     generator: GaitGenerator | None = None) -> Evaluation:
+    """``ev`` itself, unless its gait fell undisturbed (:func:`fell_undisturbed`) after one of its joints reached
+    the end of its range with room to give (:func:`robustgait.gaitgen.walkcheck.margin_after`): then the evaluation
+    of the gait generated with that margin, its ``retried`` saying why (the margin, the first evaluation's status,
+    reason and cause) and its seconds counting both."""
+    from robustgait.gaitgen.walkcheck import diagnose_fall, margin_after
+
+    steps = fell_undisturbed(ev, config)
+    if steps is None or ev.gait is None:
+        return ev
+    t0 = time.perf_counter()
+    diagnosis = diagnose_fall(robot, ev.gait, config, steps)
+    if diagnosis is None:
+        return ev
+    cause, joint, _ = diagnosis
+    margin = margin_after(robot, config, joint)
+    if margin is None:
+        return ev
+    again = replace(config, generate=replace(config.generate, joint_margin=margin))
+    gen = margin_generator(robot, again, generator)
+    out = certify_evaluation(robot, generate_and_walk(robot, params, again, generator=gen), again)
+    out.retried = {"joint_margin": margin, "status": ev.status, "reason": ev.reason, "cause": cause,
+                   "limit_joint": joint}
+    out.seconds["first"] = ev.seconds.get("total", 0.0) + time.perf_counter() - t0
+    out.seconds["total"] = out.seconds.get("total", 0.0) + out.seconds["first"]
+    return out
 
 
 def generate_and_walk(robot: Robot, params: GaitParams, config: Config | None = None, *,
