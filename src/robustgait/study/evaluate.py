@@ -48,7 +48,8 @@ class Evaluation:
     :meth:`GaitCertificate.to_dict` with the samples (None unless certified). comfort: what a passenger feels on the
     walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`, ``config.comfort``; None when the walk completed no measured
     step or the gait was not generated). seconds: per stage (generate, walk, certify; build when :func:`evaluate`
-    built the generator itself; first: the evaluation a retry replaced; total). retried: None, or why the gait was
+    built the generator itself; first: the evaluation a retry replaced, retry: its diagnosis and the margin's
+    generator; total). retried: None, or why the gait was
     generated again with a joint margin (:func:`retry_after_fall`: ``joint_margin``, the first evaluation's
     ``status``, ``reason``, ``cause`` and ``limit_joint``).
     """
@@ -173,11 +174,13 @@ def retry_after_fall(robot: Robot, params: GaitParams, config: Config, ev: Evalu
         return ev
     again = replace(config, generate=replace(config.generate, joint_margin=margin))
     gen = margin_generator(robot, again, generator)
+    retry = time.perf_counter() - t0  # the diagnosis, and the margin's generator when it was built now
     out = certify_evaluation(robot, generate_and_walk(robot, params, again, generator=gen), again)
     out.retried = {"joint_margin": margin, "status": ev.status, "reason": ev.reason, "cause": cause,
                    "limit_joint": joint}
-    out.seconds["first"] = ev.seconds.get("total", 0.0) + time.perf_counter() - t0
-    out.seconds["total"] = out.seconds.get("total", 0.0) + out.seconds["first"]
+    out.seconds["first"] = ev.seconds.get("total", 0.0)
+    out.seconds["retry"] = retry
+    out.seconds["total"] = out.seconds.get("total", 0.0) + out.seconds["first"] + retry
     return out
 
 
