@@ -12,9 +12,10 @@ from robustgait.study.person import pending_iteration, stored_floor
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord
 
-# comfort: the walk's comfort figures (robustgait.sim.comfort.Comfort.to_dict; None for a study evaluated before them)
+# comfort: the walk's comfort figures (robustgait.sim.comfort.Comfort.to_dict; None for a study evaluated before them);
+# retried: why the gait was generated again with a joint margin (robustgait.study.evaluate.retry_after_fall), or None
 _TRIAL_KEYS = ("status", "reason", "steps_taken", "step_cap", "fell", "fall_reason", "mean_speed",
-               "certificate_value", "comfort", "gait_file", "certificate_file", "seconds")
+               "certificate_value", "comfort", "gait_file", "certificate_file", "seconds", "retried")
 
 
 def trial_summary(r: TrialRecord) -> dict[str, Any]:
