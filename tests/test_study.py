@@ -662,6 +662,8 @@ def test_the_progress_bar_and_status_say_a_refused_gait_is_refused():
     lines = [outcome_line(r, "J*") for r in results]
     assert lines == ["J* 21.500, steps 50", "refused (unsettled), steps 50", "refused (unstable), steps 50",
                      "fell in step 13", "generation failed"]
+    again = {**results[0], "retried": {"joint_margin": 0.1, "status": "fell", "limit_joint": "hip_roll"}}
+    assert outcome_line(again, "J*") == "J* 21.500, steps 50 (generated again with joint margin 0.1 rad)"
     records = [TrialRecord(i, "COMPLETE", 0, i, i, {}, None, r, None, None, {}) for i, r in enumerate(results)]
     records.append(TrialRecord(9, "RUNNING", 0, 9, 9, {}, None, None, None, None, {}))
     assert outcome_counts(records) == {"certified": 1, "fell": 1, "generation_failed": 1, "refused: unsettled": 1,

@@ -526,15 +526,18 @@ class StudyRunner:
 
 def outcome_line(result: dict[str, Any], name: str) -> str:
     """An evaluation's outcome in a few words for a progress bar: its certified value, or why it has none — the
-    refusal's status (a gait without a stable orbit is refused, not a zero), a fall, a failed generation."""
+    refusal's status (a gait without a stable orbit is refused, not a zero), a fall, a failed generation —, and the
+    joint margin of a gait generated again after a fall at a joint limit."""
     status = result.get("status")
+    again = result.get("retried")
+    tail = f" (generated again with joint margin {again['joint_margin']:g} rad)" if again else ""
     if status == "certified":
-        return f"{name} {result['certificate_value']:.3f}, steps {result['steps_taken']}"
+        return f"{name} {result['certificate_value']:.3f}, steps {result['steps_taken']}{tail}"
     if status == "not_certified":
-        return f"refused ({str(result.get('reason', '')).split(':', 1)[0]}), steps {result['steps_taken']}"
+        return f"refused ({str(result.get('reason', '')).split(':', 1)[0]}), steps {result['steps_taken']}{tail}"
     if status == "fell":
-        return f"fell in step {result.get('steps_taken', 0) + 1}"
-    return str(status).replace("_", " ")
+        return f"fell in step {result.get('steps_taken', 0) + 1}{tail}"
+    return str(status).replace("_", " ") + tail
 
 
 def run_study(directory: str | Path, run: RunConfig | None = None, *, progress: bool = True, verbose: bool = False,
