@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -284,6 +285,23 @@ def margin_after(robot: Robot, config: Config, limit_joint: str | None) -> float
     return retry if margin < retry else None
 
 
+_MARGINED: weakref.WeakKeyDictionary[GaitGenerator, dict[float, GaitGenerator]] = weakref.WeakKeyDictionary()
+
+
+def retry_generator(robot: Robot, config: Config, margin: float, base: GaitGenerator | None = None
+                    ) -> tuple[Config, GaitGenerator]:
+    """``config`` with ``generate.joint_margin`` = ``margin`` [rad], and a generator for it: built once per ``base``
+    generator (a study worker's, the command's) and margin, since building costs seconds; a new one without
+    ``base``."""
+    again = dataclasses.replace(config, generate=dataclasses.replace(config.generate, joint_margin=margin))
+    if base is None:
+        return again, GaitGenerator(robot, again.generate)
+    built = _MARGINED.setdefault(base, {})
+    if margin not in built:
+        built[margin] = GaitGenerator(robot, again.generate)
+    return again, built[margin]
+
+
 @dataclass
 class CheckedGait:
     """What :func:`generate_walking` did: ``result``, the solve whose gait it stands by (the second after a retry);
@@ -318,8 +336,8 @@ def generate_walking(robot: Robot, params: GaitParams, config: Config, generator
         return CheckedGait(res, walked)
     tell(f"the walk check failed: {walked.text()}\nsolving again with {margin:g} rad between the planned joints and "
          "their range ends (generate.retry_joint_margin) ...")
-    again = dataclasses.replace(config, generate=dataclasses.replace(config.generate, joint_margin=margin))
-    retry = GaitGenerator(robot, again.generate).solve(params, warm)
+    again, gen = retry_generator(robot, config, margin, generator)
+    retry = gen.solve(params, warm)
     if retry.gait is None:
         return CheckedGait(retry, None, walked, margin)
     return CheckedGait(retry, walk_check(robot, retry.gait, again, retry.check), walked, margin)

@@ -11,9 +11,8 @@ resumable, and lets a study reuse the result of a gait it already evaluated.
 from __future__ import annotations
 
 import time
-import weakref
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
 from robustgait.certificate.certify import certify_gait
@@ -136,30 +135,13 @@ def fell_undisturbed(ev: Evaluation, config: Config) -> int | None:
     return None
 
 
-_MARGINED: weakref.WeakKeyDictionary[GaitGenerator, dict[float, GaitGenerator]] = weakref.WeakKeyDictionary()
-
-
-def margin_generator(robot: Robot, config: Config, base: GaitGenerator | None) -> GaitGenerator:
-    """A generator for ``config.generate`` (its joint margin set), built once per ``base`` generator (a study worker's)
-    and margin."""
-    from robustgait.gaitgen import GaitGenerator
-
-    margin = float(config.generate.joint_margin or 0.0)
-    if base is None:
-        return GaitGenerator(robot, config.generate)
-    built = _MARGINED.setdefault(base, {})
-    if margin not in built:
-        built[margin] = GaitGenerator(robot, config.generate)
-    return built[margin]
-
-
 def retry_after_fall(robot: Robot, params: GaitParams, config: Config, ev: Evaluation,
                      generator: GaitGenerator | None = None) -> Evaluation:
     """``ev`` itself, unless its gait fell undisturbed (:func:`fell_undisturbed`) after one of its joints reached
     the end of its range with room to give (:func:`robustgait.gaitgen.walkcheck.margin_after`): then the evaluation
     of the gait generated with that margin, its ``retried`` saying why (the margin, the first evaluation's status,
     reason and cause) and its seconds counting both."""
-    from robustgait.gaitgen.walkcheck import diagnose_fall, margin_after
+    from robustgait.gaitgen.walkcheck import diagnose_fall, margin_after, retry_generator
 
     steps = fell_undisturbed(ev, config)
     if steps is None or ev.gait is None:
@@ -172,8 +154,7 @@ def retry_after_fall(robot: Robot, params: GaitParams, config: Config, ev: Evalu
     margin = margin_after(robot, config, joint)
     if margin is None:
         return ev
-    again = replace(config, generate=replace(config.generate, joint_margin=margin))
-    gen = margin_generator(robot, again, generator)
+    again, gen = retry_generator(robot, config, margin, generator)
     retry = time.perf_counter() - t0  # the diagnosis, and the margin's generator when it was built now
     out = certify_evaluation(robot, generate_and_walk(robot, params, again, generator=gen), again)
     out.retried = {"joint_margin": margin, "status": ev.status, "reason": ev.reason, "cause": cause,
