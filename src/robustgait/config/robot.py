@@ -42,8 +42,9 @@ class ScaleRules:
     joint_margin_narrow: Annotated[Float, Doc(
         "generate.joint_margin written when the soles are narrow (sole width / leg length < "
         "sim.regulator.narrow_ratio), if above 0: the step regulator moves the swing foot by joint offsets, which a "
-        "trajectory on a joint's limit cannot take (0.1 lets Menagerie's G1 walk its default gait, and makes the "
-        "narrow T1's widest steps fall: docs/your-robot.md)", unit="rad", ge=0.0, le=0.5)] = 0.0
+        "trajectory on a joint's limit cannot take; a margin for every gait costs the widest steps their range, so "
+        "gait generate and studies add one only where a walk fell at a joint limit (generate.retry_joint_margin)",
+        unit="rad", ge=0.0, le=0.5)] = 0.0
     action_step_length: AxisRule = (0.67, 1.47, 6)
     action_step_duration: AxisRule = (0.86, 1.57, 5)
     action_step_width: AxisRule = (0.88, 1.2, 4)
