@@ -211,6 +211,19 @@ def test_name_partners() -> None:
     assert name_partner("waist", names) is None
 
 
+def test_a_model_files_rounding_is_not_an_asymmetry(tmp_path: Path) -> None:
+    """Both legs 0.7 mm to the left (PNDbotics Adam Lite's torso sits 0.5 mm off the plane): each hip roll's axis line
+    1.4 mm from the other's reflection, within robot.mirror_tolerance (2 mm); 5 mm is refused, saying the
+    tolerance."""
+    def shifted(dy: float) -> str:
+        return biped_xml().replace('pos="0 0.09 -0.05"', f'pos="0 {0.09 + dy:g} -0.05"').replace(
+            'pos="0 -0.09 -0.05"', f'pos="0 {-0.09 + dy:g} -0.05"')
+    assert 'pos="0 0.0907 -0.05"' in shifted(0.0007)
+    draft_spec(write(tmp_path, shifted(0.0007)), RobotConfig())
+    with pytest.raises(RobustGaitError, match=r"anchor 10.00 mm from the reflected one, tolerance 2 mm"):
+        draft_spec(write(tmp_path, shifted(0.005), "far.xml"), RobotConfig())
+
+
 def test_mirror_signs_follow_the_axes_and_reflect_the_model(tmp_path: Path) -> None:
     r = open_model(write(tmp_path, biped_xml()))
     mirror = find_mirror(r, 1e-3)

@@ -64,11 +64,15 @@ def strip(src: Path, out: Path) -> dict[str, Any]:
         spec.delete(m)
     for t in list(spec.textures):  # image files that are not here either
         spec.delete(t)
+    for mat in spec.materials:  # a material naming a deleted texture does not compile
+        mat.textures = [""] * len(mat.textures)
     spec.meshdir = ""
     spec.texturedir = ""
     floor = any(g.type == mujoco.mjtGeom.mjGEOM_PLANE for g in spec.worldbody.geoms)
     if not floor:
-        spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 0.05])
+        # explicit collision bits: a model whose default geom does not collide (contacts by <pair>) keeps its floor
+        spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 0.05], contype=1,
+                                conaffinity=1)
     model = spec.compile()
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(spec.to_xml())

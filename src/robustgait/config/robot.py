@@ -137,8 +137,10 @@ class RobotConfig:
                                         "height (else one leg)", gt=0.0, le=1.0)] = 0.1
     sole_tolerance: Annotated[Float, Doc("a foot's collision geoms within this height of its lowest point form the "
                                          "sole", unit="m", gt=0.0, le=0.05)] = 0.005
-    mirror_tolerance: Annotated[Float, Doc("largest mirror residual: position error of a body", unit="m", gt=0.0,
-                                           le=0.1)] = 1e-3
+    mirror_tolerance: Annotated[Float, Doc("largest mirror residual: position error of a body, and how far a "
+                                           "partner's axis line may pass from the reflected anchor (a model file's "
+                                           "placement rounding is not an asymmetry)", unit="m", gt=0.0,
+                                           le=0.1)] = 2e-3
     mirror_angle_tolerance: Annotated[Float, Doc("largest mirror residual: orientation error of a body", unit="rad",
                                                  gt=0.0, le=0.5)] = 1e-3
     side_mass_tolerance: Annotated[Float, Doc(

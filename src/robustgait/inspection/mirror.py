@@ -116,8 +116,9 @@ def find_mirror(robot: RobotModel, tolerance: float) -> Mirror:
             if not matches(j, k):
                 off = offset(j, k)
                 raise input_error(src, f"the mirror does not reflect the model: joint '{name}' and its name partner "
-                                  f"'{named[0]}' are not mirror images (anchor {off:.4f} m from the reflected one, "
-                                  f"axes {axis[j].round(3).tolist()} and {axis[k].round(3).tolist()})")
+                                  f"'{named[0]}' are not mirror images (anchor {1e3 * off:.2f} mm from the reflected "
+                                  f"one, tolerance {1e3 * tolerance:g} mm: robot.mirror_tolerance; axes "
+                                  f"{axis[j].round(3).tolist()} and {axis[k].round(3).tolist()})")
             partner[j] = k
             continue
         found = [k for k in robot.joints if matches(j, k)]
