@@ -186,7 +186,7 @@ def test_the_only_plane_is_the_floor(tmp_path: Path) -> None:
     ("held:missing", "every non-base joint must be in joints.names or joints.held (missing: left_shoulder, "
                      "right_shoulder)"),
     ("legs:two", "legs.left: name the sole with exactly one of sole_geom, sole_geoms or sole_body"),
-    ("legs:cylinder", "the left sole (geom 'lcyl') has a cylinder geom"),
+    ("legs:ellipsoid", "the left sole (geom 'lell') has an ellipsoid geom"),
     ("legs:nofoot", "no sole found for the left leg: body 'left_foot' has no colliding geom of class 'hand'"),
     ("floor:none", "the MJCF's world body has 0 plane geoms: name the floor with floor_geom, or set add_floor"),
     ("floor:twice", "add_floor: the MJCF already has a floor ('ground')"),
@@ -210,9 +210,9 @@ def test_bad_any_robot_specs(tmp_path: Path, change: str, message: str) -> None:
         held = ""
     elif change == "legs:two":
         legs = '[legs.left]\nsole_geom = "left_sole"\nsole_body = "left_foot"\n[legs.right]\nsole_geom = "right_sole"\n'
-    elif change == "legs:cylinder":
-        xml = xml.replace('<geom name="left_sole" type="box"', '<geom name="lcyl" type="cylinder"')
-        legs = '[legs.left]\nsole_geom = "lcyl"\n[legs.right]\nsole_geom = "right_sole"\n'
+    elif change == "legs:ellipsoid":
+        xml = xml.replace('<geom name="left_sole" type="box"', '<geom name="lell" type="ellipsoid"')
+        legs = '[legs.left]\nsole_geom = "lell"\n[legs.right]\nsole_geom = "right_sole"\n'
     elif change == "legs:nofoot":
         legs = '[legs.left]\nsole_body = "left_foot"\nsole_class = "hand"\n[legs.right]\nsole_geom = "right_sole"\n'
     elif change == "floor:none":

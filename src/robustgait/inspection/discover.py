@@ -7,8 +7,8 @@ and each joint's range and torque limit with where it came from.
   from the body where the two feet's chains branch (the base, or a waist below it) down to its foot; left is
   y > 0 in the base frame.
 * **Soles.** A foot's collision geoms whose lowest points lie within ``sole_tolerance`` of the foot's lowest
-  point: one box (its bottom face is the sole), or a set of spheres, capsules and boxes of that body (the loader
-  spans a virtual sole box over their lowest points). Meshes, cylinders and ellipsoids are refused: their contact
+  point: one box (its bottom face is the sole), or a set of spheres, capsules, cylinders and boxes of that body (the
+  loader spans a virtual sole box over where they meet the ground). Meshes and ellipsoids are refused: their contact
   patch is not a sole robustgait can constrain.
 * **Floor.** A plane geom of the world body with its normal up; none: the loader adds one (``add_floor``).
 * **Torque limits.** The smallest of the joint's ``actuatorfrcrange``, its joint actuators' ``forcerange`` × gear,
@@ -24,10 +24,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.errors import input_error
-from robustgait.inspection.model import GEOM_TYPES, RobotModel, geom_bottom, geom_lowest_point
+from robustgait.inspection.model import GEOM_TYPES, RobotModel, geom_bottom
+from robustgait.robots.soles import SOLE_TYPES, article, sole_points
 
 SIDES = ("left", "right")
-SOLE_SHAPES = {int(mujoco.mjtGeom.mjGEOM_BOX), int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE)}
 PLANE = int(mujoco.mjtGeom.mjGEOM_PLANE)
 MIN_SOLE = 1e-3  # [m]: a sole narrower than this has no area to stand on (one sphere, a capsule on end)
 
@@ -125,8 +125,10 @@ def find_feet(robot: RobotModel, d: mujoco.MjData, foot_level: float) -> tuple[i
     src = robot.path
     low = _lowest_bodies(robot, d)
     if not low:
+        pairs = f"; its {robot.model.npair} <pair> contacts are not read" if robot.model.npair else ""
         raise input_error(src, f"no sole found: no geom of the robot below '{robot.base_name}' takes part in "
-                          "contacts (every contype and conaffinity is 0)")
+                          f"contacts (every contype and conaffinity is 0{pairs}): give the soles' geoms contype and "
+                          "conaffinity")
     a = min(low, key=low.__getitem__)
     ya = float(d.xpos[a][1])
     name_a = robot.body_name(a) or f"#{a}"
@@ -174,25 +176,10 @@ def _geom_class(robot: RobotModel, body: int, g: int) -> str | None:
 
 
 def footprint_points(m: mujoco.MjModel, d: mujoco.MjData, g: int) -> NDArray[np.float64]:
-    """Where sole geom ``g`` meets the ground, (k, 3) world: the corners of a box's face that looks down, the
-    bottoms of a capsule's two ends, a sphere's bottom."""
-    t = int(m.geom_type[g])
-    p, r, s = d.geom_xpos[g], d.geom_xmat[g].reshape(3, 3), m.geom_size[g]
-    if t == int(mujoco.mjtGeom.mjGEOM_BOX):
-        axis = int(np.argmax(np.abs(r[2, :])))  # the box axis closest to vertical: its bottom face's normal
-        down = -np.sign(r[2, axis])
-        corners = [[i, j] for i in (-1.0, 1.0) for j in (-1.0, 1.0)]
-        others = [k for k in range(3) if k != axis]
-        pts = []
-        for c in corners:
-            local = np.zeros(3)
-            local[axis] = down * s[axis]
-            local[others] = np.array(c) * s[others]
-            pts.append(p + r @ local)
-        return np.array(pts)
-    if t == int(mujoco.mjtGeom.mjGEOM_CAPSULE):
-        return np.array([p + r[:, 2] * s[1], p - r[:, 2] * s[1]]) - [0.0, 0.0, s[0]]
-    return geom_lowest_point(m, d, g)[None, :]
+    """Where sole geom ``g`` meets the ground, (k, 3) world, at the kinematics ``d``
+    (:func:`robustgait.robots.soles.sole_points` with up the world's z)."""
+    return sole_points(SOLE_TYPES[int(m.geom_type[g])], d.geom_xpos[g], d.geom_xmat[g].reshape(3, 3),
+                       m.geom_size[g], np.array([0.0, 0.0, 1.0]))
 
 
 def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: float) -> FoundSole:
@@ -203,11 +190,12 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
     bottom = min(geom_bottom(m, d, g) for g in coll)
     geoms = tuple(g for g in coll if geom_bottom(m, d, g) <= bottom + tol)
     for g in geoms:
-        if int(m.geom_type[g]) not in SOLE_SHAPES:
+        if int(m.geom_type[g]) not in SOLE_TYPES:
             gname = f"'{robot.geom_name(g)}'" if robot.geom_name(g) else f"#{g - int(m.body_geomadr[foot])}"
-            raise input_error(src, f"the {side} sole (the lowest geometry of body '{name}', geom {gname}) is a "
-                              f"{GEOM_TYPES[int(m.geom_type[g])]}: robustgait needs a box or a set of spheres, "
-                              "capsules and boxes (add a box geom under the foot)")
+            kind = GEOM_TYPES[int(m.geom_type[g])]
+            raise input_error(src, f"the {side} sole (the lowest geometry of body '{name}', geom {gname}) is "
+                              f"{article(kind)} {kind}: robustgait needs a box or a set of spheres, "
+                              "capsules, cylinders and boxes (add a box geom under the foot)")
     names = [robot.geom_name(g) for g in geoms]
     sole_class = None
     if len(geoms) == 1 and all(names) and int(m.geom_type[geoms[0]]) == int(mujoco.mjtGeom.mjGEOM_BOX):

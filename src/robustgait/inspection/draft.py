@@ -2,8 +2,9 @@
 gains and scaled values, gathered in a :class:`Draft` that :mod:`.writer` renders as a commented TOML.
 
 Every refusal is a one-line :class:`~robustgait.errors.RobustGaitError` raised before anything is written: no
-free joint (a URDF gets one), one leg, no sole, a sole that is not a box or a set of spheres/capsules/boxes, a
-mirror that does not reflect the model, a leg whose joints' names say the other side.
+free joint (a URDF gets one), one leg, no sole, a sole that is not a box or a set of spheres/capsules/cylinders/
+boxes, a mirror that does not reflect the model, a leg whose joints' names say the other side. A sole that its
+model tilts in the posture (a foot plate's geoms rotated 90.5°) is levelled by the leg's ankle (:func:`level_soles`).
 """
 
 from __future__ import annotations
@@ -45,6 +46,7 @@ from robustgait.inspection.mirror import Mirror, Residual, find_mirror, fk_resid
 from robustgait.inspection.model import RobotModel, clip_to_range, open_model
 from robustgait.inspection.scale import RobotSize, Scaled, scale
 from robustgait.robots.model import mass_matrix
+from robustgait.robots.soles import sole_slopes
 
 INTEGRATOR_NAMES = {int(mujoco.mjtIntegrator.mjINT_EULER): "euler",
                     int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST): "implicitfast",
@@ -56,7 +58,8 @@ class Draft:
     """Everything a written spec says (see :func:`draft_spec`). ``planned``: the joints the gait plans, in output
     order (the left leg's from the branch down, then the right leg's, then — ``--plan all`` — the others in model
     order); ``held``: the others. ``angles``: every joint's posture angle, made left/right symmetric
-    (``asymmetry``: the largest change that took [rad]). ``torque``: each joint's limit and its source (estimated
+    (``asymmetry``: the largest change that took [rad]) and with its soles level (``levelled``: the largest ankle
+    change that took [rad], :func:`level_soles`). ``torque``: each joint's limit and its source (estimated
     where the model has none). ``timestep``: the spec's physics step (:func:`servo_timestep`; ``servo_frequency``
     [Hz]: the fastest servo's natural frequency on its swing inertia, before any lowering for stability).
     ``height``: the base's height above the floor standing in the posture [m].
@@ -74,6 +77,7 @@ class Draft:
     held: tuple[int, ...]
     angles: dict[int, float]
     asymmetry: float
+    levelled: float
     torque: dict[int, TorqueLimit]
     loads: dict[int, JointLoad]
     gains: dict[int, PDGains]
@@ -130,6 +134,41 @@ def symmetric_angles(robot: RobotModel, mirror: Mirror) -> tuple[dict[int, float
     return out, max((abs(out[j] - q[j]) for j in q), default=0.0)
 
 
+# iterations of the ankle's Gauss-Newton levelling, its finite-difference step [rad] and the slope it stops at
+LEVEL_ITERATIONS, LEVEL_STEP, LEVEL_SLOPE = 8, 1e-5, 1e-7
+
+
+def sole_tilt(robot: RobotModel, legs: Legs, side: str, angles: dict[int, float]) -> NDArray[np.float64]:
+    """The slopes (2,) of a sole's plane in the world (:func:`robustgait.robots.soles.sole_slopes` over the ground
+    points of its geoms, :func:`~.discover.footprint_points`, along x and y) with the joints at ``angles``."""
+    d = robot.kinematics(robot.qpos(angles))
+    pts = np.vstack([footprint_points(robot.model, d, g) for g in legs[side].sole.geoms])
+    return np.array(sole_slopes(pts[:, 0], pts[:, 1], pts[:, 2]))
+
+
+def level_soles(robot: RobotModel, legs: Legs, mirror: Mirror) -> float:
+    """Level the soles in the posture: the left leg's last two joints (its ankle) turned by Gauss-Newton on the slopes
+    of :func:`sole_tilt` (least squares: a leg whose ankle cannot level every slope levels what it can), the right
+    leg's mirrored onto it (the posture stays symmetric), each clipped to its range. Edits ``robot.angles``; returns
+    the largest change [rad] (0 for a model whose soles are level)."""
+    angles = dict(robot.angles)
+    ankle = legs.left.joints[-2:]
+    for _ in range(LEVEL_ITERATIONS):
+        s = sole_tilt(robot, legs, "left", angles)
+        if float(np.abs(s).max()) <= LEVEL_SLOPE:
+            break
+        jac = np.column_stack([(sole_tilt(robot, legs, "left", angles | {j: angles[j] + LEVEL_STEP}) - s)
+                               / LEVEL_STEP for j in ankle])
+        step = np.linalg.lstsq(jac, -s, rcond=None)[0]
+        for j, dq in zip(ankle, step, strict=True):
+            angles[j] = clip_to_range(robot.model, j, angles[j] + float(dq))
+    for j in ankle:
+        angles[mirror.partner[j]] = clip_to_range(robot.model, mirror.partner[j], mirror.sign[j] * angles[j])
+    change = max(abs(angles[j] - robot.angles[j]) for j in angles)
+    robot.angles = angles
+    return change
+
+
 def coupled_gains(robot: RobotModel, qpos: NDArray[np.float64], gains: dict[int, PDGains], dt: float,
                   integrator: str) -> tuple[dict[int, PDGains], float]:
     """The gains with every servo acting together on the joint-space mass matrix at ``qpos`` (base held):
@@ -176,8 +215,11 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     find_legs(robot, config.foot_level, config.sole_tolerance)  # one leg, no sole ...: said before the mirror
     mirror = find_mirror(robot, config.mirror_tolerance)
     robot.angles, asymmetry = symmetric_angles(robot, mirror)
-    angles = robot.angles
     legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the symmetric posture
+    levelled = level_soles(robot, legs, mirror)
+    if levelled > 0.0:
+        legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the levelled posture
+    angles = robot.angles
     floor = find_floor(robot)
     _floor_collides(robot, floor, legs)
     _check_sides(robot, legs, mirror)
@@ -227,11 +269,15 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
                      "(closed linkages?): robustgait's servos drive every joint on its own; check that they agree")
     if asymmetry > 0.0:
         notes.append(f"the posture was not left/right symmetric: made symmetric (largest change {asymmetry:.3g} rad)")
+    if levelled > 0.0:
+        notes.append(f"the soles were not level in the posture: each ankle turned by up to {levelled:.3g} rad to "
+                     "level them")
     size = RobotSize(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,
                      gravity=gravity, hip_spacing=legs.hip_spacing,
                      sole_length=legs.left.sole.length, sole_width=legs.left.sole.width)
     return Draft(robot=robot, config=config, name=config.name or spec_name(robot), legs=legs, floor=floor,
                  mirror=mirror, residual=residual, planned=planned, held=held, angles=angles, asymmetry=asymmetry,
+                 levelled=levelled,
                  torque=torque, loads=loads, gains=gains, size=size, scaled=scale(size, config.scale),
                  timestep=timestep, servo_frequency=servo_frequency, integrator=integrator, radius=radius,
                  height=height, notes=notes)

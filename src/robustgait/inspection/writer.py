@@ -253,9 +253,10 @@ def _scaled(draft: Draft) -> list[str]:
 
 def _posture(draft: Draft) -> list[str]:
     r = draft.robot
-    src = f"keyframe '{r.keyframe}'" if r.keyframe is not None else "every joint at 0 clipped to its range"
-    lines = ["", "[posture]", f"# cold-start posture of gait generation [rad]: the {src}"
-             + (" made left/right symmetric" if draft.asymmetry > 0 else "")]
+    src = f"the keyframe '{r.keyframe}'" if r.keyframe is not None else "every joint at 0 clipped to its range"
+    lines = ["", "[posture]", f"# cold-start posture of gait generation [rad]: {src}"
+             + (" made left/right symmetric" if draft.asymmetry > 0 else "")
+             + (", its ankles turned to level the soles" if draft.levelled > 0 else "")]
     lines += [f"{key(r.joint_name(j))} = {angle(draft.angles[j])}" for j in draft.planned]
     return lines
 

@@ -3,10 +3,10 @@
 The pipeline places a foot by its *sole box*: a box geom whose bottom face is the sole (the gait generator's foot
 frames, the centre-of-pressure bounds, the touchdown guard's flatness). A spec names the sole as one box geom, a set
 of geoms of one body, or a body (optionally one default class of its geoms). When that is not a single box — the
-sphere or capsule feet of some Menagerie robots, an unnamed box — :func:`resolve_sole` adds a *virtual sole*: a box
-geom ``robustgait_{side}_sole`` on the foot body that takes part in no contact and has no mass, spanning the
-rectangle of the geoms' lowest points (its bottom face at their lowest point). Contacts stay the real geoms'; the
-contact sensor of that sole then counts the foot body's contacts.
+sphere, capsule or cylinder feet of some Menagerie robots, an unnamed box — :func:`resolve_sole` adds a *virtual
+sole*: a box geom ``robustgait_{side}_sole`` on the foot body that takes part in no contact and has no mass,
+spanning the rectangle of the points where the geoms meet the ground (:func:`sole_points`; its bottom face at the
+lowest). Contacts stay the real geoms'; the contact sensor of that sole then counts the foot body's contacts.
 
 :func:`resolve_floor` finds the world's plane (naming it if unnamed) or adds one (``add_floor``).
 """
@@ -26,12 +26,23 @@ from robustgait.rotations import quat_to_mat
 
 FloatArray = NDArray[np.float64]
 SOLE_TYPES = {int(mujoco.mjtGeom.mjGEOM_BOX): "box", int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
-              int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule"}
+              int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule", int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder"}
+# points on the rim of a cylinder standing on its end: its bottom disk as a polygon (its bounding rectangle is the
+# disk's to within 1 − cos(π/8) ≈ 8 % of the radius when the foot's axes are at 22.5° to the disk's)
+RIM_POINTS = 8
 # thickness of a virtual sole box [m]: only its bottom face matters (it takes part in no contact)
 VIRTUAL_SOLE_THICKNESS = 0.002
 # points within this height of a foot's lowest point are on its sole [m] (a box's bottom face, sphere bottoms
 # at one height); higher points (a heel sphere raised by 1 cm) do not widen the sole
 SOLE_PLANE_TOLERANCE = 0.002
+# ... plus this slope times their horizontal distance from it: a sole a model tilts by up to atan(slope) ≈ 1° in its
+# foot's frame (a foot plate's geoms rotated 90.5° rather than 90°) spans its whole length
+SOLE_TILT_SLOPE = 0.0175
+
+
+def article(noun: str) -> str:
+    """"an" before a vowel, else "a" (geom type names in messages)."""
+    return "an" if noun[:1] in "aeiou" else "a"
 
 
 def virtual_sole_name(side: str) -> str:
@@ -82,27 +93,53 @@ def _sole_geoms(mjs: mujoco.MjSpec, model: mujoco.MjModel, leg: LegSpec, side: s
     for g in ids:
         if int(model.geom_type[g]) not in SOLE_TYPES:
             kind = mujoco.mjtGeom(int(model.geom_type[g])).name.removeprefix("mjGEOM_").lower()
-            raise input_error(src, f"the {side} sole ({leg.describe()}) has a {kind} geom: a sole is one box or a set "
-                              "of boxes, spheres or capsules")
+            raise input_error(src, f"the {side} sole ({leg.describe()}) has {article(kind)} {kind} geom: a sole is "
+                              "one box or a set of boxes, spheres, capsules or cylinders")
     return ids
 
 
-def _lowest_points(model: mujoco.MjModel, g: int) -> FloatArray:
-    """Candidate contact points (k, 3) of a sole geom in its body's frame: a box's 8 corners, a sphere's centre, a
-    capsule's two segment ends — each to be pushed down by the radius (:func:`sole_rectangle`)."""
-    pos, rot, size = model.geom_pos[g], quat_to_mat(model.geom_quat[g]), model.geom_size[g]
-    kind = SOLE_TYPES[int(model.geom_type[g])]
+def sole_points(kind: str, pos: FloatArray, rot: FloatArray, size: FloatArray, up: FloatArray) -> FloatArray:
+    """Where a sole geom meets a ground plane of normal ``up`` (3,) when it rests on it, (k, 3), in the frame of
+    ``pos`` (3,), ``rot`` (3, 3; columns: the geom's axes) and ``up``; ``kind`` a :data:`SOLE_TYPES` name, ``size``
+    MuJoCo's geom size [m]. A box: the four corners of its face that looks down; a sphere: its bottom; a capsule:
+    the bottoms of its two end spheres; a cylinder lying on its side: the two ends of its lowest line; a cylinder
+    standing on an end: :data:`RIM_POINTS` points of that end's rim (tilted: the lowest point of each end's rim)."""
+    pos, rot, size, up = (np.asarray(a, dtype=float) for a in (pos, rot, size, up))
     if kind == "box":
-        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * size
-        return np.asarray(pos + corners @ rot.T)
+        axis = int(np.argmax(np.abs(up @ rot)))  # the box axis closest to up: its bottom face's normal
+        others = [k for k in range(3) if k != axis]
+        local = np.zeros((4, 3))
+        local[:, axis] = -np.sign(up @ rot[:, axis]) * size[axis]
+        local[:, others] = np.array([[i, j] for i in (-1.0, 1.0) for j in (-1.0, 1.0)]) * size[others]
+        return np.asarray(pos + local @ rot.T)
     if kind == "sphere":
-        return np.asarray(pos[None])
-    half = size[1] * rot[:, 2]  # a capsule's segment runs along its z axis
-    return np.asarray(np.stack([pos - half, pos + half]))
+        return np.asarray(pos - size[0] * up)[None]
+    ends = np.stack([pos - size[1] * rot[:, 2], pos + size[1] * rot[:, 2]])  # along the geom's z axis
+    if kind == "capsule":
+        return np.asarray(ends - size[0] * up)
+    down = -up - float(-up @ rot[:, 2]) * rot[:, 2]  # −up within the end disks' plane
+    norm = float(np.linalg.norm(down))
+    if norm > 1e-6:
+        return np.asarray(ends + size[0] * down / norm)
+    theta = 2.0 * np.pi * np.arange(RIM_POINTS) / RIM_POINTS
+    rim = size[0] * (np.cos(theta)[:, None] * rot[:, 0] + np.sin(theta)[:, None] * rot[:, 1])
+    low = ends[int(np.argmin(ends @ up))]
+    return np.asarray(low + rim)
 
 
-def _radius(model: mujoco.MjModel, g: int) -> float:
-    return 0.0 if SOLE_TYPES[int(model.geom_type[g])] == "box" else float(model.geom_size[g][0])
+def sole_slopes(along: FloatArray, across: FloatArray, height: FloatArray) -> tuple[float, float]:
+    """The sole's plane through its ground points: the least-squares slopes (a, b) of height = c + a·along + b·across
+    (points (k,) in a frame whose third axis is up, [m]); a direction the points do not span (a line of points, one
+    point) gets slope 0."""
+    slopes = [0.0, 0.0]
+    axes = (along, across)
+    spanned = [i for i in (0, 1) if float(np.ptp(axes[i])) > 1e-6]
+    if spanned:
+        fit = np.column_stack([np.ones_like(height), *(axes[i] - axes[i].mean() for i in spanned)])
+        coef = np.linalg.lstsq(fit, height, rcond=None)[0]
+        for i, c in zip(spanned, coef[1:], strict=True):
+            slopes[i] = float(c)
+    return slopes[0], slopes[1]
 
 
 def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int], forward: FloatArray
@@ -111,9 +148,11 @@ def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int],
     are the box's x (toe), y (left) and z (up) axes, half-sizes (3,)), at the posture of ``data``.
 
     Up is the body axis closest to the world's vertical and toe the remaining body axis closest to ``forward``
-    (the base's x axis in the world), so the box is aligned with the foot. The sole plane is the lowest point of
-    the geoms along up (a sphere or capsule's bottom: its centre minus its radius); the rectangle spans the
-    points within :data:`SOLE_PLANE_TOLERANCE` of it; the box is :data:`VIRTUAL_SOLE_THICKNESS` thick above it.
+    (the base's x axis in the world), so the box is aligned with the foot. The sole's points are the geoms' ground
+    points (:func:`sole_points`) within :data:`SOLE_PLANE_TOLERANCE` + :data:`SOLE_TILT_SLOPE` × their horizontal
+    distance of the lowest along up; when their plane (:func:`sole_slopes`) is tilted from the body's axes (a foot
+    plate's geoms rotated 90.5°), the box is turned onto it, so that the box lies flat where the geoms do. The
+    rectangle spans the points; the box is :data:`VIRTUAL_SOLE_THICKNESS` thick above the lowest.
     """
     body = int(model.geom_bodyid[geoms[0]])
     rb = data.xmat[body].reshape(3, 3)  # body axes in the world (columns)
@@ -123,14 +162,20 @@ def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int],
     fwd_k = max(rest, key=lambda k: abs(float(rb[:, k] @ forward)))
     fwd = np.eye(3)[fwd_k] * (1.0 if float(rb[:, fwd_k] @ forward) >= 0 else -1.0)
     left = np.cross(up, fwd)
-    pts, heights = [], []
-    for g in geoms:
-        p = _lowest_points(model, g)
-        pts.append(p)
-        heights.append(p @ up - _radius(model, g))
-    points, height = np.concatenate(pts), np.concatenate(heights)
+    points = np.concatenate([sole_points(SOLE_TYPES[int(model.geom_type[g])], model.geom_pos[g],
+                                         quat_to_mat(model.geom_quat[g]), model.geom_size[g], up) for g in geoms])
+    height = points @ up
     bottom = float(height.min())
-    on = height <= bottom + SOLE_PLANE_TOLERANCE
+    flat = points - np.outer(height, up)  # the points projected on the sole plane
+    reach = np.linalg.norm(flat - flat[int(np.argmin(height))], axis=1)
+    on = height <= bottom + SOLE_PLANE_TOLERANCE + SOLE_TILT_SLOPE * reach
+    a, b = sole_slopes(points[on] @ fwd, points[on] @ left, height[on])
+    if max(abs(a), abs(b)) > 1e-9:  # the plane's normal (−a, −b, 1) in (toe, left, up): the box's axes turned onto it
+        up = (up - a * fwd - b * left) / float(np.sqrt(1.0 + a * a + b * b))
+        fwd = fwd - float(fwd @ up) * up
+        fwd /= float(np.linalg.norm(fwd))
+        left = np.cross(up, fwd)
+        bottom = float((points[on] @ up).min())
     along, across = points[on] @ fwd, points[on] @ left
     half = np.array([(along.max() - along.min()) / 2, (across.max() - across.min()) / 2,
                      VIRTUAL_SOLE_THICKNESS / 2])
