@@ -4,6 +4,7 @@ repository; the gain rule's inertias against rigid-body sums; the scaling rules 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 import textwrap
@@ -475,6 +476,21 @@ def test_the_rules_give_back_exos_spec() -> None:
     assert s.gait == pytest.approx({"step_length": 0.15, "step_duration": 0.7, "step_width": 0.25,
                                     "step_height": 0.07}, rel=0.03)
     assert [nice_step(x) for x in (0.019, 0.11, 0.0024, 3.3)] == [0.02, 0.1, 0.0025, 2.5]
+
+
+def test_narrow_soles_get_shorter_default_steps_and_a_shorter_grid() -> None:
+    """PNDbotics Adam Lite's size (sole 0.05 m on a 0.896 m leg: narrow): the default step is 2.0 √(l/g), where the
+    same robot with 0.12 m soles gets 2.3 √(l/g); the narrow grid ends at 3.0 √(l/g)."""
+    import math
+
+    narrow = RobotSize(leg_length=0.896, standing_height=0.929, mass=58.2, gravity=9.81, hip_spacing=0.234,
+                       sole_length=0.22, sole_width=0.05)
+    wide = dataclasses.replace(narrow, sole_width=0.12)
+    t = math.sqrt(0.896 / 9.81)
+    assert scale(narrow, ScaleRules()).gait["step_duration"] == pytest.approx(2.0 * t, rel=1e-2)
+    assert scale(wide, ScaleRules()).gait["step_duration"] == pytest.approx(2.3 * t, rel=1e-2)
+    assert scale(narrow, ScaleRules()).action_space["step_duration"][1] <= 3.0 * t + 1e-9
+    assert scale(narrow, ScaleRules()).multicontact_action_space == scale(wide, ScaleRules()).multicontact_action_space
 
 
 def test_a_grid_stops_at_the_grid_point_nearest_its_high_multiple() -> None:

@@ -35,6 +35,10 @@ class ScaleRules:
     step_width_gap: Annotated[Float, Doc("least step width: sole width + this multiple of the feet's clearance "
                                          "generate.foot_gap (the default step width is the hip spacing, at least "
                                          "this)", ge=0.0, le=10.0)] = 2.0
+    step_duration_narrow: Annotated[Float, Doc(
+        "default flat-foot step duration ÷ √(l/g) when the soles are narrow (sole width / leg length < "
+        "sim.regulator.narrow_ratio): the step regulator corrects once a step, and over a long single support the "
+        "error grows past what a narrow sole holds", gt=0.0, le=20.0)] = 2.0
     narrow_step_duration: Annotated[Float, Doc(
         "longest flat-foot step of the action space ÷ √(l/g) when the soles are narrow (sole width / leg length < "
         "sim.regulator.narrow_ratio): a long single support on a narrow sole falls whatever the next foothold",

@@ -49,10 +49,17 @@ def step_length(size: RobotSize, rules: ScaleRules) -> float:
     return rules.step_length * size.leg_length
 
 
+def duration_constant(size: RobotSize, rules: ScaleRules, multicontact: bool = False) -> float:
+    """c of the default step duration c · √(l/g): ``step_duration_multicontact``; flat-foot, ``step_duration_narrow``
+    when the soles are narrow (:func:`narrow_soles`), else ``step_duration``."""
+    if multicontact:
+        return rules.step_duration_multicontact
+    return rules.step_duration_narrow if narrow_soles(size) else rules.step_duration
+
+
 def step_duration(size: RobotSize, rules: ScaleRules, multicontact: bool = False) -> float:
-    """Default step duration = c · √(l/g) [s] (flat-foot or multi-contact constant)."""
-    c = rules.step_duration_multicontact if multicontact else rules.step_duration
-    return c * math.sqrt(size.leg_length / size.gravity)
+    """Default step duration = c · √(l/g) [s] (:func:`duration_constant`)."""
+    return duration_constant(size, rules, multicontact) * math.sqrt(size.leg_length / size.gravity)
 
 
 def step_width(size: RobotSize, rules: ScaleRules) -> float:
@@ -113,7 +120,7 @@ def duration_rule(size: RobotSize, rules: ScaleRules) -> tuple[float, float, int
     ``narrow_step_duration`` · √(l/g) when the soles are narrow (:func:`narrow_soles`)."""
     low, high, points = rules.action_step_duration
     if narrow_soles(size):
-        high = min(high, rules.narrow_step_duration / rules.step_duration)
+        high = min(high, rules.narrow_step_duration / duration_constant(size, rules))
     return low, high, points
 
 

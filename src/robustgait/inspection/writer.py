@@ -15,7 +15,7 @@ from robustgait.inspection.discover import SIDES, FoundSole
 from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
 from robustgait.inspection.mirror import mass_asymmetry
 from robustgait.inspection.model import GEOM_TYPES
-from robustgait.inspection.scale import GAIT_AXES, balance, narrow_soles, sig
+from robustgait.inspection.scale import GAIT_AXES, balance, duration_constant, narrow_soles, sig
 from robustgait.robots.spec import FallCriteria
 
 BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
@@ -282,15 +282,16 @@ def _generation(draft: Draft) -> list[str]:
 def _gait(draft: Draft) -> list[str]:
     s, size, rules = draft.scaled, draft.size, draft.config.scale
     t = math.sqrt(size.leg_length / size.gravity)
+    c = duration_constant(size, rules)
     width_rule = (f"the hip spacing {size.hip_spacing:.3g} m" if s.gait["step_width"] == sig(size.hip_spacing)
                   else f"sole width + {rules.step_width_gap:g} × foot_gap (wider than the hips)")
     return [
         "", "[gait]",
         "# the robot's default gait (what `gait generate` uses without flags), scaled with the leg length l",
         f"step_length = {num(s.gait['step_length'], 3)}  # {rules.step_length:g} × l",
-        f"step_duration = {num(s.gait['step_duration'], 3)}  # {rules.step_duration:g} × √(l/g) = "
-        f"{rules.step_duration:g} × {t:.3g} s (flat-foot; multi-contact: {rules.step_duration_multicontact:g} × "
-        "√(l/g))",
+        f"step_duration = {num(s.gait['step_duration'], 3)}  # {c:g} × √(l/g) = {c:g} × {t:.3g} s (flat-foot"
+        + ("; narrow soles: robot.scale.step_duration_narrow" if narrow_soles(size) else "")
+        + f"; multi-contact: {rules.step_duration_multicontact:g} × √(l/g))",
         f"step_width = {num(s.gait['step_width'], 3)}  # {width_rule}",
         f"step_height = {num(s.gait['step_height'], 3)}  # {rules.step_height:g} × l",
     ]
