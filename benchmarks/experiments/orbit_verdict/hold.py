@@ -38,8 +38,12 @@ from robustgait.sim import walk
 from robustgait.sim.walk import canonical_event_states
 
 
-class BandHold(rule.Watch):
-    """The orbit rule with the hold test against the band's half-width max(ν, κ σ) per coordinate."""
+class _VariantHold(rule.Watch):
+    """The orbit rule with its hold test replaced by :meth:`judge_window`, called on each whole window of the hold
+    with the window's first step and its phase centres' deviations from the band's (k, d)."""
+
+    def judge_window(self, start: int, dev: np.ndarray) -> None:
+        raise NotImplementedError
 
     def add(self, z: Any) -> bool:
         if self.found is None or self.done:
@@ -47,16 +51,23 @@ class BandHold(rule.Watch):
         self.z.append(np.asarray(z, dtype=float))
         cfg, f = self.cfg, self.found
         if self.held % cfg.window == 0:
-            w = np.array(self.z[-cfg.window:])
             steps = self.steps - cfg.window + 1 + np.arange(cfg.window)
-            centres, _ = rule.phase_stats(w, steps, f.period)
-            ratio = float((np.abs(centres - f.band.centres) / f.band.half_width).max())
-            if ratio > 1.0:
-                self.left = (int(steps[0]), ratio, 1.0)
+            centres, _ = rule.phase_stats(np.array(self.z[-cfg.window:]), steps, f.period)
+            self.judge_window(int(steps[0]), np.abs(centres - f.band.centres))
         return self.done
 
 
-class HorizonHold(rule.Watch):
+class BandHold(_VariantHold):
+    """The orbit rule with the hold test against the band's half-width max(ν, κ σ) per coordinate."""
+
+    def judge_window(self, start: int, dev: np.ndarray) -> None:
+        assert self.found is not None
+        ratio = float((dev / self.found.band.half_width).max())
+        if ratio > 1.0:
+            self.left = (start, ratio, 1.0)
+
+
+class HorizonHold(_VariantHold):
     """The orbit rule with a hold window that moved within the band's half-width watched on to ``horizon`` steps."""
 
     horizon = 300
@@ -71,22 +82,13 @@ class HorizonHold(rule.Watch):
             return self.steps >= self.horizon
         return bool(super().done)
 
-    def add(self, z: Any) -> bool:
-        if self.found is None or self.done:
-            return super().add(z)
-        self.z.append(np.asarray(z, dtype=float))
-        cfg, f = self.cfg, self.found
-        if self.held % cfg.window == 0:
-            w = np.array(self.z[-cfg.window:])
-            steps = self.steps - cfg.window + 1 + np.arange(cfg.window)
-            centres, _ = rule.phase_stats(w, steps, f.period)
-            dev = np.abs(centres - f.band.centres)
-            allowed = cfg.settle_multiple * max(cfg.floor, f.band.sigma)
-            if (dev / f.band.half_width).max() > 1.0:
-                self.left = (int(steps[0]), float(dev.max()), 1.0)
-            elif dev.max() > allowed:
-                self.wandered = True
-        return self.done
+    def judge_window(self, start: int, dev: np.ndarray) -> None:
+        assert self.found is not None
+        cfg, band = self.cfg, self.found.band
+        if (dev / band.half_width).max() > 1.0:
+            self.left = (start, float(dev.max()), 1.0)
+        elif dev.max() > cfg.settle_multiple * max(cfg.floor, band.sigma):
+            self.wandered = True
 
 
 def verdict(watch: rule.Watch, z: np.ndarray, fell: str | None) -> str:
