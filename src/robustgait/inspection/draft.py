@@ -134,8 +134,9 @@ def symmetric_angles(robot: RobotModel, mirror: Mirror) -> tuple[dict[int, float
     return out, max((abs(out[j] - q[j]) for j in q), default=0.0)
 
 
-# iterations of the ankle's Gauss-Newton levelling, its finite-difference step [rad] and the slope it stops at
-LEVEL_ITERATIONS, LEVEL_STEP, LEVEL_SLOPE = 8, 1e-5, 1e-7
+# iterations of the ankle's Gauss-Newton levelling, its finite-difference step [rad] and the slope it stops at (a
+# slope below it, a model file's round-off, is left alone)
+LEVEL_ITERATIONS, LEVEL_STEP, LEVEL_SLOPE = 8, 1e-6, 1e-5
 
 
 def sole_tilt(robot: RobotModel, legs: Legs, side: str, angles: dict[int, float]) -> NDArray[np.float64]:
