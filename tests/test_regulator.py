@@ -186,6 +186,11 @@ def test_a_tipping_sole_under_part_of_the_gain_is_told_to_try_all_of_it(t1_narro
     assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, Config(), tipped, whole_tried=True))
     assert not any("gain_scale" in a for a in advice(t1, exo_gait, Config(), tipped))
     assert not any("gain_scale" in a for a in advice(t1_narrow, exo_gait, Config(), "no_touchdown"))
+    # under the stepping regulator a tipping sole is told to step quicker (the error grows over a long single
+    # support), under the PD alone slower; both shorter and wider
+    quick = f"shorter, quicker steps (--step-length; --step-duration under this gait's {exo_gait.step_duration:.3g} s)"
+    assert quick in tips and "a wider step (--step-width)" in tips
+    assert "shorter, slower steps (--step-length, --step-duration)" in advice(t1, exo_gait, Config(), tipped)
 
 
 @pytest.fixture(scope="module")

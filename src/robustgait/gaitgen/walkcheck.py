@@ -199,7 +199,11 @@ def advice(robot: Robot, gait: Gait, config: Config, cause: str, share: float | 
         out.append(f"the H-LIP's whole stepping gain (--override sim.regulator.gain_scale=1; the sole's rule "
                    f"gives {share:.2f})")
     if "tipped" in cause or "centre of pressure" in cause:
-        out.append("shorter, slower steps (--step-length, --step-duration)")
+        if on:  # under the stepping regulator the error grows over the single support: a long step tips the sole
+            out.append(f"shorter, quicker steps (--step-length; --step-duration under this gait's "
+                       f"{gait.step_duration:.3g} s)")
+        else:
+            out.append("shorter, slower steps (--step-length, --step-duration)")
         out.append("a wider step (--step-width)")
     if "torque" in cause:
         out.append("a slower gait or lower servo gains ([controller] in the robot spec)")
