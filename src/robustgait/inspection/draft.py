@@ -154,6 +154,7 @@ def level_soles(robot: RobotModel, legs: Legs, mirror: Mirror) -> float:
     the largest change [rad] (0 for a model whose soles are level)."""
     angles = dict(robot.angles)
     ankle = legs.left.joints[-2:]
+    turned = False
     for _ in range(LEVEL_ITERATIONS):
         s = sole_tilt(robot, legs, "left", angles)
         if float(np.abs(s).max()) <= LEVEL_SLOPE:
@@ -163,6 +164,9 @@ def level_soles(robot: RobotModel, legs: Legs, mirror: Mirror) -> float:
         step = np.linalg.lstsq(jac, -s, rcond=None)[0]
         for j, dq in zip(ankle, step, strict=True):
             angles[j] = clip_to_range(robot.model, j, angles[j] + float(dq))
+        turned = True
+    if not turned:  # level: the symmetric posture stays as it is (re-mirroring could move a clipped partner)
+        return 0.0
     for j in ankle:
         angles[mirror.partner[j]] = clip_to_range(robot.model, mirror.partner[j], mirror.sign[j] * angles[j])
     change = max(abs(angles[j] - robot.angles[j]) for j in angles)
