@@ -48,6 +48,78 @@ def test_verification_sizes_spend_beta() -> None:
         verification_size(0.02, 0.05, 0)
 
 
+def test_a_first_share_spends_beta_and_shrinks_the_first_batch() -> None:
+    """β_1 = s β and β_a = (1 − s) β / 2^(a−1) after: Σ β_a = β for any share; s = 0.9 draws 154 pushes first (ε 2 %,
+    β 5 %) where s = 0.5 draws 183, and a second batch of 297."""
+    for share in (0.5, 0.7, 0.9):
+        assert sum(verification_beta(0.05, a, share) for a in range(1, 60)) == pytest.approx(0.05)
+        assert verification_beta(0.05, 1, share) == pytest.approx(0.05 * share)
+    assert [verification_size(0.02, 0.05, a, 0.9) for a in (1, 2)] == [154, 297]
+    assert verification_size(0.02, 0.05, 1, 0.5) == 183
+    n = verification_size(0.02, 0.05, 1, 0.9)
+    assert verification_bound(n, 0.05, 1, 0.9) <= 0.02
+
+
+def test_exploration_on_a_cheaper_map_verification_on_the_certified_one() -> None:
+    """The exploration rounds run on ``explore``, the verification batch on P alone; the batch is drawn in
+    verify_margin × r̂ and J* is that radius when it passes; the statement holds whatever the exploration map (a
+    misleading one included: it only places the disk)."""
+    truth = PushThresholdMap(j0=20.0, a=0.3, b=0.4)
+    calls: dict[str, int] = {"P": 0, "explore": 0}
+
+    def counted(name: str, m: PushThresholdMap):
+        def f(x: np.ndarray) -> np.ndarray:
+            calls[name] += x.shape[0]
+            return m(x)
+        return f
+
+    cfg = CertifyConfig(seed=3, r_max=60.0, disturbance="push", push={"verify_margin": 0.8, "first_share": 0.9})
+    cert = certify_map_sequential(counted("P", truth), np.zeros(2), cfg,
+                                  explore=counted("explore", PushThresholdMap(j0=30.0, a=0.3, b=0.4)))
+    verify = [r for r in cert.rounds if r.kind == "verify"]
+    assert calls["P"] == sum(r.n_samples for r in verify) and calls["explore"] == cert.n_samples - calls["P"]
+    assert cert.estimate is not None and verify[0].radius == pytest.approx(0.8 * cert.estimate)
+    assert verify[0].n_samples == 154 or not verify[0].passed  # the first batch at 0.9 β (or abandoned)
+    if cert.violation_bound < 1.0:
+        assert cert.verified and cert.r_star == pytest.approx(verify[-1].radius) and cert.attained
+        assert truth.violating_fraction(cert.r_star) <= 0.02 or cert.r_star <= truth.r_star * 1.2
+
+
+def test_coverage_with_a_margin_and_cheap_exploration() -> None:
+    """Over seeds, the certified J* of a margin below 1 and an exploration map that differs from the certified one
+    still has at most ε of its disk failing (coverage ≥ 1 − β), and the first batch passes more often than with no
+    margin."""
+    truth, explore = PushThresholdMap(j0=20.0, a=0.3, b=0.4), PushThresholdMap(j0=21.0, a=0.3, b=0.35)
+    wrong, first = {0.8: 0, 1.0: 0}, {0.8: 0, 1.0: 0}
+    for seed in range(40):
+        for margin in (0.8, 1.0):
+            cfg = CertifyConfig(seed=seed, r_max=60.0, disturbance="push", push={"verify_margin": margin})
+            cert = certify_map_sequential(truth, np.zeros(2), cfg, explore=explore)
+            if cert.violation_bound < 1.0:
+                wrong[margin] += truth.violating_fraction(cert.r_star) > 0.02
+            first[margin] += bool(next(r for r in cert.rounds if r.kind == "verify").passed)
+    assert wrong[0.8] <= 6 and wrong[1.0] <= 6  # 40 runs at a failure rate ≤ β: > 6 has probability < 0.02
+    assert first[0.8] > first[1.0]
+
+
+def test_an_estimate_alone_and_a_verification_decided_by_it() -> None:
+    """verify=False stops after the exploration: r* is its r̂, not verified, no statement; a callable decides from
+    the estimate (a person study verifies what clears its floor)."""
+    P = PushThresholdMap(j0=20.0, a=0.3, b=0.4)
+    cfg = CertifyConfig(seed=1, r_max=60.0, disturbance="push")
+    est = certify_map_sequential(P, np.zeros(2), cfg, verify=False)
+    assert not est.verified and est.violation_bound == 1.0 and not est.budget_exhausted
+    assert est.r_star == est.estimate and all(r.kind != "verify" for r in est.rounds)
+    assert "estimate" in est.statement() and "not verified" in est.statement()
+    seen: list[float] = []
+    below = certify_map_sequential(P, np.zeros(2), cfg, verify=lambda j: seen.append(j) or j >= 1e3)
+    assert seen == [est.estimate] and not below.verified and below.r_star == est.r_star
+    above = certify_map_sequential(P, np.zeros(2), cfg, verify=lambda j: j >= 1.0)
+    assert above.verified and above.estimate == est.estimate
+    assert any(r.kind == "verify" for r in above.rounds)
+    assert json.loads(json.dumps(est.to_dict()))["verified"] is False
+
+
 @pytest.mark.parametrize("kwargs", [{"epsilon": 0.0}, {"epsilon": 1.0}, {"budget": 0}, {"round_size": 0},
                                     {"explore": -1}, {"local_fraction": 1.5}, {"spread": 0.0}, {"min_depth": 1.0},
                                     {"elites": 0}, {"first_round": True}])
@@ -219,9 +291,10 @@ def test_coverage_of_the_push_certificate() -> None:
 
 
 def test_chunked_verification_abandons_a_failing_batch_and_keeps_a_passing_one() -> None:
-    """verify_chunk: a batch that passes is the same batch, sample for sample; one that fails stops at the first
-    chunk holding a violation inside r̂ (so it holds fewer samples, all drawn from the same stream) — and the
-    statement still covers (the push coverage test runs with the push certificate's chunks)."""
+    """verify_chunk: the batch is evaluated farthest from x* first; a batch that passes is the same batch, sample for
+    sample in that order; one that fails stops at the first chunk holding a violation inside the radius verified (so
+    it holds fewer samples, all drawn from the same stream) — and the statement still covers (the push coverage test
+    runs with the push certificate's chunks)."""
     P = PushThresholdMap(j0=20.0, a=0.3, b=0.4)
     failed = 0
     for seed in range(12):
@@ -233,6 +306,8 @@ def test_chunked_verification_abandons_a_failing_batch_and_keeps_a_passing_one()
         w, c = whole.rounds[first], chunked.rounds[first]
         assert whole.rounds[:first] == chunked.rounds[:first]  # the same rounds up to the first verification
         ws = whole.samples[whole.sample_round == first]
+        order = np.argsort(-np.linalg.norm(ws, axis=1), kind="stable")  # the chunks' order: farthest first
+        ws, w_fell = ws[order], whole.fell[whole.sample_round == first][order]
         cs = chunked.samples[chunked.sample_round == first]
         np.testing.assert_array_equal(cs, ws[:len(cs)])  # a prefix of the same batch
         if w.passed:
@@ -241,7 +316,7 @@ def test_chunked_verification_abandons_a_failing_batch_and_keeps_a_passing_one()
             failed += 1
             assert not c.passed
             # a push sample violates iff it fell inside the disk verified: the chunk of the first such sample ends it
-            bad = np.flatnonzero(whole.fell[whole.sample_round == first] & (np.linalg.norm(ws, axis=1) < w.radius))
+            bad = np.flatnonzero(w_fell & (np.linalg.norm(ws, axis=1) <= w.radius))
             assert bad.size
             assert c.n_samples == min(w.n_samples, 25 * (bad[0] // 25 + 1))
         if whole.violation_bound < 1.0 and chunked.violation_bound < 1.0:

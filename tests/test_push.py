@@ -123,8 +123,9 @@ def test_a_pushed_walk_stops_once_back_in_the_band_and_fails_when_it_is_not(exo,
     simulate_trials(engine, np.tile(orbit.qpos, (4, 1)), np.tile(orbit.qvel, (4, 1)), 21, 21,
                     pushed_first_step(engine, wrench), first_at=0, sections=sections)
     np.testing.assert_array_equal(recovered_steps(orbit.band, exo, sections, 2), back)
-    narrow = dataclasses.replace(orbit.band, radius=1e-6, multiple=0.0)
-    tight = PushMap(engine, orbit.qpos, orbit.qvel, narrow, ValidateConfig(), PushConfig(horizon=4))
+    narrow = dataclasses.replace(orbit.band, multiple=0.0)  # its floor ν is the push rule's
+    tight = PushMap(engine, orbit.qpos, orbit.qvel, narrow, ValidateConfig(), PushConfig(horizon=4,
+                                                                                       recovery_radius=1e-6))
     ok2, reasons2, fall2, back2 = tight.walk(j, phase)
     assert ok2.all() and all(r is None for r in reasons2) and (back2[1:] == 0).all() and (fall2 == 0).all()
     assert tight.physics_steps > 3 * 5 * 500  # the three walked the whole horizon

@@ -294,7 +294,9 @@ class Certificate:
     estimator (``uniform``, ``sequential``); rounds: its rounds; sample_round (N,): the round of each sample
     (index into rounds); basis: why the bound holds (empty: the uniform union bound of
     :func:`violation_bound`); budget_exhausted: the sequential estimator ran out of samples before a
-    verification batch passed (then there is no statement).
+    verification batch passed (then there is no statement). estimate: the sequential estimator's r̂ after its
+    exploration, before any verification (None for ``uniform``); verified: false for the sequential estimator's
+    exploration alone (``verify=False``: r* is then the estimate, with no statement).
     """
 
     r_star: float
@@ -316,6 +318,8 @@ class Certificate:
     sample_round: NDArray[np.int64] | None = None
     basis: str = ""
     budget_exhausted: bool = False
+    estimate: float | None = None
+    verified: bool = True
 
     @property
     def n_samples(self) -> int:
@@ -339,6 +343,9 @@ class Certificate:
         where = f"the {ball} ball of radius r* = {self.r_star:.6g} around x*"
         cond = f"the DTBF condition (alpha = {self.alpha:g}" + (", paper barrier H = r − ‖x − x*‖²)"
                                                                 if self.barrier == "paper" else ")")
+        if not self.verified:
+            return (f"r̂ = {self.r_star:.6g} is an estimate from {self.n_samples} exploration samples, not verified: "
+                    "no confidence statement.")
         if self.vacuous:
             return (f"No sample lies in {where}: the certificate is vacuous (no confidence statement; "
                     f"{self.n_samples} samples, method {self.method}).")
@@ -370,6 +377,8 @@ class Certificate:
             "violation_bound": float(self.violation_bound),
             "vacuous": self.vacuous,
             "budget_exhausted": bool(self.budget_exhausted),
+            "estimate": None if self.estimate is None else float(self.estimate),
+            "verified": bool(self.verified),
             "statement": self.statement(),
             "basis": self.basis,
             "rounds": [asdict(r) for r in self.rounds],
@@ -397,16 +406,19 @@ def certificate_from_samples(
     beta: float,
     barrier: Barrier,
     seed: int | None = None,
+    solution: RadiusSolution | None = None,
 ) -> Certificate:
     """Certificate from given samples x0 (N, n) and images x1 (N, n) (NaN row = fell), x_star (n,).
 
-    The confidence statement assumes x0 i.i.d. uniform on B_{r_max}(x*) (see :func:`violation_bound`);
-    the sequential estimator replaces it with its own (:mod:`.estimators`).
+    r* is the exact :func:`solve_radius` of the samples in [0, r_max], or ``solution`` when given (the radius a
+    sequential verification batch certified, at most that). The confidence statement assumes x0 i.i.d. uniform on
+    B_{r_max}(x*) (see :func:`violation_bound`); the sequential estimator replaces it with its own
+    (:mod:`.estimators`).
     """
     a0, a1, xs = _check_samples(x0, x1, x_star)
     a, b = float(alpha), float(beta)
     d, p = distances(a0, a1, xs)
-    sol = solve_radius(d, p, alpha=a, r_max=r_max, barrier=barrier)
+    sol = solution if solution is not None else solve_radius(d, p, alpha=a, r_max=r_max, barrier=barrier)
     fell = _fell_rows(a1)
     images = np.where(fell[:, None], np.nan, a1)
     inside = d <= sol.r_star if sol.attained else d < sol.r_star

@@ -27,9 +27,10 @@ from robustgait.certificate.push import PushMap
 from robustgait.certificate.reduced import Coordinates, ReducedState, section_dimension
 from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
-from robustgait.certificate.search import find_orbit
+from robustgait.certificate.search import find_orbit, probe_impulse
 from robustgait.certificate.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
+from robustgait.config.certify import R_MAX_LIMIT
 from robustgait.config.work import Work, check_work
 from robustgait.gait import Gait
 from robustgait.robots import Robot
@@ -37,16 +38,20 @@ from robustgait.sim.engine import step_physics_steps
 from robustgait.sim.factory import make_engine
 
 
-def push_basis(c: Certificate) -> str:
+def push_basis(c: Certificate, config: CertifyConfig) -> str:
     """Why a push certificate's bound holds, in pushes and J* (the estimator words it in samples and r*): the
-    verification batch (sequential) or the union bound over the samples (uniform)."""
+    verification batch (sequential; its β_a from ``config``) or the union bound over the samples (uniform)."""
     inside = "≤" if c.attained else "<"
     if c.method == "sequential":
         verify = [r for r in c.rounds if r.kind == "verify"]
         n_a, attempt = verify[-1].n_samples, len(verify)
-        return (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed: none fell "
-                f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}), and none of the "
-                f"{c.n_samples} pushes of its {len(c.rounds)} rounds with |J| {inside} J* failed")
+        beta_a = config.estimator.beta_of(config.beta, attempt)
+        explored = "" if c.estimate is None else (f"{verify[-1].radius / c.estimate:.2g} × the estimate Ĵ = "
+                                                  f"{c.estimate:.4g} N s of ")
+        n_explore = c.n_samples - sum(r.n_samples for r in verify)
+        return (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed ({explored}"
+                f"{n_explore} exploration pushes): none fell (verification attempt {attempt}: (1 − ε)^{n_a} ≤ "
+                f"β_{attempt} = {100.0 * beta_a:.3g}%)")
     return (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
             f"with |J| {inside} J* did not fall (union bound over the {c.n_samples + 1} possible choices of J*)")
 
@@ -129,13 +134,19 @@ class GaitCertificate:
             return (f"No certificate ({self.status}): {self.reason}; {radius_name(self.config.space)} = 0 after "
                     f"{self.steps_walked} steps.")
         c, cfg = self.certificate, self.config
+        if not c.verified:
+            name = radius_name(cfg.space)
+            unit = "N s" if cfg.disturbance == "push" else cfg.unit
+            return (f"{name} ≈ {c.r_star:.4g} {unit} is an estimate from {c.n_samples} exploration "
+                    f"{'pushes' if cfg.disturbance == 'push' else 'samples'}, not verified: no confidence statement "
+                    f"(robustgait certify verifies it).")
         if cfg.disturbance != "push":
             return c.statement() + self._scatter_clause()
         if c.vacuous or c.budget_exhausted:
             return c.statement()
         v = self.validate or ValidateConfig()
         inside = "≤" if c.attained else "<"
-        basis = push_basis(c)
+        basis = push_basis(c, cfg)
         p = cfg.push
         fail = f"make the robot fall within that step and {p.horizon} more"
         if p.recovery:
@@ -217,16 +228,21 @@ Progress = Callable[[int], None]
 BatchMap = Callable[[np.ndarray, "Progress | None"], np.ndarray]
 
 
-def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: bool, desc: str) -> Certificate:
+def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: bool, desc: str, *,
+              explore: BatchMap | None = None, verify: bool | Callable[[float], bool] = True) -> Certificate:
     """Run the configured estimator on a map in certificate coordinates (progress bar: samples, stderr; the map is
-    called with the bar's update, per sample that reaches its end)."""
+    called with the bar's update, per sample that reaches its end). ``explore``: the sequential estimator's map of
+    exploration (default P); ``verify`` false: its exploration alone (an estimate)."""
     total = cfg.n_samples if cfg.method == "uniform" else cfg.estimator.budget
     with tqdm(total=total, desc=desc, unit="sample", disable=not progress, leave=False) as bar:
         def counted(x: np.ndarray) -> np.ndarray:
             return P(x, bar.update)
+
+        def counted_explore(x: np.ndarray) -> np.ndarray:
+            return (explore or P)(x, bar.update)
         if cfg.method == "uniform":
             return certify_map(counted, x_star, cfg)
-        return certify_map_sequential(counted, x_star, cfg)
+        return certify_map_sequential(counted, x_star, cfg, explore=counted_explore, verify=verify)
 
 
 def certify_steps(config: CertifyConfig, graph: str, dim: int) -> int:
@@ -307,7 +323,8 @@ def orbit_scatter(orbit: Orbit, reduced: ReducedState, coords: Coordinates) -> f
 
 
 def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
-                 validate: ValidateConfig | None = None, progress: bool = False) -> GaitCertificate:
+                 validate: ValidateConfig | None = None, progress: bool = False,
+                 verify: bool | Callable[[float], bool] = True) -> GaitCertificate:
     """Find the orbit the gait walks (:func:`.search.find_orbit`: settled, stable), then certify the set of
     ``config`` around its x* with the configured estimator (``uniform``: :func:`.barrier.certify_map`;
     ``sequential``: :func:`.estimators.certify_map_sequential`) on the map of the orbit's period, in the state, set
@@ -317,11 +334,16 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
     With ``ellipsoid.compare_ball`` an ellipsoid's certificate also certifies the ball of the same state (its r* and
     the volume ratio are reported). A gait without a stable orbit, or whose reduced map falls from x̄*, returns a
     certificate with that ``status`` and r* = 0 (no exception); too much work for the limits raises
-    :class:`RobustGaitError` before any simulation. ``progress``: bars on stderr.
+    :class:`RobustGaitError` before any simulation. ``progress``: bars on stderr. ``verify`` false (the sequential
+    estimator): the exploration alone, whose r̂ is an estimate with no statement (``certificate.verified`` false) —
+    what a study ranks its gaits by (docs/studies.md); a callable of the estimate decides whether to verify it (a
+    person study verifies only the gaits it may show).
     """
     cfg = config or CertifyConfig()
     sim = sim or SimConfig()
     push = cfg.disturbance == "push"
+    if push and cfg.r_max is None:  # the first round's disk, at the robot's scale
+        cfg = dataclasses.replace(cfg, r_max=min(R_MAX_LIMIT["push"], probe_impulse(robot, cfg.push.r_max_scale)))
     vcfg = validate or ValidateConfig()
     check_certify_work(robot, gait, cfg, sim)
     t0 = time.perf_counter()
@@ -353,10 +375,12 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         if push:
             coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
             pushes = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push)
-            cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}")
+            exploring = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push.exploring())
+            cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}", explore=exploring,
+                             verify=verify)
             if cert.basis:
-                cert = dataclasses.replace(cert, basis=push_basis(cert))
-            steps = pushes.physics_steps
+                cert = dataclasses.replace(cert, basis=push_basis(cert, cfg))
+            steps = pushes.physics_steps + exploring.physics_steps
         else:
             fmap = FullStateMap(robot, gait, orbit.period, engine=engine)
             reduced = ReducedState.at(cfg.state, robot, orbit.qpos, orbit.qvel, gait.stance, cfg)
@@ -379,7 +403,7 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
             sigma = orbit_scatter(orbit, reduced, coords)
             paths = _Paths()
             desc = f"{cfg.state} {cfg.set}{'' if cfg.horizon == 1 else f', P^{cfg.horizon}'}, {cfg.method}"
-            cert = _estimate(_in_coordinates(pmap, coords, paths), coords.x_star, cfg, progress, desc)
+            cert = _estimate(_in_coordinates(pmap, coords, paths), coords.x_star, cfg, progress, desc, verify=verify)
             if cfg.horizon > 1:
                 excursion = paths.excursion(cert, coords)
             steps = fmap.physics_steps

@@ -7,30 +7,36 @@
   the N + 1 values r* can take (:func:`.barrier.certify_map`,
   :func:`~.barrier.violation_bound`).
 * ``sequential`` (:func:`certify_map_sequential`) — beyond the paper. Exploration proposes r̂, verification
-  certifies it:
+  certifies a radius below it:
 
   1. round 1: the uniform draw with N = ``first_round`` (the same samples as ``uniform`` with that N and seed);
   2. exploration rounds of ``round_size`` proposals inside B(r̂): a fraction uniform in B(r̂), the rest
      *local* — around the directions of the violating samples closest to x* ("elites"), just inside r̂
      (relative depth log-uniform in [``min_depth``, 1]). After each round r̂ = the exact r* of all samples so
-     far; it only shrinks. Exploration may use any distribution: it only proposes;
-  3. verification attempt a = 1, 2, …: a fresh batch of n_a samples i.i.d. uniform in B(r̂_a), drawn after r̂_a
-     is fixed, with n_a the least n such that (1 − ε)^n ≤ β_a = β / 2^a. If no sample of the batch violates
-     the condition at r̂_a (r̂ is unchanged by the batch) the certificate is r* = r̂_a; otherwise r̂ shrinks,
-     ``explore_after_failure`` more exploration samples follow and attempt a + 1 is drawn. With
-     ``verify_chunk`` > 0 the batch is evaluated in chunks and abandoned at the first chunk that shrinks r̂
-     (it cannot pass then); the whole batch is still drawn, so the streams stay aligned. When the next
-     batch would exceed ``budget`` samples the estimator stops and says there is no statement.
+     far; it only shrinks. Exploration may use any distribution and any map — a cheaper one than the map certified
+     (``explore``: the push certificate's exploration pushes stop sooner) —: it only proposes;
+  3. verification attempt a = 1, 2, …: the radius r_a = ``verify_margin`` × r̂ is fixed, then a fresh batch of n_a
+     samples i.i.d. uniform in B(r_a) is drawn and evaluated on the certified map, with n_a the least n such that
+     (1 − ε)^n ≤ β_a (β_1 = s β, β_a = (1 − s) β / 2^(a−1) after, s = ``first_share``). If no sample of the batch
+     violates the condition at r_a (r_a stays the supremum of the feasible radii up to r_a over every sample so
+     far) the certificate is r* = r_a; otherwise r̂ shrinks, ``explore_after_failure`` more exploration samples
+     follow and attempt a + 1 is drawn. With ``verify_chunk`` > 0 the batch is evaluated in chunks, the samples
+     farthest from x* first (where a violation is likeliest), and abandoned at the first chunk with a violation
+     (it cannot pass then); the whole batch is still drawn, so the streams stay aligned. When the next batch would
+     exceed ``budget`` samples the estimator stops and says there is no statement.
+
+  ``verify=False`` stops after exploration: r̂ is an *estimate* (no statement), what a study ranks gaits by.
 
 Guarantee of ``sequential``: P(a certificate is issued and the fraction of the volume of B(r*) where the
-condition at radius r* fails exceeds ε) ≤ Σ_a β_a ≤ β, whatever the map and the exploration. Proof: let
-V(r) be that violating fraction and F_{a−1} everything drawn before batch a. r̂_a is F_{a−1}-measurable and
-batch a is i.i.d. uniform in B(r̂_a) independently of F_{a−1}, so on {V(r̂_a) > ε}, P(all n_a samples
-satisfy | F_{a−1}) ≤ (1 − ε)^{n_a} ≤ β_a. A certificate at attempt a needs that event; a union over a gives
-Σ β_a; a batch abandoned at its first violating chunk (``verify_chunk``) issues no certificate, so it changes nothing
-here. Assumptions: the map is deterministic; the condition is evaluated exactly at the samples; the
-pseudo-random streams stand in for independent uniforms. It says nothing about violating sets of volume
-fraction ≤ ε, and it is not a proof of invariance.
+condition at radius r* fails exceeds ε) ≤ Σ_a β_a ≤ β, whatever the map of exploration and the exploration itself.
+Proof: let V(r) be that violating fraction (on the certified map) and F_{a−1} everything drawn before batch a. r_a is
+F_{a−1}-measurable and batch a is i.i.d. uniform in B(r_a) independently of F_{a−1}, so on {V(r_a) > ε}, P(all n_a
+samples satisfy | F_{a−1}) ≤ (1 − ε)^{n_a} ≤ β_a. A certificate at attempt a needs that event; a union over a gives
+Σ β_a; the order in which a batch's samples are evaluated, and a batch abandoned at its first violating chunk
+(``verify_chunk``), issue no certificate, so they change nothing here. Assumptions: the certified map is
+deterministic; the condition is evaluated exactly at the verification samples; the pseudo-random streams stand in
+for independent uniforms. It says nothing about violating sets of volume fraction ≤ ε, and it is not a proof of
+invariance.
 
 Common random numbers: every perturbation is x* + ρ·u with the direction u and the fraction ρ taken from
 streams that depend on the seed only (round 1: ``default_rng(seed)``; exploration: ``default_rng([seed, 1])``;
@@ -42,6 +48,7 @@ for local proposals, around their own elites) and the same verification directio
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -50,6 +57,7 @@ from numpy.typing import ArrayLike, NDArray
 from robustgait.certificate.barrier import (
     BatchedMap,
     Certificate,
+    RadiusSolution,
     Round,
     _check_point,
     certificate_from_samples,
@@ -74,11 +82,12 @@ FloatArray = NDArray[np.float64]
 
 
 # ------------------------------------------------------------------------------------ verification
-def verification_bound(n: int, beta: float, attempt: int) -> float:
-    """ε_a = 1 − β_a^{1/n}: the bound certified by n fresh uniform samples that all satisfy (attempt a)."""
+def verification_bound(n: int, beta: float, attempt: int, first_share: float = 0.5) -> float:
+    """ε_a = 1 − β_a^{1/n}: the bound certified by n fresh uniform samples that all satisfy (attempt a; β_a of
+    :func:`~robustgait.config.verification_beta` with ``first_share``)."""
     if n < 1:
         raise RobustGaitError(f"a verification batch has at least one sample, got {n}")
-    return float(-math.expm1(math.log(verification_beta(beta, attempt)) / n))
+    return float(-math.expm1(math.log(verification_beta(beta, attempt, first_share)) / n))
 
 
 # ------------------------------------------------------------------------------------- exploration
@@ -111,10 +120,13 @@ def propose_round(rng: np.random.Generator, m: int, x_star: FloatArray, r_hat: f
 
 
 class _Pool:
-    """All samples so far with their distances, violation ends and rounds; r̂ of all of them."""
+    """All samples so far with their distances, violation ends and rounds; r̂ of all of them. ``P``: the certified
+    map (verification rounds); ``explore``: the map of the other rounds."""
 
-    def __init__(self, P: BatchedMap, x_star: FloatArray, alpha: float, r_max: float, barrier: Barrier):
-        self.P, self.x_star, self.alpha, self.r_max, self.barrier = P, x_star, alpha, r_max, barrier
+    def __init__(self, P: BatchedMap, explore: BatchedMap, x_star: FloatArray, alpha: float, r_max: float,
+                 barrier: Barrier):
+        self.P, self.explore, self.x_star, self.alpha, self.r_max, self.barrier = P, explore, x_star, alpha, r_max, \
+            barrier
         self.x0: list[FloatArray] = []
         self.x1: list[FloatArray] = []
         self.d = np.empty(0)
@@ -123,38 +135,56 @@ class _Pool:
         self.round_of: list[NDArray[np.int64]] = []
         self.rounds: list[Round] = []
         self.r_hat = r_max
+        self.verified: RadiusSolution | None = None  # the radius the last passed verification batch certified
 
     @property
     def used(self) -> int:
         return int(self.d.size)
 
-    def add(self, kind: str, radius: float, x0: FloatArray, chunk: int = 0) -> None:
-        """Evaluate the map on x0, add the samples as a round and recompute r̂. A ``verify`` round passes when
-        r̂ is unchanged: no sample of it violates the condition at r̂ (nor chains a violation down to it).
+    def _evaluate(self, P: BatchedMap, part: FloatArray) -> None:
+        x1 = evaluate_map(P, part)
+        d, p = distances(part, x1, self.x_star)
+        self.x0.append(part)
+        self.x1.append(x1)
+        self.d = np.concatenate([self.d, d])
+        self.p = np.concatenate([self.p, p])
+        self.s = np.concatenate([self.s, violation_end(d, p, self.alpha, self.barrier)])
+        self.round_of.append(np.full(d.size, len(self.rounds), dtype=np.int64))
 
-        ``chunk`` > 0 (verification only): evaluate x0 in chunks of that many samples, in order, and abandon the
-        rest of the batch at the first chunk that shrinks r̂ — the batch cannot pass then, and its remaining
-        samples would only be simulated to be discarded. The round holds the samples evaluated."""
-        before = self.r_hat
-        step = chunk if (kind == "verify" and chunk > 0) else x0.shape[0]
+    def _solve(self, r_max: float) -> RadiusSolution:
+        return solve_radius(self.d, self.p, alpha=self.alpha, r_max=r_max, barrier=self.barrier)
+
+    def add(self, kind: str, radius: float, x0: FloatArray) -> None:
+        """Evaluate the exploration map on x0, add the samples as a round and recompute r̂."""
+        self._evaluate(self.explore, x0)
+        self.r_hat = self._solve(self.r_max).r_star
+        self.rounds.append(Round(kind, float(radius), int(x0.shape[0]), self.used, float(self.r_hat), None))
+
+    def verify(self, radius: float, x0: FloatArray, chunk: int = 0) -> bool:
+        """Evaluate a verification batch x0 (uniform in B(radius)) on the certified map and add it as a round. It
+        passes when ``radius`` is still the supremum of the feasible radii up to it over every sample so far: no sample
+        of the batch violates the condition there (nor chains a violation up to it).
+
+        ``chunk`` > 0: evaluate x0 in chunks of that many samples, the farthest from x* first, and abandon the rest
+        of the batch at the first chunk that fails it — the batch cannot pass then, and its remaining samples would
+        only be simulated to be discarded. The round holds the samples evaluated, in the order evaluated."""
+        order = np.argsort(-np.linalg.norm(x0 - self.x_star, axis=1), kind="stable") if chunk > 0 else None
+        x0 = x0 if order is None else x0[order]
+        step = chunk if chunk > 0 else x0.shape[0]
         n_used = 0
+        sol = self._solve(radius)
         for start in range(0, x0.shape[0], max(step, 1)):
             part = x0[start:start + step]
-            x1 = evaluate_map(self.P, part)
-            d, p = distances(part, x1, self.x_star)
-            self.x0.append(part)
-            self.x1.append(x1)
-            self.d = np.concatenate([self.d, d])
-            self.p = np.concatenate([self.p, p])
-            self.s = np.concatenate([self.s, violation_end(d, p, self.alpha, self.barrier)])
-            self.round_of.append(np.full(d.size, len(self.rounds), dtype=np.int64))
-            n_used += d.size
-            self.r_hat = solve_radius(self.d, self.p, alpha=self.alpha, r_max=self.r_max,
-                                      barrier=self.barrier).r_star
-            if self.r_hat != before:  # only a chunked verification has samples left to abandon
+            self._evaluate(self.P, part)
+            n_used += part.shape[0]
+            sol = self._solve(radius)
+            if sol.r_star != radius:
                 break
-        passed = self.r_hat == before if kind == "verify" else None
-        self.rounds.append(Round(kind, float(radius), int(n_used), self.used, float(self.r_hat), passed))
+        passed = sol.r_star == radius
+        self.r_hat = self._solve(self.r_max).r_star
+        self.verified = sol if passed else None
+        self.rounds.append(Round("verify", float(radius), int(n_used), self.used, float(self.r_hat), passed))
+        return passed
 
     def elites(self, k: int) -> FloatArray:
         """Unit directions (≤ k, n) of the samples violated somewhere (s > d, falls included) with d ≥ r̂,
@@ -165,13 +195,18 @@ class _Pool:
         return _unit(x0[idx] - self.x_star)
 
 
-def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConfig | None = None) -> Certificate:
+def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConfig | None = None, *,
+                           explore: BatchedMap | None = None,
+                           verify: bool | Callable[[float], bool] = True) -> Certificate:
     """The sequential estimator (module docstring): certify a batched map P: (N, n) → (N, n) (NaN rows =
     fell) around its fixed point x_star (n,) with ``config`` (``r_max``, ``alpha``, ``beta``, ``seed``,
-    ``barrier`` and the estimator's options ``sequential``). Returns a :class:`~.barrier.Certificate`
-    with ``method="sequential"``, every round (``rounds``: kind, radius, samples, samples used, r̂ after it)
-    and, if a verification batch passed, ``violation_bound`` = ε_a ≤ ε (:func:`verification_bound`) at
-    confidence 1 − β; otherwise ``budget_exhausted`` (bound 1) or, if r̂ reached 0, a vacuous certificate.
+    ``barrier`` and the estimator's options ``sequential``). ``explore``: the map the first round and the exploration
+    rounds are evaluated on (default P). Returns a :class:`~.barrier.Certificate` with ``method="sequential"``, every
+    round (``rounds``: kind, radius, samples, samples used, r̂ after it), ``estimate`` (r̂ after the exploration
+    before the first verification) and, if a verification batch passed, r* = its radius and ``violation_bound`` = ε_a
+    ≤ ε (:func:`verification_bound`) at confidence 1 − β; otherwise ``budget_exhausted`` (bound 1) or, if r̂ reached
+    0, a vacuous certificate. ``verify=False``: the exploration alone, r* = the estimate r̂, with no statement
+    (``verified`` false); a callable decides from the estimate r̂ whether to go on to verification.
     """
     full = config or CertifyConfig()
     cfg = full.estimator
@@ -180,36 +215,48 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
     n = xs.shape[0]
     explore_rng = np.random.default_rng([seed, 1])
     verify_rng = np.random.default_rng([seed, 2])
-    pool = _Pool(P, xs, a, r, barrier)
+    pool = _Pool(P, P if explore is None else explore, xs, a, r, barrier)
     pool.add("uniform", r, sample_ball(cfg.first_round, n, r, xs, np.random.default_rng(seed)))
     explore_left, attempt, passed = cfg.explore, 0, False
+    estimate: float | None = None
+    verifying = verify is not False
     while pool.r_hat > 0.0:
-        room = cfg.budget - pool.used - verification_size(cfg.epsilon, b, attempt + 1)
+        room = cfg.budget - pool.used - (cfg.batch_size(b, attempt + 1) if verifying else 0)
         while explore_left > 0 and room > 0 and pool.r_hat > 0.0:
             m = min(cfg.round_size, explore_left, room)
             pool.add("explore", pool.r_hat, propose_round(explore_rng, m, xs, pool.r_hat, pool.elites(cfg.elites), cfg))
             explore_left -= m
             room -= m
-        if pool.r_hat == 0.0:
+        if estimate is None:
+            estimate = pool.r_hat
+            verifying = verify(estimate) if callable(verify) else verify
+        if pool.r_hat == 0.0 or not verifying:
             break
         attempt += 1
-        n_a = verification_size(cfg.epsilon, b, attempt)
+        n_a = cfg.batch_size(b, attempt)
         if pool.used + n_a > cfg.budget:
             break
-        pool.add("verify", pool.r_hat, sample_ball(n_a, n, pool.r_hat, xs, verify_rng), cfg.verify_chunk)
-        if pool.rounds[-1].passed:
+        radius = cfg.verify_margin * pool.r_hat
+        if pool.verify(radius, sample_ball(n_a, n, radius, xs, verify_rng), cfg.verify_chunk):
             passed = True
             break
         explore_left = cfg.explore_after_failure
 
-    cert = certificate_from_samples(np.concatenate(pool.x0), np.concatenate(pool.x1), xs, alpha=a, r_max=r,
-                                    beta=b, seed=seed, barrier=barrier)
-    assert cert.r_star == pool.r_hat
-    cert = replace(cert, method="sequential", rounds=tuple(pool.rounds), sample_round=np.concatenate(pool.round_of))
+    x0_all, x1_all = np.concatenate(pool.x0), np.concatenate(pool.x1)
+    solution = pool.verified if passed else None
+    cert = certificate_from_samples(x0_all, x1_all, xs, alpha=a, r_max=r, beta=b, seed=seed, barrier=barrier,
+                                    solution=solution)
+    assert passed or cert.r_star == pool.r_hat
+    cert = replace(cert, method="sequential", rounds=tuple(pool.rounds), sample_round=np.concatenate(pool.round_of),
+                   estimate=float(pool.r_hat if estimate is None else estimate), verified=verifying)
     if passed:
         n_a = pool.rounds[-1].n_samples
+        beta_text = "β/2" if cfg.first_share == 0.5 and attempt == 1 else (
+            f"{cfg.first_share:g} β" if attempt == 1 else f"β_{attempt}")
         basis = (f"a batch of {n_a} fresh samples drawn uniformly in this ball after r* was fixed all satisfy it "
-                 f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β/2^{attempt}; r* is exact for all "
-                 f"{cert.n_samples} samples of {len(pool.rounds)} rounds)")
-        return replace(cert, violation_bound=verification_bound(n_a, b, attempt), basis=basis)
-    return replace(cert, violation_bound=1.0, budget_exhausted=pool.r_hat > 0.0)
+                 f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ {beta_text}; r* is exact for all "
+                 f"{cert.n_samples} samples of {len(pool.rounds)} rounds)" if cfg.verify_margin == 1.0 else
+                 f"a batch of {n_a} fresh samples drawn uniformly in this ball after r* = {cfg.verify_margin:g} r̂ "
+                 f"was fixed all satisfy it (verification attempt {attempt}: (1 − ε)^{n_a} ≤ {beta_text})")
+        return replace(cert, violation_bound=verification_bound(n_a, b, attempt, cfg.first_share), basis=basis)
+    return replace(cert, violation_bound=1.0, budget_exhausted=verifying and pool.r_hat > 0.0)

@@ -20,6 +20,7 @@ one seed (common random numbers) meet every gait at the same phases.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 from collections.abc import Callable
@@ -101,7 +102,9 @@ def recovered_steps(band: Band, robot: Robot, sections: FloatArray, steps: int) 
 class PushMap:
     """J (N, 2) → (N, 2): (0, 0) if the push did not fail, NaN if it failed (module docstring). ``engine``: the gait's
     engine; ``qpos``, ``qvel``: x* (a section state that starts a step of the gait's stance), ``band``: its orbit's
-    band, where a recovered walk stops (None, or ``push.recovery`` false: every push walks the whole horizon). The walk
+    band, where a recovered walk stops (with ``push.recovery_radius`` as its floor; None, or ``push.recovery`` false:
+    every push walks the whole horizon); ``push``: the rule of a push — the statement's, or an exploration push's
+    (:meth:`~robustgait.config.PushConfig.exploring`). The walk
     is the validation's (:func:`robustgait.sim.trials.simulate_trials`): a multi-contact step is the previous leg's
     rolling double support then the single support, and the push's window spans the whole step, as ``validate
     --disturbance push``'s."""
@@ -109,7 +112,9 @@ class PushMap:
     def __init__(self, engine: StepEngine, qpos: FloatArray, qvel: FloatArray, band: Band | None,
                  validate: ValidateConfig, push: PushConfig):
         self.engine, self.qpos, self.qvel = engine, qpos, qvel
-        self.band = band if push.recovery else None
+        # the band's floor is this rule's (an exploration push's band is looser than the statement's)
+        self.band = dataclasses.replace(band, radius=push.recovery_radius) if band is not None and push.recovery \
+            else None
         self.horizon, self.recovery_steps = push.horizon, push.recovery_steps
         self.validate = validate
         r = quat_to_mat(qpos[3:7])

@@ -6,12 +6,16 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import TYPE_CHECKING
 
 from robustgait.cli.common import GAIT_HELP, ROBOT_HELP, command, inputs, naming_file
 from robustgait.cli.options import config_from, number_within, numbers_within, output_path
 from robustgait.config import CertifyConfig, radius_name
 from robustgait.errors import RobustGaitError
 from robustgait.io.limits import BARRIER_R, X_STAR
+
+if TYPE_CHECKING:
+    from robustgait.certificate.barrier import Round
 
 CERTIFY = {"--state": "certify.state", "--set": "certify.set", "--horizon": "certify.horizon",
            "--disturbance": "certify.disturbance", "--push-horizon": "certify.push.horizon",
@@ -87,15 +91,24 @@ def _certify(args: argparse.Namespace) -> int:
             print("largest ‖P^j(z) − z*‖ over the samples inside, j = 1 … k: "
                   + " ".join(f"{v:.4g}" for v in gc.excursion))
         if cfg.method == "sequential":
-            print(f"{name[0]}̂ after each round: " + " ".join(f"{r.kind[0]}{r.samples_used}:{r.r_hat:.4g}"
-                                                           for r in c.rounds)
-                  + "  (u = uniform, e = explore, v = verify; samples used: estimate)")
+            print(f"{name[0]}̂ after each round: " + " ".join(_round_text(r) for r in c.rounds)
+                  + "  (u = uniform, e = explore, v = verify at the radius @, ✓ passed, ✗ failed; samples used: "
+                  "estimate)")
         print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside; controller {gc.controller}"
               + (f" ({gc.controller_note})" if gc.controller_note else ""))
         print(gc.statement())
         print(f"time: orbit {gc.seconds['orbit']:.2f} s, sampling {gc.seconds['sampling']:.2f} s "
               f"({gc.seconds['sim_steps_per_s']:.0f} simulated steps/s)")
     return 0 if gc.ok else 1
+
+
+def _round_text(r: Round) -> str:
+    """One round of the sequential estimator in a few characters: its kind, the samples used after it, the estimate
+    after it and, for a verification batch, the radius it was drawn in and whether it passed."""
+    text = f"{r.kind[0]}{r.samples_used}:{r.r_hat:.4g}"
+    if r.kind == "verify":
+        text += f"@{r.radius:.4g}{'✓' if r.passed else '✗'}"
+    return text
 
 
 def _barrier_eval(args: argparse.Namespace) -> int:

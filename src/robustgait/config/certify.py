@@ -67,16 +67,19 @@ def radius_name(space: str) -> str:
 SEED_LIMIT = 2**63 - 1  # a seed fits a signed 64-bit integer (study storage)
 
 
-def verification_beta(beta: float, attempt: int) -> float:
-    """β_a = β / 2^a: the share of β spent on verification attempt a ≥ 1 of the sequential estimator (Σ_a β_a = β)."""
+def verification_beta(beta: float, attempt: int, first_share: float = 0.5) -> float:
+    """β_a: the part of β spent on verification attempt a ≥ 1 of the sequential estimator, β_1 = s β and
+    β_a = (1 − s) β / 2^(a−1) for a ≥ 2, s = ``first_share`` ∈ (0, 1) (Σ_a β_a = β; s = ½ gives β / 2^a)."""
     if attempt < 1:
         raise ValueError(f"verification attempts count from 1, got {attempt}")
-    return beta * 0.5**attempt
+    if attempt == 1:
+        return beta * first_share
+    return beta * (1.0 - first_share) * 0.5 ** (attempt - 1)
 
 
-def verification_size(epsilon: float, beta: float, attempt: int) -> int:
+def verification_size(epsilon: float, beta: float, attempt: int, first_share: float = 0.5) -> int:
     """n_a = ⌈ln β_a / ln(1 − ε)⌉: the least batch with (1 − ε)^{n_a} ≤ β_a (:func:`verification_beta`)."""
-    n = math.log(verification_beta(beta, attempt)) / math.log1p(-epsilon)
+    n = math.log(verification_beta(beta, attempt, first_share)) / math.log1p(-epsilon)
     return max(1, math.ceil(n - 1e-9))  # the slack absorbs rounding when n is an integer
 
 
@@ -100,9 +103,22 @@ class SequentialConfig:
                                le=1000)] = 8
     min_depth: Annotated[Float, Doc("smallest relative depth 1 − d/r̂ of a local proposal (log-uniform depths)",
                                     gt=0.0, lt=1.0)] = 1e-3
-    verify_chunk: Annotated[Int, Doc("evaluate a verification batch in chunks of this many samples and abandon it at "
-                                     "the first chunk that shrinks r̂ (0: the whole batch at once)", ge=0,
-                                     le=10_000)] = 0
+    verify_chunk: Annotated[Int, Doc("evaluate a verification batch in chunks of this many samples, farthest from x* "
+                                     "first, and abandon it at the first chunk that shrinks r̂ (0: the whole batch at "
+                                     "once)", ge=0, le=10_000)] = 0
+    verify_margin: Annotated[Float, Doc("the radius a verification batch is drawn in, as a fraction of the explored "
+                                        "r̂ (below 1: fewer failed batches, a smaller certified radius)", gt=0.0,
+                                        le=1.0)] = 1.0
+    first_share: Annotated[Float, Doc("share of β spent on the first verification attempt (the rest halves over the "
+                                      "further attempts; 0.5: β/2, β/4, …)", gt=0.0, lt=1.0)] = 0.5
+
+    def beta_of(self, beta: float, attempt: int) -> float:
+        """β_a of verification attempt a (:func:`verification_beta` with this estimator's ``first_share``)."""
+        return verification_beta(beta, attempt, self.first_share)
+
+    def batch_size(self, beta: float, attempt: int) -> int:
+        """n_a of verification attempt a (:func:`verification_size` with ``epsilon`` and ``first_share``)."""
+        return verification_size(self.epsilon, beta, attempt, self.first_share)
 
 
 @config
@@ -201,18 +217,45 @@ class PushConfig:
                                            "scatter in each coordinate", ge=0.0, le=1000.0)] = 3.0
     recovery_steps: Annotated[Int, Doc("consecutive steps in the band that make a pushed walk recovered (it stops)",
                                        ge=1, le=100)] = 2
+    r_max_scale: Annotated[Float, Doc(
+        "certify.r_max of a push certificate when not set: this multiple of the robot's momentum at its pendulum "
+        "speed, m √(g l) (the disk of the first round; J* is at most r_max)", gt=0.0, le=10.0)] = 0.25
     first_round: Annotated[Int, Doc("round 1: uniform pushes in the disk of radius r_max", ge=1, le=10_000)] = 50
     explore: Annotated[Int, Doc("exploration pushes before the first verification", ge=0, le=100_000)] = 100
     explore_after_failure: Annotated[Int, Doc("exploration pushes before each further verification", ge=0,
                                               le=100_000)] = 50
-    verify_chunk: Annotated[Int, Doc("verification pushes simulated per chunk; a batch is abandoned at the first "
-                                     "chunk with a fall inside the disk verified (0: the whole batch at once)", ge=0,
-                                     le=10_000)] = 25
+    verify_chunk: Annotated[Int, Doc("verification pushes simulated per chunk, the largest first; a batch is "
+                                     "abandoned at the first chunk with a fall inside the disk verified (0: the "
+                                     "whole batch at once)", ge=0, le=10_000)] = 25
+    verify_margin: Annotated[Float, Doc("the disk a verification batch is drawn in, as a fraction of the explored "
+                                        "estimate Ĵ: J* is this fraction of Ĵ when the batch passes (below 1: fewer "
+                                        "failed batches, a smaller J*)", gt=0.0, le=1.0)] = 0.9
+    first_share: Annotated[Float, Doc("share of β spent on the first verification batch (the rest halves over the "
+                                      "further batches; 0.5: β/2, β/4, …): a larger share, a smaller first batch",
+                                      gt=0.0, lt=1.0)] = 0.9
+    explore_horizon: Annotated[Int, Doc("exploration: steps after the pushed one within which an exploration push "
+                                        "fails (exploration only places the verified disk; the statement rests on "
+                                        "the verification batch, at horizon)", ge=1, le=100)] = 8
+    explore_recovery_radius: Annotated[Float, Doc(
+        "exploration: the band's floor ν of a recovered exploration push (band coordinates)", gt=0.0,
+        le=10.0)] = 0.03
+    explore_recovery_steps: Annotated[Int, Doc("exploration: consecutive steps in that band that make an exploration "
+                                               "push recovered", ge=1, le=100)] = 1
 
     def __post_init__(self) -> None:
         if self.recovery and self.recovery_steps > 1 + self.horizon:
             raise FieldProblem("recovery_steps", f"must be at most the pushed step and horizon ({1 + self.horizon} "
                                f"steps), got {self.recovery_steps}")
+        if self.recovery and self.explore_recovery_steps > 1 + self.explore_horizon:
+            raise FieldProblem("explore_recovery_steps", "must be at most the pushed step and explore_horizon "
+                               f"({1 + self.explore_horizon} steps), got {self.explore_recovery_steps}")
+
+    def exploring(self) -> PushConfig:
+        """The push rule of exploration pushes: ``explore_horizon``, ``explore_recovery_radius`` and
+        ``explore_recovery_steps`` in place of the statement's ``horizon``, ``recovery_radius`` and
+        ``recovery_steps``."""
+        return dataclasses.replace(self, horizon=self.explore_horizon, recovery_radius=self.explore_recovery_radius,
+                                   recovery_steps=self.explore_recovery_steps)
 
 
 @config
@@ -238,8 +281,8 @@ class CertifyConfig:
         "states, r*; setting state, set or horizon without disturbance implies it)")] = "push"
     n_samples: Annotated[Int, Doc("uniform: number of sampled perturbations N", ge=1, le=10_000)] = 200
     r_max: Annotated[Float | None, Doc(
-        "radius of the sampled ball (unset: 2 rad/s for omega, 10 √J for centroidal and velocity, 100 N s for push)",
-        gt=0.0, le=10_000.0)] = None
+        "radius of the sampled ball (unset: 2 rad/s for omega, 10 √J for centroidal and velocity, push.r_max_scale × "
+        "m √(g l) for push; 100 N s where no robot is given)", gt=0.0, le=10_000.0)] = None
     alpha: Annotated[Float, Doc("DTBF decay rate α", gt=0.0, lt=1.0)] = 0.05
     beta: Annotated[Float, Doc("1 − confidence of the violation bound", gt=0.0, lt=1.0)] = 0.05
     seed: Annotated[Int, Doc("seed of the perturbations", ge=0, le=SEED_LIMIT)] = 0
@@ -263,7 +306,8 @@ class CertifyConfig:
             return self.sequential
         p = self.push
         return dataclasses.replace(self.sequential, first_round=p.first_round, explore=p.explore,
-                                   explore_after_failure=p.explore_after_failure, verify_chunk=p.verify_chunk)
+                                   explore_after_failure=p.explore_after_failure, verify_chunk=p.verify_chunk,
+                                   verify_margin=p.verify_margin, first_share=p.first_share)
 
     def __post_init__(self) -> None:
         if self.disturbance == "push" and self.chooses_a_state:
@@ -274,7 +318,7 @@ class CertifyConfig:
             raise FieldProblem("r_max", f"must satisfy 0 < x ≤ {R_MAX_LIMIT[self.space]:g} {R_MAX_UNIT[self.space]} "
                                f"when certifying {self.space} (got {self.r_max:g})")
         seq = self.estimator
-        need = seq.first_round + verification_size(seq.epsilon, self.beta, 1)
+        need = seq.first_round + seq.batch_size(self.beta, 1)
         if self.method == "sequential" and seq.budget < need:
             raise FieldProblem("sequential.budget", f"{seq.budget} samples cannot hold the first round "
                                f"({seq.first_round}) and one verification batch ({need - seq.first_round} for "
