@@ -42,6 +42,9 @@ else:  # pragma: no cover - exercised on 3.10 only
 REPO = Path(__file__).resolve().parents[1]
 T1 = REPO.parent / "shared" / "robots" / "booster_t1" / "t1.xml"
 EXO_XML = REPO / "src" / "robustgait" / "robots" / "exo" / "exo.xml"
+# robot init's servo timestep rule, which walks no gait (the accuracy rule's tests: tests/test_timestep.py), and robot
+# check without the timestep check (which generates the default gait)
+SERVO_RULE = ("--timestep-rule", "servo")
 needs_t1 = pytest.mark.skipif(not T1.is_file(), reason="../shared/robots/booster_t1 (Booster T1) is not beside the "
                               "repository")
 
@@ -204,7 +207,7 @@ def test_soles_of_sets_and_unnamed_geoms_load_as_virtual_soles(tmp_path: Path, f
     assert (sole.kind, len(sole.geoms), sole.sole_class) == (kind, count, sole_class)
     assert (sole.length, sole.width) == (pytest.approx(length), pytest.approx(width))
     spec = tmp_path / "spec.toml"
-    assert main(["robot", "init", str(path), "-o", str(spec)]) == 0
+    assert main(["robot", "init", str(path), "-o", str(spec), *SERVO_RULE]) == 0
     robot = load_robot(spec)
     g = robot.sole_geom_id["left"]
     # the loader's sole box spans the same footprint
@@ -225,7 +228,7 @@ def test_a_sole_its_model_tilts_is_levelled_by_the_ankle_in_the_posture(tmp_path
     for s, j in pitch.items():
         assert abs(d.angles[j] - level.angles[j]) == pytest.approx(0.01, abs=1e-6), s
     spec = tmp_path / "tilted" / "spec.toml"
-    assert main(["robot", "init", str(path), "-o", str(spec)]) == 0
+    assert main(["robot", "init", str(path), "-o", str(spec), *SERVO_RULE]) == 0
     soles = next(r for r in run_checks(load_robot(spec), RobotConfig()) if r.name == "soles")
     assert soles.passed and soles.values["tilt"] < 1e-5
 
@@ -506,7 +509,7 @@ def test_init_writes_a_spec_that_loads_and_passes_check(tmp_path: Path, capsys: 
     model = write(tmp_path, biped_xml())
     spec = tmp_path / "out" / "biped.toml"
     spec.parent.mkdir()
-    code, out, err = run(capsys, "robot", "init", model, "-o", spec)
+    code, out, err = run(capsys, "robot", "init", model, "-o", spec, *SERVO_RULE)
     assert code == 0 and err == "" and "mirror: verified" in out and f"wrote {spec}" in out
     text = spec.read_text()
     raw = tomllib.loads(text)
@@ -530,7 +533,7 @@ def test_init_writes_a_spec_that_loads_and_passes_check(tmp_path: Path, capsys: 
     assert robot.n_joints == 12 and len(robot.spec.held) == 6
     results = run_checks(robot, RobotConfig())
     assert all(r.passed for r in results), [r.line for r in results]
-    code, out, _ = run(capsys, "robot", "check", spec, "--json")
+    code, out, _ = run(capsys, "robot", "check", spec, "--no-timestep", "--json")
     report = json.loads(out)
     assert code == 0 and report["passed"] and [c["name"] for c in report["checks"]] == [
         "mirror", "soles", "torques", "stiffness", "stand", "tracking"]
@@ -544,7 +547,7 @@ def test_an_asymmetric_keyframe_is_made_symmetric(tmp_path: Path) -> None:
 
 def test_plan_all_plans_every_joint(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     spec = tmp_path / "all.toml"
-    code, _, _ = run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, "--plan", "all",
+    code, _, _ = run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, *SERVO_RULE, "--plan", "all",
                      "--bandwidth", "3")
     raw = tomllib.loads(spec.read_text())
     assert code == 0 and len(raw["joints"]["names"]) == 18 and "held" not in raw["joints"]
@@ -555,18 +558,18 @@ def test_plan_all_plans_every_joint(tmp_path: Path, capsys: pytest.CaptureFixtur
 
 def test_a_broken_mirror_fails_check(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     spec = tmp_path / "spec.toml"
-    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec)
+    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, *SERVO_RULE)
     text = spec.read_text().replace("joint_sign = [-1, 1, 1, 1, 1, -1, -1, 1, 1, 1, 1, -1]",
                                     "joint_sign = [-1, 1, 1, -1, 1, -1, -1, 1, 1, -1, 1, -1]")
     spec.write_text(text)
-    code, out, _ = run(capsys, "robot", "check", spec)
+    code, out, _ = run(capsys, "robot", "check", spec, "--no-timestep")
     assert code == 1 and "mirror: FAIL" in out and "1 of 6 checks failed (mirror)" in out
 
 
 def test_a_servo_weaker_than_gravity_fails_stiffness(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """kp capped at τ_max / 1 rad: the stance ankle is softer than the robot tipping over it (m g h)."""
     spec = tmp_path / "spec.toml"
-    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, "--tracking-error", "1")
+    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, *SERVO_RULE, "--tracking-error", "1")
     robot = load_robot(spec)
     result = next(r for r in run_checks(robot, RobotConfig()) if r.name == "stiffness")
     assert not result.passed and result.values["ratio"] < 1 and "ankle" in result.line
@@ -574,9 +577,9 @@ def test_a_servo_weaker_than_gravity_fails_stiffness(tmp_path: Path, capsys: pyt
 
 def test_soft_gains_fail_stand_and_tracking(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     spec = tmp_path / "spec.toml"
-    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, "--bandwidth", "0.2",
+    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, *SERVO_RULE, "--bandwidth", "0.2",
         "--damping-ratio", "0.2")
-    code, out, _ = run(capsys, "robot", "check", spec)
+    code, out, _ = run(capsys, "robot", "check", spec, "--no-timestep")
     lines = {line.split(":")[0]: line for line in out.splitlines()}
     assert code == 1 and "FAIL" in lines["tracking"] and ("FELL" in lines["stand"] or "FAIL" in lines["stand"])
 
@@ -610,7 +613,7 @@ def biped_urdf() -> str:
 def test_init_on_a_urdf(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     model = write(tmp_path, biped_urdf(), "biped.urdf")
     spec = tmp_path / "spec.toml"
-    code, _, err = run(capsys, "robot", "init", model, "-o", spec)
+    code, _, err = run(capsys, "robot", "init", model, "-o", spec, *SERVO_RULE)
     assert code == 0, err
     raw = tomllib.loads(spec.read_text())
     assert raw["base_body"] == "pelvis" and raw["mjcf"] == "biped.urdf" and raw["add_floor"] is True
@@ -624,7 +627,7 @@ def test_init_on_a_urdf(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> N
 
 def test_init_on_exo_finds_its_spec(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     spec = tmp_path / "exo.toml"
-    code, out, _ = run(capsys, "robot", "init", EXO_XML, "-o", spec)
+    code, out, _ = run(capsys, "robot", "init", EXO_XML, "-o", spec, *SERVO_RULE)
     raw = tomllib.loads(spec.read_text())
     shipped = tomllib.loads(EXO_XML.with_name("spec.toml").read_text())
     assert code == 0 and "no torque limit in the model: estimated" in out
@@ -638,7 +641,7 @@ def test_init_on_exo_finds_its_spec(tmp_path: Path, capsys: pytest.CaptureFixtur
 @needs_t1
 def test_init_and_check_on_booster_t1(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     spec = tmp_path / "t1.toml"
-    code, out, _ = run(capsys, "robot", "init", T1, "-o", spec)
+    code, out, _ = run(capsys, "robot", "init", T1, "-o", spec, *SERVO_RULE)
     assert code == 0
     raw = tomllib.loads(spec.read_text())
     j = raw["joints"]
@@ -654,7 +657,7 @@ def test_init_and_check_on_booster_t1(tmp_path: Path, capsys: pytest.CaptureFixt
     # of √(l/g)): 0.5 ms (docs/robots.md)
     assert raw["sim"]["timestep"] == 0.0005
     assert raw["gait_quality"]["pelvis_roll"] == 0.05 and raw["gait_quality"]["pelvis_pitch"] == [-0.05, 0.15]
-    code, out, _ = run(capsys, "robot", "check", spec)
+    code, out, _ = run(capsys, "robot", "check", spec, "--no-timestep")
     assert code == 0 and "t1: all 6 checks passed" in out
 
 
@@ -665,11 +668,11 @@ def test_init_on_booster_t1_as_the_menagerie_has_it(tmp_path: Path, capsys: pyte
     xml = xml.replace('<geom name="floor" type="plane" size="0 0 0.05" rgba="0.8 0.8 0.8 1"/>', "")
     assert 'type="plane"' not in xml and 'name="left_foot_box"' not in xml
     spec = tmp_path / "t1.toml"
-    code, out, err = run(capsys, "robot", "init", write(tmp_path, xml, "t1.xml"), "-o", spec)
+    code, out, err = run(capsys, "robot", "init", write(tmp_path, xml, "t1.xml"), "-o", spec, *SERVO_RULE)
     raw = tomllib.loads(spec.read_text())
     assert code == 0, err
     assert raw["legs"]["left"] == {"sole_body": "left_foot_link"} and raw["add_floor"] is True
-    code, out, _ = run(capsys, "robot", "check", spec)
+    code, out, _ = run(capsys, "robot", "check", spec, "--no-timestep")
     assert code == 0 and "t1: all 6 checks passed" in out
 
 
@@ -717,7 +720,7 @@ def test_bad_paths_are_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str
 
 def test_check_refuses_a_held_joint_that_does_not_exist(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     spec = tmp_path / "spec.toml"
-    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec)
+    run(capsys, "robot", "init", write(tmp_path, biped_xml()), "-o", spec, *SERVO_RULE)
     spec.write_text(spec.read_text().replace("neck_yaw", "neck_roll"))
     code, out, err = run(capsys, "robot", "check", spec)
     assert code == 2 and out == "" and "unknown held joint name 'neck_roll'" in err
@@ -738,7 +741,7 @@ def test_a_robot_of_collision_geoms_only_is_rendered(tmp_path: Path, capsys: pyt
     from robustgait.sim.walk import offscreen_renderer, scene_option
 
     spec = tmp_path / "t1.toml"
-    assert run(capsys, "robot", "init", T1, "-o", spec)[0] == 0
+    assert run(capsys, "robot", "init", T1, "-o", spec, *SERVO_RULE)[0] == 0
     for robot, groups in ((load_robot(spec), [1, 1, 1, 1, 0, 0]), (load_robot("exo"), [1, 1, 1, 0, 0, 0])):
         option = scene_option(robot)
         assert list(option.geomgroup) == groups

@@ -9,7 +9,8 @@ For each gait and each timestep h (the reference ``--reference`` first):
   √(g/l); the recovery band's floor is 0.03): the largest coordinate difference under the best phase shift;
 * the step map at the reference's x*: one step (the orbit's period of steps) from the same state at h and at the
   reference — the largest band-coordinate difference of the switching states (the map's error at h);
-* with ``--certify``: the default certificate (J*, pushes, physics steps, seconds).
+* with ``--certify``: the default certificate (J*, pushes, physics steps, seconds), with ``--seeds N`` for the
+  certificate seeds 0 … N − 1 (J*'s spread over seeds).
 
 Every other option is the robot's. Rows go to ``--out`` (JSON lines) and a table is printed.
 
@@ -89,6 +90,7 @@ def main() -> None:
     ap.add_argument("--reference", type=setting, required=True)
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--certify", action="store_true")
+    ap.add_argument("--seeds", type=int, default=1, help="with --certify: certificate seeds 0 … N−1")
     ap.add_argument("--out", default="")
     args = ap.parse_args()
     commit = git_commit()
@@ -121,11 +123,15 @@ def main() -> None:
                     img = map_error(robot, gait, o.qpos, o.qvel, o.period, sim)
                     row["map_diff"] = float(np.max(np.abs(img - ref["image"])))
             if args.certify and (h, r) != args.reference:
-                t0 = time.perf_counter()
-                c = certify_gait(robot, gait, CertifyConfig(), sim)
-                row.update(status=c.status.value, j_star=c.r_star, certify_s=round(time.perf_counter() - t0, 1),
-                           pushes=c.certificate.n_samples if c.certificate else 0,
-                           certify_physics=c.physics_steps + c.orbit_physics_steps)
+                for seed in range(args.seeds):
+                    t0 = time.perf_counter()
+                    c = certify_gait(robot, gait, CertifyConfig(seed=seed), sim)
+                    one = dict(status=c.status.value, j_star=c.r_star, certify_s=round(time.perf_counter() - t0, 1),
+                               pushes=c.certificate.n_samples if c.certificate else 0,
+                               certify_physics=c.physics_steps + c.orbit_physics_steps)
+                    if seed == 0:
+                        row.update(one)
+                    row.setdefault("seeds", []).append({"seed": seed, **one})
             rows.append(row)
             print(json.dumps(row), flush=True)
             if args.out:
@@ -141,6 +147,15 @@ def main() -> None:
               f"{r.get('centre_diff', float('nan')):.3g} | "
               f"{r.get('map_diff', float('nan')):.3g} | {r.get('j_star', float('nan')):.3f} | "
               f"{r.get('certify_s', float('nan'))} |")
+    if any(len(r.get("seeds", [])) > 1 for r in rows):
+        print("\n| gait | h [ms] | J* over seeds [N s]: mean (range) | seconds: mean |")
+        print("|---|---|---|---|")
+        for r in rows:
+            if len(r.get("seeds", [])) > 1:
+                js = [x["j_star"] for x in r["seeds"]]
+                secs = [x["certify_s"] for x in r["seeds"]]
+                print(f"| {r['gait']} | {r['timestep'] * 1e3:g}{' SPD' if r['stable_pd'] else ''} | "
+                      f"{np.mean(js):.3f} ({min(js):.3f}–{max(js):.3f}) | {np.mean(secs):.1f} |")
 
 
 if __name__ == "__main__":

@@ -38,6 +38,10 @@ class RegulatorConfig:
     predict: Annotated[Bool, Doc(
         "predict the CoM error at touchdown with the H-LIP's pendulum flow (a point-foot model); off: the error "
         "measured now is the estimate (a flat foot the joint PD holds does not let it grow that way)")] = False
+    update_interval: Annotated[Float, Doc(
+        "time between two updates of the landing change (the engine's chunks on a regulated robot: round(interval / "
+        "timestep) physics steps), in seconds so that the regulated controller is the same at any timestep",
+        unit="s", gt=0.0, le=1.0)] = 0.05
     land_tau: Annotated[Float, Doc("phase by which the swing foot's correction is fully applied", gt=0.0,
                                    le=1.0)] = 0.8
     freeze_tau: Annotated[Float, Doc("phase after which the correction is no longer updated (≤ land_tau)", ge=0.0,

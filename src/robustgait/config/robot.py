@@ -9,11 +9,15 @@ back its hand-written spec; ``docs/robots.md`` compares what they give for exo a
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from typing import Annotated, Literal
 
-from robustgait.config.base import Doc, FieldProblem, Float, Int, Str, config
+from robustgait.config.base import Bool, Doc, FieldProblem, Float, Int, Str, config
 
 Plan = Literal["legs", "all"]
+TimestepRule = Literal["accuracy", "servo"]
+# a candidate's reference walk runs at half of it, which a spec's timestep may still be (io.limits.TIMESTEP: ≥ 0.1 ms)
+Candidate = Annotated[Float, Doc(unit="s", ge=2e-4, le=0.05)]
 Factor = Annotated[Float, Doc(gt=0.0, le=100.0)]
 Fraction = Annotated[Float, Doc(gt=0.0, le=1.0)]
 Angle = Annotated[Float, Doc(ge=-1.0, le=1.0)]
@@ -65,8 +69,8 @@ class ScaleRules:
         "pelvis height band above the stance sole ÷ the standing height")] = (0.87, 1.03)
     fall_height: Annotated[Float, Doc("fall when the base is lower than this fraction of the standing height",
                                       gt=0.0, le=1.0)] = 0.65
-    timestep: Annotated[Float, Doc("largest physics step ÷ √(l/g) (the model's step is lowered to a nice value below "
-                                   "it; exo: 1 ms of 0.308 s)", gt=0.0, le=0.1)] = 0.0035
+    timestep: Annotated[Float, Doc("the servo rule's largest physics step ÷ √(l/g) (the model's step is lowered to a "
+                                   "nice value below it; exo: 1 ms of 0.308 s)", gt=0.0, le=0.1)] = 0.0035
     pelvis_roll: Annotated[Float, Doc("gait-quality bound on the pelvis roll relative to the stance sole (an angle: "
                                       "no scale; exo's)", unit="rad", gt=0.0, le=1.0)] = 0.05
     pelvis_yaw: Annotated[Float, Doc("gait-quality bound on the pelvis yaw (exo's)", unit="rad", gt=0.0,
@@ -113,6 +117,9 @@ class RobotCheckConfig:
                                            gt=0.0, le=1.0)] = 0.05
     torque_margin: Annotated[Float, Doc("largest static torque ÷ torque limit that holds the posture (double "
                                         "support)", gt=0.0, le=1.0)] = 0.5
+    timestep: Annotated[Bool, Doc(
+        "re-check the spec's timestep: generate the default gait and walk it at the spec's step and at half of it, "
+        "within robot.timestep_tolerance (tens of seconds)")] = True
 
 
 @config
@@ -130,9 +137,21 @@ class RobotConfig:
                                         gt=0.0, le=10.0)] = 1.0
     tracking_error: Annotated[Float, Doc("kp ≤ torque limit ÷ this error: a larger error saturates anyway",
                                          unit="rad", gt=0.0, le=1.0)] = 0.02
+    timestep_rule: Annotated[TimestepRule, Doc(
+        "how the spec's timestep is chosen: accuracy (the largest of robot.timestep_candidates whose default gait's "
+        "settled switching states lie within robot.timestep_tolerance of those at half the step, stable PD; walks "
+        "the gait: tens of seconds) or servo (the model's step lowered by robot.servo_steps and "
+        "robot.scale.timestep, no walk)")] = "accuracy"
+    timestep_candidates: Annotated[tuple[Candidate, ...], Doc(
+        "the timesteps the accuracy rule tries, largest first (with the model's own step among them)",
+        unit="s")] = (0.002, 0.001, 0.0005, 0.00025)
+    timestep_tolerance: Annotated[Float, Doc(
+        "largest difference of the default gait's settled switching-state band centres at a timestep and at half "
+        "of it (band coordinates): two-thirds of the recovery band's floor certify.push.recovery_radius, so that "
+        "the step's error stays well inside the band a pushed walk must come back to", gt=0.0, le=1.0)] = 0.02
     servo_steps: Annotated[Float, Doc("least physics steps per natural period of the fastest servo (on its swing "
-                                      "inertia): the spec's timestep is the model's, lowered to a nice value that "
-                                      "gives this many (exo: 15 at 1 ms)", ge=2.0, le=1000.0)] = 12.0
+                                      "inertia): the servo rule's timestep is the model's, lowered to a nice value "
+                                      "that gives this many (exo: 15 at 1 ms)", ge=2.0, le=1000.0)] = 12.0
     torque_limit_factor: Annotated[Float, Doc("a joint without a torque limit in the model gets this multiple of "
                                               "the largest static torque it holds (on one foot, the weight at a "
                                               "sole's corner, its subtree's weight × COM distance)", ge=1.0,
@@ -157,3 +176,8 @@ class RobotConfig:
     seed: Annotated[Int, Doc("seed of the mirror check's configurations", ge=0, le=2**63 - 1)] = 0
     scale: ScaleRules = dataclasses.field(default_factory=ScaleRules)
     check: RobotCheckConfig = dataclasses.field(default_factory=RobotCheckConfig)
+
+    def __post_init__(self) -> None:
+        c = self.timestep_candidates
+        if not c or any(a <= b for a, b in itertools.pairwise(c)):
+            raise FieldProblem("timestep_candidates", f"must be one or more timesteps, largest first, got {list(c)}")

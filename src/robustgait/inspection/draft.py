@@ -13,6 +13,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -47,6 +48,9 @@ from robustgait.inspection.model import RobotModel, clip_to_range, open_model
 from robustgait.inspection.scale import RobotSize, Scaled, scale
 from robustgait.robots.model import mass_matrix
 from robustgait.robots.soles import sole_slopes
+
+if TYPE_CHECKING:
+    from robustgait.inspection.timestep import TimestepChoice
 
 INTEGRATOR_NAMES = {int(mujoco.mjtIntegrator.mjINT_EULER): "euler",
                     int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST): "implicitfast",
@@ -89,6 +93,8 @@ class Draft:
     radius: float
     height: float
     notes: list[str] = field(default_factory=list)
+    stable_pd: bool = False
+    choice: TimestepChoice | None = None
 
 
 def spec_name(robot: RobotModel) -> str:
@@ -197,6 +203,31 @@ def coupled_gains(robot: RobotModel, qpos: NDArray[np.float64], gains: dict[int,
             for j, g in gains.items()}, radius
 
 
+def drafted_gains(robot: RobotModel, loads: dict[int, JointLoad], torque: dict[int, TorqueLimit],
+                  config: RobotConfig, qpos: NDArray[np.float64], dt: float, integrator: str
+                  ) -> tuple[dict[int, PDGains], float]:
+    """Every joint's servo at the physics step ``dt`` [s]: :func:`pd_gains` from its loads and torque limit, then
+    :func:`coupled_gains` on the mass matrix at ``qpos``; and the coupled radius."""
+    gains = {j: pd_gains(loads[j], float(torque[j].value or 0.0), config.bandwidth, config.damping_ratio,
+                         config.tracking_error, dt, integrator) for j in robot.joints}
+    return coupled_gains(robot, qpos, gains, dt, integrator)
+
+
+def draft_at_timestep(draft: Draft, dt: float, stable_pd: bool, choice: TimestepChoice | None = None) -> Draft:
+    """The draft with the physics step ``dt`` [s] and its gains drafted at it (:func:`drafted_gains`: the gain rules
+    depend on the step), its servos stable PD or not, and the accuracy rule's ``choice`` that set it (None: none)."""
+    qpos = draft.robot.qpos(height=draft.height)
+    gains, radius = drafted_gains(draft.robot, draft.loads, draft.torque, draft.config, qpos, dt, draft.integrator)
+    return dataclasses.replace(draft, timestep=dt, gains=gains, radius=radius, stable_pd=stable_pd, choice=choice,
+                               notes=list(draft.notes))
+
+
+def lowered(draft: Draft) -> bool:
+    """Whether a servo's gains were lowered to contract at the draft's step: the step is above the servos' stability
+    bound."""
+    return any(g.bound == "stability" for g in draft.gains.values())
+
+
 def symmetric_loads(loads: dict[int, JointLoad], torque: dict[int, TorqueLimit], mirror: Mirror
                     ) -> tuple[dict[int, JointLoad], dict[int, TorqueLimit]]:
     """The loads averaged over each left/right pair and the smaller torque limit of the pair, so that partners get
@@ -266,9 +297,7 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     gravity = float(np.linalg.norm(robot.model.opt.gravity))
     timestep = servo_timestep(float(robot.model.opt.timestep), servo_frequency, config.servo_steps,
                               math.sqrt(legs.leg_length / gravity), config.scale.timestep)
-    gains = {j: pd_gains(loads[j], float(torque[j].value or 0.0), config.bandwidth, config.damping_ratio,
-                         config.tracking_error, timestep, integrator) for j in robot.joints}
-    gains, radius = coupled_gains(robot, qpos, gains, timestep, integrator)
+    gains, radius = drafted_gains(robot, loads, torque, config, qpos, timestep, integrator)
     if robot.model.neq:
         notes.append(f"the model has {robot.model.neq} equality constraint{'s' if robot.model.neq > 1 else ''} "
                      "(closed linkages?): robustgait's servos drive every joint on its own; check that they agree")

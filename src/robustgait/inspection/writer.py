@@ -16,6 +16,7 @@ from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
 from robustgait.inspection.mirror import mass_asymmetry
 from robustgait.inspection.model import GEOM_TYPES
 from robustgait.inspection.scale import GAIT_AXES, balance, duration_constant, narrow_soles, sig
+from robustgait.inspection.timestep import TimestepChoice, ms
 from robustgait.robots.spec import FallCriteria
 
 BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
@@ -198,6 +199,8 @@ def _mirror(draft: Draft) -> list[str]:
 
 
 def _timestep_comment(draft: Draft) -> str:
+    if draft.choice is not None:
+        return _accuracy_comment(draft, draft.choice)
     model = float(draft.robot.model.opt.timestep)
     size, c = draft.size, draft.config
     rules = (f"at least {c.servo_steps:g} steps per period of the fastest servo ({draft.servo_frequency:.3g} Hz on "
@@ -206,6 +209,45 @@ def _timestep_comment(draft: Draft) -> str:
     if draft.timestep >= model:
         return f"the model's <option>: {rules}"
     return f"the model's {model:g} s lowered to a nice value: {rules}"
+
+
+def _accuracy_comment(draft: Draft, choice: TimestepChoice) -> str:
+    """The accuracy rule's comment: the rule, the tolerance, the error at the chosen step against half of it and why
+    the next larger candidate was not taken."""
+    model = float(draft.robot.model.opt.timestep)
+    tol = choice.tolerance
+    tried = ", ".join(ms(h) for h in choice.candidates)
+    text = (f"by accuracy (robot.timestep_rule): the largest of {tried} (the model's {ms(model)} and "
+            f"robot.timestep_candidates) whose default gait's settled switching states, stable PD, lie "
+            f"within {tol:g} band units of those at half the step (robot.timestep_tolerance)")
+    chosen = choice.chosen
+    if choice.passed and chosen is not None and chosen.error is not None:
+        text += f": {chosen.error:.3g} against {ms(chosen.fine.timestep)}"
+    else:
+        text += f": NONE DOES, the smallest is written ({chosen.why_not(tol) if chosen else 'not walked'})"
+    larger = choice.larger
+    if larger is not None:
+        text += f"; {ms(larger.timestep)} not taken: {larger.why_not(tol)}"
+    if choice.excluded:
+        text += (f"; not tried: {', '.join(ms(h) for h in choice.excluded)} (above the servos' stability bound: their "
+                 "gains would be lowered to contract)")
+    return text
+
+
+def _sim(draft: Draft) -> list[str]:
+    lines = [
+        "", "[sim]",
+        f"timestep = {num(draft.timestep)}  # " + _timestep_comment(draft),
+        f"integrator = {text(draft.integrator)}  # "
+        + ("the model's <option>" if INTEGRATOR_NAMES.get(int(draft.robot.model.opt.integrator)) == draft.integrator
+           else "the model's is euler: implicitfast integrates the servos' damping implicitly")
+        + f"; one step of all the servos on the mass matrix (base held) has spectral radius {draft.radius:.6f} "
+        "(< 1: stable)",
+    ]
+    if draft.stable_pd:
+        lines.append("stable_pd = true  # the servos' damping is kd + h kp, integrated implicitly (stable PD), as the "
+                     "timestep rule walked them")
+    return lines
 
 
 def _scaled(draft: Draft) -> list[str]:
@@ -220,13 +262,7 @@ def _scaled(draft: Draft) -> list[str]:
         f"min_base_height = {num(s.fall_height, 3)}  # {rules.fall_height:g} × the standing height h (robot.scale."
         "fall_height)",
         f"max_tilt = {num(FallCriteria.max_tilt)}  # robustgait's default (an angle: no scale)",
-        "", "[sim]",
-        f"timestep = {num(draft.timestep)}  # " + _timestep_comment(draft),
-        f"integrator = {text(draft.integrator)}  # "
-        + ("the model's <option>" if INTEGRATOR_NAMES.get(int(draft.robot.model.opt.integrator)) == draft.integrator
-           else "the model's is euler: implicitfast integrates the servos' damping implicitly")
-        + f"; one step of all the servos on the mass matrix (base held) has spectral radius {draft.radius:.6f} "
-        "(< 1: stable)",
+        *_sim(draft),
         "", "[gait_quality]",
         "# angles: exo's hand-tuned bounds (an angle has no scale); rates ∝ √(g/l), heights ∝ h (robot.scale)",
         f"pelvis_roll = {num(rules.pelvis_roll)}  # exo's (robot.scale.pelvis_roll)",
@@ -307,6 +343,16 @@ def render(draft: Draft, spec_path: str | Path) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _timestep_summary(draft: Draft) -> str:
+    c = draft.choice
+    if c is None:
+        return f"timestep {ms(draft.timestep)}: the servo rule (robot.servo_steps, robot.scale.timestep)"
+    head = f"timestep {ms(draft.timestep)}, stable PD: "
+    head += ("the largest candidate" if c.passed else "NO candidate") + (
+        f" within {c.tolerance:g} band units of half the step (robot.timestep_tolerance); ")
+    return head + "; ".join(t.describe(c.tolerance) for t in c.trials)
+
+
 def summary(draft: Draft, spec_path: str | Path) -> list[str]:
     """What ``robot init`` prints: what it found and decided, one fact per line."""
     r, legs, res, c = draft.robot, draft.legs, draft.residual, draft.config
@@ -336,6 +382,7 @@ def summary(draft: Draft, spec_path: str | Path) -> list[str]:
     g = draft.scaled.gait
     out.append("default gait: " + ", ".join(f"{k} {v:g}" for k, v in g.items()))
     out.append(f"balance: {balance(draft.size)[1]} for flat-foot gaits (sim.regulator)")
+    out.append(_timestep_summary(draft))
     out += [f"note: {n}" for n in draft.notes]
     out.append(f"wrote {spec_path}; check it: robustgait robot check {spec_path}")
     return out

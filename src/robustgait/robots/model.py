@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.config import GaitParams, RobotScale
-from robustgait.errors import input_error
+from robustgait.errors import RobustGaitError, input_error
 from robustgait.robots.held import weld_joints
 from robustgait.robots.soles import ResolvedSole, resolve_floor, resolve_soles
 from robustgait.robots.spec import SIDES, RobotSpec
@@ -209,6 +209,16 @@ class Robot:
         mjs = self._resolved.copy()
         weld_joints(mjs, mjs.compile(), self.spec.held, self.spec.source)
         return Robot(dataclasses.replace(self.spec, held=()), mjs, resolved=(self.soles, self.floor_name))
+
+    def at_timestep(self, h: float, stable_pd: bool = True) -> Robot:
+        """This robot with the physics step ``h`` [s] and its servos as stable PD or not (``stable_pd``,
+        :func:`servo_damping`): a new model compiled from the same parsed MJCF, soles and floor, every other value of
+        the spec (gains, limits, integrator, …) unchanged; edits made to this robot's compiled ``model`` are not
+        carried over. Raises RobustGaitError for an ``h`` that is not a positive finite number."""
+        if not (np.isfinite(h) and h > 0):
+            raise RobustGaitError(f"{self.name}: a timestep must be a positive number of seconds, got {h!r}")
+        spec = dataclasses.replace(self.spec, timestep=float(h), stable_pd=bool(stable_pd))
+        return Robot(spec, self._resolved.copy(), resolved=(self.soles, self.floor_name))
 
     def expand_state(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64]
                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -2,7 +2,8 @@
 event, or a fall, on :func:`mujoco.rollout` (multi-threaded C) — no Python call per physics step.
 
 A step's controls depend on time only (:mod:`robustgait.sim.controller`), so all K samples share one
-control series. The step is rolled out in chunks of ``chunk_steps`` physics steps; after each chunk the
+control series. The step is rolled out in chunks of ``chunk_steps`` physics steps (a robot under the step regulator:
+its ``update_interval``); after each chunk the
 recorded states and contact sensors are scanned (vectorized) for each sample's first event — a switching
 event or a fall — and only the samples still going are rolled on from their last state. Walking one robot
 (:mod:`robustgait.sim.walk`) uses the same engine with K = 1, so a walk and a batch agree exactly.
@@ -185,8 +186,11 @@ class StepEngine:
         self._sens = {s: adr[CONTACT_SENSORS[i]] for i, s in enumerate(("left", "right"))}
         self._sens_floor = adr[CONTACT_SENSORS[2]]
         self._cos_max_tilt = math.cos(robot.spec.fall.max_tilt)
-        self.regulator = regulator_for(robot, self.gaits, self.config.regulator, self.config.chunk_steps,
-                                       self.horizons[0])
+        # a regulated step is rolled out in chunks of the regulator's update interval, the same in seconds at any
+        # timestep (the controller must not change with the physics step); others in sim.chunk_steps
+        update = max(1, round(self.config.regulator.update_interval / robot.dt))
+        self.regulator = regulator_for(robot, self.gaits, self.config.regulator, update, self.horizons[0])
+        self.chunk = self.config.chunk_steps if self.regulator is None else update
         if self.regulator is not None:
             self.controller_name = f"{self.controller_name}+{self.regulator.name}"
             if self.regulator.needs_growth:  # its share of the H-LIP gain depends on how this walk's error grows
@@ -388,7 +392,7 @@ class StepEngine:
         if regulator is not None:
             regulator.begin(stance, current)
         while active.size and k0 < horizon:
-            n = min(self.config.chunk_steps, horizon - k0)
+            n = min(self.chunk, horizon - k0)
             reg = regulator.offsets(active, current[active], k0, n) if regulator is not None else None
             with quiet_mujoco():
                 st, sens, applied = self._rollout(active, current, ctrl, k0, n, inputs, reg)

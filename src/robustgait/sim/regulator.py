@@ -5,7 +5,7 @@ A joint-space tracking controller on an HZD gait has no balance feedback: a sole
 through the ankle tips, and nothing brings the walk back. The regulator closes that loop where a walking robot
 does, at the next foothold:
 
-1. At every chunk boundary of a step (each ``sim.chunk_steps`` physics steps, before τ = ``freeze_tau``) it
+1. At every chunk boundary of a step (each ``update_interval`` seconds, before τ = ``freeze_tau``) it
    measures each sample's CoM state x = [p, v] per horizontal axis, relative to the stance sole's centre in the
    sole's heading frame, and compares it with the gait's own x*(τ) at the same phase — computed by kinematics from
    the gait's outputs with the stance sole flat, so the comparison carries no model bias.

@@ -1,0 +1,84 @@
+"""``robustgait robot init`` end to end (``docs/robots.md``, "Your robot"): the draft of a model (:mod:`.draft`), its
+timestep chosen by accuracy (:mod:`.timestep`) with the gains drafted at each candidate step, and the spec's text
+(:mod:`.writer`).
+
+With ``robot.timestep_rule`` = ``accuracy`` (the default) each candidate step h (:func:`.timestep.candidate_timesteps`;
+one whose drafted gains would be lowered to contract is above the servos' stability bound and not tried) is the spec
+robot init would write at h with stable PD, loaded as a robot; the default gait is generated once (the gains and the
+step do not enter the gait's optimisation) and walked at each candidate (:func:`.timestep.select_timestep`). When the
+default gait cannot be generated, no candidate is below the stability bound, or none is accurate enough, the timestep
+is the servo rule's (:func:`.gains.servo_timestep`, without stable PD), with a note saying why.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+from robustgait.config import Config
+from robustgait.errors import RobustGaitError
+from robustgait.inspection.draft import Draft, draft_at_timestep, draft_spec, lowered
+from robustgait.inspection.timestep import candidate_timesteps, default_gait, ms, select_timestep
+from robustgait.inspection.writer import render
+from robustgait.io.robotfile import read_mjcf, spec_from_raw
+from robustgait.robots import Robot
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on 3.10 only
+    import tomli as tomllib
+
+
+def draft_robot(draft: Draft, spec_path: str | Path) -> Robot:
+    """The robot of the spec a draft renders (:func:`.writer.render`, written at ``spec_path``: the model's path is
+    relative to it), loaded without writing a file. Raises RobustGaitError when that spec does not load."""
+    p = Path(spec_path)
+    try:
+        spec = spec_from_raw(tomllib.loads(render(draft, p)), p)
+        return Robot(spec, read_mjcf(spec))
+    except RobustGaitError as exc:  # as write_spec says it of the spec it would write
+        raise RobustGaitError(f"{p}: the written spec does not load (nothing written): {exc}") from None
+
+
+def init_spec(model: str | Path, spec_path: str | Path, config: Config,
+              say: Callable[[str], None] | None = None) -> Draft:
+    """The draft ``robot init`` writes for ``model`` at ``spec_path`` (module docstring); ``say(line)`` is told what it
+    walks as it goes. Raises RobustGaitError (one line) for a model it cannot draft; a default gait that cannot be
+    generated is a note, never an error."""
+    tell = say or (lambda line: None)
+    draft = draft_spec(model, config.robot)
+    if config.robot.timestep_rule == "servo":
+        return draft
+    model_dt = float(draft.robot.model.opt.timestep)
+    drafts = {h: draft_at_timestep(draft, h, True) for h in candidate_timesteps(model_dt,
+                                                                               config.robot.timestep_candidates)}
+    excluded = tuple(h for h, d in drafts.items() if lowered(d))
+    candidates = [h for h in drafts if h not in excluded]
+    if not candidates:
+        draft.notes.append(f"every timestep candidate ({', '.join(ms(h) for h in drafts)}) is above the servos' "
+                           "stability bound (their gains would be lowered to contract): the timestep is the servo "
+                           "rule's")
+        return draft
+    robots: dict[float, Robot] = {}
+
+    def robot_at(h: float) -> Robot:
+        if h not in robots:
+            robots[h] = draft_robot(drafts[h], spec_path)
+        return robots[h]
+
+    tell(f"generating the default gait of {draft.name} to choose its timestep (robot.timestep_rule accuracy) ...")
+    gait, why = default_gait(robot_at(candidates[0]), config)
+    if gait is None:
+        draft.notes.append(f"the default gait could not be generated ({why}): the timestep is the servo rule's, not "
+                           "chosen by walking it (robot.timestep_rule)")
+        return draft
+    choice = dataclasses.replace(select_timestep(robot_at, gait, candidates, config, say=tell), excluded=excluded)
+    if not choice.passed:  # no step is accurate enough with stable PD: the servo rule's
+        draft.notes.append(f"{choice.note}: the timestep is the servo rule's, without stable PD")
+        return draft
+    out = draft_at_timestep(draft, choice.timestep, True, choice)
+    if choice.note:
+        out.notes.append(choice.note)
+    return out
