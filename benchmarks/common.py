@@ -113,3 +113,37 @@ def grid_params(robot_name: str, n: int, domains: str) -> list[dict[str, float]]
     space = ActionSpace.from_robot(load_robot(robot_name), domains)
     idx = np.unique(np.linspace(0, space.size - 1, n).round().astype(int))
     return [space.value(int(i)) for i in idx]
+
+
+YARDSTICK_STEPS = 120_000
+"""Physics steps of the yardstick (:func:`yardstick`)."""
+
+
+def yardstick() -> float:
+    """CPU seconds of a fixed raw MuJoCo workload — ``mujoco.rollout`` on one thread of the shipped ``exo`` model,
+    100 states of its default gait's start, 1 200 physics steps each under the gait's first step's controls
+    (:data:`YARDSTICK_STEPS` in all) —, the unit in which the performance figures give a command's CPU time
+    ("yardsticks"): a figure measured beside it in the same run is comparable across machines and load."""
+    import time
+
+    from mujoco import rollout
+
+    from robustgait import SimConfig, load_gait, load_robot
+    from robustgait.sim.engine import StepEngine
+
+    robot = load_robot("exo")
+    gait = load_gait(EXO_GAIT, robot)
+    k, n = 100, YARDSTICK_STEPS // 100
+    s = gait.initial_state
+    assert s is not None
+    qpos, qvel = start_states(np.asarray(s.qpos), np.asarray(s.qvel), k)
+    with StepEngine(robot, gait, SimConfig(n_threads=1)) as eng:
+        init = eng.full_states(qpos, qvel)
+        series = eng.controls[(gait.stance, 0)]
+    ctrl = np.repeat(series[None, np.minimum(np.arange(n), len(series) - 1)], k, axis=0)
+    data = [robot.new_data()]
+    with rollout.Rollout(nthread=1) as pool:
+        t0 = time.process_time()
+        pool.rollout(robot.model, data, init, ctrl)
+        cpu = time.process_time() - t0
+    return cpu

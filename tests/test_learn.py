@@ -208,3 +208,53 @@ def test_polar_and_eubo_beat_random_on_a_smooth_utility():
         diff = r["random"] - r[name]  # paired: same utility, same first batch
         se = diff.std(ddof=1) / np.sqrt(diff.size)
         assert diff.mean() > 2 * se, (name, {n: float(v.mean()) for n, v in r.items()})
+
+
+# ---- the region predicted to clear a person study's floor (robustgait.learn.floor) ---------------------------------
+def test_the_region_around_the_reference_is_the_ball_the_formula_gives() -> None:
+    """One observation (the floor's reference, figure v, floor f v): the grid points predicted to clear the floor are
+    those within ℓ √(2 ln((1 − f) / (f w₀))) of it, and no point farther."""
+    from robustgait.learn.floor import predicted_to_clear
+
+    space = grid_space(21, 21)
+    ref = {"x0": 0.5, "x1": 0.5}
+    ell, f, w0 = 0.2, 0.75, 0.1
+    region = predicted_to_clear(space, [(ref, 20.0)], f * 20.0, ell, w0)
+    d = np.linalg.norm(space.normalized() - 0.5, axis=1)
+    radius = ell * np.sqrt(2 * np.log((1 - f) / (f * w0)))
+    assert region[d < 0.999 * radius].all() and not region[d > 1.001 * radius].any() and region.sum() > 1
+    assert predicted_to_clear(space, [], 15.0, ell, w0).all()  # nothing observed: no model, nothing excluded
+    assert predicted_to_clear(space, [(ref, 20.0)], 0.0, ell, w0).all()  # floor 0: everything clears it
+
+
+def test_the_region_follows_the_evaluated_gaits() -> None:
+    """Gaits that fell (figure 0) carve their neighbourhood out of the region; robust ones extend it."""
+    from robustgait.learn.floor import predicted_to_clear
+
+    space = grid_space(11, 11)
+    ref = ({"x0": 0.5, "x1": 0.5}, 20.0)
+    grown = predicted_to_clear(space, [ref, ({"x0": 0.9, "x1": 0.5}, 22.0)], 15.0, 0.2, 0.1)
+    cut = predicted_to_clear(space, [ref, ({"x0": 0.6, "x1": 0.5}, 0.0)], 15.0, 0.2, 0.1)
+    base = predicted_to_clear(space, [ref], 15.0, 0.2, 0.1)
+    i = space.index({"x0": 0.9, "x1": 0.5})
+    j = space.index({"x0": 0.6, "x1": 0.5})
+    assert grown[i] and not base[i] and base[j] and not cut[j] and grown.sum() > base.sum() > cut.sum()
+
+
+@pytest.mark.parametrize("name", ["random", "polar", "eubo"])
+def test_learners_propose_within_the_allowed_grid_points(name: str) -> None:
+    """With ``allowed``, every learner proposes among those points (all of them when too few are allowed, the allowed
+    first); without it, its proposals are unchanged."""
+    space = grid_space(5, 5)
+    learner = make_learner(name, space, LearnerConfig(), seed=2)
+    history = History.from_batches([[(0, 1.0), (6, 0.5), (24, 0.0)]])
+    allowed = np.zeros(space.size, dtype=bool)
+    allowed[[6, 7, 8, 11, 12, 13]] = True
+    for k, h in ((0, History.from_batches([])), (1, history)):
+        picks = learner.propose(h, k, 3, allowed)
+        assert len(set(picks)) == 3 and all(allowed[i] for i in picks)
+        assert learner.propose(h, k, 3) == learner.propose(h, k, 3, None)
+    few = np.zeros(space.size, dtype=bool)
+    few[[3]] = True
+    picks = learner.propose(history, 1, 3, few)
+    assert picks[0] == 3 and len(set(picks)) == 3

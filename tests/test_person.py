@@ -247,7 +247,7 @@ class Recording(Executor):
     def __init__(self, workers: int):
         self.workers, self.submitted = workers, []  # type: ignore[var-annotated]
 
-    def submit(self, key: int, params: dict[str, float]) -> None:
+    def submit(self, key: int, params: dict[str, float], verify_above: float | None = None) -> None:
         self.submitted.append((key, params["i"]))
 
     @property

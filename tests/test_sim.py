@@ -1,4 +1,5 @@
 import itertools
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -111,6 +112,19 @@ def test_bad_sim_inputs(exo, exo_gait):
         eng.step(np.zeros((2, 5)), np.zeros((2, 18)), "right")
 
 
+def mp4_facts(path: Path) -> dict[str, object]:
+    """What a browser needs of an .mp4: its codec, pixel format, size, frames per second and frames (decoded to the
+    last), and whether its index (``moov``) comes before the frames (``mdat``: playable as it loads)."""
+    import imageio_ffmpeg
+
+    reader = imageio_ffmpeg.read_frames(str(path))
+    meta = next(reader)
+    frames = sum(1 for _ in reader)
+    data = path.read_bytes()
+    return {"codec": meta["codec"], "pix_fmt": meta["pix_fmt"].split("(")[0], "size": tuple(meta["size"]),
+            "fps": meta["fps"], "frames": frames, "index_first": 0 <= data.find(b"moov") < data.find(b"mdat")}
+
+
 @pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_video(tmp_path, exo, exo_gait):
     res = walk(exo, exo_gait, steps=1, keep_trajectory=True)
@@ -120,7 +134,50 @@ def test_video(tmp_path, exo, exo_gait):
     except RobustGaitError as exc:  # no EGL/OSMesa on this machine: the message must say what to do
         assert "MUJOCO_GL" in str(exc)
         return
-    assert frames == pytest.approx(res.time * 10, abs=1) and out.stat().st_size > 1000
+    # a frame every 0.1 s of physics steps from the first: ceil(n / every), played at 10 fps, H.264 a browser plays
+    every = round(0.1 / exo.dt)
+    assert frames == -(-len(res.trajectory) // every) == pytest.approx(res.time * 10, abs=1)
+    assert mp4_facts(out) == {"codec": "h264", "pix_fmt": "yuv420p", "size": (96, 64), "fps": 10.0, "frames": frames,
+                              "index_first": True}
+    fast = tmp_path / "fast.mp4"
+    assert render_video(exo, res.trajectory, fast, fps=10, width=96, height=64, shadows=False,
+                        antialias=False) == frames
+    assert mp4_facts(fast)["frames"] == frames
+
+
+@pytest.mark.slow  # rendering: keeps plain pytest ≤ 60 s; CI runs it
+def test_fast_rendering_draws_the_same_robot(exo, exo_gait):
+    """Without shadows, reflections and multisampling (the reports' videos) a frame draws the same robot in the same
+    place; the robot's own model keeps its settings; the pose drawn from qpos alone (pose_for_drawing) is the one
+    mj_forward gives, pixel for pixel."""
+    from robustgait.sim.walk import offscreen_renderer, pose_for_drawing, scene_option
+
+    res = walk(exo, exo_gait, steps=1, keep_trajectory=True)
+    state = res.trajectory[len(res.trajectory) // 2]
+    m = exo.model
+    samples = m.vis.quality.offsamples
+    cam = mujoco.MjvCamera()
+    cam.type, cam.trackbodyid = mujoco.mjtCamera.mjCAMERA_TRACKING, exo.base_body_id
+    cam.distance, cam.elevation, cam.azimuth = 3.0, -15.0, 120.0
+    images = {}
+    for shadows, pose in ((True, mujoco.mj_forward), (True, pose_for_drawing), (False, pose_for_drawing)):
+        try:
+            renderer = offscreen_renderer(exo, 160, 120, shadows=shadows, antialias=shadows)
+        except RobustGaitError:  # no EGL/OSMesa here: test_video checks the message
+            return
+        with renderer:
+            assert bool(renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW]) == shadows
+            data = mujoco.MjData(m)
+            mujoco.mj_setState(m, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS.value)
+            pose(m, data)
+            renderer.update_scene(data, cam, scene_option=scene_option(exo))
+            images[(shadows, pose.__name__)] = renderer.render().astype(int)
+    assert m.vis.quality.offsamples == samples
+    np.testing.assert_array_equal(images[(True, "mj_forward")], images[(True, "pose_for_drawing")])
+    # the robot covers the same pixels, give or take its edges
+    skin = {k: np.ptp(v, axis=2) > 40 for k, v in images.items()}  # the passenger's orange: the floor is grey
+    fast, full = skin[(False, "pose_for_drawing")], skin[(True, "mj_forward")]
+    assert fast.sum() > 300 and (fast ^ full).sum() < 0.15 * fast.sum()
 
 
 def test_a_diverging_sample_is_a_silent_fall(tmp_path, monkeypatch, capfd):

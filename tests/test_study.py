@@ -555,6 +555,34 @@ def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path, reference_stud
     assert again.returncode == 0 and comparable(d) == comparable(reference_study)
 
 
+@pytest.mark.slow  # rendering: keeps plain pytest ≤ 60 s; CI runs it
+def test_report_video_is_what_the_configuration_says(tmp_path, exo, exo_gait):
+    """The report's video of the best gait (render_best_video, the defaults of ReportConfig): video_steps steps from
+    the gait's initial state, a frame every 1/video_fps s of them, video_width × video_height, H.264 yuv420p with its
+    index first — what the page's <video> plays as it loads."""
+    from robustgait.config import ReportConfig
+    from robustgait.report.study import render_best_video
+    from robustgait.sim import walk
+    from tests.conftest import EXO_GAIT
+    from tests.test_sim import mp4_facts
+
+    cfg = ReportConfig()
+    status = {"robot": "exo", "best": {"gait_file": EXO_GAIT.name}}
+    try:
+        out = render_best_video(EXO_GAIT.parent, status, tmp_path / "best.mp4")
+    except RobustGaitError as exc:  # no EGL/OSMesa on this machine: the message says what to do
+        assert "MUJOCO_GL" in str(exc)
+        return
+    n = len(walk(exo, exo_gait, steps=cfg.video_steps, keep_trajectory=True).trajectory)
+    frames = -(-n // round(1 / (cfg.video_fps * exo.dt)))
+    assert frames == pytest.approx(cfg.video_steps * exo_gait.params.step_duration * cfg.video_fps, abs=1.5)
+    assert mp4_facts(out) == {"codec": "h264", "pix_fmt": "yuv420p", "size": (cfg.video_width, cfg.video_height),
+                              "fps": float(cfg.video_fps), "frames": frames, "index_first": True}
+    small = ReportConfig(video_steps=1, video_fps=10, video_width=96, video_height=64, video_shadows=True)
+    assert mp4_facts(render_best_video(EXO_GAIT.parent, status, tmp_path / "b.mp4", 2, small))["frames"] == \
+        pytest.approx(2 * exo_gait.params.step_duration * 10, abs=1.5)  # steps given: the configuration's overridden
+
+
 @pytest.mark.slow
 def test_status_report_and_compare(tmp_path, reference_study):
     res = cli("study", "status", str(reference_study), "--json")

@@ -286,3 +286,24 @@ def test_blind_mode_hides_the_figures(served):
     assert st["blind"] is True  # type: ignore[index]
     assert [set(g) for g in st["batch"]] == [{"slot", "iteration", "name", "video", "no_video"}] * 2  # type: ignore[index]
     assert st["hidden"] == [{"slot": 2, "name": "C", "why": None}]  # type: ignore[index]
+
+
+@pytest.mark.slow  # rendering: keeps plain pytest ≤ 60 s; CI runs it
+def test_a_person_video_is_what_the_configuration_says(tmp_path, exo, exo_gait):
+    """A gait's looping video (render_person_video, the defaults of PersonConfig): the last ``steps`` steps after the
+    comfort figures' skipped ones, a frame every 1/video_fps s of them, the side and the front views side by side
+    (2·video_width × video_height), H.264 yuv420p with its index first — what the page's <video> plays and loops."""
+    from robustgait.config import ComfortConfig
+    from robustgait.web.media import render_person_video
+    from tests.test_sim import mp4_facts
+
+    cfg = PersonConfig()
+    out = tmp_path / "person.mp4"
+    try:
+        frames = render_person_video(exo, exo_gait, out, cfg.video_steps, ComfortConfig(skip_steps=1))
+    except RobustGaitError as exc:  # no EGL/OSMesa on this machine: the message says what to do
+        assert "MUJOCO_GL" in str(exc)
+        return
+    assert frames == pytest.approx(cfg.video_steps * exo_gait.params.step_duration * cfg.video_fps, abs=1.5)
+    assert mp4_facts(out) == {"codec": "h264", "pix_fmt": "yuv420p", "size": (2 * cfg.video_width, cfg.video_height),
+                              "fps": float(cfg.video_fps), "frames": frames, "index_first": True}

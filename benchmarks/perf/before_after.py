@@ -1,17 +1,31 @@
-"""A command's wall time and work before and after a change, in one run: each case is run with this checkout's
-``src`` and with ``--before SRC`` (another checkout's ``src``, e.g. a ``git worktree`` of main) first on
-``PYTHONPATH``, the two interleaved ``--repeat`` times so that the machine's load hits them alike.
+"""A command's wall time, CPU time and work before and after a change, in one run: each case is run with this
+checkout's ``src`` and with ``--before SRC`` (another checkout's ``src``, e.g. a ``git worktree`` of main) first on
+``PYTHONPATH``, the two interleaved ``--repeat`` times so that the machine's load hits them alike. Each run's CPU time
+(the command's processes, every thread) is also given in **yardsticks**: the CPU time of a fixed raw
+``mujoco.rollout`` workload (:func:`common.yardstick`) measured in the same run, beside it — a figure comparable
+across machines and load.
 
-Cases (``--cases``, comma-separated):
+Cases (``--cases``, comma-separated). A robot's spec is the side's own (``robots/…/spec.toml`` of each checkout, or
+``--g1-before`` / ``--g1-after``): a spec change, such as a timestep, is part of what is compared.
 
 * ``certify``: ``robustgait certify tests/data/exo_gait.json --robot exo --json`` — the default exo certificate: wall
-  time, J*, its pushes and physics steps (the sampling's, and the orbit's or fixed point's search);
-* ``certify-t1``: the same on Booster T1's L 0.08 T 0.8 gait (``--t1-spec``, ``--t1-gait``);
+  and CPU time, J*, its pushes and physics steps (the sampling's, and the orbit search's);
+* ``certify-mc``: the same on exo's default multi-contact gait (``tests/data/exo_multicontact_gait.json``);
+* ``certify-atalante``: the Atalante FROST gait (``../shared/atalante``);
+* ``certify-t1``: T1's default gait, generated once with this checkout (``../shared/robots/booster_t1``);
+* ``certify-t1-slow``: T1's L 0.08 T 0.8 W 0.2 h 0.03 gait, generated once;
+* ``certify-g1``: ``--g1-gait`` with ``--g1-before`` / ``--g1-after`` (a Menagerie G1 made as
+  ``benchmarks/experiments/menagerie_humanoids`` says);
 * ``certify-gaits``: the default certificate of ``--limit`` study gaits (``--from-jsonl``, evenly spaced; each
   generated cold with this checkout): per gait the physics steps and seconds of both, and the medians of the ratios;
-* ``demo``: ``robustgait demo --dir TMP`` — the main job: wall time.
+* ``demo``: ``robustgait demo --dir TMP`` — the main job;
+* ``study-exo``, ``study-t1``: ``robustgait study run DIR --robot R`` with the defaults (10 × 5);
+* ``person-first``: ``robustgait study run DIR --robot exo --metric person --port 0`` with the defaults: the seconds
+  from its start to its first question (the study's first pending batch, read from its database), how many gaits
+  it shows and how many were evaluated to fill it; the study is then stopped.
 
-Printed: per case and side the median (and range) of the wall times, the work figures, and after / before.
+Printed: per case and side the median (and range) of the wall times, the CPU time in yardsticks, the work figures,
+and after / before.
 
     python benchmarks/perf/before_after.py --before /tmp/oldmain/src [--cases certify,demo] [--repeat 3]
 """
@@ -21,6 +35,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
+import signal
+import sqlite3
 import statistics
 import subprocess
 import sys
@@ -30,34 +47,135 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/common.py
-from common import EXO_GAIT, REPO, T1_SPEC, git_commit
+from common import ATALANTE_GAIT, EXO_GAIT, EXO_MULTICONTACT_GAIT, REPO, git_commit
+
+T1_MODEL_GAITS = {"certify-t1": {}, "certify-t1-slow": {"step_length": 0.08, "step_duration": 0.8,
+                                                         "step_width": 0.2, "step_height": 0.03}}
 
 
-def command(case: str, args: argparse.Namespace, tmp: Path) -> list[str]:
+def spec_of(side_src: str, robot: str, args: argparse.Namespace, side: str) -> str:
+    """A robot's spec on a side: that checkout's ``robots/<robot>/spec.toml``, or the G1's given spec."""
+    if robot == "g1":
+        return str(args.g1_before if side == "before" else args.g1_after)
+    return str(Path(side_src).parent / "robots" / robot / "spec.toml")
+
+
+def command(case: str, side: str, src: str, args: argparse.Namespace, tmp: Path) -> list[str]:
     exe = [sys.executable, "-m", "robustgait.cli"]
+    run_dir = str(tmp / f"{case}-{side}-{time.monotonic_ns()}")
     if case == "certify":
         return [*exe, "certify", str(EXO_GAIT), "--robot", "exo", "--json"]
-    if case == "certify-t1":
-        return [*exe, "certify", args.t1_gait, "--robot", args.t1_spec, "--json"]
+    if case == "certify-mc":
+        return [*exe, "certify", str(EXO_MULTICONTACT_GAIT), "--robot", "exo", "--json"]
+    if case == "certify-atalante":
+        return [*exe, "certify", str(ATALANTE_GAIT), "--robot", spec_of(src, "atalante", args, side), "--json"]
+    if case in T1_MODEL_GAITS:
+        return [*exe, "certify", str(tmp / f"{case}.json"), "--robot", spec_of(src, "t1", args, side), "--json"]
+    if case == "certify-g1":
+        return [*exe, "certify", str(args.g1_gait), "--robot", spec_of(src, "g1", args, side), "--json"]
     if case == "demo":
-        return [*exe, "demo", "--dir", str(tmp / f"demo-{time.monotonic_ns()}")]
+        return [*exe, "demo", "--dir", run_dir]
+    if case == "study-exo":
+        return [*exe, "study", "run", run_dir, "--robot", "exo"]
+    if case == "study-t1":
+        return [*exe, "study", "run", run_dir, "--robot", spec_of(src, "t1", args, side)]
+    if case == "person-first":
+        return [*exe, "study", "run", run_dir, "--robot", "exo", "--metric", "person", "--port", "0"]
     if case.startswith("gait:"):
         return [*exe, "certify", case.split(":", 1)[1], "--robot", "exo", "--json"]
     raise SystemExit(f"unknown case {case!r}")
 
 
-def run(case: str, src: str, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
-    env = {**os.environ, "PYTHONPATH": src}
+def children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def first_question(p: subprocess.Popen[str], directory: Path, timeout: float) -> dict[str, Any]:
+    """Wait for a person study's first pending batch (its iteration record in the database), then stop the study:
+    seconds to it, gaits shown and evaluated."""
     t0 = time.perf_counter()
-    p = subprocess.run(command(case, args, tmp), env=env, capture_output=True, text=True, cwd=tmp)
-    out: dict[str, Any] = {"seconds": time.perf_counter() - t0, "code": p.returncode}
-    if (case.startswith("certify") or case.startswith("gait:")) and p.stdout.strip():
-        res = json.loads(p.stdout)
+    db = directory / "study.db"
+    while time.perf_counter() - t0 < timeout and p.poll() is None:
+        time.sleep(0.5)
+        if not db.exists():
+            continue
+        try:
+            with sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=5) as con:
+                rows = con.execute("SELECT value_json FROM study_user_attributes "
+                                   "WHERE key = 'iteration_000'").fetchall()
+        except sqlite3.Error:
+            continue
+        rec = json.loads(rows[0][0]) if rows else {}
+        if "pending" in rec:
+            seconds = time.perf_counter() - t0
+            p.send_signal(signal.SIGINT)
+            p.wait(timeout=60)
+            return {"first_question": seconds, "shown": len(rec["pending"]["shown"]),
+                    "evaluated": rec["pending"]["size"]}
+    p.kill()
+    return {"first_question": None, "error": "no question within the timeout"}
+
+
+def run(case: str, side: str, src: str, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
+    env = {**os.environ, "PYTHONPATH": src}
+    cmd = command(case, side, src, args, tmp)
+    cpu0, t0 = children_cpu(), time.perf_counter()
+    if case == "person-first":
+        p = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, text=True, cwd=tmp)
+        extra = first_question(p, Path(cmd[cmd.index("run") + 1]), args.timeout)
+        return {"seconds": time.perf_counter() - t0, "cpu": children_cpu() - cpu0, "code": 0, **extra}
+    p2 = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=tmp)
+    out: dict[str, Any] = {"seconds": time.perf_counter() - t0, "cpu": children_cpu() - cpu0, "code": p2.returncode}
+    if (case.startswith("certify") or case.startswith("gait:")) and p2.stdout.strip():
+        res = json.loads(p2.stdout)
         search = res.get("orbit_physics_steps", res.get("fixed_point_physics_steps", 0))
-        out.update(status=res["status"], j_star=res["r_star"], pushes=res.get("n_samples"),
-                   physics=res["physics_steps"], search_physics=search)
-    elif p.returncode != 0:
-        out["error"] = p.stderr.strip().splitlines()[-1:] or [""]
+        out.update(status=res["status"], j_star=res.get("j_star", res["r_star"]), pushes=res.get("n_samples"),
+                   physics=res["physics_steps"], search_physics=search,
+                   attempts=sum(r["kind"] == "verify" for r in res.get("rounds") or []))
+    elif p2.returncode != 0:
+        out["error"] = p2.stderr.strip().splitlines()[-1:] or [""]
+    return out
+
+
+def yardstick_cpu(src: str) -> float:
+    """The yardstick's CPU seconds, in a fresh process on ``src``."""
+    code = f"import sys; sys.path.insert(0, {str(REPO / 'benchmarks')!r}); from common import yardstick; " \
+           "print(yardstick())"
+    p = subprocess.run([sys.executable, "-c", code], env={**os.environ, "PYTHONPATH": src}, capture_output=True,
+                       text=True, check=True)
+    return float(p.stdout.strip().splitlines()[-1])
+
+
+def prepare(cases: list[str], tmp: Path) -> None:
+    """The gaits the T1 cases certify, generated once with this checkout (``tmp/<case>.json``)."""
+    from robustgait.config import GaitParams
+    from robustgait.gaitgen import generate_gait
+    from robustgait.io.gaitfile import save_gait
+    from robustgait.io.robotfile import load_robot
+
+    for case in cases:
+        if case in T1_MODEL_GAITS:
+            robot = load_robot(REPO / "robots" / "t1" / "spec.toml")
+            params = GaitParams(**T1_MODEL_GAITS[case]) if T1_MODEL_GAITS[case] else robot.default_params
+            res = generate_gait(robot, params)
+            if res.gait is None:
+                raise SystemExit(f"{case}: the gait was not generated ({res.status}: {res.reason})")
+            save_gait(res.gait, tmp / f"{case}.json")
+
+
+def describe(r: dict[str, Any], stick: float) -> str:
+    """The work figures of one run."""
+    out = f"; CPU {r['cpu']:.1f} s = {r['cpu'] / stick:.1f} yardsticks"
+    if "physics" in r:
+        out += (f"; {r['status']}, J* {r['j_star']:.3f} N s, {r['pushes']} pushes, {r['attempts']} verification "
+                f"batch(es), {(r['physics'] + r['search_physics']) / 1e6:.2f} M physics steps "
+                f"(search {r['search_physics'] / 1e3:.0f} k)")
+    elif "first_question" in r:
+        out += (f"; first question after {r['first_question']:.1f} s, {r['shown']} gaits shown of "
+                f"{r['evaluated']} evaluated" if r["first_question"] is not None else f"; {r.get('error')}")
+    elif "error" in r:
+        out += f"; exit {r['code']}: {r['error'][0]}"
     return out
 
 
@@ -66,48 +184,55 @@ def main() -> None:
     ap.add_argument("--before", required=True, help="the other checkout's src directory")
     ap.add_argument("--cases", default="certify,demo")
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--t1-spec", default=str(T1_SPEC))
-    ap.add_argument("--t1-gait", default="")
+    ap.add_argument("--g1-gait", default="")
+    ap.add_argument("--g1-before", default="")
+    ap.add_argument("--g1-after", default="")
+    ap.add_argument("--timeout", type=float, default=1800.0, help="person-first: the longest wait [s]")
     ap.add_argument("--from-jsonl",
                     default=str(REPO / "benchmarks" / "experiments" / "predictors" / "data" / "exo.jsonl"))
     ap.add_argument("--limit", type=int, default=10)
+    ap.add_argument("--out", default="", help="append each run as a JSON line")
     args = ap.parse_args()
     commit = git_commit()
     before = git_commit(Path(args.before).parent)
     print(f"# before_after {time.strftime('%Y-%m-%d %H:%M')}: after = {commit}, before = {before}; "
-          f"load {os.getloadavg()[0]:.1f}")
+          f"load {os.getloadavg()[0]:.1f}", flush=True)
     sides = {"before": args.before, "after": str(REPO / "src")}
+    cases = args.cases.split(",")
     with tempfile.TemporaryDirectory(prefix="bench_before_after_") as d:
         tmp = Path(d)
-        for case in args.cases.split(","):
+        prepare(cases, tmp)
+        for case in cases:
             if case == "certify-gaits":
                 certify_gaits(args, sides, tmp)
                 continue
             rows: dict[str, list[dict[str, Any]]] = {"before": [], "after": []}
+            sticks: list[float] = []
             for _ in range(args.repeat):
+                sticks.append(yardstick_cpu(sides["after"]))
                 for side, src in sides.items():
-                    rows[side].append(run(case, src, args, tmp))
+                    r = run(case, side, src, args, tmp)
+                    rows[side].append(r)
+                    if args.out:
+                        with open(args.out, "a") as f:
+                            f.write(json.dumps({"case": case, "side": side, **r, "yardstick": sticks[-1],
+                                                "commit": commit if side == "after" else before,
+                                                "date": time.strftime("%Y-%m-%d %H:%M")}) + "\n")
+            stick = statistics.median(sticks)
             med = {}
             for side, rs in rows.items():
                 secs = [r["seconds"] for r in rs]
                 med[side] = statistics.median(secs)
-                extra = ""
-                r = rs[0]
-                if "physics" in r:
-                    extra = (f"; {r['status']}, J* {r['j_star']:.2f} N s, {r['pushes']} pushes, "
-                             f"{(r['physics'] + r['search_physics']) / 1e6:.2f} M physics steps "
-                             f"(search {r['search_physics'] / 1e3:.0f} k)")
-                elif "error" in r:
-                    extra = f"; exit {r['code']}: {r['error'][0]}"
                 print(f"{case} {side}: {med[side]:.1f} s median ({min(secs):.1f}–{max(secs):.1f}, {len(secs)} runs)"
-                      f"{extra}")
+                      f"{describe(rs[0], stick)}", flush=True)
             ratio = med["after"] / med["before"]
             work = ""
-            if "physics" in rows["after"][0] and "physics" in rows["before"][0]:
-                a, b = rows["after"][0], rows["before"][0]
+            a, b = rows["after"][0], rows["before"][0]
+            if "physics" in a and "physics" in b:
                 steps = (a["physics"] + a["search_physics"]) / (b["physics"] + b["search_physics"])
                 work = f", physics steps {steps:.2f}×"
-            print(f"{case}: after / before {ratio:.2f}× wall{work}\n")
+            print(f"{case}: after / before {ratio:.2f}× wall, CPU {a['cpu'] / b['cpu']:.2f}×{work} "
+                  f"(yardstick {stick:.2f} CPU s)\n", flush=True)
 
 
 def certify_gaits(args: argparse.Namespace, sides: dict[str, str], tmp: Path) -> None:
@@ -134,7 +259,7 @@ def certify_gaits(args: argparse.Namespace, sides: dict[str, str], tmp: Path) ->
             continue
         path = tmp / f"{label}.json"
         save_gait(res.gait, path)
-        out = {side: run(f"gait:{path}", src, args, tmp) for side, src in sides.items()}
+        out = {side: run(f"gait:{path}", side, src, args, tmp) for side, src in sides.items()}
         cells = []
         for side in ("before", "after"):
             r = out[side]

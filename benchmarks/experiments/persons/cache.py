@@ -34,8 +34,8 @@ from robustgait.io.robotfile import load_robot
 from robustgait.learn.space import ActionSpace
 from robustgait.study.evaluate import Evaluation, certify_evaluation, generate_and_walk
 from robustgait.study.executors import Executor
-from robustgait.study.run import params_label
 from robustgait.study.storage import current_names
+from robustgait.study.verify import params_label
 
 _WORKER: dict[str, Any] = {}
 

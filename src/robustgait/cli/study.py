@@ -8,6 +8,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from robustgait.cli.common import ROBOT_HELP, command
 from robustgait.cli.options import FlagTable, config_from
@@ -37,6 +38,13 @@ def _name(status: dict[str, object]) -> str:
     return radius_name(str(status.get("certificate")))
 
 
+def _value(entry: dict[str, Any], st: dict[str, Any]) -> str:
+    """A gait's certificate figure as a user reads it: verified, or the estimate said to be one."""
+    from robustgait.study.status import figure_text
+
+    return f"{_name(st)} {figure_text(entry, st['unit'])}"
+
+
 def print_summary(directory: str | Path, seconds: float | None = None) -> None:
     from robustgait.study.status import study_status
 
@@ -57,8 +65,7 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
               f"CPU s over {use['busy_seconds']:.0f} s)")
     if best is not None:
         params = ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())
-        print(f"best gait (trial {best['trial']}): {params}; {_name(st)} = {best['certificate_value']:.4g} "
-              f"{st['unit']}, "
+        print(f"best gait (trial {best['trial']}): {params}; {_value(best, st)}, "
               f"{best['steps_taken']} steps; {best['gait_file'] or 'no gait file'}")
         c = best.get("comfort")
         if c:
@@ -70,7 +77,7 @@ def print_summary(directory: str | Path, seconds: float | None = None) -> None:
     if obs is not None and not st.get("person") and (best is None or obs["score"] != best["score"]):
         params = ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
         print(f"best evaluated gait (trial {obs['trial']}; the best gait above is the learner's highest posterior "
-              f"mean): {params}; {_name(st)} = {obs['certificate_value']:.4g} {st['unit']}, {obs['steps_taken']} steps")
+              f"mean): {params}; {_value(obs, st)}, {obs['steps_taken']} steps")
     person = st.get("person")
     if person:  # docs/person.md
         floor = person["floor"]
@@ -154,14 +161,17 @@ def _study_status(args: argparse.Namespace) -> int:
         print(json.dumps(st, allow_nan=False))
         return 0
     print_summary(args.dir)
-    print(f"{'iteration':>9}  {'best ' + _name(st):>8}  {'steps':>5}  best gait")
+    print(f"{'iteration':>9}  {'best ' + _name(st):>8}  {'':9}  {'steps':>5}  best gait")
     for it in st["iterations"]:
         b = it["best"]
         if b is None:
-            print(f"{it['iteration'] + 1:>9}  {'—':>8}  {'—':>5}  {'running' if it['trials'] else 'not started'}")
+            print(f"{it['iteration'] + 1:>9}  {'—':>8}  {'':9}  {'—':>5}  "
+                  f"{'running' if it['trials'] else 'not started'}")
         else:
-            print(f"{it['iteration'] + 1:>9}  {b['certificate_value']:>8.4f}  {b['steps_taken']:>5}  "
-                  + ", ".join(f"{v:g}" for v in b["params"].values()))
+            verified = bool(b["verified"] and b["verified_value"] is not None)
+            value = b["verified_value"] if verified else b["certificate_value"]
+            print(f"{it['iteration'] + 1:>9}  {value:>8.4f}  {'verified' if verified else 'estimated':9}  "
+                  f"{b['steps_taken']:>5}  " + ", ".join(f"{v:g}" for v in b["params"].values()))
     return 0
 
 

@@ -87,8 +87,27 @@ class PersonConfig:
     ahead: Annotated[Bool, Doc("while a person answers, evaluate the candidates the learner would propose next if the "
                                "answer were the one its model predicts (reused when they are proposed; discarded "
                                "otherwise)")] = True
+    region: Annotated[Bool, Doc("propose only where the gaits are predicted to clear the floor (a model of the "
+                                "certificate's figure over the action space, robustgait.learn.floor), as ROIAL asks "
+                                "only in a region predicted safe")] = True
+    region_lengthscale: Annotated[Float, Doc("that model's kernel lengthscale ℓ, on the action space normalized to "
+                                             "[0, 1] per axis", gt=0.0, le=10.0)] = 0.2
+    region_prior: Annotated[Float, Doc("that model's prior weight w₀ on a figure of 0 (an unexplored gait is not "
+                                       "presumed robust): larger, a smaller region", gt=0.0, le=100.0)] = 0.1
+    min_shown: Annotated[Int, Doc("a batch is asked only once at least this many of its gaits may be shown (a "
+                                  "ranking of one gait tells the learner nothing): more candidates are proposed "
+                                  "until then", ge=1, le=100)] = 2
     video_steps: Annotated[Int, Doc("steps of each gait's looping video (after the comfort figures' skipped steps; "
                                     "2: one stride, which loops seamlessly)", ge=1, le=20)] = 2
+    video_fps: Annotated[Int, Doc("the videos' frames per second of walking (they play in real time)", ge=5,
+                                  le=60)] = 20
+    video_width: Annotated[Int, Doc("the width of one view (a video is the side and the front view side by side)",
+                                    unit="px", ge=64, le=1920)] = 288
+    video_height: Annotated[Int, Doc("the videos' height", unit="px", ge=64, le=1080)] = 324
+    video_shadows: Annotated[Bool, Doc("the videos draw the light's shadows and the floor's reflections (rendered in "
+                                       "software, without a GPU, they cost most of each frame)")] = False
+    video_antialias: Annotated[Bool, Doc("the videos' frames are multisampled (smoother edges; in software, several "
+                                         "times the cost of a frame)")] = False
     simulated: SimulatedPersonConfig = dataclasses.field(default_factory=SimulatedPersonConfig)
 
 

@@ -16,10 +16,12 @@ PERSON_METRICS = ("person", "simulated-person")
 LearnerName = Literal["polar", "eubo", "random"]
 Hyperparameters = Literal["fixed", "fit"]
 ExecutorName = Literal["local", "ray"]
+Verify = Literal["shown", "all"]
 # a gait that walked the cap without a certificate scores cap − this: below every certified gait (cap + r* ≥ cap),
 # above every faller (≤ cap − 1)
 UNCERTIFIED_PENALTY = 0.5
 Lengthscale = Annotated[Float, Doc(gt=0.0, le=1e3)]
+CERTIFICATE_FIGURES = ("certificate_value", "r_star", "j_star")  # a requirement's names of the certificate figure
 
 
 @config
@@ -78,6 +80,10 @@ class StudyConfig:
         "requirements FIGURE OP NUMBER on recorded figures (speed>=0.2; OP >= <= > <; a comfort figure, "
         "certificate_value (the study's J* or r*; also named r_star or j_star), steps_taken, mean_speed or a gait "
         "parameter), comma-separated: a gait failing one ranks below all that meet them")] = ()
+    verify: Annotated[Verify, Doc(
+        "which gaits get the verified certificate: shown (the learner ranks every gait on its certificate's estimate "
+        "from exploration; verified are each iteration's best, the recommendations, the gaits a person is shown and "
+        "the Pareto front) or all (every gait, ranked on its verified value)")] = "shown"
     learner: Annotated[LearnerName, Doc("polar (Thompson sampling), eubo (qEUBO) or random")] = "polar"
     iterations: Annotated[Int, Doc("batches", ge=1, le=1000)] = 10
     batch: Annotated[Int, Doc("gaits per batch (a batch is ranked: at least 2)", ge=2, le=100)] = 5
@@ -101,6 +107,12 @@ class StudyConfig:
     @property
     def trials_planned(self) -> int:
         return self.iterations * self.batch
+
+    @property
+    def verifies_all(self) -> bool:
+        """Every evaluation computes the verified certificate (``verify = all``, or a requirement on the certificate's
+        figure, which only a verified value can meet)."""
+        return self.verify == "all" or any(parse_requirement(t)[0] in CERTIFICATE_FIGURES for t in self.require)
 
     @property
     def asks_a_person(self) -> bool:
@@ -144,6 +156,16 @@ class ReportConfig:
     axes: Annotated[tuple[Str, Str], Doc("the two parameters of the posterior-mean map")] = (
         "step_length", "step_duration")
     video: Annotated[Bool, Doc("render a video of the best gait")] = True
+    video_steps: Annotated[Int, Doc("steps the best gait walks in the video, from its initial state", ge=1,
+                                    le=50)] = 6
+    video_fps: Annotated[Int, Doc("the video's frames per second of walking (it plays in real time)", ge=5,
+                                  le=60)] = 25
+    video_width: Annotated[Int, Doc("the video's width (as shown on the page)", unit="px", ge=64, le=1920)] = 480
+    video_height: Annotated[Int, Doc("the video's height", unit="px", ge=64, le=1080)] = 360
+    video_shadows: Annotated[Bool, Doc("the video draws the light's shadows and the floor's reflections (rendered in "
+                                       "software, without a GPU, they cost most of each frame)")] = False
+    video_antialias: Annotated[Bool, Doc("the video's frames are multisampled (smoother edges; in software, "
+                                         "several times the cost of a frame)")] = False
     pareto_figure: Annotated[Str, Doc("comfort figure (a cost: lower is better) of the trade-off front over the "
                                       "certificate, the speed and it (study pareto, the report)")] = (
         "pelvis_acc_vertical_rms")

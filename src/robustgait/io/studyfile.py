@@ -134,15 +134,27 @@ def load_config(directory: str | Path) -> StudySetup:
     if isinstance(certify, dict) and ("push_steps" in certify or isinstance(certify.get("push"), dict)):
         push = {**(certify.get("push") or {})}
         push.setdefault("verify_chunk", 0)  # written before chunked verification: whole verification batches
+        if "verify_margin" not in push:  # written before cheap exploration: exploration pushes were the statement's
+            push.update({"explore_horizon": push.get("horizon", 20),
+                         "explore_recovery_radius": push.get("recovery_radius", 0.03),
+                         "explore_recovery_steps": push.get("recovery_steps", 2), "verify_margin": 1.0,
+                         "first_share": 0.5})
         # format 3 as first written had a push_steps key: the fixed horizon the recovery band retired
         certify = {k: v for k, v in certify.items() if k != "push_steps"} | {"push": push}
         raw = {**raw, "config": {**raw["config"], "certify": certify}}
     raw = _without_unused_state_choice(_retired_certify_fields(raw))
     if isinstance(raw, dict) and isinstance(raw.get("config"), dict):
+        study = raw["config"].get("study")
+        study = dict(study) if isinstance(study, dict) else {}
+        if "verify" not in study:  # written before studies ranked on estimates: every gait was verified
+            raw = {**raw, "config": {**raw["config"], "study": {**study, "verify": "all"}}}
         person = raw["config"].get("person")
         person = dict(person) if isinstance(person, dict) else {}
         if "overdraw" not in person:  # written before over-drawn batches: its iterations evaluate the batch alone
-            raw = {**raw, "config": {**raw["config"], "person": {**person, "overdraw": 0, "ahead": False}}}
+            person = {**person, "overdraw": 0, "ahead": False}
+        if "region" not in person:  # written before the floor's region: proposals anywhere, batches of one asked
+            person = {**person, "region": False, "min_shown": 1}
+        raw = {**raw, "config": {**raw["config"], "person": person}}
     if not (isinstance(raw, dict) and raw.get("format_version") == FORMAT_VERSION and isinstance(raw.get("robot"), str)
             and "config" in raw):
         raise input_error(path, f"unsupported study file (format_version {FORMAT_VERSION} expected)")

@@ -106,12 +106,15 @@ class Learner:
     def generator(self, iteration: int, stream: int = 0) -> torch.Generator:
         return torch.Generator().manual_seed(iteration_seed(self.seed, iteration, stream))
 
-    def random_batch(self, iteration: int, batch: int) -> list[int]:
+    def random_batch(self, iteration: int, batch: int, allowed: NDArray[np.bool_] | None = None) -> list[int]:
         """``batch`` distinct grid indices, uniformly at random (the first iteration of every learner, so
-        that learners with one seed start from the same gaits)."""
+        that learners with one seed start from the same gaits); with ``allowed`` (size,), among those first."""
         if batch > self.space.size:
             raise RobustGaitError(f"a batch of {batch} gaits does not fit in an action space of {self.space.size}")
-        return [int(i) for i in torch.randperm(self.space.size, generator=self.generator(iteration))[:batch]]
+        order = [int(i) for i in torch.randperm(self.space.size, generator=self.generator(iteration))]
+        if allowed is not None:
+            order = [i for i in order if allowed[i]] + [i for i in order if not allowed[i]]
+        return order[:batch]
 
     def model(self, history: History, iteration: int = 0) -> Any:
         """The preference model fitted to ``history`` (the prior if it holds no comparison)."""
@@ -135,21 +138,32 @@ class Learner:
         with torch_threads(1):
             return np.asarray(posterior_mean(self.model(history, iteration), self._x[list(indices)]), dtype=float)
 
-    def propose(self, history: History, iteration: int, batch: int) -> list[int]:
+    def propose(self, history: History, iteration: int, batch: int,
+                allowed: NDArray[np.bool_] | None = None) -> list[int]:
         """The ``batch`` distinct grid indices to evaluate in iteration ``iteration`` given ``history`` (the
-        iterations before it)."""
+        iterations before it). ``allowed`` (size,): propose among these grid points (a person study: those predicted
+        to clear its floor, :mod:`robustgait.learn.floor`), the others only when fewer than ``batch`` are allowed."""
+        if allowed is not None and int(np.count_nonzero(allowed)) >= batch:
+            with torch_threads(1):
+                return self._propose(history, iteration, batch, allowed)
         with torch_threads(1):
-            return self._propose(history, iteration, batch)
+            picks = self._propose(history, iteration, batch, None)
+        if allowed is None:
+            return picks
+        first = [int(i) for i in np.flatnonzero(allowed)]
+        return (first + [i for i in picks if i not in set(first)])[:batch]
 
-    def _propose(self, history: History, iteration: int, batch: int) -> list[int]:
+    def _propose(self, history: History, iteration: int, batch: int,
+                 allowed: NDArray[np.bool_] | None) -> list[int]:
         raise NotImplementedError
 
 
 class RandomLearner(Learner):
     name = "random"
 
-    def _propose(self, history: History, iteration: int, batch: int) -> list[int]:
-        return self.random_batch(iteration, batch)
+    def _propose(self, history: History, iteration: int, batch: int,
+                 allowed: NDArray[np.bool_] | None) -> list[int]:
+        return self.random_batch(iteration, batch, allowed)
 
 
 class PolarLearner(Learner):
@@ -169,13 +183,18 @@ class PolarLearner(Learner):
         keep += [int(i) for i in perm if int(i) not in taken][:cap - len(keep)]
         return np.array(sorted(keep), dtype=np.int64)
 
-    def _propose(self, history: History, iteration: int, batch: int) -> list[int]:
+    def _propose(self, history: History, iteration: int, batch: int,
+                 allowed: NDArray[np.bool_] | None) -> list[int]:
         if iteration == 0 or not history.actions:
-            return self.random_batch(iteration, batch)
+            return self.random_batch(iteration, batch, allowed)
         gen = self.generator(iteration)
         model = self.model(history, iteration)
         best = self.recommend(history, iteration, model)
         cand = self.candidates(history, best, gen)
+        if allowed is not None and int(np.count_nonzero(allowed[cand])) >= batch:
+            cand = cand[allowed[cand]]
+        elif allowed is not None:  # the candidate subset holds too few: every allowed grid point
+            cand = np.flatnonzero(allowed).astype(np.int64)
         if batch > cand.size:
             raise RobustGaitError(f"a batch of {batch} gaits does not fit in {cand.size} candidate gaits")
         mean, cov = posterior_mean_cov(model, self._x[cand])
@@ -197,9 +216,10 @@ class PolarLearner(Learner):
 class EuboLearner(Learner):
     name = "eubo"
 
-    def _propose(self, history: History, iteration: int, batch: int) -> list[int]:
+    def _propose(self, history: History, iteration: int, batch: int,
+                 allowed: NDArray[np.bool_] | None) -> list[int]:
         if iteration == 0 or not history.actions:
-            return self.random_batch(iteration, batch)
+            return self.random_batch(iteration, batch, allowed)
         from botorch.acquisition.preference import qExpectedUtilityOfBestOption
         from botorch.optim import optimize_acqf_discrete
         from botorch.sampling import SobolQMCNormalSampler
@@ -210,12 +230,13 @@ class EuboLearner(Learner):
         sampler = SobolQMCNormalSampler(torch.Size([self.config.eubo_samples]),
                                         seed=iteration_seed(self.seed, iteration, 1) % 2**31)
         acq = qExpectedUtilityOfBestOption(pref_model=model, sampler=sampler)
-        choices = torch.as_tensor(self._x, dtype=torch.float64)
+        index = np.arange(self.space.size) if allowed is None else np.flatnonzero(allowed)
+        choices = torch.as_tensor(self._x[index], dtype=torch.float64)
         with torch.no_grad(), warnings.catch_warnings():
             warnings.simplefilter("ignore")
             x, _ = optimize_acqf_discrete(acq, q=batch, choices=choices, unique=True)
         rows = torch.cdist(x.reshape(batch, -1), choices).argmin(dim=1)
-        return [int(i) for i in rows]
+        return [int(index[int(i)]) for i in rows]
 
 
 LEARNER_CLASSES: dict[str, type[Learner]] = {"polar": PolarLearner, "eubo": EuboLearner, "random": RandomLearner}

@@ -96,6 +96,17 @@ class ActionSpace:
         scale = np.array([max(n - 1, 1) for n in self.shape], dtype=float)
         return c / scale
 
+    def normalize(self, values: Mapping[str, float]) -> FloatArray:
+        """Normalized coordinates (d,) of any parameter values (on the grid or not): each axis' [first, last] value
+        mapped onto [0, 1], as :meth:`normalized` maps the grid; an axis of one value maps to 0."""
+        out = []
+        for name, vals in zip(self.names, self.values, strict=True):
+            if name not in values:
+                raise RobustGaitError(f"missing parameter '{name}' of the action space")
+            span = vals[-1] - vals[0]
+            out.append((float(values[name]) - vals[0]) / span if span > 0 else 0.0)
+        return np.asarray(out, dtype=float)
+
     def value(self, index: int) -> dict[str, float]:
         """Parameter name → value of action ``index``."""
         c = self.coords(index)

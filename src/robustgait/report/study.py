@@ -35,10 +35,11 @@ from robustgait.io.output import write_text
 from robustgait.io.schema import read_json
 from robustgait.report.figures import _save, plot_certificate
 from robustgait.report.person import pareto_parts, person_parts
+from robustgait.study.status import figure_text
 
-OUTCOME_COLORS = {"certified": "tab:green", "not_certified": "tab:olive", "fell": "tab:red",
+OUTCOME_COLORS = {"certified": "tab:green", "estimated": "tab:cyan", "not_certified": "tab:olive", "fell": "tab:red",
                   "generation_failed": "0.3"}
-OUTCOME_MARKERS = {"certified": "o", "not_certified": "s", "fell": "x", "generation_failed": "+"}
+OUTCOME_MARKERS = {"certified": "o", "estimated": "^", "not_certified": "s", "fell": "x", "generation_failed": "+"}
 REPORT_DIR = "report"
 
 
@@ -189,18 +190,24 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
     return _save(fig, path)
 
 
-def render_best_video(directory: Path, status: dict[str, Any], path: Path, steps: int = 8) -> Path:
-    """Walk the best gait ``steps`` steps and render it (MuJoCo offscreen)."""
+def render_best_video(directory: Path, status: dict[str, Any], path: Path, steps: int | None = None,
+                      config: ReportConfig | None = None) -> Path:
+    """Walk the best gait ``steps`` steps from its initial state (not set: ``config.video_steps``) and render it
+    (:func:`~robustgait.sim.walk.render_video`, MuJoCo offscreen) with the video settings of ``config`` (default
+    :class:`ReportConfig`): ``video_fps``, ``video_width`` × ``video_height``, ``video_shadows``,
+    ``video_antialias``."""
     from robustgait.io.gaitfile import load_gait
     from robustgait.io.robotfile import load_robot
     from robustgait.sim import render_video, walk
 
+    config = config or ReportConfig()
     robot = load_robot(status["robot"])
     gait = load_gait(directory / status["best"]["gait_file"], robot)
-    res = walk(robot, gait, steps=steps, keep_trajectory=True)
+    res = walk(robot, gait, steps=config.video_steps if steps is None else steps, keep_trajectory=True)
     if res.trajectory is None:
         raise RobustGaitError("the best gait produced no trajectory to render")
-    render_video(robot, res.trajectory, path, width=480, height=360)
+    render_video(robot, res.trajectory, path, fps=config.video_fps, width=config.video_width,
+                 height=config.video_height, shadows=config.video_shadows, antialias=config.video_antialias)
     return path
 
 
@@ -222,19 +229,24 @@ def _fmt(v: Any, nd: int = 3) -> str:
     return str(v)
 
 
-def write_study_report(directory: str | Path, config: ReportConfig | None = None, *, video_steps: int = 8) -> Path:
-    """Write ``DIR/report/index.html`` and its PNGs (and ``best.mp4`` when ``config.video``); returns the HTML path.
+def write_study_report(directory: str | Path, config: ReportConfig | None = None, *,
+                       video_steps: int | None = None) -> Path:
+    """Write ``DIR/report/index.html`` and its PNGs (and ``best.mp4`` when ``config.video``: ``video_steps`` steps of
+    the best gait, not set: ``config.video_steps``; :func:`render_best_video`); returns the HTML path.
     ``config.axes``: the two parameters of the posterior-mean map. Parts that cannot be made (no certified gait,
     no offscreen GL for the video) are replaced by a note."""
     from robustgait.study.status import study_status
 
     config = config or ReportConfig()
     axes, video = config.axes, config.video
+    video_steps = config.video_steps if video_steps is None else video_steps
 
     d = Path(directory)
     status = study_status(d)
     if status["trials_done"] == 0:
         raise input_error(d, "the study has no evaluated gait yet")
+    if verify_recommended(d, status, config.pareto_figure):  # what the report recommends is verified
+        status = study_status(d)
     out = d / REPORT_DIR
     out.mkdir(exist_ok=True)
     parts: list[str] = []
@@ -267,13 +279,34 @@ def write_study_report(directory: str | Path, config: ReportConfig | None = None
     parts += _validation_parts(d, status, out, notes)
     if video and best is not None and best.get("gait_file"):
         try:
-            v = render_best_video(d, status, out / "best.mp4", video_steps)
+            v = render_best_video(d, status, out / "best.mp4", video_steps, config)
             b64 = base64.b64encode(v.read_bytes()).decode()
             parts.append(f"<h2>The best gait walking ({video_steps} steps)</h2><video controls loop muted "
-                         f'width="480" src="data:video/mp4;base64,{b64}"></video>')
+                         f'width="{config.video_width}" src="data:video/mp4;base64,{b64}"></video>')
         except RobustGaitError as exc:
             notes.append(f"No video: {exc}")
     return write_text(out / "index.html", _page(status, parts, notes), "html")
+
+
+def verify_recommended(directory: Path, status: dict[str, Any], figure: str) -> bool:
+    """Verify, on demand, every gait the report recommends whose certificate is an estimate: the learner's best, the
+    best evaluated gait, each iteration's and the Pareto front's (:func:`~robustgait.study.pareto.study_pareto`).
+    Returns whether any was verified."""
+    from robustgait.study.pareto import study_pareto
+    from robustgait.study.verify import verify_now
+
+    entries = [status["best"], status["best_observed"], *(e for it in status["iterations"]
+                                                         for e in (it["best"], it["batch_best"]))]
+    indices = [e["grid_index"] for e in entries if e is not None and e.get("status") == "estimated"]
+    done = verify_now(directory, indices) > 0
+    try:
+        front = study_pareto(directory, figure, verify=False)["front"]
+    except RobustGaitError:  # no front to recommend (the figure is the report's to refuse, below)
+        return done
+    if any(not r["verified"] for r in front):
+        study_pareto(directory, figure)
+        done = True
+    return done
 
 
 def _comfort_parts(status: dict[str, Any], out: Path, notes: list[str]) -> list[str]:
@@ -337,7 +370,10 @@ def _certify_text(cfg: dict[str, Any]) -> str:
            "until a fresh uniform batch certifies the violating fraction)"
            if c.get("method") == "sequential" else f"uniform estimator (the paper's N = {c['n_samples']} samples)")
     if cfg["study"].get("metric") == "push" or c.get("disturbance") == "push":
-        what = f"push certificate J* ({c.get('push', {}).get('steps', 3)} steps after the push)"
+        what = f"push certificate J* ({c.get('push', {}).get('horizon', 20)} steps after the push)"
+    if cfg["study"].get("verify", "all") == "shown":
+        how += ("; the learner ranks every gait on its estimate from exploration, and the best of each iteration, the "
+                "recommendations, the gaits shown to a person and the Pareto front are verified")
     else:
         what = (f"{c.get('state', 'omega')} {c.get('set', 'ball')}, horizon {c.get('horizon', 1)}")
     return f"{what}; {how}, seed {c['seed']}, step cap {cfg['sim']['step_cap']}"
@@ -355,22 +391,23 @@ def _page(status: dict[str, Any], parts: list[str], notes: list[str]) -> str:
                ["certificate", _certify_text(cfg)]]
     if best is not None:
         summary += [["best gait (learner)", ", ".join(f"{k} = {v:g}" for k, v in best["params"].items())],
-                    [f"best {name} / steps", f"{_fmt(best['certificate_value'], 4)} {status.get('unit', 'rad/s')} / "
+                    [f"best {name} / steps", f"{figure_text(best, status.get('unit', 'rad/s'))} / "
                                         f"{best['steps_taken']}"],
                     ["best gait file", best["gait_file"] or "—"]]
     obs = status["best_observed"]
     if obs is not None and (best is None or obs["trial"] != best["trial"]):
         summary += [["best evaluated gait", ", ".join(f"{k} = {v:g}" for k, v in obs["params"].items())
-                     + f": {name} {_fmt(obs['certificate_value'], 4)} {status.get('unit', 'rad/s')}, "
+                     + f": {name} {figure_text(obs, status.get('unit', 'rad/s'))}, "
                      f"{obs['steps_taken']} steps (trial {obs['trial']}; the "
                      "learner's best is the highest posterior mean, from comparisons only)"]]
-    it_rows = [[it["iteration"] + 1, _fmt(it["best"]["certificate_value"], 4) if it["best"] else "—",
+    unit = status.get("unit", "rad/s")
+    it_rows = [[it["iteration"] + 1, figure_text(it["best"], unit) if it["best"] else "—",
                 it["best"]["steps_taken"] if it["best"] else "—",
                 ", ".join(f"{v:g}" for v in it["best"]["params"].values()) if it["best"] else "—",
                 len(it["comparisons"] or [])] for it in status["iterations"]]
     tr_rows = [[t["number"], t["iteration"] + 1, t["state"], ", ".join(f"{v:g}" for v in t["params"].values()),
                 t["status"] or "—", t["steps_taken"] if t["steps_taken"] is not None else "—",
-                _fmt(t["certificate_value"], 4),
+                figure_text(t, unit),
                 (t["reason"] or "")[:90] + (f" (same gait as trial {t['reused_from']})" if t["reused_from"] is not None
                                             else "")] for t in status["trials"]]
     note_html = "".join(f"<p class=note>{html.escape(n)}</p>" for n in notes)

@@ -14,7 +14,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.io.output import atomic_output, check_output
 from robustgait.robots import Robot
-from robustgait.sim.walk import offscreen_renderer, scene_option, walk
+from robustgait.sim.walk import offscreen_renderer, pose_for_drawing, scene_option, walk
 
 # camera azimuths [deg] of the two rows: MuJoCo's free camera at azimuth 90 looks along +y (it sees the
 # robot's right side; the robot walks to the right of the image), at 180 along −x (the robot walks towards it)
@@ -59,7 +59,7 @@ def render_tiles(robot: Robot, gait: Gait, path: str | Path, config: ReportConfi
             row = []
             for state in states:
                 mujoco.mj_setState(m, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS.value)
-                mujoco.mj_forward(m, data)
+                pose_for_drawing(m, data)
                 cam = mujoco.MjvCamera()
                 cam.type = mujoco.mjtCamera.mjCAMERA_FREE
                 base = data.xpos[robot.base_body_id]

@@ -5,8 +5,9 @@ Stability in the sense of the paper is the number of steps completed before a fa
 
 from __future__ import annotations
 
+import copy
 import json
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -253,14 +254,45 @@ def _track(stats: TrackingStats, eng: StepEngine, batch: object, start: NDArray[
                            controls=controls))
 
 
-def offscreen_renderer(robot: Robot, width: int, height: int) -> mujoco.Renderer:
-    """MuJoCo's offscreen renderer for the robot's model, or a one-line RobustGaitError naming the fix."""
+def offscreen_renderer(robot: Robot, width: int, height: int, *, shadows: bool = True,
+                       antialias: bool = True) -> mujoco.Renderer:
+    """MuJoCo's offscreen renderer for the robot's model, width × height pixels, or a one-line RobustGaitError naming
+    the fix. ``shadows``: the light's shadows and the floor's reflections (the model's own look; without them a frame
+    drawn in software, EGL or OSMesa without a GPU, costs a fraction); ``antialias``: multisampling with the model's
+    ``visual/quality/offsamples`` (without it: one sample a pixel, jagged edges, again a fraction of the cost). The
+    offscreen buffer is enlarged to width × height when the model's ``visual/global`` one is smaller."""
+    model = robot.model
+    g = model.vis.global_
+    if (not antialias and model.vis.quality.offsamples != 0) or width > g.offwidth or height > g.offheight:
+        model = copy.copy(model)  # read when the context is made: on a copy, the robot's model is left as it is
+        model.vis.global_.offwidth = max(width, g.offwidth)
+        model.vis.global_.offheight = max(height, g.offheight)
+        if not antialias:
+            model.vis.quality.offsamples = 0
     try:
-        return mujoco.Renderer(robot.model, height, width)
+        renderer = mujoco.Renderer(model, height, width)
     except Exception as exc:  # the GL backends raise a variety of errors when no context can be made
         raise RobustGaitError(
             f"offscreen rendering unavailable ({type(exc).__name__}: {exc}); MuJoCo needs EGL or OSMesa: set "
             "MUJOCO_GL=egl or MUJOCO_GL=osmesa and install libegl1 or libosmesa6") from None
+    if not shadows:
+        for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION):
+            renderer.scene.flags[flag] = False
+    return renderer
+
+
+def pose_for_drawing(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+    """Compute from ``data``'s qpos what a frame draws, and no more: the bodies' and geoms' poses, the centre of mass
+    a tracking camera follows, the cameras and lights, the tendons' paths (no dynamics, no contacts: those are not
+    drawn); a model with flexible bodies gets the whole ``mj_forward``."""
+    if model.nflex:
+        mujoco.mj_forward(model, data)
+        return
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_comPos(model, data)
+    mujoco.mj_camlight(model, data)
+    if model.ntendon:
+        mujoco.mj_tendon(model, data)
 
 
 def scene_option(robot: Robot) -> mujoco.MjvOption:
@@ -279,24 +311,15 @@ def scene_option(robot: Robot) -> mujoco.MjvOption:
     return opt
 
 
-def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path, *, fps: int = 30,
-                 width: int = 640, height: int = 480) -> int:
-    """Render a trajectory (full-physics states, as kept by :func:`walk`) to an ``.mp4`` (H.264 via ffmpeg) or
-    an animated ``.gif`` (half the size, at most :data:`~robustgait.config.work.MAX_GIF_FRAMES` frames: GIFs are
-    big) with MuJoCo's offscreen renderer (EGL or OSMesa, chosen by ``MUJOCO_GL``); returns the number of frames
-    written. Written through :func:`robustgait.io.output.atomic_output` (checked target, atomic)."""
-    import imageio.v2 as imageio
-    from PIL import Image
-
-    path = check_output(path, "video")
-    gif = path.suffix.lower() == ".gif"
+def video_frames(robot: Robot, trajectory: NDArray[np.float64], *, fps: int = 30, width: int = 640, height: int = 480,
+                 shadows: bool = True, antialias: bool = True) -> Generator[NDArray[np.uint8], None, None]:
+    """The frames of a trajectory (full-physics states, as kept by :func:`walk`, one per physics step of
+    ``robot.dt``): every ``round(1 / (fps · dt))``-th state from the first, up to the first non-finite one, each
+    (height, width, 3) RGB drawn by :func:`offscreen_renderer` (``shadows``, ``antialias``) from a camera tracking
+    the base at 3 m, 15° above, from the front left. The renderer is made on the first frame and freed when the
+    iteration ends."""
     every = max(1, round(1.0 / (fps * robot.dt)))
-    n_frames = -(-len(trajectory) // every)
-    if gif:
-        width, height = width // 2, height // 2
-        if n_frames > MAX_GIF_FRAMES:
-            raise input_error(path, f"{n_frames} frames, over the {MAX_GIF_FRAMES} a .gif may hold (use .mp4)")
-    renderer = offscreen_renderer(robot, width, height)
+    renderer = offscreen_renderer(robot, width, height, shadows=shadows, antialias=antialias)
     option = scene_option(robot)
     m = robot.model
     data = mujoco.MjData(m)
@@ -304,30 +327,61 @@ def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path
     cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
     cam.trackbodyid = robot.base_body_id
     cam.distance, cam.elevation, cam.azimuth = 3.0, -15.0, 120.0
-
-    def frames() -> Iterator[NDArray[np.uint8]]:
+    try:
         for state in trajectory[::every]:
             if not np.isfinite(state).all():
                 break
             mujoco.mj_setState(m, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS.value)
-            mujoco.mj_forward(m, data)
+            pose_for_drawing(m, data)
             renderer.update_scene(data, cam, scene_option=option)
             yield renderer.render()
-
-    count = 0
-    try:
-        with atomic_output(path, "video") as tmp:
-            if gif:  # Pillow's fast octree quantizer: imageio's default GIF path takes ~1 s per 640×480 frame
-                images = [Image.fromarray(f).quantize(colors=256, method=Image.Quantize.FASTOCTREE) for f in frames()]
-                count = len(images)
-                if images:
-                    images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
-                                   duration=round(1000 / fps), loop=0)
-            else:
-                with imageio.get_writer(tmp, fps=fps, macro_block_size=1) as writer:
-                    for frame in frames():
-                        writer.append_data(frame)  # type: ignore[attr-defined]
-                        count += 1
     finally:
         renderer.close()
+
+
+def write_video(frames: Iterable[NDArray[np.uint8]], path: str | Path, fps: int) -> int:
+    """Write ``frames`` ((height, width, 3) RGB, all of one size) to ``path``, played at ``fps`` frames a second: an
+    ``.mp4`` (H.264, yuv420p, CRF 25 with x264's ``veryfast`` preset, its index first — ``+faststart`` — so that a
+    browser plays it as it loads) or an animated ``.gif`` (256 colours, looping). Returns the number of frames
+    written; through :func:`robustgait.io.output.atomic_output` (checked target, atomic)."""
+    import imageio.v2 as imageio
+    from PIL import Image
+
+    path = check_output(path, "video")
+    count = 0
+    with atomic_output(path, "video") as tmp:
+        if path.suffix.lower() == ".gif":  # Pillow's fast octree quantizer: imageio's GIF path is far slower
+            images = [Image.fromarray(f).quantize(colors=256, method=Image.Quantize.FASTOCTREE) for f in frames]
+            count = len(images)
+            if images:
+                images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
+                               duration=round(1000 / fps), loop=0)
+        else:
+            with imageio.get_writer(tmp, fps=fps, codec="libx264", pixelformat="yuv420p", macro_block_size=1,
+                                    ffmpeg_params=["-preset", "veryfast", "-movflags", "+faststart"]) as writer:
+                for frame in frames:
+                    writer.append_data(frame)  # type: ignore[attr-defined]
+                    count += 1
     return count
+
+
+def render_video(robot: Robot, trajectory: NDArray[np.float64], path: str | Path, *, fps: int = 30,
+                 width: int = 640, height: int = 480, shadows: bool = True, antialias: bool = True) -> int:
+    """Render a trajectory (full-physics states, as kept by :func:`walk`) to an ``.mp4`` or an animated ``.gif``
+    (:func:`write_video`; a .gif at half the size, at most :data:`~robustgait.config.work.MAX_GIF_FRAMES` frames:
+    GIFs are big) of ``fps`` frames a second, width × height pixels, with MuJoCo's offscreen renderer (EGL or
+    OSMesa, chosen by ``MUJOCO_GL``; :func:`video_frames`: ``shadows`` and ``antialias`` as in
+    :func:`offscreen_renderer`). Returns the number of frames written."""
+    path = check_output(path, "video")
+    if path.suffix.lower() == ".gif":
+        width, height = width // 2, height // 2
+        every = max(1, round(1.0 / (fps * robot.dt)))
+        n_frames = -(-len(trajectory) // every)
+        if n_frames > MAX_GIF_FRAMES:
+            raise input_error(path, f"{n_frames} frames, over the {MAX_GIF_FRAMES} a .gif may hold (use .mp4)")
+    frames = video_frames(robot, trajectory, fps=fps, width=width, height=height, shadows=shadows,
+                          antialias=antialias)
+    try:
+        return write_video(frames, path, fps)
+    finally:
+        frames.close()  # the renderer is freed even when writing failed

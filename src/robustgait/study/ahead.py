@@ -24,11 +24,13 @@ class Ahead:
     :meth:`fill` submits the next unknown candidates to idle workers while fewer than ``batch`` of them are known, or
     running, to qualify (be shown to a person) — the rule an iteration's own candidates are evaluated by;
     :meth:`finish` keeps a finished evaluation; :meth:`take` hands it to the trial of its gait. Executor keys are
-    −2, −3, … (the study's trials use their numbers, the floor's reference evaluation −1)."""
+    −2, −3, … (the study's trials use their numbers, the floor's reference evaluation −1). ``verify_above``: each
+    evaluation's certificate is verified when its estimate is at least this (the floor: the gaits a person may be
+    shown)."""
 
     def __init__(self, executor: Executor, batch: int, params: Callable[[int], dict[str, float]],
-                 qualifies: Callable[[int, Result], bool]):
-        self.executor, self.batch = executor, batch
+                 qualifies: Callable[[int, Result], bool], verify_above: float | None = None):
+        self.executor, self.batch, self.verify_above = executor, batch, verify_above
         self.params, self.qualifies = params, qualifies
         self.results: dict[int, Result] = {}  # grid index → its evaluation, as the study stores it
         self.running: dict[int, int] = {}  # executor key → grid index
@@ -56,7 +58,7 @@ class Ahead:
                 break
             if i in running or self._result(i) is not None:
                 continue
-            self.executor.submit(self._next_key, self.params(i))
+            self.executor.submit(self._next_key, self.params(i), self.verify_above)
             self.running[self._next_key] = i
             running.add(i)
             self._next_key -= 1

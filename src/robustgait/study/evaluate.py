@@ -11,11 +11,11 @@ resumable, and lets a study reuse the result of a gait it already evaluated.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
-from robustgait.certificate.certify import certify_gait
+from robustgait.certificate.certify import GaitCertificate, certify_gait
 from robustgait.certificate.orbit import Status as OrbitStatus
 from robustgait.config import Config, GaitParams
 from robustgait.errors import RobustGaitError
@@ -29,27 +29,33 @@ from robustgait.study.storage import current_names
 if TYPE_CHECKING:
     from robustgait.gaitgen import GaitGenerator
 
-Status = Literal["certified", "generation_failed", "fell", "not_certified"]
-STATUSES: tuple[Status, ...] = ("certified", "generation_failed", "fell", "not_certified")
+Status = Literal["certified", "estimated", "generation_failed", "fell", "not_certified"]
+STATUSES: tuple[Status, ...] = ("certified", "estimated", "generation_failed", "fell", "not_certified")
+RANKED: tuple[Status, ...] = ("certified", "estimated")
+"""The statuses of a gait with a certificate figure the study ranks by: verified, or estimated by exploration."""
 
 
 @dataclass
 class Evaluation:
     """The outcome of :func:`evaluate`.
 
-    status: ``certified`` (walked the cap, its certificate computed), ``generation_failed``, ``fell`` (before the cap),
-    ``not_certified`` (walked the cap but the certificate refused it: ``unsettled``, ``unstable``, ``fell`` in the
-    orbit search, ``unstable_fixed_point`` (:class:`robustgait.certificate.orbit.Status`); the reason starts with it —
-    the oracles rank it below every certified gait);
-    reason: why, in one line ('' when certified). generation: :meth:`GaitGenResult.summary`. certificate_value: the
-    figure of the study's certificate (``config.study_certify``: J* in N s for a push certificate, r* in the state's
-    unit for a state certificate; :func:`robustgait.config.radius_name` names it), 0 unless certified. certificate:
-    :meth:`GaitCertificate.to_dict` with the samples (None unless certified). comfort: what a passenger feels on the
-    walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`, ``config.comfort``; None when the walk completed no measured
-    step or the gait was not generated). seconds: per stage (generate, walk, certify; build when :func:`evaluate`
-    built the generator itself; first: the evaluation a retry replaced, retry: its diagnosis and the margin's
-    generator; total). retried: None, or why the gait was
-    generated again with a joint margin (:func:`retry_after_fall`: ``joint_margin``, the first evaluation's
+    status: ``certified`` (walked the cap, its certificate computed and verified), ``estimated`` (walked the cap, on a
+    stable orbit, its certificate's figure estimated by exploration only: ``study.verify = shown``),
+    ``generation_failed``, ``fell`` (before the cap), ``not_certified`` (walked the cap but the certificate refused it:
+    ``unsettled``, ``unstable``, ``fell`` in the orbit search, ``unstable_fixed_point``
+    (:class:`robustgait.certificate.orbit.Status`); the reason starts with it — the oracles rank it below every
+    certified or estimated gait); reason: why, in one line ('' when certified or estimated). generation:
+    :meth:`GaitGenResult.summary`. certificate_value: the figure the study ranks by (``config.study_certify``: J* in N s
+    for a push certificate, r* in the state's unit for a state certificate; :func:`robustgait.config.radius_name` names
+    it): the verified value when the study verifies every gait (:attr:`~robustgait.config.StudyConfig.verifies_all`),
+    else the estimate; 0 unless certified or estimated. estimate: the exploration's estimate (None before the
+    certificate). verified_value: the verified value (None unless verified). certificate:
+    :meth:`GaitCertificate.to_dict` with the samples (None unless certified or estimated). comfort: what a passenger
+    feels on the walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`, ``config.comfort``; None when the walk completed
+    no measured step or the gait was not generated). seconds: per stage (generate, walk, certify; build when
+    :func:`evaluate` built the generator itself; first: the evaluation a retry replaced, retry: its diagnosis and the
+    margin's generator; total). retried: None, or why the gait was generated again with a joint margin
+    (:func:`retry_after_fall`: ``joint_margin``, the first evaluation's
     ``status``, ``reason``, ``cause`` and ``limit_joint``).
     """
 
@@ -68,9 +74,11 @@ class Evaluation:
     gait: Gait | None = None
     seconds: dict[str, float] = field(default_factory=dict)
     retried: dict[str, Any] | None = None
+    estimate: float | None = None
+    verified_value: float | None = None
 
     def outcome(self) -> Outcome:
-        return Outcome(self.steps_taken, self.step_cap, self.certificate_value, self.status == "certified")
+        return Outcome(self.steps_taken, self.step_cap, self.certificate_value, self.status in RANKED)
 
     def certificate_summary(self) -> dict[str, Any] | None:
         """The certificate without its samples (what a study keeps in its database)."""
@@ -86,7 +94,7 @@ class Evaluation:
                 "fall_reason": self.fall_reason, "mean_speed": self.mean_speed,
                 "certificate_value": self.certificate_value, "generation": self.generation,
                 "certificate": self.certificate_summary(), "comfort": self.comfort, "seconds": self.seconds,
-                "retried": self.retried}
+                "retried": self.retried, "estimate": self.estimate, "verified_value": self.verified_value}
 
     def to_dict(self) -> dict[str, Any]:
         """Everything, JSON-ready (what a worker sends back)."""
@@ -104,11 +112,15 @@ class Evaluation:
                    generation=d["generation"],
                    certificate=d["certificate"], comfort=d.get("comfort"),  # absent: evaluated before comfort
                    gait=gait_from_dict(d["gait"]) if d.get("gait") else None, seconds=d["seconds"],
-                   retried=d.get("retried"))  # absent: evaluated before the retry
+                   retried=d.get("retried"),  # absent: evaluated before the retry
+                   # absent: evaluated before estimates, when every certified value was verified
+                   estimate=d.get("estimate"),
+                   verified_value=d.get("verified_value", d["certificate_value"] if d["status"] == "certified"
+                                        else None))
 
 
 def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
-             generator: GaitGenerator | None = None) -> Evaluation:
+             generator: GaitGenerator | None = None, verify_above: float | None = None) -> Evaluation:
     """Generate the gait of ``params`` (cold start, ``config.generate``), walk it up to ``config.sim.step_cap``
     steps and, if it walked the cap, certify it (``config.certify``). Pass a ``generator`` built for ``robot`` with
     ``config.generate`` to reuse it (building costs seconds). The certificate is ``config.study_certify`` (J* for the
@@ -116,10 +128,13 @@ def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
     :func:`generate_and_walk` and :func:`certify_evaluation`, one after the other; a gait whose undisturbed walk fell
     (in the walk, or in the certificate's orbit search) after one of its joints reached the end of its range is
     generated again with ``generate.retry_joint_margin`` and evaluated once more, as ``gait generate`` does
-    (:func:`retry_after_fall`)."""
+    (:func:`retry_after_fall`). The certificate is verified when the study verifies every gait
+    (:attr:`~robustgait.config.StudyConfig.verifies_all`) or, given ``verify_above``, when its estimate is at least
+    that (a person study's floor: the gaits it may show); otherwise it is the exploration's estimate (status
+    ``estimated``)."""
     cfg = config or Config()
-    first = certify_evaluation(robot, generate_and_walk(robot, params, cfg, generator=generator), cfg)
-    return retry_after_fall(robot, params, cfg, first, generator)
+    first = certify_evaluation(robot, generate_and_walk(robot, params, cfg, generator=generator), cfg, verify_above)
+    return retry_after_fall(robot, params, cfg, first, generator, verify_above)
 
 
 def fell_undisturbed(ev: Evaluation, config: Config) -> int | None:
@@ -136,7 +151,7 @@ def fell_undisturbed(ev: Evaluation, config: Config) -> int | None:
 
 
 def retry_after_fall(robot: Robot, params: GaitParams, config: Config, ev: Evaluation,
-                     generator: GaitGenerator | None = None) -> Evaluation:
+                     generator: GaitGenerator | None = None, verify_above: float | None = None) -> Evaluation:
     """``ev`` itself, unless its gait fell undisturbed (:func:`fell_undisturbed`) after one of its joints reached
     the end of its range with room to give (:func:`robustgait.gaitgen.walkcheck.margin_after`): then the evaluation
     of the gait generated with that margin, its ``retried`` saying why (the margin, the first evaluation's status,
@@ -156,7 +171,7 @@ def retry_after_fall(robot: Robot, params: GaitParams, config: Config, ev: Evalu
         return ev
     again, gen = retry_generator(robot, config, margin, generator)
     retry = time.perf_counter() - t0  # the diagnosis, and the margin's generator when it was built now
-    out = certify_evaluation(robot, generate_and_walk(robot, params, again, generator=gen), again)
+    out = certify_evaluation(robot, generate_and_walk(robot, params, again, generator=gen), again, verify_above)
     out.retried = {"joint_margin": margin, "status": ev.status, "reason": ev.reason, "cause": cause,
                    "limit_joint": joint}
     out.seconds["first"] = ev.seconds.get("total", 0.0)
@@ -206,21 +221,54 @@ def generate_and_walk(robot: Robot, params: GaitParams, config: Config | None = 
 NOT_CERTIFIED_YET = "not certified yet"
 
 
-def certify_evaluation(robot: Robot, ev: Evaluation, config: Config | None = None) -> Evaluation:
+def certify_evaluation(robot: Robot, ev: Evaluation, config: Config | None = None,
+                       verify_above: float | None = None) -> Evaluation:
     """The second stage of :func:`evaluate`: certify a gait that walked the cap (``config.study_certify``; a fall, no
-    fixed point: a status, not an exception); any other evaluation is returned as it is. Adds to ``ev.seconds``."""
+    fixed point: a status, not an exception; verified as :func:`evaluate` says); any other evaluation is returned as it
+    is. Adds to ``ev.seconds``."""
     if ev.gait is None or ev.status != "not_certified" or ev.reason != NOT_CERTIFIED_YET:
         return ev
     cfg = config or Config()
     t0 = time.perf_counter()
+    everything = cfg.study.verifies_all or cfg.study_certify.method != "sequential"
+    verify: bool | Callable[[float], bool] = everything or (
+        (lambda estimate: estimate >= verify_above) if verify_above is not None else False)
     # a fall, no stable orbit: a status, not an exception
-    gc = certify_gait(robot, ev.gait, cfg.study_certify, cfg.sim, validate=cfg.validate)
-    if gc.ok:
-        ev.status, ev.reason = "certified", ""
-        ev.certificate_value = float(gc.r_star)
-        ev.certificate = gc.to_dict(samples=True)
-    else:
-        ev.status, ev.reason = "not_certified", f"{gc.status}: {gc.reason}"
+    gc = certify_gait(robot, ev.gait, cfg.study_certify, cfg.sim, validate=cfg.validate, verify=verify)
+    record_certificate(ev, gc, everything)
     ev.seconds["certify"] = time.perf_counter() - t0
     ev.seconds["total"] = ev.seconds.get("total", 0.0) + ev.seconds["certify"]
     return ev
+
+
+def record_certificate(ev: Evaluation, gc: GaitCertificate, ranks_verified: bool) -> None:
+    """Put a gait's certificate in its evaluation: the status (``certified`` when verified, ``estimated`` when only
+    explored, ``not_certified`` with the refusal's status and reason), the estimate, the verified value and the figure
+    the study ranks by (the verified value when ``ranks_verified``, else the estimate)."""
+    if not gc.ok or gc.certificate is None:
+        ev.status, ev.reason = "not_certified", f"{gc.status}: {gc.reason}"
+        return
+    c = gc.certificate
+    ev.estimate = float(c.estimate if c.estimate is not None else c.r_star)
+    ev.certificate = gc.to_dict(samples=True)
+    if c.verified:
+        ev.status, ev.reason, ev.verified_value = "certified", "", float(gc.r_star)
+    else:
+        ev.status, ev.reason = "estimated", ""
+    ev.certificate_value = float(gc.r_star) if ranks_verified else ev.estimate
+
+
+def verify_gait(robot: Robot, gait: Gait, config: Config) -> dict[str, Any]:
+    """The verified certificate of a study's gait (``config.study_certify``, verified whatever its estimate): a record
+    with its ``status`` (``certified`` or ``not_certified``), ``reason``, ``verified_value`` (None unless certified),
+    ``estimate``, ``certificate`` (:meth:`GaitCertificate.to_dict` with the samples; None when refused) and ``seconds``.
+    Deterministic for a gait and a configuration, as the evaluation is: the same orbit and exploration as its
+    estimate."""
+    t0 = time.perf_counter()
+    gc = certify_gait(robot, gait, config.study_certify, config.sim, validate=config.validate, verify=True)
+    c = gc.certificate
+    ok = gc.ok and c is not None
+    return {"status": "certified" if ok else "not_certified", "reason": "" if ok else f"{gc.status}: {gc.reason}",
+            "verified_value": float(gc.r_star) if ok else None,
+            "estimate": None if c is None else float(c.estimate if c.estimate is not None else c.r_star),
+            "certificate": gc.to_dict(samples=True) if ok else None, "seconds": time.perf_counter() - t0}

@@ -43,6 +43,7 @@ from robustgait.errors import RobustGaitError
 
 # Filled once per worker process by _init_worker: (robot, generator, evaluation config).
 _WORKER: dict[str, Any] = {}
+Task = dict[str, Any]  # evaluation_task or verification_task
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 GUARD_INTERVAL = 0.5  # seconds between the guard's looks at the processes below the driver
 _BLAS_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
@@ -73,19 +74,34 @@ class EvaluationWorker:
         self.robot = load_robot(spec.robot)
         self.generator = GaitGenerator(self.robot, self.config.generate, verbose=spec.verbose)
 
-    def evaluate(self, params: dict[str, float]) -> dict[str, Any]:
-        from robustgait.config import GaitParams
-        from robustgait.study.evaluate import evaluate
-
+    def run(self, task: Task) -> dict[str, Any]:
+        """A task of :func:`evaluation_task` (:meth:`evaluate`) or :func:`verification_task` (:meth:`verify`), with
+        its CPU time and when and where it ran."""
         cpu, wall = time.process_time(), time.time()
-        ev = evaluate(self.robot, GaitParams(**params), self.config, generator=self.generator)
-        out = ev.to_dict()
-        # the worker runs one evaluation at a time, so its process CPU time (every thread) is this evaluation's
+        out = self.verify(task["verify"]) if "verify" in task else self.evaluate(task["params"],
+                                                                                   task.get("verify_above"))
+        # the worker runs one task at a time, so its process CPU time (every thread) is this task's
         out["cpu_seconds"] = time.process_time() - cpu
         # when it ran (POSIX s): an evaluation made ahead of its trial ran before the trial started
         out["worker"] = {"pid": os.getpid(), "host": os.uname().nodename, "cores": os.cpu_count() or 1,
                          "wall": [wall, time.time()]}
         return out
+
+    def evaluate(self, params: dict[str, float], verify_above: float | None = None) -> dict[str, Any]:
+        """:func:`robustgait.study.evaluate.evaluate` of ``params`` (its ``verify_above``), as a dict."""
+        from robustgait.config import GaitParams
+        from robustgait.study.evaluate import evaluate
+
+        ev = evaluate(self.robot, GaitParams(**params), self.config, generator=self.generator,
+                      verify_above=verify_above)
+        return ev.to_dict()
+
+    def verify(self, gait: dict[str, Any]) -> dict[str, Any]:
+        """The verified certificate of a study's gait (:func:`robustgait.study.evaluate.verify_gait`)."""
+        from robustgait.io.gaitfile import gait_from_dict
+        from robustgait.study.evaluate import verify_gait
+
+        return verify_gait(self.robot, gait_from_dict(gait), self.config)
 
     def pid(self) -> int:
         return os.getpid()
@@ -199,8 +215,18 @@ def _init_worker(spec: WorkerSpec) -> None:
     _WORKER["worker"] = EvaluationWorker(spec)
 
 
-def _run_task(params: dict[str, float]) -> dict[str, Any]:
-    return _WORKER["worker"].evaluate(params)
+def _run_task(task: Task) -> dict[str, Any]:
+    return _WORKER["worker"].run(task)
+
+
+def evaluation_task(params: dict[str, float], verify_above: float | None = None) -> Task:
+    """A worker's task: evaluate the gait of ``params`` (:meth:`EvaluationWorker.evaluate`)."""
+    return {"params": params, "verify_above": verify_above}
+
+
+def verification_task(gait: dict[str, Any]) -> Task:
+    """A worker's task: the verified certificate of a study's gait (:meth:`EvaluationWorker.verify`)."""
+    return {"verify": gait}
 
 
 @contextlib.contextmanager
@@ -220,11 +246,20 @@ def blas_threads(n: int) -> Iterator[None]:
 
 
 class Executor:
-    """Runs evaluations: :meth:`submit` (key, params), :meth:`next_result` → (key, result dict)."""
+    """Runs evaluations: :meth:`submit` (key, params) and :meth:`submit_verify` (key, gait), :meth:`next_result` →
+    (key, result dict)."""
 
     workers: int = 1
 
-    def submit(self, key: int, params: dict[str, float]) -> None:
+    def submit(self, key: int, params: dict[str, float], verify_above: float | None = None) -> None:
+        """Evaluate the gait of ``params`` (:func:`evaluation_task`)."""
+        self.submit_task(key, evaluation_task(params, verify_above))
+
+    def submit_verify(self, key: int, gait: dict[str, Any]) -> None:
+        """Verify a study's gait (:func:`verification_task`)."""
+        self.submit_task(key, verification_task(gait))
+
+    def submit_task(self, key: int, task: Task) -> None:
         raise NotImplementedError
 
     def next_result(self) -> tuple[int, dict[str, Any]]:
@@ -268,7 +303,7 @@ class LocalExecutor(Executor):
         self.spec = replace(spec, threads=threads if threads is not None else (os.cpu_count() or 1))
         self.retries = retries
         self._pool: ProcessPoolExecutor | None = None
-        self._futures: dict[Future[dict[str, Any]], tuple[int, dict[str, float]]] = {}
+        self._futures: dict[Future[dict[str, Any]], tuple[int, Task]] = {}
         self._attempts: dict[int, int] = {}
         self._env: contextlib.ExitStack | None = None
 
@@ -281,8 +316,8 @@ class LocalExecutor(Executor):
                                              initializer=_init_worker, initargs=(self.spec,))
         return self._pool
 
-    def submit(self, key: int, params: dict[str, float]) -> None:
-        self._futures[self._ensure_pool().submit(_run_task, params)] = (key, params)
+    def submit_task(self, key: int, task: Task) -> None:
+        self._futures[self._ensure_pool().submit(_run_task, task)] = (key, task)
 
     @property
     def pending(self) -> int:
@@ -296,24 +331,25 @@ class LocalExecutor(Executor):
             if not done:
                 return None
             fut = next(iter(done))
-            key, params = self._futures.pop(fut)
+            key, task = self._futures.pop(fut)
             try:
                 return key, fut.result()
             except BrokenProcessPool:
-                self._restart([(key, params)])
+                self._restart([(key, task)])
 
-    def _restart(self, lost: list[tuple[int, dict[str, float]]]) -> None:
+    def _restart(self, lost: list[tuple[int, Task]]) -> None:
         """A worker died: every task of the broken pool is lost; start a new pool and resubmit them."""
         lost += list(self._futures.values())
         self._futures.clear()
         if self._pool is not None:
             self._pool.shutdown(wait=False, cancel_futures=True)
             self._pool = None
-        for key, params in lost:
+        for key, task in lost:
             self._attempts[key] = self._attempts.get(key, 0) + 1
             if self._attempts[key] > self.retries:
-                raise RobustGaitError(f"a worker process died {self._attempts[key]} times evaluating {params}")
-            self.submit(key, params)
+                what = "verifying a gait" if "verify" in task else f"evaluating {task['params']}"
+                raise RobustGaitError(f"a worker process died {self._attempts[key]} times {what}")
+            self.submit_task(key, task)
 
     def close(self, wait: bool = True) -> None:
         if self._pool is not None:
@@ -359,17 +395,17 @@ class RayExecutor(Executor):
         self.spec = replace(spec, threads=cpus_per_worker)
         self.actors: list[Any] = [actor.remote(self.spec) for _ in range(workers)]
         self._idle: deque[Any] = deque(self.actors)
-        self._queue: deque[tuple[int, dict[str, float]]] = deque()
+        self._queue: deque[tuple[int, Task]] = deque()
         self._running: dict[Any, tuple[Any, int]] = {}
 
     def _dispatch(self) -> None:
         while self._idle and self._queue:
             actor = self._idle.popleft()
-            key, params = self._queue.popleft()
-            self._running[actor.evaluate.remote(params)] = (actor, key)
+            key, task = self._queue.popleft()
+            self._running[actor.run.remote(task)] = (actor, key)
 
-    def submit(self, key: int, params: dict[str, float]) -> None:
-        self._queue.append((key, params))
+    def submit_task(self, key: int, task: Task) -> None:
+        self._queue.append((key, task))
         self._dispatch()
 
     @property

@@ -28,23 +28,26 @@ def non_dominated(objectives: NDArray[np.float64]) -> NDArray[np.bool_]:
 
 
 def pareto(status: dict[str, Any], figure: str) -> dict[str, Any]:
-    """From :func:`robustgait.study.status.study_status`: every certified unique gait with its certificate, speed and
-    ``figure``, whether it is on the front, sorted by the certificate (descending): per gait ``trial``, ``params``,
-    ``certificate_value`` (in ``certificate_unit``), ``speed``, ``figure``, ``gait_file``, ``front``."""
+    """From :func:`robustgait.study.status.study_status`: every certified or estimated unique gait with its
+    certificate, speed and ``figure``, whether it is on the front, sorted by the certificate (descending): per gait
+    ``trial``, ``grid_index``, ``params``, ``certificate_value`` (in ``certificate_unit``: the verified value, else the
+    estimate), ``verified``, ``speed``, ``figure``, ``gait_file``, ``front``."""
     if figure not in FIGURES or figure in HIGHER_IS_BETTER:
         costs = ", ".join(n for n in FIGURES if n not in HIGHER_IS_BETTER)
         raise RobustGaitError(f"report.pareto_figure: {figure!r} is not a comfort cost (one of {costs})")
     seen: set[int] = set()
     rows = []
     for t in status["trials"]:
-        if t["state"] != "COMPLETE" or t["status"] != "certified" or t["grid_index"] in seen:
+        if t["state"] != "COMPLETE" or t["status"] not in ("certified", "estimated") or t["grid_index"] in seen:
             continue
         c = t.get("comfort") or {}
         if c.get(figure) is None or c.get("speed") is None:
             continue
         seen.add(t["grid_index"])
-        rows.append({"trial": t["number"], "params": t["params"],
-                     "certificate_value": t["certificate_value"], "speed": c["speed"],
+        verified = bool(t.get("verified"))
+        value = t["verified_value"] if verified else t.get("estimate", t["certificate_value"])
+        rows.append({"trial": t["number"], "grid_index": t["grid_index"], "params": t["params"],
+                     "certificate_value": value, "verified": verified, "speed": c["speed"],
                      figure: c[figure], "gait_file": t["gait_file"]})
     obj = np.array([[r["certificate_value"], r["speed"], -r[figure]] for r in rows]).reshape(-1, 3)
     front = non_dominated(obj) if rows else np.zeros(0, dtype=bool)
@@ -55,7 +58,17 @@ def pareto(status: dict[str, Any], figure: str) -> dict[str, Any]:
             "certificate": status["certificate"], "gaits": rows, "front": [r for r in rows if r["front"]]}
 
 
-def study_pareto(directory: str | Path, figure: str) -> dict[str, Any]:
+def study_pareto(directory: str | Path, figure: str, *, verify: bool = True, progress: bool = True
+                 ) -> dict[str, Any]:
+    """:func:`pareto` of the study in ``directory``. ``verify``: the front is of verified values — each gait on it
+    whose certificate is an estimate is verified first (:func:`~robustgait.study.verify.verify_now`, stored in the
+    study), and the front made again, until every gait on it is verified (a verified value is at most the estimate,
+    so each round can only bring other gaits onto the front)."""
     from robustgait.study.status import study_status
+    from robustgait.study.verify import verify_now
 
-    return pareto(study_status(directory), figure)
+    while True:
+        res = pareto(study_status(directory), figure)
+        todo = [r["grid_index"] for r in res["front"] if not r["verified"]]
+        if not verify or not todo or not verify_now(Path(directory), todo, progress=progress):
+            return res

@@ -23,7 +23,7 @@ from typing import Any
 from robustgait.config import Config
 from robustgait.errors import RobustGaitError
 from robustgait.learn.person import SimulatedPerson
-from robustgait.study.ranking import LABELS, Requirement, shown
+from robustgait.study.ranking import LABELS, Requirement, shown, verified_value
 from robustgait.study.storage import StudyStore, TrialRecord, current_names
 
 FLOOR_ATTR = "floor"
@@ -47,7 +47,7 @@ def floor_record(config: Config, reference: dict[str, Any] | None) -> dict[str, 
         return {"value": float(p.floor), "source": "person.floor"}
     if reference is None:
         raise RobustGaitError("the floor needs the default gait's evaluation")
-    value = float(reference.get("certificate_value") or 0.0)
+    value = verified_value(reference) or 0.0
     rec = {"value": p.floor_fraction * value, "source": "person.floor_fraction", "fraction": p.floor_fraction,
            "reference": {"params": reference.get("params"), "status": reference.get("status"),
                          "certificate_value": value, "comfort": reference.get("comfort")}}
@@ -71,10 +71,13 @@ def hidden_reason(r: TrialRecord, floor: float, reqs: Sequence[Requirement], uni
     if shown(r, floor, reqs):
         return None
     res = r.result or {}
+    if res.get("status") == "estimated":
+        return f"estimated {float(res['certificate_value']):.3g} {unit}, below the floor {floor:.3g} {unit}"
     if res.get("status") != "certified":
         return f"{res.get('status')}: {res.get('reason') or ''}".strip(": ")
-    if float(res["certificate_value"]) < floor:
-        return f"certified {float(res['certificate_value']):.3g} {unit}, below the floor {floor:.3g} {unit}"
+    value = verified_value(res) or 0.0
+    if value < floor:
+        return f"certified {value:.3g} {unit}, below the floor {floor:.3g} {unit}"
     failed = [q.text for q in reqs if not q.holds(r.params, res)]
     return "fails " + ", ".join(failed)
 

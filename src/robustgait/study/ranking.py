@@ -17,6 +17,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.learn.learners import History
 from robustgait.learn.oracle import Outcome, person_scores, score
 from robustgait.sim.comfort import FIGURES
+from robustgait.study.evaluate import RANKED
 from robustgait.study.storage import TrialRecord
 
 LABELS = ("bad", "neutral", "good")  # a person's ordinal labels, worst first (ROIAL's)
@@ -79,10 +80,20 @@ def figure_value(name: str, params: Mapping[str, float], result: Mapping[str, An
 
 
 def outcome_of(r: TrialRecord, reqs: Sequence[Requirement] = ()) -> Outcome:
-    """The oracle's view of a stored evaluation (certified: its ``status``; meets: the requirements)."""
+    """The oracle's view of a stored evaluation (certified: its ``status`` is one with a certificate figure, verified
+    or estimated, :data:`~robustgait.study.evaluate.RANKED`; meets: the requirements)."""
     res = r.result or {}
     return Outcome(int(res["steps_taken"]), int(res["step_cap"]), float(res["certificate_value"]),
-                   res.get("status") == "certified", all(q.holds(r.params, res) for q in reqs))
+                   res.get("status") in RANKED, all(q.holds(r.params, res) for q in reqs))
+
+
+def verified_value(result: Mapping[str, Any]) -> float | None:
+    """The verified certificate figure of a stored evaluation (None: not verified). An evaluation stored before
+    estimates has no ``verified_value``: its ``certified`` value was verified."""
+    if "verified_value" in result:
+        v = result["verified_value"]
+        return None if v is None else float(v)
+    return float(result["certificate_value"]) if result.get("status") == "certified" else None
 
 
 def study_score(config: StudyConfig, r: TrialRecord, reqs: Sequence[Requirement] = ()) -> float:
@@ -91,10 +102,23 @@ def study_score(config: StudyConfig, r: TrialRecord, reqs: Sequence[Requirement]
     return score(config.metric, outcome_of(r, reqs), config.uncertified_penalty)
 
 
+def figure_of(result: Mapping[str, Any], verification: Mapping[str, Any] | None = None) -> float:
+    """What a stored evaluation says of its gait's certificate figure: the verified value (the evaluation's, or that
+    of its later ``verification``), else the estimate, else 0 (fell, refused, not generated)."""
+    if verification is not None and verification.get("verified_value") is not None:
+        return float(verification["verified_value"])
+    v = verified_value(result)
+    if v is not None:
+        return v
+    return float(result["certificate_value"]) if result.get("status") == "estimated" else 0.0
+
+
 def shown(r: TrialRecord, floor: float, reqs: Sequence[Requirement]) -> bool:
-    """Whether a person may be shown this gait: certified, its certificate at or above the floor, requirements met."""
+    """Whether a person may be shown this gait: certified, its verified certificate at or above the floor,
+    requirements met."""
     res = r.result or {}
-    return res.get("status") == "certified" and float(res["certificate_value"]) >= floor and outcome_of(r, reqs).meets
+    v = verified_value(res)
+    return res.get("status") == "certified" and v is not None and v >= floor and outcome_of(r, reqs).meets
 
 
 def batch_scores(config: StudyConfig, batch: Sequence[TrialRecord], record: Mapping[str, Any],

@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 from tqdm import tqdm
 
 from robustgait.certificate.certify import check_certify_work
@@ -45,6 +46,7 @@ from robustgait.gait import BEZIER_DEGREE, Domain, Gait
 from robustgait.io.output import write_json
 from robustgait.io.robotfile import load_robot
 from robustgait.io.studyfile import StudySetup, environment_changes, load_config, save_config
+from robustgait.learn.floor import predicted_to_clear
 from robustgait.learn.learners import History, Learner, iteration_seed, make_learner
 from robustgait.learn.oracle import batch_comparisons
 from robustgait.learn.space import ActionSpace
@@ -66,12 +68,15 @@ from robustgait.study.person import (
 from robustgait.study.ranking import (  # history_before, study_score: re-exported by robustgait.study.run
     Requirement,
     batch_scores,
+    figure_of,
     history_before,
     requirements,
     shown,
     study_score,
+    verified_value,
 )
-from robustgait.study.storage import StudyStore, TrialRecord, default_url
+from robustgait.study.storage import StudyStore, TrialRecord, completed_batches, current_names, default_url
+from robustgait.study.verify import CERTIFICATE_FILE, ESTIMATE_FILE, GAITS_DIR, Verifier, gait_label
 
 
 class Asker(Protocol):
@@ -92,8 +97,7 @@ class Asker(Protocol):
 POLL = 0.5  # s: how often a study waiting for a person looks for the answer and its evaluations ahead
 
 LOCK_FILE = ".lock"
-GAITS_DIR = "gaits"
-_ABBREV = {"step_length": "L", "step_duration": "T", "step_width": "W", "step_height": "H"}
+
 
 
 def robot_reference(robot: str) -> str:
@@ -104,16 +108,6 @@ def robot_reference(robot: str) -> str:
     if not p.is_file():
         raise input_error(robot, "not a shipped robot name nor a robot spec file")
     return str(p.resolve())
-
-
-def gait_label(space: ActionSpace, index: int) -> str:
-    """Directory name of a gait's files, e.g. ``L0.12_T0.8_W0.24_H0.06``."""
-    return params_label(space.value(index))
-
-
-def params_label(params: dict[str, float]) -> str:
-    """:func:`gait_label` of a grid point's parameters."""
-    return "_".join(f"{_ABBREV.get(n, n)}{v:g}" for n, v in params.items())
 
 
 @contextlib.contextmanager
@@ -213,19 +207,6 @@ def open_store(directory: Path, setup: StudySetup, space: ActionSpace) -> StudyS
     return StudyStore(storage_url(directory, setup), setup.config.study.study_name, space)
 
 
-def completed_batches(records: list[TrialRecord]) -> dict[int, list[TrialRecord]]:
-    """COMPLETE trials per iteration, ordered by slot; an (iteration, slot) completed twice is an error."""
-    out: dict[int, dict[int, TrialRecord]] = {}
-    for r in records:
-        if r.state == "COMPLETE":
-            slots = out.setdefault(r.iteration, {})
-            if r.slot in slots:
-                raise RobustGaitError(f"iteration {r.iteration} slot {r.slot} was completed twice "
-                                      f"(trials {slots[r.slot].number} and {r.number})")
-            slots[r.slot] = r
-    return {k: [v[s] for s in sorted(v)] for k, v in out.items()}
-
-
 class StudyRunner:
     """Runs (or resumes) the study in ``directory`` to its total budget, its evaluations spread as ``run`` says
     (executor, workers); ``progress``: a bar on stderr; ``verbose``: IPOPT's iteration log in the workers."""
@@ -247,6 +228,7 @@ class StudyRunner:
         self.asker = asker
         self.floor = 0.0
         self.ahead: Ahead | None = None  # evaluations ahead of a person's answer
+        self.verifier = Verifier(self.directory, self.space, self.executor)
 
     def executor(self) -> Executor:
         if self._executor is None:
@@ -274,6 +256,7 @@ class StudyRunner:
                   disable=not self.progress, dynamic_ncols=True) as bar:
             if cfg.asks_a_person:
                 self.floor = self._floor(store)
+            self.verifier.submit(store, self.verifier.needed(store))  # what a killed run had not verified yet
             for k in range(cfg.iterations):
                 batches = completed_batches(store.records())
                 iterations = store.iterations()
@@ -287,6 +270,10 @@ class StudyRunner:
                 if cfg.asks_a_person:
                     self._ask(store, k)
                 self._close_iteration(store, k, bar)
+                self.verifier.submit(store, self.verifier.needed(store))
+            while self.verifier.running:  # the last iteration's verifications
+                bar.set_postfix_str(f"verifying the best and recommended gaits: {len(self.verifier.running)} left")
+                self.verifier.take(store, *self.executor().next_result())
 
     def _floor(self, store: StudyStore) -> float:
         """The robustness floor of a person study (:func:`robustgait.study.person.floor_record`): stored once; not
@@ -294,8 +281,8 @@ class StudyRunner:
         rec = store.user_attrs().get(FLOOR_ATTR)
         if rec is None:
             reference = None
-            if self.setup.config.person.floor is None:
-                self.executor().submit(-1, self.setup.config.params.to_dict())
+            if self.setup.config.person.floor is None:  # the default gait's verified certificate
+                self.executor().submit(-1, self.setup.config.params.to_dict(), verify_above=0.0)
                 _, reference = self.executor().next_result()
                 reference = {k: v for k, v in reference.items() if k not in ("gait", "certificate")}
             rec = floor_record(self.setup.config, reference)
@@ -329,6 +316,8 @@ class StudyRunner:
             while not self.asker.answered(k, 0.0 if self.ahead is not None and self.ahead.busy else POLL):
                 if self.ahead is not None and self.ahead.busy:
                     got = self.executor().poll(POLL)
+                    if got is not None and self.verifier.take(store, *got):
+                        continue
                     if got is not None:
                         index, written = self._finish_ahead(*got)
                         self.ahead.fill()
@@ -349,9 +338,9 @@ class StudyRunner:
         guess = {**iterations[k], "answer": predicted_answer(list(utilities), fallback, show)}
         t0 = time.perf_counter()
         candidates = self.learner.propose(history_before(k + 1, batches, cfg, {**iterations, k: guess}, self.reqs),
-                                          k + 1, self._candidates())
+                                          k + 1, self._candidates(), self._region(store, k + 1))
         if self.ahead is None:
-            self.ahead = Ahead(self.executor(), cfg.batch, self.space.value, self._qualifies)
+            self.ahead = Ahead(self.executor(), cfg.batch, self.space.value, self._qualifies, self._verify_above())
         known = {r.index: r.result for r in records if r.state == "COMPLETE" and r.result is not None}
         self.ahead.plan(candidates, known)
         self.ahead.fill()
@@ -364,6 +353,26 @@ class StudyRunner:
         return shown(TrialRecord(-1, "COMPLETE", -1, -1, index, self.space.value(index), None, result, None, None, {}),
                      self.floor, self.reqs)
 
+    def _region(self, store: StudyStore, k: int, within: bool = False) -> NDArray[np.bool_] | None:
+        """A person study's proposals for iteration k are made among the grid points predicted to clear its floor
+        (:func:`~robustgait.learn.floor.predicted_to_clear`, ``person.region``): from the floor's reference evaluation
+        and the evaluations of iterations before k (``within``: of k too). None: not a person study, or no floor
+        (0) to clear."""
+        person = self.setup.config.person
+        if not self.config.asks_a_person or not person.region or self.floor <= 0.0:
+            return None
+        observed = []
+        reference = (store.user_attrs().get(FLOOR_ATTR) or {}).get("reference")
+        if reference and reference.get("params"):
+            value = verified_value(current_names(reference))
+            observed.append(({**self.setup.config.params.to_dict(), **reference["params"]}, value or 0.0))
+        verifications = store.verifications()
+        for r in store.records():
+            if r.state != "COMPLETE" or r.result is None or (r.iteration >= k and not (within and r.iteration == k)):
+                continue
+            observed.append((r.params, figure_of(r.result, verifications.get(r.index))))
+        return predicted_to_clear(self.space, observed, self.floor, person.region_lengthscale, person.region_prior)
+
     def _candidates(self) -> int:
         """Candidates an iteration proposes: the batch, and for a study that asks a person its over-draw."""
         return self.config.batch + (self.setup.config.person.overdraw if self.config.asks_a_person else 0)
@@ -375,11 +384,13 @@ class StudyRunner:
         cfg = self.config
         size = self._candidates()
         t0 = time.perf_counter()
-        proposal = self.learner.propose(history, k, size)
+        proposal = self.learner.propose(history, k, size, self._region(store, k))
         seconds = time.perf_counter() - t0
         stored = {r.slot: r.index for r in store.records() if r.iteration == k}
+        extended = store.iterations().get(k, {}).get("proposals") or []  # with candidates added while filling
+        proposal = proposal + [int(i) for i in extended[size:]]
         for slot, index in stored.items():
-            if slot >= size or proposal[slot] != index:
+            if slot >= len(proposal) or proposal[slot] != index:
                 changes = environment_changes(self.setup.environment)
                 raise RobustGaitError(f"{self.directory}: iteration {k} slot {slot} holds grid index {index} but "
                                       f"the learner reproduces {proposal[slot] if slot < size else 'nothing'}"
@@ -423,6 +434,8 @@ class StudyRunner:
             mine = [r for r in store.records() if r.iteration == k]
             ready = sum(1 for r in mine if r.state == "COMPLETE" and shown(r, self.floor, self.reqs))
             slots = len({r.slot for r in mine})
+            if ready + len(started) < cfg.batch and slots == len(proposals) and not started:
+                proposals = self._more_candidates(store, k, proposals, ready)
             if ready + len(started) < cfg.batch and slots < len(proposals):
                 store.enqueue(k, slots, proposals[slots], self._trial_attrs())
                 if slots >= cfg.batch:
@@ -436,6 +449,25 @@ class StudyRunner:
         if self.ahead is not None and "ahead" in before:  # what the evaluations ahead of this iteration gave
             store.set_iteration(k - 1, {**before, "ahead": {**before["ahead"], "evaluated": len(self.ahead.submitted),
                                                             "used": self.ahead.used}})
+
+    def _more_candidates(self, store: StudyStore, k: int, proposals: list[int], ready: int) -> list[int]:
+        """A person study's iteration k has evaluated every candidate and fewer than ``person.min_shown`` of them may
+        be shown: the learner proposes ``person.overdraw`` more (new ones, within the region predicted to clear the
+        floor given this iteration's evaluations too), recorded in the iteration's proposals before they are
+        dispatched. Unchanged when enough may be shown, or when the action space holds no other gait."""
+        need = min(self.setup.config.person.min_shown, self.config.batch)
+        if ready >= need or len(proposals) >= self.space.size:
+            return proposals
+        batches, iterations = completed_batches(store.records()), store.iterations()
+        history = history_before(k, batches, self.config, iterations, self.reqs)
+        size = min(self.space.size, len(proposals) + max(1, self.setup.config.person.overdraw))
+        region = self._region(store, k, within=True)
+        if region is not None:
+            region[proposals] = False  # evaluated already: the new candidates come from the rest of the region
+        more = [i for i in self.learner.propose(history, k, size, region) if i not in set(proposals)]
+        out = proposals + more[:size - len(proposals)]
+        store.set_iteration(k, {**iterations.get(k, {}), "proposals": out})
+        return out
 
     def _dispatch(self, store: StudyStore, trial: TrialRecord, cache: dict[int, TrialRecord],
                   started: dict[int, TrialRecord], bar: tqdm) -> None:
@@ -454,12 +486,19 @@ class StudyRunner:
             started[key] = trial
             return
         started[trial.number] = trial
-        self.executor().submit(trial.number, trial.params)
+        self.executor().submit(trial.number, trial.params, self._verify_above())
+
+    def _verify_above(self) -> float | None:
+        """Evaluations verify their certificate when its estimate is at least this (a person study's floor: the gaits
+        it may show), else only when the study verifies every gait (None)."""
+        return self.floor if self.config.asks_a_person else None
 
     def _collect(self, store: StudyStore, started: dict[int, TrialRecord], bar: tqdm) -> None:
-        """Wait for the next finished evaluation: a trial's, or one made ahead (kept; completing the trial that
-        adopted it)."""
+        """Wait for the next finished evaluation: a trial's, one made ahead (kept; completing the trial that
+        adopted it) or a verification (stored)."""
         key, result = self.executor().next_result()
+        if self.verifier.take(store, key, result):
+            return
         if self.ahead is not None and self.ahead.owns(key):
             index, _ = self._finish_ahead(key, result)
             trial = started.pop(key, None)
@@ -488,8 +527,9 @@ class StudyRunner:
             write_json(self.directory / rel / "gait.json", result["gait"])
             out["gait_file"] = str(rel / "gait.json")
         if result.get("certificate") is not None:
-            write_json(self.directory / rel / "certificate.json", result["certificate"])
-            out["certificate_file"] = str(rel / "certificate.json")
+            name = ESTIMATE_FILE if result.get("status") == "estimated" else CERTIFICATE_FILE
+            write_json(self.directory / rel / name, result["certificate"])
+            out["certificate_file"] = str(rel / name)
             out["certificate"] = Evaluation.from_dict({**result, "gait": None}).certificate_summary()
         else:
             out["certificate"] = None
@@ -503,6 +543,9 @@ class StudyRunner:
         bar.update(1)
         bar.set_postfix_str(f"iteration {trial.iteration + 1}/{self.config.iterations}, last: "
                             f"{outcome_line(result, self.name)}")
+        if self.asker is not None and self._qualifies(trial.index, result):
+            # its video now, while the workers evaluate the batch's other candidates: the batch is shown sooner
+            self.asker.render_ahead(trial.index, result)
 
     def _close_iteration(self, store: StudyStore, k: int, bar: tqdm) -> None:
         """Comparisons of the ranked batch and the learner's recommendation after it."""
@@ -533,6 +576,8 @@ def outcome_line(result: dict[str, Any], name: str) -> str:
     tail = f" (generated again with joint margin {again['joint_margin']:g} rad)" if again else ""
     if status == "certified":
         return f"{name} {result['certificate_value']:.3f}, steps {result['steps_taken']}{tail}"
+    if status == "estimated":
+        return f"{name} ≈ {result['certificate_value']:.3f} (estimated), steps {result['steps_taken']}{tail}"
     if status == "not_certified":
         return f"refused ({str(result.get('reason', '')).split(':', 1)[0]}), steps {result['steps_taken']}{tail}"
     if status == "fell":

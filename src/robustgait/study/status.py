@@ -9,6 +9,7 @@ from typing import Any
 
 from robustgait.io.studyfile import environment_changes, load_config
 from robustgait.study.person import pending_iteration, stored_floor
+from robustgait.study.ranking import verified_value
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord
 
@@ -18,39 +19,68 @@ _TRIAL_KEYS = ("status", "reason", "steps_taken", "step_cap", "fell", "fall_reas
                "certificate_value", "comfort", "gait_file", "certificate_file", "seconds", "retried")
 
 
-def trial_summary(r: TrialRecord) -> dict[str, Any]:
+def trial_summary(r: TrialRecord, verification: dict[str, Any] | None = None) -> dict[str, Any]:
+    """One trial as ``study status`` lists it. ``certificate_value`` is the figure the study ranked it by; ``estimate``
+    the exploration's estimate and ``verified_value`` the verified figure (None: not verified), ``verified`` whether
+    there is one — from the evaluation, or from ``verification``, the record of a gait verified after its trial
+    (:meth:`~robustgait.study.storage.StudyStore.set_verification`), whose status (``certified`` or
+    ``not_certified``), reason and certificate file then replace the estimate's."""
     out: dict[str, Any] = {"number": r.number, "state": r.state, "iteration": r.iteration, "slot": r.slot,
                            "grid_index": r.index, "params": r.params, "score": r.value,
                            "reused_from": r.reused_from, "retry_of": r.retry_of,
                            "evaluated_ahead": bool(r.attrs.get("evaluated_ahead"))}
     res = r.result or {}
     out.update({k: res.get(k) for k in _TRIAL_KEYS})
+    out["estimate"] = res.get("estimate", res.get("certificate_value") if res.get("status") == "certified" else None)
+    out["verified_value"] = verified_value(res) if res else None
     cert = res.get("certificate") or {}
+    if verification is not None and res.get("status") == "estimated":
+        out.update(status=verification["status"], reason=verification.get("reason", ""),
+                   verified_value=verification.get("verified_value"),
+                   certificate_file=verification.get("certificate_file"))
+    out["verified"] = out["verified_value"] is not None
     out["x_star"] = cert.get("x_star")
     out["n_inside"] = cert.get("n_inside")
     return out
 
 
-def _best_entry(r: TrialRecord | None, records: dict[int, TrialRecord]) -> dict[str, Any] | None:
+def figure_text(entry: dict[str, Any], unit: str, digits: int = 4) -> str:
+    """A gait's certificate figure as a person reads it (an entry of ``trials`` or ``best``): the verified value,
+    "≈ the estimate (estimated)" for a gait whose certificate was only estimated, or "—" for one without."""
+    if entry.get("verified") and entry.get("verified_value") is not None:
+        return f"{entry['verified_value']:.{digits}g} {unit} (verified)"
+    if entry.get("status") == "estimated" and entry.get("estimate") is not None:
+        return f"≈ {entry['estimate']:.{digits}g} {unit} (estimated)"
+    if entry.get("status") == "certified" and entry.get("certificate_value") is not None:
+        return f"{entry['certificate_value']:.{digits}g} {unit}"
+    return "—"
+
+
+def _best_entry(r: TrialRecord | None, records: dict[int, TrialRecord],
+                verifications: dict[int, dict[str, Any]]) -> dict[str, Any] | None:
     if r is None:
         return None
     src = records.get(r.reused_from, r) if r.reused_from is not None else r
-    s = trial_summary(r)
+    s = trial_summary(r, verifications.get(r.index))
+    v = trial_summary(src, verifications.get(r.index))
     return {"trial": r.number, "iteration": r.iteration, "params": r.params, "grid_index": r.index,
-            "certificate_value": s["certificate_value"], "steps_taken": s["steps_taken"], "status": s["status"],
-            "score": r.value, "comfort": s["comfort"], "gait_file": (src.result or {}).get("gait_file"),
-            "certificate_file": (src.result or {}).get("certificate_file")}
+            "certificate_value": s["certificate_value"], "estimate": s["estimate"],
+            "verified_value": s["verified_value"], "verified": s["verified"], "steps_taken": s["steps_taken"],
+            "status": s["status"], "score": r.value, "comfort": s["comfort"], "gait_file": v["gait_file"],
+            "certificate_file": v["certificate_file"]}
 
 
-def outcome_counts(records: list[TrialRecord]) -> dict[str, int]:
-    """How the evaluated gaits ended (COMPLETE trials, a reused evaluation counted once per trial): ``certified``,
-    ``refused: <status>`` (walked the cap without a certificate — the certificate's refusal: unsettled, unstable,
-    fell in its search …), ``fell`` (before the cap), ``generation_failed``."""
+def outcome_counts(records: list[TrialRecord], verifications: dict[int, dict[str, Any]] | None = None
+                   ) -> dict[str, int]:
+    """How the evaluated gaits ended (COMPLETE trials, a reused evaluation counted once per trial): ``certified``
+    (verified), ``estimated`` (a certificate estimated, not verified), ``refused: <status>`` (walked the cap without a
+    certificate — the certificate's refusal: unsettled, unstable, fell in its search …), ``fell`` (before the cap),
+    ``generation_failed``; an estimated gait verified later counts as its verification ended."""
     out: dict[str, int] = {}
     for r in records:
         if r.state != "COMPLETE" or r.result is None:
             continue
-        res = r.result
+        res = trial_summary(r, (verifications or {}).get(r.index))
         key = str(res.get("status"))
         if key == "not_certified":
             key = "refused: " + str(res.get("reason") or "").split(":", 1)[0]
@@ -87,7 +117,9 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     ``person`` (a person study: its ``floor``, the ``pending`` iteration, every ``answer``, the gaits evaluated
     ``ahead`` of an answer and how many of them were then proposed; else None), ``require``,
     ``best`` (the learner's recommendation after the last finished iteration: trial, params, certificate_value — the
-    study's certificate figure, J* or r* as ``certificate`` names it, in ``unit`` —, steps_taken, comfort, gait file),
+    study's certificate figure, J* or r* as ``certificate`` names it, in ``unit``, as the study ranked it —, its
+    ``estimate``, ``verified_value`` and whether it is ``verified``, steps_taken, comfort, gait file), ``verify``
+    (``study.verify``: which gaits get the verified certificate),
     ``best_observed`` (the evaluated gait with the highest oracle score), one record per iteration and one per trial
     (``trials``, including FAIL trials of interrupted runs, each with its ``certificate_value``), each with its
     ``comfort`` figures (``docs/comfort.md``; None when not measured or evaluated before they existed), and
@@ -101,6 +133,7 @@ def study_status(directory: str | Path) -> dict[str, Any]:
         records = store.records()
         iterations = store.iterations()
         floor = stored_floor(store)
+        verifications = store.verifications()
     finally:
         store.close()
     by_number = {r.number: r for r in records}
@@ -121,9 +154,9 @@ def study_status(directory: str | Path) -> dict[str, Any]:
         per_iteration.append({
             "iteration": k, "trials": [r.number for r in batch], "proposals": rec.get("proposals"),
             "comparisons": rec.get("comparisons"), "done": "recommendation" in rec,
-            "best": _best_entry(by_number.get(n) if n is not None else None, by_number),
+            "best": _best_entry(by_number.get(n) if n is not None else None, by_number, verifications),
             "batch_best": _best_entry(max(batch, key=lambda r: (r.value or 0.0, -r.number), default=None),
-                                      by_number)})
+                                      by_number, verifications)})
     state = ("complete" if len(finished) == cfg.iterations else
              "running" if is_running(d) else "stopped")
     person = None
@@ -138,9 +171,12 @@ def study_status(directory: str | Path) -> dict[str, Any]:
             "unit": setup.config.study_certify.unit, "certificate": setup.config.study_certify.space,
             "learner": cfg.learner, "seed": cfg.seed, "trials_done": done, "trials_planned": cfg.trials_planned,
             "iterations_done": len(finished), "iterations_planned": cfg.iterations,
-            "unique_gaits": len({r.index for r in complete}), "outcomes": outcome_counts(records),
+            "unique_gaits": len({r.index for r in complete}),
+            "outcomes": outcome_counts(records, verifications),
             "utilisation": utilisation(records),
-            "best": _best_entry(best, by_number), "best_observed": _best_entry(observed, by_number),
-            "iterations": per_iteration, "trials": [trial_summary(r) for r in sorted(records, key=lambda r: r.number)],
+            "best": _best_entry(best, by_number, verifications),
+            "best_observed": _best_entry(observed, by_number, verifications), "verify": cfg.verify,
+            "iterations": per_iteration,
+            "trials": [trial_summary(r, verifications.get(r.index)) for r in sorted(records, key=lambda r: r.number)],
             "config": setup.to_dict()["config"], "environment": setup.environment,
             "environment_changes": environment_changes(setup.environment)}

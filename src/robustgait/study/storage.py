@@ -14,7 +14,9 @@ One Optuna trial per proposed gait. Its lifecycle is the storage contract (docs/
    parameters and attributes (``retry_of`` = the failed trial's number).
 
 Per-iteration records (proposals, learner seed, comparisons, recommendation) are study user attributes
-``iteration_NNN``: comparisons exist only once a whole batch is in, after its trials are complete.
+``iteration_NNN``: comparisons exist only once a whole batch is in, after its trials are complete. The verified
+certificate of a gait whose trial holds an estimate is the study user attribute ``verified_NNNNNN`` (its grid index):
+a completed trial is never written again.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.learn.space import ActionSpace
 
 DB_FILE = "study.db"
+VERIFIED_PREFIX = "verified_"
 
 STORED_NAMES = {"r_star": "certificate_value", "study_r_star": "study_certificate_value",
                 "r_star_critical": "certificate_value_critical"}
@@ -172,6 +175,16 @@ class StudyStore:
     def set_iteration(self, k: int, record: dict[str, Any]) -> None:
         self.study.set_user_attr(f"iteration_{k:03d}", record)
 
+    def set_verification(self, index: int, record: dict[str, Any]) -> None:
+        """The verified certificate of grid point ``index``'s gait, made after its trial completed (a study that
+        ranks on estimates verifies what it shows or recommends)."""
+        self.study.set_user_attr(f"{VERIFIED_PREFIX}{index:06d}", record)
+
+    def verifications(self) -> dict[int, dict[str, Any]]:
+        """Grid index → its verification record (:meth:`set_verification`)."""
+        return {int(key[len(VERIFIED_PREFIX):]): v for key, v in self.study.user_attrs.items()
+                if key.startswith(VERIFIED_PREFIX)}
+
     def iterations(self) -> dict[int, dict[str, Any]]:
         return {int(key.split("_")[1]): v for key, v in self.study.user_attrs.items() if key.startswith("iteration_")}
 
@@ -181,3 +194,16 @@ class StudyStore:
     def close(self) -> None:
         self.storage.remove_session()
         self.storage.engine.dispose()
+
+
+def completed_batches(records: list[TrialRecord]) -> dict[int, list[TrialRecord]]:
+    """COMPLETE trials per iteration, ordered by slot; an (iteration, slot) completed twice is an error."""
+    out: dict[int, dict[int, TrialRecord]] = {}
+    for r in records:
+        if r.state == "COMPLETE":
+            slots = out.setdefault(r.iteration, {})
+            if r.slot in slots:
+                raise RobustGaitError(f"iteration {r.iteration} slot {r.slot} was completed twice "
+                                      f"(trials {slots[r.slot].number} and {r.number})")
+            slots[r.slot] = r
+    return {k: [v[s] for s in sorted(v)] for k, v in out.items()}

@@ -88,8 +88,8 @@ class StudyGait:
 
 def study_gaits(directory: Path) -> tuple[dict[str, Any], list[StudyGait]]:
     """The study's status and its unique gaits (completed trials, first trial of each grid index)."""
-    from robustgait.study.run import params_label
     from robustgait.study.status import study_status
+    from robustgait.study.verify import params_label
 
     st = study_status(directory)
     done = sorted((t for t in st["trials"] if t["state"] == "COMPLETE"), key=lambda t: t["number"])
@@ -278,6 +278,12 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None,
         if k not in KINDS:
             raise RobustGaitError(f"unknown disturbance {k!r} (choose from {', '.join(KINDS)} or all)")
     status, gaits = study_gaits(d)
+    estimated = [g.grid_index for g in gaits if g.status == "estimated"]
+    if estimated and not recertify:  # the validation checks verified certificates: verified on demand
+        from robustgait.study.verify import verify_now
+
+        verify_now(d, estimated)
+        status, gaits = study_gaits(d)
     runnable = [g for g in gaits if g.gait_file is not None]
     if not runnable:
         raise input_error(d, f"no gait of the study has a gait file ({len(gaits)} unique gaits, all failed "

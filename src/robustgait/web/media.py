@@ -10,20 +10,21 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import mujoco
 import numpy as np
+from numpy.typing import NDArray
 
-from robustgait.config import ComfortConfig, SimConfig
+from robustgait.config import ComfortConfig, PersonConfig, SimConfig
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.io.output import atomic_output
 from robustgait.io.studyfile import StudySetup
 from robustgait.learn.space import ActionSpace
 from robustgait.robots import Robot
-from robustgait.sim.walk import offscreen_renderer, scene_option, walk
+from robustgait.sim.walk import offscreen_renderer, pose_for_drawing, scene_option, walk, write_video
 from robustgait.study.run import GAITS_DIR, gait_label
 from robustgait.web.records import StudyRecords
 from robustgait.web.view import gait_names
@@ -31,52 +32,53 @@ from robustgait.web.view import gait_names
 LOG = logging.getLogger("robustgait.web")
 VIDEO_FILE = "person.mp4"
 
-FPS = 20
-WIDTH, HEIGHT = 288, 324  # one view; the video is two views wide
 DISTANCE = 3.4  # m: the tiles' camera distance
 
 
 def render_person_video(robot: Robot, gait: Gait, path: str | Path, steps: int, comfort: ComfortConfig,
-                        sim: SimConfig | None = None) -> int:
+                        sim: SimConfig | None = None, person: PersonConfig | None = None) -> int:
     """Walk ``gait`` for ``comfort.skip_steps`` + ``steps`` steps and write the last ``steps`` of them, side | front,
-    to ``path`` (.mp4); returns the number of frames."""
-    import imageio.v2 as imageio
-
+    to ``path`` (.mp4, :func:`~robustgait.sim.walk.write_video`) with the video settings of ``person`` (default
+    :class:`PersonConfig`): ``video_fps`` frames a second, each (``video_height``, 2 × ``video_width``, 3), drawn
+    with ``video_shadows`` and ``video_antialias`` (:func:`~robustgait.sim.walk.offscreen_renderer`); returns the
+    number of frames."""
     from robustgait.report.tiles import VIEWS  # here: the report package is loaded by the first video only
 
+    person = person or PersonConfig()
     res = walk(robot, gait, sim, steps=comfort.skip_steps + steps, keep_trajectory=True)
     if res.trajectory is None or res.fell or len(res.events) < comfort.skip_steps + steps:
         raise RobustGaitError(f"the gait fell ({res.fall_reason}) after {res.steps_taken} steps: no video")
     t0 = res.events[comfort.skip_steps - 1].time if comfort.skip_steps > 0 else 0.0
     tr = res.trajectory
     seg = tr[tr[:, 0] > t0 - 1e-9]
-    every = max(1, round(1.0 / (FPS * robot.dt)))
+    every = max(1, round(1.0 / (person.video_fps * robot.dt)))
+    renderer = offscreen_renderer(robot, person.video_width, person.video_height, shadows=person.video_shadows,
+                                  antialias=person.video_antialias)
+    option = scene_option(robot)
     m = robot.model
     data = mujoco.MjData(m)
-    renderer = offscreen_renderer(robot, WIDTH, HEIGHT)
-    option = scene_option(robot)
-    count = 0
+    cameras = []
+    for _, azimuth in VIEWS:
+        cam = mujoco.MjvCamera()
+        cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+        cam.distance, cam.elevation, cam.azimuth = DISTANCE, -5.0, azimuth
+        cameras.append(cam)
+
+    def frames() -> Iterator[NDArray[np.uint8]]:
+        for state in seg[::every]:
+            mujoco.mj_setState(m, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS.value)
+            pose_for_drawing(m, data)
+            views = []
+            for cam in cameras:  # follows the walk forward; height fixed for every gait
+                cam.lookat[:] = [data.xpos[robot.base_body_id][0], 0.0, 0.9]
+                renderer.update_scene(data, cam, scene_option=option)
+                views.append(renderer.render().copy())
+            yield np.concatenate(views, axis=1)
+
     try:
-        with atomic_output(path, "video") as tmp, imageio.get_writer(
-                tmp, fps=FPS, codec="libx264", pixelformat="yuv420p", macro_block_size=1,
-                ffmpeg_params=["-movflags", "+faststart"]) as writer:
-            for state in seg[::every]:
-                mujoco.mj_setState(m, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS.value)
-                mujoco.mj_forward(m, data)
-                base = data.xpos[robot.base_body_id]
-                views = []
-                for _, azimuth in VIEWS:
-                    cam = mujoco.MjvCamera()
-                    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-                    cam.lookat[:] = [base[0], 0.0, 0.9]  # follows the walk forward; height fixed for every gait
-                    cam.distance, cam.elevation, cam.azimuth = DISTANCE, -5.0, azimuth
-                    renderer.update_scene(data, cam, scene_option=option)
-                    views.append(renderer.render().copy())
-                writer.append_data(np.concatenate(views, axis=1))  # type: ignore[attr-defined]
-                count += 1
+        return write_video(frames(), path, person.video_fps)
     finally:
         renderer.close()
-    return count
 
 
 class GaitVideos:
@@ -152,4 +154,5 @@ class GaitVideos:
             self._robot = load_robot(setup.robot)
         cfg = setup.config
         gait = load_gait(self.directory / gait_file, self._robot)
-        render_person_video(self._robot, gait, self.path(index), cfg.person.video_steps, cfg.comfort, cfg.sim)
+        render_person_video(self._robot, gait, self.path(index), cfg.person.video_steps, cfg.comfort, cfg.sim,
+                            cfg.person)

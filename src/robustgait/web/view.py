@@ -6,7 +6,8 @@ The state, its keys in this order: ``study`` (the directory's name), ``robot``, 
 | ``preparing`` | ``evaluating`` | ``stopped``), ``blind``, ``labels``, ``iterations`` (planned), ``iteration``
 (the pending one, 0-based, or None), ``iterations_done``, ``trials_done``, ``trials_planned``, ``certificate`` (the
 radius' name), ``unit``, ``floor`` (``{"value", "source"}`` or None), ``answers`` (:func:`answers_view`); while a
-batch waits: ``batch`` and ``hidden`` (:func:`batch_view`); when the study is complete, or always when not blind:
+batch waits: ``batch`` and ``hidden`` (:func:`batch_view`) and ``evaluated`` (how many gaits were evaluated to fill
+it); when the study is complete, or always when not blind:
 ``recommendation`` (:func:`gait_view`) and ``recommendation_note`` when there are such."""
 
 from __future__ import annotations
@@ -71,6 +72,7 @@ def page_state(setup: StudySetup, snap: StudySnapshot, *, study: str, reqs: Sequ
         out["batch"], out["hidden"] = batch_view(k, batches.get(k, []), iterations[k], blind=blind,
                                                  figures=cfg.person.figures, video_url=video_url,
                                                  video_errors=video_errors)
+        out["evaluated"] = int(iterations[k]["pending"].get("size", len(out["batch"]) + len(out["hidden"])))
     if complete or not blind:  # blind: only at the end
         value = -math.inf if floor is None else float(floor["value"])
         pick, note = recommendation(iterations, by_number, value, reqs)

@@ -1,0 +1,93 @@
+"""A study that ranks on estimates and verifies what it shows (docs/studies.md, ``study.verify``): the evaluations hold
+the exploration's estimate, each iteration's best and the recommendation get the verified certificate on the study's
+workers, a study killed before they finished verifies them when resumed, and the commands that show gaits (status,
+pareto) mark or verify them. Real components at small sizes: exo, a step cap of 5, push certificates with small
+exploration rounds."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from robustgait.config import (
+    CertifyConfig,
+    ComfortConfig,
+    Config,
+    PushConfig,
+    SequentialConfig,
+    SimConfig,
+    StudyConfig,
+)
+from robustgait.io.studyfile import load_config
+from robustgait.study.run import create_study, open_store, run_study
+from robustgait.study.status import figure_text, study_status
+from robustgait.study.verify import Verifier
+
+# exo, 2 × 2 gaits walked 5 steps; J* with small rounds, ε 0.2 (verification batches of 14) and 3 steps after a push
+SMALL = Config(study=StudyConfig(iterations=2, batch=2, seed=0), sim=SimConfig(step_cap=5),
+               certify=CertifyConfig(sequential=SequentialConfig(epsilon=0.2),
+                                     push=PushConfig(first_round=10, explore=10, explore_after_failure=10, horizon=3,
+                                                     explore_horizon=3)),
+               comfort=ComfortConfig(skip_steps=1, steps=3))
+
+
+def test_an_old_study_file_verifies_every_gait(tmp_path: Path) -> None:
+    """A study written before estimates keeps ranking on verified values, its exploration the statement's."""
+    d = create_study(tmp_path / "s", "exo", SMALL)
+    assert load_config(d).config.study.verify == "shown"
+    path = d / "study.json"
+    raw = json.loads(path.read_text())
+    raw["config"]["study"].pop("verify")
+    for key in ("verify_margin", "first_share", "explore_horizon", "explore_recovery_radius",
+                "explore_recovery_steps"):
+        raw["config"]["certify"]["push"].pop(key)
+    path.write_text(json.dumps(raw))
+    cfg = load_config(d).config
+    assert cfg.study.verify == "all" and cfg.study.verifies_all
+    p = cfg.certify.push
+    assert (p.verify_margin, p.first_share, p.explore_horizon, p.explore_recovery_steps) == (1.0, 0.5, 3, 2)
+
+
+def test_a_requirement_on_the_certificate_verifies_every_gait() -> None:
+    assert not SMALL.study.verifies_all
+    assert StudyConfig(require=("j_star>=10",)).verifies_all and StudyConfig(verify="all").verifies_all
+    assert not StudyConfig(require=("speed>=0.2",)).verifies_all
+
+
+@pytest.mark.slow
+def test_estimates_ranked_and_what_is_shown_verified_also_after_a_kill(tmp_path: Path,
+                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    d = create_study(tmp_path / "s", "exo", SMALL)
+    # a run whose verifications never happen (as a study killed before they finished)
+    monkeypatch.setattr(Verifier, "submit", lambda self, store, indices: None)
+    run_study(d, progress=False)
+    st = study_status(d)
+    assert st["state"] == "complete" and st["verify"] == "shown"
+    trials = [t for t in st["trials"] if t["state"] == "COMPLETE"]
+    estimated = [t for t in trials if t["status"] == "estimated"]
+    assert estimated and all(not t["verified"] and t["estimate"] == t["certificate_value"] for t in estimated)
+    assert all((d / t["certificate_file"]).name == "estimate.json" for t in estimated)
+    best = st["best"]
+    assert best is not None and not best["verified"] and "(estimated)" in figure_text(best, st["unit"])
+    monkeypatch.undo()
+    run_study(d, progress=False)  # resumed: the study is complete, its verifications are made now
+    st = study_status(d)
+    store = open_store(d, load_config(d), load_config(d).action_space())
+    try:
+        verified = store.verifications()
+    finally:
+        store.close()
+    wanted = {st["best"]["grid_index"], *(it["batch_best"]["grid_index"] for it in st["iterations"])}
+    assert wanted <= set(verified)
+    best = st["best"]
+    assert best["verified"] and best["status"] in ("certified", "not_certified")
+    if best["status"] == "certified":
+        assert best["verified_value"] <= best["estimate"] + 1e-9  # drawn in a margin of the estimate
+        assert (d / best["certificate_file"]).name == "certificate.json"
+        cert = json.loads((d / best["certificate_file"]).read_text())
+        assert cert["verified"] and cert["estimate"] == pytest.approx(best["estimate"])
+        assert "(verified)" in figure_text(best, st["unit"])
+    # the ranking is the estimates': the trials' scores did not change with the verifications
+    assert [t["score"] for t in st["trials"]] == [t["score"] for t in study_status(d)["trials"]]
