@@ -285,10 +285,14 @@ def test_cli_walk_log_then_barrier_eval(capsys, tmp_path):
     assert code == 2 and "3 columns" in err
 
 
-# ---- regression: the headline figures are deterministic for a seed ------------------------------------------
-# the paper's certificate (omega ball, one step) of the two stored gaits at the orbit search's x*, seed 0
+# ---- regression: the headline figures for a seed -----------------------------------------------------------------
+# the paper's certificate (omega ball, one step) of the two stored gaits at the orbit search's x*, seed 0: the same
+# to 1e-6 on every machine measured, but for the multi-contact gait's sequential r*, whose orbit (heel and toe rolling)
+# is not the same bit for bit across machines: 0.0594, 0.0634, 0.0653 for seeds 0–2 on one machine, 0.0769 for seed 0
+# on another (2026-11-29, docs/certificate.md) — it is held to the band those spread over, one spread wide each side
 PINNED = {("exo", "uniform"): 0.48816619978446785, ("exo", "sequential"): 0.35487481531929144,
-          ("exo-multicontact", "uniform"): 0.9984739342663146, ("exo-multicontact", "sequential"): 0.07692298937608628}
+          ("exo-multicontact", "uniform"): 0.9984739342663146}
+SPREAD = {("exo-multicontact", "sequential"): (0.0594, 0.0769)}
 
 
 @pytest.mark.parametrize("name, method", [
@@ -302,7 +306,22 @@ def test_stored_gaits_keep_their_r_star_for_seed_0(request, name, method):
     # the paper's certificate named explicitly: the pins hold whatever the defaults become
     gc = certify_gait(robot, gait, CertifyConfig(method=method, seed=0, disturbance="state", state="omega", set="ball",
                                                  horizon=1))
-    assert gc.ok and gc.r_star == pytest.approx(PINNED[(name, method)], abs=1e-6)
+    assert gc.ok
+    if (name, method) in PINNED:
+        assert gc.r_star == pytest.approx(PINNED[(name, method)], abs=1e-6)
+    else:
+        low, high = SPREAD[(name, method)]
+        assert low - (high - low) <= gc.r_star <= high + (high - low)
+
+
+@pytest.mark.slow  # two certificates of the multi-contact gait
+def test_a_certificate_is_the_same_bits_for_the_same_seed_on_one_machine(exo, exo_mc_gait):
+    """What is reproducible bit for bit: the same machine, gait and seed give the same certificate."""
+    cfg = CertifyConfig(method="uniform", n_samples=40, seed=3, disturbance="state")
+    a, b = certify_gait(exo, exo_mc_gait, cfg), certify_gait(exo, exo_mc_gait, cfg)
+    assert a.r_star == b.r_star and a.orbit is not None and b.orbit is not None
+    np.testing.assert_array_equal(a.certificate.samples, b.certificate.samples)
+    np.testing.assert_array_equal(a.certificate.images, b.certificate.images)
 
 
 # ---- reduced states, shaped sets, horizons, pushes -----------------------------------------------------------
@@ -356,11 +375,16 @@ def test_push_certificate(exo, exo_gait):
     gc = certify_gait(exo, exo_gait, uniform(disturbance="push", n_samples=12, seed=1,
                                              push={"horizon": 1, "recovery": False}))
     c = gc.certificate
-    assert gc.ok and c.samples.shape == (12, 2) and c.r_max == 100.0 and gc.config.unit == "N s"
+    # r_max unset: the robot's scale, push.r_max_scale × m √(g l)
+    from robustgait.certificate.search import probe_impulse
+
+    scale = probe_impulse(exo, gc.config.push.r_max_scale)
+    assert gc.ok and c.samples.shape == (12, 2) and c.r_max == pytest.approx(scale, rel=0.01)
+    assert gc.config.unit == "N s" and gc.config.r_max == c.r_max
     # the image of a push is the origin (absorbed) or a fall: J* is the smallest impulse that fell (or r_max)
     d = np.linalg.norm(c.samples, axis=1)
     assert np.all(np.isnan(c.images[c.fell])) and np.all(c.images[~c.fell] == 0)
-    assert c.r_star == pytest.approx(d[c.fell].min() if c.fell.any() else 100.0)
+    assert c.r_star == pytest.approx(d[c.fell].min() if c.fell.any() else c.r_max)
     text = gc.statement()
     assert "N s" in text and "pushes" in text and "union bound over the 13 possible choices of J*" in text
     assert f"the {c.n_inside} with |J|" in text and "ball" not in text and "r*" not in text
@@ -369,8 +393,8 @@ def test_push_certificate(exo, exo_gait):
 
 @pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_gait):
-    """The statement of a sequential J* names its passing batch (size and attempt, from the rounds) in pushes and
-    the disk, not the state certificate's ball and r*."""
+    """The statement of a sequential J* names its passing batch (size, attempt and β, from the rounds), the share of
+    the exploration's estimate it was drawn in, in pushes and the disk, not the state certificate's ball and r*."""
     gc = certify_gait(exo, exo_gait, CertifyConfig(
         disturbance="push", seed=3, push={"horizon": 6, "first_round": 8, "explore": 8, "explore_after_failure": 8},
         sequential=SequentialConfig(epsilon=0.2, budget=400)))
@@ -378,9 +402,11 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
     verify = [r for r in c.rounds if r.kind == "verify"]
     assert gc.ok and c.method == "sequential" and verify[-1].passed and c.violation_bound <= 0.2
     text = gc.statement()
-    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed: none "
-            f"fell (verification attempt {len(verify)}:") in text
-    assert f"none of the {c.n_samples} pushes of its {len(c.rounds)} rounds" in text
+    explored = c.n_samples - sum(r.n_samples for r in verify)
+    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed "
+            f"({verify[-1].radius / c.estimate:.2g} × the estimate Ĵ = {c.estimate:.4g} N s of {explored} exploration "
+            f"pushes): none fell (verification attempt {len(verify)}:") in text
+    assert c.estimate is not None and c.r_star == pytest.approx(verify[-1].radius)
     # what a failure is: a fall within the pushed step and push.horizon more (a walk back in the band stops there)
     assert "make the robot fall within that step and 6 more (a pushed walk stops once recovered: 2 consecutive" in text
     assert "every coordinate of the switching state within 0.03 of its orbit's band" in text

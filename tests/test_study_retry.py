@@ -47,7 +47,7 @@ def test_a_fall_at_a_joint_limit_is_evaluated_again_with_the_margin(exo, exo_gai
     assert out is not first and out.retried is not None
     assert out.retried["joint_margin"] == pytest.approx(0.1) and out.retried["limit_joint"] == "left_knee"
     assert out.retried["status"] == "fell" and out.retried["reason"] == "fell in step 31 (tilt)"
-    assert out.status == "certified" and out.gait is not None
+    assert out.status in ("certified", "estimated") and out.gait is not None  # ranked: verified or estimated
     assert out.gait.solver["joint_margin"] == pytest.approx(0.1)
     assert out.seconds["first"] == 10.0 and out.seconds["retry"] > 0
     assert out.seconds["total"] == pytest.approx(sum(out.seconds[k] for k in ("generate", "walk", "certify", "first",

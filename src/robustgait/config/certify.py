@@ -229,7 +229,7 @@ class PushConfig:
                                      "whole batch at once)", ge=0, le=10_000)] = 25
     verify_margin: Annotated[Float, Doc("the disk a verification batch is drawn in, as a fraction of the explored "
                                         "estimate Ĵ: J* is this fraction of Ĵ when the batch passes (below 1: fewer "
-                                        "failed batches, a smaller J*)", gt=0.0, le=1.0)] = 0.9
+                                        "failed batches, a smaller J*)", gt=0.0, le=1.0)] = 0.8
     first_share: Annotated[Float, Doc("share of β spent on the first verification batch (the rest halves over the "
                                       "further batches; 0.5: β/2, β/4, …): a larger share, a smaller first batch",
                                       gt=0.0, lt=1.0)] = 0.9
