@@ -109,8 +109,12 @@ def first_question(p: subprocess.Popen[str], directory: Path, timeout: float) ->
         rec = json.loads(rows[0][0]) if rows else {}
         if "pending" in rec:
             seconds = time.perf_counter() - t0
-            p.send_signal(signal.SIGINT)
-            p.wait(timeout=60)
+            p.send_signal(signal.SIGINT)  # the study stops as after a person's Ctrl-C
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
             return {"first_question": seconds, "shown": len(rec["pending"]["shown"]),
                     "evaluated": rec["pending"]["size"]}
     p.kill()
