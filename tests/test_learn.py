@@ -227,6 +227,18 @@ def test_the_region_around_the_reference_is_the_ball_the_formula_gives() -> None
     assert predicted_to_clear(space, [(ref, 20.0)], 0.0, ell, w0).all()  # floor 0: everything clears it
 
 
+def test_the_region_around_the_reference_alone_does_not_depend_on_its_value() -> None:
+    """A person study proposes its first batch while the reference is still evaluated: with the reference alone and
+    the floor a fraction f of its figure, the region is the same for any figure v > 0 (computed with v = 1)."""
+    from robustgait.learn.floor import predicted_to_clear
+
+    space = grid_space(21, 21)
+    ref = {"x0": 0.3, "x1": 0.6}
+    unit = predicted_to_clear(space, [(ref, 1.0)], 0.75, 0.2, 0.1)
+    for v in (0.37, 1.9, 13.61, 94.7):
+        assert np.array_equal(predicted_to_clear(space, [(ref, v)], 0.75 * v, 0.2, 0.1), unit), v
+
+
 def test_the_region_follows_the_evaluated_gaits() -> None:
     """Gaits that fell (figure 0) carve their neighbourhood out of the region; robust ones extend it."""
     from robustgait.learn.floor import predicted_to_clear

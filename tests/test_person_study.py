@@ -19,6 +19,7 @@ from robustgait.config import (
     Config,
     GaitParams,
     PersonConfig,
+    RunConfig,
     SimConfig,
     StudyConfig,
 )
@@ -29,9 +30,10 @@ from robustgait.study.person import record_answer
 from robustgait.study.run import create_study, open_store, run_study
 from robustgait.study.status import study_status
 
-BATCH, OVERDRAW = 3, 3
+BATCH, OVERDRAW, FIRST = 3, 3, 2
 # evaluations walk 5 steps and certify with 10 uniform samples; a gait is shown only if its step is 0.14 m or longer
-TINY = Config(study=StudyConfig(iterations=3, batch=BATCH, seed=0, metric="person", require=("step_length>=0.14",)),
+TINY = Config(study=StudyConfig(iterations=3, batch=BATCH, first_batch=FIRST, seed=0, metric="person",
+                                require=("step_length>=0.14",)),
               sim=SimConfig(step_cap=5), certify=CertifyConfig(method="uniform", n_samples=10),
               comfort=ComfortConfig(skip_steps=1, steps=3), person=PersonConfig(floor=0.0, overdraw=OVERDRAW))
 
@@ -81,18 +83,20 @@ def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path, ca
     st = study_status(d)
     assert st["state"] == "complete"
     trials = [t for t in st["trials"] if t["state"] == "COMPLETE"]
-    sizes = []
+    over = []
+    assert st["trials_planned"] == FIRST + (TINY.study.iterations - 1) * BATCH
     for it in st["iterations"]:
+        size = FIRST if it["iteration"] == 0 else BATCH  # the person's first question asks for fewer gaits
         mine = sorted((t for t in trials if t["iteration"] == it["iteration"]), key=lambda t: t["slot"])
         n = len(mine)
-        sizes.append(n)
-        assert [t["slot"] for t in mine] == list(range(n)) and BATCH <= n <= BATCH + OVERDRAW
+        over.append(n > size)
+        assert [t["slot"] for t in mine] == list(range(n)) and size <= n <= size + OVERDRAW
         assert [t["grid_index"] for t in mine] == it["proposals"][:n]  # evaluated in the learner's order
         may_show = [t["params"]["step_length"] >= 0.14 and t["status"] == "certified" for t in mine]
-        assert sum(may_show) <= BATCH and (sum(may_show) == BATCH or n == BATCH + OVERDRAW)
+        assert sum(may_show) <= size and (sum(may_show) == size or n == size + OVERDRAW)
         answer = next(a for a in st["person"]["answers"] if a["iteration"] == it["iteration"])
         assert len(answer["ranks"]) == n and [r is not None for r in answer["ranks"]] == may_show
-    assert max(sizes) > BATCH, sizes  # some batch needed its over-drawn candidates
+    assert any(over), over  # some batch needed its over-drawn candidates
     ahead = [t for t in trials if t["evaluated_ahead"]]
     assert st["person"]["ahead"]["evaluated"] >= st["person"]["ahead"]["used"] == len(ahead) > 0
     space = load_config(d).action_space()  # videos are made ahead only of gaits that may be shown
@@ -106,6 +110,37 @@ def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path, ca
     fresh = evaluate(load_robot(setup.robot), GaitParams(**t["params"]), setup.config)  # ahead: the evaluation
     assert (fresh.status, fresh.steps_taken, fresh.certificate_value) == (t["status"], t["steps_taken"],
                                                                           t["certificate_value"])
+
+
+@pytest.mark.slow
+def test_the_floor_is_evaluated_beside_a_first_batch_proposed_around_the_default_gait(tmp_path):
+    """No floor given: the default gait's verified certificate sets it (``floor_fraction`` of it), evaluated on the
+    workers beside the first batch, which is proposed in the ball around the default gait that the region's formula
+    gives (its radius does not depend on the figure) and holds ``first_batch`` gaits that may be shown."""
+    from robustgait.config import PushConfig, SequentialConfig
+    from robustgait.learn.floor import predicted_to_clear
+
+    cfg = Config(study=StudyConfig(iterations=1, batch=3, first_batch=2, seed=0, metric="simulated-person"),
+                 sim=SimConfig(step_cap=5), comfort=ComfortConfig(skip_steps=1, steps=3),
+                 certify=CertifyConfig(sequential=SequentialConfig(epsilon=0.2),
+                                       push=PushConfig(first_round=10, explore=10, explore_after_failure=10, horizon=3,
+                                                       explore_horizon=3)))
+    d = create_study(tmp_path / "s", "exo", cfg)
+    run_study(d, progress=False, run=RunConfig(workers=2))
+    st = study_status(d)
+    floor = st["person"]["floor"]
+    reference = floor["reference"]
+    assert reference["status"] == "certified" and reference["certificate_value"] > 0
+    assert floor["value"] == pytest.approx(0.75 * reference["certificate_value"])
+    assert st["state"] == "complete" and st["trials_planned"] == 2
+    space = load_config(d).action_space()
+    ball = predicted_to_clear(space, [(cfg.params.to_dict(), 1.0)], 0.75, 0.2, 0.1)
+    proposals = st["iterations"][0]["proposals"]
+    assert ball[proposals[:cfg.study.batch_size(0) + cfg.person.overdraw]].all() and ball.sum() < space.size
+    mine = [t for t in st["trials"] if t["state"] == "COMPLETE" and t["iteration"] == 0]
+    shown = [t for t in mine if t["status"] == "certified" and t["verified_value"] is not None
+             and t["verified_value"] >= floor["value"]]
+    assert len(shown) == 2 or len(mine) >= 2 + cfg.person.overdraw, mine
 
 
 def test_a_study_written_before_over_drawn_batches_evaluates_its_batch_alone(tmp_path):

@@ -82,8 +82,8 @@ class PersonConfig:
         "speed", "cadence", "pelvis_acc_vertical_rms", "pelvis_acc_lateral_rms", "impact_force_ratio",
         "cost_of_transport")
     overdraw: Annotated[Int, Doc("candidates the learner proposes beyond the batch: they are evaluated in its order "
-                                 "only while fewer than study.batch gaits of the iteration may be shown, so that a "
-                                 "batch shown is full", ge=0, le=100)] = 5
+                                 "only while fewer than the iteration's batch (study.batch, study.first_batch) may be "
+                                 "shown, so that a batch shown is full", ge=0, le=100)] = 5
     ahead: Annotated[Bool, Doc("while a person answers, evaluate the candidates the learner would propose next if the "
                                "answer were the one its model predicts (reused when they are proposed; discarded "
                                "otherwise)")] = True

@@ -87,6 +87,9 @@ class StudyConfig:
     learner: Annotated[LearnerName, Doc("polar (Thompson sampling), eubo (qEUBO) or random")] = "polar"
     iterations: Annotated[Int, Doc("batches", ge=1, le=1000)] = 10
     batch: Annotated[Int, Doc("gaits per batch (a batch is ranked: at least 2)", ge=2, le=100)] = 5
+    first_batch: Annotated[Int | None, Doc(
+        "a person study's first batch (the person's first question comes once this many gaits may be shown; later "
+        "batches, evaluated while the person answers, hold batch); not set: batch", ge=2, le=100)] = 2
     seed: Annotated[Int, Doc("seed of the learner", ge=0, le=SEED_LIMIT)] = 0
     uncertified_penalty: Annotated[Float, Doc(
         "push and robustness oracles: a gait that walked the step cap without a certificate scores cap − this, "
@@ -104,9 +107,16 @@ class StudyConfig:
             except ValueError as exc:
                 raise FieldProblem("require", str(exc)) from None
 
+    def batch_size(self, k: int) -> int:
+        """Gaits in iteration k's batch: ``first_batch`` for a person study's first iteration, else ``batch`` (a
+        person study's iteration holds this many gaits that may be shown, besides its over-drawn candidates)."""
+        if k == 0 and self.asks_a_person and self.first_batch is not None:
+            return self.first_batch
+        return self.batch
+
     @property
     def trials_planned(self) -> int:
-        return self.iterations * self.batch
+        return sum(self.batch_size(k) for k in range(self.iterations))
 
     @property
     def verifies_all(self) -> bool:

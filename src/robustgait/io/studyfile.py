@@ -147,7 +147,10 @@ def load_config(directory: str | Path) -> StudySetup:
         study = raw["config"].get("study")
         study = dict(study) if isinstance(study, dict) else {}
         if "verify" not in study:  # written before studies ranked on estimates: every gait was verified
-            raw = {**raw, "config": {**raw["config"], "study": {**study, "verify": "all"}}}
+            study = {**study, "verify": "all"}
+        if "first_batch" not in study:  # written before a person's shorter first batch: every batch full
+            study = {**study, "first_batch": None}
+        raw = {**raw, "config": {**raw["config"], "study": study}}
         person = raw["config"].get("person")
         person = dict(person) if isinstance(person, dict) else {}
         if "overdraw" not in person:  # written before over-drawn batches: its iterations evaluate the batch alone

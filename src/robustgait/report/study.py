@@ -154,7 +154,7 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
     finally:
         store.close()
     # the last iteration ranked (a person study's pending batch has no answer yet: the one before it)
-    k = max((i for i in range(cfg.iterations) if len(batches.get(i, [])) >= cfg.batch
+    k = max((i for i in range(cfg.iterations) if len(batches.get(i, [])) >= cfg.batch_size(i)
              and (not cfg.asks_a_person or "answer" in iterations.get(i, {}))), default=-1)
     history = history_before(k + 1, batches, cfg, iterations, requirements(cfg, space.names))
     learner = make_learner(cfg.learner, space, cfg.learning, cfg.seed)

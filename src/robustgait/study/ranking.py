@@ -148,14 +148,14 @@ def history_before(k: int, batches: Mapping[int, Sequence[TrialRecord]], config:
                    iterations: Mapping[int, Mapping[str, Any]] | None = None,
                    reqs: Sequence[Requirement] = ()) -> History:
     """The learner's history: iterations 0..k−1 (each must be complete), ranked by the study's oracle (a person study:
-    by the stored answers, with the comparisons of their labels). A person study's iteration holds ``config.batch``
-    evaluated candidates or more (``person.overdraw``): every one of them is ranked."""
+    by the stored answers, with the comparisons of their labels). A person study's iteration i holds
+    ``config.batch_size(i)`` evaluated candidates or more (``person.overdraw``): every one of them is ranked."""
     iterations = iterations or {}
     ranked = []
     for i in range(k):
-        batch = batches.get(i, [])
-        if len(batch) < config.batch or (len(batch) > config.batch and not config.asks_a_person):
-            raise RobustGaitError(f"iteration {i} has {len(batch)} of {config.batch} trials complete")
+        batch, size = batches.get(i, []), config.batch_size(i)
+        if len(batch) < size or (len(batch) > size and not config.asks_a_person):
+            raise RobustGaitError(f"iteration {i} has {len(batch)} of {size} trials complete")
         scores = batch_scores(config, batch, iterations.get(i, {}), reqs)
         ranked.append([(r.index, s) for r, s in zip(batch, scores, strict=True)])
     extra = label_comparisons(batches, iterations, k) if config.asks_a_person else []

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
+import math
 import os
 import sys
 import time
@@ -94,6 +95,7 @@ class Asker(Protocol):
         (``result``, as stored) and may be shown in the next batch."""
 
 
+REFERENCE_KEY = -1  # the executor key of a person study's reference evaluation (the default gait, for its floor)
 POLL = 0.5  # s: how often a study waiting for a person looks for the answer and its evaluations ahead
 
 LOCK_FILE = ".lock"
@@ -163,8 +165,9 @@ def create_study(directory: str | Path, robot: str, config: Config | None = None
     setup = StudySetup(robot_reference(robot), replace(config, study=study))
     loaded = load_robot(setup.robot)
     space = setup.action_space(loaded)
-    if study.batch > space.size:
-        raise RobustGaitError(f"a batch of {study.batch} gaits does not fit in an action space of {space.size}")
+    if max(study.batch, study.batch_size(0)) > space.size:
+        raise RobustGaitError(f"a batch of {max(study.batch, study.batch_size(0))} gaits does not fit in an action "
+                              f"space of {space.size}")
     check_evaluation_work(setup.config, loaded, space)
     requirements(study, space.names)  # a requirement on a figure that is not recorded: refused now
     d.mkdir(parents=True, exist_ok=True)
@@ -227,6 +230,7 @@ class StudyRunner:
         self.reqs: list[Requirement] = requirements(self.config, self.space.names)
         self.asker = asker
         self.floor = 0.0
+        self.floor_pending = False  # the reference evaluation that sets the floor is running
         self.ahead: Ahead | None = None  # evaluations ahead of a person's answer
         self.verifier = Verifier(self.directory, self.space, self.executor)
 
@@ -255,12 +259,12 @@ class StudyRunner:
         with tqdm(total=cfg.trials_planned, initial=done, desc="study", unit="gait", file=sys.stderr,
                   disable=not self.progress, dynamic_ncols=True) as bar:
             if cfg.asks_a_person:
-                self.floor = self._floor(store)
+                self._start_floor(store)
             self.verifier.submit(store, self.verifier.needed(store))  # what a killed run had not verified yet
             for k in range(cfg.iterations):
                 batches = completed_batches(store.records())
                 iterations = store.iterations()
-                if len(batches.get(k, [])) >= cfg.batch and "recommendation" in iterations.get(k, {}):
+                if len(batches.get(k, [])) >= cfg.batch_size(k) and "recommendation" in iterations.get(k, {}):
                     continue
                 self._propose(store, k, history_before(k, batches, cfg, iterations, self.reqs))
                 if cfg.asks_a_person:
@@ -275,19 +279,27 @@ class StudyRunner:
                 bar.set_postfix_str(f"verifying the best and recommended gaits: {len(self.verifier.running)} left")
                 self.verifier.take(store, *self.executor().next_result())
 
-    def _floor(self, store: StudyStore) -> float:
+    def _start_floor(self, store: StudyStore) -> None:
         """The robustness floor of a person study (:func:`robustgait.study.person.floor_record`): stored once; not
-        configured, the robot's default gait is evaluated (on the study's workers) when the study first starts."""
+        configured, the robot's default gait is evaluated on the study's workers when the study first starts, beside
+        the first batch's candidates (:meth:`_set_floor` when it ends; until then no gait may be shown and every
+        candidate verifies its certificate, ``floor_pending``)."""
         rec = store.user_attrs().get(FLOOR_ATTR)
-        if rec is None:
-            reference = None
-            if self.setup.config.person.floor is None:  # the default gait's verified certificate
-                self.executor().submit(-1, self.setup.config.params.to_dict(), verify_above=0.0)
-                _, reference = self.executor().next_result()
-                reference = {k: v for k, v in reference.items() if k not in ("gait", "certificate")}
-            rec = floor_record(self.setup.config, reference)
+        if rec is None and self.setup.config.person.floor is not None:
+            rec = floor_record(self.setup.config, None)
             store.study.set_user_attr(FLOOR_ATTR, rec)
-        return float(rec["value"])
+        if rec is not None:
+            self.floor = float(rec["value"])
+            return
+        self.executor().submit(REFERENCE_KEY, self.setup.config.params.to_dict(), verify_above=0.0)
+        self.floor, self.floor_pending = math.inf, True
+
+    def _set_floor(self, store: StudyStore, result: dict[str, Any]) -> None:
+        """Store the floor from the reference evaluation ``result`` (the default gait's verified certificate)."""
+        reference = {k: v for k, v in result.items() if k not in ("gait", "certificate")}
+        rec = floor_record(self.setup.config, reference)
+        store.study.set_user_attr(FLOOR_ATTR, rec)
+        self.floor, self.floor_pending = float(rec["value"]), False
 
     def _ask(self, store: StudyStore, k: int) -> None:
         """Iteration k's answer: stored already (a resumed study), none needed (no gait above the floor), a simulated
@@ -338,7 +350,7 @@ class StudyRunner:
         guess = {**iterations[k], "answer": predicted_answer(list(utilities), fallback, show)}
         t0 = time.perf_counter()
         candidates = self.learner.propose(history_before(k + 1, batches, cfg, {**iterations, k: guess}, self.reqs),
-                                          k + 1, self._candidates(), self._region(store, k + 1))
+                                          k + 1, self._candidates(k + 1), self._region(store, k + 1))
         if self.ahead is None:
             self.ahead = Ahead(self.executor(), cfg.batch, self.space.value, self._qualifies, self._verify_above())
         known = {r.index: r.result for r in records if r.state == "COMPLETE" and r.result is not None}
@@ -357,32 +369,41 @@ class StudyRunner:
         """A person study's proposals for iteration k are made among the grid points predicted to clear its floor
         (:func:`~robustgait.learn.floor.predicted_to_clear`, ``person.region``): from the floor's reference evaluation
         and the evaluations of iterations before k (``within``: of k too). None: not a person study, or no floor
-        (0) to clear."""
+        (0) to clear.
+
+        With the reference alone (the first iteration's proposals, made while the reference is still evaluated) the
+        region does not depend on the reference's value when the floor is ``floor_fraction`` of it
+        (:mod:`robustgait.learn.floor`): it is computed with the value 1 and the floor ``floor_fraction``, so that the
+        proposals are the same whether the floor is known yet or not."""
         person = self.setup.config.person
-        if not self.config.asks_a_person or not person.region or self.floor <= 0.0:
+        if not self.config.asks_a_person or not person.region:
             return None
-        observed = []
+        verifications = store.verifications()
+        observed = [(r.params, figure_of(r.result, verifications.get(r.index))) for r in store.records()
+                    if r.state == "COMPLETE" and r.result is not None
+                    and (r.iteration < k or (within and r.iteration == k))]
+        if not observed and person.floor is None:
+            default = self.setup.config.params.to_dict()
+            return predicted_to_clear(self.space, [(default, 1.0)], person.floor_fraction, person.region_lengthscale,
+                                      person.region_prior)
+        if self.floor <= 0.0 or self.floor_pending:
+            return None
         reference = (store.user_attrs().get(FLOOR_ATTR) or {}).get("reference")
         if reference and reference.get("params"):
             value = verified_value(current_names(reference))
-            observed.append(({**self.setup.config.params.to_dict(), **reference["params"]}, value or 0.0))
-        verifications = store.verifications()
-        for r in store.records():
-            if r.state != "COMPLETE" or r.result is None or (r.iteration >= k and not (within and r.iteration == k)):
-                continue
-            observed.append((r.params, figure_of(r.result, verifications.get(r.index))))
+            observed.insert(0, ({**self.setup.config.params.to_dict(), **reference["params"]}, value or 0.0))
         return predicted_to_clear(self.space, observed, self.floor, person.region_lengthscale, person.region_prior)
 
-    def _candidates(self) -> int:
-        """Candidates an iteration proposes: the batch, and for a study that asks a person its over-draw."""
-        return self.config.batch + (self.setup.config.person.overdraw if self.config.asks_a_person else 0)
+    def _candidates(self, k: int) -> int:
+        """Candidates iteration k proposes: its batch, and for a study that asks a person its over-draw."""
+        return self.config.batch_size(k) + (self.setup.config.person.overdraw if self.config.asks_a_person else 0)
 
     def _propose(self, store: StudyStore, k: int, history: History) -> None:
         """Reproduce the proposals of iteration k and enqueue the slots not recorded yet (a study that asks a person:
         none, :meth:`_fill` records each when it dispatches it); a stored slot that differs from the reproduction is
         an error (another version or config wrote this study)."""
         cfg = self.config
-        size = self._candidates()
+        size = self._candidates(k)
         t0 = time.perf_counter()
         proposal = self.learner.propose(history, k, size, self._region(store, k))
         seconds = time.perf_counter() - t0
@@ -420,8 +441,9 @@ class StudyRunner:
 
     def _fill(self, store: StudyStore, k: int, bar: tqdm) -> None:
         """Evaluate iteration k's candidates in the learner's order, each recorded when it is dispatched, while fewer
-        than ``batch`` of those evaluated or running may be shown (a study that asks a person)."""
-        cfg = self.config
+        than its batch (:meth:`~robustgait.config.StudyConfig.batch_size`) of those evaluated or running may be shown
+        (a study that asks a person); the first iteration also waits for the floor's reference evaluation."""
+        size = self.config.batch_size(k)
         proposals = store.iterations()[k]["proposals"]
         cache = {r.index: r for r in store.records() if r.state == "COMPLETE" and r.reused_from is None}
         started: dict[int, TrialRecord] = {}
@@ -434,15 +456,15 @@ class StudyRunner:
             mine = [r for r in store.records() if r.iteration == k]
             ready = sum(1 for r in mine if r.state == "COMPLETE" and shown(r, self.floor, self.reqs))
             slots = len({r.slot for r in mine})
-            if ready + len(started) < cfg.batch and slots == len(proposals) and not started:
+            if ready + len(started) < size and slots == len(proposals) and not started and not self.floor_pending:
                 proposals = self._more_candidates(store, k, proposals, ready)
-            if ready + len(started) < cfg.batch and slots < len(proposals):
+            if ready + len(started) < size and slots < len(proposals):
                 store.enqueue(k, slots, proposals[slots], self._trial_attrs())
-                if slots >= cfg.batch:
+                if slots >= size:
                     bar.total += 1
                     bar.refresh()
                 continue
-            if not started:
+            if not started and not self.floor_pending:
                 break
             self._collect(store, started, bar)
         before = store.iterations().get(k - 1, {})
@@ -455,7 +477,7 @@ class StudyRunner:
         be shown: the learner proposes ``person.overdraw`` more (new ones, within the region predicted to clear the
         floor given this iteration's evaluations too), recorded in the iteration's proposals before they are
         dispatched. Unchanged when enough may be shown, or when the action space holds no other gait."""
-        need = min(self.setup.config.person.min_shown, self.config.batch)
+        need = min(self.setup.config.person.min_shown, self.config.batch_size(k))
         if ready >= need or len(proposals) >= self.space.size:
             return proposals
         batches, iterations = completed_batches(store.records()), store.iterations()
@@ -490,13 +512,22 @@ class StudyRunner:
 
     def _verify_above(self) -> float | None:
         """Evaluations verify their certificate when its estimate is at least this (a person study's floor: the gaits
-        it may show), else only when the study verifies every gait (None)."""
-        return self.floor if self.config.asks_a_person else None
+        it may show; every estimate while the floor is not known yet), else only when the study verifies every gait
+        (None)."""
+        if not self.config.asks_a_person:
+            return None
+        return 0.0 if self.floor_pending else self.floor
 
     def _collect(self, store: StudyStore, started: dict[int, TrialRecord], bar: tqdm) -> None:
         """Wait for the next finished evaluation: a trial's, one made ahead (kept; completing the trial that
         adopted it) or a verification (stored)."""
         key, result = self.executor().next_result()
+        if key == REFERENCE_KEY:
+            self._set_floor(store, result)
+            bar.set_postfix_str(f"floor {self.floor:.4g} {self.setup.config.study_certify.unit} "
+                                f"({self.setup.config.person.floor_fraction:g} × the default gait's)"
+                                if self.floor > 0 else "floor 0: the default gait was not certified")
+            return
         if self.verifier.take(store, key, result):
             return
         if self.ahead is not None and self.ahead.owns(key):
