@@ -63,7 +63,9 @@ FEET = {
     # a box sole and a higher cylinder (an ankle guard) of another class: the sole is the box's class
     "box_and_cylinder": ('<geom class="foot" type="box" size="0.1 0.05 0.01" pos="0.03 0 -0.05"/>'
                          '<geom type="cylinder" size="0.03 0.02" pos="0 0 0"/>'),
+    # a mesh (a pyramid on its base): the sole is its convex hull's bottom face
     "mesh": '<geom type="mesh" mesh="footmesh"/>',
+    "ellipsoid": '<geom type="ellipsoid" size="0.1 0.05 0.01" pos="0.03 0 -0.05"/>',
     # the box sole pitched 0.01 rad in its foot's frame (a CAD export's foot plate)
     "tilted_box": '<geom name="{s}_sole" type="box" size="0.1 0.05 0.01" pos="0.03 0 -0.05" euler="0 0.01 0"/>',
     # a toe on its own hinge, its box level with the foot's
@@ -197,7 +199,8 @@ def test_torque_limits_say_where_they_came_from(tmp_path: Path) -> None:
 @pytest.mark.parametrize(("foot", "kind", "count", "sole_class", "length", "width"), [
     ("spheres", "body", 4, None, 0.18, 0.08), ("capsules", "body", 2, None, 0.18, 0.08),
     ("cylinders", "body", 2, None, 0.18, 0.08), ("puck", "body", 1, None, 0.1, 0.1),
-    ("unnamed_box", "body", 1, None, 0.2, 0.1), ("box_and_cylinder", "body", 1, "foot", 0.2, 0.1)])
+    ("unnamed_box", "body", 1, None, 0.2, 0.1), ("box_and_cylinder", "body", 1, "foot", 0.2, 0.1),
+    ("mesh", "body", 1, None, 0.2, 0.1)])
 def test_soles_of_sets_and_unnamed_geoms_load_as_virtual_soles(tmp_path: Path, foot: str, kind: str, count: int,
                                                                sole_class: str | None, length: float,
                                                                width: float) -> None:
@@ -686,7 +689,8 @@ BAD_MODELS = {
                       'geom2="ground"/><pair geom1="right_sole" geom2="ground"/></contact></mujoco>'),
                       "its 2 <pair> contacts are not read"),
     "no foot geom": (lambda: biped_xml(foot="none"), "no area to stand on"),
-    "mesh sole": (lambda: biped_xml(foot="mesh"), "is a mesh"),
+    "ellipsoid sole": (lambda: biped_xml(foot="ellipsoid"), "is an ellipsoid, whose contact patch robustgait "
+                       "cannot bound: make it a box or a mesh"),
     "two-body foot": (lambda: biped_xml(foot="toe", keyframe=False), "foot stands on 2 bodies"),
     # the right shin 3 cm shorter: the feet still stand level within the tolerance, the mirror cannot be right
     "asymmetric": (lambda: biped_xml(right_short=0.03), "the mirror does not reflect the model"),

@@ -7,9 +7,10 @@ and each joint's range and torque limit with where it came from.
   from the body where the two feet's chains branch (the base, or a waist below it) down to its foot; left is
   y > 0 in the base frame.
 * **Soles.** A foot's collision geoms whose lowest points lie within ``sole_tolerance`` of the foot's lowest
-  point: one box (its bottom face is the sole), or a set of spheres, capsules, cylinders and boxes of that body (the
-  loader spans a virtual sole box over where they meet the ground). Meshes and ellipsoids are refused: their contact
-  patch is not a sole robustgait can constrain.
+  point: one box (its bottom face is the sole), or a set of spheres, capsules, cylinders, boxes and meshes of that
+  body (the loader spans a virtual sole box over where they meet the ground: a mesh's convex hull on its tread).
+  Ellipsoids, planes, height fields and SDFs are refused: their contact patch is not a sole robustgait can
+  constrain.
 * **Floor.** A plane geom of the world body with its normal up; none: the loader adds one (``add_floor``).
 * **Torque limits.** The smallest of the joint's ``actuatorfrcrange``, its joint actuators' ``forcerange`` × gear,
   and its motors' ``ctrlrange`` × gain × gear; a joint with none gets an estimate (:mod:`.gains`), said so.
@@ -25,7 +26,7 @@ from numpy.typing import NDArray
 
 from robustgait.errors import input_error
 from robustgait.inspection.model import GEOM_TYPES, RobotModel, geom_bottom
-from robustgait.robots.soles import SOLE_TYPES, article, sole_points
+from robustgait.robots.soles import SOLE_TYPES, article, foot_up, geom_sole_points, on_sole
 
 SIDES = ("left", "right")
 PLANE = int(mujoco.mjtGeom.mjGEOM_PLANE)
@@ -39,7 +40,8 @@ class FoundSole:
     footprint in the foot's frame (``length`` along the foot axis closest to forward, ``width`` along the one
     closest to left, [m]) and the foot's bottom height at the posture (``bottom``, base at height 0). What a model
     offers, before any spec exists; how a spec's sole is built into the robot's model is
-    :class:`robustgait.robots.soles.ResolvedSole`."""
+    :class:`robustgait.robots.soles.ResolvedSole`. ``tread``: how many of each mesh geom's convex-hull vertices are
+    on the sole (what ``robot init``'s comment says)."""
 
     body: int
     geoms: tuple[int, ...]
@@ -48,6 +50,7 @@ class FoundSole:
     length: float
     width: float
     bottom: float
+    tread: tuple[tuple[int, int], ...] = ()  # (mesh geom, its hull vertices on the sole) for each mesh geom
 
 
 @dataclass(frozen=True)
@@ -177,9 +180,10 @@ def _geom_class(robot: RobotModel, body: int, g: int) -> str | None:
 
 def footprint_points(m: mujoco.MjModel, d: mujoco.MjData, g: int) -> NDArray[np.float64]:
     """Where sole geom ``g`` meets the ground, (k, 3) world, at the kinematics ``d``
-    (:func:`robustgait.robots.soles.sole_points` with up the world's z)."""
-    return sole_points(SOLE_TYPES[int(m.geom_type[g])], d.geom_xpos[g], d.geom_xmat[g].reshape(3, 3),
-                       m.geom_size[g], np.array([0.0, 0.0, 1.0]))
+    (:func:`robustgait.robots.soles.geom_sole_points` with up the foot body's axis closest to the world's z, as the
+    loader reads it: a foot the posture tilts keeps its whole tread)."""
+    rb = d.xmat[int(m.geom_bodyid[g])].reshape(3, 3)
+    return geom_sole_points(m, g, d.geom_xpos[g], d.geom_xmat[g].reshape(3, 3), rb @ foot_up(rb))
 
 
 def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: float) -> FoundSole:
@@ -194,8 +198,8 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
             gname = f"'{robot.geom_name(g)}'" if robot.geom_name(g) else f"#{g - int(m.body_geomadr[foot])}"
             kind = GEOM_TYPES[int(m.geom_type[g])]
             raise input_error(src, f"the {side} sole (the lowest geometry of body '{name}', geom {gname}) is "
-                              f"{article(kind)} {kind}: robustgait needs a box or a set of spheres, "
-                              "capsules, cylinders and boxes (add a box geom under the foot)")
+                              f"{article(kind)} {kind}, whose contact patch robustgait cannot bound: make it a box or "
+                              "a mesh, or add a box geom under the foot")
     names = [robot.geom_name(g) for g in geoms]
     sole_class = None
     if len(geoms) == 1 and all(names) and int(m.geom_type[geoms[0]]) == int(mujoco.mjtGeom.mjGEOM_BOX):
@@ -213,8 +217,10 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
                 raise input_error(src, f"the {side} sole geoms of body '{name}' are unnamed and share their default "
                                   "class with the body's other collision geoms: name them")
             sole_class = classes.pop()
-    pts = np.vstack([footprint_points(m, d, g) for g in geoms])
+    per_geom = [footprint_points(m, d, g) for g in geoms]
     rf = d.xmat[foot].reshape(3, 3)
+    on = on_sole(np.vstack(per_geom), rf @ foot_up(rf))  # across the geoms, as the loader's sole box
+    pts = np.vstack(per_geom)[on]
     local = (pts - d.xpos[foot]) @ rf
     fwd = int(np.argmax(np.abs(rf[0, :])))  # the foot axes closest to forward and to left
     lft = int(np.argmax(np.abs(rf[1, :])))
@@ -223,7 +229,17 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
     if min(length, width) < MIN_SOLE:
         raise input_error(src, f"no sole found for the {side} leg: the lowest geometry of body '{name}' spans "
                           f"{length:.3g} × {width:.3g} m, no area to stand on (add a box geom under the foot)")
-    return FoundSole(foot, geoms, kind, sole_class, length, width, bottom)
+    return FoundSole(foot, geoms, kind, sole_class, length, width, bottom, _tread(m, geoms, per_geom, on))
+
+
+def _tread(m: mujoco.MjModel, geoms: tuple[int, ...], per_geom: list[NDArray[np.float64]], on: NDArray[np.bool_]
+           ) -> tuple[tuple[int, int], ...]:
+    """(mesh geom, how many of its ground points are on the sole) for each mesh geom of ``geoms``, whose ground
+    points ``per_geom`` were stacked in that order and filtered by the mask ``on``."""
+    ends = np.cumsum([len(p) for p in per_geom])
+    counts = [int(on[end - len(p):end].sum()) for end, p in zip(ends, per_geom, strict=True)]
+    mesh = int(mujoco.mjtGeom.mjGEOM_MESH)
+    return tuple((g, c) for g, c in zip(geoms, counts, strict=True) if int(m.geom_type[g]) == mesh)
 
 
 def find_floor(robot: RobotModel) -> Floor:

@@ -3,7 +3,7 @@ gains and scaled values, gathered in a :class:`Draft` that :mod:`.writer` render
 
 Every refusal is a one-line :class:`~robustgait.errors.RobustGaitError` raised before anything is written: no
 free joint (a URDF gets one), one leg, no sole, a sole that is not a box or a set of spheres/capsules/cylinders/
-boxes, a mirror that does not reflect the model, a leg whose joints' names say the other side. A sole that its
+boxes/meshes, a mirror that does not reflect the model, a leg whose joints' names say the other side. A sole that its
 model tilts in the posture (a foot plate's geoms rotated 90.5°) is levelled by the leg's ankle (:func:`level_soles`).
 """
 

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from robustgait.errors import input_error
 from robustgait.io.robotfile import ModelKind, read_model
+from robustgait.robots.soles import hull_vertices
 
 FREE = int(mujoco.mjtJoint.mjJNT_FREE)
 HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
@@ -188,8 +189,8 @@ def open_model(path: str | Path, keyframe: str | None = None) -> RobotModel:
 # ----------------------------------------------------------------------------------------------- geometry
 def geom_lowest_point(m: mujoco.MjModel, d: mujoco.MjData, g: int) -> NDArray[np.float64]:
     """The lowest point (world frame, least z) of geom ``g`` at the kinematics ``d``: exact for spheres,
-    capsules, cylinders, ellipsoids, boxes (support point in the direction −z) and meshes (their vertices); the
-    bounding box for other shapes. A face lying flat has many lowest points: this is one of them."""
+    capsules, cylinders, ellipsoids, boxes (support point in the direction −z) and meshes (their convex hull's
+    vertices); the bounding box for other shapes. A face lying flat has many lowest points: this is one of them."""
     p = d.geom_xpos[g]
     r = d.geom_xmat[g].reshape(3, 3)
     s = m.geom_size[g]
@@ -211,9 +212,7 @@ def geom_lowest_point(m: mujoco.MjModel, d: mujoco.MjData, g: int) -> NDArray[np
         norm = float(np.linalg.norm(scaled))
         return p + r @ (s[:3] * scaled / norm) if norm > 0 else p
     if t == int(mujoco.mjtGeom.mjGEOM_MESH) and m.geom_dataid[g] >= 0:
-        mesh = int(m.geom_dataid[g])
-        adr, count = int(m.mesh_vertadr[mesh]), int(m.mesh_vertnum[mesh])
-        pts = p + m.mesh_vert[adr:adr + count] @ r.T
+        pts = p + hull_vertices(m, g) @ r.T  # the hull MuJoCo collides (maxhullvert may drop mesh vertices)
         return np.asarray(pts[int(np.argmin(pts[:, 2]))])
     if t == int(mujoco.mjtGeom.mjGEOM_BOX):
         half = s[:3]

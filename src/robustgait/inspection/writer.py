@@ -9,6 +9,7 @@ import os
 import re
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
 from robustgait.inspection.discover import SIDES, FoundSole
@@ -17,6 +18,7 @@ from robustgait.inspection.mirror import mass_asymmetry
 from robustgait.inspection.model import GEOM_TYPES
 from robustgait.inspection.scale import GAIT_AXES, balance, duration_constant, narrow_soles, sig
 from robustgait.inspection.timestep import TimestepChoice, ms
+from robustgait.robots.soles import SOLE_PLANE_TOLERANCE, SOLE_TILT_SLOPE
 from robustgait.robots.spec import FallCriteria
 
 BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
@@ -74,7 +76,20 @@ def _sole_lines(draft: Draft, side: str, sole: FoundSole) -> list[str]:
         if sole.sole_class is not None:
             lines.append(f"sole_class = {text(sole.sole_class)}  # just the sole's geoms: the body's other "
                          "collision geoms are of other classes")
-    return lines
+    return lines + _tread_lines(draft, sole)
+
+
+def _tread_lines(draft: Draft, sole: FoundSole) -> list[str]:
+    """A comment naming a sole's meshes and how many of each one's convex-hull vertices the sole spans (none for a
+    sole without meshes)."""
+    if not sole.tread:
+        return []
+    m = draft.robot.model
+    meshes = ", ".join(f"'{mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_MESH, int(m.geom_dataid[g])) or '#' + str(g)}' "
+                       f"({n} vertices)" for g, n in sole.tread)
+    return [f"# mesh sole: MuJoCo collides a mesh through its convex hull; the sole spans the hull vertices within "
+            f"{SOLE_PLANE_TOLERANCE * 1e3:g} mm + {SOLE_TILT_SLOPE:g} × their distance of the lowest (the tread), "
+            f"of {meshes}"]
 
 
 def _geom_type(draft: Draft, g: int) -> str:

@@ -6,7 +6,9 @@ of geoms of one body, or a body (optionally one default class of its geoms). Whe
 sphere, capsule or cylinder feet of some Menagerie robots, an unnamed box — :func:`resolve_sole` adds a *virtual
 sole*: a box geom ``robustgait_{side}_sole`` on the foot body that takes part in no contact and has no mass,
 spanning the rectangle of the points where the geoms meet the ground (:func:`sole_points`; its bottom face at the
-lowest). Contacts stay the real geoms'; the contact sensor of that sole then counts the foot body's contacts.
+lowest). Contacts stay the real geoms'; the contact sensor of that sole then counts the foot body's contacts. A mesh
+sole (the mesh-only feet of some Menagerie robots) is one such set: MuJoCo collides a mesh through its convex hull,
+so it stands on the hull's vertices at the bottom of the foot (its tread), not on its bounding box.
 
 :func:`resolve_floor` finds the world's plane (naming it if unnamed) or adds one (``add_floor``).
 """
@@ -26,7 +28,8 @@ from robustgait.rotations import quat_to_mat
 
 FloatArray = NDArray[np.float64]
 SOLE_TYPES = {int(mujoco.mjtGeom.mjGEOM_BOX): "box", int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
-              int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule", int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder"}
+              int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule", int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder",
+              int(mujoco.mjtGeom.mjGEOM_MESH): "mesh"}
 # points on the rim of a cylinder standing on its end: its bottom disk as a polygon (its bounding rectangle is the
 # disk's to within 1 − cos(π/8) ≈ 8 % of the radius when the foot's axes are at 22.5° to the disk's)
 RIM_POINTS = 8
@@ -94,17 +97,61 @@ def _sole_geoms(mjs: mujoco.MjSpec, model: mujoco.MjModel, leg: LegSpec, side: s
         if int(model.geom_type[g]) not in SOLE_TYPES:
             kind = mujoco.mjtGeom(int(model.geom_type[g])).name.removeprefix("mjGEOM_").lower()
             raise input_error(src, f"the {side} sole ({leg.describe()}) has {article(kind)} {kind} geom: a sole is "
-                              "one box or a set of boxes, spheres, capsules or cylinders")
+                              "one box or a set of boxes, spheres, capsules, cylinders or meshes (name those)")
     return ids
 
 
-def sole_points(kind: str, pos: FloatArray, rot: FloatArray, size: FloatArray, up: FloatArray) -> FloatArray:
+def on_sole(points: FloatArray, up: FloatArray) -> NDArray[np.bool_]:
+    """Which of a foot's ground points (k, 3) lie on its sole, (k,) booleans: those within
+    :data:`SOLE_PLANE_TOLERANCE` + :data:`SOLE_TILT_SLOPE` × their horizontal distance [m] of the lowest along ``up``
+    (3,), a unit vector). The one rule for every shape: a box's bottom corners, sphere bottoms at one height, a
+    mesh's tread vertices are on it; a heel sphere raised by 1 cm, a toe that rises off the tread are not. Empty
+    ``points``: an empty mask."""
+    points, up = np.asarray(points, dtype=float), np.asarray(up, dtype=float)
+    if len(points) == 0:
+        return np.zeros(0, dtype=bool)
+    height = points @ up
+    lowest = int(np.argmin(height))
+    flat = points - np.outer(height, up)  # the points projected on the plane normal to up
+    reach = np.linalg.norm(flat - flat[lowest], axis=1)
+    return np.asarray(height <= height[lowest] + SOLE_PLANE_TOLERANCE + SOLE_TILT_SLOPE * reach)
+
+
+def hull_vertices(model: mujoco.MjModel, g: int) -> FloatArray:
+    """The vertices (n, 3) of mesh geom ``g``'s convex hull, in the geom's frame [m] (MuJoCo stores a mesh's vertices
+    in its compiled mesh frame, recentred and scaled, and folds that frame's offset into geom_pos/geom_quat).
+
+    MuJoCo collides a mesh through its convex hull, whose vertices are mesh vertices: its graph (mesh_graph: vertex
+    and face counts, each vertex's edge address, then each vertex's index among the mesh's) names them; a hull
+    limited by ``maxhullvert`` has fewer. A mesh without a graph (MuJoCo built none) gives all its vertices, which
+    serve as well: the lowest plane supports the mesh and its hull alike, and the mesh vertices within a tolerance of
+    it are the hull's plus vertices inside the hull within that same band, which add nothing the band does not."""
+    mesh = int(model.geom_dataid[g])
+    adr, count = int(model.mesh_vertadr[mesh]), int(model.mesh_vertnum[mesh])
+    verts = np.asarray(model.mesh_vert[adr:adr + count], dtype=float)
+    graph = int(model.mesh_graphadr[mesh])
+    if graph < 0:
+        return verts
+    numvert = int(model.mesh_graph[graph])
+    ids = model.mesh_graph[graph + 2 + numvert: graph + 2 + 2 * numvert]
+    return np.asarray(verts[ids])
+
+
+def sole_points(kind: str, pos: FloatArray, rot: FloatArray, size: FloatArray, up: FloatArray,
+                vertices: FloatArray | None = None) -> FloatArray:
     """Where a sole geom meets a ground plane of normal ``up`` (3,) when it rests on it, (k, 3), in the frame of
     ``pos`` (3,), ``rot`` (3, 3; columns: the geom's axes) and ``up``; ``kind`` a :data:`SOLE_TYPES` name, ``size``
     MuJoCo's geom size [m]. A box: the four corners of its face that looks down; a sphere: its bottom; a capsule:
     the bottoms of its two end spheres; a cylinder lying on its side: the two ends of its lowest line; a cylinder
-    standing on an end: :data:`RIM_POINTS` points of that end's rim (tilted: the lowest point of each end's rim)."""
+    standing on an end: :data:`RIM_POINTS` points of that end's rim (tilted: the lowest point of each end's rim); a
+    mesh: its convex hull's ``vertices`` (n, 3, in the geom's frame: :func:`hull_vertices`) that are on the sole
+    (:func:`on_sole`), its tread. A mesh without ``vertices`` is a ValueError."""
     pos, rot, size, up = (np.asarray(a, dtype=float) for a in (pos, rot, size, up))
+    if kind == "mesh":
+        if vertices is None:
+            raise ValueError("sole_points: a mesh's points need its hull's vertices")
+        points = pos + np.asarray(vertices, dtype=float) @ rot.T
+        return np.asarray(points[on_sole(points, up)])
     if kind == "box":
         axis = int(np.argmax(np.abs(up @ rot)))  # the box axis closest to up: its bottom face's normal
         others = [k for k in range(3) if k != axis]
@@ -127,6 +174,24 @@ def sole_points(kind: str, pos: FloatArray, rot: FloatArray, size: FloatArray, u
     return np.asarray(low + rim)
 
 
+def geom_sole_points(model: mujoco.MjModel, g: int, pos: FloatArray, rot: FloatArray, up: FloatArray) -> FloatArray:
+    """:func:`sole_points` of sole geom ``g`` of ``model`` placed at ``pos`` (3,) with axes ``rot`` (3, 3) — its
+    body-frame placement, or its world placement after the kinematics — for a ground normal ``up`` (3,) in that
+    frame; a mesh's hull vertices read from the model (:func:`hull_vertices`)."""
+    kind = SOLE_TYPES[int(model.geom_type[g])]
+    vertices = hull_vertices(model, g) if kind == "mesh" else None
+    return sole_points(kind, pos, rot, model.geom_size[g], up, vertices)
+
+
+def foot_up(rot: FloatArray) -> FloatArray:
+    """The unit axis (3,) of a body with axes ``rot`` (3, 3, columns, in the world) closest to the world's vertical
+    and pointing up, in the body's frame: the up a foot's sole is read along, so that a foot the posture tilts keeps
+    its whole tread (the world's vertical would keep only the edge it tilts down to)."""
+    rot = np.asarray(rot, dtype=float)
+    k = int(np.argmax(np.abs(rot[2])))
+    return np.asarray(np.eye(3)[k] * np.sign(rot[2, k]))
+
+
 def sole_slopes(along: FloatArray, across: FloatArray, height: FloatArray) -> tuple[float, float]:
     """The sole's plane through its ground points: the least-squares slopes (a, b) of height = c + a·along + b·across
     (points (k,) in a frame whose third axis is up, [m]); a direction the points do not span (a line of points, one
@@ -147,28 +212,26 @@ def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int],
     """The sole of a foot's geoms as a box in the foot body's frame: (centre (3,), rotation (3, 3) whose columns
     are the box's x (toe), y (left) and z (up) axes, half-sizes (3,)), at the posture of ``data``.
 
-    Up is the body axis closest to the world's vertical and toe the remaining body axis closest to ``forward``
-    (the base's x axis in the world), so the box is aligned with the foot. The sole's points are the geoms' ground
-    points (:func:`sole_points`) within :data:`SOLE_PLANE_TOLERANCE` + :data:`SOLE_TILT_SLOPE` × their horizontal
-    distance of the lowest along up; when their plane (:func:`sole_slopes`) is tilted from the body's axes (a foot
-    plate's geoms rotated 90.5°), the box is turned onto it, so that the box lies flat where the geoms do. The
-    rectangle spans the points; the box is :data:`VIRTUAL_SOLE_THICKNESS` thick above the lowest.
+    Up is the body axis closest to the world's vertical (:func:`foot_up`) and toe the remaining body axis closest
+    to ``forward`` (the base's x axis in the world), so the box is aligned with the foot. The sole's points are the
+    geoms' ground points (:func:`geom_sole_points`) that are on the sole (:func:`on_sole`) across the geoms; when
+    their plane (:func:`sole_slopes`) is tilted from the body's axes (a foot plate's geoms rotated 90.5°), the box is
+    turned onto it, so that the box lies flat where the geoms do. The rectangle spans the points; the box is
+    :data:`VIRTUAL_SOLE_THICKNESS` thick above the lowest.
     """
     body = int(model.geom_bodyid[geoms[0]])
     rb = data.xmat[body].reshape(3, 3)  # body axes in the world (columns)
-    up_k = int(np.argmax(np.abs(rb[2])))
-    up = np.eye(3)[up_k] * np.sign(rb[2, up_k])
+    up = foot_up(rb)
+    up_k = int(np.argmax(np.abs(up)))
     rest = [k for k in range(3) if k != up_k]
     fwd_k = max(rest, key=lambda k: abs(float(rb[:, k] @ forward)))
     fwd = np.eye(3)[fwd_k] * (1.0 if float(rb[:, fwd_k] @ forward) >= 0 else -1.0)
     left = np.cross(up, fwd)
-    points = np.concatenate([sole_points(SOLE_TYPES[int(model.geom_type[g])], model.geom_pos[g],
-                                         quat_to_mat(model.geom_quat[g]), model.geom_size[g], up) for g in geoms])
+    points = np.concatenate([geom_sole_points(model, g, model.geom_pos[g], quat_to_mat(model.geom_quat[g]), up)
+                             for g in geoms])
+    on = on_sole(points, up)
     height = points @ up
-    bottom = float(height.min())
-    flat = points - np.outer(height, up)  # the points projected on the sole plane
-    reach = np.linalg.norm(flat - flat[int(np.argmin(height))], axis=1)
-    on = height <= bottom + SOLE_PLANE_TOLERANCE + SOLE_TILT_SLOPE * reach
+    bottom = float(height[on].min())
     a, b = sole_slopes(points[on] @ fwd, points[on] @ left, height[on])
     if max(abs(a), abs(b)) > 1e-9:  # the plane's normal (−a, −b, 1) in (toe, left, up): the box's axes turned onto it
         up = (up - a * fwd - b * left) / float(np.sqrt(1.0 + a * a + b * b))
