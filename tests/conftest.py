@@ -71,18 +71,44 @@ def flat_robot_gait(request):  # type: ignore[no-untyped-def]
     return request.getfixturevalue("atalante"), request.getfixturevalue("atalante_gait")
 
 
+def shared_spec(tmp_path_factory, name: str, make) -> Path:  # type: ignore[no-untyped-def]
+    """A spec made once per test run and shared by the pytest-xdist workers (each worker has a session of its own,
+    and ``robot init`` walks the default gait: tens of seconds): the first worker to ask makes it, under a file lock
+    in the run's common temporary directory, with ``make(directory, spec_path)``; the others read it."""
+    from filelock import FileLock
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # pytest-N/popen-gwK → pytest-N, common to this run's workers
+    d = root / f"shared_{name}"
+    spec = d / f"{name}.toml"
+    with FileLock(str(root / f"shared_{name}.lock")):
+        if not spec.is_file():
+            d.mkdir(exist_ok=True)
+            make(d, spec)
+    return spec
+
+
 @pytest.fixture(scope="session")
-def t1(tmp_path_factory):  # type: ignore[no-untyped-def]
-    """Booster T1 (../shared/robots, MuJoCo Menagerie, meshes removed) with the spec ``robot init`` writes for it, as a
-    user brings it (skipped with the reason when absent)."""
+def t1_spec(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """The spec ``robot init`` writes for Booster T1 (../shared/robots, MuJoCo Menagerie, meshes removed), as a user
+    brings it (skipped with the reason when absent)."""
     if not T1_MODEL.is_file():
         pytest.skip("../shared/robots/booster_t1 (Booster T1) is not beside the repository")
-    from robustgait import load_robot
     from robustgait.cli import main
 
-    spec = tmp_path_factory.mktemp("t1") / "t1.toml"
-    assert main(["robot", "init", str(T1_MODEL), "-o", str(spec)]) == 0
-    return load_robot(spec)
+    def make(d: Path, spec: Path) -> None:
+        assert main(["robot", "init", str(T1_MODEL), "-o", str(spec)]) == 0
+
+    return shared_spec(tmp_path_factory, "t1", make)
+
+
+@pytest.fixture(scope="session")
+def t1(t1_spec):  # type: ignore[no-untyped-def]
+    """Booster T1 with the spec ``robot init`` writes for it (:func:`t1_spec`)."""
+    from robustgait import load_robot
+
+    return load_robot(t1_spec)
 
 
 @pytest.fixture(scope="session")
@@ -95,10 +121,10 @@ def t1_narrow(tmp_path_factory):  # type: ignore[no-untyped-def]
     from robustgait.cli import main
     from tests.robots import narrow_t1_xml
 
-    d = tmp_path_factory.mktemp("t1_narrow")
-    xml = narrow_t1_xml(T1_MODEL, d)
-    assert main(["robot", "init", str(xml), "-o", str(d / "t1.toml")]) == 0
-    return load_robot(d / "t1.toml")
+    def make(d: Path, spec: Path) -> None:
+        assert main(["robot", "init", str(narrow_t1_xml(T1_MODEL, d)), "-o", str(spec)]) == 0
+
+    return load_robot(shared_spec(tmp_path_factory, "t1_narrow", make))
 
 
 def write_frost_yaml(gait, path, *, inputparams=None):  # type: ignore[no-untyped-def]

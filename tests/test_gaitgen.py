@@ -29,6 +29,7 @@ def default(gen):
     return res
 
 
+@pytest.mark.xdist_group("exo_generator")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_default_gait_passes_the_physics_check(exo, gen, default):
     c = default.check
@@ -55,6 +56,7 @@ def test_default_gait_passes_the_physics_check(exo, gen, default):
     np.testing.assert_allclose(dx[:2], [0.15, -0.25], atol=1e-9)
 
 
+@pytest.mark.xdist_group("exo_generator")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_physics_check_catches_a_wrong_solution(gen, default):
     ns = dataclasses.replace(default.nodes[0], u=default.nodes[0].u * 1.01)
@@ -62,6 +64,7 @@ def test_physics_check_catches_a_wrong_solution(gen, default):
     assert not bad.passed and bad.dynamics_residual > 1e-4 and "dynamics residual" in bad.failures[0]
 
 
+@pytest.mark.xdist_group("exo_generator")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_default_gait_meets_the_gait_quality_bounds(exo, gen, default):
     """Pelvis bands, angular velocity, joint speeds and the swing sole's attitude hold at every node."""
@@ -85,6 +88,7 @@ def test_default_gait_meets_the_gait_quality_bounds(exo, gen, default):
         assert min(corners) >= gen.config.flat_approach * h[2, 3] - tol
 
 
+@pytest.mark.xdist_group("exo_generator")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_stored_test_gait_is_what_the_generator_makes(exo, default):
     """tests/data/exo_gait.json (used by the simulator, return-map and certificate tests) is today's default."""
@@ -111,6 +115,7 @@ def _walks_like_an_exoskeleton(robot, gait, max_speed_error=0.03):
     return res
 
 
+@pytest.mark.xdist_group("exo_generator")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_default_gait_walks_and_gets_a_certificate(exo, default):
     _walks_like_an_exoskeleton(exo, default.gait)
@@ -127,6 +132,7 @@ def test_default_gait_walks_and_gets_a_certificate(exo, default):
     assert c.violation_bound <= 0.2 or c.budget_exhausted
 
 
+@pytest.mark.xdist_group("exo_generator")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_warm_start_converges_faster(gen, default):
     params = GaitParams(step_length=0.17)
@@ -160,6 +166,7 @@ def test_grid_over_the_action_space_walks(exo, gen):
         _walks_like_an_exoskeleton(exo, res.gait)
 
 
+@pytest.mark.xdist_group("exo_generator")  # one worker computes the shared module fixture
 @pytest.mark.parametrize("kwargs, reason", [
     ({"step_width": 0.1}, "feet collide"),
     ({"step_length": 1.3}, "beyond generate.max_step_length"),

@@ -67,6 +67,7 @@ def test_the_whole_gain_is_taken_only_where_the_error_grows_and_it_helps(exo, ex
         assert asked == ([0.25] if under_whole is None else [0.25, 1.0])
 
 
+@pytest.mark.xdist_group("narrow_gait")  # one worker computes the shared module fixture
 def test_the_growth_probe_measures_the_walk_once_and_leaves_no_trace(t1_narrow, narrow_gait):  # type: ignore[no-untyped-def]
     """The narrow T1's ankle holds a lateral error (it grows ×1.1 a step without foot placement, under the limit of
     2): κ stays the sole's share. The probe runs once per gait in a process, and its steps are not counted as the
@@ -202,6 +203,7 @@ def narrow_gait(t1_narrow):  # type: ignore[no-untyped-def]
     return res.gait
 
 
+@pytest.mark.xdist_group("narrow_gait")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_a_narrow_footed_humanoid_walks_with_the_regulator_and_falls_without(t1_narrow, narrow_gait):  # type: ignore[no-untyped-def]
     """Four 5 mm spheres per foot on a 4 cm footprint: the default gait falls within 20 steps under the joint PD alone
@@ -227,6 +229,7 @@ def test_gait_generate_refuses_a_gait_that_does_not_walk_and_says_why(t1_narrow,
     assert out.exists()
 
 
+@pytest.mark.xdist_group("narrow_gait")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_the_narrow_footed_humanoid_is_certified_with_the_defaults(t1_narrow, narrow_gait):  # type: ignore[no-untyped-def]
     from robustgait import certify_gait

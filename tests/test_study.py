@@ -503,6 +503,7 @@ def _completed(db: Path) -> int:
         return 0
 
 
+@pytest.mark.xdist_group("reference_study")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_status_reports_the_machine_use_of_a_run(reference_study):
     """Each evaluation records its worker's CPU time; `study status` divides their sum by the busy wall time and the
@@ -521,6 +522,7 @@ def test_status_reports_the_machine_use_of_a_run(reference_study):
     assert out.returncode == 0 and "machine use: " in out.stdout
 
 
+@pytest.mark.xdist_group("reference_study")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path, reference_study):
     """kill -9 of `study run` (1 worker) after its first completed trial; `study resume` finishes it: every
@@ -583,6 +585,7 @@ def test_report_video_is_what_the_configuration_says(tmp_path, exo, exo_gait):
         pytest.approx(2 * exo_gait.params.step_duration * 10, abs=1.5)  # steps given: the configuration's overridden
 
 
+@pytest.mark.xdist_group("reference_study")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_status_report_and_compare(tmp_path, reference_study):
     res = cli("study", "status", str(reference_study), "--json")
@@ -632,6 +635,7 @@ def test_status_report_and_compare(tmp_path, reference_study):
     assert txt.returncode == 0 and "(uniform, N = 10)" in txt.stdout.splitlines()[0]
 
 
+@pytest.mark.xdist_group("reference_study")  # one worker computes the shared module fixture
 @pytest.mark.slow
 def test_ray_worker_killed_mid_task_is_retried(tmp_path, reference_study):
     """A Ray actor killed while it evaluates a gait: Ray restarts it and re-runs the task; the study

@@ -100,6 +100,7 @@ def test_spearman_defined_and_undefined():
         json.dumps(u.to_dict(), allow_nan=False)  # never NaN
 
 
+@pytest.mark.xdist_group("small_study")  # one worker computes the shared module fixture
 @pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_every_unique_gait_meets_the_same_disturbances(small_study, first_run):
     out, _ = first_run
@@ -133,6 +134,7 @@ def test_every_unique_gait_meets_the_same_disturbances(small_study, first_run):
     validate_study(small_study, SMALL, progress=False)  # push.json back to seed 0 (stored: nothing runs)
 
 
+@pytest.mark.xdist_group("small_study")  # one worker computes the shared module fixture
 @pytest.mark.slow  # the study it reads takes seconds to build: plain pytest stays ≤ 60 s
 def test_correlations_have_n_and_p_or_a_reason(small_study, first_run):
     out, _ = first_run
@@ -153,6 +155,7 @@ def test_correlations_have_n_and_p_or_a_reason(small_study, first_run):
     assert stored["sim"] == {**to_dict(TINY.sim), "n_threads": 0}  # the study's simulation
 
 
+@pytest.mark.xdist_group("small_study")  # one worker computes the shared module fixture
 @pytest.mark.slow  # the study it reads takes seconds to build: plain pytest stays ≤ 60 s
 def test_rerun_reuses_stored_results(small_study, first_run):
     out, seconds = first_run
@@ -198,6 +201,7 @@ def test_cli_errors_exit_2_with_one_line(tmp_path, capsys, small_study):
         validate_study(small_study, replace(SMALL, trials=20_000), progress=False)
 
 
+@pytest.mark.xdist_group("small_study")  # one worker computes the shared module fixture
 @pytest.mark.slow  # the study it reads takes seconds to build: plain pytest stays ≤ 60 s
 def test_cli_text_and_json(small_study, first_run, capsys):
     assert main(["study", "validate", str(small_study), "--trials", "8", "--steps-after", "3", "--quiet"]) == 0
@@ -210,6 +214,7 @@ def test_cli_text_and_json(small_study, first_run, capsys):
     assert out["push"]["correlations"] == first_run[0]["correlations"]
 
 
+@pytest.mark.xdist_group("small_study")  # one worker computes the shared module fixture
 @pytest.mark.slow  # keeps plain pytest within 60 s; CI runs it
 def test_another_state_certifies_every_gait_again(small_study, first_run, capsys):
     """--state: every certified gait gets a certificate of that state (the study's other options), is checked in
@@ -236,6 +241,7 @@ def test_another_state_certifies_every_gait_again(small_study, first_run, capsys
     validate_study(small_study, SMALL, progress=False)  # push.json back to the study's certificates (stored)
 
 
+@pytest.mark.xdist_group("small_study")  # one worker computes the shared module fixture
 @pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_report_with_and_without_validation(small_study, first_run, tmp_path):
     import shutil
@@ -254,6 +260,7 @@ def test_report_with_and_without_validation(small_study, first_run, tmp_path):
     assert "Validation:" not in page and (bare / "report" / "history.png").is_file()
 
 
+@pytest.mark.xdist_group("small_study")  # one worker computes the shared module fixture
 @pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_a_changed_gait_file_is_validated_again(small_study, first_run):
     """The stored results are keyed by the files too (last in this module: it leaves one gait stored twice)."""

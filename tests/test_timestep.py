@@ -31,7 +31,7 @@ from robustgait.inspection.timestep import (
     select_timestep,
     trial_error,
 )
-from tests.test_inspection import EXO_XML, T1, biped_xml, write
+from tests.test_inspection import EXO_XML, biped_xml, write
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -236,13 +236,14 @@ def run(capsys: pytest.CaptureFixture[str], *argv: str | Path) -> tuple[int, str
 # ----------------------------------------------------------------------------------------------- end to end
 @pytest.mark.slow  # the default gait generated and walked at two or three steps by init, then by check: ~1 min each
 @pytest.mark.parametrize("model", ["exo", "t1"])
-def test_init_chooses_a_step_that_check_passes(tmp_path: Path, capsys: pytest.CaptureFixture[str], model: str) -> None:
-    path = EXO_XML if model == "exo" else T1
-    if not path.is_file():
-        pytest.skip("../shared/robots/booster_t1 (Booster T1) is not beside the repository")
-    spec = tmp_path / f"{model}.toml"
-    code, out, err = run(capsys, "robot", "init", path, "-o", spec)
-    assert code == 0 and "walking the default gait" in err
+def test_init_chooses_a_step_that_check_passes(tmp_path: Path, capsys: pytest.CaptureFixture[str], model: str,
+                                               request: pytest.FixtureRequest) -> None:
+    if model == "exo":
+        spec = tmp_path / "exo.toml"
+        code, out, err = run(capsys, "robot", "init", EXO_XML, "-o", spec)
+        assert code == 0 and "walking the default gait" in err
+    else:  # the spec the session's T1 fixture made with the same command (tests/conftest.py)
+        spec = request.getfixturevalue("t1_spec")
     raw = tomllib.loads(spec.read_text())
     assert raw["sim"]["stable_pd"] is True and raw["sim"]["timestep"] in CANDIDATES
     assert raw["sim"]["timestep"] <= 0.002  # exo's flat gait passes at 2 ms, T1's at 1 ms (docs/robots.md)

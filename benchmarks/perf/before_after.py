@@ -196,12 +196,16 @@ def main() -> None:
                     default=str(REPO / "benchmarks" / "experiments" / "predictors" / "data" / "exo.jsonl"))
     ap.add_argument("--limit", type=int, default=10)
     ap.add_argument("--out", default="", help="append each run as a JSON line")
+    ap.add_argument("--sides", default="before,after",
+                    help="which sides to run (one side alone: its figures, no ratio — the other's from an earlier "
+                         "run of the same day and machine, with its --out line)")
     args = ap.parse_args()
     commit = git_commit()
     before = git_commit(Path(args.before).parent)
     print(f"# before_after {time.strftime('%Y-%m-%d %H:%M')}: after = {commit}, before = {before}; "
           f"load {os.getloadavg()[0]:.1f}", flush=True)
-    sides = {"before": args.before, "after": str(REPO / "src")}
+    sides = {k: v for k, v in {"before": args.before, "after": str(REPO / "src")}.items()
+             if k in args.sides.split(",")}
     cases = args.cases.split(",")
     with tempfile.TemporaryDirectory(prefix="bench_before_after_") as d:
         tmp = Path(d)
@@ -210,7 +214,7 @@ def main() -> None:
             if case == "certify-gaits":
                 certify_gaits(args, sides, tmp)
                 continue
-            rows: dict[str, list[dict[str, Any]]] = {"before": [], "after": []}
+            rows: dict[str, list[dict[str, Any]]] = {side: [] for side in sides}
             sticks: list[float] = []
             for _ in range(args.repeat):
                 sticks.append(yardstick_cpu(sides["after"]))
@@ -229,6 +233,8 @@ def main() -> None:
                 med[side] = statistics.median(secs)
                 print(f"{case} {side}: {med[side]:.1f} s median ({min(secs):.1f}–{max(secs):.1f}, {len(secs)} runs)"
                       f"{describe(rs[0], stick)}", flush=True)
+            if len(rows) < 2:
+                continue
             ratio = med["after"] / med["before"]
             work = ""
             a, b = rows["after"][0], rows["before"][0]
