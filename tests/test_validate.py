@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -359,3 +360,20 @@ def test_every_kind_runs_on_a_multicontact_gait(mc_validator):
     for kind in ("mass", "latency", "noise", "terrain", "slope"):
         s = mc_validator.run(kind).summary()
         assert s["trials"] == 4 and 0 <= s["success"]["k"] <= 4
+
+
+def test_terrain_replaces_the_floor_the_loader_resolved(tmp_path):
+    """The terrain replaces the robot's floor as loaded — here the plane ``add_floor`` adds — not only a floor the
+    spec names (``floor_geom``)."""
+    exo_xml = Path(dist.__file__).parents[1] / "robots" / "exo" / "exo.xml"
+    mjs = mujoco.MjSpec.from_file(str(exo_xml))
+    mjs.delete(mjs.geom("floor"))
+    (tmp_path / "exo.xml").write_text(mjs.to_xml())
+    text = exo_xml.with_name("spec.toml").read_text()
+    assert 'floor_geom = "floor"' in text
+    (tmp_path / "spec.toml").write_text(text.replace('floor_geom = "floor"', "add_floor = true"))
+    robot = load_robot(tmp_path / "spec.toml")
+    assert robot.spec.floor_geom is None
+    m = dist.terrain_model(robot, dist.TerrainLayout(x0=-1.0, rough_from=0.3, y0=-1.0, tile=0.5, nx=2, ny=4))
+    assert m.geom_type[m.geom(robot.floor_name).id] == mujoco.mjtGeom.mjGEOM_BOX
+    assert m.geom("robustgait_tile_1_3").id > 0

@@ -218,14 +218,14 @@ def terrain_spec(robot: Robot, layout: TerrainLayout) -> mujoco.MjSpec:
     the floor geom, so sole–ground contacts are footfalls and any other ground contact is a fall, as on the
     flat floor."""
     mjs = physics_spec(robot)
-    floor = next(g for g in mjs.geoms if g.name == robot.spec.floor_geom)
+    floor = next(g for g in mjs.geoms if g.name == robot.floor_name)
     t = TILE_HALF_THICKNESS
     flat_half = (layout.rough_from - layout.x0) / 2
     floor.type = mujoco.mjtGeom.mjGEOM_BOX
     floor.size = [flat_half, layout.ny * layout.tile / 2, t]
     floor.pos = [layout.x0 + flat_half, layout.y0 + layout.ny * layout.tile / 2, -t]
     floor.quat = [1, 0, 0, 0]
-    pairs = [p for p in mjs.pairs if robot.spec.floor_geom in (p.geomname1, p.geomname2)]
+    pairs = [p for p in mjs.pairs if robot.floor_name in (p.geomname1, p.geomname2)]
     for i in range(layout.nx):
         for j in range(layout.ny):
             name = _tile_name(i, j)
@@ -237,7 +237,7 @@ def terrain_spec(robot: Robot, layout: TerrainLayout) -> mujoco.MjSpec:
                 margin=floor.margin, gap=floor.gap, group=floor.group, rgba=[0.7, 0.7, 0.75, 1.0])
             assert tile is not None
             for p in pairs:
-                other = p.geomname2 if p.geomname1 == robot.spec.floor_geom else p.geomname1
+                other = p.geomname2 if p.geomname1 == robot.floor_name else p.geomname1
                 mjs.add_pair(geomname1=other, geomname2=name, condim=p.condim, friction=p.friction,
                              solref=p.solref, solimp=p.solimp, solreffriction=p.solreffriction, margin=p.margin,
                              gap=p.gap)
