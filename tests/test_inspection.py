@@ -684,10 +684,6 @@ BAD_MODELS = {
     "no free joint": (lambda: biped_xml(freejoint=False, keyframe=False), "no free joint"),
     "one leg": (lambda: biped_xml(legs=("left",)), "one leg"),
     "no collision geom": (lambda: biped_xml(collide=False), "no sole found"),
-    # contacts only by <pair> (Apptronik Apollo's scene): said, not silently refused
-    "pair contacts": (lambda: biped_xml(collide=False).replace("</mujoco>", '<contact><pair geom1="left_sole" '
-                      'geom2="ground"/><pair geom1="right_sole" geom2="ground"/></contact></mujoco>'),
-                      "its 2 <pair> contacts are not read"),
     "no foot geom": (lambda: biped_xml(foot="none"), "no area to stand on"),
     "ellipsoid sole": (lambda: biped_xml(foot="ellipsoid"), "is an ellipsoid, whose contact patch robustgait "
                        "cannot bound: make it a box or a mesh"),

@@ -6,6 +6,9 @@ and each joint's range and torque limit with where it came from.
   height within ``foot_level`` of the standing height (else the robot has one leg). A leg is the chain of joints
   from the body where the two feet's chains branch (the base, or a waist below it) down to its foot; left is
   y > 0 in the base frame.
+* **Collision geoms.** Those MuJoCo may make contacts with: contype or conaffinity ≠ 0, or named by an explicit
+  ``<pair>`` (:func:`robustgait.robots.soles.collides`): the soles of a model whose contacts are all pairs are the
+  foot geoms paired with the floor.
 * **Soles.** A foot's collision geoms whose lowest points lie within ``sole_tolerance`` of the foot's lowest
   point: one box (its bottom face is the sole), or a set of spheres, capsules, cylinders, boxes and meshes of that
   body (the loader spans a virtual sole box over where they meet the ground: a mesh's convex hull on its tread).
@@ -128,10 +131,9 @@ def find_feet(robot: RobotModel, d: mujoco.MjData, foot_level: float) -> tuple[i
     src = robot.path
     low = _lowest_bodies(robot, d)
     if not low:
-        pairs = f"; its {robot.model.npair} <pair> contacts are not read" if robot.model.npair else ""
         raise input_error(src, f"no sole found: no geom of the robot below '{robot.base_name}' takes part in "
-                          f"contacts (every contype and conaffinity is 0{pairs}): give the soles' geoms contype and "
-                          "conaffinity")
+                          "contacts (every contype and conaffinity is 0 and no <pair> names one): give the soles' "
+                          "geoms contype and conaffinity, or pair them with the floor")
     a = min(low, key=low.__getitem__)
     ya = float(d.xpos[a][1])
     name_a = robot.body_name(a) or f"#{a}"
@@ -257,11 +259,6 @@ def find_floor(robot: RobotModel) -> Floor:
                           "(and only it) so that robot init can tell which one is the floor")
     g = named[0] if len(planes) > 1 else planes[0]
     return Floor(robot.geom_name(g) or None, False, float(d.geom_xpos[g][2]))
-
-
-def collides(m: mujoco.MjModel, g1: int, g2: int) -> bool:
-    """MuJoCo's contact filter of two geoms: contype of one & conaffinity of the other."""
-    return bool((m.geom_contype[g1] & m.geom_conaffinity[g2]) or (m.geom_contype[g2] & m.geom_conaffinity[g1]))
 
 
 def _one_foot_body(robot: RobotModel, d: mujoco.MjData, leg: Leg, top: int, tol: float) -> None:

@@ -26,7 +26,6 @@ from robustgait.inspection.discover import (
     Floor,
     Legs,
     TorqueLimit,
-    collides,
     find_floor,
     find_legs,
     footprint_points,
@@ -47,7 +46,7 @@ from robustgait.inspection.mirror import Mirror, Residual, find_mirror, fk_resid
 from robustgait.inspection.model import RobotModel, clip_to_range, open_model
 from robustgait.inspection.scale import RobotSize, Scaled, scale
 from robustgait.robots.model import mass_matrix
-from robustgait.robots.soles import sole_slopes
+from robustgait.robots.soles import can_touch, sole_slopes
 
 if TYPE_CHECKING:
     from robustgait.inspection.timestep import TimestepChoice
@@ -120,16 +119,18 @@ def _check_sides(robot: RobotModel, legs: Legs, mirror: Mirror) -> None:
 
 
 def _floor_collides(robot: RobotModel, floor: Floor, legs: Legs) -> None:
-    """Refuse a floor plane that no sole geom can touch (MuJoCo's contype/conaffinity filter)."""
+    """Refuse a floor plane that no sole geom can touch (an explicit pair of the two, or MuJoCo's contype/conaffinity
+    filter: :func:`robustgait.robots.soles.can_touch`)."""
     if floor.add:
         return
     m = robot.model
     g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, floor.name) if floor.name else next(
         g for g in robot.body_geoms(0) if int(m.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_PLANE))
     for side in SIDES:
-        if not any(collides(m, g, s) for s in legs[side].sole.geoms):
+        if not any(can_touch(m, g, s) for s in legs[side].sole.geoms):
             raise input_error(robot.path, f"the floor '{floor.name or 'unnamed plane'}' does not collide with the "
-                              f"{side} sole's geoms (contype/conaffinity): the robot would fall through it")
+                              f"{side} sole's geoms (contype/conaffinity, or a <pair>): the robot would fall "
+                              "through it")
 
 
 def symmetric_angles(robot: RobotModel, mirror: Mirror) -> tuple[dict[int, float], float]:

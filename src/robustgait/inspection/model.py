@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from robustgait.errors import input_error
 from robustgait.io.robotfile import ModelKind, read_model
-from robustgait.robots.soles import hull_vertices
+from robustgait.robots.soles import collides, hull_vertices
 
 FREE = int(mujoco.mjtJoint.mjJNT_FREE)
 HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
@@ -105,8 +105,9 @@ class RobotModel:
         return list(range(int(m.body_geomadr[body]), int(m.body_geomadr[body] + m.body_geomnum[body])))
 
     def is_collision(self, g: int) -> bool:
-        """A geom that takes part in contacts (contype or conaffinity ≠ 0)."""
-        return bool(self.model.geom_contype[g] or self.model.geom_conaffinity[g])
+        """A geom that takes part in contacts: contype or conaffinity ≠ 0, or named by a ``<pair>``
+        (:func:`robustgait.robots.soles.collides`)."""
+        return collides(self.model, g)
 
 
 def joint_range(m: mujoco.MjModel, j: int) -> tuple[float, float] | None:

@@ -8,7 +8,8 @@ Compiling replaces the MJCF's actuators and sensors by ours:
   are folded into ``ctrl`` by the controller (see :mod:`robustgait.sim.controller`), so a step's controls
   are one time series shared by every sample — what lets :func:`mujoco.rollout` run batches.
 * three contact sensors (count of contacts found): left sole–floor, right sole–floor, floor–anything.
-  ``anything − left − right > 0`` is a non-foot ground contact, i.e. a fall.
+  ``anything − left − right > 0`` is a non-foot ground contact, i.e. a fall. MuJoCo's contact sensor reads the
+  contacts found, whether its contype/conaffinity filter or an explicit ``<pair>`` made them.
 
 The MJCF is read by :mod:`robustgait.io.robotfile` (``load_robot``), which hands the parsed
 :class:`mujoco.MjSpec` to :class:`Robot`.

@@ -11,6 +11,10 @@ sole (the mesh-only feet of some Menagerie robots) is one such set: MuJoCo colli
 so it stands on the hull's vertices at the bottom of the foot (its tread), not on its bounding box.
 
 :func:`resolve_floor` finds the world's plane (naming it if unnamed) or adds one (``add_floor``).
+
+A geom takes part in contacts as MuJoCo reads the model (:func:`collides`): by its contype/conaffinity, or because an
+explicit ``<contact><pair>`` names it. A model whose contacts are all pairs (contype = conaffinity = 0 everywhere)
+stands on the foot geoms paired with its floor; its pairs stay as they are and keep their own contact parameters.
 """
 
 from __future__ import annotations
@@ -64,8 +68,37 @@ class ResolvedSole:
     virtual: bool
 
 
-def _colliding(g: mujoco.MjsGeom) -> bool:
-    return bool(g.contype or g.conaffinity)
+def collides(model: mujoco.MjModel, g: int) -> bool:
+    """Whether geom ``g`` of ``model`` takes part in contacts, as MuJoCo reads the model: its contype or conaffinity
+    is not 0 (MuJoCo's filter may pair it with another geom), or an explicit contact pair (``<contact><pair>``) names
+    it — pairs bypass the filter, so a model whose geoms all have contype = conaffinity = 0 (Apptronik Apollo's) may
+    touch its floor through pairs alone. Whether it may touch one given geom: :func:`can_touch`; the same rule on a
+    parsed spec: :func:`spec_collides`."""
+    paired = bool(np.any(model.pair_geom1 == g) or np.any(model.pair_geom2 == g))
+    return paired or bool(model.geom_contype[g] or model.geom_conaffinity[g])
+
+
+def can_touch(model: mujoco.MjModel, g1: int, g2: int) -> bool:
+    """Whether MuJoCo may make contacts between geoms ``g1`` and ``g2`` of ``model``: an explicit pair names the two,
+    or its filter lets them (the contype of one shares a bit with the conaffinity of the other). The filter's other
+    exclusions (geoms of one body or of a parent and child, ``<exclude>``) are not read: the callers ask about a
+    robot's geom and the world's floor."""
+    for a, b in zip(model.pair_geom1, model.pair_geom2, strict=True):
+        if {int(a), int(b)} == {g1, g2}:
+            return True
+    return bool((model.geom_contype[g1] & model.geom_conaffinity[g2])
+                or (model.geom_contype[g2] & model.geom_conaffinity[g1]))
+
+
+def paired_names(mjs: mujoco.MjSpec) -> frozenset[str]:
+    """The names of the geoms the explicit contact pairs of the parsed ``mjs`` name (a pair names its geoms)."""
+    return frozenset(name for p in mjs.pairs for name in (p.geomname1, p.geomname2))
+
+
+def spec_collides(g: mujoco.MjsGeom, paired: frozenset[str]) -> bool:
+    """:func:`collides` read on a parsed spec's geom ``g``: its contype or conaffinity, or its name among ``paired``
+    (:func:`paired_names` of its spec) — for edits made before compiling (a compiled model's ids are not a spec's)."""
+    return bool(g.contype or g.conaffinity) or (bool(g.name) and g.name in paired)
 
 
 def _sole_geoms(mjs: mujoco.MjSpec, model: mujoco.MjModel, leg: LegSpec, side: str,
@@ -83,7 +116,7 @@ def _sole_geoms(mjs: mujoco.MjSpec, model: mujoco.MjModel, leg: LegSpec, side: s
         body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, leg.sole_body)
         if body < 0:
             raise input_error(src, f"unknown body name '{leg.sole_body}' for the {side} sole")
-        specs = [g for g in mjs.geoms if g.parent.name == leg.sole_body and _colliding(g)
+        specs = [g for g in mjs.geoms if g.parent.name == leg.sole_body and collides(model, int(g.id))
                  and (leg.sole_class is None or g.classname.name == leg.sole_class)]
         ids = [int(g.id) for g in specs]
         if not ids:
@@ -290,8 +323,9 @@ def resolve_sole(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel, sid
 
 def resolve_floor(spec: RobotSpec, mjs: mujoco.MjSpec, soles: list[mujoco.MjsGeom]) -> str:
     """The floor geom's name in ``mjs`` (edited in place): the spec's ``floor_geom``; or with ``add_floor`` a plane
-    :data:`ADDED_FLOOR` added to the world body, colliding with the soles' geoms (their contype/conaffinity bits); or
-    the world body's only plane, named :data:`ADDED_FLOOR` if unnamed. ``soles``: the real sole geoms."""
+    :data:`ADDED_FLOOR` added to the world body, colliding with the soles' geoms (their contype/conaffinity bits; soles
+    that touch only through ``<pair>`` elements are an input error: no pair names the added plane); or the world
+    body's only plane, named :data:`ADDED_FLOOR` if unnamed. ``soles``: the real sole geoms."""
     src = spec.source or spec.mjcf
     planes = [g for g in mjs.worldbody.geoms if g.type == mujoco.mjtGeom.mjGEOM_PLANE]
     if spec.add_floor:
@@ -303,6 +337,9 @@ def resolve_floor(spec: RobotSpec, mjs: mujoco.MjSpec, soles: list[mujoco.MjsGeo
         for g in soles:
             contype |= int(g.conaffinity)
             conaffinity |= int(g.contype)
+        if soles and not contype | conaffinity:  # no pair can name a floor the MJCF does not have
+            raise input_error(src, "add_floor: the soles' geoms touch only what a <pair> names (contype = conaffinity "
+                              "= 0): add the floor plane and its pairs with the soles to the MJCF")
         mjs.worldbody.add_geom(name=ADDED_FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
                                contype=contype or 1, conaffinity=conaffinity or 1, rgba=[0.8, 0.8, 0.8, 1])
         return ADDED_FLOOR

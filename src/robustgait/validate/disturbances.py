@@ -27,8 +27,10 @@ How each kind reaches MuJoCo (:class:`robustgait.sim.StepInputs`):
   one) is evaluated at the noisy joint state.
 * ``terrain``: the ground becomes boxes: flat under the start, then square tiles of ``terrain_tile``
   metres, each with a random height and slope, within ±A (A the trial's amplitude) — step changes between
-  tiles and slopes on them. The contact sensors count contacts with any ground box (the world body), so
-  sole–ground contacts are footfalls and any other ground contact is a fall, as on the flat floor.
+  tiles and slopes on them. Every tile takes the floor's contact properties and its explicit contact pairs (a
+  ``<pair>`` of the floor and a sole becomes one per tile), so the ground touches what the floor touched. The
+  contact sensors count contacts with any ground box (the world body), so sole–ground contacts are footfalls and
+  any other ground contact is a fall, as on the flat floor.
 * ``slope``: smooth ground (no edge) inclined by θ ∈ [0, ``slope_max``] whose downhill direction makes the angle
   φ with the heading of the fixed point (φ = 0: downhill ahead; π: uphill; ±π/2: sideways). Simulated exactly as
   a rigid rotation of the world: the floor stays the plane z = 0 and gravity is tilted by θ towards the downhill
@@ -51,6 +53,7 @@ from robustgait.config import KINDS, ValidateConfig
 from robustgait.errors import RobustGaitError
 from robustgait.robots import Robot
 from robustgait.robots.model import CONTACT_SENSORS
+from robustgait.robots.soles import paired_names, spec_collides
 from robustgait.sim.trials import wrench_window
 
 # name and unit of the size axis of each kind
@@ -114,10 +117,12 @@ def push_wrench(draws: Draws, duration: float, period: float, dt: float, horizon
 
 def physics_spec(robot: Robot) -> mujoco.MjSpec:
     """The robot's MjSpec without geoms that neither collide nor carry mass (visual meshes): per-trial model
-    copies stay small. The dynamics are unchanged (checked in :func:`physics_model`)."""
+    copies stay small. A geom an explicit contact pair names collides (:func:`robustgait.robots.soles.spec_collides`)
+    and stays, with its pair. The dynamics are unchanged (checked in :func:`physics_model`)."""
     mjs = robot.mjspec()
+    paired = paired_names(mjs)
     for g in list(mjs.geoms):
-        if g.contype == 0 and g.conaffinity == 0:
+        if not spec_collides(g, paired):
             mjs.delete(g)
     for mesh in list(mjs.meshes):
         if not any(g.meshname == mesh.name for g in mjs.geoms):
@@ -132,7 +137,7 @@ def physics_model(robot: Robot, mjs: mujoco.MjSpec | None = None) -> mujoco.MjMo
     for f in ("body_mass", "body_inertia", "body_ipos", "body_iquat"):
         if not np.array_equal(getattr(m, f), getattr(r, f)):
             raise RobustGaitError(f"{robot.name}: removing the visual geoms changed {f}; geoms with "
-                                  "contype = conaffinity = 0 must not carry mass")
+                                  "contype = conaffinity = 0 and in no <pair> must not carry mass")
     return m
 
 
@@ -186,6 +191,8 @@ class TerrainLayout:
 
 
 TILE_HALF_THICKNESS = 0.25
+# an explicit contact pair's own contact parameters (it does not mix its geoms'): a tile's copy of a floor pair has them
+PAIR_FIELDS = ("condim", "friction", "solref", "solimp", "solreffriction", "margin", "gap", "adhesion")
 
 
 def terrain_layout(robot: Robot, qpos: FloatArray, stance: str, config: ValidateConfig,
@@ -238,9 +245,10 @@ def terrain_spec(robot: Robot, layout: TerrainLayout) -> mujoco.MjSpec:
             assert tile is not None
             for p in pairs:
                 other = p.geomname2 if p.geomname1 == robot.floor_name else p.geomname1
-                mjs.add_pair(geomname1=other, geomname2=name, condim=p.condim, friction=p.friction,
-                             solref=p.solref, solimp=p.solimp, solreffriction=p.solreffriction, margin=p.margin,
-                             gap=p.gap)
+                twin = mjs.add_pair(geomname1=other, geomname2=name)
+                for field in PAIR_FIELDS:
+                    if hasattr(p, field):  # adhesion: MuJoCo ≥ 4 only
+                        setattr(twin, field, getattr(p, field))
     for sensor in mjs.sensors:
         if sensor.name == CONTACT_SENSORS[2]:
             sensor.objtype, sensor.objname = mujoco.mjtObj.mjOBJ_BODY, "world"
