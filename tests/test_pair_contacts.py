@@ -125,6 +125,7 @@ def pair_validator(pair_exo: Robot):  # type: ignore[no-untyped-def]
         yield v
 
 
+@pytest.mark.xdist_group("pair_validator")  # one worker computes the shared module fixture
 def test_terrain_tiles_take_the_floor_pairs_and_carry_the_walk(pair_validator, pair_exo: Robot) -> None:
     """The terrain's tiles replace the floor with its pairs: each tile is paired with every geom the floor was, a
     sole standing on a tile is a footfall (its sensor), the pelvis on a tile a ground contact, and a walk over flat
@@ -150,6 +151,7 @@ def test_terrain_tiles_take_the_floor_pairs_and_carry_the_walk(pair_validator, p
     assert res.success.all()
 
 
+@pytest.mark.xdist_group("pair_validator")  # one worker computes the shared module fixture
 def test_a_slope_trial_walks_like_the_floor_on_the_pair_model(pair_validator) -> None:
     """Slopes tilt gravity over the floor and its pairs: 0° walks as the flat floor, 30° falls."""
     z = Draws("push", np.zeros(1), {"direction": np.zeros(1), "phase": np.zeros(1)})
