@@ -68,6 +68,7 @@ def test_the_whole_gain_is_taken_only_where_the_error_grows_and_it_helps(exo, ex
 
 
 @pytest.mark.xdist_group("narrow_gait")  # one worker computes the shared module fixture
+@pytest.mark.slow  # its T1 specs: robot init walks the default gait to choose the timestep (tens of seconds)
 def test_the_growth_probe_measures_the_walk_once_and_leaves_no_trace(t1_narrow, narrow_gait):  # type: ignore[no-untyped-def]
     """The narrow T1's ankle holds a lateral error (it grows ×1.1 a step without foot placement, under the limit of
     2): κ stays the sole's share. The probe runs once per gait in a process, and its steps are not counted as the
@@ -86,6 +87,7 @@ def test_the_growth_probe_measures_the_walk_once_and_leaves_no_trace(t1_narrow, 
     assert given is not None and given.growth is None and given.share == 0.5
 
 
+@pytest.mark.slow  # its T1 specs: robot init walks the default gait to choose the timestep (tens of seconds)
 def test_robots_with_wide_soles_run_without_it_bit_for_bit(exo, exo_gait, exo_mc_gait, t1):  # type: ignore[no-untyped-def]
     """auto leaves exo and T1 alone: no regulator object, the engine's code path is the one without it, and a walk
     with mode = off is the same walk to the last bit."""
@@ -166,12 +168,14 @@ def test_the_feedback_engine_refuses_it_in_one_line(exo, exo_gait):  # type: ign
     assert "\n" not in str(e.value)
 
 
+@pytest.mark.slow  # its T1 specs: robot init walks the default gait to choose the timestep (tens of seconds)
 def test_robot_init_says_whether_it_is_on(t1_narrow, t1):  # type: ignore[no-untyped-def]
     assert t1_narrow.scale.sole_half_width * 2 == pytest.approx(0.03)
     assert regulator_rule(RegulatorConfig(), 0.03, t1_narrow.leg_length, 1)[0]
     assert not regulator_rule(RegulatorConfig(), 2 * t1.scale.sole_half_width, t1.leg_length, 1)[0]
 
 
+@pytest.mark.slow  # its T1 specs: robot init walks the default gait to choose the timestep (tens of seconds)
 def test_a_tipping_sole_under_part_of_the_gain_is_told_to_try_all_of_it(t1_narrow, t1, exo_gait):  # type: ignore[no-untyped-def]
     """The walk check's advice: a narrow sole that tipped under the share κ its width gives (0.22 on the narrow T1) is
     told to try the H-LIP's whole gain; with κ = 1 already, or a wide sole (the regulator off), it is not."""
