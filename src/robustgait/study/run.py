@@ -165,9 +165,9 @@ def create_study(directory: str | Path, robot: str, config: Config | None = None
     setup = StudySetup(robot_reference(robot), replace(config, study=study))
     loaded = load_robot(setup.robot)
     space = setup.action_space(loaded)
-    if max(study.batch, study.batch_size(0)) > space.size:
-        raise RobustGaitError(f"a batch of {max(study.batch, study.batch_size(0))} gaits does not fit in an action "
-                              f"space of {space.size}")
+    largest = max(study.batch, study.batch_size(0))
+    if largest > space.size:
+        raise RobustGaitError(f"a batch of {largest} gaits does not fit in an action space of {space.size}")
     check_evaluation_work(setup.config, loaded, space)
     requirements(study, space.names)  # a requirement on a figure that is not recorded: refused now
     d.mkdir(parents=True, exist_ok=True)
@@ -229,8 +229,7 @@ class StudyRunner:
         self._own_executor = executor is None
         self.reqs: list[Requirement] = requirements(self.config, self.space.names)
         self.asker = asker
-        self.floor = 0.0
-        self.floor_pending = False  # the reference evaluation that sets the floor is running
+        self.floor = 0.0  # a person study's floor; ∞ while its reference evaluation runs (floor_pending)
         self.ahead: Ahead | None = None  # evaluations ahead of a person's answer
         self.verifier = Verifier(self.directory, self.space, self.executor)
 
@@ -292,14 +291,20 @@ class StudyRunner:
             self.floor = float(rec["value"])
             return
         self.executor().submit(REFERENCE_KEY, self.setup.config.params.to_dict(), verify_above=0.0)
-        self.floor, self.floor_pending = math.inf, True
+        self.floor = math.inf
 
     def _set_floor(self, store: StudyStore, result: dict[str, Any]) -> None:
         """Store the floor from the reference evaluation ``result`` (the default gait's verified certificate)."""
         reference = {k: v for k, v in result.items() if k not in ("gait", "certificate")}
         rec = floor_record(self.setup.config, reference)
         store.study.set_user_attr(FLOOR_ATTR, rec)
-        self.floor, self.floor_pending = float(rec["value"]), False
+        self.floor = float(rec["value"])
+
+    @property
+    def floor_pending(self) -> bool:
+        """The reference evaluation that sets the floor is running: the floor is ∞ until it ends, so that no gait
+        may be shown yet."""
+        return math.isinf(self.floor)
 
     def _ask(self, store: StudyStore, k: int) -> None:
         """Iteration k's answer: stored already (a resumed study), none needed (no gait above the floor), a simulated
