@@ -5,6 +5,7 @@ default ``robustgait gait generate --robot exo`` gait), and the Atalante model a
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 # MuJoCo picks its GL backend once, at import: make offscreen rendering headless before any test imports it.
@@ -71,22 +72,45 @@ def flat_robot_gait(request):  # type: ignore[no-untyped-def]
     return request.getfixturevalue("atalante"), request.getfixturevalue("atalante_gait")
 
 
-def shared_spec(tmp_path_factory, name: str, make) -> Path:  # type: ignore[no-untyped-def]
-    """A spec made once per test run and shared by the pytest-xdist workers (each worker has a session of its own,
-    and ``robot init`` walks the default gait: tens of seconds): the first worker to ask makes it, under a file lock
-    in the run's common temporary directory, with ``make(directory, spec_path)``; the others read it."""
+def shared_dir(tmp_path_factory, name: str, make) -> Path:  # type: ignore[no-untyped-def]
+    """A directory made once per test run and shared by the pytest-xdist workers (each worker has a session of its
+    own, and what is shared takes tens of seconds to make: ``robot init`` walks the default gait, a study runs): the
+    first worker to ask makes it, under a file lock in the run's common temporary directory, with ``make(directory)``
+    into a directory of its own that is renamed into place when complete; the others read it. Tests that write into
+    it copy it first."""
     from filelock import FileLock
 
     root = tmp_path_factory.getbasetemp()
     if os.environ.get("PYTEST_XDIST_WORKER"):
         root = root.parent  # pytest-N/popen-gwK → pytest-N, common to this run's workers
     d = root / f"shared_{name}"
-    spec = d / f"{name}.toml"
     with FileLock(str(root / f"shared_{name}.lock")):
-        if not spec.is_file():
-            d.mkdir(exist_ok=True)
-            make(d, spec)
-    return spec
+        if not d.is_dir():
+            part = root / f"shared_{name}.part"
+            shutil.rmtree(part, ignore_errors=True)
+            part.mkdir()
+            make(part)
+            part.rename(d)  # a failed make leaves no directory that looks complete
+    return d
+
+
+def shared_spec(tmp_path_factory, name: str, make) -> Path:  # type: ignore[no-untyped-def]
+    """A spec made once per test run (:func:`shared_dir`) with ``make(directory, spec_path)``."""
+    return shared_dir(tmp_path_factory, name, lambda d: make(d, d / f"{name}.toml")) / f"{name}.toml"
+
+
+@pytest.fixture(scope="session")
+def tiny_study(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """The tiny exo study (``tests.test_study.CLI_TINY``: 2 iterations × 3 gaits) run uninterrupted by ``study run``
+    with 2 local workers, once per test run: the reference that resumed, Ray and validated runs are compared with.
+    Read it in place; copy it before writing into it (a report, a validation)."""
+    from tests.test_study import CLI_TINY, cli
+
+    def make(d: Path) -> None:
+        res = cli("study", "run", str(d / "study"), *CLI_TINY, "--workers", "2", "--quiet")
+        assert res.returncode == 0, res.stderr
+
+    return shared_dir(tmp_path_factory, "tiny_study", make) / "study"
 
 
 @pytest.fixture(scope="session")
@@ -180,3 +204,14 @@ def standing_gait(robot, *, extras: bool = False):  # type: ignore[no-untyped-de
                 pre_impact_state=state if extras else None, params=GaitParams().resolved("flat") if extras else None,
                 solver={"status": "none", "iterations": 0} if extras else None,
                 meta={"source": "test", "tags": ["standing", 1.5, None, True]} if extras else {})
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Modules with the most ``slow`` tests first, each module's tests in their own order: pytest-xdist hands tests
+    out in collection order, so the long ones start early and the short ones fill the gaps at the end instead of
+    one worker finishing a long test alone. A module's tests stay together, so its module fixtures are made once."""
+    slow: dict[str, int] = {}
+    for item in items:
+        slow[item.module.__name__ if item.module else ""] = slow.get(item.module.__name__ if item.module else "", 0) \
+            + (item.get_closest_marker("slow") is not None)
+    items.sort(key=lambda item: -slow[item.module.__name__ if item.module else ""])

@@ -415,10 +415,11 @@ def test_multicontact_study_is_created_on_its_own_action_space(tmp_path):
 
 @pytest.mark.slow
 def test_multicontact_study_runs(tmp_path):
-    """One batch of two multi-contact gaits, generated, walked and certified (≈ 2 min: two 40 s builds)."""
+    """One batch of two multi-contact gaits, generated, walked and certified on one worker (one build of the 2-domain
+    problem, the slowest part)."""
     d = tmp_path / "mc"
     res = cli("study", "run", str(d), "--robot", "exo", "--domains", "multicontact", "--iterations", "1", "--batch",
-              "2", "--method", "uniform", "--samples", "10", "--steps", "5", "--workers", "2", "--quiet")
+              "2", "--method", "uniform", "--samples", "10", "--steps", "5", "--workers", "1", "--quiet")
     assert res.returncode == 0, res.stderr
     st = json.loads(cli("study", "status", str(d), "--json").stdout)
     assert st["trials_done"] == 2
@@ -486,15 +487,6 @@ def comparable(directory: Path) -> dict:  # type: ignore[type-arg]
     }
 
 
-@pytest.fixture(scope="module")
-def reference_study(tmp_path_factory):
-    """An uninterrupted run of the tiny study with 2 local workers."""
-    d = tmp_path_factory.mktemp("ref") / "study"
-    res = cli("study", "run", str(d), *CLI_TINY, "--workers", "2", "--quiet")
-    assert res.returncode == 0, res.stderr
-    return d
-
-
 def _completed(db: Path) -> int:
     try:
         with sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=5) as con:
@@ -503,14 +495,13 @@ def _completed(db: Path) -> int:
         return 0
 
 
-@pytest.mark.xdist_group("reference_study")  # one worker computes the shared module fixture
 @pytest.mark.slow
-def test_status_reports_the_machine_use_of_a_run(reference_study):
+def test_status_reports_the_machine_use_of_a_run(tiny_study):
     """Each evaluation records its worker's CPU time; `study status` divides their sum by the busy wall time and the
     cores. An evaluation's CPU time is measured inside its trial's interval, so the share cannot exceed 1; how close
     to 1 it gets depends on what else the machine runs (another test process here), which this test does not
     assert."""
-    st = study_status(reference_study)
+    st = study_status(tiny_study)
     use = st["utilisation"]
     assert use is not None and use["cores"] == (os.cpu_count() or 1)
     done = [t for t in st["trials"] if t["state"] == "COMPLETE" and t["reused_from"] is None]
@@ -518,13 +509,12 @@ def test_status_reports_the_machine_use_of_a_run(reference_study):
     # busy time covers the longest evaluation and at most the evaluations one after another
     assert max(t["seconds"]["total"] for t in done) <= use["busy_seconds"] + 1.0
     assert 0.0 < use["cpu_seconds"] and 0.0 < use["share"] <= 1.0 + 1e-6
-    out = cli("study", "status", str(reference_study))
+    out = cli("study", "status", str(tiny_study))
     assert out.returncode == 0 and "machine use: " in out.stdout
 
 
-@pytest.mark.xdist_group("reference_study")  # one worker computes the shared module fixture
 @pytest.mark.slow
-def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path, reference_study):
+def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path, tiny_study):
     """kill -9 of `study run` (1 worker) after its first completed trial; `study resume` finishes it: every
     trial exactly once, and the same gaits, outcomes, comparisons and best as the 2-worker reference."""
     d = tmp_path / "study"
@@ -552,9 +542,9 @@ def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path, reference_stud
     failed = [t for t in st["trials"] if t["state"] == "FAIL"]
     retried = {t["retry_of"] for t in st["trials"] if t["retry_of"] is not None}
     assert {t["number"] for t in failed} == retried  # every interrupted trial was re-run
-    assert comparable(d) == comparable(reference_study)
+    assert comparable(d) == comparable(tiny_study)
     again = cli("study", "resume", str(d), "--quiet")  # a finished study: nothing to do, nothing changes
-    assert again.returncode == 0 and comparable(d) == comparable(reference_study)
+    assert again.returncode == 0 and comparable(d) == comparable(tiny_study)
 
 
 @pytest.mark.slow  # rendering: keeps plain pytest ≤ 60 s; CI runs it
@@ -585,10 +575,11 @@ def test_report_video_is_what_the_configuration_says(tmp_path, exo, exo_gait):
         pytest.approx(2 * exo_gait.params.step_duration * 10, abs=1.5)  # steps given: the configuration's overridden
 
 
-@pytest.mark.xdist_group("reference_study")  # one worker computes the shared module fixture
 @pytest.mark.slow
-def test_status_report_and_compare(tmp_path, reference_study):
-    res = cli("study", "status", str(reference_study), "--json")
+def test_status_report_and_compare(tmp_path, tiny_study):
+    study = tmp_path / "study"  # the report is written into the study: a copy of the shared one
+    shutil.copytree(tiny_study, study)
+    res = cli("study", "status", str(study), "--json")
     st = json.loads(res.stdout)
     assert st["trials_done"] == st["trials_planned"] == 6 and st["state"] == "complete"
     assert set(st["best"]) >= {"params", "certificate_value", "steps_taken", "gait_file"}
@@ -598,23 +589,23 @@ def test_status_report_and_compare(tmp_path, reference_study):
     assert walked and all(t["comfort"]["steps"] == 3 and t["comfort"]["speed"] > 0 for t in walked)
     assert st["best"]["comfort"] is not None and st["best"]["comfort"]["cost_of_transport"] > 0
     best = st["best"]
-    assert best["steps_taken"] == 5 and (reference_study / best["gait_file"]).is_file()
+    assert best["steps_taken"] == 5 and (study / best["gait_file"]).is_file()
     observed = max(t["score"] for t in st["trials"])
     assert best["score"] <= observed
-    text = cli("study", "status", str(reference_study))
+    text = cli("study", "status", str(study))
     assert text.returncode == 0 and "best gait" in text.stdout
     assert st["environment_changes"] == [] and "other library versions" not in text.stdout
     moved = tmp_path / "moved"  # the same study opened on another install: the status says which versions differ
-    shutil.copytree(reference_study, moved)
+    shutil.copytree(study, moved)
     raw = json.loads((moved / "study.json").read_text())
     raw["environment"]["botorch"] = "0.0.1"
     (moved / "study.json").write_text(json.dumps(raw))
     text = cli("study", "status", str(moved))
     assert text.returncode == 0 and "created with other library versions (botorch 0.0.1 → " in text.stdout
-    again = cli("study", "run", str(reference_study), *CLI_TINY)
+    again = cli("study", "run", str(study), *CLI_TINY)
     assert again.returncode == 2 and "study resume" in again.stderr
 
-    rep = cli("study", "report", str(reference_study), "--no-video")
+    rep = cli("study", "report", str(study), "--no-video")
     html = Path(rep.stdout.strip())
     assert rep.returncode == 0, rep.stderr
     page = html.read_text()
@@ -623,7 +614,7 @@ def test_status_report_and_compare(tmp_path, reference_study):
     for png in ("history.png", "explored.png", "posterior.png", "comfort.png"):
         assert (html.parent / png).stat().st_size > 10_000
 
-    cmp = cli("study", "compare", str(reference_study), str(reference_study), "--seeds", "2", "--samples", "10",
+    cmp = cli("study", "compare", str(study), str(study), "--seeds", "2", "--samples", "10",
               "--json")
     out = json.loads(cmp.stdout)
     a, b = out["studies"]
@@ -631,13 +622,12 @@ def test_status_report_and_compare(tmp_path, reference_study):
     assert a["steps_taken"] == 5 and len(a["certificates"]) == 2
     # the text names the estimator in its own words: the reference study certifies with the uniform estimator
     assert out["method"] == "uniform"
-    txt = cli("study", "compare", str(reference_study), str(reference_study), "--seeds", "1", "--samples", "10")
+    txt = cli("study", "compare", str(study), str(study), "--seeds", "1", "--samples", "10")
     assert txt.returncode == 0 and "(uniform, N = 10)" in txt.stdout.splitlines()[0]
 
 
-@pytest.mark.xdist_group("reference_study")  # one worker computes the shared module fixture
 @pytest.mark.slow
-def test_ray_worker_killed_mid_task_is_retried(tmp_path, reference_study):
+def test_ray_worker_killed_mid_task_is_retried(tmp_path, tiny_study):
     """A Ray actor killed while it evaluates a gait: Ray restarts it and re-runs the task; the study
     completes with the reference results."""
     ray = pytest.importorskip("ray")
@@ -674,7 +664,7 @@ def test_ray_worker_killed_mid_task_is_retried(tmp_path, reference_study):
         ray.shutdown()
     st = study_status(d)
     assert st["state"] == "complete" and st["trials_done"] == 6
-    assert comparable(d) == comparable(reference_study)
+    assert comparable(d) == comparable(tiny_study)
 
 
 def test_the_progress_bar_and_status_say_a_refused_gait_is_refused():

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -29,7 +30,7 @@ from robustgait.study.run import StudyRunner, create_study, open_store
 from robustgait.study.validate import RUNS_DIR, VALIDATION_DIR, config_key, validate_study
 from robustgait.validate import spearman
 from tests.conftest import EXO_GAIT, EXO_MC_GAIT
-from tests.test_study import CLI_TINY, TINY, cli
+from tests.test_study import TINY, cli
 
 SMALL = ValidateConfig(trials=8, steps_after=3)
 CAP = TINY.sim.step_cap
@@ -244,8 +245,6 @@ def test_another_state_certifies_every_gait_again(small_study, first_run, capsys
 @pytest.mark.xdist_group("small_study")  # one worker computes the shared module fixture
 @pytest.mark.slow  # rendering / a second map: keeps plain pytest ≤ 60 s; CI runs it
 def test_report_with_and_without_validation(small_study, first_run, tmp_path):
-    import shutil
-
     from robustgait.config import ReportConfig
     from robustgait.report.study import write_study_report
 
@@ -273,14 +272,13 @@ def test_a_changed_gait_file_is_validated_again(small_study, first_run):
 
 
 @pytest.mark.slow
-def test_study_validate_on_a_study_run_end_to_end(tmp_path):
-    """``study run`` (2 × 3 gaits, generated, walked and certified), then ``study validate`` with 2 worker
-    processes; again with 1 process after removing the stored results: identical (the rollout's thread count
-    does not change results); the report shows the scatter."""
+def test_study_validate_on_a_study_run_end_to_end(tmp_path, tiny_study):
+    """A study made by ``study run`` (conftest's ``tiny_study``: 2 × 3 gaits, generated, walked and certified,
+    copied), then ``study validate`` with 2 worker processes; again with 1 process after removing the stored results:
+    identical (the rollout's thread count does not change results); the report shows the scatter."""
     d = tmp_path / "study"
-    res = cli("study", "run", str(d), *CLI_TINY, "--workers", "2", "--quiet")
-    assert res.returncode == 0, res.stderr
-    args = ("study", "validate", str(d), "--trials", "12", "--steps-after", "3", "--json", "--quiet")
+    shutil.copytree(tiny_study, d)
+    args = ("study", "validate", str(d), "--trials", "8", "--steps-after", "3", "--json", "--quiet")
     two = cli(*args, "--workers", "2")
     assert two.returncode == 0, two.stderr
     a = json.loads(two.stdout)["push"]
@@ -301,8 +299,6 @@ def test_study_validate_on_a_study_run_end_to_end(tmp_path):
             assert math.isclose(c["rho"], ref.statistic) and math.isclose(c["p"], ref.pvalue)
         else:
             assert c["rho"] is None and c["reason"]
-    import shutil
-
     shutil.rmtree(d / VALIDATION_DIR / RUNS_DIR)
     one = cli(*args, "--workers", "1")
     b = json.loads(one.stdout)["push"]
