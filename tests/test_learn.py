@@ -73,6 +73,19 @@ def test_action_space_rejects_off_grid_and_missing(exo_space):
         ActionSpace.from_robot(robot, "multicontact")
 
 
+def test_the_nearest_grid_point_rounds_each_axis_and_a_tie_goes_down(exo_space):
+    on = GaitParams(0.16, 0.8, 0.26, 0.06)
+    assert exo_space.nearest(on) == exo_space.index(on)  # a grid point is its own nearest
+    # exo's default gait lies between grid values on three axes: 0.15 (0.14 | 0.16), 0.25 (0.24 | 0.26), 0.07
+    assert exo_space.value(exo_space.nearest(GaitParams().resolved("flat"))) == pytest.approx(
+        {"step_length": 0.14, "step_duration": 0.7, "step_width": 0.24, "step_height": 0.06})
+    assert exo_space.value(exo_space.nearest({"step_length": 0.151, "step_duration": 5.0, "step_width": 0.0,
+                                              "step_height": 0.09})) == pytest.approx(
+        {"step_length": 0.16, "step_duration": 1.1, "step_width": 0.22, "step_height": 0.08})
+    with pytest.raises(RobustGaitError, match="missing parameter 'step_height'"):
+        exo_space.nearest({"step_length": 0.15, "step_duration": 0.7, "step_width": 0.25})
+
+
 def test_neighbourhood_is_the_clipped_box(exo_space):
     assert len(exo_space.neighbours(0)) == 2**4  # corner: itself and one step up each axis
     centre = exo_space.index(GaitParams(0.16, 0.8, 0.26, 0.06))

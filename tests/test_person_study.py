@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +33,7 @@ from robustgait.study.status import study_status
 
 BATCH, OVERDRAW, FIRST = 3, 3, 2
 # evaluations walk 5 steps and certify with 10 uniform samples; a gait is shown only if its step is 0.14 m or longer
-TINY = Config(study=StudyConfig(iterations=3, batch=BATCH, first_batch=FIRST, seed=0, metric="person",
+TINY = Config(study=StudyConfig(iterations=2, batch=BATCH, first_batch=FIRST, seed=0, metric="person",
                                 require=("step_length>=0.14",)),
               sim=SimConfig(step_cap=5), certify=CertifyConfig(method="uniform", n_samples=10),
               comfort=ComfortConfig(skip_steps=1, steps=3), person=PersonConfig(floor=0.0, overdraw=OVERDRAW))
@@ -113,10 +114,11 @@ def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path, ca
 
 
 @pytest.mark.slow
-def test_the_floor_is_evaluated_beside_a_first_batch_proposed_around_the_default_gait(tmp_path):
-    """No floor given: the default gait's verified certificate sets it (``floor_fraction`` of it), evaluated on the
-    workers beside the first batch, which is proposed in the ball around the default gait that the region's formula
-    gives (its radius does not depend on the figure) and holds ``first_batch`` gaits that may be shown."""
+def test_the_floor_is_the_first_gait_of_a_first_batch_proposed_around_the_default_gait(tmp_path):
+    """No floor given: the first batch's first gait is the grid point nearest the default gait, and its verified
+    certificate sets the floor (``floor_fraction`` of it); the batch is proposed in the ball around the default gait
+    that the region's formula gives (its radius does not depend on the figure) and holds ``first_batch`` gaits that
+    may be shown, evaluated on the workers side by side."""
     from robustgait.config import PushConfig, SequentialConfig
     from robustgait.learn.floor import predicted_to_clear
 
@@ -128,19 +130,22 @@ def test_the_floor_is_evaluated_beside_a_first_batch_proposed_around_the_default
     d = create_study(tmp_path / "s", "exo", cfg)
     run_study(d, progress=False, run=RunConfig(workers=2))
     st = study_status(d)
-    floor = st["person"]["floor"]
-    reference = floor["reference"]
-    assert reference["status"] == "certified" and reference["certificate_value"] > 0
-    assert floor["value"] == pytest.approx(0.75 * reference["certificate_value"])
-    assert st["state"] == "complete" and st["trials_planned"] == 2
     space = load_config(d).action_space()
+    mine = sorted((t for t in st["trials"] if t["state"] == "COMPLETE" and t["iteration"] == 0),
+                  key=lambda t: t["slot"])
+    reference = mine[0]
+    assert reference["grid_index"] == space.nearest(cfg.params.to_dict())
+    assert reference["status"] == "certified" and reference["verified_value"] > 0
+    floor = st["person"]["floor"]
+    assert floor["reference"]["params"] == reference["params"]
+    assert floor["value"] == pytest.approx(0.75 * reference["verified_value"])
+    assert st["state"] == "complete" and st["trials_planned"] == 2
     ball = predicted_to_clear(space, [(cfg.params.to_dict(), 1.0)], 0.75, 0.2, 0.1)
     proposals = st["iterations"][0]["proposals"]
     assert ball[proposals[:cfg.study.batch_size(0) + cfg.person.overdraw]].all() and ball.sum() < space.size
-    mine = [t for t in st["trials"] if t["state"] == "COMPLETE" and t["iteration"] == 0]
     shown = [t for t in mine if t["status"] == "certified" and t["verified_value"] is not None
              and t["verified_value"] >= floor["value"]]
-    assert len(shown) == 2 or len(mine) >= 2 + cfg.person.overdraw, mine
+    assert reference in shown and (len(shown) == 2 or len(mine) >= 2 + cfg.person.overdraw), mine
 
 
 def test_a_study_written_before_over_drawn_batches_evaluates_its_batch_alone(tmp_path):
@@ -152,3 +157,24 @@ def test_a_study_written_before_over_drawn_batches_evaluates_its_batch_alone(tmp
     path.write_text(json.dumps(raw))
     person = load_config(d).config.person
     assert person.overdraw == 0 and not person.ahead
+
+
+def test_a_study_written_before_the_reference_in_the_batch_evaluates_the_default_gait_beside_it(tmp_path):
+    """The floor's reference of a study created before it joined the first batch stays the default gait, evaluated on
+    its own: no reference index, and the first batch's proposals reproduce as they were made."""
+    from robustgait.study.person import Floor
+
+    d = create_study(tmp_path / "s", "exo", TINY)
+    setup = load_config(d)
+    assert setup.config.person.reference_in_batch and Floor(replace(setup.config, person=replace(
+        setup.config.person, floor=None)), setup.action_space()).index is not None
+    path = d / "study.json"
+    raw = json.loads(path.read_text())
+    del raw["config"]["person"]["reference_in_batch"]
+    path.write_text(json.dumps(raw))
+    old = load_config(d).config
+    assert not old.person.reference_in_batch
+    assert Floor(replace(old, person=replace(old.person, floor=None)), setup.action_space()).index is None
+    not_person = replace(old, study=replace(old.study, metric="push"), person=replace(old.person, floor=None,
+                                                                                       reference_in_batch=True))
+    assert Floor(not_person, setup.action_space()).index is None  # only a study that asks a person has one

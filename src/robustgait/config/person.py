@@ -75,6 +75,10 @@ class PersonConfig:
                                        "× the certificate of the robot's default gait", ge=0.0, le=1e6)] = None
     floor_fraction: Annotated[Float, Doc("the floor when not set, as a fraction of the default gait's certificate",
                                          ge=0.0, le=10.0)] = 0.75
+    reference_in_batch: Annotated[Bool, Doc("the floor's reference is the grid point nearest the default gait, the "
+                                            "first gait of the first batch (one evaluation fewer before the first "
+                                            "question); false: the default gait itself, evaluated beside the first "
+                                            "batch")] = True
     blind: Annotated[Bool, Doc("hide the certificate, speed and comfort figures on the page (the person judges the "
                                "videos alone)")] = False
     labels: Annotated[Bool, Doc("ask an ordinal label per gait (bad / neutral / good, as ROIAL)")] = True

@@ -157,6 +157,8 @@ def load_config(directory: str | Path) -> StudySetup:
             person = {**person, "overdraw": 0, "ahead": False}
         if "region" not in person:  # written before the floor's region: proposals anywhere, batches of one asked
             person = {**person, "region": False, "min_shown": 1}
+        if "reference_in_batch" not in person:  # written before: the default gait itself beside the first batch
+            person = {**person, "reference_in_batch": False}
         raw = {**raw, "config": {**raw["config"], "person": person}}
     if not (isinstance(raw, dict) and raw.get("format_version") == FORMAT_VERSION and isinstance(raw.get("robot"), str)
             and "config" in raw):

@@ -9,23 +9,16 @@ from typing import TYPE_CHECKING
 from robustgait._lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from robustgait.learn.learners import (
-        EuboLearner,
-        History,
-        Learner,
-        PolarLearner,
-        RandomLearner,
-        iteration_seed,
-        make_learner,
-    )
+    from robustgait.learn.history import History, iteration_seed
+    from robustgait.learn.learners import EuboLearner, Learner, PolarLearner, RandomLearner, make_learner
     from robustgait.learn.model import thompson_draws
     from robustgait.learn.offline import ReplayResult, replay
     from robustgait.learn.oracle import Outcome, batch_comparisons, prefer, score
     from robustgait.learn.space import ActionSpace
 
 _EXPORTS = {
-    **dict.fromkeys(("EuboLearner", "History", "Learner", "PolarLearner",
-                     "RandomLearner", "iteration_seed", "make_learner"), "learners"),
+    **dict.fromkeys(("EuboLearner", "Learner", "PolarLearner", "RandomLearner", "make_learner"), "learners"),
+    **dict.fromkeys(("History", "iteration_seed"), "history"),
     "thompson_draws": "model",
     **dict.fromkeys(("Outcome", "batch_comparisons", "prefer", "score"), "oracle"),
     **dict.fromkeys(("ReplayResult", "replay"), "offline"),

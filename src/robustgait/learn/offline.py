@@ -6,7 +6,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from robustgait.learn.learners import History, Learner
+from robustgait.learn.history import History
+from robustgait.learn.learners import Learner
 
 
 @dataclass

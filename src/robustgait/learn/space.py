@@ -132,6 +132,17 @@ class ActionSpace:
             coords.append(j)
         return self.index_of_coords(coords)
 
+    def nearest(self, values: GaitParams | Mapping[str, float]) -> int:
+        """Grid index of the grid point nearest a parameter set (on the grid or not): per axis the nearest value, a
+        tie going to the lower one."""
+        get = values.to_dict() if isinstance(values, GaitParams) else dict(values)
+        missing = [n for n in self.names if n not in get]
+        if missing:
+            raise RobustGaitError(f"missing parameter '{missing[0]}' of the action space")
+        # distances rounded to 1e-9 so that a tie in exact arithmetic is a tie here too (argmin: the first, lower)
+        return self.index_of_coords([int(np.argmin(np.round(np.abs(np.asarray(vals) - get[name]), 9)))
+                                     for name, vals in zip(self.names, self.values, strict=True)])
+
     def neighbours(self, index: int, radius: int = 1) -> IntArray:
         """Grid indices within ``radius`` grid steps of ``index`` along every axis (the box, including
         ``index`` itself), sorted."""

@@ -251,6 +251,10 @@ class Executor:
 
     workers: int = 1
 
+    def start(self) -> None:
+        """Start the workers now (each builds its robot and generator), before the first evaluation is submitted;
+        they start on the first submit otherwise."""
+
     def submit(self, key: int, params: dict[str, float], verify_above: float | None = None) -> None:
         """Evaluate the gait of ``params`` (:func:`evaluation_task`)."""
         self.submit_task(key, evaluation_task(params, verify_above))
@@ -306,6 +310,7 @@ class LocalExecutor(Executor):
         self._futures: dict[Future[dict[str, Any]], tuple[int, Task]] = {}
         self._attempts: dict[int, int] = {}
         self._env: contextlib.ExitStack | None = None
+        self._started: list[Future[int]] = []  # start()'s empty tasks
 
     def _ensure_pool(self) -> ProcessPoolExecutor:
         if self._env is None:  # workers inherit the environment when they are spawned
@@ -315,6 +320,13 @@ class LocalExecutor(Executor):
             self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
                                              initializer=_init_worker, initargs=(self.spec,))
         return self._pool
+
+    def start(self) -> None:
+        """Spawn every worker now: one empty task each (the pool starts a process per task while none is idle); their
+        results are not results of the study."""
+        if self._pool is None:
+            pool = self._ensure_pool()
+            self._started = [pool.submit(os.getpid) for _ in range(self.workers)]
 
     def submit_task(self, key: int, task: Task) -> None:
         self._futures[self._ensure_pool().submit(_run_task, task)] = (key, task)

@@ -2,9 +2,9 @@
 answer stored in the study the moment it is given.
 
 * **The floor** (``person.floor``, in the certificate's unit; not set: ``person.floor_fraction`` × the certificate of
-  the robot's default gait, evaluated once when the study starts): a person is shown only gaits certified at or above
-  it that meet the study's requirements (:func:`robustgait.study.ranking.shown`); a proposal below it is ranked below
-  every shown gait without asking. Stored as the study attribute ``floor``.
+  the grid gait nearest the robot's default gait, the first batch's first gait: :class:`Floor`): a person is shown
+  only gaits certified at or above it that meet the study's requirements (:func:`robustgait.study.ranking.shown`); a
+  proposal below it is ranked below every shown gait without asking. Stored as the study attribute ``floor``.
 * **A pending batch**: iteration k's record (``iteration_NNN``) gets ``pending`` — the shown slots and why the others
   are hidden — before the person is asked; the answer is ``answer``: a rank per slot (0 the best, equal ranks "cannot
   tell", None for a hidden gait), optionally a label per slot (bad / neutral / good), who answered and when.
@@ -23,6 +23,7 @@ from typing import Any
 from robustgait.config import Config
 from robustgait.errors import RobustGaitError
 from robustgait.learn.person import SimulatedPerson
+from robustgait.learn.space import ActionSpace
 from robustgait.study.ranking import LABELS, Requirement, shown, verified_value
 from robustgait.study.storage import StudyStore, TrialRecord, current_names
 
@@ -40,8 +41,8 @@ class AnswerError(RobustGaitError):
 
 
 def floor_record(config: Config, reference: dict[str, Any] | None) -> dict[str, Any]:
-    """The study's floor: ``person.floor`` if set, else ``floor_fraction`` × the reference (default gait)
-    evaluation's certificate (0 if it was not certified: every certified gait is then shown — said in ``note``)."""
+    """The study's floor: ``person.floor`` if set, else ``floor_fraction`` × the reference evaluation's verified
+    certificate (:class:`Floor`; 0 if it was not certified: every certified gait is then shown — said in ``note``)."""
     p = config.person
     if p.floor is not None:
         return {"value": float(p.floor), "source": "person.floor"}
@@ -52,9 +53,60 @@ def floor_record(config: Config, reference: dict[str, Any] | None) -> dict[str, 
            "reference": {"params": reference.get("params"), "status": reference.get("status"),
                          "certificate_value": value, "comfort": reference.get("comfort")}}
     if reference.get("status") != "certified":
-        rec["note"] = (f"the default gait was not certified ({reference.get('status')}: {reference.get('reason')}): "
+        rec["note"] = (f"the reference gait was not certified ({reference.get('status')}: {reference.get('reason')}): "
                        "floor 0, every certified gait is shown")
     return rec
+
+
+class Floor:
+    """A person study's floor as its run knows it (:func:`floor_record`): :attr:`value` is 0 (no floor to clear), the
+    floor in the certificate's unit, or ∞ while the reference evaluation that sets it runs (:attr:`pending`: no gait
+    may be shown yet, every candidate verifies its certificate).
+
+    Without ``person.floor`` the reference is the first gait of the first batch, the grid point nearest the robot's
+    default gait (``person.reference_in_batch``: :attr:`index`), or else the default gait itself, evaluated on its own
+    beside the first batch (a study created before; :meth:`start` says so)."""
+
+    def __init__(self, config: Config, space: ActionSpace):
+        self.config = config
+        person = config.person
+        self.value = 0.0
+        in_batch = config.study.asks_a_person and person.floor is None and person.reference_in_batch
+        self.index = space.nearest(config.params.to_dict()) if in_batch else None
+
+    @property
+    def pending(self) -> bool:
+        return math.isinf(self.value)
+
+    def start(self, store: StudyStore) -> bool:
+        """Take the stored floor, or the configured one (stored), or else mark it pending; a reference in the batch
+        that completed before a killed run could store its floor sets it now. True: the default gait must be
+        evaluated on its own for it (:meth:`set` with its result)."""
+        rec = store.user_attrs().get(FLOOR_ATTR)
+        if rec is None and self.config.person.floor is not None:
+            rec = floor_record(self.config, None)
+            store.study.set_user_attr(FLOOR_ATTR, rec)
+        if rec is not None:
+            self.value = float(rec["value"])
+            return False
+        self.value = math.inf
+        if self.index is None:
+            return True
+        first = next((r for r in store.records() if r.state == "COMPLETE" and r.iteration == 0 and r.slot == 0), None)
+        if first is not None and first.result is not None:
+            self.set(store, {**first.result, "params": first.params})
+        return False
+
+    def is_reference(self, trial: TrialRecord) -> bool:
+        """Whether ``trial`` is the reference in the batch whose result sets the pending floor."""
+        return self.pending and self.index is not None and (trial.iteration, trial.slot) == (0, 0)
+
+    def set(self, store: StudyStore, result: dict[str, Any]) -> None:
+        """Store the floor from the reference's evaluation ``result`` (its verified certificate)."""
+        reference = {k: v for k, v in result.items() if k not in ("gait", "certificate")}
+        rec = floor_record(self.config, reference)
+        store.study.set_user_attr(FLOOR_ATTR, rec)
+        self.value = float(rec["value"])
 
 
 def stored_floor(store: StudyStore) -> dict[str, Any] | None:

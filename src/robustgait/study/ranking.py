@@ -14,7 +14,7 @@ from typing import Any
 
 from robustgait.config import StudyConfig, parse_requirement
 from robustgait.errors import RobustGaitError
-from robustgait.learn.learners import History
+from robustgait.learn.history import History
 from robustgait.learn.oracle import Outcome, person_scores, score
 from robustgait.sim.comfort import FIGURES
 from robustgait.study.evaluate import RANKED

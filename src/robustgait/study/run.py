@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
-import math
 import os
 import sys
 import time
@@ -34,7 +33,7 @@ import uuid
 from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,7 +47,7 @@ from robustgait.io.output import write_json
 from robustgait.io.robotfile import load_robot
 from robustgait.io.studyfile import StudySetup, environment_changes, load_config, save_config
 from robustgait.learn.floor import predicted_to_clear
-from robustgait.learn.learners import History, Learner, iteration_seed, make_learner
+from robustgait.learn.history import History, iteration_seed
 from robustgait.learn.oracle import batch_comparisons
 from robustgait.learn.space import ActionSpace
 from robustgait.robots import Robot
@@ -59,8 +58,8 @@ from robustgait.study.evaluate import Evaluation
 from robustgait.study.executors import Executor, WorkerSpec, make_executor
 from robustgait.study.person import (
     FLOOR_ATTR,
+    Floor,
     automatic_answer,
-    floor_record,
     pending_record,
     predicted_answer,
     shown_flags,
@@ -78,6 +77,9 @@ from robustgait.study.ranking import (  # history_before, study_score: re-export
 )
 from robustgait.study.storage import StudyStore, TrialRecord, completed_batches, current_names, default_url
 from robustgait.study.verify import CERTIFICATE_FILE, ESTIMATE_FILE, GAITS_DIR, Verifier, gait_label
+
+if TYPE_CHECKING:
+    from robustgait.learn.learners import Learner
 
 
 class Asker(Protocol):
@@ -224,14 +226,24 @@ class StudyRunner:
         self.progress, self.verbose = progress, verbose
         self.robot = load_robot(self.setup.robot)
         self.space = self.setup.action_space(self.robot)
-        self.learner: Learner = make_learner(self.config.learner, self.space, self.config.learning, self.config.seed)
+        self._learner: Learner | None = None  # made when first asked (it loads torch)
         self._executor = executor
         self._own_executor = executor is None
         self.reqs: list[Requirement] = requirements(self.config, self.space.names)
         self.asker = asker
-        self.floor = 0.0  # a person study's floor; ∞ while its reference evaluation runs (floor_pending)
+        self.floor = Floor(self.setup.config, self.space)  # a person study's floor
         self.ahead: Ahead | None = None  # evaluations ahead of a person's answer
         self.verifier = Verifier(self.directory, self.space, self.executor)
+
+    @property
+    def learner(self) -> Learner:
+        """The study's learner (:func:`~robustgait.learn.learners.make_learner`), made on first use: loading torch and
+        BoTorch takes seconds, which the workers spend building their generators."""
+        if self._learner is None:
+            from robustgait.learn.learners import make_learner
+
+            self._learner = make_learner(self.config.learner, self.space, self.config.learning, self.config.seed)
+        return self._learner
 
     def executor(self) -> Executor:
         if self._executor is None:
@@ -242,6 +254,8 @@ class StudyRunner:
     def run(self) -> None:
         with study_lock(self.directory):
             store = open_store(self.directory, self.setup, self.space)
+            if self._has_work(store):
+                self.executor().start()  # the workers build their generators while the learner loads
             ok = False
             try:
                 store.retry_interrupted()
@@ -251,6 +265,12 @@ class StudyRunner:
                 store.close()
                 if self._own_executor and self._executor is not None:
                     self._executor.close(wait=ok)
+
+    def _has_work(self, store: StudyStore) -> bool:
+        """Whether the study has a batch to evaluate, an iteration to close or a gait to verify."""
+        batches, iterations = completed_batches(store.records()), store.iterations()
+        return any(len(batches.get(k, [])) < self.config.batch_size(k) or "recommendation" not in iterations.get(k, {})
+                   for k in range(self.config.iterations)) or bool(self.verifier.needed(store))
 
     def _run(self, store: StudyStore) -> None:
         cfg = self.config
@@ -279,32 +299,24 @@ class StudyRunner:
                 self.verifier.take(store, *self.executor().next_result())
 
     def _start_floor(self, store: StudyStore) -> None:
-        """The robustness floor of a person study (:func:`robustgait.study.person.floor_record`): stored once; not
-        configured, the robot's default gait is evaluated on the study's workers when the study first starts, beside
-        the first batch's candidates (:meth:`_set_floor` when it ends; until then no gait may be shown and every
-        candidate verifies its certificate, ``floor_pending``)."""
-        rec = store.user_attrs().get(FLOOR_ATTR)
-        if rec is None and self.setup.config.person.floor is not None:
-            rec = floor_record(self.setup.config, None)
-            store.study.set_user_attr(FLOOR_ATTR, rec)
-        if rec is not None:
-            self.floor = float(rec["value"])
-            return
-        self.executor().submit(REFERENCE_KEY, self.setup.config.params.to_dict(), verify_above=0.0)
-        self.floor = math.inf
+        """The robustness floor of a person study (:class:`~robustgait.study.person.Floor`): stored once; not
+        configured, its reference is the first batch's first gait, or for a study created before, the default gait
+        evaluated on the workers beside the first batch's candidates (:meth:`_floor_set` when it ends)."""
+        if self.floor.start(store):
+            self.executor().submit(REFERENCE_KEY, self.setup.config.params.to_dict(), verify_above=0.0)
 
-    def _set_floor(self, store: StudyStore, result: dict[str, Any]) -> None:
-        """Store the floor from the reference evaluation ``result`` (the default gait's verified certificate)."""
-        reference = {k: v for k, v in result.items() if k not in ("gait", "certificate")}
-        rec = floor_record(self.setup.config, reference)
-        store.study.set_user_attr(FLOOR_ATTR, rec)
-        self.floor = float(rec["value"])
-
-    @property
-    def floor_pending(self) -> bool:
-        """The reference evaluation that sets the floor is running: the floor is ∞ until it ends, so that no gait
-        may be shown yet."""
-        return math.isinf(self.floor)
+    def _floor_set(self, store: StudyStore, result: dict[str, Any], bar: tqdm) -> None:
+        """The reference evaluation ended: store the floor, say it, and render the videos of the first batch's gaits
+        that may now be shown."""
+        self.floor.set(store, result)
+        bar.set_postfix_str(f"floor {self.floor.value:.4g} {self.setup.config.study_certify.unit} "
+                            f"({self.setup.config.person.floor_fraction:g} × the reference gait's)"
+                            if self.floor.value > 0 else "floor 0: the reference gait was not certified")
+        if self.asker is not None:
+            for r in store.records():
+                if r.state == "COMPLETE" and r.iteration == 0 and r.result is not None \
+                        and self._qualifies(r.index, r.result):
+                    self.asker.render_ahead(r.index, r.result)
 
     def _ask(self, store: StudyStore, k: int) -> None:
         """Iteration k's answer: stored already (a resumed study), none needed (no gait above the floor), a simulated
@@ -314,15 +326,16 @@ class StudyRunner:
         if "answer" in rec:
             return
         batch = completed_batches(store.records())[k]
-        show = shown_flags(batch, self.floor, self.reqs)
+        show = shown_flags(batch, self.floor.value, self.reqs)
         if not any(show):
             rec["answer"] = automatic_answer(len(batch), f"no gait of the batch is certified at or above the floor "
-                                             f"{self.floor:.4g} and meets the requirements: nothing to ask")
+                                             f"{self.floor.value:.4g} and meets the requirements: nothing to ask")
         elif self.config.metric == "simulated-person":
             rec["answer"] = simulated_answer(self.setup.config, batch, show, k)
         else:
             if "pending" not in rec:
-                rec["pending"] = pending_record(batch, self.floor, self.reqs, self.setup.config.study_certify.unit)
+                rec["pending"] = pending_record(batch, self.floor.value, self.reqs,
+                                                self.setup.config.study_certify.unit)
                 store.set_iteration(k, rec)
             if self.asker is None:
                 raise RobustGaitError(f"{self.directory}: iteration {k + 1} waits for a person's answers: "
@@ -365,10 +378,11 @@ class StudyRunner:
         rec["ahead"] = {"candidates": candidates, "propose_seconds": time.perf_counter() - t0}
         store.set_iteration(k, rec)
 
-    def _qualifies(self, index: int, result: dict[str, Any]) -> bool:
-        """Whether a person may be shown the evaluated gait ``index`` (:func:`~robustgait.study.ranking.shown`)."""
+    def _qualifies(self, index: int, result: dict[str, Any], any_floor: bool = False) -> bool:
+        """Whether a person may be shown the evaluated gait ``index`` (:func:`~robustgait.study.ranking.shown`; with
+        ``any_floor``, under a floor of 0)."""
         return shown(TrialRecord(-1, "COMPLETE", -1, -1, index, self.space.value(index), None, result, None, None, {}),
-                     self.floor, self.reqs)
+                     0.0 if any_floor else self.floor.value, self.reqs)
 
     def _region(self, store: StudyStore, k: int, within: bool = False) -> NDArray[np.bool_] | None:
         """A person study's proposals for iteration k are made among the grid points predicted to clear its floor
@@ -391,13 +405,14 @@ class StudyRunner:
             default = self.setup.config.params.to_dict()
             return predicted_to_clear(self.space, [(default, 1.0)], person.floor_fraction, person.region_lengthscale,
                                       person.region_prior)
-        if self.floor <= 0.0 or self.floor_pending:
+        if self.floor.value <= 0.0 or self.floor.pending:
             return None
         reference = (store.user_attrs().get(FLOOR_ATTR) or {}).get("reference")
-        if reference and reference.get("params"):
+        if reference and reference.get("params") and self.floor.index is None:  # in the batch: among the records
             value = verified_value(current_names(reference))
             observed.insert(0, ({**self.setup.config.params.to_dict(), **reference["params"]}, value or 0.0))
-        return predicted_to_clear(self.space, observed, self.floor, person.region_lengthscale, person.region_prior)
+        return predicted_to_clear(self.space, observed, self.floor.value, person.region_lengthscale,
+                                  person.region_prior)
 
     def _candidates(self, k: int) -> int:
         """Candidates iteration k proposes: its batch, and for a study that asks a person its over-draw."""
@@ -411,6 +426,8 @@ class StudyRunner:
         size = self._candidates(k)
         t0 = time.perf_counter()
         proposal = self.learner.propose(history, k, size, self._region(store, k))
+        if k == 0 and self.floor.index is not None:  # the floor's reference first
+            proposal = [self.floor.index, *[i for i in proposal if i != self.floor.index]][:size]
         seconds = time.perf_counter() - t0
         stored = {r.slot: r.index for r in store.records() if r.iteration == k}
         extended = store.iterations().get(k, {}).get("proposals") or []  # with candidates added while filling
@@ -459,9 +476,12 @@ class StudyRunner:
                                           f"iteration {k} runs")
                 self._dispatch(store, trial, cache, started, bar)
             mine = [r for r in store.records() if r.iteration == k]
-            ready = sum(1 for r in mine if r.state == "COMPLETE" and shown(r, self.floor, self.reqs))
+            # while the floor is pending, a gait that may be shown under some floor counts: no candidate is drawn
+            # beyond the batch before the floor says one is needed (the first question waits for what is started)
+            floor = 0.0 if self.floor.pending else self.floor.value
+            ready = sum(1 for r in mine if r.state == "COMPLETE" and shown(r, floor, self.reqs))
             slots = len({r.slot for r in mine})
-            if ready + len(started) < size and slots == len(proposals) and not started and not self.floor_pending:
+            if ready + len(started) < size and slots == len(proposals) and not started and not self.floor.pending:
                 proposals = self._more_candidates(store, k, proposals, ready)
             if ready + len(started) < size and slots < len(proposals):
                 store.enqueue(k, slots, proposals[slots], self._trial_attrs())
@@ -469,7 +489,7 @@ class StudyRunner:
                     bar.total += 1
                     bar.refresh()
                 continue
-            if not started and not self.floor_pending:
+            if not started and not self.floor.pending:
                 break
             self._collect(store, started, bar)
         before = store.iterations().get(k - 1, {})
@@ -521,17 +541,14 @@ class StudyRunner:
         (None)."""
         if not self.config.asks_a_person:
             return None
-        return 0.0 if self.floor_pending else self.floor
+        return 0.0 if self.floor.pending else self.floor.value
 
     def _collect(self, store: StudyStore, started: dict[int, TrialRecord], bar: tqdm) -> None:
         """Wait for the next finished evaluation: a trial's, one made ahead (kept; completing the trial that
         adopted it) or a verification (stored)."""
         key, result = self.executor().next_result()
         if key == REFERENCE_KEY:
-            self._set_floor(store, result)
-            bar.set_postfix_str(f"floor {self.floor:.4g} {self.setup.config.study_certify.unit} "
-                                f"({self.setup.config.person.floor_fraction:g} × the default gait's)"
-                                if self.floor > 0 else "floor 0: the default gait was not certified")
+            self._floor_set(store, result, bar)
             return
         if self.verifier.take(store, key, result):
             return
@@ -544,7 +561,10 @@ class StudyRunner:
                 self._complete(store, trial, made, bar, extra={"evaluated_ahead": True})
             return
         trial = started.pop(key)
-        self._complete(store, trial, self._write_files(trial.index, result), bar)
+        written = self._write_files(trial.index, result)
+        self._complete(store, trial, written, bar)
+        if self.floor.is_reference(trial):
+            self._floor_set(store, {**written, "params": trial.params}, bar)
 
     def _finish_ahead(self, key: int, result: dict[str, Any]) -> tuple[int, dict[str, Any]]:
         """Write the files of the evaluation made ahead under executor ``key`` and keep it (:meth:`Ahead.finish`):
@@ -579,8 +599,9 @@ class StudyRunner:
         bar.update(1)
         bar.set_postfix_str(f"iteration {trial.iteration + 1}/{self.config.iterations}, last: "
                             f"{outcome_line(result, self.name)}")
-        if self.asker is not None and self._qualifies(trial.index, result):
-            # its video now, while the workers evaluate the batch's other candidates: the batch is shown sooner
+        if self.asker is not None and self._qualifies(trial.index, result, self.floor.pending):
+            # its video now, while the workers evaluate the batch's other candidates: the batch is shown sooner (while
+            # the floor is pending, a gait that may be shown under some floor: the floor's reference is still running)
             self.asker.render_ahead(trial.index, result)
 
     def _close_iteration(self, store: StudyStore, k: int, bar: tqdm) -> None:
