@@ -19,7 +19,8 @@ from robustgait.learn.oracle import REQUIREMENT_PENALTY, Outcome, batch_comparis
 from robustgait.learn.person import SimulatedPerson
 from robustgait.study.ahead import Ahead
 from robustgait.study.executors import Executor
-from robustgait.study.pareto import non_dominated, pareto
+from robustgait.study.front import non_dominated
+from robustgait.study.pareto import pareto
 from robustgait.study.person import (
     answer_size,
     automatic_answer,

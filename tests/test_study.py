@@ -670,9 +670,9 @@ def test_ray_worker_killed_mid_task_is_retried(tmp_path, tiny_study):
 def test_the_progress_bar_and_status_say_a_refused_gait_is_refused():
     """A gait that walked the cap without a certificate is 'refused' with its status, not a zero; study status counts
     every outcome."""
-    from robustgait.study.run import outcome_line
     from robustgait.study.status import outcome_counts
     from robustgait.study.storage import TrialRecord
+    from robustgait.study.trials import outcome_line
 
     results = [{"status": "certified", "certificate_value": 21.5, "steps_taken": 50},
                {"status": "not_certified", "certificate_value": 0.0, "steps_taken": 50,

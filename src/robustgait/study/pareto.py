@@ -8,23 +8,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-from numpy.typing import NDArray
-
-from robustgait.errors import RobustGaitError
 from robustgait.sim.comfort import FIGURES
-
-HIGHER_IS_BETTER = ("speed", "step_length", "cadence")  # not a cost: refused as the comfort objective
-
-
-def non_dominated(objectives: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """Rows (n, m) of objectives, all to be maximized: True where no other row is ≥ in every objective and > in one."""
-    x = np.asarray(objectives, dtype=float)
-    keep = np.ones(len(x), dtype=bool)
-    for i in range(len(x)):
-        dominated = np.all(x >= x[i], axis=1) & np.any(x > x[i], axis=1)
-        keep[i] = not dominated.any()
-    return keep
+from robustgait.study.front import front_rows
 
 
 def pareto(status: dict[str, Any], figure: str) -> dict[str, Any]:
@@ -32,28 +17,7 @@ def pareto(status: dict[str, Any], figure: str) -> dict[str, Any]:
     certificate, speed and ``figure``, whether it is on the front, sorted by the certificate (descending): per gait
     ``trial``, ``grid_index``, ``params``, ``certificate_value`` (in ``certificate_unit``: the verified value, else the
     estimate), ``verified``, ``speed``, ``figure``, ``gait_file``, ``front``."""
-    if figure not in FIGURES or figure in HIGHER_IS_BETTER:
-        costs = ", ".join(n for n in FIGURES if n not in HIGHER_IS_BETTER)
-        raise RobustGaitError(f"report.pareto_figure: {figure!r} is not a comfort cost (one of {costs})")
-    seen: set[int] = set()
-    rows = []
-    for t in status["trials"]:
-        if t["state"] != "COMPLETE" or t["status"] not in ("certified", "estimated") or t["grid_index"] in seen:
-            continue
-        c = t.get("comfort") or {}
-        if c.get(figure) is None or c.get("speed") is None:
-            continue
-        seen.add(t["grid_index"])
-        verified = bool(t.get("verified"))
-        value = t["verified_value"] if verified else t.get("estimate", t["certificate_value"])
-        rows.append({"trial": t["number"], "grid_index": t["grid_index"], "params": t["params"],
-                     "certificate_value": value, "verified": verified, "speed": c["speed"],
-                     figure: c[figure], "gait_file": t["gait_file"]})
-    obj = np.array([[r["certificate_value"], r["speed"], -r[figure]] for r in rows]).reshape(-1, 3)
-    front = non_dominated(obj) if rows else np.zeros(0, dtype=bool)
-    for r, f in zip(rows, front, strict=True):
-        r["front"] = bool(f)
-    rows.sort(key=lambda r: -r["certificate_value"])
+    rows = front_rows(status["trials"], figure)
     return {"figure": figure, "unit": FIGURES[figure][0], "certificate_unit": status["unit"],
             "certificate": status["certificate"], "gaits": rows, "front": [r for r in rows if r["front"]]}
 

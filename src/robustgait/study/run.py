@@ -76,6 +76,7 @@ from robustgait.study.ranking import (  # history_before, study_score: re-export
     verified_value,
 )
 from robustgait.study.storage import StudyStore, TrialRecord, completed_batches, current_names, default_url
+from robustgait.study.trials import outcome_line
 from robustgait.study.verify import CERTIFICATE_FILE, ESTIMATE_FILE, GAITS_DIR, Verifier, gait_label
 
 if TYPE_CHECKING:
@@ -294,9 +295,12 @@ class StudyRunner:
                     self._ask(store, k)
                 self._close_iteration(store, k, bar)
                 self.verifier.submit(store, self.verifier.needed(store))
-            while self.verifier.running:  # the last iteration's verifications
-                bar.set_postfix_str(f"verifying the best and recommended gaits: {len(self.verifier.running)} left")
+            self.verifier.submit_front(store, self.config, self.setup.config.report.pareto_figure)
+            while self.verifier.running:  # the last iteration's verifications, and the trade-off front's
+                bar.set_postfix_str(f"verifying the best, recommended and trade-off gaits: {len(self.verifier.running)}"
+                                    " left")
                 self.verifier.take(store, *self.executor().next_result())
+                self.verifier.submit_front(store, self.config, self.setup.config.report.pareto_figure)
 
     def _start_floor(self, store: StudyStore) -> None:
         """The robustness floor of a person study (:class:`~robustgait.study.person.Floor`): stored once; not
@@ -622,24 +626,6 @@ class StudyRunner:
         if rec_trial is not None and rec_trial.result is not None:
             bar.set_postfix_str(f"iteration {k + 1}/{self.config.iterations} done, best: "
                                 f"{outcome_line(rec_trial.result, self.name)}")
-
-
-def outcome_line(result: dict[str, Any], name: str) -> str:
-    """An evaluation's outcome in a few words for a progress bar: its certified value, or why it has none — the
-    refusal's status (a gait without a stable orbit is refused, not a zero), a fall, a failed generation —, and the
-    joint margin of a gait generated again after a fall at a joint limit."""
-    status = result.get("status")
-    again = result.get("retried")
-    tail = f" (generated again with joint margin {again['joint_margin']:g} rad)" if again else ""
-    if status == "certified":
-        return f"{name} {result['certificate_value']:.3f}, steps {result['steps_taken']}{tail}"
-    if status == "estimated":
-        return f"{name} ≈ {result['certificate_value']:.3f} (estimated), steps {result['steps_taken']}{tail}"
-    if status == "not_certified":
-        return f"refused ({str(result.get('reason', '')).split(':', 1)[0]}), steps {result['steps_taken']}{tail}"
-    if status == "fell":
-        return f"fell in step {result.get('steps_taken', 0) + 1}{tail}"
-    return str(status).replace("_", " ") + tail
 
 
 def run_study(directory: str | Path, run: RunConfig | None = None, *, progress: bool = True, verbose: bool = False,

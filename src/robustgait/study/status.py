@@ -9,39 +9,9 @@ from typing import Any
 
 from robustgait.io.studyfile import environment_changes, load_config
 from robustgait.study.person import pending_iteration, stored_floor
-from robustgait.study.ranking import verified_value
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord
-
-# comfort: the walk's comfort figures (robustgait.sim.comfort.Comfort.to_dict; None for a study evaluated before them);
-# retried: why the gait was generated again with a joint margin (robustgait.study.evaluate.retry_after_fall), or None
-_TRIAL_KEYS = ("status", "reason", "steps_taken", "step_cap", "fell", "fall_reason", "mean_speed",
-               "certificate_value", "comfort", "gait_file", "certificate_file", "seconds", "retried")
-
-
-def trial_summary(r: TrialRecord, verification: dict[str, Any] | None = None) -> dict[str, Any]:
-    """One trial as ``study status`` lists it. ``certificate_value`` is the figure the study ranked it by; ``estimate``
-    the exploration's estimate and ``verified_value`` the verified figure (None: not verified), ``verified`` whether
-    there is one — from the evaluation, or from ``verification``, the record of a gait verified after its trial
-    (:meth:`~robustgait.study.storage.StudyStore.set_verification`), whose status (``certified`` or
-    ``not_certified``), reason and certificate file then replace the estimate's."""
-    out: dict[str, Any] = {"number": r.number, "state": r.state, "iteration": r.iteration, "slot": r.slot,
-                           "grid_index": r.index, "params": r.params, "score": r.value,
-                           "reused_from": r.reused_from, "retry_of": r.retry_of,
-                           "evaluated_ahead": bool(r.attrs.get("evaluated_ahead"))}
-    res = r.result or {}
-    out.update({k: res.get(k) for k in _TRIAL_KEYS})
-    out["estimate"] = res.get("estimate", res.get("certificate_value") if res.get("status") == "certified" else None)
-    out["verified_value"] = verified_value(res) if res else None
-    cert = res.get("certificate") or {}
-    if verification is not None and res.get("status") == "estimated":
-        out.update(status=verification["status"], reason=verification.get("reason", ""),
-                   verified_value=verification.get("verified_value"),
-                   certificate_file=verification.get("certificate_file"))
-    out["verified"] = out["verified_value"] is not None
-    out["x_star"] = cert.get("x_star")
-    out["n_inside"] = cert.get("n_inside")
-    return out
+from robustgait.study.trials import trial_summary
 
 
 def figure_text(entry: dict[str, Any], unit: str, digits: int = 4) -> str:

@@ -15,11 +15,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from robustgait.config import StudyConfig
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
 from robustgait.learn.space import ActionSpace
 from robustgait.study.executors import Executor
+from robustgait.study.front import front_rows
 from robustgait.study.storage import StudyStore, TrialRecord, completed_batches, default_url
+from robustgait.study.trials import trial_summary
 
 GAITS_DIR = "gaits"
 CERTIFICATE_FILE = "certificate.json"  # a gait's verified certificate
@@ -82,6 +85,17 @@ class Verifier:
             key = verification_key(index)
             self.executor().submit_verify(key, gait)
             self.running[key] = index
+
+    def submit_front(self, store: StudyStore, config: StudyConfig, figure: str) -> None:
+        """Submit the verification of the trade-off front's gaits that hold an estimate only (``study pareto`` and the
+        report show that front of verified values, :func:`~robustgait.study.pareto.study_pareto`; ``figure``: its
+        comfort objective); called again as verifications end, since a verified value below its estimate can bring
+        other gaits onto the front. Nothing for a study that verifies every gait."""
+        if config.verifies_all:
+            return
+        verifications = store.verifications()
+        trials = [trial_summary(r, verifications.get(r.index)) for r in store.records()]
+        self.submit(store, [r["grid_index"] for r in front_rows(trials, figure) if not r["verified"]])
 
     def take(self, store: StudyStore, key: int, result: dict[str, Any]) -> bool:
         """If ``key`` is a verification's: write its certificate and store its record (True); else False."""
