@@ -81,6 +81,10 @@ def test_estimates_ranked_and_what_is_shown_verified_also_after_a_kill(tmp_path:
         store.close()
     wanted = {st["best"]["grid_index"], *(it["batch_best"]["grid_index"] for it in st["iterations"])}
     assert wanted <= set(verified)
+    from robustgait.study.pareto import study_pareto
+
+    front = study_pareto(d, load_config(d).config.report.pareto_figure, verify=False)["front"]
+    assert front and all(g["verified"] for g in front)  # the run verified the trade-off front the report shows
     best = st["best"]
     assert best["verified"] and best["status"] in ("certified", "not_certified")
     if best["status"] == "certified":
