@@ -210,8 +210,10 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Modules with the most ``slow`` tests first, each module's tests in their own order: pytest-xdist hands tests
     out in collection order, so the long ones start early and the short ones fill the gaps at the end instead of
     one worker finishing a long test alone. A module's tests stay together, so its module fixtures are made once."""
+    def module(item: pytest.Item) -> str:
+        return item.module.__name__ if item.module else ""
+
     slow: dict[str, int] = {}
     for item in items:
-        slow[item.module.__name__ if item.module else ""] = slow.get(item.module.__name__ if item.module else "", 0) \
-            + (item.get_closest_marker("slow") is not None)
-    items.sort(key=lambda item: -slow[item.module.__name__ if item.module else ""])
+        slow[module(item)] = slow.get(module(item), 0) + (item.get_closest_marker("slow") is not None)
+    items.sort(key=lambda item: -slow[module(item)])

@@ -14,6 +14,7 @@ from robustgait.config import radius_name
 from robustgait.report.figures import _save, plt
 from robustgait.sim.comfort import FIGURES
 from robustgait.study.pareto import pareto
+from robustgait.study.verify import params_label
 
 
 def _params(p: dict[str, float]) -> str:
@@ -78,13 +79,6 @@ def answer_rows(status: dict[str, Any]) -> list[list[str]]:
     return rows
 
 
-def reference_params(reference: dict[str, Any]) -> str:
-    """The floor's reference gait in words (" of L 0.14 T 0.7 …"), empty when its parameters were not stored."""
-    params = reference.get("params") or {}
-    short = {"step_length": "L", "step_duration": "T", "step_width": "W", "step_height": "h", "rolling_fraction": "ρ"}
-    return (" of " + " ".join(f"{short.get(k, k)} {v:g}" for k, v in params.items() if k in short)) if params else ""
-
-
 def person_parts(status: dict[str, Any], table: Any) -> list[str]:
     """The person section: floor, every answer, the recommendation with its certificate and comfort figures."""
     p = status.get("person")
@@ -95,7 +89,8 @@ def person_parts(status: dict[str, Any], table: Any) -> list[str]:
     text = (f"<h2>The person's answers</h2><p>Shown: gaits certified at or above the floor {name} ≥ "
             f"{floor.get('value', 0):.4g} {unit} ({html.escape(str(floor.get('source')))}"
             + (f": {floor.get('fraction')} × the reference gait's {floor['reference']['certificate_value']:.4g}"
-               + reference_params(floor["reference"]) if floor.get("reference") else "") + ")"
+               + (f" ({params_label(floor['reference']['params'])})" if floor["reference"].get("params") else "")
+               if floor.get("reference") else "") + ")"
             + (f" meeting {html.escape(', '.join(status['require']))}" if status["require"] else "")
             + "; the others ranked below every shown gait without asking."
             + (f" Batch {p['pending'] + 1} waits for an answer." if p["pending"] is not None else "") + "</p>")

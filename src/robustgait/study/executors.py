@@ -310,7 +310,6 @@ class LocalExecutor(Executor):
         self._futures: dict[Future[dict[str, Any]], tuple[int, Task]] = {}
         self._attempts: dict[int, int] = {}
         self._env: contextlib.ExitStack | None = None
-        self._started: list[Future[int]] = []  # start()'s empty tasks
 
     def _ensure_pool(self) -> ProcessPoolExecutor:
         if self._env is None:  # workers inherit the environment when they are spawned
@@ -326,7 +325,8 @@ class LocalExecutor(Executor):
         results are not results of the study."""
         if self._pool is None:
             pool = self._ensure_pool()
-            self._started = [pool.submit(os.getpid) for _ in range(self.workers)]
+            for _ in range(self.workers):
+                pool.submit(os.getpid)
 
     def submit_task(self, key: int, task: Task) -> None:
         self._futures[self._ensure_pool().submit(_run_task, task)] = (key, task)

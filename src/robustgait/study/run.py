@@ -267,11 +267,15 @@ class StudyRunner:
                 if self._own_executor and self._executor is not None:
                     self._executor.close(wait=ok)
 
+    def _closed(self, k: int, batches: dict[int, list[TrialRecord]], iterations: dict[int, dict[str, Any]]) -> bool:
+        """Whether iteration k is done: its batch evaluated and its recommendation stored."""
+        return len(batches.get(k, [])) >= self.config.batch_size(k) and "recommendation" in iterations.get(k, {})
+
     def _has_work(self, store: StudyStore) -> bool:
-        """Whether the study has a batch to evaluate, an iteration to close or a gait to verify."""
+        """Whether the study has an iteration that is not done (:meth:`_closed`) or a gait to verify."""
         batches, iterations = completed_batches(store.records()), store.iterations()
-        return any(len(batches.get(k, [])) < self.config.batch_size(k) or "recommendation" not in iterations.get(k, {})
-                   for k in range(self.config.iterations)) or bool(self.verifier.needed(store))
+        return not all(self._closed(k, batches, iterations) for k in range(self.config.iterations)) \
+            or bool(self.verifier.needed(store))
 
     def _run(self, store: StudyStore) -> None:
         cfg = self.config
@@ -284,7 +288,7 @@ class StudyRunner:
             for k in range(cfg.iterations):
                 batches = completed_batches(store.records())
                 iterations = store.iterations()
-                if len(batches.get(k, [])) >= cfg.batch_size(k) and "recommendation" in iterations.get(k, {}):
+                if self._closed(k, batches, iterations):
                     continue
                 self._propose(store, k, history_before(k, batches, cfg, iterations, self.reqs))
                 if cfg.asks_a_person:
