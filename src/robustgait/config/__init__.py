@@ -145,8 +145,8 @@ class Config:
             **{f"generate.{k}": "not set: the robot spec's [generation] value, else relative to the robot (its help)"
                for k in ROBOT_SCALED},
             "study.storage": "not set: a SQLite file in the study directory",
-            "person.floor": "not set: person.floor_fraction × the certificate of the robot's default gait (the gait "
-                            "section), measured when the study starts",
+            "person.floor": "not set: person.floor_fraction × the certificate of the grid gait nearest the robot's "
+                            "default gait (the gait section), the first batch's first gait (person.reference_in_batch)",
             "run.workers": f"not set: min(cores, 2) = {default_workers()} here",
             "run.address": "not set: start a local Ray",
             "compare.samples": "not set: study A's",

@@ -72,8 +72,10 @@ class PersonConfig:
     below every shown gait without asking (among themselves by the certificate's oracle)."""
 
     floor: Annotated[Float | None, Doc("robustness floor, in the certificate's unit (J*: N s); not set: floor_fraction "
-                                       "× the certificate of the robot's default gait", ge=0.0, le=1e6)] = None
-    floor_fraction: Annotated[Float, Doc("the floor when not set, as a fraction of the default gait's certificate",
+                                       "× the certificate of the grid gait nearest the robot's default gait", ge=0.0,
+                                       le=1e6)] = None
+    floor_fraction: Annotated[Float, Doc("the floor when not set, as a fraction of the reference gait's certificate "
+                                         "(reference_in_batch)",
                                          ge=0.0, le=10.0)] = 0.75
     reference_in_batch: Annotated[Bool, Doc("the floor's reference is the grid point nearest the default gait, the "
                                             "first gait of the first batch (one evaluation fewer before the first "

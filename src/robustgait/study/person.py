@@ -47,7 +47,7 @@ def floor_record(config: Config, reference: dict[str, Any] | None) -> dict[str, 
     if p.floor is not None:
         return {"value": float(p.floor), "source": "person.floor"}
     if reference is None:
-        raise RobustGaitError("the floor needs the default gait's evaluation")
+        raise RobustGaitError("the floor needs its reference gait's evaluation")
     value = verified_value(reference) or 0.0
     rec = {"value": p.floor_fraction * value, "source": "person.floor_fraction", "fraction": p.floor_fraction,
            "reference": {"params": reference.get("params"), "status": reference.get("status"),
