@@ -260,6 +260,23 @@ class NodeSymbols:
     nu: cs.SX
 
 
+@dataclass(frozen=True)
+class NodeRows:
+    """The rows [start, stop) of g that node i of domain d adds (:meth:`GaitProblem._add_node`)."""
+
+    d: int
+    i: int
+    start: int
+    stop: int
+
+
+def trapezoid_weights(n: int) -> FloatArray:
+    """The trapezoid rule's weights (n,) on n equally spaced nodes of [0, 1]: 1/(n − 1), halved at both ends."""
+    w = np.full(n, 1.0 / (n - 1))
+    w[[0, -1]] *= 0.5
+    return w
+
+
 def inner_range(joint_range: FloatArray, margin: float) -> FloatArray:
     """Each joint's range (m, 2) [rad] less ``margin`` at each finite end, the margin at most a quarter of the range
     (a narrow range keeps half of itself): [lo + μ, hi − μ], μ = min(margin, (hi − lo)/4); an unlimited end stays
@@ -286,10 +303,15 @@ class GaitProblem:
         self._g: list[cs.SX] = []
         self._lbg: list[float] = []
         self._ubg: list[float] = []
+        self._n_rows = 0
+        self._basis_symbols: tuple[cs.SX, cs.SX, cs.SX] | None = None
         self.rows: dict[str, list[int]] = {}
+        self.node_rows: list[NodeRows] = []
         for d in range(len(self.graph)):
             for i in range(len(self.domain_taus[d])):
+                start = self._n_rows
                 self._add_node(d, i)
+                self.node_rows.append(NodeRows(d, i, start, self._n_rows))
         self._add_position_periodicity()
         self.g = cs.vertcat(*self._g)
         self.lbg, self.ubg = np.array(self._lbg), np.array(self._ubg)
@@ -355,8 +377,8 @@ class GaitProblem:
     def _add(self, name: str, expr: cs.SX, lo: float | list[float], hi: float | list[float]) -> None:
         """Append the rows lo ≤ vec(expr) ≤ hi to g (bounds broadcast) and record their indices under ``name``."""
         e = cs.vec(expr)
-        start = sum(int(gi.numel()) for gi in self._g)
-        self.rows.setdefault(name, []).extend(range(start, start + int(e.numel())))
+        start, self._n_rows = self._n_rows, self._n_rows + int(e.numel())
+        self.rows.setdefault(name, []).extend(range(start, self._n_rows))
         self._g.append(e)
         self._lbg.extend(np.broadcast_to(lo, (int(e.numel()),)).tolist())
         self._ubg.extend(np.broadcast_to(hi, (int(e.numel()),)).tolist())
@@ -390,17 +412,53 @@ class GaitProblem:
             if d == len(self.graph) - 1:
                 self._add_velocity_periodicity(nup)
 
+    def node_kind(self, d: int, i: int) -> tuple[int, bool, bool, bool, bool]:
+        """What node i of domain d's rows depend on besides its variables and its Bézier basis values — the
+        branches of :meth:`_add_node`: its domain, and whether it is the first, an inner, the middle or the last
+        node. Nodes of one kind add the same rows as functions of those (:meth:`node_function`)."""
+        n = len(self.domain_taus[d])
+        return d, i == 0, 0 < i < n - 1, i == (n - 1) // 2, i == n - 1
+
+    def node_function(self, d: int, i: int, columns: list[int]) -> cs.Function:
+        """Node i of domain d's rows of g, and its term of the cost without the trapezoid weight, as a function
+        of the variables they depend on: (z, p, c) → (g_node, T_d ‖u_i‖²), z = x[columns] (the columns in
+        increasing order), p the parameters, c the node's Bézier basis values (8 × 3, :meth:`node_basis`). Every
+        other variable is zero in it, so ``columns`` must hold all those the rows depend on. The rows are built
+        by :meth:`_add_node` itself, on these symbols."""
+        z, c = cs.SX.sym("z", len(columns)), cs.SX.sym("c", BEZIER_DEGREE + 1, 3)
+        x = cs.SX.zeros(self.layout.size)
+        for k, j in enumerate(columns):
+            x[j] = z[k]
+        kept = (self.x, self._betas, self._basis_symbols, self._g, self._lbg, self._ubg, self.rows, self._n_rows)
+        self.x, self._betas = x, [cs.reshape(x[dl.beta], self.m, BEZIER_DEGREE + 1) for dl in self.layout.domains]
+        self._basis_symbols = (c[:, 0], c[:, 1], c[:, 2])
+        self._g, self._lbg, self._ubg, self.rows, self._n_rows = [], [], [], {}, 0
+        try:
+            self._add_node(d, i)
+            rows = cs.vertcat(*self._g)
+        finally:
+            (self.x, self._betas, self._basis_symbols, self._g, self._lbg, self._ubg, self.rows,
+             self._n_rows) = kept
+        cost = self._durations[d] * cs.sumsqr(x[self.layout.domains[d].nodes[i]["u"]])
+        return cs.Function(f"node_{d}_{i}", [z, self.p, c], [rows, cost], ["z", "p", "c"], ["g", "cost"])
+
     def _add_bezier_outputs(self, d: int, i: int, v: NodeSymbols) -> None:
         """The virtual constraints (3 |O_d| rows, ``bezier``): the output joints O_d of domain d follow its Bézier
         polynomial at τ_i, s_O = β_O b(τ_i) [rad], ṡ_O T_d = β_O b'(τ_i) [rad], s̈_O T_d² = β_O b''(τ_i) [rad]
         (b' = d1 b₇, b'' = d2 b₆). The joints are node variables tied to β by these linear rows: the nonlinear
         dynamics then stay local to a node and the Lagrangian's Hessian block-diagonal."""
         out, Td = self.outputs[d], self._durations[d]
-        b0, b1, b2 = self._bases[d]
+        # a node function's basis values are its input (:meth:`node_function`)
+        c0, c1, c2 = self._basis_symbols or tuple(cs.DM(c) for c in self.node_basis(d, i).T)
         bo = self._betas[d][out, :]
-        self._add("bezier", cs.vertcat(v.s[out] - cs.mtimes(bo, cs.DM(b0[i])),
-                                       v.sd[out] * Td - cs.mtimes(bo, cs.DM(self._d1 @ b1[i])),
-                                       v.sdd[out] * Td**2 - cs.mtimes(bo, cs.DM(self._d2 @ b2[i]))), 0.0, 0.0)
+        self._add("bezier", cs.vertcat(v.s[out] - cs.mtimes(bo, c0), v.sd[out] * Td - cs.mtimes(bo, c1),
+                                       v.sdd[out] * Td**2 - cs.mtimes(bo, c2)), 0.0, 0.0)
+
+    def node_basis(self, d: int, i: int) -> FloatArray:
+        """The Bézier basis values of node i of domain d (8 × 3): columns b(τ_i), d1 b₇(τ_i), d2 b₆(τ_i), so that
+        s = β c₀, ṡ T_d = β c₁, s̈ T_d² = β c₂ (:meth:`_add_bezier_outputs`)."""
+        b0, b1, b2 = self._bases[d]
+        return np.stack([b0[i], self._d1 @ b1[i], self._d2 @ b2[i]], axis=1)
 
     def _add_continuity(self, d: int, v: NodeSymbols) -> None:
         """The first node of domain d > 0 starts where domain d − 1 left (2m + 12 rows, ``continuity``): joints s,
@@ -566,9 +624,7 @@ class GaitProblem:
         """The cost Σ_d T_d Σ_i w_i ‖u_i / 100‖² (scaled torques; trapezoid weights w on the nodes of domain d)."""
         cost: Any = 0.0
         for d, (dl, taus, Td) in enumerate(zip(self.layout.domains, self.domain_taus, self._durations, strict=True)):
-            n = len(taus)
-            wts = np.full(n, 1.0 / (n - 1))
-            wts[[0, -1]] *= 0.5
+            wts = trapezoid_weights(len(taus))
             domain_cost: Any = 0.0
             for i, node in enumerate(dl.nodes):
                 domain_cost = domain_cost + wts[i] * cs.sumsqr(self.x[node["u"]])

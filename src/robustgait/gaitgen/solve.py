@@ -18,6 +18,7 @@ from robustgait.domains import Contact
 from robustgait.dynamics import Dynamics, foot_frame
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait, State
 from robustgait.gaitgen.check import PhysicsCheck, check_solution
+from robustgait.gaitgen.derivatives import derivative_functions
 from robustgait.gaitgen.problem import (
     F_SCALE,
     U_SCALE,
@@ -234,8 +235,8 @@ def unpack(prob: GaitProblem, x: FloatArray, durations: list[float]) -> tuple[li
 
 
 class GaitGenerator:
-    """Builds the NLP of a domain graph once for a robot (flat: ≈ 6 s for exo, 10 s for Atalante) and solves
-    it for any :class:`GaitParams`."""
+    """Builds the NLP of a domain graph once for a robot — its derivatives node kind by node kind
+    (:mod:`.derivatives`) — and solves it for any :class:`GaitParams`."""
 
     def __init__(self, robot: Robot, config: GenerationConfig | None = None, *, verbose: bool = False):
         self.robot = robot
@@ -246,9 +247,11 @@ class GaitGenerator:
         self.dyn = Dynamics(robot.planned)
         self.problem = prob = GaitProblem(self.dyn, cfg)
         nlp = {"x": prob.x, "p": prob.p, "f": prob.cost, "g": prob.g}
-        opts = {"ipopt.max_iter": cfg.max_iter, "ipopt.tol": cfg.tol, "ipopt.constr_viol_tol": 1e-9,
+        opts: dict[str, Any] = {"ipopt.max_iter": cfg.max_iter, "ipopt.tol": cfg.tol, "ipopt.constr_viol_tol": 1e-9,
                 "ipopt.print_level": 5 if verbose else 0, "print_time": False, "ipopt.sb": "yes",
                 "ipopt.linear_solver": "mumps", "ipopt.mu_strategy": "adaptive"}
+        # the derivatives node kind by node kind: nlpsol's own would derive them over the whole problem
+        opts["jac_g"], opts["hess_lag"] = derivative_functions(prob)
         self.solver = cs.nlpsol(f"robustgait_{cfg.domains}", "ipopt", nlp, opts)
         self.build_seconds = time.perf_counter() - t0
         self.n_variables, self.n_constraints = int(prob.x.numel()), int(prob.g.numel())
