@@ -6,12 +6,17 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 from pathlib import Path
 
 # MuJoCo picks its GL backend once, at import: make offscreen rendering headless before any test imports it.
 os.environ.setdefault("MUJOCO_GL", "egl")
+# Compile each module once per checkout, whatever PYTHONDONTWRITEBYTECODE says: the test modules' assertion rewriting
+# and robustgait's modules are otherwise compiled again by every xdist worker and every CLI subprocess of every run
+# (git ignores __pycache__).
+sys.dont_write_bytecode = False
 
-import pytest
+import pytest  # noqa: E402 (after the environment it must see)
 
 REPO = Path(__file__).resolve().parents[1]
 ATALANTE_DIR = REPO.parent / "shared" / "atalante"
@@ -207,13 +212,16 @@ def standing_gait(robot, *, extras: bool = False):  # type: ignore[no-untyped-de
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Modules with the most ``slow`` tests first, each module's tests in their own order: pytest-xdist hands tests
-    out in collection order, so the long ones start early and the short ones fill the gaps at the end instead of
-    one worker finishing a long test alone. A module's tests stay together, so its module fixtures are made once."""
+    """Modules with the most ``slow`` tests first, then those whose tests share an ``xdist_group``, each module's tests
+    in their own order: pytest-xdist hands tests out in collection order (a group as one unit), so the long ones
+    start early and the short ones fill the gaps at the end instead of one worker finishing a long test or group
+    alone."""
     def module(item: pytest.Item) -> str:
         return item.module.__name__ if item.module else ""
 
     slow: dict[str, int] = {}
+    grouped: dict[str, int] = {}
     for item in items:
         slow[module(item)] = slow.get(module(item), 0) + (item.get_closest_marker("slow") is not None)
-    items.sort(key=lambda item: -slow[module(item)])
+        grouped[module(item)] = grouped.get(module(item), 0) + (item.get_closest_marker("xdist_group") is not None)
+    items.sort(key=lambda item: (-slow[module(item)], -grouped[module(item)]))

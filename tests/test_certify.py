@@ -14,6 +14,9 @@ from robustgait.config import CertifyConfig, OrbitConfig, SequentialConfig, SimC
 from robustgait.report import outcome_masks, plot_barrier_trace, plot_certificate
 from tests.conftest import EXO_GAIT, EXO_MC_GAIT, standing_gait
 
+# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
+pytestmark = pytest.mark.xdist_group("certify_module")
+
 # an orbit search that cannot settle: two windows of 16 must agree to within 1e-12
 NEVER_SETTLES = OrbitConfig(max_steps=32, floor=1e-12, drift=1e-9)
 

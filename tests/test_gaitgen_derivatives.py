@@ -14,7 +14,8 @@ from robustgait.gaitgen.derivatives import derivative_functions
 from robustgait.gaitgen.problem import GaitProblem
 
 
-@pytest.mark.parametrize("domains", ["flat", pytest.param("multicontact", marks=pytest.mark.slow)])
+@pytest.mark.slow  # CasADi's own derivatives of the whole problem, the reference, take 10-30 s to derive
+@pytest.mark.parametrize("domains", ["flat", "multicontact"])
 def test_node_derivatives_are_the_whole_problems(exo, domains):  # type: ignore[no-untyped-def]
     prob = GaitProblem(Dynamics(exo.planned), GenerationConfig(domains=domains))
     kinds = {prob.node_kind(nr.d, nr.i) for nr in prob.node_rows}

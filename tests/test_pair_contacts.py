@@ -24,6 +24,9 @@ from robustgait.validate import disturbances as dist
 from tests.conftest import EXO_GAIT
 from tests.test_inspection import EXO_XML, SERVO_RULE, biped_xml, run, write
 
+# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
+pytestmark = pytest.mark.xdist_group("pair_contacts_module")
+
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - exercised on 3.10 only
@@ -99,6 +102,7 @@ def test_the_pair_model_loads_and_senses_the_floor_as_exo(pair_exo: Robot, exo: 
     assert stand[0] + stand[1] > 0 and stand[2] == stand[0] + stand[1] and sunk[2] > sunk[0] + sunk[1]
 
 
+@pytest.mark.slow
 def test_the_stored_gait_walks_and_certifies_as_on_exo(pair_exo: Robot, exo: Robot) -> None:
     """exo's stored gait on the pair model: the same switching states over 20 steps, and the same uniform
     certificate (its samples fall or not alike, so r* is the same)."""
@@ -125,7 +129,6 @@ def pair_validator(pair_exo: Robot):  # type: ignore[no-untyped-def]
         yield v
 
 
-@pytest.mark.xdist_group("pair_validator")  # one worker computes the shared module fixture
 def test_terrain_tiles_take_the_floor_pairs_and_carry_the_walk(pair_validator, pair_exo: Robot) -> None:
     """The terrain's tiles replace the floor with its pairs: each tile is paired with every geom the floor was, a
     sole standing on a tile is a footfall (its sensor), the pelvis on a tile a ground contact, and a walk over flat
@@ -151,7 +154,6 @@ def test_terrain_tiles_take_the_floor_pairs_and_carry_the_walk(pair_validator, p
     assert res.success.all()
 
 
-@pytest.mark.xdist_group("pair_validator")  # one worker computes the shared module fixture
 def test_a_slope_trial_walks_like_the_floor_on_the_pair_model(pair_validator) -> None:
     """Slopes tilt gravity over the floor and its pairs: 0° walks as the flat floor, 30° falls."""
     z = Draws("push", np.zeros(1), {"direction": np.zeros(1), "phase": np.zeros(1)})

@@ -20,6 +20,9 @@ from robustgait.sim.trials import pushed_first_step, simulate_trials
 from robustgait.validate import Validator
 from robustgait.validate.disturbances import Draws
 
+# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
+pytestmark = pytest.mark.xdist_group("push_module")
+
 
 @pytest.fixture(scope="module")
 def mc_pushes(exo, exo_mc_gait):  # type: ignore[no-untyped-def]

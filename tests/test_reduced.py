@@ -23,6 +23,9 @@ from robustgait.certificate.shape import Shape
 from robustgait.robots.model import mass_matrix
 from robustgait.rotations import quat_to_mat
 
+# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
+pytestmark = pytest.mark.xdist_group("reduced_module")
+
 STATES = ("omega", "centroidal", "velocity")
 
 

@@ -17,6 +17,9 @@ from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
 from robustgait.certificate.search import find_orbit, initial_section
 
+# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
+pytestmark = pytest.mark.xdist_group("returnmap_module")
+
 
 @pytest.fixture(scope="module")
 def step_map(robot_gait):  # type: ignore[no-untyped-def]
@@ -78,6 +81,7 @@ def test_angular_only_changes_only_the_angular_velocity(step_map):
     assert set(changed) <= {3, 4, 5} and np.array_equal(qpos[0], orbit.qpos)
 
 
+@pytest.mark.slow
 def test_a_two_step_map_is_two_steps_unmirrored_and_a_one_step_map_mirrors(exo, exo_gait):
     """The stride map (k = 2) of a symmetric robot is the step map applied twice (each mirrored: the mirrors cancel),
     to rounding; a map of no steps is refused."""

@@ -18,6 +18,9 @@ from robustgait.gait import State
 from robustgait.sim.walk import canonical_event_states
 from tests.conftest import EXO_GAIT
 
+# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
+pytestmark = pytest.mark.xdist_group("search_module")
+
 
 @pytest.fixture(scope="module")
 def exo_orbit(exo, exo_gait):  # type: ignore[no-untyped-def]

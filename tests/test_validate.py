@@ -27,6 +27,9 @@ from robustgait.validate import (
 )
 from robustgait.validate import disturbances as dist
 
+# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
+pytestmark = pytest.mark.xdist_group("validate_module")
+
 
 def test_wilson_interval_known_values():
     # reference values: Wilson (1927) score interval, z = 1.959964 (also scipy's binomtest(...).proportion_ci)
