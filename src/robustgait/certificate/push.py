@@ -7,7 +7,7 @@ J / duration for the validation's ``push_duration``, starting at a phase φ of t
 ``push_phase`` range (as ``robustgait validate --disturbance push``), and walks on. A push **fails** when the robot
 falls within the pushed step and ``push.horizon`` more. A pushed walk stops as soon as it has **recovered** — its
 whole switching state back in its orbit's band (:class:`.band.Band`) for ``push.recovery_steps`` consecutive steps,
-from where the orbit's own stability brings it home (a walk back in the band does not fall later: measured,
+from where the orbit's own stability brings it home (a walk back in the band does not fall later:
 ``docs/certificate.md`` "Recovery") — so a push costs the steps it needs, and a push that neither falls nor recovers
 walks the whole horizon. The map returns (0, 0) when the push did not fail and NaN when it failed, so the DTBF
 condition of :mod:`.barrier` reads "no failure" and the largest certified ball is J*: with confidence 1 − β at most ε

@@ -17,7 +17,7 @@ GaitFormat = Literal["json", "frost"]
 GAIT_FORMATS: tuple[GaitFormat, ...] = ("json", "frost")
 
 # The step duration of each domain graph when none is given [s]: multi-contact gaits of 0.7 s solve but do not
-# walk on exo (the 0.14 s of rolling is too fast for the simulator's soft contacts; measured, docs/gaitgen.md),
+# walk on exo (the 0.14 s of rolling is too fast for the simulator's soft contacts; docs/gaitgen.md),
 # 0.8–1.1 s do.
 DEFAULT_STEP_DURATION: dict[str, float] = {"flat": 0.7, "multicontact": 0.9}
 

@@ -263,7 +263,8 @@ class GaitGenerator:
         A warm start of this domain graph is rebuilt with its own durations, contact targets and stored
         torques, not with ``params``: its β describes its own step, so x₀ is then that gait's solution (the
         new essential constraints are IPOPT's to meet). Rebuilt with the new step length instead, a
-        multi-contact warm start's double support no longer closes and IPOPT needs ≈ 4× the iterations."""
+        multi-contact warm start's double support no longer closes and IPOPT needs several times the iterations
+        (docs/gaitgen.md)."""
         prob, robot = self.problem, self.robot
         n_dom = len(prob.graph)
         durations = domain_durations(prob, params)

@@ -232,7 +232,7 @@ def lowered(draft: Draft) -> bool:
 def symmetric_loads(loads: dict[int, JointLoad], torque: dict[int, TorqueLimit], mirror: Mirror
                     ) -> tuple[dict[int, JointLoad], dict[int, TorqueLimit]]:
     """The loads averaged over each left/right pair and the smaller torque limit of the pair, so that partners get
-    the same servo (a model's two sides may differ slightly: Booster T1's shanks weigh 1.73 and 1.79 kg)."""
+    the same servo (a model's two sides may differ slightly, e.g. in a link's mass)."""
     out_loads, out_torque = {}, {}
     for j, load in loads.items():
         p = loads[mirror.partner[j]]

@@ -239,7 +239,7 @@ class MassAsymmetry:
 def mass_asymmetry(robot: RobotModel, mirror: Mirror) -> MassAsymmetry:
     """max |m_b − m_b'| over body pairs (b, b') of the mirror (with |m_b − m_b'| / max(m_b, m_b') of that pair), and
     max_i |I_b,i − I_b',i| / max(I_b,i, I_b',i) of their sorted principal inertias: a model whose kinematics reflect
-    exactly may still not be its own mirror image in its dynamics (Menagerie's T1: the shanks differ by 60 g), so
+    exactly may still not be its own mirror image in its dynamics (a link's mass may differ between the sides), so
     that the mirrored step map is not the walk's map (``docs/certificate.md``, "The orbit the gait walks")."""
     m = robot.model
     mass, relative, body, partner, inertia = 0.0, 0.0, robot.base, robot.base, 0.0

@@ -29,8 +29,8 @@ FloatArray = NDArray[np.float64]
 @contextlib.contextmanager
 def torch_threads(n: int = 1) -> Iterator[None]:
     """Run the block with ``n`` torch threads (restored after). The model's matrices are small (at most
-    a thousand rows): one thread is 4–5× faster than torch's default pool on a shared 2-core machine,
-    where the pool's threads compete with the simulation workers."""
+    a thousand rows): one thread beats torch's default pool on a shared machine, where the pool's threads
+    compete with the simulation workers (docs/studies.md)."""
     old = torch.get_num_threads()
     torch.set_num_threads(n)
     try:

@@ -308,7 +308,7 @@ class ComfortRecorder:
         self.touchdowns: dict[int, tuple[int, str]] = {}  # step → (row of its touchdown, landing sole)
 
     def wants(self, step: int) -> bool:
-        """Whether step ``step`` (1-based) is kept (measured, or the step before or after)."""
+        """Whether step ``step`` (1-based) is kept (a step the figures are taken on, or the step before or after)."""
         return max(1, self.first - 1) <= step <= self.last + 1
 
     def add(self, step: int, domain: int, stance: str, start: FloatArray, trajectory: FloatArray,

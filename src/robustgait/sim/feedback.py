@@ -8,7 +8,7 @@ can run there. :class:`FeedbackEngine` is a StepEngine whose chunks are stepped 
 bit-identical to stepping one ``MjData`` per simulation) one physics step at a time; between two steps a
 :class:`FeedbackController` computes the K torques in vectorized NumPy from the K states (and, if it asks
 for them, MuJoCo's position/velocity-stage quantities of the K states, e.g. ``cdof``: the batch is then
-persistent and computes those stages at each new state, which was measured to run at ~0.6 of a plain step,
+persistent and computes those stages at each new state, which runs well below a plain step's speed (docs/feedback.md),
 so the shipped laws compute what they need themselves). The
 chunking, the event scan (switching, falls), the outputs (:class:`~robustgait.sim.engine.StepBatch`) and the
 disturbances (:class:`~robustgait.sim.engine.StepInputs`) are StepEngine's own: this class only replaces
@@ -200,7 +200,7 @@ _THREADPOOLS: list[object] = []
 
 
 def _one_blas_thread() -> contextlib.AbstractContextManager[object]:
-    """Limit BLAS to one thread (threadpoolctl's controller is made once: making it costs ~1 ms)."""
+    """Limit BLAS to one thread (threadpoolctl's controller is made once, not at every call)."""
     if not _THREADPOOLS:
         try:
             from threadpoolctl import ThreadpoolController
@@ -498,7 +498,8 @@ class FeedbackEngine(StepEngine):
         always None (this engine refuses the step regulator).
 
         The controller's NumPy runs with one BLAS thread: its products are small, and a multi-threaded BLAS
-        competing with the batch's threads (or another process) for the cores was measured 5× slower."""
+        competing with the batch's threads (or another process) for the cores is several times slower
+        (docs/feedback.md)."""
         with _one_blas_thread():
             return self._closed_loop(active, current, k0, n, inputs)
 

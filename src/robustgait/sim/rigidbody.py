@@ -282,11 +282,10 @@ class NominalKinematics:
     detection), sample by sample.
 
     The feedback engine's passivity law evaluates its model with this rather than with the simulator's own
-    position stage at the new state: the batched physics step then stays a plain ``mj_step`` (measured: a
-    persistent batch that also computed the next position stage ran at ~0.6 of the plain step; a NumPy forward
-    kinematics over the tree's levels cost ~1000 small NumPy calls, 5 ms for K = 1), and the controller keeps
-    the *nominal* model when the simulated plants are perturbed (per-sample masses, friction, terrain), as a
-    real controller would. ~5 µs per sample.
+    position stage at the new state: the batched physics step then stays a plain ``mj_step`` (a persistent batch
+    that also computes the next position stage, or a NumPy forward kinematics over the tree's levels, is slower:
+    docs/feedback.md), and the controller keeps the *nominal* model when the simulated plants are perturbed
+    (per-sample masses, friction, terrain), as a real controller would.
     """
 
     def __init__(self, model: mujoco.MjModel):

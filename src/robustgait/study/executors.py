@@ -4,8 +4,8 @@ Every worker loads the robot and builds the gait generator once (seconds: docs/p
 after gait with it. The study's driver process keeps the database: workers receive parameters and return
 :meth:`Evaluation.to_dict`, so they need no access to the study directory (Ray workers may run on other
 machines). Each local worker gets one MuJoCo rollout thread per core rather than a share of the cores
-(measured: paper-size exo studies 620 s → 549 s and 605 s → 559 s, because a batch of 5 gaits on 2 workers ends with one
-worker certifying alone); results do not depend on the thread count (the certificate is identical for any
+(docs/studies.md: a batch of 5 gaits on 2 workers ends with one worker certifying alone, which then uses every
+core); results do not depend on the thread count (the certificate is identical for any
 count).
 
 Both executors retry the task of a worker that died (a local process killed or crashed, a Ray actor

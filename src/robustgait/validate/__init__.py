@@ -1,5 +1,6 @@
-"""Does r* predict robustness? Disturbed walks of a gait — pushes, model mismatch, rough ground — and the
-certificate's promise tested (``robustgait validate``, ``docs/validation.md``)."""
+"""Does the certificate (J* or r*) predict robustness? Disturbed walks of a gait — pushes, model mismatch, rough
+ground, slopes, noise, latency — and the certificate's promise tested (``robustgait validate``,
+``docs/validation.md``)."""
 
 from robustgait.validate.disturbances import KINDS, SIZE_LABELS, Draws, draw
 from robustgait.validate.run import (
