@@ -86,11 +86,11 @@ def person_parts(status: dict[str, Any], table: Any) -> list[str]:
         return []
     name, unit = radius_name(status["certificate"]), status["unit"]
     floor = p.get("floor") or {}
+    ref = floor.get("reference")
+    of_ref = "" if not ref else (f": {floor.get('fraction')} × the reference gait's {ref['certificate_value']:.4g}"
+                                 + (f" ({params_label(ref['params'])})" if ref.get("params") else ""))
     text = (f"<h2>The person's answers</h2><p>Shown: gaits certified at or above the floor {name} ≥ "
-            f"{floor.get('value', 0):.4g} {unit} ({html.escape(str(floor.get('source')))}"
-            + (f": {floor.get('fraction')} × the reference gait's {floor['reference']['certificate_value']:.4g}"
-               + (f" ({params_label(floor['reference']['params'])})" if floor["reference"].get("params") else "")
-               if floor.get("reference") else "") + ")"
+            f"{floor.get('value', 0):.4g} {unit} ({html.escape(str(floor.get('source')))}{of_ref})"
             + (f" meeting {html.escape(', '.join(status['require']))}" if status["require"] else "")
             + "; the others ranked below every shown gait without asking."
             + (f" Batch {p['pending'] + 1} waits for an answer." if p["pending"] is not None else "") + "</p>")
