@@ -420,6 +420,26 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
     assert "ball" not in basis and "r*" not in basis
 
 
+@pytest.mark.slow  # three certificates: plain pytest stays ≤ 60 s; CI runs it
+def test_a_verification_replays_its_estimates_exploration(exo, exo_gait):
+    """certify_gait with ``explored`` = an estimate of the same gait and options (as a study verifies what it ranked on
+    an estimate): the same certificate, to the last bit, with the estimate's pushes replayed rather than walked again;
+    an estimate made with other options is ignored."""
+    cfg = CertifyConfig(disturbance="push", seed=3, push={"horizon": 4, "explore_horizon": 3, "first_round": 12,
+                                                          "explore": 12}, sequential=SequentialConfig(epsilon=0.2))
+    estimate = json.loads(json.dumps(certify_gait(exo, exo_gait, cfg, verify=False).to_dict()))
+    fresh = certify_gait(exo, exo_gait, cfg)
+    again = certify_gait(exo, exo_gait, cfg, explored=estimate)
+    assert fresh.ok and fresh.certificate.verified and fresh.replayed_samples == 0
+    assert again.replayed_samples == estimate["n_samples"] == 24
+    assert again.physics_steps < fresh.physics_steps
+    changes = ("seconds", "physics_steps", "replayed_samples")
+    a, b = fresh.to_dict(), again.to_dict()
+    assert {k: v for k, v in a.items() if k not in changes} == {k: v for k, v in b.items() if k not in changes}
+    other = certify_gait(exo, exo_gait, dataclasses.replace(cfg, seed=4), explored=estimate, verify=False)
+    assert other.replayed_samples == 0
+
+
 @pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_cli_validate_refuses_a_certificate_of_another_state(capsys, tmp_path):
     cert = tmp_path / "c.json"

@@ -3,6 +3,7 @@ coverage of its confidence statement, common random numbers), against the paper'
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import json
 import math
@@ -12,6 +13,7 @@ import pytest
 
 from robustgait.certificate.barrier import certify_map, distances, sample_ball, solve_radius
 from robustgait.certificate.estimators import (
+    Replay,
     certify_map_sequential,
     propose_round,
     verification_beta,
@@ -118,6 +120,37 @@ def test_an_estimate_alone_and_a_verification_decided_by_it() -> None:
     assert above.verified and above.estimate == est.estimate
     assert any(r.kind == "verify" for r in above.rounds)
     assert json.loads(json.dumps(est.to_dict()))["verified"] is False
+
+
+def test_a_replayed_exploration_gives_the_same_certificate_without_evaluating_it_again() -> None:
+    """A verification run whose exploration map replays an earlier estimate's samples and images (:class:`Replay`)
+    makes the same certificate, sample for sample, as one that evaluates them, and evaluates only what the estimate
+    did not: the verification batches, and exploration after a failed batch. A replay asked for anything else (another
+    seed) evaluates everything."""
+    P = PushThresholdMap(j0=20.0, a=0.3, b=0.4)
+    calls = {"n": 0}
+
+    def counted(x: np.ndarray, progress: object = None) -> np.ndarray:
+        calls["n"] += x.shape[0]
+        return P(x)
+
+    # verify_margin 1: batches fail on this map, so exploration resumes after them (those samples are not replayed)
+    cfg = CertifyConfig(seed=4, r_max=60.0, disturbance="push", push={"verify_margin": 1.0})
+    est = certify_map_sequential(P, np.zeros(2), cfg, verify=False)
+    x0, x1 = np.asarray(est.samples), np.asarray(est.images)
+    fresh = certify_map_sequential(P, np.zeros(2), cfg)
+    replay = Replay(counted, x0, x1)
+    again = certify_map_sequential(P, np.zeros(2), cfg, explore=replay)
+    verified = sum(r.n_samples for r in again.rounds if r.kind == "verify")
+    assert replay.replayed == est.n_samples and calls["n"] == again.n_samples - verified - est.n_samples
+    assert [r.kind for r in fresh.rounds].count("verify") >= 2  # exploration after a failure was evaluated
+    assert json.dumps(again.to_dict()) == json.dumps(fresh.to_dict())
+    other = Replay(counted, x0, x1)
+    calls["n"] = 0
+    moved = certify_map_sequential(P, np.zeros(2), dataclasses.replace(cfg, seed=5), verify=False, explore=other)
+    assert other.replayed == 0 and calls["n"] == moved.n_samples
+    with pytest.raises(RobustGaitError, match="one shape"):
+        Replay(counted, x0, x1[:-1])
 
 
 @pytest.mark.parametrize("kwargs", [{"epsilon": 0.0}, {"epsilon": 1.0}, {"budget": 0}, {"round_size": 0},

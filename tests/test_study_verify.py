@@ -91,7 +91,11 @@ def test_estimates_ranked_and_what_is_shown_verified_also_after_a_kill(tmp_path:
         assert best["verified_value"] <= best["estimate"] + 1e-9  # drawn in a margin of the estimate
         assert (d / best["certificate_file"]).name == "certificate.json"
         cert = json.loads((d / best["certificate_file"]).read_text())
-        assert cert["verified"] and cert["estimate"] == pytest.approx(best["estimate"])
+        assert cert["verified"] and cert["estimate"] == best["estimate"]
+        # the verification replayed the estimate's exploration (estimate.json) instead of walking it again
+        estimate = json.loads((d / best["certificate_file"]).with_name("estimate.json").read_text())
+        n = estimate["n_samples"]
+        assert cert["replayed_samples"] == n and cert["samples"][:n] == estimate["samples"]
         assert "(verified)" in figure_text(best, st["unit"])
     # the ranking is the estimates': the trials' scores did not change with the verifications
     assert [t["score"] for t in st["trials"]] == [t["score"] for t in study_status(d)["trials"]]

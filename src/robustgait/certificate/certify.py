@@ -12,8 +12,9 @@ study it is a data point).
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,7 +22,7 @@ import numpy as np
 from tqdm import tqdm
 
 from robustgait.certificate.barrier import Certificate, certify_map, evaluate_map, sample_ball
-from robustgait.certificate.estimators import certify_map_sequential
+from robustgait.certificate.estimators import Replay, certify_map_sequential
 from robustgait.certificate.orbit import FixedPoint, Orbit, Status
 from robustgait.certificate.push import PushMap
 from robustgait.certificate.reduced import Coordinates, ReducedState, section_dimension
@@ -95,6 +96,7 @@ class GaitCertificate:
     orbit: Orbit | None = None
     orbit_physics_steps: int = 0  # simulated by the orbit search (its walk, the probe, ρ)
     sigma: float | None = None
+    replayed_samples: int = 0  # exploration samples answered from an earlier run's (certify_gait's ``explored``)
 
     @property
     def ok(self) -> bool:
@@ -217,7 +219,7 @@ class GaitCertificate:
         if self.excursion is not None:
             out["excursion"] = self.excursion
         out.update({"physics_steps": self.physics_steps, "orbit_physics_steps": self.orbit_physics_steps,
-                    "config": to_dict(cfg), "sim": to_dict(self.sim),
+                    "replayed_samples": self.replayed_samples, "config": to_dict(cfg), "sim": to_dict(self.sim),
                     "seconds": self.seconds})
         if self.validate is not None:
             out["push"] = {"duration": self.validate.push_duration, "phase": list(self.validate.push_phase)}
@@ -243,6 +245,37 @@ def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: boo
         if cfg.method == "uniform":
             return certify_map(counted, x_star, cfg)
         return certify_map_sequential(counted, x_star, cfg, explore=counted_explore, verify=verify)
+
+
+def stored_exploration(explored: Mapping[str, Any], robot: str, config: CertifyConfig, sim: SimConfig,
+                       validate: ValidateConfig | None, fp: FixedPoint) -> tuple[np.ndarray, np.ndarray] | None:
+    """The exploration of an earlier certificate of the same gait (``explored``: :meth:`GaitCertificate.to_dict` with
+    its samples, e.g. a study's estimate) as (samples (N, n), images (N, n), NaN rows: fell): the samples of its rounds
+    before its first verification, in the order they were evaluated. None unless it was made on the same robot, with
+    the same certificate, simulation and push options (``validate``: a push certificate's duration and phases), from
+    the same x* (its step and reduced state, to the last bit), and holds its samples."""
+    if (explored.get("status") != str(Status.OK) or explored.get("samples") is None or explored.get("robot") != robot
+            or explored.get("config") != to_dict(config) or explored.get("sim") != to_dict(sim)
+            or explored.get("fixed_point_step") != fp.step
+            or explored.get("omega_star") != [float(v) for v in fp.omega]):
+        return None
+    if config.disturbance == "push":
+        v = validate or ValidateConfig()
+        if explored.get("push") != {"duration": v.push_duration, "phase": list(v.push_phase)}:
+            return None
+    try:
+        kinds = [r["kind"] for r in explored["rounds"]]
+        first_verify = kinds.index("verify") if "verify" in kinds else len(kinds)
+        rounds = np.asarray(explored["sample_round"], dtype=np.int64)
+        keep = np.flatnonzero(rounds < first_verify)
+        samples = np.asarray(explored["samples"], dtype=np.float64).reshape(len(rounds), -1)
+        nan = [math.nan] * samples.shape[1]
+        images = np.array([nan if row is None else row for row in explored["images"]], dtype=np.float64)
+        if images.shape != samples.shape:
+            return None
+    except (KeyError, TypeError, ValueError):  # not a certificate's samples (an edited file): simulate instead
+        return None
+    return samples[keep], images[keep]
 
 
 def certify_steps(config: CertifyConfig, graph: str, dim: int) -> int:
@@ -324,7 +357,8 @@ def orbit_scatter(orbit: Orbit, reduced: ReducedState, coords: Coordinates) -> f
 
 def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
                  validate: ValidateConfig | None = None, progress: bool = False,
-                 verify: bool | Callable[[float], bool] = True) -> GaitCertificate:
+                 verify: bool | Callable[[float], bool] = True,
+                 explored: Mapping[str, Any] | None = None) -> GaitCertificate:
     """Find the orbit the gait walks (:func:`.search.find_orbit`: settled, stable), then certify the set of
     ``config`` around its x* with the configured estimator (``uniform``: :func:`.barrier.certify_map`;
     ``sequential``: :func:`.estimators.certify_map_sequential`) on the map of the orbit's period, in the state, set
@@ -337,7 +371,11 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
     :class:`RobustGaitError` before any simulation. ``progress``: bars on stderr. ``verify`` false (the sequential
     estimator): the exploration alone, whose r̂ is an estimate with no statement (``certificate.verified`` false) —
     what a study ranks its gaits by (docs/studies.md); a callable of the estimate decides whether to verify it (a
-    person study verifies only the gaits it may show).
+    person study verifies only the gaits it may show). ``explored``: an earlier certificate of this gait with its
+    samples (:meth:`GaitCertificate.to_dict`, e.g. a study's estimate): where it was made with the same options from
+    the same x* (:func:`stored_exploration`; a state certificate of horizon 1), its exploration is replayed instead of
+    simulated again (:class:`.estimators.Replay`) — the same certificate, fewer physics steps
+    (``replayed_samples``); otherwise it is ignored.
     """
     cfg = config or CertifyConfig()
     sim = sim or SimConfig()
@@ -367,6 +405,9 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
                           physics_steps=0)
         assert orbit.qpos is not None and orbit.qvel is not None
         fp = orbit.fixed_point(cfg.frame)
+        stored = None if explored is None or cfg.method != "sequential" or (not push and cfg.horizon > 1) else \
+            stored_exploration(explored, robot.name, cfg, sim, vcfg if push else None, fp)
+        replay: Replay | None = None
         t2 = time.perf_counter()
         ball: Certificate | None = None
         excursion: list[float] | None = None
@@ -376,7 +417,8 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
             coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
             pushes = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push)
             exploring = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push.exploring())
-            cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}", explore=exploring,
+            replay = None if stored is None else Replay(exploring, *stored)
+            cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}", explore=replay or exploring,
                              verify=verify)
             if cert.basis:
                 cert = dataclasses.replace(cert, basis=push_basis(cert, cfg))
@@ -403,13 +445,16 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
             sigma = orbit_scatter(orbit, reduced, coords)
             paths = _Paths()
             desc = f"{cfg.state} {cfg.set}{'' if cfg.horizon == 1 else f', P^{cfg.horizon}'}, {cfg.method}"
-            cert = _estimate(_in_coordinates(pmap, coords, paths), coords.x_star, cfg, progress, desc, verify=verify)
+            P = _in_coordinates(pmap, coords, paths)
+            replay = None if stored is None else Replay(P, *stored)
+            cert = _estimate(P, coords.x_star, cfg, progress, desc, explore=replay, verify=verify)
             if cfg.horizon > 1:
                 excursion = paths.excursion(cert, coords)
             steps = fmap.physics_steps
         t3 = time.perf_counter()
         return result(Status.OK, "", certificate=cert, fixed_point=fp, map_residual=map_residual,
-                      physics_steps=steps, coordinates=coords, ball=ball, excursion=excursion, sigma=sigma,
+                      physics_steps=steps, replayed_samples=0 if replay is None else replay.replayed,
+                      coordinates=coords, ball=ball, excursion=excursion, sigma=sigma,
                       seconds={"orbit": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,
                                "sim_steps_per_s": steps / max(t3 - t2, 1e-9)})
     finally:

@@ -71,6 +71,7 @@ from robustgait.config import Barrier, CertifyConfig, SequentialConfig, verifica
 from robustgait.errors import RobustGaitError
 
 __all__ = [
+    "Replay",
     "certify_map_sequential",
     "propose_round",
     "verification_beta",
@@ -117,6 +118,38 @@ def propose_round(rng: np.random.Generator, m: int, x_star: FloatArray, r_hat: f
         u[local] = _unit(elites[j[local]] + config.spread * g[local])
         rho[local] = 1.0 - config.min_depth ** w[local, 1]
     return np.asarray(x_star + r_hat * rho[:, None] * u, dtype=np.float64)
+
+
+class Replay:
+    """A map of exploration that answers from an earlier run's exploration: while it is asked for exactly the samples
+    that run evaluated, in the order it evaluated them (``samples`` (N, n) and their ``images`` (N, n), NaN rows: fell),
+    it returns their stored images without evaluating ``P``; from the first call that asks for anything else it
+    evaluates ``P``, and keeps doing so. The sequential estimator's exploration is a function of the seed and the
+    images alone, so a run of the same map, seed and options asks for those samples again and, replayed, goes on
+    exactly as if it had evaluated them (a study verifies a gait whose estimate it already explored). ``P``'s calls
+    take the samples and an optional progress callback (called with the number of samples answered). ``replayed``:
+    samples answered from the stored run."""
+
+    def __init__(self, P: Callable[..., ArrayLike], samples: ArrayLike, images: ArrayLike):
+        self.P = P
+        self.samples = np.asarray(samples, dtype=np.float64)
+        self.images = np.asarray(images, dtype=np.float64)
+        if self.samples.shape != self.images.shape or self.samples.ndim != 2:
+            raise RobustGaitError(f"replayed exploration: samples {self.samples.shape} and images "
+                                  f"{self.images.shape} must be two arrays of one shape (N, n)")
+        self.next = 0
+        self.replayed = 0
+
+    def __call__(self, x: FloatArray, progress: Callable[[int], None] | None = None) -> FloatArray:
+        k, m = self.next, x.shape[0]
+        if k + m <= self.samples.shape[0] and np.array_equal(x, self.samples[k:k + m]):
+            self.next += m
+            self.replayed += m
+            if progress is not None:
+                progress(m)
+            return self.images[k:k + m].copy()
+        self.next = self.samples.shape[0]  # the run has left the stored one: never replay after this
+        return np.asarray(self.P(x, progress), dtype=np.float64)
 
 
 class _Pool:

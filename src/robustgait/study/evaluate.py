@@ -258,14 +258,17 @@ def record_certificate(ev: Evaluation, gc: GaitCertificate, ranks_verified: bool
     ev.certificate_value = float(gc.r_star) if ranks_verified else ev.estimate
 
 
-def verify_gait(robot: Robot, gait: Gait, config: Config) -> dict[str, Any]:
+def verify_gait(robot: Robot, gait: Gait, config: Config,
+                explored: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """The verified certificate of a study's gait (``config.study_certify``, verified whatever its estimate): a record
     with its ``status`` (``certified`` or ``not_certified``), ``reason``, ``verified_value`` (None unless certified),
     ``estimate``, ``certificate`` (:meth:`GaitCertificate.to_dict` with the samples; None when refused) and ``seconds``.
     Deterministic for a gait and a configuration, as the evaluation is: the same orbit and exploration as its
-    estimate."""
+    estimate — ``explored``, the estimate's certificate with its samples, is replayed rather than simulated again
+    (:func:`~robustgait.certificate.certify.certify_gait`), with the same result."""
     t0 = time.perf_counter()
-    gc = certify_gait(robot, gait, config.study_certify, config.sim, validate=config.validate, verify=True)
+    gc = certify_gait(robot, gait, config.study_certify, config.sim, validate=config.validate, verify=True,
+                      explored=explored)
     c = gc.certificate
     ok = gc.ok and c is not None
     return {"status": "certified" if ok else "not_certified", "reason": "" if ok else f"{gc.status}: {gc.reason}",

@@ -78,7 +78,7 @@ class EvaluationWorker:
         """A task of :func:`evaluation_task` (:meth:`evaluate`) or :func:`verification_task` (:meth:`verify`), with
         its CPU time and when and where it ran."""
         cpu, wall = time.process_time(), time.time()
-        out = self.verify(task["verify"]) if "verify" in task else self.evaluate(task["params"],
+        out = self.verify(task["verify"], task.get("explored")) if "verify" in task else self.evaluate(task["params"],
                                                                                    task.get("verify_above"))
         # the worker runs one task at a time, so its process CPU time (every thread) is this task's
         out["cpu_seconds"] = time.process_time() - cpu
@@ -96,12 +96,13 @@ class EvaluationWorker:
                       verify_above=verify_above)
         return ev.to_dict()
 
-    def verify(self, gait: dict[str, Any]) -> dict[str, Any]:
-        """The verified certificate of a study's gait (:func:`robustgait.study.evaluate.verify_gait`)."""
+    def verify(self, gait: dict[str, Any], explored: dict[str, Any] | None = None) -> dict[str, Any]:
+        """The verified certificate of a study's gait (:func:`robustgait.study.evaluate.verify_gait`; ``explored``: its
+        estimate's certificate, whose exploration is replayed)."""
         from robustgait.io.gaitfile import gait_from_dict
         from robustgait.study.evaluate import verify_gait
 
-        return verify_gait(self.robot, gait_from_dict(gait), self.config)
+        return verify_gait(self.robot, gait_from_dict(gait), self.config, explored)
 
     def pid(self) -> int:
         return os.getpid()
@@ -224,9 +225,10 @@ def evaluation_task(params: dict[str, float], verify_above: float | None = None)
     return {"params": params, "verify_above": verify_above}
 
 
-def verification_task(gait: dict[str, Any]) -> Task:
-    """A worker's task: the verified certificate of a study's gait (:meth:`EvaluationWorker.verify`)."""
-    return {"verify": gait}
+def verification_task(gait: dict[str, Any], explored: dict[str, Any] | None = None) -> Task:
+    """A worker's task: the verified certificate of a study's gait (:meth:`EvaluationWorker.verify`), with its
+    estimate's certificate (``explored``, with its samples) when the study holds one."""
+    return {"verify": gait, "explored": explored}
 
 
 @contextlib.contextmanager
@@ -259,9 +261,9 @@ class Executor:
         """Evaluate the gait of ``params`` (:func:`evaluation_task`)."""
         self.submit_task(key, evaluation_task(params, verify_above))
 
-    def submit_verify(self, key: int, gait: dict[str, Any]) -> None:
+    def submit_verify(self, key: int, gait: dict[str, Any], explored: dict[str, Any] | None = None) -> None:
         """Verify a study's gait (:func:`verification_task`)."""
-        self.submit_task(key, verification_task(gait))
+        self.submit_task(key, verification_task(gait, explored))
 
     def submit_task(self, key: int, task: Task) -> None:
         raise NotImplementedError

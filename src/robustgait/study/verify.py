@@ -83,7 +83,7 @@ class Verifier:
                 continue
             gait = read_json(self.directory / res["gait_file"], "gait")
             key = verification_key(index)
-            self.executor().submit_verify(key, gait)
+            self.executor().submit_verify(key, gait, stored_estimate(self.directory, res))
             self.running[key] = index
 
     def submit_front(self, store: StudyStore, config: StudyConfig, figure: str) -> None:
@@ -132,11 +132,21 @@ def verify_now(directory: Path, indices: list[int], *, progress: bool = True) ->
         for index in tqdm(todo, desc="verifying", unit="gait", disable=not progress, leave=False):
             res = evaluated[index].result or {}
             gait = gait_from_dict(read_json(directory / res["gait_file"], "gait"))
-            record = verify_gait(robot, gait, setup.config)
+            record = verify_gait(robot, gait, setup.config, stored_estimate(directory, res))
             store_verification(store, directory, space, index, record)
         return len(todo)
     finally:
         store.close()
+
+
+def stored_estimate(directory: Path, result: dict[str, Any]) -> dict[str, Any] | None:
+    """The estimate's certificate of a trial's ``result`` (``estimate.json``, with its samples: its exploration is
+    replayed by the verification), or None when the trial holds none or its file is gone."""
+    name = result.get("certificate_file")
+    if result.get("status") != "estimated" or not name or not (directory / name).is_file():
+        return None
+    out = read_json(directory / name, "estimate")
+    return out if isinstance(out, dict) else None
 
 
 def store_verification(store: StudyStore, directory: Path, space: ActionSpace, index: int,
