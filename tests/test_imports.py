@@ -1,4 +1,5 @@
-"""Layers without a cycle: the import graph of src/robustgait, function-local and type-checking imports included."""
+"""Layers without a cycle: the import graph of src/robustgait, function-local and type-checking imports included; and
+packages in the layers of docs/design.md, bottom to top, none importing a package above its own."""
 
 from __future__ import annotations
 
@@ -95,3 +96,44 @@ def test_data_modules_read_no_files_and_the_config_imports_no_pipeline():
     for m, deps in graph.items():
         if m.startswith("robustgait.config"):
             assert all(d.startswith(("robustgait.config", "robustgait.errors")) for d in deps), (m, deps)
+
+
+# the packages of docs/design.md's table, bottom to top ("__init__": the package robustgait itself)
+LAYERS = ("errors", "_lazy", "config", "bezier", "rotations", "robots", "gait", "domains", "dynamics", "learn", "io",
+          "inspection", "sim", "certificate", "gaitgen", "robotinit", "validate", "study", "report", "web", "cli",
+          "__init__")
+
+
+def package_of(module: str) -> str:
+    """robustgait.X.y → X; robustgait itself → __init__."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "__init__"
+
+
+def upward_imports(graph: dict[str, set[str]], layers: tuple[str, ...]) -> list[tuple[str, str]]:
+    """The (module, imported module) pairs whose imported package lies above the importer's in ``layers``."""
+    rank = {p: i for i, p in enumerate(layers)}
+    return sorted((m, d) for m, deps in graph.items() for d in deps
+                  if rank[package_of(d)] > rank[package_of(m)])
+
+
+def test_no_package_imports_one_above_it():
+    graph = import_graph()
+    assert {package_of(m) for m in graph} == set(LAYERS)  # a new package takes its place in the layers
+    assert upward_imports(graph, LAYERS) == []
+
+
+def test_the_layer_check_finds_an_upward_import():
+    graph = {"robustgait.sim.walk": {"robustgait.certificate.orbit"}, "robustgait.certificate.orbit": set()}
+    assert upward_imports(graph, ("sim", "certificate")) == [("robustgait.sim.walk", "robustgait.certificate.orbit")]
+    assert upward_imports(graph, ("certificate", "sim")) == []
+
+
+def test_the_layers_are_the_design_documents():
+    """docs/design.md names each package's layer in this order (its table, bottom to top)."""
+    text = (SRC.parents[1] / "docs" / "design.md").read_text()
+    table = text[text.index("| layer | module | owns |"):]
+    table = table[:table.index("\n\n")]
+    found = [p for p in LAYERS if p not in ("__init__", "_lazy")]
+    where = {p: min(i for i in (table.find(f"`{p}/"), table.find(f"`{p}.py")) if i >= 0) for p in found}
+    assert sorted(found, key=where.__getitem__) == found

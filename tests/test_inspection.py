@@ -20,7 +20,6 @@ from robustgait.config import RobotConfig, ScaleRules
 from robustgait.errors import RobustGaitError
 from robustgait.inspection.check import run_checks
 from robustgait.inspection.discover import find_legs, torque_limits
-from robustgait.inspection.draft import draft_spec
 from robustgait.inspection.gains import (
     joint_loads,
     nice_floor,
@@ -32,6 +31,7 @@ from robustgait.inspection.gains import (
 from robustgait.inspection.mirror import Mirror, find_mirror, fk_residual, mass_asymmetry, name_partner
 from robustgait.inspection.model import open_model
 from robustgait.inspection.scale import RobotSize, axis_range, nice_step, scale
+from robustgait.robotinit.draft import draft_spec
 from robustgait.robots.soles import sole_points
 
 if sys.version_info >= (3, 11):

@@ -19,8 +19,8 @@ from robustgait.config import RobotConfig
 from robustgait.errors import RobustGaitError
 from robustgait.inspection.check import check_mirror, check_soles
 from robustgait.inspection.discover import find_legs
-from robustgait.inspection.draft import draft_spec
 from robustgait.inspection.model import open_model
+from robustgait.robotinit.draft import draft_spec
 from robustgait.robots.soles import hull_vertices, sole_points, sole_rectangle
 from tests.test_inspection import SERVO_RULE, biped_xml, write
 

@@ -84,7 +84,7 @@ def test_a_settled_walk_that_does_not_come_back_is_unstable():
 
     o = search(F, np.array([0.02, 0.1, 0.1]))
     assert o.status == Status.UNSTABLE and o.band is not None and o.probe is not None and not o.probe.ok
-    assert "moved away from the band" in o.reason and any(o.probe.diverging) and not any(o.probe.fell)
+    assert "moved away from its band" in o.reason and any(o.probe.diverging) and not any(o.probe.fell)
     assert search(F, np.array([0.02, 0.1, 0.1]), perturbation=0.04).ok  # within the basin: they come back
 
 

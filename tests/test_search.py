@@ -11,11 +11,10 @@ import numpy as np
 import pytest
 
 from robustgait import CertifyConfig, walk
-from robustgait.certificate.orbit import Status, classify_walk, min_period
+from robustgait.certificate.orbit import Status, canonical_event_states, classify_walk, min_period, walk_orbit
 from robustgait.certificate.search import find_orbit, probe_impulse
 from robustgait.config import SimConfig
 from robustgait.gait import State
-from robustgait.sim.walk import canonical_event_states
 from tests.conftest import EXO_GAIT
 
 # one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
@@ -51,8 +50,8 @@ def test_walk_and_the_certificate_report_the_same_orbit(exo, exo_gait, exo_orbit
     same switching states — the same settled step, period, band and x*."""
     from robustgait.cli import main
 
-    api = walk(exo, exo_gait, SimConfig(step_cap=300)).orbit
-    assert api is not None and api.ok
+    api = walk_orbit(exo, exo_gait, walk(exo, exo_gait, SimConfig(step_cap=300)), CertifyConfig())
+    assert api.ok
     for field in ("settled", "period", "steps", "x_star_step"):
         assert getattr(api, field) == getattr(exo_orbit, field), field
     np.testing.assert_array_equal(api.band.centres, exo_orbit.band.centres)
@@ -62,9 +61,26 @@ def test_walk_and_the_certificate_report_the_same_orbit(exo, exo_gait, exo_orbit
     assert cli["sigma"] == pytest.approx(exo_orbit.sigma, rel=1e-12)
 
 
+@pytest.mark.slow  # two walks of a few seconds
+def test_a_walk_says_whether_its_switching_events_settled_on_an_orbit(exo, exo_gait, exo_mc_gait):
+    """From the events a walk already has (no simulation): the stored flat-foot gait settles in a band far below the
+    recovery floor, the multi-contact gait in a wider one; both hold their band — the orbit the certificate's search
+    finds (tests/test_search.py); a walk too short to see the band hold says so."""
+    cfg = CertifyConfig()
+    o = walk_orbit(exo, exo_gait, walk(exo, exo_gait, steps=120), cfg)
+    assert o.ok and o.period == 1 and o.sigma < 1e-3 and o.held == 64
+    assert o.to_dict()["settled_at_step"] == o.settled
+    mc_walk = walk(exo, exo_mc_gait, steps=120)
+    mc = walk_orbit(exo, exo_mc_gait, mc_walk, cfg)
+    assert mc_walk.steps_taken == 120 and not mc_walk.fell and mc.ok
+    assert mc.sigma > 10 * o.sigma and "settled at step" in mc.describe()
+    short = walk_orbit(exo, exo_gait, walk(exo, exo_gait, steps=50), cfg)
+    assert short.status == "undecided" and "are needed to see the band hold" in short.reason
+
+
 def test_a_walk_too_short_to_tell_says_so(exo, exo_gait):
-    o = walk(exo, exo_gait, SimConfig(step_cap=20)).orbit
-    assert o is not None and o.status == Status.UNDECIDED and "before its switching states settled" in o.reason
+    o = walk_orbit(exo, exo_gait, walk(exo, exo_gait, SimConfig(step_cap=20)), CertifyConfig())
+    assert o.status == Status.UNDECIDED and "before its switching states settled" in o.reason
 
 
 def test_a_walk_whose_steps_alternate_is_a_period_two_orbit(exo, exo_gait):

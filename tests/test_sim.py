@@ -31,22 +31,6 @@ def test_gait_walks_on_a_mirrored_period_one_orbit(robot_gait):
     np.testing.assert_allclose(w[1], w[0] * [-1, 1, -1], atol=0.03)
 
 
-@pytest.mark.slow  # two walks of a few seconds
-def test_a_walk_says_whether_its_switching_events_settled_on_an_orbit(exo, exo_gait, exo_mc_gait):
-    """From the events a walk already has (no simulation): the stored flat-foot gait settles in a band far below the
-    recovery floor, the multi-contact gait in a wider one; both hold their band — the orbit the certificate's search
-    finds (tests/test_search.py); a walk too short to see the band hold says so."""
-    res = walk(exo, exo_gait, steps=120)
-    o = res.orbit
-    assert o is not None and o.ok and o.period == 1 and o.sigma < 1e-3 and o.held == 64
-    assert res.to_dict()["orbit"]["settled_at_step"] == o.settled
-    mc = walk(exo, exo_mc_gait, steps=120)
-    assert mc.steps_taken == 120 and not mc.fell and mc.orbit is not None and mc.orbit.ok
-    assert mc.orbit.sigma > 10 * o.sigma and "settled at step" in mc.orbit.describe()
-    short = walk(exo, exo_gait, steps=50).orbit
-    assert short is not None and short.status == "undecided" and "are needed to see the band hold" in short.reason
-
-
 @pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_generated_gait_keeps_the_pelvis_level(exo, exo_gait):
     """The exoskeleton-grade bounds of gait generation hold in simulation: pelvis roll within ±6°."""

@@ -1,4 +1,4 @@
-"""The timestep by accuracy (robustgait.inspection.timestep, robot init's and robot check's; docs/robots.md, "The
+"""The timestep by accuracy (robustgait.robotinit.timestep, robot init's and robot check's; docs/robots.md, "The
 timestep"): the candidates, the error of two settled bands, the rule on synthetic trials, the walks it stops after
 (walks stubbed), robot init's spec with the gains drafted at the chosen step and its fallback (generation stubbed);
 end to end on exo and Booster T1 (slow: the default gait generated and walked)."""
@@ -19,8 +19,9 @@ from robustgait.cli import main
 from robustgait.config import CertifyConfig, Config, RobotConfig
 from robustgait.config.base import ConfigError
 from robustgait.errors import RobustGaitError
-from robustgait.inspection import robotinit, timestep
-from robustgait.inspection.timestep import (
+from robustgait.robotinit import init as robotinit
+from robustgait.robotinit import timestep
+from robustgait.robotinit.timestep import (
     TimestepChoice,
     Trial,
     Walked,

@@ -34,8 +34,8 @@ from common import git_commit
 from robustgait import Config, load_gait, load_robot
 from robustgait.certificate import orbit as rule
 from robustgait.certificate.band import band_coordinates
+from robustgait.certificate.orbit import canonical_event_states
 from robustgait.sim import walk
-from robustgait.sim.walk import canonical_event_states
 
 
 class _VariantHold(rule.Watch):

@@ -8,7 +8,7 @@ evenly spaced in grid order (all of them when the grid is smaller), each
 * solved cold by the gait generator (IPOPT, then its physics check): status, iterations, seconds;
 * walked ``--steps`` steps (default 300) with the spec's simulator (PD + feedforward): steps walked, fall reason,
   tracking RMS and max |q − y_d|, torque saturation (fraction of joint-steps at a limit);
-* the orbit of its switching states — the product's own classification (:func:`robustgait.sim.walk.walk_orbit`,
+* the orbit of its switching states — the product's own classification (:func:`robustgait.certificate.orbit.walk_orbit`,
   the one rule of walk, certify and studies: a band the states enter and hold, its period and scatter σ in band
   coordinates). ``outcome``: ``p1``, ``p2``, ``p4`` (settled, of that period), ``unsettled``, ``fell``, ``nosolve``.
 
@@ -67,9 +67,9 @@ def spec_path(robot: str, overrides: list[str], out_dir: Path) -> str:
     """The spec to run: ``robot`` itself, or the spec ``robot init`` writes for a model (into ``out_dir``)."""
     if Path(robot).suffix.lower() not in MODEL_SUFFIXES:
         return robot
-    from robustgait.inspection.draft import draft_spec
-    from robustgait.inspection.writer import render
     from robustgait.io.robotfile import write_spec
+    from robustgait.robotinit.draft import draft_spec
+    from robustgait.robotinit.writer import render
 
     target = out_dir / (Path(robot).stem + ".toml")
     write_spec(target, render(draft_spec(robot, robot_config(overrides)), target))
@@ -114,7 +114,8 @@ def worst_joints(robot: Any, tracking: dict[str, Any]) -> dict[str, Any]:
 def point(index: int, steps: int) -> dict[str, Any]:
     """One grid point: solve, walk, orbit (module docstring)."""
     from robustgait import walk
-    from robustgait.config import SimConfig
+    from robustgait.certificate.orbit import walk_orbit
+    from robustgait.config import CertifyConfig, SimConfig
     from robustgait.learn.space import ActionSpace
 
     robot, gen = _STATE["robot"], _STATE["gen"]
@@ -138,8 +139,7 @@ def point(index: int, steps: int) -> dict[str, Any]:
     if w.steps_taken < steps:
         out["outcome"] = "fell"
         return out
-    o = w.orbit
-    assert o is not None
+    o = walk_orbit(robot, res.gait, w, CertifyConfig())
     out.update(outcome=f"p{o.period}" if o.ok else str(o.status), orbit_steps=o.steps, settled=o.settled,
                period=o.period if o.ok else None, sigma=o.sigma, orbit_reason=o.reason)
     return out

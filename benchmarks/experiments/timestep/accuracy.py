@@ -3,10 +3,10 @@ candidate timestep h walked at h and at h/2 until the switching states settle, a
 of the two settled bands' centres, band coordinates — against ``robot.timestep_tolerance``.
 
 Every candidate is walked (robot init stops at the first that passes); the walks and the error are the package's
-(:func:`robustgait.inspection.timestep.select_timestep`). The servos are the spec's at every step, stable PD unless
+(:func:`robustgait.robotinit.timestep.select_timestep`). The servos are the spec's at every step, stable PD unless
 ``--no-stable-pd`` (robot init drafts the gains at each step: with its rules they are the same at every candidate
 below the servos' stability bound). The gait: ``--gait`` (a file), else the robot's default gait, generated as robot
-init generates it (:func:`robustgait.inspection.timestep.default_gait`). Progress on stderr; the table and the
+init generates it (:func:`robustgait.robotinit.timestep.default_gait`). Progress on stderr; the table and the
 choice on stdout.
 
     python benchmarks/experiments/timestep/accuracy.py --robot exo
@@ -25,7 +25,7 @@ from pathlib import Path
 
 from robustgait import load_gait, load_robot
 from robustgait.config import Config, RobotConfig
-from robustgait.inspection.timestep import Walked, default_gait, ms, select_timestep
+from robustgait.robotinit.timestep import Walked, default_gait, ms, select_timestep
 from robustgait.robots import Robot
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py

@@ -33,10 +33,10 @@ import numpy as np
 
 from robustgait import CertifyConfig, SimConfig, certify_gait, load_gait, load_robot, walk
 from robustgait.certificate.band import band_coordinates
+from robustgait.certificate.orbit import walk_orbit
 from robustgait.io.robotfile import read_mjcf
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine
-from robustgait.sim.walk import walk_orbit
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py
 from common import git_commit

@@ -80,10 +80,11 @@ def measure(job: dict[str, Any]) -> dict[str, Any]:
     estimates: dict[str, dict[str, Any]] = {}
     est = None
     for rule in job["rules"]:
-        nu, steps, horizon = rule.split("/")
+        nu, steps, horizon, *sizes_ = rule.split("/")
+        first, explore = (int(sizes_[0]), int(sizes_[1])) if sizes_ else (cfg.push.first_round, cfg.push.explore)
         rcfg = dataclasses.replace(cfg, push=dataclasses.replace(
             cfg.push, explore_recovery_radius=float(nu), explore_recovery_steps=int(steps),
-            explore_horizon=int(horizon)))
+            explore_horizon=int(horizon), first_round=first, explore=explore))
         t0 = time.perf_counter()
         est = certify_gait(robot, gait, rcfg, sim, verify=False)
         row.update(status=str(est.status), reason=est.reason, orbit_physics=est.orbit_physics_steps)
@@ -188,10 +189,16 @@ def cmd_report(args: argparse.Namespace) -> None:
         commits = sorted({r.get("commit", "?") for r in rows})
         print(f"## {path}: {len(rows)} gaits, {len(ok)} with an estimate (commit {', '.join(commits)}); "
               f"n₁ = {n1}\n")
-        rules = sorted({rule for r in ok for rule in r.get("estimates", {"legacy": 0})})
+        # in the order they were run: the first is the one the others are compared with
+        rules = list(dict.fromkeys(rule for r in ok for rule in r.get("estimates", {"legacy": 0})))
         for rule in rules:
-            print(f"rule {rule} (ν/m/h): exploration physics steps, median "
-                  f"{np.median([estimate(r, rule)['explore_physics'] for r in ok]) / 1e3:.0f} k\n")
+            base = [estimate(r, rules[0]) for r in ok]
+            here = [estimate(r, rule) for r in ok]
+            ratio = np.array([h["j_hat"] / b["j_hat"] for h, b in zip(here, base, strict=True) if b["j_hat"] > 0])
+            print(f"rule {rule} (ν/m/h[/first/explore]): exploration physics steps, median "
+                  f"{np.median([h['explore_physics'] for h in here]) / 1e3:.0f} k; Ĵ / Ĵ of rule {rules[0]}: median "
+                  f"{np.median(ratio):.3f}, range {ratio.min():.3f}–{ratio.max():.3f}, equal on "
+                  f"{int(np.sum(np.isclose(ratio, 1.0)))} of {ratio.size}\n")
             print("| margin c | expected first-attempt passes | gaits with a fall inside c Ĵ | walking steps per push "
                   "inside |")
             print("|---|---|---|---|")
@@ -233,7 +240,8 @@ def main() -> None:
     r.add_argument("--pushes", type=int, default=300, help="M: fresh pushes per gait")
     r.add_argument("--outer", type=float, default=1.2, help="their disk's radius over the largest Ĵ")
     r.add_argument("--rules", default="0.03/1/8",
-                   help="exploration rules ν/m/h (explore_recovery_radius / explore_recovery_steps / explore_horizon), "
+                   help="exploration rules ν/m/h[/first/explore] (explore_recovery_radius / explore_recovery_steps / "
+                        "explore_horizon, and optionally push.first_round / push.explore), "
                         "comma-separated: each one's estimate Ĵ")
     r.add_argument("--seed", type=int, default=0)
     r.add_argument("--full", action="store_true", help="also the default certificate")

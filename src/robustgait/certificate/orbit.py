@@ -37,8 +37,10 @@ from robustgait.certificate.reduced import reduce_state, section_dimension
 from robustgait.config import CertifyConfig
 from robustgait.config.certify import Frame, MapKind, OrbitConfig
 from robustgait.errors import RobustGaitError
+from robustgait.gait import Gait
 from robustgait.inspection.check import sides_differ
 from robustgait.robots import Robot
+from robustgait.sim.walk import SwitchEvent, WalkResult
 
 FloatArray = NDArray[np.float64]
 
@@ -231,6 +233,29 @@ class Probe:
         return {"impulse": self.impulse, "horizon": self.horizon, "recovered": list(self.recovered),
                 "steps": list(self.steps), "fell": list(self.fell), "left": list(self.left),
                 "diverging": list(self.diverging)}
+
+
+def probe_of(size: float, horizon: int, back: NDArray[np.int64], fell: NDArray[np.bool_] | NDArray[np.int64],
+             left: NDArray[np.bool_], trace: FloatArray, growth: float) -> Probe:
+    """The :class:`Probe` of perturbations of ``size`` from x*, followed ``horizon`` steps (or maps): per probe the
+    step it was back in the band (``back``, 0: not), whether it fell (``fell``, or the step it fell in), whether it
+    left the band (``left``) and its band distance after every step (``trace`` (n, ≥ horizon), NaN once stopped),
+    judged diverging by :func:`moving_away` with ``growth`` (``orbit.probe_growth``)."""
+    return Probe(float(size), horizon, tuple(bool(b) for b in back > 0), tuple(int(b) for b in back),
+                 tuple(bool(f) for f in np.asarray(fell, dtype=np.int64) > 0), tuple(bool(x) for x in left),
+                 moving_away(back, fell, trace, growth))
+
+
+def unstable_reason(probe: Probe, settled: str, perturbed: str, unit: str) -> str:
+    """One line, for an orbit the probe refused: ``settled`` (what settled: "the walk") and, of its probes
+    (``perturbed``: "pushes of 12 N s"), how many moved away from the band, fell or stayed near it without entering
+    it, and how many came back within its horizon (in ``unit``: "steps")."""
+    n, fell, moving, back = len(probe.recovered), sum(probe.fell), sum(probe.diverging), sum(probe.recovered)
+    near = n - fell - moving - back
+    what = ", ".join([f"{moving} moved away from its band"] * bool(moving) + [f"{fell} fell"] * bool(fell)
+                     + [f"{near} stayed near it without entering it"] * bool(near))
+    return (f"{settled} settled, but of {n} {perturbed} from x*, {what} and {back} came back within {probe.horizon} "
+            f"{unit}")
 
 
 def moving_away(recovered: NDArray[np.int64], fell: NDArray[np.bool_] | NDArray[np.int64], trace: FloatArray,
@@ -512,6 +537,28 @@ def classify_walk(robot: Robot, qpos: FloatArray, qvel: FloatArray, config: Cert
                                states=window, states_step=a)
 
 
+def canonical_event_states(robot: Robot, gait: Gait, events: Sequence[SwitchEvent]
+                           ) -> tuple[FloatArray, FloatArray]:
+    """The states (len(events), nq), (len(events), nv) of a walk's switching events, each written for the gait's own
+    stance (an event that starts a step of the other stance is mirrored): the sequence the step map acts on."""
+    if not events:
+        return np.empty((0, robot.model.nq)), np.empty((0, robot.model.nv))
+    qpos, qvel = np.array([e.qpos for e in events]), np.array([e.qvel for e in events])
+    # the step that ended was canonical, so the next one is not
+    other = np.array([e.stance == gait.stance for e in events])
+    mq, mv = robot.mirror_state(qpos, qvel)
+    return np.where(other[:, None], mq, qpos), np.where(other[:, None], mv, qvel)
+
+
+def walk_orbit(robot: Robot, gait: Gait, walked: WalkResult, config: CertifyConfig) -> Orbit:
+    """The orbit of a walk's switching states (:func:`robustgait.sim.walk.walk`), written for the gait's stance
+    (:func:`canonical_event_states`), by :func:`classify_walk` with the options of ``config.orbit`` and ``config.map``
+    — no simulation, and the same orbit the certificate's search finds on the same gait (it walks the same steps and
+    stops where they settle), without its stability probe (``robustgait.certificate.search.find_orbit``)."""
+    qpos, qvel = canonical_event_states(robot, gait, walked.events)
+    return classify_walk(robot, qpos, qvel, config, walked.fall_reason if walked.fell else None)
+
+
 class SettlingWatch:
     """A stop rule for a walk (``walk(..., until=...)``): true once the orbit rule (:class:`Watch`) has its answer, so
     that the orbit search walks no further than it needs. Called with the walk's events so far (objects with
@@ -572,13 +619,9 @@ def map_orbit(F: Callable[[FloatArray], FloatArray], x0: FloatArray, config: Cer
             left |= live & (shifted[:, 0] > 1.0)
         trace[live, j - 1] = shifted[live].min(axis=1)
         back[live & (run.max(axis=1) >= p.recovery_steps)] = j
-    moving = moving_away(back, fallen, trace, o.probe_growth)
-    probe = Probe(perturbation, o.probe_horizon, tuple(bool(b) for b in back > 0), tuple(int(b) for b in back),
-                  tuple(bool(f) for f in fallen), tuple(bool(x) for x in left), moving)
+    probe = probe_of(perturbation, o.probe_horizon, back, fallen, left, trace, o.probe_growth)
     orbit = dataclasses.replace(orbit, probe=probe)
     if not probe.ok:
-        orbit = dataclasses.replace(orbit, status=Status.UNSTABLE, reason=(
-            f"the iterates settled, but of {len(back)} states perturbed by {perturbation:g} from x*, "
-            f"{sum(moving)} moved away from the band, {int(fallen.sum())} fell and {int((back > 0).sum())} came back "
-            f"within {o.probe_horizon} maps"))
+        orbit = dataclasses.replace(orbit, status=Status.UNSTABLE, reason=unstable_reason(
+            probe, "the iterates", f"states perturbed by {perturbation:g}", "maps"))
     return orbit

@@ -3,8 +3,8 @@ the band come back to it (``docs/certificate.md``, "The orbit the gait walks").
 
 1. **Settled** — the gait is walked (:func:`robustgait.sim.walk.walk`, the walk every command runs) until its
    switching states settle (by ``orbit.max_steps``) and their band has held ``orbit.hold_steps`` more steps
-   (:class:`.orbit.SettlingWatch`); the orbit, its period, band and x* are :func:`.orbit.classify_walk`'s, so
-   ``walk`` reports the same orbit for the same gait once it has walked as far.
+   (:class:`.orbit.SettlingWatch`); the orbit, its period, band and x* are :func:`.orbit.walk_orbit`'s, so any walk
+   of the same gait classified by it gives the same orbit once it has walked as far.
 2. **Stable** — ``orbit.probe_pushes`` pushes of ``orbit.probe_impulse`` × m √(g l) at evenly spaced directions
    start from x*, each walked until it has come back to the band for ``push.recovery_steps`` steps, within
    ``orbit.probe_horizon`` steps (the push map's own walk, :class:`.push.PushMap`). ``unstable`` when a probe does
@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.certificate.linearization import linearize
-from robustgait.certificate.orbit import Orbit, Probe, SettlingWatch, Status, moving_away
+from robustgait.certificate.orbit import Orbit, Probe, SettlingWatch, Status, probe_of, unstable_reason, walk_orbit
 from robustgait.certificate.push import PushMap, push_phase
 from robustgait.certificate.returnmap import FullStateMap
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig
@@ -63,9 +63,7 @@ def probe_stability(engine: StepEngine, orbit: Orbit, config: CertifyConfig, val
             break
         size *= 2.0
     assert pm.trace is not None
-    moving = moving_away(recovered, fall_step, pm.trace, o.probe_growth)
-    return Probe(size, o.probe_horizon, tuple(bool(r) for r in recovered > 0), tuple(int(r) for r in recovered),
-                 tuple(bool(f) for f in fall_step > 0), tuple(bool(x) for x in left), moving), pm.physics_steps
+    return probe_of(size, o.probe_horizon, recovered, fall_step, left, pm.trace, o.probe_growth), pm.physics_steps
 
 
 def find_orbit(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
@@ -88,17 +86,16 @@ def find_orbit(robot: Robot, gait: Gait, config: CertifyConfig | None = None, si
             return watch(events)
 
         result = walk(robot, gait, eng.config, steps=cfg.orbit.max_steps + cfg.orbit.hold_steps, engine=eng,
-        certify=cfg,
                       until=until)
-        orbit = result.orbit
-        assert orbit is not None
+        orbit = walk_orbit(robot, gait, result, cfg)
         physics = result.physics_steps
         if orbit.ok and cfg.orbit.probe_impulse > 0:
             probe, steps = probe_stability(eng, orbit, cfg, v)
             physics += steps
             orbit = dataclasses.replace(orbit, probe=probe)
             if not probe.ok:
-                orbit = dataclasses.replace(orbit, status=Status.UNSTABLE, reason=_unstable_reason(probe))
+                orbit = dataclasses.replace(orbit, status=Status.UNSTABLE, reason=unstable_reason(
+                    probe, "the walk", f"pushes of {probe.impulse:.3g} N s", "steps"))
         if orbit.ok and cfg.orbit.linearization:
             assert orbit.qpos is not None and orbit.qvel is not None
             with FullStateMap(robot, gait, orbit.period, engine=eng) as fmap:
@@ -108,16 +105,6 @@ def find_orbit(robot: Robot, gait: Gait, config: CertifyConfig | None = None, si
     finally:
         if own:
             eng.close()
-
-
-def _unstable_reason(probe: Probe) -> str:
-    """One line: which probing pushes moved away from the band, fell or stayed near it, and how many came back."""
-    n, fell, moving, back = len(probe.recovered), sum(probe.fell), sum(probe.diverging), sum(probe.recovered)
-    near = n - fell - moving - back
-    what = ", ".join([f"{moving} moved away from its band"] * bool(moving) + [f"{fell} fell"] * bool(fell)
-                     + [f"{near} stayed near it without entering it"] * bool(near))
-    return (f"the walk settled, but of {n} pushes of {probe.impulse:.3g} N s from x*, {what} and {back} came back "
-            f"within {probe.horizon} steps")
 
 
 def initial_section(robot: Robot, gait: Gait, engine: StepEngine) -> tuple[FloatArray, FloatArray]:

@@ -23,9 +23,9 @@ def progress(line: str) -> None:
 
 def _init(args: argparse.Namespace) -> int:
     from robustgait.cli.options import config_from
-    from robustgait.inspection.robotinit import init_spec
-    from robustgait.inspection.writer import render, summary
     from robustgait.io.robotfile import write_spec
+    from robustgait.robotinit.init import init_spec
+    from robustgait.robotinit.writer import render, summary
 
     config = config_from(args)
     draft = init_spec(args.model, args.output, config, say=progress)
@@ -37,8 +37,8 @@ def _init(args: argparse.Namespace) -> int:
 def _check(args: argparse.Namespace) -> int:
     from robustgait.cli.options import config_from
     from robustgait.inspection.check import run_checks
-    from robustgait.inspection.timestep import check_timestep
     from robustgait.io.robotfile import load_robot
+    from robustgait.robotinit.timestep import check_timestep
 
     config = config_from(args)
     robot = load_robot(args.spec)

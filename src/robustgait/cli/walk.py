@@ -12,20 +12,20 @@ SIM = {"--controller": "sim.controller", "--switching": "sim.switching", "--feed
 
 
 def _walk(args: argparse.Namespace) -> int:
+    from robustgait.certificate.orbit import canonical_event_states, walk_orbit
     from robustgait.certificate.reduced import reduce_state
     from robustgait.io.output import write_csv
     from robustgait.sim import walk
-    from robustgait.sim.walk import canonical_event_states
 
     config, robot, gait = inputs(args)
     with naming_file(args.gait):
-        result = walk(robot, gait, config.sim, video=args.video, comfort=config.comfort, certify=config.certify)
-    orbit = result.orbit
+        result = walk(robot, gait, config.sim, video=args.video, comfort=config.comfort)
+    orbit = walk_orbit(robot, gait, result, config.certify)
     if args.log is not None:
         xs = reduce_state(*canonical_event_states(robot, gait, result.events), config.certify.frame)
         write_csv(args.log, ["wx", "wy", "wz"], xs.tolist())
     if args.json:
-        print(json.dumps(result.to_dict(), allow_nan=False))
+        print(json.dumps({**result.to_dict(), "orbit": orbit.to_dict()}, allow_nan=False))
     else:
         end = f"fell ({result.fall_reason}) at t = {result.time:.2f} s" if result.fell else "no fall"
         print(f"{gait.robot} gait on {robot.name}: {result.steps_taken}/{result.max_steps} steps, {end}; "
@@ -48,8 +48,7 @@ def _walk(args: argparse.Namespace) -> int:
                   f" gain {reg['gain']}): "
                   f"{reg['updates']} corrections, largest landing change {100 * reg['largest_step_change']:.3g} cm, "
                   f"{reg['clipped']} clipped (tracking errors include its corrections)")
-        if orbit is not None:
-            print(f"orbit of the switching events: {orbit.describe()} (stability: robustgait certify)")
+        print(f"orbit of the switching events: {orbit.describe()} (stability: robustgait certify)")
         if result.comfort is not None:
             print("\n".join(result.comfort.text()))
         else:

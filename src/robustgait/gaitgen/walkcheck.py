@@ -18,7 +18,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.certificate.orbit import Orbit, SettlingWatch, Status
+from robustgait.certificate.orbit import Orbit, SettlingWatch, Status, walk_orbit
 from robustgait.config import Config, GaitParams
 from robustgait.config.regulator import placement_share, regulator_rule
 from robustgait.gait import Gait
@@ -232,11 +232,12 @@ def walk_check(robot: Robot, gait: Gait, config: Config, check: PhysicsCheck | N
             done = watch(events)  # fed every event, whatever the least steps
             return done and len(events) >= least
 
-    result = walk(robot, gait, config.sim, steps=steps, certify=config.certify, until=until)
+    result = walk(robot, gait, config.sim, steps=steps, until=until)
     out = WalkCheck(least, result.steps_taken, result.fell, result.fall_reason, result.controller)
-    if result.orbit is not None and until is not None:
-        out.orbit = result.orbit.status.value
-        out.orbit_text = orbit_summary(result.orbit) if not result.fell else result.orbit.reason
+    if until is not None:
+        orbit = walk_orbit(robot, gait, result, config.certify)
+        out.orbit = orbit.status.value
+        out.orbit_text = orbit_summary(orbit) if not result.fell else orbit.reason
     if result.fell:
         diagnosis = diagnose_fall(robot, gait, config, result.steps_taken + 1, check)
         assert diagnosis is not None  # the same walk: it falls again

@@ -13,7 +13,7 @@ its thresholds in :class:`robustgait.config.RobotCheckConfig` (``docs/robots.md`
   follows a sinusoid about the posture with the walker's servo law (c = q_d + kd q̇_d / kp, no feedforward);
   each joint's error RMS and its time at the torque limit.
 
-The ``timestep`` check, which walks the default gait, is :func:`robustgait.inspection.timestep.check_timestep`
+The ``timestep`` check, which walks the default gait, is :func:`robustgait.robotinit.timestep.check_timestep`
 (the certificate's orbit rule it walks with reads :func:`sides_differ` of this module); ``robot check`` runs it after
 these.
 """

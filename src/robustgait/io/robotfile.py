@@ -2,7 +2,7 @@
 :class:`~robustgait.robots.RobotSpec`), the MJCF it names (parsed by MuJoCo), :func:`load_robot` (``docs/robots.md``,
 limits in ``docs/inputs.md``), and the files of ``robot init``: the MJCF or URDF it reads (:func:`read_model`) and the
 spec it writes only once the loader accepts it (:func:`write_spec`; its text is rendered by
-:mod:`robustgait.inspection.writer`).
+:mod:`robustgait.robotinit.writer`).
 Names (joints, geoms, bodies) are checked against the MJCF when the robot is compiled
 (:func:`robustgait.robots.model.build_mjspec`); everything else is checked here."""
 

@@ -16,8 +16,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.certificate.orbit import Orbit, classify_walk
-from robustgait.config import CertifyConfig, ComfortConfig, SimConfig
+from robustgait.config import ComfortConfig, SimConfig
 from robustgait.config.work import MAX_GIF_FRAMES, MAX_VIDEO_PHYSICS_STEPS, Work, check_gif, check_work
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import Gait
@@ -55,8 +54,7 @@ class WalkResult:
     every physics step: RMS and largest |q − y_d| [rad] and the torque saturation (joint-steps whose commanded
     torque exceeded the limit, and their fraction; :class:`~robustgait.sim.controller.TrackingStats`); ``comfort``:
     what a passenger feels (:class:`~robustgait.sim.comfort.Comfort`) when the walk was asked for it and completed a
-    measured step, else None; ``orbit``: whether the switching events, written for the gait's stance, settled on an
-    orbit (:func:`walk_orbit`); ``physics_steps`` simulated; ``regulator``: what the step regulator did
+    measured step, else None; ``physics_steps`` simulated; ``regulator``: what the step regulator did
     (:meth:`~robustgait.sim.regulator.StepRegulator.summary`), None when it did not run."""
 
     steps_taken: int
@@ -73,46 +71,22 @@ class WalkResult:
     tracking: dict[str, float] = field(default_factory=dict)
     comfort: Comfort | None = None
     trajectory: NDArray[np.float64] | None = field(default=None, repr=False)
-    orbit: Orbit | None = None
     physics_steps: int = 0
     regulator: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
         out.pop("trajectory")
-        out["orbit"] = None if self.orbit is None else self.orbit.to_dict()
         return out
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), allow_nan=False)
 
 
-def canonical_event_states(robot: Robot, gait: Gait, events: list[SwitchEvent]
-                           ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The states (len(events), nq), (len(events), nv) of a walk's switching events, each written for the gait's own
-    stance (an event that starts a step of the other stance is mirrored): the sequence the step map acts on."""
-    if not events:
-        return np.empty((0, robot.model.nq)), np.empty((0, robot.model.nv))
-    qpos, qvel = np.array([e.qpos for e in events]), np.array([e.qvel for e in events])
-    # the step that ended was canonical, so the next one is not
-    other = np.array([e.stance == gait.stance for e in events])
-    mq, mv = robot.mirror_state(qpos, qvel)
-    return np.where(other[:, None], mq, qpos), np.where(other[:, None], mv, qvel)
-
-
 def _heading(qpos: NDArray[np.float64]) -> NDArray[np.float64]:
     """Unit horizontal direction of the base's x axis (from the quaternion w, x, y, z)."""
     fwd = quat_to_mat(qpos[3:7])[:2, 0]
     return fwd / max(float(np.linalg.norm(fwd)), 1e-12)
-
-
-def walk_orbit(robot: Robot, gait: Gait, result: WalkResult, certify: CertifyConfig | None = None) -> Orbit:
-    """The orbit of a walk's switching states, written for the gait's stance (:func:`canonical_event_states`): the
-    certificate's own classification (:func:`robustgait.certificate.orbit.classify_walk`, the options of
-    ``certify.orbit`` and ``certify.map``) — no simulation, and the same orbit the certificate's search finds on the
-    same gait (it walks the same steps and stops where they settle)."""
-    qpos, qvel = canonical_event_states(robot, gait, result.events)
-    return classify_walk(robot, qpos, qvel, certify or CertifyConfig(), result.fall_reason if result.fell else None)
 
 
 def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, video: str | Path | None = None) -> Work:
@@ -135,7 +109,7 @@ def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, vid
 def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: int | None = None,
          keep_trajectory: bool = False, video: str | Path | None = None,
          engine: StepEngine | None = None, comfort: ComfortConfig | None = None,
-         certify: CertifyConfig | None = None, until: Callable[[list[SwitchEvent]], bool] | None = None) -> WalkResult:
+         until: Callable[[list[SwitchEvent]], bool] | None = None) -> WalkResult:
     """Walk ``gait`` from its initial state for up to ``steps`` steps (default ``config.step_cap``), switching
     stance at each event.
 
@@ -146,9 +120,10 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     The trajectory (every physics step's full state, (n, nstate), MuJoCo's ``mjSTATE_FULLPHYSICS`` layout,
     time continuing across steps) is kept when ``keep_trajectory`` or ``video`` (an ``.mp4`` or ``.gif`` path,
     rendered after the walk by :func:`render_video`). The work is bounded before anything runs
-    (:func:`check_walk_work`; a video's stricter limits, the output path checked). ``orbit`` of the result:
-    :func:`walk_orbit` with the orbit options of ``certify``. ``until(events)``, called after each completed step,
-    ends the walk early when it returns true (the orbit search stops where the switching states have settled).
+    (:func:`check_walk_work`; a video's stricter limits, the output path checked). The orbit its switching events
+    settle on is the certificate's to say (:func:`robustgait.certificate.orbit.walk_orbit`). ``until(events)``, called
+    after each completed step, ends the walk early when it returns true (the orbit search stops where the switching
+    states have settled).
 
     ``comfort``: measure what a passenger feels over the steps it names (:mod:`robustgait.sim.comfort`,
     ``WalkResult.comfort``); None: not measured.
@@ -223,7 +198,6 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
             controller=eng.controller_name, controller_note=eng.controller_note, tracking=stats.summary(),
             comfort=measure(robot, eng.physics_model, recorder, heading) if recorder is not None else None,
             physics_steps=physics, regulator=eng.regulator.summary() if eng.regulator is not None else None)
-        result.orbit = walk_orbit(robot, gait, result, certify)
     finally:
         if own:
             eng.close()

@@ -49,7 +49,7 @@ from robustgait.robots.model import mass_matrix
 from robustgait.robots.soles import can_touch, sole_slopes
 
 if TYPE_CHECKING:
-    from robustgait.inspection.timestep import TimestepChoice
+    from robustgait.robotinit.timestep import TimestepChoice
 
 INTEGRATOR_NAMES = {int(mujoco.mjtIntegrator.mjINT_EULER): "euler",
                     int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST): "implicitfast",

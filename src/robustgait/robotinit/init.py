@@ -19,10 +19,10 @@ from pathlib import Path
 
 from robustgait.config import Config
 from robustgait.errors import RobustGaitError
-from robustgait.inspection.draft import Draft, draft_at_timestep, draft_spec, lowered
-from robustgait.inspection.timestep import candidate_timesteps, default_gait, ms, select_timestep
-from robustgait.inspection.writer import render
 from robustgait.io.robotfile import read_mjcf, spec_from_raw
+from robustgait.robotinit.draft import Draft, draft_at_timestep, draft_spec, lowered
+from robustgait.robotinit.timestep import candidate_timesteps, default_gait, ms, select_timestep
+from robustgait.robotinit.writer import render
 from robustgait.robots import Robot
 
 if sys.version_info >= (3, 11):

@@ -1,4 +1,4 @@
-"""The spec TOML of a :class:`~robustgait.inspection.draft.Draft` (the format of ``docs/robots.md``), every value
+"""The spec TOML of a :class:`~robustgait.robotinit.draft.Draft` (the format of ``docs/robots.md``), every value
 with a comment saying where it came from, and the summary ``robot init`` prints."""
 
 from __future__ import annotations
@@ -13,11 +13,11 @@ import mujoco
 import numpy as np
 
 from robustgait.inspection.discover import SIDES, FoundSole
-from robustgait.inspection.draft import INTEGRATOR_NAMES, Draft
 from robustgait.inspection.mirror import mass_asymmetry
 from robustgait.inspection.model import GEOM_TYPES
 from robustgait.inspection.scale import GAIT_AXES, balance, duration_constant, narrow_soles, sig
-from robustgait.inspection.timestep import TimestepChoice, ms
+from robustgait.robotinit.draft import INTEGRATOR_NAMES, Draft
+from robustgait.robotinit.timestep import TimestepChoice, ms
 from robustgait.robots.soles import SOLE_PLANE_TOLERANCE, SOLE_TILT_SLOPE
 from robustgait.robots.spec import FallCriteria
 
