@@ -420,24 +420,28 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
     assert "ball" not in basis and "r*" not in basis
 
 
-@pytest.mark.slow  # three certificates: plain pytest stays ≤ 60 s; CI runs it
+@pytest.mark.slow  # five certificates: plain pytest stays ≤ 60 s; CI runs it
 def test_a_verification_replays_its_estimates_exploration(exo, exo_gait):
     """certify_gait with ``explored`` = an estimate of the same gait and options (as a study verifies what it ranked on
     an estimate): the same certificate, to the last bit, with the estimate's pushes replayed rather than walked again;
-    an estimate made with other options is ignored."""
+    its orbit taken from the estimate's record (same robot, gait and options); an estimate made with other options is
+    ignored."""
     cfg = CertifyConfig(disturbance="push", seed=3, push={"horizon": 4, "explore_horizon": 3, "first_round": 12,
                                                           "explore": 12}, sequential=SequentialConfig(epsilon=0.2))
     estimate = json.loads(json.dumps(certify_gait(exo, exo_gait, cfg, verify=False).to_dict()))
     fresh = certify_gait(exo, exo_gait, cfg)
     again = certify_gait(exo, exo_gait, cfg, explored=estimate)
-    assert fresh.ok and fresh.certificate.verified and fresh.replayed_samples == 0
-    assert again.replayed_samples == estimate["n_samples"] == 24
+    assert fresh.ok and fresh.certificate.verified and fresh.replayed_samples == 0 and not fresh.replayed_orbit
+    assert again.replayed_samples == estimate["n_samples"] == 24 and again.replayed_orbit  # the orbit is the estimate's
     assert again.physics_steps < fresh.physics_steps
-    changes = ("seconds", "physics_steps", "replayed_samples")
+    changes = ("seconds", "physics_steps", "replayed_samples", "replayed_orbit")
     a, b = fresh.to_dict(), again.to_dict()
     assert {k: v for k, v in a.items() if k not in changes} == {k: v for k, v in b.items() if k not in changes}
+    # an estimate of another gait (its digest) gives no orbit: searched again, the same, and its exploration replayed
+    searched = certify_gait(exo, exo_gait, cfg, explored={**estimate, "gait_digest": "another gait"})
+    assert not searched.replayed_orbit and searched.replayed_samples == 24 and searched.r_star == fresh.r_star
     other = certify_gait(exo, exo_gait, dataclasses.replace(cfg, seed=4), explored=estimate, verify=False)
-    assert other.replayed_samples == 0
+    assert other.replayed_samples == 0 and not other.replayed_orbit
 
 
 @pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it

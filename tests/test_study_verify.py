@@ -95,7 +95,8 @@ def test_estimates_ranked_and_what_is_shown_verified_also_after_a_kill(tmp_path:
         # the verification replayed the estimate's exploration (estimate.json) instead of walking it again
         estimate = json.loads((d / best["certificate_file"]).with_name("estimate.json").read_text())
         n = estimate["n_samples"]
-        assert cert["replayed_samples"] == n and cert["samples"][:n] == estimate["samples"]
+        assert cert["replayed_samples"] == n and cert["samples"][:n] == estimate["samples"] and cert["replayed_orbit"]
+        assert cert["orbit"] == estimate["orbit"] and cert["orbit_state"] == estimate["orbit_state"]
         assert "(verified)" in figure_text(best, st["unit"])
     # the ranking is the estimates': the trials' scores did not change with the verifications
     assert [t["score"] for t in st["trials"]] == [t["score"] for t in study_status(d)["trials"]]

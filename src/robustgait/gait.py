@@ -15,6 +15,8 @@ made for are a :class:`~robustgait.config.GaitParams`.
 
 from __future__ import annotations
 
+import hashlib
+import json
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
@@ -99,6 +101,12 @@ class Gait:
             "solver": self.solver,
             "meta": self.meta,
         } | ({"held": dict(self.held)} if self.held else {})
+
+    def digest(self) -> str:
+        """SHA-256 (hex) of what a walk of the gait depends on: :meth:`to_dict` without its solver's record
+        (``solver``, ``meta``) — two gaits with one digest walk alike on one robot."""
+        d = {k: v for k, v in self.to_dict().items() if k not in ("meta", "solver")}
+        return hashlib.sha256(json.dumps(d, sort_keys=True, default=str).encode()).hexdigest()
 
     def check_robot(self, robot: Robot) -> None:
         """Raise if this gait cannot drive ``robot`` (output count, joint names, initial state size)."""

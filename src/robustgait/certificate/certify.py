@@ -23,7 +23,7 @@ from tqdm import tqdm
 
 from robustgait.certificate.barrier import Certificate, certify_map, evaluate_map, sample_ball
 from robustgait.certificate.estimators import Replay, certify_map_sequential
-from robustgait.certificate.orbit import FixedPoint, Orbit, Status
+from robustgait.certificate.orbit import FixedPoint, Orbit, Status, orbit_from_dict, orbit_state
 from robustgait.certificate.push import PushMap
 from robustgait.certificate.reduced import Coordinates, ReducedState, section_dimension
 from robustgait.certificate.reducedmap import ReducedMap
@@ -97,6 +97,9 @@ class GaitCertificate:
     orbit_physics_steps: int = 0  # simulated by the orbit search (its walk, the probe, ρ)
     sigma: float | None = None
     replayed_samples: int = 0  # exploration samples answered from an earlier run's (certify_gait's ``explored``)
+    replayed_orbit: bool = False  # the orbit was the earlier run's, not searched again
+    gait_digest: str = ""  # Gait.digest() of the gait certified
+    robot_digest: str = ""  # Robot.digest of the robot it was certified on
 
     @property
     def ok(self) -> bool:
@@ -218,9 +221,12 @@ class GaitCertificate:
                            "statement": self.ball.statement(), "volume_ratio": self.volume_ratio}
         if self.excursion is not None:
             out["excursion"] = self.excursion
+        if self.orbit is not None and (state := orbit_state(self.orbit)) is not None:
+            out["orbit_state"] = state
         out.update({"physics_steps": self.physics_steps, "orbit_physics_steps": self.orbit_physics_steps,
-                    "replayed_samples": self.replayed_samples, "config": to_dict(cfg), "sim": to_dict(self.sim),
-                    "seconds": self.seconds})
+                    "replayed_samples": self.replayed_samples, "replayed_orbit": self.replayed_orbit,
+                    "gait_digest": self.gait_digest, "robot_digest": self.robot_digest, "config": to_dict(cfg),
+                    "sim": to_dict(self.sim), "seconds": self.seconds})
         if self.validate is not None:
             out["push"] = {"duration": self.validate.push_duration, "phase": list(self.validate.push_phase)}
         return out
@@ -247,22 +253,47 @@ def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: boo
         return certify_map_sequential(counted, x_star, cfg, explore=counted_explore, verify=verify)
 
 
-def stored_exploration(explored: Mapping[str, Any], robot: str, config: CertifyConfig, sim: SimConfig,
+def _same_run(explored: Mapping[str, Any], robot: Robot, config: CertifyConfig, sim: SimConfig,
+              validate: ValidateConfig | None) -> bool:
+    """Whether an earlier certificate (``explored``, :meth:`GaitCertificate.to_dict`) was made on ``robot`` with the
+    same certificate and simulation options (and, for a push certificate, ``validate``'s push duration and phases)."""
+    if (explored.get("status") != str(Status.OK) or explored.get("robot") != robot.name
+            or explored.get("config") != to_dict(config) or explored.get("sim") != to_dict(sim)):
+        return False
+    if config.disturbance == "push":
+        v = validate or ValidateConfig()
+        return bool(explored.get("push") == {"duration": v.push_duration, "phase": list(v.push_phase)})
+    return True
+
+
+def stored_orbit(explored: Mapping[str, Any], robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig,
+                 validate: ValidateConfig | None) -> Orbit | None:
+    """The orbit of an earlier push certificate of this gait (``explored``: :meth:`GaitCertificate.to_dict`, e.g. a
+    study's estimate), rebuilt (:func:`.orbit.orbit_from_dict`) instead of searched again: the search is a function of
+    the robot, the gait and the options alone, so an orbit searched on the same robot (:attr:`Robot.digest`), the same
+    gait (:meth:`Gait.digest`) and the same options is the same orbit. None otherwise, or when the record does not
+    hold it whole."""
+    if (config.disturbance != "push" or not _same_run(explored, robot, config, sim, validate)
+            or explored.get("robot_digest") != robot.digest or explored.get("gait_digest") != gait.digest()):
+        return None
+    try:
+        orbit = orbit_from_dict(explored["orbit"], explored["orbit_state"])
+    except (KeyError, TypeError, ValueError):  # not a whole record (an older or edited file): search again
+        return None
+    return orbit if orbit.ok else None
+
+
+def stored_exploration(explored: Mapping[str, Any], robot: Robot, config: CertifyConfig, sim: SimConfig,
                        validate: ValidateConfig | None, fp: FixedPoint) -> tuple[np.ndarray, np.ndarray] | None:
     """The exploration of an earlier certificate of the same gait (``explored``: :meth:`GaitCertificate.to_dict` with
     its samples, e.g. a study's estimate) as (samples (N, n), images (N, n), NaN rows: fell): the samples of its rounds
     before its first verification, in the order they were evaluated. None unless it was made on the same robot, with
     the same certificate, simulation and push options (``validate``: a push certificate's duration and phases), from
     the same x* (its step and reduced state, to the last bit), and holds its samples."""
-    if (explored.get("status") != str(Status.OK) or explored.get("samples") is None or explored.get("robot") != robot
-            or explored.get("config") != to_dict(config) or explored.get("sim") != to_dict(sim)
+    if (explored.get("samples") is None or not _same_run(explored, robot, config, sim, validate)
             or explored.get("fixed_point_step") != fp.step
             or explored.get("omega_star") != [float(v) for v in fp.omega]):
         return None
-    if config.disturbance == "push":
-        v = validate or ValidateConfig()
-        if explored.get("push") != {"duration": v.push_duration, "phase": list(v.push_phase)}:
-            return None
     try:
         kinds = [r["kind"] for r in explored["rounds"]]
         first_verify = kinds.index("verify") if "verify" in kinds else len(kinds)
@@ -375,7 +406,8 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
     samples (:meth:`GaitCertificate.to_dict`, e.g. a study's estimate): where it was made with the same options from
     the same x* (:func:`stored_exploration`; a state certificate of horizon 1), its exploration is replayed instead of
     simulated again (:class:`.estimators.Replay`) — the same certificate, fewer physics steps
-    (``replayed_samples``); otherwise it is ignored.
+    (``replayed_samples``); otherwise it is ignored. A push certificate also takes its orbit from it when it was
+    searched on the same robot and gait with the same options (:func:`stored_orbit`, ``replayed_orbit``).
     """
     cfg = config or CertifyConfig()
     sim = sim or SimConfig()
@@ -387,9 +419,12 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
     t0 = time.perf_counter()
     engine = make_engine(robot, gait, sim)
     try:
-        with tqdm(total=cfg.orbit.max_steps, desc="orbit", unit="step", disable=not progress, leave=False) as bar:
-            orbit = find_orbit(robot, gait, cfg, sim, validate=vcfg, engine=engine,
-                               progress=lambda k: bar.update(k - bar.n))
+        orbit = None if explored is None else stored_orbit(explored, robot, gait, cfg, sim, vcfg)
+        replayed_orbit = orbit is not None
+        if orbit is None:
+            with tqdm(total=cfg.orbit.max_steps, desc="orbit", unit="step", disable=not progress, leave=False) as bar:
+                orbit = find_orbit(robot, gait, cfg, sim, validate=vcfg, engine=engine,
+                                   progress=lambda k: bar.update(k - bar.n))
         t1 = time.perf_counter()
 
         def result(status: Status, reason: str, **kw: Any) -> GaitCertificate:
@@ -397,6 +432,8 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
             seconds = kw.pop("seconds", {"orbit": t1 - t0, "sampling": 0.0, "total": t - t0, "sim_steps_per_s": 0.0})
             return GaitCertificate(status=status, reason=reason, config=cfg, sim=sim, robot=robot.name,
                                    seconds=seconds, steps_walked=orbit.steps, validate=vcfg if push else None,
+                                   replayed_orbit=replayed_orbit, gait_digest=gait.digest(),
+                                   robot_digest=robot.digest,
                                    controller=engine.controller_name, controller_note=engine.controller_note,
                                    orbit=orbit, orbit_physics_steps=orbit.physics_steps, **kw)
 
@@ -406,7 +443,7 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         assert orbit.qpos is not None and orbit.qvel is not None
         fp = orbit.fixed_point(cfg.frame)
         stored = None if explored is None or cfg.method != "sequential" or (not push and cfg.horizon > 1) else \
-            stored_exploration(explored, robot.name, cfg, sim, vcfg if push else None, fp)
+            stored_exploration(explored, robot, cfg, sim, vcfg if push else None, fp)
         replay: Replay | None = None
         t2 = time.perf_counter()
         ball: Certificate | None = None

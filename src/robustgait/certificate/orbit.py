@@ -234,6 +234,13 @@ class Probe:
                 "steps": list(self.steps), "fell": list(self.fell), "left": list(self.left),
                 "diverging": list(self.diverging)}
 
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> Probe:
+        """The probe :meth:`to_dict` wrote."""
+        return cls(float(d["impulse"]), int(d["horizon"]), tuple(bool(x) for x in d["recovered"]),
+                   tuple(int(x) for x in d["steps"]), tuple(bool(x) for x in d["fell"]),
+                   tuple(bool(x) for x in d["left"]), tuple(bool(x) for x in d["diverging"]))
+
 
 def probe_of(size: float, horizon: int, back: NDArray[np.int64], fell: NDArray[np.bool_] | NDArray[np.int64],
              left: NDArray[np.bool_], trace: FloatArray, growth: float) -> Probe:
@@ -386,6 +393,36 @@ class Orbit:
                 "probe": None if self.probe is None else self.probe.to_dict(),
                 "linearization": None if self.linearization is None else self.linearization.to_dict(),
                 "sides_differ": self.sides_differ, "held": self.held, "physics_steps": self.physics_steps}
+
+
+def orbit_from_dict(d: dict[str, Any], state: dict[str, Any]) -> Orbit:
+    """A settled orbit as :meth:`Orbit.to_dict` wrote it, with ``state`` (``qpos``, ``qvel``: x*; ``band_centres``,
+    ``band_scatter`` (k, d): its band) — what a push certificate needs of it (:func:`orbit_state`); its band's states
+    and window steps are not kept. Raises KeyError, TypeError or ValueError on anything else, and when the record
+    holds a linearization (not rebuilt)."""
+    if d["linearization"] is not None:
+        raise ValueError("an orbit with its linearization is not rebuilt")
+    b = d["band"]
+    band = Band(np.asarray(state["band_centres"], dtype=float), np.asarray(state["band_scatter"], dtype=float),
+                float(b["radius"]), float(b["multiple"]))
+    if band.centres.shape != band.scatter.shape or band.period != int(d["period"]):
+        raise ValueError("the band's centres and scatter do not match its period")
+    return Orbit(status=Status(d["status"]), reason=str(d["reason"]), steps=int(d["steps"]), window=int(d["window"]),
+                 settled=d["settled_at_step"], period=int(d["period"]), band=band,
+                 qpos=np.asarray(state["qpos"], dtype=float), qvel=np.asarray(state["qvel"], dtype=float),
+                 x_star_step=d["x_star_step"], sigma_a=d["sigma_a"], sigma_b=d["sigma_b"], moved=d["moved"],
+                 period_scatter={int(k): float(v) for k, v in d["period_scatter"].items()},
+                 probe=None if d["probe"] is None else Probe.from_dict(d["probe"]),
+                 sides_differ=bool(d["sides_differ"]), held=int(d["held"]), physics_steps=int(d["physics_steps"]))
+
+
+def orbit_state(orbit: Orbit) -> dict[str, Any] | None:
+    """What :func:`orbit_from_dict` needs beside :meth:`Orbit.to_dict` (x* and the band's arrays, JSON-ready); None
+    for an orbit without them."""
+    if orbit.qpos is None or orbit.qvel is None or orbit.band is None:
+        return None
+    return {"qpos": orbit.qpos.tolist(), "qvel": orbit.qvel.tolist(), "band_centres": orbit.band.centres.tolist(),
+            "band_scatter": orbit.band.scatter.tolist()}
 
 
 class Watch:

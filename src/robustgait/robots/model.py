@@ -19,7 +19,9 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import hashlib
 from functools import cached_property
+from pathlib import PurePath
 
 import mujoco
 import numpy as np
@@ -271,6 +273,15 @@ class Robot:
     @property
     def name(self) -> str:
         return self.spec.name
+
+    @cached_property
+    def digest(self) -> str:
+        """SHA-256 (hex) of what the robot's walks depend on: its compiled MuJoCo model (its binary form) and its spec
+        without file paths — two robots with one digest simulate alike, wherever their files lie."""
+        buf = np.empty(mujoco.mj_sizeModel(self.model), dtype=np.uint8)
+        mujoco.mj_saveModel(self.model, None, buf)
+        spec = {k: v for k, v in dataclasses.asdict(self.spec).items() if not isinstance(v, PurePath)}
+        return hashlib.sha256(buf.tobytes() + repr(spec).encode()).hexdigest()
 
     def mjspec(self) -> mujoco.MjSpec:
         """A fresh copy of the robot's edited :class:`mujoco.MjSpec` (our actuators and sensors): to compile

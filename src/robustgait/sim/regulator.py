@@ -30,8 +30,6 @@ step map stays a function of the section state, as the certificate assumes.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -384,12 +382,6 @@ GROWTH_STEPS = 6        # steps walked: the growth is the mean ratio from the fi
 GROWTH_VELOCITY = 0.01  # the lateral velocity change, × √(g l)
 
 
-def _gait_key(gait: Gait) -> str:
-    """A digest of what a walk of ``gait`` depends on (its outputs and states, not its solver's record)."""
-    d = {k: v for k, v in gait.to_dict().items() if k not in ("meta", "solver")}
-    return hashlib.sha256(json.dumps(d, sort_keys=True, default=str).encode()).hexdigest()
-
-
 def lateral_growth(engine: _Walker, options: str, share: float) -> float:
     """μ, how much a lateral error of the CoM grows per step under ``share`` κ of the H-LIP gain (the step-start blend
     on): the gait's initial state with its base's lateral velocity changed by ±δ
@@ -404,7 +396,7 @@ def lateral_growth(engine: _Walker, options: str, share: float) -> float:
         raise ValueError("lateral_growth needs an engine whose step regulator runs")
     robot = engine.robot
     gait = engine.gaits[next(iter(engine.gaits))]
-    key = (robot.name, str(robot.spec.source), repr(robot.dt), _gait_key(gait), options, repr(share))
+    key = (robot.name, str(robot.spec.source), repr(robot.dt), gait.digest(), options, repr(share))
     if key in _GROWTH:
         return _GROWTH[key]
     kept = reg.share

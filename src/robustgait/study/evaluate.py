@@ -84,7 +84,7 @@ class Evaluation:
         """The certificate without its samples (what a study keeps in its database)."""
         if self.certificate is None:
             return None
-        drop = ("samples", "images", "fell", "margins", "config", "sim")
+        drop = ("samples", "images", "fell", "margins", "config", "sim", "orbit_state")
         return {k: v for k, v in self.certificate.items() if k not in drop}
 
     def summary(self) -> dict[str, Any]:
