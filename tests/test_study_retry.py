@@ -5,13 +5,34 @@ from __future__ import annotations
 
 import pytest
 
+from robustgait.certificate.orbit import Status
 from robustgait.config import Config
-from robustgait.study.evaluate import Evaluation, fell_undisturbed, retry_after_fall
+from robustgait.study.evaluate import Evaluation, EvaluationStatus, fell_undisturbed, refusal_of, retry_after_fall
 
 
 def evaluation(status: str, reason: str = "", steps: int = 50, gait: object = None) -> Evaluation:
-    return Evaluation(params=Config().params, status=status, reason=reason, step_cap=50,  # type: ignore[arg-type]
-                      steps_taken=steps, gait=gait)  # type: ignore[arg-type]
+    """An evaluation as a study stores it (its refusal the certificate's status its reason names)."""
+    return Evaluation(params=Config().params, status=EvaluationStatus(status), reason=reason, step_cap=50,
+                      steps_taken=steps, gait=gait,  # type: ignore[arg-type]
+                      refusal=refusal_of({"status": status, "reason": reason}))
+
+
+def test_a_refusal_travels_as_the_certificates_status() -> None:
+    """A refused gait's evaluation carries the certificate's Status (not a reason parsed back), stored as its value and
+    read again; a record stored before refusals were kept names it as its reason's first word; other outcomes have
+    none."""
+    ev = evaluation("not_certified", "unstable: the walk settled, but …")
+    assert ev.refusal is Status.UNSTABLE
+    stored = ev.summary()
+    assert stored["refusal"] == "unstable" and stored["status"] == "not_certified"
+    again = Evaluation.from_dict({**stored, "gait": None})
+    assert again.refusal is Status.UNSTABLE and again.status is EvaluationStatus.NOT_CERTIFIED
+    # an unrelated reason is not read as a status once the refusal is stored
+    assert refusal_of({**stored, "reason": "fell: …"}) is Status.UNSTABLE
+    old = {k: v for k, v in stored.items() if k != "refusal"}
+    assert refusal_of(old) is Status.UNSTABLE  # the reason's first word, as older studies wrote it
+    assert refusal_of({"status": "certified", "reason": ""}) is None
+    assert refusal_of({"status": "not_certified", "reason": "not certified yet"}) is None
 
 
 def test_an_undisturbed_fall_is_found_in_the_walk_or_the_orbit_search(exo_gait) -> None:  # type: ignore[no-untyped-def]

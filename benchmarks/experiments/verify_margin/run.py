@@ -134,7 +134,7 @@ def measure(job: dict[str, Any]) -> dict[str, Any]:
 def cmd_run(args: argparse.Namespace) -> None:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    lines = out.read_text().splitlines() if out.exists() else []
+    lines = [line for f in (out, *map(Path, args.done)) if f.exists() for line in f.read_text().splitlines()]
     done = {json.loads(line)["label"] for line in lines if line.strip()}
     if args.gait:
         points = [({}, g) for g in args.gait]
@@ -149,7 +149,8 @@ def cmd_run(args: argparse.Namespace) -> None:
              "pushes": args.pushes, "outer": args.outer, "seed": args.seed, "full": args.full,
              "rules": args.rules.split(",")}
             for p, g in points]
-    jobs = [j for j in jobs if j["label"] not in done]
+    shard, shards = (int(x) for x in args.shard.split("/"))
+    jobs = [j for i, j in enumerate(jobs) if i % shards == shard and j["label"] not in done]
     commit, day = git_commit(), date.today().isoformat()
     print(f"# verify_margin run {day} at {commit}: {args.robot}, {len(jobs)} gaits to go, {args.workers} workers")
     with ProcessPoolExecutor(args.workers) as pool:
@@ -247,6 +248,9 @@ def main() -> None:
     r.add_argument("--full", action="store_true", help="also the default certificate")
     r.add_argument("--workers", type=int, default=2)
     r.add_argument("--out", required=True)
+    r.add_argument("--shard", default="0/1", help="i/n: the gaits whose index is i modulo n (runs side by side, each "
+                                                  "with its own --out)")
+    r.add_argument("--done", nargs="*", default=[], help="other --out files: their gaits are skipped")
     p = sub.add_parser("report")
     p.add_argument("files", nargs="+")
     args = ap.parse_args()

@@ -10,10 +10,11 @@ resumable, and lets a study reuse the result of a gait it already evaluated.
 
 from __future__ import annotations
 
+import enum
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 from robustgait.certificate.certify import GaitCertificate, certify_gait
 from robustgait.certificate.orbit import Status as OrbitStatus
@@ -29,10 +30,34 @@ from robustgait.study.storage import current_names
 if TYPE_CHECKING:
     from robustgait.gaitgen import GaitGenerator
 
-Status = Literal["certified", "estimated", "generation_failed", "fell", "not_certified"]
-STATUSES: tuple[Status, ...] = ("certified", "estimated", "generation_failed", "fell", "not_certified")
-RANKED: tuple[Status, ...] = ("certified", "estimated")
+class EvaluationStatus(str, enum.Enum):
+    """How an evaluation ended (:class:`Evaluation`): equal to its value, the text a study stores."""
+
+    CERTIFIED = "certified"
+    ESTIMATED = "estimated"
+    GENERATION_FAILED = "generation_failed"
+    FELL = "fell"
+    NOT_CERTIFIED = "not_certified"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+STATUSES: tuple[EvaluationStatus, ...] = tuple(EvaluationStatus)
+RANKED: tuple[EvaluationStatus, ...] = (EvaluationStatus.CERTIFIED, EvaluationStatus.ESTIMATED)
 """The statuses of a gait with a certificate figure the study ranks by: verified, or estimated by exploration."""
+
+
+def refusal_of(result: Mapping[str, Any]) -> OrbitStatus | None:
+    """The certificate's status of a refused gait (``not_certified``) from its stored record
+    (:meth:`Evaluation.summary`, a verification's record): its ``refusal``; a record written before refusals were
+    stored names it only as its reason's first word, which is read then. None for any other outcome."""
+    if result.get("status") != EvaluationStatus.NOT_CERTIFIED:
+        return None
+    if result.get("refusal") is not None:
+        return OrbitStatus(result["refusal"])
+    head = str(result.get("reason") or "").split(":", 1)[0]
+    return OrbitStatus(head) if head in {s.value for s in OrbitStatus} else None
 
 
 @dataclass
@@ -42,9 +67,9 @@ class Evaluation:
     status: ``certified`` (walked the cap, its certificate computed and verified), ``estimated`` (walked the cap, on a
     stable orbit, its certificate's figure estimated by exploration only: ``study.verify = shown``),
     ``generation_failed``, ``fell`` (before the cap), ``not_certified`` (walked the cap but the certificate refused it:
-    ``unsettled``, ``unstable``, ``fell`` in the orbit search, ``unstable_fixed_point``
-    (:class:`robustgait.certificate.orbit.Status`); the reason starts with it — the oracles rank it below every
-    certified or estimated gait); reason: why, in one line ('' when certified or estimated). generation:
+    ``refusal``, its :class:`robustgait.certificate.orbit.Status` — ``unsettled``, ``unstable``, ``fell`` in the
+    orbit search, ``unstable_fixed_point``; the oracles rank it below every certified or estimated gait)
+    (:class:`EvaluationStatus`); reason: why, in one line ('' when certified or estimated). generation:
     :meth:`GaitGenResult.summary`. certificate_value: the figure the study ranks by (``config.study_certify``: J* in N s
     for a push certificate, r* in the state's unit for a state certificate; :func:`robustgait.config.radius_name` names
     it): the verified value when the study verifies every gait (:attr:`~robustgait.config.StudyConfig.verifies_all`),
@@ -60,7 +85,7 @@ class Evaluation:
     """
 
     params: GaitParams
-    status: Status
+    status: EvaluationStatus
     reason: str
     step_cap: int
     steps_taken: int = 0
@@ -76,6 +101,7 @@ class Evaluation:
     retried: dict[str, Any] | None = None
     estimate: float | None = None
     verified_value: float | None = None
+    refusal: OrbitStatus | None = None
 
     def outcome(self) -> Outcome:
         return Outcome(self.steps_taken, self.step_cap, self.certificate_value, self.status in RANKED)
@@ -94,7 +120,8 @@ class Evaluation:
                 "fall_reason": self.fall_reason, "mean_speed": self.mean_speed,
                 "certificate_value": self.certificate_value, "generation": self.generation,
                 "certificate": self.certificate_summary(), "comfort": self.comfort, "seconds": self.seconds,
-                "retried": self.retried, "estimate": self.estimate, "verified_value": self.verified_value}
+                "retried": self.retried, "estimate": self.estimate, "verified_value": self.verified_value,
+                "refusal": None if self.refusal is None else self.refusal.value}
 
     def to_dict(self) -> dict[str, Any]:
         """Everything, JSON-ready (what a worker sends back)."""
@@ -106,7 +133,8 @@ class Evaluation:
         """An evaluation from :meth:`to_dict` or a study's stored record (read by
         :func:`~robustgait.study.storage.current_names`)."""
         d = current_names(d)
-        return cls(params=GaitParams(**d["params"]), status=d["status"], reason=d["reason"], step_cap=d["step_cap"],
+        return cls(params=GaitParams(**d["params"]), status=EvaluationStatus(d["status"]), reason=d["reason"],
+                   step_cap=d["step_cap"],
                    steps_taken=d["steps_taken"], fell=d["fell"], fall_reason=d["fall_reason"],
                    mean_speed=d["mean_speed"], certificate_value=d["certificate_value"],
                    generation=d["generation"],
@@ -116,7 +144,8 @@ class Evaluation:
                    # absent: evaluated before estimates, when every certified value was verified
                    estimate=d.get("estimate"),
                    verified_value=d.get("verified_value", d["certificate_value"] if d["status"] == "certified"
-                                        else None))
+                                        else None),
+                   refusal=refusal_of(d))
 
 
 def evaluate(robot: Robot, params: GaitParams, config: Config | None = None, *,
@@ -142,9 +171,9 @@ def fell_undisturbed(ev: Evaluation, config: Config) -> int | None:
     search (``config.study_certify.orbit``: at most ``max_steps`` + ``hold_steps``) —, or None if it did not."""
     if ev.gait is None:
         return None
-    if ev.status == "fell":
+    if ev.status == EvaluationStatus.FELL:
         return ev.steps_taken + 1
-    if ev.status == "not_certified" and ev.reason.startswith(f"{OrbitStatus.FELL.value}:"):
+    if ev.refusal == OrbitStatus.FELL:
         o = config.study_certify.orbit
         return o.max_steps + o.hold_steps
     return None
@@ -195,7 +224,8 @@ def generate_and_walk(robot: Robot, params: GaitParams, config: Config | None = 
     res = gen.solve(params)
     t_gen = time.perf_counter()
     seconds = {"generate": t_gen - t_build} | ({} if generator is not None else {"build": t_build - t0})
-    ev = Evaluation(params=res.params or params, status="generation_failed", reason=f"{res.status}: {res.reason}",
+    ev = Evaluation(params=res.params or params, status=EvaluationStatus.GENERATION_FAILED,
+                    reason=f"{res.status}: {res.reason}",
                     step_cap=cap, generation=res.summary(), seconds=seconds)
     if res.gait is None:
         seconds["total"] = t_gen - t0
@@ -204,14 +234,14 @@ def generate_and_walk(robot: Robot, params: GaitParams, config: Config | None = 
     try:
         w = walk(robot, res.gait, cfg.sim, comfort=cfg.comfort)
     except RobustGaitError as exc:  # e.g. the generated gait has no initial state to start from
-        ev.status, ev.reason, ev.fell = "fell", f"walk failed: {exc}", True
+        ev.status, ev.reason, ev.fell = EvaluationStatus.FELL, f"walk failed: {exc}", True
     else:
         ev.steps_taken, ev.fell, ev.fall_reason, ev.mean_speed = w.steps_taken, w.fell, w.fall_reason, w.mean_speed
         ev.comfort = w.comfort.to_dict() if w.comfort is not None else None
         if w.steps_taken < cap:
-            ev.status, ev.reason = "fell", f"fell in step {w.steps_taken + 1} ({w.fall_reason})"
+            ev.status, ev.reason = EvaluationStatus.FELL, f"fell in step {w.steps_taken + 1} ({w.fall_reason})"
         else:
-            ev.status, ev.reason = "not_certified", NOT_CERTIFIED_YET
+            ev.status, ev.reason = EvaluationStatus.NOT_CERTIFIED, NOT_CERTIFIED_YET
     t_walk = time.perf_counter()
     seconds["walk"] = t_walk - t_gen
     seconds["total"] = t_walk - t0
@@ -226,7 +256,7 @@ def certify_evaluation(robot: Robot, ev: Evaluation, config: Config | None = Non
     """The second stage of :func:`evaluate`: certify a gait that walked the cap (``config.study_certify``; a fall, no
     fixed point: a status, not an exception; verified as :func:`evaluate` says); any other evaluation is returned as it
     is. Adds to ``ev.seconds``."""
-    if ev.gait is None or ev.status != "not_certified" or ev.reason != NOT_CERTIFIED_YET:
+    if ev.gait is None or ev.status != EvaluationStatus.NOT_CERTIFIED or ev.reason != NOT_CERTIFIED_YET:
         return ev
     cfg = config or Config()
     t0 = time.perf_counter()
@@ -246,22 +276,23 @@ def record_certificate(ev: Evaluation, gc: GaitCertificate, ranks_verified: bool
     explored, ``not_certified`` with the refusal's status and reason), the estimate, the verified value and the figure
     the study ranks by (the verified value when ``ranks_verified``, else the estimate)."""
     if not gc.ok or gc.certificate is None:
-        ev.status, ev.reason = "not_certified", f"{gc.status}: {gc.reason}"
+        ev.status, ev.reason, ev.refusal = EvaluationStatus.NOT_CERTIFIED, f"{gc.status}: {gc.reason}", gc.status
         return
     c = gc.certificate
     ev.estimate = float(c.estimate if c.estimate is not None else c.r_star)
     ev.certificate = gc.to_dict(samples=True)
     if c.verified:
-        ev.status, ev.reason, ev.verified_value = "certified", "", float(gc.r_star)
+        ev.status, ev.reason, ev.verified_value = EvaluationStatus.CERTIFIED, "", float(gc.r_star)
     else:
-        ev.status, ev.reason = "estimated", ""
+        ev.status, ev.reason = EvaluationStatus.ESTIMATED, ""
     ev.certificate_value = float(gc.r_star) if ranks_verified else ev.estimate
 
 
 def verify_gait(robot: Robot, gait: Gait, config: Config,
                 explored: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """The verified certificate of a study's gait (``config.study_certify``, verified whatever its estimate): a record
-    with its ``status`` (``certified`` or ``not_certified``), ``reason``, ``verified_value`` (None unless certified),
+    with its ``status`` (``certified`` or ``not_certified``), ``reason``, ``refusal`` (the certificate's status value
+    when refused, else None), ``verified_value`` (None unless certified),
     ``estimate``, ``certificate`` (:meth:`GaitCertificate.to_dict` with the samples; None when refused) and ``seconds``.
     Deterministic for a gait and a configuration, as the evaluation is: the same orbit and exploration as its
     estimate — ``explored``, the estimate's certificate with its samples, is replayed rather than simulated again
@@ -271,7 +302,8 @@ def verify_gait(robot: Robot, gait: Gait, config: Config,
                       explored=explored)
     c = gc.certificate
     ok = gc.ok and c is not None
-    return {"status": "certified" if ok else "not_certified", "reason": "" if ok else f"{gc.status}: {gc.reason}",
+    return {"status": EvaluationStatus.CERTIFIED if ok else EvaluationStatus.NOT_CERTIFIED,
+            "reason": "" if ok else f"{gc.status}: {gc.reason}", "refusal": None if ok else gc.status.value,
             "verified_value": float(gc.r_star) if ok else None,
             "estimate": None if c is None else float(c.estimate if c.estimate is not None else c.r_star),
             "certificate": gc.to_dict(samples=True) if ok else None, "seconds": time.perf_counter() - t0}

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from robustgait.io.studyfile import environment_changes, load_config
+from robustgait.study.evaluate import EvaluationStatus, refusal_of
 from robustgait.study.person import pending_iteration, stored_floor
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord
@@ -52,8 +53,9 @@ def outcome_counts(records: list[TrialRecord], verifications: dict[int, dict[str
             continue
         res = trial_summary(r, (verifications or {}).get(r.index))
         key = str(res.get("status"))
-        if key == "not_certified":
-            key = "refused: " + str(res.get("reason") or "").split(":", 1)[0]
+        if key == EvaluationStatus.NOT_CERTIFIED:
+            refusal = refusal_of(res)
+            key = "refused" if refusal is None else f"refused: {refusal.value}"
         out[key] = out.get(key, 0) + 1
     return dict(sorted(out.items()))
 

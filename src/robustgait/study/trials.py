@@ -10,7 +10,7 @@ from robustgait.study.storage import TrialRecord
 
 # comfort: the walk's comfort figures (robustgait.sim.comfort.Comfort.to_dict; None for a study evaluated before them);
 # retried: why the gait was generated again with a joint margin (robustgait.study.evaluate.retry_after_fall), or None
-TRIAL_KEYS = ("status", "reason", "steps_taken", "step_cap", "fell", "fall_reason", "mean_speed",
+TRIAL_KEYS = ("status", "reason", "refusal", "steps_taken", "step_cap", "fell", "fall_reason", "mean_speed",
               "certificate_value", "comfort", "gait_file", "certificate_file", "seconds", "retried")
 
 
@@ -31,6 +31,7 @@ def trial_summary(r: TrialRecord, verification: dict[str, Any] | None = None) ->
     cert = res.get("certificate") or {}
     if verification is not None and res.get("status") == "estimated":
         out.update(status=verification["status"], reason=verification.get("reason", ""),
+                   refusal=verification.get("refusal"),
                    verified_value=verification.get("verified_value"),
                    certificate_file=verification.get("certificate_file"))
     out["verified"] = out["verified_value"] is not None
