@@ -23,7 +23,6 @@ orbit search's (:mod:`.search`); this module is arithmetic on a sequence, used b
 from __future__ import annotations
 
 import dataclasses
-import enum
 import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -35,6 +34,7 @@ from numpy.typing import NDArray
 from robustgait.certificate.band import Band, advance_runs, band_coordinates
 from robustgait.certificate.reduced import reduce_state, section_dimension
 from robustgait.config import CertifyConfig
+from robustgait.config.base import TextEnum
 from robustgait.config.certify import Frame, MapKind, OrbitConfig
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
@@ -45,7 +45,7 @@ from robustgait.sim.walk import SwitchEvent, WalkResult
 FloatArray = NDArray[np.float64]
 
 
-class Status(str, enum.Enum):
+class Status(TextEnum):
     """What a certificate or an orbit search concluded: ``ok``; ``fell`` (the undisturbed walk fell while its orbit
     was searched); ``unsettled`` (its band kept growing or moving: it drifts, turns or slowly falls); ``undecided``
     (a walk that ended before the rule could tell: too few steps — a walk's, never a certificate's); ``unstable``
@@ -58,9 +58,6 @@ class Status(str, enum.Enum):
     UNDECIDED = "undecided"
     UNSTABLE = "unstable"
     UNSTABLE_FIXED_POINT = "unstable_fixed_point"
-
-    def __str__(self) -> str:
-        return self.value
 
 
 def periods(max_period: int, min_period: int = 1) -> tuple[int, ...]:

@@ -21,6 +21,7 @@ from its message strings.
 from __future__ import annotations
 
 import dataclasses
+import enum
 import functools
 import json
 import math
@@ -46,6 +47,13 @@ Bool = Annotated[bool, Strict()]
 Str = Annotated[str, Strict()]
 
 SETTINGS = ConfigDict(extra="forbid", allow_inf_nan=False, defer_build=True)
+
+
+class TextEnum(str, enum.Enum):
+    """An enumeration whose members are their text: equal to it, printed and stored as it (``str(m) == m.value``)."""
+
+    def __str__(self) -> str:
+        return str(self.value)
 
 
 def number_text(v: float) -> str:

@@ -10,7 +10,6 @@ resumable, and lets a study reuse the result of a gait it already evaluated.
 
 from __future__ import annotations
 
-import enum
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -19,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 from robustgait.certificate.certify import GaitCertificate, certify_gait
 from robustgait.certificate.orbit import Status as OrbitStatus
 from robustgait.config import Config, GaitParams
+from robustgait.config.base import TextEnum
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.io.gaitfile import gait_from_dict
@@ -30,7 +30,7 @@ from robustgait.study.storage import current_names
 if TYPE_CHECKING:
     from robustgait.gaitgen import GaitGenerator
 
-class EvaluationStatus(str, enum.Enum):
+class EvaluationStatus(TextEnum):
     """How an evaluation ended (:class:`Evaluation`): equal to its value, the text a study stores."""
 
     CERTIFIED = "certified"
@@ -38,9 +38,6 @@ class EvaluationStatus(str, enum.Enum):
     GENERATION_FAILED = "generation_failed"
     FELL = "fell"
     NOT_CERTIFIED = "not_certified"
-
-    def __str__(self) -> str:
-        return self.value
 
 
 STATUSES: tuple[EvaluationStatus, ...] = tuple(EvaluationStatus)
