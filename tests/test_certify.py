@@ -459,3 +459,14 @@ def test_cli_validate_refuses_a_certificate_of_another_state(capsys, tmp_path):
                         "--trials", "4", "--steps-after", "1", "--json")
     res = json.loads(out)
     assert code == 0 and res["certificate"]["space"] == "centroidal" and res["kinds"]["push"]["energy_star"] > 0
+
+
+def test_a_certificates_figure_is_named_for_what_it_is(small_cert):
+    """A state certificate's figure is r_star (j_star is refused by name) and its JSON writes r_star; a push
+    certificate's JSON writes j_star (tests/test_io.py reads both)."""
+    assert small_cert.value == small_cert.r_star and "r_star" in small_cert.to_dict()
+    with pytest.raises(RobustGaitError, match="r_star, not j_star"):
+        _ = small_cert.j_star
+    push = dataclasses.replace(small_cert, config=CertifyConfig(disturbance="push"))
+    d = push.to_dict()
+    assert push.j_star == push.value and d["j_star"] == push.value and "r_star" not in d

@@ -379,3 +379,21 @@ def test_every_file_limit_is_documented():
         assert lim.text() in doc, (lim.help, lim.text())
     for name in (n for n, v in vars(L).items() if n.isupper() and isinstance(v, (int, float))):
         assert f"`{name}`" in doc, name
+
+
+def test_a_certificate_file_names_its_figure_and_older_files_still_read(tmp_path):
+    """A push certificate's figure is j_star, a state certificate's r_star; a push certificate written before its
+    figure was named (r_star) still reads, with the same figure; a file with neither is refused in one line."""
+    from robustgait import RobustGaitError
+    from robustgait.io.certfile import certificate_figure, read_certificate
+
+    base = {"status": "ok", "attained": True, "x_star": [0.0, 0.0], "map": "step", "frame": "heading",
+            "reconstruction": "holonomic", "config": {"disturbance": "push"}}
+    for key in ("j_star", "r_star"):
+        path = tmp_path / f"{key}.json"
+        path.write_text(json.dumps({**base, key: 12.5}))
+        assert read_certificate(path).value == 12.5 and certificate_figure({**base, key: 12.5}) == 12.5
+    bad = tmp_path / "none.json"
+    bad.write_text(json.dumps(base))
+    with pytest.raises(RobustGaitError, match="no figure"):
+        read_certificate(bad)

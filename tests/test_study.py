@@ -445,7 +445,7 @@ def test_evaluate_never_raises_and_records_stages(exo_generator):
     assert good.status == "certified" and good.steps_taken == 5 and not good.fell and good.certificate_value > 0
     assert good.comfort is not None and good.comfort["first_step"] == 2 and good.comfort["steps"] == 3
     assert good.summary()["comfort"] == good.comfort
-    assert good.certificate is not None and good.certificate["r_star"] == good.certificate_value
+    assert good.certificate is not None and good.certificate["j_star"] == good.certificate_value  # a push certificate
     assert set(good.seconds) >= {"generate", "walk", "certify", "total"} and good.gait is not None
     assert "build" not in good.seconds  # the generator was given
     bad = evaluate(robot, GaitParams(step_width=0.1), TINY, generator=gen)  # the feet would collide

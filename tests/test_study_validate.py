@@ -115,7 +115,7 @@ def test_every_unique_gait_meets_the_same_disturbances(small_study, first_run):
     assert rows[10]["start"] == rows[20]["start"] == "fixed_point" and rows[40]["start"] == "initial_state"
     assert rows[40]["status"] == "not_certified" and rows[40]["certificate_value"] == 0.0
     assert rows[40]["certificate_check"] is None
-    assert rows[10]["certificate_value"] > 0 and rows[10]["certificate"]["r_star"] == rows[10]["certificate_value"]
+    assert rows[10]["certificate_value"] > 0 and rows[10]["certificate"]["j_star"] == rows[10]["certificate_value"]
     assert rows[10]["study_certificate_value"] == rows[10]["certificate_value"]
     for r in rows.values():
         s = r["success"]

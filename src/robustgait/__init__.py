@@ -8,7 +8,7 @@ Public API (everything else is reachable from the submodules)::
     gait = robustgait.load_gait("gait.json", robot)      # or a FROST/ambersim .yaml
     result = robustgait.walk(robot, gait)                # SimConfig: switching, step cap, ...
     result = robustgait.walk(robot, gait, comfort=robustgait.ComfortConfig())   # result.comfort: the passenger
-    cert = robustgait.certify_gait(robot, gait)          # cert.status, cert.r_star (J* [N s]), cert.statement()
+    cert = robustgait.certify_gait(robot, gait)          # cert.status, cert.j_star [N s] (.value), cert.statement()
     cert = robustgait.certify_gait(robot, gait, robustgait.CertifyConfig(method="uniform"))  # the paper's
     res = robustgait.validate_gait(robot, gait)          # disturbed walks, certificate check
     gen = robustgait.GaitGenerator(robot)                # build the HZD problem once, then gen.solve(params)

@@ -116,7 +116,7 @@ def run(model: Path, d: Path, steps: int) -> dict[str, Any]:
     row["walk"] |= {"steps_taken": w.get("steps_taken"), "fell": w.get("fell"), "controller": w.get("controller"),
                     "orbit": (w.get("orbit") or {}).get("status")}
     c = stage("certify", "certify", str(gait), "--robot", str(spec), "-o", str(cert), "--json", parse=True)
-    row["certify"] |= {"status": c.get("status"), "j_star": c.get("r_star")}
+    row["certify"] |= {"status": c.get("status"), "j_star": c.get("j_star", c.get("r_star"))}
     if row["certify"]["exit"] == 0 and c.get("status") == "ok":
         v = stage("validate", "validate", str(gait), "--robot", str(spec), "--certificate", str(cert),
                   "--disturbance", "push", "--json", parse=True)

@@ -112,7 +112,7 @@ def profile_evaluate(spec: str, params: list[float]) -> dict[str, Any]:
     ev = evaluate(robot, p, cfg, generator=gen)
     d = ev.to_dict()
     return {"build_s": build, "total_s": time.perf_counter() - t0, "seconds": d.get("seconds"),
-            "status": (d.get("certificate") or {}).get("status"), "j_star": (d.get("certificate") or {}).get("r_star")}
+            "status": (d.get("certificate") or {}).get("status"), "j_star": (d.get("certificate") or {}).get("j_star")}
 
 
 def main() -> None:

@@ -33,6 +33,7 @@ from robustgait.certificate.shape import Shape, fit_linearization, shape_from_fi
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
 from robustgait.config.certify import R_MAX_LIMIT
 from robustgait.config.work import Work, check_work
+from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.sim.engine import step_physics_steps
@@ -106,8 +107,24 @@ class GaitCertificate:
         return self.status == Status.OK
 
     @property
-    def r_star(self) -> float:
+    def value(self) -> float:
+        """The certified figure (0 unless certified): J* [N s] of a push certificate, r* (``config.unit``) of a state
+        certificate — :attr:`j_star` or :attr:`r_star` by name."""
         return self.certificate.r_star if self.certificate is not None else 0.0
+
+    @property
+    def j_star(self) -> float:
+        """J* [N s] of a push certificate; raises :class:`RobustGaitError` for a state certificate (its figure is
+        :attr:`r_star`)."""
+        if self.config.disturbance != "push":
+            raise RobustGaitError(f"a {self.config.space} certificate's figure is r_star, not j_star")
+        return self.value
+
+    @property
+    def r_star(self) -> float:
+        """r* of a state certificate, in ``config.unit``; for a push certificate, its J* (the estimator's radius: the
+        name older code reads — :attr:`j_star` or :attr:`value` say what it is)."""
+        return self.value
 
     @property
     def below_scatter(self) -> bool:
@@ -229,6 +246,8 @@ class GaitCertificate:
                     "sim": to_dict(self.sim), "seconds": self.seconds})
         if self.validate is not None:
             out["push"] = {"duration": self.validate.push_duration, "phase": list(self.validate.push_phase)}
+        if cfg.disturbance == "push":  # the figure by its name: J* [N s] (a state certificate's stays r_star)
+            out = {("j_star" if k == "r_star" else k): v for k, v in out.items()}
         return out
 
 

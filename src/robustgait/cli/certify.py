@@ -53,7 +53,7 @@ def _certify(args: argparse.Namespace) -> int:
 
         label = f"N = {c.n_samples}" + (f" in {len(c.rounds)} rounds" if cfg.method == "sequential" else "")
         kind = _certificate_kind(cfg)
-        plot_certificate(c, args.plot, title=f"{robot.name}: {name} = {gc.r_star:.4g} {cfg.unit} ({kind}, "
+        plot_certificate(c, args.plot, title=f"{robot.name}: {name} = {gc.value:.4g} {cfg.unit} ({kind}, "
                          f"{cfg.method}, {label}, α = {cfg.alpha:g})", coordinates=co, ball=gc.ball)
     if args.output is not None:
         from robustgait.io.output import write_json

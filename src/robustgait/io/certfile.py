@@ -1,5 +1,6 @@
 """Certificate files (``robustgait certify -o CERT.json``): the part of their schema that validation reads back
-(``robustgait validate --certificate``)."""
+(``robustgait validate --certificate``), and the certified figure of a certificate record (``j_star`` of a push
+certificate, ``r_star`` of a state certificate; older push certificates wrote ``r_star``)."""
 
 from __future__ import annotations
 
@@ -24,7 +25,6 @@ class CertificateFile:
     base angular velocity written before states were a choice: the identity), E* and the certificate's config (its
     state, set, horizon and fixed-point search)."""
 
-    r_star: Annotated[Float, Doc(ge=0.0)]
     attained: Bool
     x_star: Annotated[list[Float], at.MinLen(1), at.MaxLen(1000)]
     map: MapKind
@@ -33,6 +33,14 @@ class CertificateFile:
     config: dict[str, Any] = dataclasses.field(default_factory=dict)
     coordinates: dict[str, Any] | None = None
     energy: Annotated[Float, Doc(ge=0.0)] | None = None
+    r_star: Annotated[Float, Doc(ge=0.0)] | None = None  # a state certificate's r* (a push certificate's J*, before
+    j_star: Annotated[Float, Doc(ge=0.0)] | None = None  # its figure was named j_star)
+
+    @property
+    def value(self) -> float:
+        """The certified figure: ``j_star`` of a push certificate, else ``r_star`` (0 when neither is written:
+        :func:`read_certificate` refuses such a file)."""
+        return float(self.j_star if self.j_star is not None else self.r_star or 0.0)
 
     def transform(self, src: str | Path) -> list[list[float]] | None:
         """T (k, k) of the certificate's coordinates, checked square of the size of x*; None if absent."""
@@ -74,4 +82,14 @@ def read_certificate(path: str | Path) -> CertificateFile:
     if isinstance(raw, dict) and raw.get("status", "ok") != "ok":  # a failed certificate has no ball to check
         raise input_error(path, f"the certificate has status {raw['status']!r} ({raw.get('reason', '')}): nothing "
                           "to validate against")
-    return validate(raw, CertificateFile, path, "json")
+    out = validate(raw, CertificateFile, path, "json")
+    if out.j_star is None and out.r_star is None:
+        raise input_error(path, "the certificate has no figure (j_star or r_star)")
+    return out
+
+
+def certificate_figure(record: dict[str, Any]) -> float:
+    """The certified figure of a certificate record (:meth:`~robustgait.certificate.certify.GaitCertificate.to_dict`,
+    a file or a study's copy): ``j_star`` of a push certificate, ``r_star`` of a state certificate or of a push
+    certificate written before its figure was named. KeyError when it has neither."""
+    return float(record["j_star"] if "j_star" in record else record["r_star"])

@@ -31,6 +31,7 @@ from robustgait.certificate.barrier import Certificate, Round
 from robustgait.certificate.reduced import Coordinates
 from robustgait.config import ReportConfig, radius_name
 from robustgait.errors import RobustGaitError, input_error
+from robustgait.io.certfile import certificate_figure
 from robustgait.io.output import write_text
 from robustgait.io.schema import read_json
 from robustgait.report.figures import _save, plot_certificate
@@ -45,7 +46,8 @@ REPORT_DIR = "report"
 
 def certificate_from_json(d: dict[str, Any]) -> Certificate:
     """A :class:`Certificate` from its JSON (:meth:`GaitCertificate.to_dict` with samples): null image rows
-    back to NaN, null margins back to −inf."""
+    back to NaN, null margins back to −inf; its radius the certified figure (``j_star`` or ``r_star``)."""
+    d = {**d, "r_star": certificate_figure(d)}
     fell = np.asarray(d["fell"], dtype=bool)
     n = len(d["x_star"])
     images = np.array([[np.nan] * n if row is None else row for row in d["images"]], dtype=float)

@@ -31,7 +31,7 @@ def recertify(robot: Robot, gait: Gait, config: CertifyConfig, seeds: Sequence[i
     out = []
     for s in seeds:
         gc = certify_gait(robot, gait, dataclasses.replace(config, seed=int(s)), sim, validate=validate)
-        out.append({"seed": int(s), "certificate_value": float(gc.r_star) if gc.ok else 0.0, "status": gc.status,
+        out.append({"seed": int(s), "certificate_value": float(gc.value) if gc.ok else 0.0, "status": gc.status,
                     "reason": gc.reason, "n_inside": gc.certificate.n_inside if gc.certificate is not None else 0})
     return out
 

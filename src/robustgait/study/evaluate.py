@@ -279,10 +279,10 @@ def record_certificate(ev: Evaluation, gc: GaitCertificate, ranks_verified: bool
     ev.estimate = float(c.estimate if c.estimate is not None else c.r_star)
     ev.certificate = gc.to_dict(samples=True)
     if c.verified:
-        ev.status, ev.reason, ev.verified_value = EvaluationStatus.CERTIFIED, "", float(gc.r_star)
+        ev.status, ev.reason, ev.verified_value = EvaluationStatus.CERTIFIED, "", float(gc.value)
     else:
         ev.status, ev.reason = EvaluationStatus.ESTIMATED, ""
-    ev.certificate_value = float(gc.r_star) if ranks_verified else ev.estimate
+    ev.certificate_value = float(gc.value) if ranks_verified else ev.estimate
 
 
 def verify_gait(robot: Robot, gait: Gait, config: Config,
@@ -301,6 +301,6 @@ def verify_gait(robot: Robot, gait: Gait, config: Config,
     ok = gc.ok and c is not None
     return {"status": EvaluationStatus.CERTIFIED if ok else EvaluationStatus.NOT_CERTIFIED,
             "reason": "" if ok else f"{gc.status}: {gc.reason}", "refusal": None if ok else gc.status.value,
-            "verified_value": float(gc.r_star) if ok else None,
+            "verified_value": float(gc.value) if ok else None,
             "estimate": None if c is None else float(c.estimate if c.estimate is not None else c.r_star),
             "certificate": gc.to_dict(samples=True) if ok else None, "seconds": time.perf_counter() - t0}

@@ -52,6 +52,7 @@ from tqdm import tqdm
 from robustgait.config import KINDS, CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
 from robustgait.config.certify import orbit_options
 from robustgait.errors import RobustGaitError, input_error
+from robustgait.io.certfile import certificate_figure
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
 from robustgait.io.studyfile import load_config
@@ -203,7 +204,7 @@ def _validate_one(task: _Task) -> dict[str, Any]:
         with Validator(robot, gait, task.config, certify=task.certify, sim=task.sim, certificate=ref,
                        start=start) as v:
             kinds = {k: v.run(k).to_dict(trials=True) for k in task.kinds}
-            return {"label": task.label, "certificate": asdict(v.certificate), "setup_seconds": v.seconds_setup,
+            return {"label": task.label, "certificate": v.certificate.to_dict(), "setup_seconds": v.seconds_setup,
                     "kinds": kinds}
     except RobustGaitError as exc:
         return {"label": task.label, "error": str(exc)}
@@ -359,7 +360,7 @@ def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim:
         if g.label in stored:
             res = stored[g.label]["result"]
             cert = stored[g.label]["certificate"]
-            rows.append({**g.row(), "certificate_value": float(cert["r_star"]) if g.certificate_file else 0.0,
+            rows.append({**g.row(), "certificate_value": certificate_figure(cert) if g.certificate_file else 0.0,
                          "study_certificate_value": g.certificate_value,
                          "start": "fixed_point" if g.certificate_file else "initial_state",
                          "certificate": stored[g.label]["certificate"], "success": res["success"],

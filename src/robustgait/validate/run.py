@@ -18,7 +18,7 @@ import json
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -73,12 +73,18 @@ class CertificateRef:
     source: str
     push: PushConfig | None = None  # a push certificate's pushed walk: its horizon and recovery
 
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (tuples as lists by the encoder): the figure by its name — ``j_star`` of a push certificate,
+        ``r_star`` of a state certificate (:func:`robustgait.io.certfile.certificate_figure` reads both)."""
+        out = asdict(self)
+        return {("j_star" if k == "r_star" and self.push is not None else k): v for k, v in out.items()}
+
     @staticmethod
     def of(gc: GaitCertificate) -> CertificateRef:
         c, cfg, co = gc.certificate, gc.config, gc.coordinates
         if c is None or gc.fixed_point is None or co is None:
             raise RobustGaitError(f"the gait has no certificate to validate against ({gc.status}: {gc.reason})")
-        return CertificateRef(float(c.r_star), bool(c.attained), tuple(float(v) for v in c.x_star),
+        return CertificateRef(gc.value, bool(c.attained), tuple(float(v) for v in c.x_star),
                               tuple(tuple(float(v) for v in row) for row in co.transform), cfg.space, cfg.set,
                               cfg.horizon, gc.energy, cfg.map, cfg.frame, cfg.reconstruction,
                               tuple(orbit_options(cfg).items()), "computed",
@@ -93,7 +99,7 @@ class CertificateRef:
         cfg = c.certify_config(path)
         k = len(c.x_star)
         t = c.transform(path) or np.eye(k).tolist()
-        return CertificateRef(c.r_star, c.attained, tuple(c.x_star), tuple(tuple(row) for row in t), cfg.space,
+        return CertificateRef(c.value, c.attained, tuple(c.x_star), tuple(tuple(row) for row in t), cfg.space,
                               cfg.set, cfg.horizon, c.energy, cfg.map, cfg.frame, cfg.reconstruction,
                               tuple(orbit_options(cfg).items()), str(path),
                               cfg.push if cfg.disturbance == "push" else None)
@@ -241,9 +247,7 @@ class ValidationResult:
     seconds: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self, *, trials: bool = True) -> dict[str, Any]:
-        from dataclasses import asdict
-
-        return {"robot": self.robot, "gait": self.gait, "certificate": asdict(self.certificate),
+        return {"robot": self.robot, "gait": self.gait, "certificate": self.certificate.to_dict(),
                 "config": to_dict(self.config), "sim": to_dict(self.sim), "seconds": self.seconds,
                 "kinds": {k: v.to_dict(trials) for k, v in self.kinds.items()}}
 
