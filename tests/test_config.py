@@ -215,14 +215,3 @@ def test_the_configuration_page_lists_every_field():
 
     page = (Path(__file__).resolve().parents[1] / "docs" / "configuration.md").read_text()
     assert Config.markdown() in page, "docs/configuration.md is stale: robustgait config show --markdown"
-
-
-def test_the_verification_margin_follows_the_walk_unless_set() -> None:
-    """push.verify_margin unset: 0.8 for a walk without the step regulator, 0.65 for one under it (narrow soles);
-    set: that value for both; the estimator's options without a walk use the unregulated one."""
-    from robustgait.config.certify import REGULATED_VERIFY_MARGIN, VERIFY_MARGIN, PushConfig
-
-    assert PushConfig().margin(False) == VERIFY_MARGIN == 0.8 and PushConfig().margin(True) == REGULATED_VERIFY_MARGIN
-    assert REGULATED_VERIFY_MARGIN < VERIFY_MARGIN
-    assert PushConfig(verify_margin=0.7).margin(True) == PushConfig(verify_margin=0.7).margin(False) == 0.7
-    assert CertifyConfig(disturbance="push").estimator.verify_margin == VERIFY_MARGIN

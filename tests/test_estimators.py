@@ -321,7 +321,7 @@ def test_coverage_of_the_push_certificate() -> None:
             wrong += P.violating_fraction(cert.r_star) > eps
     assert len(js) > runs // 2 and wrong <= 12  # 100 runs at a failure rate ≤ β: > 12 has probability < 0.002
     # J* is verify_margin × the explored estimate, which lies near the true threshold
-    margin = CertifyConfig(disturbance="push").estimator.verify_margin
+    margin = CertifyConfig(disturbance="push").push.verify_margin
     assert 0.9 * margin * P.r_star <= np.median(js) <= 1.25 * P.r_star
 
 

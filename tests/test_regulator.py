@@ -13,7 +13,6 @@ import pytest
 
 from robustgait.cli import main
 from robustgait.config import Config, SimConfig
-from robustgait.config.certify import REGULATED_VERIFY_MARGIN
 from robustgait.config.regulator import RegulatorConfig, placement_share, regulator_rule
 from robustgait.errors import RobustGaitError
 from robustgait.sim.engine import StepEngine
@@ -241,10 +240,7 @@ def test_the_narrow_footed_humanoid_is_certified_with_the_defaults(t1_narrow, na
 
     cert = certify_gait(t1_narrow, narrow_gait, Config().certify)
     assert cert.status == "ok", cert.reason
-    assert cert.controller == "pd+hlip" and cert.j_star > 0.5
-    # a walk under the step regulator: its batch is drawn in the regulated margin, and the certificate says so
-    assert cert.config.push.verify_margin == REGULATED_VERIFY_MARGIN
-    assert cert.to_dict()["config"]["push"]["verify_margin"] == REGULATED_VERIFY_MARGIN
+    assert cert.controller == "pd+hlip" and cert.r_star > 0.5
 
 
 @pytest.mark.slow

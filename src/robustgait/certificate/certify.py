@@ -437,9 +437,6 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
     check_certify_work(robot, gait, cfg, sim)
     t0 = time.perf_counter()
     engine = make_engine(robot, gait, sim)
-    if push and cfg.push.verify_margin is None:  # the margin of the walk certified: with the step regulator or not
-        cfg = dataclasses.replace(cfg, push=dataclasses.replace(
-            cfg.push, verify_margin=cfg.push.margin(engine.regulator is not None)))
     try:
         orbit = None if explored is None else stored_orbit(explored, robot, gait, cfg, sim, vcfg)
         replayed_orbit = orbit is not None

@@ -64,10 +64,6 @@ def radius_name(space: str) -> str:
     return "J*" if space == "push" else "r*"
 
 
-# push.verify_margin when unset: a walk under the H-LIP step regulator falls in sparse pockets inside the explored
-# estimate, so its batch is drawn in a smaller disk (the figures: docs/certificate.md, "Explore cheap, verify exact")
-VERIFY_MARGIN = 0.8
-REGULATED_VERIFY_MARGIN = 0.65
 SEED_LIMIT = 2**63 - 1  # a seed fits a signed 64-bit integer (study storage)
 
 
@@ -231,10 +227,9 @@ class PushConfig:
     verify_chunk: Annotated[Int, Doc("verification pushes simulated per chunk, the largest first; a batch is "
                                      "abandoned at the first chunk with a fall inside the disk verified (0: the "
                                      "whole batch at once)", ge=0, le=10_000)] = 25
-    verify_margin: Annotated[Float | None, Doc(
-        "the disk a verification batch is drawn in, as a fraction of the explored estimate Ĵ: J* is this fraction of "
-        "Ĵ when the batch passes (below 1: fewer failed batches, a smaller J*); unset: 0.8, or 0.65 for a walk the "
-        "H-LIP step regulator runs (narrow soles, whose falls lie in sparse pockets inside Ĵ)", gt=0.0, le=1.0)] = None
+    verify_margin: Annotated[Float, Doc("the disk a verification batch is drawn in, as a fraction of the explored "
+                                        "estimate Ĵ: J* is this fraction of Ĵ when the batch passes (below 1: fewer "
+                                        "failed batches, a smaller J*)", gt=0.0, le=1.0)] = 0.8
     first_share: Annotated[Float, Doc("share of β spent on the first verification batch (the rest halves over the "
                                       "further batches; 0.5: β/2, β/4, …): a larger share, a smaller first batch",
                                       gt=0.0, lt=1.0)] = 0.9
@@ -254,13 +249,6 @@ class PushConfig:
         if self.recovery and self.explore_recovery_steps > 1 + self.explore_horizon:
             raise FieldProblem("explore_recovery_steps", "must be at most the pushed step and explore_horizon "
                                f"({1 + self.explore_horizon} steps), got {self.explore_recovery_steps}")
-
-    def margin(self, regulated: bool) -> float:
-        """``verify_margin`` in effect for a walk the H-LIP step regulator runs (``regulated``) or not: the value
-        set, else :data:`VERIFY_MARGIN` or :data:`REGULATED_VERIFY_MARGIN`."""
-        if self.verify_margin is not None:
-            return float(self.verify_margin)
-        return REGULATED_VERIFY_MARGIN if regulated else VERIFY_MARGIN
 
     def exploring(self) -> PushConfig:
         """The push rule of exploration pushes: ``explore_horizon``, ``explore_recovery_radius`` and
@@ -313,14 +301,13 @@ class CertifyConfig:
     @property
     def estimator(self) -> SequentialConfig:
         """The sequential estimator's options in effect: ``sequential``, with the push certificate's round sizes for
-        ``disturbance = push`` (its ``verify_margin`` as set, else that of a walk without the step regulator:
-        :func:`robustgait.certificate.certify.certify_gait` sets it for the walk it certifies)."""
+        ``disturbance = push``."""
         if self.disturbance != "push":
             return self.sequential
         p = self.push
         return dataclasses.replace(self.sequential, first_round=p.first_round, explore=p.explore,
                                    explore_after_failure=p.explore_after_failure, verify_chunk=p.verify_chunk,
-                                   verify_margin=p.margin(False), first_share=p.first_share)
+                                   verify_margin=p.verify_margin, first_share=p.first_share)
 
     def __post_init__(self) -> None:
         if self.disturbance == "push" and self.chooses_a_state:
