@@ -134,9 +134,9 @@ def run(case: str, side: str, src: str, args: argparse.Namespace, tmp: Path) -> 
     if (case.startswith("certify") or case.startswith("gait:")) and p2.stdout.strip():
         res = json.loads(p2.stdout)
         search = res.get("orbit_physics_steps", res.get("fixed_point_physics_steps", 0))
-        out.update(status=res["status"], j_star=res.get("j_star", res["r_star"]), pushes=res.get("n_samples"),
-                   physics=res["physics_steps"], search_physics=search,
-                   attempts=sum(r["kind"] == "verify" for r in res.get("rounds") or []))
+        j_star = res["j_star"] if "j_star" in res else res["r_star"]  # J*: written as r_star before it was named
+        out.update(status=res["status"], j_star=j_star, pushes=res.get("n_samples"), physics=res["physics_steps"],
+                   search_physics=search, attempts=sum(r["kind"] == "verify" for r in res.get("rounds") or []))
     elif p2.returncode != 0:
         out["error"] = p2.stderr.strip().splitlines()[-1:] or [""]
     return out
