@@ -13,7 +13,8 @@ import pytest
 from robustgait import RobustGaitError
 from robustgait.certificate.barrier import certify_map
 from robustgait.certificate.numerics import fd_jacobian, flow_projection, spectral_radius
-from robustgait.certificate.orbit import Status, classify, map_orbit, periods, settle_window
+from robustgait.certificate.orbit import Status, classify, periods, settle_window
+from robustgait.certificate.search import map_orbit
 from robustgait.certificate.synthetic import DriftMap, LinearMap, NoisyMap, QuadraticMap, iterates
 from robustgait.config import CertifyConfig
 

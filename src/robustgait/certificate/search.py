@@ -11,6 +11,9 @@ the band come back to it (``docs/certificate.md``, "The orbit the gait walks").
    not come back and keeps moving away from the band (:func:`.orbit.diverging`), or every probe falls; a probe that
    falls is a push beyond the gait's basin in its direction, which J* measures (:class:`.orbit.Probe`).
 3. **ρ** — with ``orbit.linearization``, the linearized map at x* as a diagnostic (:mod:`.linearization`).
+
+:func:`map_orbit` is the same search on a batched map instead of a walk (maps whose answer is known,
+:mod:`.synthetic`).
 """
 
 from __future__ import annotations
@@ -22,8 +25,18 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.certificate.band import advance_runs
 from robustgait.certificate.linearization import linearize
-from robustgait.certificate.orbit import Orbit, Probe, SettlingWatch, Status, probe_of, unstable_reason, walk_orbit
+from robustgait.certificate.orbit import (
+    Orbit,
+    Probe,
+    SettlingWatch,
+    Status,
+    Watch,
+    probe_of,
+    unstable_reason,
+    walk_orbit,
+)
 from robustgait.certificate.push import PushMap, push_phase
 from robustgait.certificate.returnmap import FullStateMap
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig
@@ -121,3 +134,53 @@ def initial_section(robot: Robot, gait: Gait, engine: StepEngine) -> tuple[Float
             raise RobustGaitError(f"the gait fell within step 1 ({b.fall_reason[0]}) before its first switching event")
         qpos, qvel = robot.mirror_state(b.qpos, b.qvel)
     return qpos, qvel
+
+
+def map_orbit(F: Callable[[FloatArray], FloatArray], x0: FloatArray, config: CertifyConfig, *, perturbation: float,
+              min_period: int = 1, seed: int = 0) -> Orbit:
+    """The orbit search of this module on a batched map F: (N, d) → (N, d) of band coordinates (NaN rows: the
+    sample fell) instead of a walk: iterate F from x0 (d,) until the iterates settle (:func:`settle_window`, at most
+    ``orbit.max_steps`` maps), classify them (:func:`classify`), then probe stability with ``orbit.probe_pushes``
+    states x* + ``perturbation`` u (u uniform in the unit L∞ ball's surface, seeded), each iterated until it has
+    been back in the band for ``push.recovery_steps`` consecutive maps within ``orbit.probe_horizon`` maps: the
+    verdict of a robot's search, on a map whose answer is known (:mod:`.synthetic`)."""
+    o, p = config.orbit, config.push
+    watch = Watch(o, min_period, p.recovery_radius, p.recovery_scatter)
+    x = np.asarray(x0, dtype=float)
+    fell: str | None = None
+    while not watch.done:
+        x = np.asarray(F(x[None]), dtype=float)[0]
+        if not np.all(np.isfinite(x)):
+            fell = "the map's image is not finite"
+            break
+        watch.add(x)
+    orbit, i = watch.orbit(fell)
+    z = np.array(watch.z)
+    if i is None or orbit.band is None:
+        return orbit
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1.0, 1.0, (o.probe_pushes, z.shape[1]))
+    u /= np.abs(u).max(axis=1, keepdims=True)
+    states = z[i] + perturbation * u
+    run = np.zeros((o.probe_pushes, orbit.band.period), dtype=np.int64)
+    back = np.zeros(o.probe_pushes, dtype=np.int64)
+    trace = np.full((o.probe_pushes, o.probe_horizon), np.nan)
+    left = np.zeros(o.probe_pushes, dtype=bool)
+    fallen = np.zeros(o.probe_pushes, dtype=bool)
+    for j in range(1, o.probe_horizon + 1):
+        live = (back == 0) & ~fallen
+        if not live.any():
+            break
+        states[live] = np.asarray(F(states[live]), dtype=float)
+        fallen |= live & ~np.isfinite(states).all(axis=1)
+        shifted = advance_runs(orbit.band, run, np.where(live[:, None], states, np.nan), j)
+        with np.errstate(invalid="ignore"):
+            left |= live & (shifted[:, 0] > 1.0)
+        trace[live, j - 1] = shifted[live].min(axis=1)
+        back[live & (run.max(axis=1) >= p.recovery_steps)] = j
+    probe = probe_of(perturbation, o.probe_horizon, back, fallen, left, trace, o.probe_growth)
+    orbit = dataclasses.replace(orbit, probe=probe)
+    if not probe.ok:
+        orbit = dataclasses.replace(orbit, status=Status.UNSTABLE, reason=unstable_reason(
+            probe, "the iterates", f"states perturbed by {perturbation:g}", "maps"))
+    return orbit
