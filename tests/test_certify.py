@@ -181,9 +181,10 @@ def test_cli_certify_json(capsys, tmp_path):
                         "--json", "--plot", str(tmp_path / "c.png"), "-o", str(tmp_path / "c.json"))
     res = json.loads(out)
     assert code == 0
-    for key in ("r_star", "x_star", "fixed_point_step", "sigma", "period", "n_samples", "n_fell", "map",
-                "reconstruction", "seconds"):
+    for key in ("j_star", "x_star", "fixed_point_step", "sigma", "period", "n_samples", "n_fell", "map",
+                "reconstruction", "seconds"):  # a push certificate: its figure is J*
         assert key in res
+    assert "r_star" not in res
     assert res["n_samples"] == 12 and res["map"] == "auto" and res["period"] == 1
     assert res["reconstruction"] == "holonomic" and res["sigma"] is None and res["orbit"]["sigma"] < 1e-3
     assert len(json.loads((tmp_path / "c.json").read_text())["samples"]) == 12
