@@ -12,7 +12,6 @@ study it is a data point).
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -21,7 +20,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from robustgait.certificate.barrier import Certificate, certify_map, evaluate_map, sample_ball
+from robustgait.certificate.barrier import Certificate, Round, certify_map, evaluate_map, sample_ball
 from robustgait.certificate.estimators import Replay, certify_map_sequential
 from robustgait.certificate.orbit import FixedPoint, Orbit, Status, orbit_from_dict, orbit_state
 from robustgait.certificate.push import PushMap
@@ -35,6 +34,7 @@ from robustgait.config.certify import R_MAX_LIMIT
 from robustgait.config.work import Work, check_work
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
+from robustgait.io.certfile import certificate_figure
 from robustgait.robots import Robot
 from robustgait.sim.engine import step_physics_steps
 from robustgait.sim.factory import make_engine
@@ -272,6 +272,24 @@ def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: boo
         return certify_map_sequential(counted, x_star, cfg, explore=counted_explore, verify=verify)
 
 
+def certificate_from_record(d: Mapping[str, Any]) -> Certificate:
+    """A :class:`Certificate` from its JSON (:meth:`GaitCertificate.to_dict` with samples): null image rows
+    back to NaN, null margins back to −inf; its radius the certified figure (``j_star`` or ``r_star``)."""
+    d = {**d, "r_star": certificate_figure(d)}
+    fell = np.asarray(d["fell"], dtype=bool)
+    n = len(d["x_star"])
+    images = np.array([[np.nan] * n if row is None else row for row in d["images"]], dtype=float)
+    margins = np.array([-np.inf if m is None else m for m in d["margins"]], dtype=float)
+    arrays: dict[str, Any] = {
+        "x_star": np.asarray(d["x_star"], dtype=float), "samples": np.asarray(d["samples"], dtype=float),
+        "images": images, "fell": fell, "margins": margins,
+        "rounds": tuple(Round(**r) for r in d.get("rounds") or ()),
+        "sample_round": None if d.get("sample_round") is None else np.asarray(d["sample_round"], dtype=np.int64)}
+    kwargs = {f.name: arrays[f.name] if f.name in arrays else d[f.name] for f in dataclasses.fields(Certificate)
+              if f.name in arrays or f.name in d}
+    return Certificate(**kwargs)
+
+
 def _same_run(explored: Mapping[str, Any], robot: Robot, config: CertifyConfig, sim: SimConfig,
               validate: ValidateConfig | None) -> bool:
     """Whether an earlier certificate (``explored``, :meth:`GaitCertificate.to_dict`) was made on ``robot`` with the
@@ -314,18 +332,14 @@ def stored_exploration(explored: Mapping[str, Any], robot: Robot, config: Certif
             or explored.get("omega_star") != [float(v) for v in fp.omega]):
         return None
     try:
-        kinds = [r["kind"] for r in explored["rounds"]]
-        first_verify = kinds.index("verify") if "verify" in kinds else len(kinds)
-        rounds = np.asarray(explored["sample_round"], dtype=np.int64)
-        keep = np.flatnonzero(rounds < first_verify)
-        samples = np.asarray(explored["samples"], dtype=np.float64).reshape(len(rounds), -1)
-        nan = [math.nan] * samples.shape[1]
-        images = np.array([nan if row is None else row for row in explored["images"]], dtype=np.float64)
-        if images.shape != samples.shape:
-            return None
+        c = certificate_from_record(explored)
     except (KeyError, TypeError, ValueError):  # not a certificate's samples (an edited file): simulate instead
         return None
-    return samples[keep], images[keep]
+    if c.samples.ndim != 2 or c.images.shape != c.samples.shape or c.round_of_sample.shape != c.samples.shape[:1]:
+        return None
+    kinds = [r.kind for r in c.rounds]
+    keep = np.flatnonzero(c.round_of_sample < (kinds.index("verify") if "verify" in kinds else len(kinds)))
+    return c.samples[keep], c.images[keep]
 
 
 def certify_steps(config: CertifyConfig, graph: str, dim: int) -> int:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -88,7 +89,7 @@ def read_certificate(path: str | Path) -> CertificateFile:
     return out
 
 
-def certificate_figure(record: dict[str, Any]) -> float:
+def certificate_figure(record: Mapping[str, Any]) -> float:
     """The certified figure of a certificate record (:meth:`~robustgait.certificate.certify.GaitCertificate.to_dict`,
     a file or a study's copy): ``j_star`` of a push certificate, ``r_star`` of a state certificate or of a push
     certificate written before its figure was named. KeyError when it has neither."""

@@ -13,7 +13,6 @@ and a short video of the best gait walking (:func:`render_video`).
 from __future__ import annotations
 
 import base64
-import dataclasses
 import html
 from itertools import combinations
 from pathlib import Path
@@ -27,11 +26,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from robustgait.certificate.barrier import Certificate, Round
+from robustgait.certificate.certify import certificate_from_record
 from robustgait.certificate.reduced import Coordinates
 from robustgait.config import ReportConfig, radius_name
 from robustgait.errors import RobustGaitError, input_error
-from robustgait.io.certfile import certificate_figure
 from robustgait.io.output import write_text
 from robustgait.io.schema import read_json
 from robustgait.report.figures import _save, plot_certificate
@@ -42,24 +40,6 @@ OUTCOME_COLORS = {"certified": "tab:green", "estimated": "tab:cyan", "not_certif
                   "generation_failed": "0.3"}
 OUTCOME_MARKERS = {"certified": "o", "estimated": "^", "not_certified": "s", "fell": "x", "generation_failed": "+"}
 REPORT_DIR = "report"
-
-
-def certificate_from_json(d: dict[str, Any]) -> Certificate:
-    """A :class:`Certificate` from its JSON (:meth:`GaitCertificate.to_dict` with samples): null image rows
-    back to NaN, null margins back to −inf; its radius the certified figure (``j_star`` or ``r_star``)."""
-    d = {**d, "r_star": certificate_figure(d)}
-    fell = np.asarray(d["fell"], dtype=bool)
-    n = len(d["x_star"])
-    images = np.array([[np.nan] * n if row is None else row for row in d["images"]], dtype=float)
-    margins = np.array([-np.inf if m is None else m for m in d["margins"]], dtype=float)
-    arrays: dict[str, Any] = {
-        "x_star": np.asarray(d["x_star"], dtype=float), "samples": np.asarray(d["samples"], dtype=float),
-        "images": images, "fell": fell, "margins": margins,
-        "rounds": tuple(Round(**r) for r in d.get("rounds") or ()),
-        "sample_round": None if d.get("sample_round") is None else np.asarray(d["sample_round"], dtype=np.int64)}
-    kwargs = {f.name: arrays[f.name] if f.name in arrays else d[f.name] for f in dataclasses.fields(Certificate)
-              if f.name in arrays or f.name in d}
-    return Certificate(**kwargs)
 
 
 def plot_history(status: dict[str, Any], path: Path) -> Path:
@@ -265,7 +245,7 @@ def write_study_report(directory: str | Path, config: ReportConfig | None = None
     cert_file = best.get("certificate_file") if best else None
     if cert_file:
         raw = read_json(d / cert_file, "certificate file")
-        cert = certificate_from_json(raw)
+        cert = certificate_from_record(raw)
         coords = Coordinates.from_dict(raw["coordinates"]) if isinstance(raw.get("coordinates"), dict) else None
         name = radius_name("push" if raw.get("disturbance") == "push" else "state")
         what = f"{raw.get('state', 'omega')} {raw.get('set', 'ball')}" if name == "r*" else "pushes"
