@@ -103,27 +103,15 @@ def base_transform(qpos: ArrayLike | cs.SX) -> Array | cs.SX:
     return H
 
 
-def _sole_frames(m: mujoco.MjModel, geom: int) -> dict[str, tuple[Array, Array]]:
-    """Foot frames of a box sole, as (pos, quat) in the geom's body frame, from the zero posture."""
-    if int(m.geom_type[geom]) != int(mujoco.mjtGeom.mjGEOM_BOX):
-        raise input_error(m.geom(geom).name, "a sole geom must be a box to place the foot frames")
-    d = mujoco.MjData(m)
-    mujoco.mj_kinematics(m, d)
-    Rw = d.geom_xmat[geom].reshape(3, 3)  # geom axes in the world, zero posture
-    size = m.geom_size[geom]
-    n = int(np.argmax(np.abs(Rw[2])))  # geom axis closest to vertical: the sole normal
-    up = 1.0 if Rw[2, n] > 0 else -1.0
-    ln = max((k for k in range(3) if k != n), key=lambda k: size[k])  # long axis: heel to toe
-    fwd = 1.0 if Rw[0, ln] >= 0 else -1.0
-    e = np.eye(3)
-    bottom = -up * size[n] * e[n]
-    x_axis, z_axis = fwd * e[ln], up * e[n]
-    R_frame = np.column_stack([x_axis, np.cross(z_axis, x_axis), z_axis])
-    R_gb = quat_to_rotation(m.geom_quat[geom])
+def _sole_frames(robot: Robot, side: str) -> dict[str, tuple[Array, Array]]:
+    """Foot frames of a sole box (:class:`~robustgait.robots.solebox.SoleBox`), as (pos, quat) in the geom's body
+    frame: its bottom face's centre (``sole``), toe and heel, with the foot frame's axes (x heel to toe, z up)."""
+    m, sole = robot.model, robot.sole_boxes[side]
+    R_gb = quat_to_rotation(m.geom_quat[sole.geom])
     quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, (R_gb @ R_frame).ravel())
-    points = {"sole": bottom, "toe": bottom + fwd * size[ln] * e[ln], "heel": bottom - fwd * size[ln] * e[ln]}
-    return {k: (m.geom_pos[geom] + R_gb @ p, quat) for k, p in points.items()}
+    mujoco.mju_mat2Quat(quat, (R_gb @ sole.frame_rotation()).ravel())
+    return {k: (m.geom_pos[sole.geom] + R_gb @ sole.point(along), quat)
+            for k, along in (("sole", 0.0), ("toe", 1.0), ("heel", -1.0))}
 
 
 def _symmetrize(m: mujoco.MjModel, robot: Robot, frames: dict[str, dict[str, tuple[Array, Array]]]) -> None:
@@ -152,7 +140,7 @@ def _adam_model(robot: Robot) -> mujoco.MjModel:
     """The robot's model prepared for adam: foot frames added, joint frames moved, statics massless."""
     mjs = robot.mjspec()
     m = robot.model
-    frames = {side: _sole_frames(m, robot.sole_geom_id[side]) for side in SIDES}
+    frames = {side: _sole_frames(robot, side) for side in SIDES}
     _symmetrize(m, robot, frames)
     for side in SIDES:
         geom = robot.sole_geom_id[side]
@@ -223,6 +211,19 @@ class Dynamics:
         return self.kindyn.mass_matrix_fun()
 
     @cached_property
+    def mixed_armature(self) -> Array:
+        """The rotor inertias on the mass matrix's diagonal in adam's mixed coordinates (6 + n,): the floating base's
+        ``dof_armature`` (one value for all six, so a rotation of the base's velocity leaves it as it is), then the
+        joints' in spec order."""
+        return np.concatenate([self.armature[:6], self.armature[self.robot.dof_idx]])
+
+    def inertia(self, H: Any, s: Any) -> Any:
+        """M(q) + diag(armature) ((6 + n) × (6 + n)), adam's mixed coordinates: the mass matrix of the equations of
+        motion MuJoCo integrates, at base pose ``H`` (4, 4) and joints ``s`` (n,); CasADi DM for numbers, SX/MX for
+        symbols (the gait problem's constraints)."""
+        return self.mass_matrix_fun(H, s) + cs.diag(self.mixed_armature)
+
+    @cached_property
     def bias_force_fun(self) -> cs.Function:
         """CasADi function ``(H, s, ν_base, ṡ) -> h`` (n+6,): Coriolis, centrifugal and gravity, mixed."""
         return self.kindyn.bias_force_fun()
@@ -254,10 +255,11 @@ class Dynamics:
         return self.velocity_map(qpos).T @ np.asarray(nu, dtype=float)
 
     def mass_matrix(self, qpos: ArrayLike) -> Array:
-        """Joint-space inertia (nv, nv) in MuJoCo's coordinates (``mj_fullM``): ``Tᵀ M T + diag(armature)``."""
+        """Joint-space inertia (nv, nv) in MuJoCo's coordinates (``mj_fullM``): ``Tᵀ (M + diag(armature)) T``
+        (:meth:`inertia`, :meth:`velocity_map`)."""
         T = self.velocity_map(qpos)
-        M = np.asarray(self.mass_matrix_fun(base_transform(qpos), self.joint_positions(qpos)), dtype=float)
-        return T.T @ M @ T + np.diag(self.armature)
+        M = np.asarray(self.inertia(base_transform(qpos), self.joint_positions(qpos)), dtype=float)
+        return T.T @ M @ T
 
     def bias_forces(self, qpos: ArrayLike, qvel: ArrayLike) -> Array:
         """Bias forces (nv,) in MuJoCo's coordinates (``qfrc_bias``): ``Tᵀ h(q, T qvel)``."""

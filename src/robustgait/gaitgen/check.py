@@ -26,6 +26,7 @@ from robustgait.domains import Contact
 from robustgait.dynamics import Dynamics, foot_frame, impact_map
 from robustgait.gaitgen.problem import GaitProblem
 from robustgait.gaitgen.states import NodeStates, to_mujoco_state
+from robustgait.robots.model import full_inertia
 
 FloatArray = NDArray[np.float64]
 DYNAMICS_TOL = 1e-6
@@ -105,57 +106,102 @@ def _wrench_figures(c: Contact, lam: FloatArray, prob: GaitProblem) -> tuple[flo
     return fz, friction, float(margin)
 
 
+@dataclass
+class _Worst:
+    """The worst of each figure over a solution's nodes and transitions, as :func:`check_solution` gathers them
+    (:class:`PhysicsCheck` for their meaning)."""
+
+    dynamics: float = 0.0
+    drift: float = 0.0
+    fz_min: float = np.inf
+    friction: float = 0.0
+    cop_margin: float = np.inf
+    force_short: float = 0.0
+    impact: float = 0.0
+    continuity: float = 0.0
+
+
+def _check_node(dyn: Dynamics, prob: GaitProblem, params: GaitParams, d: mujoco.MjData, contacts: tuple[Contact, ...],
+                ns: NodeStates, i: int, worst: _Worst) -> None:
+    """One node's equations of motion, contacts and wrenches against MuJoCo's (``worst`` updated in place)."""
+    robot, m, stance, cfg = dyn.robot, dyn.robot.model, prob.stance, prob.config
+    qpos, qvel = to_mujoco_state(robot, ns.H[i], ns.s[i], ns.vb[i], ns.sd[i])
+    qacc = dyn.velocity_map(qpos).T @ np.concatenate([ns.ab[i], ns.sdd[i]])
+    d.qpos[:], d.qvel[:] = qpos, qvel
+    mujoco.mj_forward(m, d)
+    M = full_inertia(m, d)
+    J = _contact_jacobian(dyn, m, d, contacts, stance, qpos)
+    tau = np.zeros(m.nv)
+    tau[robot.dof_idx] = ns.u[i]
+    r = M @ qacc + d.qfrc_bias - tau - J.T @ ns.lam[i]
+    worst.dynamics = max(worst.dynamics, float(np.linalg.norm(r) / max(np.linalg.norm(M @ qacc)
+                                                                       + np.linalg.norm(d.qfrc_bias), 1.0)))
+    worst.drift = max(worst.drift, float(np.linalg.norm(J @ qvel)))
+    j = 0
+    for c in contacts:
+        point, rot = dyn.frame_pose(foot_frame(c.side(stance), c.frame_kind()), qpos)
+        orient = (rot[1, 0], rot[2, 0], rot[2, 1]) if c.kind == "flat" else (rot[0, 1], rot[2, 1])
+        worst.drift = max(worst.drift, float(np.linalg.norm(point - _target(c, prob, params))),
+                          float(np.max(np.abs(orient))))
+        fz, fr, cm = _wrench_figures(c, ns.lam[i][j:j + c.n_rows], prob)
+        floor = cfg.scaled("min_normal_force") if c.kind == "flat" else cfg.scaled("min_line_force")
+        worst.fz_min, worst.friction = min(worst.fz_min, fz), max(worst.friction, fr)
+        worst.cop_margin, worst.force_short = min(worst.cop_margin, cm), max(worst.force_short, floor - fz)
+        j += c.n_rows
+
+
+def _check_impact(dyn: Dynamics, prob: GaitProblem, d: mujoco.MjData, states: list[NodeStates], k: int,
+                  worst: _Worst) -> tuple[FloatArray, FloatArray]:
+    """The impact that ends domain ``k``, with MuJoCo's M and Jacobian, against the solution's ν⁺, and the next
+    domain's start against the post-impact state (same labels); returns (qpos, post-impact qvel)."""
+    robot, m, ns = dyn.robot, dyn.robot.model, states[k]
+    qpos, qvel = to_mujoco_state(robot, ns.H[-1], ns.s[-1], ns.vb[-1], ns.sd[-1])
+    d.qpos[:], d.qvel[:] = qpos, qvel
+    mujoco.mj_forward(m, d)
+    Jt = _contact_jacobian(dyn, m, d, prob.graph.target_contacts(k), prob.stance, qpos)
+    qvel_plus, _ = impact_map(full_inertia(m, d), Jt, qvel)
+    worst.impact = max(worst.impact, float(np.linalg.norm(Jt @ qvel_plus)),
+                       float(np.abs(dyn.to_mujoco(qpos, ns.nu_plus) - qvel_plus).max()))
+    if k + 1 < len(states):
+        nxt = states[k + 1]
+        q1, v1 = to_mujoco_state(robot, nxt.H[0], nxt.s[0], nxt.vb[0], nxt.sd[0])
+        worst.continuity = max(worst.continuity, float(np.abs(q1 - qpos).max()),
+                               float(np.abs(v1 - qvel_plus).max()))
+    return qpos, qvel_plus
+
+
+def _failures(worst: _Worst, periodicity: float, errs: dict[str, float], friction: float) -> list[str]:
+    """One line per tolerance a solution's figures exceed (the module's tolerances; ``friction`` the cone's μ)."""
+    failures = []
+    if worst.dynamics > DYNAMICS_TOL:
+        failures.append(f"dynamics residual {worst.dynamics:.2e} > {DYNAMICS_TOL:g}")
+    if worst.drift > 1e-6:
+        failures.append(f"a contact moves ({worst.drift:.2e})")
+    if worst.impact > 1e-6 or periodicity > PERIODICITY_TOL:
+        failures.append(f"periodicity {periodicity:.2e} (impact {worst.impact:.2e}) > {PERIODICITY_TOL:g}")
+    if worst.force_short > FORCE_TOL or worst.friction > friction + 1e-6 or worst.cop_margin < -1e-6:
+        failures.append(f"contact wrench outside the cone/sole (min f_z {worst.fz_min:.1f} N, |f_t|/f_z "
+                        f"{worst.friction:.3f}, CoP margin {worst.cop_margin:.4f} m)")
+    for key, err in errs.items():
+        tol = TIME_TOL if key == "duration_error" else LENGTH_TOL
+        if err > tol:
+            failures.append(f"{key.replace('_', ' ')} {err:.2e} > {tol:g}")
+    return failures
+
+
 def check_solution(dyn: Dynamics, prob: GaitProblem, params: GaitParams, states: list[NodeStates],
                    durations: list[float]) -> PhysicsCheck:
     """Re-evaluate a solution's physics with MuJoCo (module docstring), every domain and transition."""
     robot = dyn.robot
-    m, d = robot.model, mujoco.MjData(robot.model)
-    cfg, graph, stance = prob.config, prob.graph, prob.stance
+    d = mujoco.MjData(robot.model)
+    cfg = prob.config
     sw_frame = foot_frame(prob.swing, "sole")
-    dyn_res, drift = 0.0, 0.0
-    fz_min, friction, cop_margin, force_short = np.inf, 0.0, np.inf, 0.0
-    impact_res, continuity = 0.0, 0.0
-    M = np.zeros((m.nv, m.nv))
     side = 1.0 if prob.swing == "left" else -1.0
-    for k, (dom, ns) in enumerate(zip(graph.domains, states, strict=True)):
+    worst = _Worst()
+    for k, (dom, ns) in enumerate(zip(prob.graph.domains, states, strict=True)):
         for i in range(len(ns.s)):
-            qpos, qvel = to_mujoco_state(robot, ns.H[i], ns.s[i], ns.vb[i], ns.sd[i])
-            qacc = dyn.velocity_map(qpos).T @ np.concatenate([ns.ab[i], ns.sdd[i]])
-            d.qpos[:], d.qvel[:] = qpos, qvel
-            mujoco.mj_forward(m, d)
-            mujoco.mj_fullM(m, d, M)
-            J = _contact_jacobian(dyn, m, d, dom.contacts, stance, qpos)
-            tau = np.zeros(m.nv)
-            tau[robot.dof_idx] = ns.u[i]
-            lhs = M @ qacc + d.qfrc_bias
-            r = lhs - tau - J.T @ ns.lam[i]
-            dyn_res = max(dyn_res, float(np.linalg.norm(r) / max(np.linalg.norm(M @ qacc)
-                                                                 + np.linalg.norm(d.qfrc_bias), 1.0)))
-            drift = max(drift, float(np.linalg.norm(J @ qvel)))
-            j = 0
-            for c in dom.contacts:
-                point, rot = dyn.frame_pose(foot_frame(c.side(stance), c.frame_kind()), qpos)
-                target = _target(c, prob, params)
-                orient = (rot[1, 0], rot[2, 0], rot[2, 1]) if c.kind == "flat" else (rot[0, 1], rot[2, 1])
-                drift = max(drift, float(np.linalg.norm(point - target)), float(np.max(np.abs(orient))))
-                fz, fr, cm = _wrench_figures(c, ns.lam[i][j:j + c.n_rows], prob)
-                floor = cfg.scaled("min_normal_force") if c.kind == "flat" else cfg.scaled("min_line_force")
-                fz_min, friction, cop_margin = min(fz_min, fz), max(friction, fr), min(cop_margin, cm)
-                force_short = max(force_short, floor - fz)
-                j += c.n_rows
-        # the impact at the end of the domain, with MuJoCo's M and Jacobian, against the solution's ν⁺
-        qpos, qvel = to_mujoco_state(robot, ns.H[-1], ns.s[-1], ns.vb[-1], ns.sd[-1])
-        d.qpos[:], d.qvel[:] = qpos, qvel
-        mujoco.mj_forward(m, d)
-        mujoco.mj_fullM(m, d, M)
-        Jt = _contact_jacobian(dyn, m, d, graph.target_contacts(k), stance, qpos)
-        qvel_plus, _ = impact_map(M, Jt, qvel)
-        impact_res = max(impact_res, float(np.linalg.norm(Jt @ qvel_plus)),
-                         float(np.abs(dyn.to_mujoco(qpos, ns.nu_plus) - qvel_plus).max()))
-        if k + 1 < len(states):  # the next domain starts from the post-impact state, same labels
-            nxt = states[k + 1]
-            q1, v1 = to_mujoco_state(robot, nxt.H[0], nxt.s[0], nxt.vb[0], nxt.sd[0])
-            continuity = max(continuity, float(np.abs(q1 - qpos).max()), float(np.abs(v1 - qvel_plus).max()))
+            _check_node(dyn, prob, params, d, dom.contacts, ns, i, worst)
+        qpos, qvel_plus = _check_impact(dyn, prob, d, states, k, worst)
     # periodicity: the last post-impact state, shifted so the new stance sole sits at the origin and mirrored,
     # is the first state
     p_sw, _ = dyn.frame_pose(sw_frame, qpos)
@@ -166,10 +212,9 @@ def check_solution(dyn: Dynamics, prob: GaitProblem, params: GaitParams, states:
     q0, v0 = to_mujoco_state(robot, first.H[0], first.s[0], first.vb[0], first.sd[0])
     if np.dot(mq[3:7], q0[3:7]) < 0:  # q and −q are the same rotation
         mq[3:7] *= -1
-    periodicity = float(max(np.abs(mq - q0).max(), np.abs(mv - v0).max(), continuity))
-    ss = states[0]
-    mid = (len(ss.s) - 1) // 2
-    q_mid, _ = to_mujoco_state(robot, ss.H[mid], ss.s[mid], ss.vb[mid], ss.sd[mid])
+    periodicity = float(max(np.abs(mq - q0).max(), np.abs(mv - v0).max(), worst.continuity))
+    mid = (len(first.s) - 1) // 2
+    q_mid, _ = to_mujoco_state(robot, first.H[mid], first.s[mid], first.vb[mid], first.sd[mid])
     h_mid = dyn.frame_pose(sw_frame, q_mid)[0][2]
     errs = {
         "step_length_error": abs(p_sw[0] - params.step_length),
@@ -177,23 +222,10 @@ def check_solution(dyn: Dynamics, prob: GaitProblem, params: GaitParams, states:
         "step_height_error": abs(h_mid - params.step_height),
         "duration_error": abs(sum(durations) - params.duration),
     }
-    failures = []
-    if dyn_res > DYNAMICS_TOL:
-        failures.append(f"dynamics residual {dyn_res:.2e} > {DYNAMICS_TOL:g}")
-    if drift > 1e-6:
-        failures.append(f"a contact moves ({drift:.2e})")
-    if impact_res > 1e-6 or periodicity > PERIODICITY_TOL:
-        failures.append(f"periodicity {periodicity:.2e} (impact {impact_res:.2e}) > {PERIODICITY_TOL:g}")
-    if force_short > FORCE_TOL or friction > cfg.friction + 1e-6 or cop_margin < -1e-6:
-        failures.append(f"contact wrench outside the cone/sole (min f_z {fz_min:.1f} N, |f_t|/f_z {friction:.3f}, "
-                        f"CoP margin {cop_margin:.4f} m)")
-    for key, err in errs.items():
-        tol = TIME_TOL if key == "duration_error" else LENGTH_TOL
-        if err > tol:
-            failures.append(f"{key.replace('_', ' ')} {err:.2e} > {tol:g}")
-    return PhysicsCheck(dynamics_residual=dyn_res, stance_drift=drift, impact_residual=impact_res,
-                        periodicity=periodicity, min_normal_force=float(fz_min), friction_ratio=friction,
-                        cop_margin=cop_margin, cop_bound=float(cfg.scaled("cop_margin")),
+    failures = _failures(worst, periodicity, errs, cfg.friction)
+    return PhysicsCheck(dynamics_residual=worst.dynamics, stance_drift=worst.drift, impact_residual=worst.impact,
+                        periodicity=periodicity, min_normal_force=float(worst.fz_min), friction_ratio=worst.friction,
+                        cop_margin=worst.cop_margin, cop_bound=float(cfg.scaled("cop_margin")),
                         **{k: float(v) for k, v in errs.items()}, passed=not failures,
                         failures=tuple(failures))
 

@@ -126,13 +126,6 @@ def double_support_free_joints(robot: Robot, side: str, names: tuple[str, ...] |
     return [ids.index(j) for j in picked]
 
 
-def sole_half_extents(dyn: Dynamics, side: str) -> tuple[float, float]:
-    """(half length, half width) [m] of a box sole: its largest and middle half sizes."""
-    m = dyn.robot.model
-    size = np.sort(m.geom_size[dyn.robot.sole_geom_id[side]])
-    return float(size[2]), float(size[1])
-
-
 @dataclass
 class DomainLayout:
     """Where one domain's variables sit in the NLP vector: its Bézier β, per-node variables (joints s, ṡ, s̈,
@@ -341,22 +334,21 @@ class GaitProblem:
         # the Bézier outputs of each domain: every joint in single support, all but the free ones in double
         self.outputs = [list(range(m)) if dom.guard == "touchdown" else [j for j in range(m) if j not in self.free]
                         for dom in graph.domains]
-        self.half_length, self.half_width = sole_half_extents(dyn, st)
+        sole = dyn.robot.sole_boxes[st]
+        self.half_length, self.half_width = sole.half_length, sole.half_width
         self.mirror = np.zeros((m, m))
         self.mirror[np.arange(m), list(robot.spec.mirror_perm)] = robot.spec.mirror_sign
 
     def _set_model_functions(self) -> None:
         """CasADi functions of the model, each of (H, s) and, for J̇ and the bias, (ν_b, ṡ): the pose (4 × 4),
         Jacobian (6 × (6 + m)) and its time derivative of the sole, toe and heel frames of both feet; the mass
-        matrix and bias forces; the joints' armature, added to the mass matrix's diagonal."""
+        matrix with armature (:meth:`~robustgait.dynamics.Dynamics.inertia`) and bias forces."""
         dyn, st, sw, kd = self.dyn, self.stance, self.swing, self.dyn.kindyn
         frames = {(side, kind): foot_frame(side, kind) for side in (st, sw) for kind in ("sole", "toe", "heel")}
         self._fk: dict[tuple[str, str], Any] = {key: dyn.frame_fun(f) for key, f in frames.items()}
         self._jac: dict[tuple[str, str], Any] = {key: kd.jacobian_fun(f) for key, f in frames.items()}
         self._jdot: dict[tuple[str, str], Any] = {key: kd.jacobian_dot_fun(f) for key, f in frames.items()}
-        self._mass, self._bias = dyn.mass_matrix_fun, dyn.bias_force_fun
-        self._armature = np.zeros(6 + self.m)
-        self._armature[6:] = dyn.armature[dyn.robot.dof_idx]
+        self._mass, self._bias = dyn.inertia, dyn.bias_force_fun
 
     def _declare_variables(self) -> None:
         """The decision variables x (``layout.size``; torques and impulses /100, wrenches /1000), parameters p = (L
@@ -503,7 +495,7 @@ class GaitProblem:
     def _add_dynamics(self, v: NodeSymbols, Jc: cs.SX) -> cs.SX:
         """The equations of motion (6 + m rows [N, N m] / 100, ``dynamics``): (M(q) + diag(armature)) ν̇ + h(q, ν)
         = (0, u) + J_cᵀ λ. Returns the mass matrix with armature ((6 + m) × (6 + m)) for the impact."""
-        M = self._mass(v.H, v.s) + cs.diag(self._armature)
+        M = self._mass(v.H, v.s)
         tau = cs.vertcat(cs.SX.zeros(6), v.u)
         dyn_res = M @ cs.vertcat(v.ab, v.sdd) + self._bias(v.H, v.s, v.vb, v.sd) - tau - Jc.T @ v.lam
         self._add("dynamics", dyn_res / ROW_SCALE, 0.0, 0.0)

@@ -128,8 +128,6 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
     m = prob.m
     taus = prob.domain_taus[domain]
     dom = prob.graph.domains[domain]
-    arm = np.zeros(6 + m)
-    arm[6:] = dyn.armature[dyn.robot.dof_idx]
     s, sd, sdd = joint_trajectories(beta, taus, duration)
     n = len(taus)
     keys = [foot_frame(c.side(prob.stance), c.frame_kind()) for c in dom.contacts]
@@ -164,7 +162,7 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
         else:
             a = -np.linalg.lstsq(J[:, cols], J[:, known] @ sdd[i][prob.outputs[domain]] + jd @ nu, rcond=None)[0]
             ab, sdd[i][free] = a[:6], a[6:]
-        M = np.asarray(dyn.mass_matrix_fun(H, s[i])) + np.diag(arm)
+        M = np.asarray(dyn.inertia(H, s[i]))
         rhs = M @ np.concatenate([ab, sdd[i]]) + np.asarray(dyn.bias_force_fun(H, s[i], vb, sd[i])).ravel()
         if single:
             lam = np.linalg.solve(J[:, :6].T, rhs[:6])

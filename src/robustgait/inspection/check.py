@@ -55,23 +55,6 @@ def inspected(robot: Robot) -> RobotModel:
                       angles)
 
 
-def sole_face(robot: Robot, d: mujoco.MjData, side: str) -> tuple[float, float]:
-    """A sole box's bottom face: (its normal's angle from vertical [rad], its centre's height [m]). The face is
-    the one across the box axis closest to vertical (as the gait generator's foot frames take it)."""
-    g = robot.sole_geom_id[side]
-    r = d.geom_xmat[g].reshape(3, 3)
-    n = int(np.argmax(np.abs(r[2])))
-    centre = d.geom_xpos[g] - np.sign(r[2, n]) * robot.model.geom_size[g][n] * r[:, n]
-    return float(np.arccos(min(1.0, abs(float(r[2, n]))))), float(centre[2])
-
-
-def sole_length(robot: Robot, d: mujoco.MjData, side: str) -> float:
-    """A sole box's length [m]: its longest edge across the axis closest to vertical."""
-    g = robot.sole_geom_id[side]
-    n = int(np.argmax(np.abs(d.geom_xmat[g].reshape(3, 3)[2])))
-    return float(2 * max(robot.model.geom_size[g][k] for k in range(3) if k != n))
-
-
 def standing_qpos(robot: Robot, rm: RobotModel) -> NDArray[np.float64]:
     """The posture with the base level, at the height that puts the lower sole on the floor."""
     floor = float(robot.model.geom_pos[robot.floor_geom_id][2])
@@ -125,9 +108,9 @@ def check_soles(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     """Both soles flat and level with each other in the posture."""
     rm = inspected(robot)
     d = rm.kinematics(standing_qpos(robot, rm))
-    faces = {s: sole_face(robot, d, s) for s in SIDES}
-    tilt = {s: f[0] for s, f in faces.items()}
-    gap = abs(faces["left"][1] - faces["right"][1])
+    soles = robot.sole_boxes
+    tilt = {s: soles[s].tilt(d) for s in SIDES}
+    gap = abs(float(soles["left"].bottom_centre(d)[2] - soles["right"].bottom_centre(d)[2]))
     ok = max(tilt.values()) <= config.sole_tilt and gap <= config.sole_gap
     return CheckResult("soles", bool(ok), f"soles: {'ok' if ok else 'FAIL'}: in the posture the soles tilt "
                        f"{tilt['left']:.3g} (left) and {tilt['right']:.3g} rad (right) from level (at most "
@@ -193,7 +176,7 @@ def check_stand(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     mujoco.mj_forward(m, d)
     h0 = float(d.qpos[2])
     soles0 = {s: d.geom_xpos[robot.sole_geom_id[s]][:2].copy() for s in SIDES}
-    length = min(sole_length(robot, d, s) for s in SIDES)
+    length = 2.0 * min(robot.sole_boxes[s].half_length for s in SIDES)
     fall = robot.spec.fall
     low, tilt, slip, fell = h0, 0.0, 0.0, ""
     adr = robot.sensor_adr

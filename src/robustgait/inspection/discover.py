@@ -28,11 +28,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.errors import input_error
-from robustgait.inspection.model import GEOM_TYPES, RobotModel, geom_bottom
-from robustgait.robots.soles import SOLE_TYPES, article, foot_up, geom_sole_points, on_sole
+from robustgait.inspection.model import RobotModel, geom_bottom
+from robustgait.robots.soles import GEOM_TYPES, SOLE_TYPES, article, foot_up, geom_sole_points, on_sole
 
 SIDES = ("left", "right")
-PLANE = int(mujoco.mjtGeom.mjGEOM_PLANE)
 MIN_SOLE = 1e-3  # [m]: a sole narrower than this has no area to stand on (one sphere, a capsule on end)
 
 
@@ -204,7 +203,7 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
                               "a mesh, or add a box geom under the foot")
     names = [robot.geom_name(g) for g in geoms]
     sole_class = None
-    if len(geoms) == 1 and all(names) and int(m.geom_type[geoms[0]]) == int(mujoco.mjtGeom.mjGEOM_BOX):
+    if len(geoms) == 1 and all(names) and GEOM_TYPES[int(m.geom_type[geoms[0]])] == "box":
         kind = "geom"
     elif all(names):
         kind = "geoms"
@@ -240,8 +239,7 @@ def _tread(m: mujoco.MjModel, geoms: tuple[int, ...], per_geom: list[NDArray[np.
     points ``per_geom`` were stacked in that order and filtered by the mask ``on``."""
     ends = np.cumsum([len(p) for p in per_geom])
     counts = [int(on[end - len(p):end].sum()) for end, p in zip(ends, per_geom, strict=True)]
-    mesh = int(mujoco.mjtGeom.mjGEOM_MESH)
-    return tuple((g, c) for g, c in zip(geoms, counts, strict=True) if int(m.geom_type[g]) == mesh)
+    return tuple((g, c) for g, c in zip(geoms, counts, strict=True) if GEOM_TYPES[int(m.geom_type[g])] == "mesh")
 
 
 def find_floor(robot: RobotModel) -> Floor:
@@ -249,7 +247,7 @@ def find_floor(robot: RobotModel) -> Floor:
     m = robot.model
     d = mujoco.MjData(m)
     mujoco.mj_kinematics(m, d)
-    planes = [g for g in robot.body_geoms(0) if int(m.geom_type[g]) == PLANE
+    planes = [g for g in robot.body_geoms(0) if GEOM_TYPES[int(m.geom_type[g])] == "plane"
               and float(d.geom_xmat[g].reshape(3, 3)[2, 2]) > 0.999]
     if not planes:
         return Floor(None, True, 0.0)

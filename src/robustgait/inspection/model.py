@@ -17,14 +17,12 @@ from numpy.typing import NDArray
 
 from robustgait.errors import input_error
 from robustgait.io.robotfile import ModelKind, read_model
-from robustgait.robots.soles import collides, hull_vertices
+from robustgait.robots.soles import GEOM_TYPES, collides, hull_vertices
 
 FREE = int(mujoco.mjtJoint.mjJNT_FREE)
 HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
 SLIDE = int(mujoco.mjtJoint.mjJNT_SLIDE)
 JOINT_TYPES = {FREE: "free", int(mujoco.mjtJoint.mjJNT_BALL): "ball", SLIDE: "slide", HINGE: "hinge"}
-GEOM_TYPES = {int(v): k[len("mjGEOM_"):].lower() for k, v in mujoco.mjtGeom.__members__.items()
-              if k.startswith("mjGEOM_")}
 
 
 @dataclass
@@ -195,27 +193,27 @@ def geom_lowest_point(m: mujoco.MjModel, d: mujoco.MjData, g: int) -> NDArray[np
     p = d.geom_xpos[g]
     r = d.geom_xmat[g].reshape(3, 3)
     s = m.geom_size[g]
-    t = int(m.geom_type[g])
+    t = GEOM_TYPES[int(m.geom_type[g])]
     down = np.array([0.0, 0.0, -1.0])
     local = r.T @ down  # the direction −z in the geom's frame
-    if t == int(mujoco.mjtGeom.mjGEOM_SPHERE):
+    if t == "sphere":
         return p + s[0] * down
-    if t == int(mujoco.mjtGeom.mjGEOM_CAPSULE):
+    if t == "capsule":
         end = r[:, 2] * s[1] * (1.0 if local[2] > 0 else -1.0)
         return p + end + s[0] * down
-    if t == int(mujoco.mjtGeom.mjGEOM_CYLINDER):
+    if t == "cylinder":
         axial = r[:, 2] * s[1] * (1.0 if local[2] > 0 else -1.0)
         radial = r @ np.array([local[0], local[1], 0.0])
         norm = float(np.linalg.norm(radial))
         return p + axial + (s[0] * radial / norm if norm > 1e-12 else 0.0)
-    if t == int(mujoco.mjtGeom.mjGEOM_ELLIPSOID):
+    if t == "ellipsoid":
         scaled = s[:3] * local
         norm = float(np.linalg.norm(scaled))
         return p + r @ (s[:3] * scaled / norm) if norm > 0 else p
-    if t == int(mujoco.mjtGeom.mjGEOM_MESH) and m.geom_dataid[g] >= 0:
+    if t == "mesh" and m.geom_dataid[g] >= 0:
         pts = p + hull_vertices(m, g) @ r.T  # the hull MuJoCo collides (maxhullvert may drop mesh vertices)
         return np.asarray(pts[int(np.argmin(pts[:, 2]))])
-    if t == int(mujoco.mjtGeom.mjGEOM_BOX):
+    if t == "box":
         half = s[:3]
     else:  # height field, SDF, ...: the geom's bounding box (centre, half sizes) in its frame
         half = m.geom_aabb[g][3:]

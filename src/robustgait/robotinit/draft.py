@@ -46,7 +46,7 @@ from robustgait.inspection.mirror import Mirror, Residual, find_mirror, fk_resid
 from robustgait.inspection.model import RobotModel, clip_to_range, open_model
 from robustgait.inspection.scale import RobotSize, Scaled, scale
 from robustgait.robots.model import mass_matrix
-from robustgait.robots.soles import can_touch, sole_slopes
+from robustgait.robots.soles import GEOM_TYPES, can_touch, sole_slopes
 
 if TYPE_CHECKING:
     from robustgait.robotinit.timestep import TimestepChoice
@@ -125,7 +125,7 @@ def _floor_collides(robot: RobotModel, floor: Floor, legs: Legs) -> None:
         return
     m = robot.model
     g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, floor.name) if floor.name else next(
-        g for g in robot.body_geoms(0) if int(m.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_PLANE))
+        g for g in robot.body_geoms(0) if GEOM_TYPES[int(m.geom_type[g])] == "plane")
     for side in SIDES:
         if not any(can_touch(m, g, s) for s in legs[side].sole.geoms):
             raise input_error(robot.path, f"the floor '{floor.name or 'unnamed plane'}' does not collide with the "

@@ -14,11 +14,10 @@ import numpy as np
 
 from robustgait.inspection.discover import SIDES, FoundSole
 from robustgait.inspection.mirror import mass_asymmetry
-from robustgait.inspection.model import GEOM_TYPES
 from robustgait.inspection.scale import GAIT_AXES, balance, duration_constant, narrow_soles, sig
 from robustgait.robotinit.draft import INTEGRATOR_NAMES, Draft
 from robustgait.robotinit.timestep import TimestepChoice, ms
-from robustgait.robots.soles import SOLE_PLANE_TOLERANCE, SOLE_TILT_SLOPE
+from robustgait.robots.soles import GEOM_TYPES, SOLE_PLANE_TOLERANCE, SOLE_TILT_SLOPE
 from robustgait.robots.spec import FallCriteria
 
 BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from robustgait.config import GaitParams, RobotScale
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.robots.held import weld_joints
+from robustgait.robots.solebox import SoleBox, sole_box
 from robustgait.robots.soles import ResolvedSole, resolve_floor, resolve_soles
 from robustgait.robots.spec import SIDES, RobotSpec
 
@@ -263,12 +264,19 @@ class Robot:
         return GaitParams(**self.spec.gait)
 
     @cached_property
+    def sole_boxes(self) -> dict[str, SoleBox]:
+        """Each side's sole box as the pipeline reads it (:class:`~robustgait.robots.solebox.SoleBox`)."""
+        return {side: sole_box(self.model, self.sole_geom_id[side], self.spec.source or self.spec.mjcf)
+                for side in SIDES}
+
+    @cached_property
     def scale(self) -> RobotScale:
-        """What robot-relative defaults scale with (:class:`robustgait.config.RobotScale`)."""
-        size = np.sort(self.model.geom_size[self.sole_geom_id["right"]])
+        """What robot-relative defaults scale with (:class:`robustgait.config.RobotScale`); the sole's size is the
+        right sole box's."""
+        sole = self.sole_boxes["right"]
         return RobotScale(mass=self.mass, gravity=float(np.linalg.norm(self.model.opt.gravity)),
-                          leg_length=self.leg_length, sole_half_length=float(size[2]),
-                          sole_half_width=float(size[1]))
+                          leg_length=self.leg_length, sole_half_length=sole.half_length,
+                          sole_half_width=sole.half_width)
 
     @property
     def name(self) -> str:

@@ -31,9 +31,12 @@ from robustgait.robots.spec import ADDED_FLOOR, SIDES, LegSpec, RobotSpec
 from robustgait.rotations import quat_to_mat
 
 FloatArray = NDArray[np.float64]
-SOLE_TYPES = {int(mujoco.mjtGeom.mjGEOM_BOX): "box", int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
-              int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule", int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder",
-              int(mujoco.mjtGeom.mjGEOM_MESH): "mesh"}
+# MuJoCo's geom types by their names in messages and specs ("box", "mesh", …): the one table of them
+GEOM_TYPES = {int(v): k.removeprefix("mjGEOM_").lower() for k, v in mujoco.mjtGeom.__members__.items()
+              if k.startswith("mjGEOM_")}
+# the types a sole may be made of
+SOLE_TYPES = {t: name for t, name in GEOM_TYPES.items()
+              if name in ("box", "sphere", "capsule", "cylinder", "mesh")}
 # points on the rim of a cylinder standing on its end: its bottom disk as a polygon (its bounding rectangle is the
 # disk's to within 1 − cos(π/8) ≈ 8 % of the radius when the foot's axes are at 22.5° to the disk's)
 RIM_POINTS = 8
@@ -128,7 +131,7 @@ def _sole_geoms(mjs: mujoco.MjSpec, model: mujoco.MjModel, leg: LegSpec, side: s
                           "geoms of one foot body")
     for g in ids:
         if int(model.geom_type[g]) not in SOLE_TYPES:
-            kind = mujoco.mjtGeom(int(model.geom_type[g])).name.removeprefix("mjGEOM_").lower()
+            kind = GEOM_TYPES[int(model.geom_type[g])]
             raise input_error(src, f"the {side} sole ({leg.describe()}) has {article(kind)} {kind} geom: a sole is "
                               "one box or a set of boxes, spheres, capsules, cylinders or meshes (name those)")
     return ids
