@@ -36,7 +36,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.io.certfile import certificate_figure
 from robustgait.robots import Robot
-from robustgait.sim.engine import step_physics_steps
+from robustgait.sim.engine import StepEngine, step_physics_steps
 from robustgait.sim.factory import make_engine
 
 
@@ -419,6 +419,75 @@ def orbit_scatter(orbit: Orbit, reduced: ReducedState, coords: Coordinates) -> f
     return float(np.max(np.linalg.norm(z - coords.x_star, axis=1)))
 
 
+@dataclass
+class _Sampled:
+    """What a certificate's sampling gave: the certificate of the set (``cert``) in its ``coords``, the physics
+    steps it simulated, how many samples it replayed; for a state certificate the map's residual at x̄*, the ball's
+    certificate beside an ellipsoid's, the horizon's excursion and the orbit's scatter (:func:`certify_gait`)."""
+
+    cert: Certificate
+    coords: Coordinates
+    steps: int
+    replayed: int
+    map_residual: float | None = None
+    ball: Certificate | None = None
+    excursion: list[float] | None = None
+    sigma: float | None = None
+
+
+def _sample_pushes(engine: StepEngine, orbit: Orbit, cfg: CertifyConfig, vcfg: ValidateConfig,
+                   stored: tuple[np.ndarray, np.ndarray] | None, progress: bool,
+                   verify: bool | Callable[[float], bool]) -> _Sampled:
+    """The push certificate's sampling: the impulse disk of J* on the orbit, its exploration at the exploring
+    settings (or replayed from ``stored``), its verification at the certifying ones."""
+    assert orbit.qpos is not None and orbit.qvel is not None  # a walking orbit (its caller checked orbit.ok)
+    coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
+    pushes = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push)
+    exploring = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push.exploring())
+    replay = None if stored is None else Replay(exploring, *stored)
+    cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}", explore=replay or exploring,
+                     verify=verify)
+    if cert.basis:
+        cert = dataclasses.replace(cert, basis=push_basis(cert, cfg))
+    return _Sampled(cert, coords, pushes.physics_steps + exploring.physics_steps,
+                    0 if replay is None else replay.replayed)
+
+
+def _sample_states(robot: Robot, gait: Gait, engine: StepEngine, orbit: Orbit, cfg: CertifyConfig,
+                   stored: tuple[np.ndarray, np.ndarray] | None, progress: bool,
+                   verify: bool | Callable[[float], bool]) -> _Sampled | None:
+    """The state certificate's sampling: the reduced map of the orbit's period (its ellipsoid fitted when the set is
+    one, the ball beside it when asked), its exploration replayed from ``stored`` when given. None when the map
+    falls from its own fixed point x̄* within the horizon."""
+    assert orbit.qpos is not None and orbit.qvel is not None  # a walking orbit (its caller checked orbit.ok)
+    fmap = FullStateMap(robot, gait, orbit.period, engine=engine)
+    reduced = ReducedState.at(cfg.state, robot, orbit.qpos, orbit.qvel, gait.stance, cfg)
+    pmap = ReducedMap(fmap, reduced, cfg.horizon)
+    coords = Coordinates.of(reduced)
+    image = coords.to_z(pmap(reduced.x_star[None]))[0]
+    first = coords.to_z(pmap.last_path[0])[0] if pmap.last_path is not None else image
+    map_residual = float(np.linalg.norm(first - coords.x_star))
+    if not np.all(np.isfinite(image)):
+        return None
+    fmap.physics_steps = 0
+    ball: Certificate | None = None
+    if cfg.set == "ellipsoid":
+        shape = fit_shape(pmap, coords, cfg)
+        if cfg.ellipsoid.compare_ball:
+            ball = _estimate(_in_coordinates(pmap, coords), coords.x_star, cfg, progress,
+                             f"{cfg.state} ball, {cfg.method}")
+        coords = dataclasses.replace(coords, shape=shape)
+    sigma = orbit_scatter(orbit, reduced, coords)
+    paths = _Paths()
+    desc = f"{cfg.state} {cfg.set}{'' if cfg.horizon == 1 else f', P^{cfg.horizon}'}, {cfg.method}"
+    P = _in_coordinates(pmap, coords, paths)
+    replay = None if stored is None else Replay(P, *stored)
+    cert = _estimate(P, coords.x_star, cfg, progress, desc, explore=replay, verify=verify)
+    excursion = paths.excursion(cert, coords) if cfg.horizon > 1 else None
+    return _Sampled(cert, coords, fmap.physics_steps, 0 if replay is None else replay.replayed,
+                    map_residual=map_residual, ball=ball, excursion=excursion, sigma=sigma)
+
+
 def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
                  validate: ValidateConfig | None = None, progress: bool = False,
                  verify: bool | Callable[[float], bool] = True,
@@ -477,55 +546,21 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         fp = orbit.fixed_point(cfg.frame)
         stored = None if explored is None or cfg.method != "sequential" or (not push and cfg.horizon > 1) else \
             stored_exploration(explored, robot, cfg, sim, vcfg if push else None, fp)
-        replay: Replay | None = None
         t2 = time.perf_counter()
-        ball: Certificate | None = None
-        excursion: list[float] | None = None
-        sigma: float | None = None
-        map_residual: float | None = None
         if push:
-            coords = Coordinates("push", "N s", False, np.zeros(2), np.eye(2), Shape(np.eye(2)))
-            pushes = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push)
-            exploring = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push.exploring())
-            replay = None if stored is None else Replay(exploring, *stored)
-            cert = _estimate(pushes, np.zeros(2), cfg, progress, f"pushes, {cfg.method}", explore=replay or exploring,
-                             verify=verify)
-            if cert.basis:
-                cert = dataclasses.replace(cert, basis=push_basis(cert, cfg))
-            steps = pushes.physics_steps + exploring.physics_steps
+            sampled = _sample_pushes(engine, orbit, cfg, vcfg, stored, progress, verify)
         else:
-            fmap = FullStateMap(robot, gait, orbit.period, engine=engine)
-            reduced = ReducedState.at(cfg.state, robot, orbit.qpos, orbit.qvel, gait.stance, cfg)
-            pmap = ReducedMap(fmap, reduced, cfg.horizon)
-            coords = Coordinates.of(reduced)
-            image = coords.to_z(pmap(reduced.x_star[None]))[0]
-            first = coords.to_z(pmap.last_path[0])[0] if pmap.last_path is not None else image
-            map_residual = float(np.linalg.norm(first - coords.x_star))
-            if not np.all(np.isfinite(image)):
+            states = _sample_states(robot, gait, engine, orbit, cfg, stored, progress, verify)
+            if states is None:
                 return result(Status.UNSTABLE_FIXED_POINT, f"the return map falls from its own fixed point within "
                               f"{cfg.horizon} map(s) (through the {cfg.reconstruction} reconstruction x̄* is not on a "
                               "walking orbit)", certificate=None, fixed_point=fp, map_residual=None, physics_steps=0)
-            fmap.physics_steps = 0
-            if cfg.set == "ellipsoid":
-                shape = fit_shape(pmap, coords, cfg)
-                if cfg.ellipsoid.compare_ball:
-                    ball = _estimate(_in_coordinates(pmap, coords), coords.x_star, cfg, progress,
-                                     f"{cfg.state} ball, {cfg.method}")
-                coords = dataclasses.replace(coords, shape=shape)
-            sigma = orbit_scatter(orbit, reduced, coords)
-            paths = _Paths()
-            desc = f"{cfg.state} {cfg.set}{'' if cfg.horizon == 1 else f', P^{cfg.horizon}'}, {cfg.method}"
-            P = _in_coordinates(pmap, coords, paths)
-            replay = None if stored is None else Replay(P, *stored)
-            cert = _estimate(P, coords.x_star, cfg, progress, desc, explore=replay, verify=verify)
-            if cfg.horizon > 1:
-                excursion = paths.excursion(cert, coords)
-            steps = fmap.physics_steps
+            sampled = states
         t3 = time.perf_counter()
-        return result(Status.OK, "", certificate=cert, fixed_point=fp, map_residual=map_residual,
-                      physics_steps=steps, replayed_samples=0 if replay is None else replay.replayed,
-                      coordinates=coords, ball=ball, excursion=excursion, sigma=sigma,
+        return result(Status.OK, "", certificate=sampled.cert, fixed_point=fp, map_residual=sampled.map_residual,
+                      physics_steps=sampled.steps, replayed_samples=sampled.replayed, coordinates=sampled.coords,
+                      ball=sampled.ball, excursion=sampled.excursion, sigma=sampled.sigma,
                       seconds={"orbit": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,
-                               "sim_steps_per_s": steps / max(t3 - t2, 1e-9)})
+                               "sim_steps_per_s": sampled.steps / max(t3 - t2, 1e-9)})
     finally:
         engine.close()

@@ -276,16 +276,8 @@ def _check_per_joint(path: Path, key: str, values: list[float], n: int) -> None:
         raise field_error(path, key, f"must be a list of {n} numbers, one per joint (got {len(values)} items)")
 
 
-def spec_from_raw(raw: object, path: Path) -> RobotSpec:
-    """Validate a parsed spec TOML and build the :class:`RobotSpec` (paths relative to ``path``)."""
-    s = validate(raw, SpecFile, path, "toml")
-    names = tuple(s.joints.names)
-    n = len(names)
-    if len(set(names)) != n:
-        dup = next(j for j in names if names.count(j) > 1)
-        raise field_error(path, "joints.names", f"joint {dup!r} is listed twice")
-    for key in ("kp", "kd", "torque_limit"):
-        _check_per_joint(path, f"joints.{key}", getattr(s.joints, key), n)
+def _mirror(s: SpecFile, path: Path, n: int) -> tuple[float, ...]:
+    """Check the ``[mirror]`` table against ``n`` joints; returns the base's signs (6,), a reflection."""
     if sorted(s.mirror.joint_perm) != list(range(n)):
         raise field_error(path, "mirror.joint_perm", f"must be a permutation of 0..{n - 1}")
     if len(s.mirror.joint_sign) != n:
@@ -299,6 +291,11 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
     if det > 0 or tuple(det * v for v in base_sign[:3]) != base_sign[3:]:
         raise field_error(path, "mirror.base_sign", "must be a reflection: (x, y, z) signs with one or three "
                           "-1s, and (roll, pitch, yaw) signs = det · (x, y, z) signs, e.g. [1,-1,1,-1,1,-1]")
+    return base_sign
+
+
+def _quality(s: SpecFile, path: Path, n: int) -> GaitQuality:
+    """The ``[gait_quality]`` bands, a per-joint velocity bound widened to ``n`` joints."""
     q = s.gait_quality
     jv = q.joint_velocity
     if isinstance(jv, list):
@@ -311,23 +308,42 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
     height = _band(path, "pelvis_height", q.pelvis_height)
     if math.isinf(height[0]):
         raise field_error(path, "gait_quality.pelvis_height", "the low end must be finite")
-    quality = GaitQuality(
+    return GaitQuality(
         pelvis_roll=q.pelvis_roll, pelvis_yaw=q.pelvis_yaw, pelvis_pitch=_band(path, "pelvis_pitch", q.pelvis_pitch),
         pelvis_height=height, pelvis_angular_velocity=q.pelvis_angular_velocity, swing_tilt=q.swing_tilt,
         swing_yaw=q.swing_yaw, swing_toe_down_until=q.swing_toe_down_until, pelvis_acceleration=q.pelvis_acceleration,
         joint_velocity=joint_velocity)
+
+
+def _passivity(s: SpecFile, path: Path, n: int) -> PassivitySpec | None:
+    """The passivity-based controller's per-joint gains, None when the spec gives none."""
+    if s.controller is None or s.controller.passivity is None:
+        return None
+    pt = s.controller.passivity
+    for key, values in (("lambda", pt.lam), ("kd", pt.kd)):
+        _check_per_joint(path, f"controller.passivity.{key}", values, n)
+    return PassivitySpec(lam=tuple(float(v) for v in pt.lam), kd=tuple(float(v) for v in pt.kd))
+
+
+def spec_from_raw(raw: object, path: Path) -> RobotSpec:
+    """Validate a parsed spec TOML and build the :class:`RobotSpec` (paths relative to ``path``)."""
+    s = validate(raw, SpecFile, path, "toml")
+    names = tuple(s.joints.names)
+    n = len(names)
+    if len(set(names)) != n:
+        dup = next(j for j in names if names.count(j) > 1)
+        raise field_error(path, "joints.names", f"joint {dup!r} is listed twice")
+    for key in ("kp", "kd", "torque_limit"):
+        _check_per_joint(path, f"joints.{key}", getattr(s.joints, key), n)
+    base_sign = _mirror(s, path, n)
+    quality = _quality(s, path, n)
     for key in s.posture:
         if key not in names:
             raise field_error(path, f"posture.{key}", "not a planned joint (joints.names)")
     if s.add_floor and s.floor_geom is not None and s.floor_geom != ADDED_FLOOR:
         raise field_error(path, "add_floor", f"adds a floor named {ADDED_FLOOR}: floor_geom must be unset or that name "
                           f"(got '{s.floor_geom}')")
-    passivity = None
-    if s.controller is not None and s.controller.passivity is not None:
-        pt = s.controller.passivity
-        for key, values in (("lambda", pt.lam), ("kd", pt.kd)):
-            _check_per_joint(path, f"controller.passivity.{key}", values, n)
-        passivity = PassivitySpec(lam=tuple(float(v) for v in pt.lam), kd=tuple(float(v) for v in pt.kd))
+    passivity = _passivity(s, path, n)
     return RobotSpec(
         name=s.name,
         mjcf=(path.parent / s.mjcf).resolve(),

@@ -358,22 +358,12 @@ class StepEngine:
         ``progress`` is called after each chunk with the number of samples that reached their event in it.
         ``inputs``: per-sample disturbances (:class:`StepInputs`); None = the gait's controls for all.
         """
-        if stance not in self.gaits:
-            raise RobustGaitError(f"stance must be 'left' or 'right', got {stance!r}")
-        qpos = np.atleast_2d(np.asarray(qpos, dtype=float))
-        qvel = np.atleast_2d(np.asarray(qvel, dtype=float))
-        if qpos.shape[1:] != (self.nq,) or qvel.shape != (qpos.shape[0], self.nv):
-            raise RobustGaitError(f"states must be (K, {self.nq}) and (K, {self.nv}), got {qpos.shape} and "
-                                  f"{qvel.shape}")
-        if self._pool is None:
-            raise RobustGaitError("this StepEngine is closed")
+        qpos, qvel = self._start_states(qpos, qvel, stance, domain)
         kk = qpos.shape[0]
         if inputs is not None:
             self._check_inputs(inputs, kk)
             inputs = self._engine_inputs(inputs)
         bad = ~(np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1))
-        if not 0 <= domain < len(self.graph):
-            raise RobustGaitError(f"the gait has {len(self.graph)} domains, no domain {domain}")
         ctrl = self.controls[(stance, domain)]
         horizon = self.horizons[domain]
         current = self.full_states(np.nan_to_num(qpos), np.nan_to_num(qvel))
@@ -422,6 +412,30 @@ class StepEngine:
         if active.size:  # ran out of horizon without a touchdown (a double support always ends by τ = 1)
             code[active] = 1 + FALL_REASONS.index("no_touchdown")
             at[active] = horizon
+        return self._step_batch(out_state, code, at, domain, physics, traj, ctrls, record)
+
+    def _start_states(self, qpos: NDArray[np.float64], qvel: NDArray[np.float64], stance: str, domain: int
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """A step's start states as (K, nq) and (K, nv) arrays; a one-line error for an unknown stance or domain,
+        states of the wrong shape, or a closed engine."""
+        if stance not in self.gaits:
+            raise RobustGaitError(f"stance must be 'left' or 'right', got {stance!r}")
+        qpos = np.atleast_2d(np.asarray(qpos, dtype=float))
+        qvel = np.atleast_2d(np.asarray(qvel, dtype=float))
+        if qpos.shape[1:] != (self.nq,) or qvel.shape != (qpos.shape[0], self.nv):
+            raise RobustGaitError(f"states must be (K, {self.nq}) and (K, {self.nv}), got {qpos.shape} and "
+                                  f"{qvel.shape}")
+        if self._pool is None:
+            raise RobustGaitError("this StepEngine is closed")
+        if not 0 <= domain < len(self.graph):
+            raise RobustGaitError(f"the gait has {len(self.graph)} domains, no domain {domain}")
+        return qpos, qvel
+
+    def _step_batch(self, out_state: NDArray[np.float64], code: NDArray[np.int64], at: NDArray[np.int64], domain: int,
+               physics: int, traj: list[list[NDArray[np.float64]]], ctrls: list[list[NDArray[np.float64]]],
+               record: bool) -> StepBatch:
+        """The :class:`StepBatch` of a step's samples: their end states (K, nstate; NaN where they fell), event
+        codes (0 an event, else 1 + the index of the fall reason), physics steps to the event, recorded pieces."""
         fell = code != 0
         out_state[fell] = np.nan
         return StepBatch(

@@ -106,6 +106,56 @@ def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, vid
     return work
 
 
+@dataclass
+class _Run:
+    """A walk's state between its steps: the state (1, nq), (1, nv), time [s], lowest base height [m], recorded
+    trajectory chunks, whether and why it fell, the last finite configuration (nq,), physics steps so far."""
+
+    qpos: NDArray[np.float64]
+    qvel: NDArray[np.float64]
+    t: float = 0.0
+    min_z: float = np.inf
+    chunks: list[NDArray[np.float64]] = field(default_factory=list)
+    fell: bool = False
+    reason: str | None = None
+    last: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    physics: int = 0
+
+
+def _take_step(eng: StepEngine, run: _Run, i: int, stance: str, stats: TrackingStats,
+               recorder: ComfortRecorder | None, keep_trajectory: bool) -> SwitchEvent | None:
+    """Step ``i`` (0-based) of a walk on ``stance``: its domains in order from ``run``'s state (updated in place).
+    Returns its switching event (the state at the end of domain 0: the Poincaré section), None when it fell."""
+    section: SwitchEvent | None = None
+    for d in range(len(eng.graph)):
+        start_state = eng.full_states(run.qpos, run.qvel)[0]
+        batch = eng.step(run.qpos, run.qvel, stance, domain=d, record=True)
+        run.physics += batch.physics_steps
+        tr = batch.trajectory[0]
+        _track(stats, eng, batch, start_state, tr, stance, d)
+        if recorder is not None:
+            recorder.add(i + 1, d, stance, start_state, tr, batch.controls[0])
+        if tr.size:
+            run.min_z = min(run.min_z, float(np.nanmin(tr[:, 3])))
+            if keep_trajectory:
+                tr = tr.copy()
+                tr[:, 0] += run.t
+                run.chunks.append(tr)
+        run.t += float(batch.duration[0])
+        if batch.fell[0]:
+            run.fell, run.reason = True, batch.fall_reason[0]
+            finite = tr[np.isfinite(tr).all(axis=1)]
+            run.last = finite[-1, 1:1 + eng.nq] if finite.size else run.last
+            return None
+        run.qpos, run.qvel = batch.qpos, batch.qvel
+        run.last = run.qpos[0]
+        if d == 0:
+            section = SwitchEvent(i + 1, run.t, stance, float(batch.tau[0]), run.qpos[0].tolist(),
+                                  run.qvel[0].tolist())
+    assert section is not None
+    return section
+
+
 def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: int | None = None,
          keep_trajectory: bool = False, video: str | Path | None = None,
          engine: StepEngine | None = None, comfort: ComfortConfig | None = None,
@@ -142,62 +192,32 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     eng = engine or make_engine(robot, gait, config)
     stats = TrackingStats()
     try:
-        qpos = gait.initial_state.qpos[None].copy()
-        qvel = gait.initial_state.qvel[None].copy()
-        start = qpos[0].copy()
+        run = _Run(gait.initial_state.qpos[None].copy(), gait.initial_state.qvel[None].copy())
+        start = run.last = run.qpos[0].copy()
+        run.min_z = float(start[2])
         heading = _heading(start)
         stance = gait.stance
-        t = 0.0
-        min_z = float(start[2])
         events: list[SwitchEvent] = []
-        chunks: list[NDArray[np.float64]] = []
-        fell, reason, last = False, None, start
-        physics = 0
         for i in range(steps):
-            section: SwitchEvent | None = None
-            for d in range(len(eng.graph)):  # the step's domains in order; the section ends domain 0
-                start_state = eng.full_states(qpos, qvel)[0]
-                batch = eng.step(qpos, qvel, stance, domain=d, record=True)
-                physics += batch.physics_steps
-                tr = batch.trajectory[0]
-                _track(stats, eng, batch, start_state, tr, stance, d)
-                if recorder is not None:
-                    recorder.add(i + 1, d, stance, start_state, tr, batch.controls[0])
-                if tr.size:
-                    min_z = min(min_z, float(np.nanmin(tr[:, 3])))
-                    if keep_trajectory:
-                        tr = tr.copy()
-                        tr[:, 0] += t
-                        chunks.append(tr)
-                t += float(batch.duration[0])
-                if batch.fell[0]:
-                    fell, reason = True, batch.fall_reason[0]
-                    finite = tr[np.isfinite(tr).all(axis=1)]
-                    last = finite[-1, 1:1 + eng.nq] if finite.size else last
-                    break
-                qpos, qvel = batch.qpos, batch.qvel
-                last = qpos[0]
-                if d == 0:
-                    section = SwitchEvent(i + 1, t, stance, float(batch.tau[0]), qpos[0].tolist(),
-                                          qvel[0].tolist())
-            if fell:
+            section = _take_step(eng, run, i, stance, stats, recorder, keep_trajectory)
+            if section is None:
                 break
-            assert section is not None
             events.append(section)
             if recorder is not None:
                 recorder.end_step(i + 1)
             stance = "left" if stance == "right" else "right"
             if until is not None and until(events):
                 break
-        disp = float(np.dot(last[:2] - start[:2], heading))
+        disp = float(np.dot(run.last[:2] - start[:2], heading))
+        t = run.t
         result = WalkResult(
-            steps_taken=len(events), fell=fell, fall_reason=reason, time=t,
-            mean_speed=disp / t if t > 0 else 0.0, min_base_height=min_z, max_steps=steps,
+            steps_taken=len(events), fell=run.fell, fall_reason=run.reason, time=t,
+            mean_speed=disp / t if t > 0 else 0.0, min_base_height=run.min_z, max_steps=steps,
             switching=eng.config.switching, events=events,
-            trajectory=np.concatenate(chunks) if keep_trajectory and chunks else None,
+            trajectory=np.concatenate(run.chunks) if keep_trajectory and run.chunks else None,
             controller=eng.controller_name, controller_note=eng.controller_note, tracking=stats.summary(),
             comfort=measure(robot, eng.physics_model, recorder, heading) if recorder is not None else None,
-            physics_steps=physics, regulator=eng.regulator.summary() if eng.regulator is not None else None)
+            physics_steps=run.physics, regulator=eng.regulator.summary() if eng.regulator is not None else None)
     finally:
         if own:
             eng.close()

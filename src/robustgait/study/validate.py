@@ -311,10 +311,29 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None,
             tasks.append(_Task(g.label, setup.robot, str(d / g.gait_file),
                                str(d / g.certificate_file) if g.certificate_file else None, cfg, certify, sim, missing,
                                certified=g.certificate_file is not None, recertify=recertify))
+    errors = _run_tasks(d, tasks, len(runnable), kinds, keys, files, results, cfg.workers, progress)
+    seconds = time.perf_counter() - t0
+    out = {}
+    for k in kinds:
+        summary = kind_summary(k, cfg, certify, sim, keys[k], status, gaits,
+                               {lb: r[k] for lb, r in results.items() if k in r},
+                               {lb for lb, c in cached.items() if k in c}, errors, seconds)
+        (d / VALIDATION_DIR).mkdir(exist_ok=True)
+        write_json(summary_path(d, k), summary)
+        out[k] = summary
+    return out
+
+
+def _run_tasks(d: Path, tasks: list[_Task], n_gaits: int, kinds: list[str], keys: dict[str, str],
+               files: dict[str, str], results: dict[str, dict[str, dict[str, Any]]], workers: int,
+               progress: bool) -> dict[str, str]:
+    """Validate the gaits of ``tasks`` in ``workers`` processes, each kind's result written to its run file as it
+    finishes and put in ``results`` (label → kind → stored run, in place); returns {label: error} of the gaits whose
+    validation failed. ``n_gaits``: the gaits validated in all (a bar's total; the others were cached)."""
     errors: dict[str, str] = {}
-    with tqdm(total=len(runnable), initial=len(runnable) - len(tasks), desc=f"study validate {','.join(kinds)}",
+    with tqdm(total=n_gaits, initial=n_gaits - len(tasks), desc=f"study validate {','.join(kinds)}",
               unit="gait", file=sys.stderr, disable=not progress, dynamic_ncols=True) as bar, \
-            _results(tasks, cfg.workers) as finished:
+            _results(tasks, workers) as finished:
         for res in finished:
             label = res["label"]
             if "error" in res:
@@ -331,16 +350,7 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None,
                 sr = next(iter(res["kinds"].values()))["success"]
                 bar.set_postfix_str(f"{label}: success {sr['k']}/{sr['n']}")
             bar.update(1)
-    seconds = time.perf_counter() - t0
-    out = {}
-    for k in kinds:
-        summary = kind_summary(k, cfg, certify, sim, keys[k], status, gaits,
-                               {lb: r[k] for lb, r in results.items() if k in r},
-                               {lb for lb, c in cached.items() if k in c}, errors, seconds)
-        (d / VALIDATION_DIR).mkdir(exist_ok=True)
-        write_json(summary_path(d, k), summary)
-        out[k] = summary
-    return out
+    return errors
 
 
 def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim: SimConfig, key: str,
