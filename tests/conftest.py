@@ -106,10 +106,10 @@ def shared_spec(tmp_path_factory, name: str, make) -> Path:  # type: ignore[no-u
 
 @pytest.fixture(scope="session")
 def tiny_study(tmp_path_factory):  # type: ignore[no-untyped-def]
-    """The tiny exo study (``tests.test_study.CLI_TINY``: 2 iterations × 3 gaits) run uninterrupted by ``study run``
-    with 2 local workers, once per test run: the reference that resumed, Ray and validated runs are compared with.
-    Read it in place; copy it before writing into it (a report, a validation)."""
-    from tests.test_study import CLI_TINY, cli
+    """The tiny exo study (``tests.study.test_study.CLI_TINY``: 2 iterations × 3 gaits) run uninterrupted by
+    ``study run`` with 2 local workers, once per test run: the reference that resumed, Ray and validated runs are
+    compared with. Read it in place; copy it before writing into it (a report, a validation)."""
+    from tests.study.test_study import CLI_TINY, cli
 
     def make(d: Path) -> None:
         res = cli("study", "run", str(d / "study"), *CLI_TINY, "--workers", "2", "--quiet")
@@ -143,12 +143,12 @@ def t1(t1_spec):  # type: ignore[no-untyped-def]
 @pytest.fixture(scope="session")
 def t1_narrow(tmp_path_factory):  # type: ignore[no-untyped-def]
     """Booster T1 with narrow soles — four 5 mm contact spheres per foot on a 0.19 × 0.04 m footprint
-    (:func:`tests.robots.narrow_t1_xml`) — and the spec ``robot init`` writes for it (skipped when T1 is absent)."""
+    (:func:`tests.models.narrow_t1_xml`) — and the spec ``robot init`` writes for it (skipped when T1 is absent)."""
     if not T1_MODEL.is_file():
         pytest.skip("../shared/robots/booster_t1 (Booster T1) is not beside the repository")
     from robustgait import load_robot
     from robustgait.cli import main
-    from tests.robots import narrow_t1_xml
+    from tests.models import narrow_t1_xml
 
     def make(d: Path, spec: Path) -> None:
         assert main(["robot", "init", str(narrow_t1_xml(T1_MODEL, d)), "-o", str(spec)]) == 0

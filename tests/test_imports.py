@@ -137,3 +137,17 @@ def test_the_layers_are_the_design_documents():
     found = [p for p in LAYERS if p not in ("__init__", "_lazy")]
     where = {p: min(i for i in (table.find(f"`{p}/"), table.find(f"`{p}.py")) if i >= 0) for p in found}
     assert sorted(found, key=where.__getitem__) == found
+
+
+def test_the_tests_mirror_the_package():
+    """tests/ mirrors src/robustgait: each test folder is named after a package, and holds the tests of its modules;
+    the tests left at the top are those of top-level modules (bezier.py, dynamics.py, …) and of the whole (imports,
+    contracts, the public API)."""
+    tests = Path(__file__).resolve().parent
+    packages = {p.name for p in SRC.iterdir() if (p / "__init__.py").is_file()}
+    folders = {p.name for p in tests.iterdir() if p.is_dir() and p.name not in ("data", "__pycache__")}
+    assert folders <= packages, f"test folders with no package of that name: {sorted(folders - packages)}"
+    modules = {p.stem for p in SRC.glob("*.py")}
+    whole = {"imports", "contracts", "init"}
+    top = {p.stem.removeprefix("test_") for p in tests.glob("test_*.py")}
+    assert top <= modules | whole, f"top-level tests of no top-level module: {sorted(top - modules - whole)}"

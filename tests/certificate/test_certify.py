@@ -375,7 +375,7 @@ def test_horizon_certificate_reports_its_excursion(exo, exo_gait):
 
 @pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_push_certificate(exo, exo_gait):
-    # falls only (push.recovery false): the image of a push is then its fall (recovery: test_push.py)
+    # falls only (push.recovery false): the image of a push is then its fall (recovery: tests/certificate/test_push.py)
     gc = certify_gait(exo, exo_gait, uniform(disturbance="push", n_samples=12, seed=1,
                                              push={"horizon": 1, "recovery": False}))
     c = gc.certificate
@@ -464,7 +464,7 @@ def test_cli_validate_refuses_a_certificate_of_another_state(capsys, tmp_path):
 
 def test_a_certificates_figure_is_named_for_what_it_is(small_cert):
     """A state certificate's figure is r_star (j_star is refused by name) and its JSON writes r_star; a push
-    certificate's JSON writes j_star (tests/test_io.py reads both)."""
+    certificate's JSON writes j_star (tests/io/test_io.py reads both)."""
     assert small_cert.value == small_cert.r_star and "r_star" in small_cert.to_dict()
     with pytest.raises(RobustGaitError, match="r_star, not j_star"):
         _ = small_cert.j_star

@@ -65,7 +65,7 @@ def test_walk_and_the_certificate_report_the_same_orbit(exo, exo_gait, exo_orbit
 def test_a_walk_says_whether_its_switching_events_settled_on_an_orbit(exo, exo_gait, exo_mc_gait):
     """From the events a walk already has (no simulation): the stored flat-foot gait settles in a band far below the
     recovery floor, the multi-contact gait in a wider one; both hold their band — the orbit the certificate's search
-    finds (tests/test_search.py); a walk too short to see the band hold says so."""
+    finds (tests/certificate/test_search.py); a walk too short to see the band hold says so."""
     cfg = CertifyConfig()
     o = walk_orbit(exo, exo_gait, walk(exo, exo_gait, steps=120), cfg)
     assert o.ok and o.period == 1 and o.sigma < 1e-3 and o.held == 64

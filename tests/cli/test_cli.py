@@ -74,7 +74,7 @@ def test_gait_convert_round_trip(tmp_path, capsys, gait_robot):
 @pytest.fixture(scope="module")
 def bad_files(tmp_path_factory, exo_gait):
     """{name: (argv, file name)} of bad inputs on exo, each a file in a temporary directory."""
-    from tests.test_robots import spec_text
+    from tests.robots.test_spec import spec_text
 
     tmp_path = tmp_path_factory.mktemp("bad")
     good = exo_gait.to_dict()  # a JSON gait to corrupt

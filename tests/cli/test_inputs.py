@@ -7,7 +7,7 @@ temporary file left behind.
 
 Bounded: a fixed number of examples per property (``derandomize`` under CI, so a CI run is reproducible),
 the shipped robot ``exo`` and gaits that stand (no solve); the whole file runs in well under two minutes.
-``RG_PROPERTY_SCALE=20 pytest tests/test_inputs.py`` searches 20 times deeper.
+``RG_PROPERTY_SCALE=20 pytest tests/cli/test_inputs.py`` searches 20 times deeper.
 """
 
 from __future__ import annotations

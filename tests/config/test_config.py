@@ -213,5 +213,5 @@ def test_bad_overrides_are_one_line(capsys):
 def test_the_configuration_page_lists_every_field():
     from pathlib import Path
 
-    page = (Path(__file__).resolve().parents[1] / "docs" / "configuration.md").read_text()
+    page = (Path(__file__).resolve().parents[2] / "docs" / "configuration.md").read_text()
     assert Config.markdown() in page, "docs/configuration.md is stale: robustgait config show --markdown"

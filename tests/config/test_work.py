@@ -24,7 +24,7 @@ from robustgait.sim.walk import check_walk_work
 from robustgait.study.run import check_evaluation_work, longest_gaits
 from robustgait.validate.run import check_validate_work
 from tests.conftest import ATALANTE_SPEC
-from tests.test_io import cli, one_error_line
+from tests.io.test_io import cli, one_error_line
 
 GRAPHS = ("flat", "multicontact")
 SPEC = {"exo": "exo", "atalante": str(ATALANTE_SPEC)}

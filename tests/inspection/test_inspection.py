@@ -39,11 +39,11 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - exercised on 3.10 only
     import tomli as tomllib
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 T1 = REPO.parent / "shared" / "robots" / "booster_t1" / "t1.xml"
 EXO_XML = REPO / "src" / "robustgait" / "robots" / "exo" / "exo.xml"
-# robot init's servo timestep rule, which walks no gait (the accuracy rule's tests: tests/test_timestep.py), and robot
-# check without the timestep check (which generates the default gait)
+# robot init's servo timestep rule, which walks no gait (the accuracy rule's tests: tests/robotinit/test_timestep.py),
+# and robot check without the timestep check (which generates the default gait)
 SERVO_RULE = ("--timestep-rule", "servo")
 needs_t1 = pytest.mark.skipif(not T1.is_file(), reason="../shared/robots/booster_t1 (Booster T1) is not beside the "
                               "repository")

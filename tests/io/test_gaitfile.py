@@ -1,6 +1,6 @@
 """Writing gaits as FROST/ambersim YAML (robustgait.io.gaitfile.save_frost_yaml, ``gait convert --to frost``):
 the file the importer reads back walks bit for bit as the original; what the layout cannot hold is refused with
-one line, nothing written. Reading either format and its bad inputs: test_io.py, test_inputs.py."""
+one line, nothing written. Reading either format and its bad inputs: tests/io/test_io.py, tests/cli/test_inputs.py."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from robustgait.gait import Gait
 from robustgait.io.gaitfile import frost_yaml_dict, import_frost_yaml, save_frost_yaml, save_gait
 from robustgait.sim.walk import WalkResult, walk
 from tests.conftest import ATALANTE_GAIT, ATALANTE_SPEC, EXO_GAIT, EXO_MC_GAIT, needs_atalante, standing_gait
-from tests.test_io import cli, one_error_line
+from tests.io.test_io import cli, one_error_line
 
 WALK_STEPS = 20
 
@@ -198,7 +198,7 @@ def test_a_robot_with_held_joints(tmp_path):
     """startingPos/startingVel carry every joint (held ones too, MJCF order); the importer takes the held angles
     from the robot spec, so the gait reads back whole."""
     from robustgait import load_robot
-    from tests.test_robots_any import biped_spec, biped_xml
+    from tests.robots.test_any_robot import biped_spec, biped_xml
 
     robot = load_robot(biped_spec(tmp_path, xml=biped_xml()))
     held = tuple((h.name, h.angle) for h in robot.spec.held)

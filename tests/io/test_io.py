@@ -1,5 +1,5 @@
 """The input layer and the output writer (robustgait.io): each input defect, one example each, run
-through the command line in-process, plus the writer's guarantees. Property-based tests: test_inputs.py."""
+through the command line in-process, plus the writer's guarantees. Property-based tests: tests/cli/test_inputs.py."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ from robustgait.io import limits as L
 from robustgait.io.logs import load_reduced_log
 from robustgait.io.output import atomic_output, check_output, kind_of, write_csv, write_text
 from tests.conftest import REPO, standing_gait
-from tests.test_robots import spec_text
+from tests.robots.test_spec import spec_text
 
 EXO_SPEC = spec_text("exo")
 

@@ -32,7 +32,7 @@ from robustgait.robotinit.timestep import (
     select_timestep,
     trial_error,
 )
-from tests.test_inspection import EXO_XML, biped_xml, write
+from tests.inspection.test_inspection import EXO_XML, biped_xml, write
 
 if sys.version_info >= (3, 11):
     import tomllib

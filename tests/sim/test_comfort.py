@@ -208,7 +208,7 @@ def test_a_virtual_soles_contacts_are_its_foot_bodys(tmp_path):
     """A sole named by a foot body and a geom class (sphere feet, a virtual box): its contacts are those of every geom
     of the foot body, as its contact sensor counts them; a sole box: that geom."""
     from robustgait import load_robot
-    from tests.test_robots_any import biped_spec, biped_xml
+    from tests.robots.test_any_robot import biped_spec, biped_xml
 
     legs = '[legs.left]\nsole_body = "left_foot"\nsole_class = "foot"\n[legs.right]\nsole_body = "right_foot"\n'
     robot = load_robot(biped_spec(tmp_path, xml=biped_xml(spheres=True), legs=legs))

@@ -251,7 +251,7 @@ def test_a_line_footed_humanoid_walks_with_the_hlip_gain_its_sole_leaves_to_the_
     from robustgait import load_robot
     from robustgait.gaitgen import GaitGenerator
     from tests.conftest import T1_MODEL
-    from tests.robots import narrow_t1_xml
+    from tests.models import narrow_t1_xml
 
     if not T1_MODEL.is_file():
         pytest.skip("../shared/robots/booster_t1 (Booster T1) is not beside the repository")

@@ -15,7 +15,7 @@ import pytest
 
 from robustgait.study.executors import descendants, proc_stat
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 # a study that keeps its workers busy for a while: 1 iteration of 2 gaits, a 5-step walk, 10 certificate samples
 CLI_SMALL = ["--robot", "exo", "--iterations", "1", "--batch", "2", "--method", "uniform", "--samples", "10", "--steps",
              "5", "--seed", "0", "--quiet"]

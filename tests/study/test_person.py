@@ -33,7 +33,7 @@ from robustgait.study.ranking import Requirement, figure_names, label_comparison
 from robustgait.study.run import create_study
 from robustgait.study.storage import TrialRecord
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 PARAMS = ("step_length", "step_duration", "step_width", "step_height")
 
 

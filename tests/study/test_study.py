@@ -42,7 +42,7 @@ from robustgait.study.run import create_study, run_study
 from robustgait.study.status import study_status
 from robustgait.study.storage import StudyStore, default_url
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 # a study's evaluations walk 5 steps (comfort measured on steps 2–4) and certify with 10 uniform samples; 2 iterations
 # × 3 gaits
 TINY = Config(study=StudyConfig(iterations=2, batch=3, seed=0), sim=SimConfig(step_cap=5),
@@ -556,7 +556,7 @@ def test_report_video_is_what_the_configuration_says(tmp_path, exo, exo_gait):
     from robustgait.report.study import render_best_video
     from robustgait.sim import walk
     from tests.conftest import EXO_GAIT
-    from tests.test_sim import mp4_facts
+    from tests.sim.test_engine import mp4_facts
 
     cfg = ReportConfig()
     status = {"robot": "exo", "best": {"gait_file": EXO_GAIT.name}}

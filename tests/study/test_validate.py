@@ -30,7 +30,7 @@ from robustgait.study.run import StudyRunner, create_study, open_store
 from robustgait.study.validate import RUNS_DIR, VALIDATION_DIR, config_key, validate_study
 from robustgait.validate import spearman
 from tests.conftest import EXO_GAIT, EXO_MC_GAIT
-from tests.test_study import TINY, cli
+from tests.study.test_study import TINY, cli
 
 SMALL = ValidateConfig(trials=8, steps_after=3)
 CAP = TINY.sim.step_cap

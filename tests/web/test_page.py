@@ -27,7 +27,7 @@ from robustgait.study.run import completed_batches, create_study, gait_label, op
 from robustgait.web.answers import parse_answer
 from robustgait.web.server import PageServer, PersonPage
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 COMFORT = {"speed": 0.2, "cadence": 86.0, "pelvis_acc_vertical_rms": 1.4, "pelvis_acc_lateral_rms": 1.3,
            "impact_force_ratio": 5.5, "cost_of_transport": 0.24}
 
@@ -295,7 +295,7 @@ def test_a_person_video_is_what_the_configuration_says(tmp_path, exo, exo_gait):
     (2·video_width × video_height), H.264 yuv420p with its index first — what the page's <video> plays and loops."""
     from robustgait.config import ComfortConfig
     from robustgait.web.media import render_person_video
-    from tests.test_sim import mp4_facts
+    from tests.sim.test_engine import mp4_facts
 
     cfg = PersonConfig()
     out = tmp_path / "person.mp4"

@@ -2,7 +2,7 @@
 ``docs/your-robot.md``, "When your robot's feet are narrow").
 
 ``build DIR [--width W]``: Booster T1 from ../shared with each sole replaced by four 5 mm contact spheres on a
-0.19 × W m footprint (default 0.04; ``tests/robots.py``), and the spec ``robot init`` writes for it (``DIR/t1.toml``).
+0.19 × W m footprint (default 0.04; ``tests/models.py``), and the spec ``robot init`` writes for it (``DIR/t1.toml``).
 
 ``default DIR``: as a user would, with the CLI: the default gait generated with the shipped defaults (the H-LIP
 regulator on by the narrow-sole rule), walked ``--steps`` steps undisturbed, certified with the defaults; and the same
@@ -53,7 +53,7 @@ def _stamp() -> dict[str, str]:
 
 def build(out: Path, width: float) -> None:
     sys.path.insert(0, str(REPO))
-    from tests.robots import narrow_t1_xml
+    from tests.models import narrow_t1_xml
 
     if not T1.is_file():
         raise SystemExit(f"{T1} is absent: the benchmark needs ../shared/robots/booster_t1")

@@ -95,7 +95,7 @@ def section_coordinates(qpos: FloatArray, qvel: FloatArray, duration: float) -> 
 
     The coordinates of the return map's fixed point (``docs/certificate.md``, "Fixed point"): the physics does not
     depend on x and y at all, and on ψ only through MuJoCo's pyramidal friction cone, whose facets are fixed in the
-    world (an elliptic cone: none; measured in ``tests/test_returnmap.py``)."""
+    world (an elliptic cone: none; measured in ``tests/certificate/test_returnmap.py``)."""
     qpos, qvel = np.atleast_2d(qpos), np.atleast_2d(qvel)
     r = quat_to_mat(qpos[:, 3:7])
     roll = np.arctan2(r[:, 2, 1], r[:, 2, 2])

@@ -21,7 +21,7 @@ previous one, with the constraint solver's warm start (``qacc_warmstart``) reset
 counters cleared, and the applied forces zeroed unless a base wrench is given; within a chunk the warm start
 carries over from step to step, and a simulation whose warning counters rise is frozen for the rest of the
 chunk (its records repeat), as :func:`mujoco.rollout` does. Hence with the PD law
-(:class:`PDController`) the engine reproduces the rollout engine (tests/test_feedback.py: states equal to
+(:class:`PDController`) the engine reproduces the rollout engine (tests/sim/test_feedback.py: states equal to
 ~1e-13 with the torque-level PD; bit-identical when the servo control itself is written, ``servo_exact``).
 
 Actuation: the robot's actuators are affine servos u = kp (c − q) − kd q̇ clamped to ±torque_limit

@@ -32,7 +32,7 @@ J̇_s(q, v) v at v = T x, both quadratic in v and computed for all samples at on
 :class:`robustgait.sim.rigidbody.TreeDynamics`. (Polarizing the full-coordinate c(q, v) instead and adding
 Tᵀ M Ṫ(q̇_a) q̇_r is *not* skew-consistent here: MuJoCo's base angular velocity is a quasi-velocity, for
 which the symmetric factorization of the full c does not give dM/dt − 2C skew-symmetric (already for a free
-rigid body, ω × Iω); tests/test_feedback.py measures both.) With it the closed loop is
+rigid body, ω × Iω); tests/sim/test_feedback.py measures both.) With it the closed loop is
 M̃ ṡ + (C̃ + K_D) s = 0, V = ½ sᵀ M̃ s decreases as V̇ = −sᵀ K_D s, so s → 0 and then e → 0 as ė = −Λ e + s.
 
 The state used is the simulated one; the reduced model takes the base velocity as T q̇_a (what the stance

@@ -24,7 +24,7 @@ following MuJoCo's own ``mj_comVel`` / ``mj_rne`` / ``mj_crb`` (engine_core_smoo
 so ``velocity_terms(v)`` = c(q, v) = C(q, v) v (MuJoCo's ``qfrc_bias`` minus gravity) for any velocity v,
 together with every body's bias acceleration J̇_b(q, v) v; ``gravity`` = G(q) (MuJoCo's gravity part of
 ``qfrc_bias``); ``mass_matrix`` = M(q) by the composite-rigid-body algorithm (plus ``dof_armature``). Each is
-checked against MuJoCo (mj_rne, mj_fullM, mj_jacDot) in tests/test_feedback.py.
+checked against MuJoCo (mj_rne, mj_fullM, mj_jacDot) in tests/sim/test_feedback.py.
 
 Not modelled (the shipped robots have none): passive joint forces (springs, dampers, friction loss),
 gravity compensation, fluid forces, tendons, and joints other than free / hinge / slide.
