@@ -46,7 +46,7 @@ import mujoco
 import numpy as np
 
 from robustgait import CertifyConfig, SimConfig, StepEngine, load_gait, load_robot, walk
-from robustgait.certificate.search import find_orbit
+from robustgait.certificate import Walking, find_orbit
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
@@ -205,7 +205,7 @@ def orbit_summary(robot: Robot, gait: Gait, ctl: object, config: SimConfig) -> s
     small pushes), and where: settled step, period, σ and ‖ω*‖, or its status and reason."""
     cfg = CertifyConfig(disturbance="state")
     with FeedbackEngine(robot, gait, ctl, config) as eng:  # type: ignore[arg-type]
-        orbit = find_orbit(robot, gait, cfg, engine=eng)
+        orbit = find_orbit(Walking(robot, gait, engine=eng), cfg)
     if not orbit.ok:
         return f"none, {orbit.status} after {orbit.steps} steps ({orbit.reason[:80]})"
     fp = orbit.fixed_point(cfg.frame)

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from robustgait import RobustGaitError
+from robustgait.certificate import Iterated, find_orbit
 from robustgait.certificate.barrier import certify_map
 from robustgait.certificate.numerics import fd_jacobian, flow_projection, spectral_radius
 from robustgait.certificate.orbit import Status, classify, periods, settle_window
-from robustgait.certificate.search import map_orbit
 from robustgait.certificate.synthetic import DriftMap, LinearMap, NoisyMap, QuadraticMap, iterates
 from robustgait.config import CertifyConfig
 
@@ -25,7 +25,7 @@ START = np.r_[0.3, 0.2, -0.1]
 
 def search(F, x0=START, **kw):  # type: ignore[no-untyped-def]
     """The orbit search on a synthetic map, probing with perturbations of 0.1 (outside the band's floor 0.03)."""
-    return map_orbit(F, x0, CFG, perturbation=kw.pop("perturbation", 0.1), **kw)
+    return find_orbit(Iterated(F, x0, kw.pop("perturbation", 0.1), **kw), CFG)
 
 
 def test_a_contraction_is_accepted_on_its_fixed_point():
@@ -115,7 +115,7 @@ def test_period_two_and_four_orbits_are_recognised_and_certified_on_their_own_ma
     # probes of 0.01 (a band of 0.003): 0.05 off the period-four orbit lies near the unstable period-two one, which a
     # perturbed state leaves only slowly
     fine = dataclasses.replace(CFG, push=dataclasses.replace(CFG.push, recovery_radius=0.003))
-    o = map_orbit(F, START, fine, perturbation=0.01)
+    o = find_orbit(Iterated(F, START, 0.01), fine)
     assert o.ok and o.period == k and o.probe is not None and any(o.probe.left), o.describe()
     x_star = o.band.centres[0]
     if k == 2:

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.certify import certify_gait
 from robustgait.certificate.push import PushMap, push_phase, recovered_steps
-from robustgait.certificate.search import find_orbit
 from robustgait.config import CertifyConfig, PushConfig, SimConfig, ValidateConfig
 from robustgait.report import plot_certificate
 from robustgait.rotations import quat_to_mat
@@ -27,7 +27,7 @@ pytestmark = pytest.mark.xdist_group("push_module")
 @pytest.fixture(scope="module")
 def mc_pushes(exo, exo_mc_gait):  # type: ignore[no-untyped-def]
     engine = make_engine(exo, exo_mc_gait, SimConfig())
-    orbit = find_orbit(exo, exo_mc_gait, engine=engine)
+    orbit = find_orbit(Walking(exo, exo_mc_gait, engine=engine))
     assert orbit.ok, orbit.describe()
     # falls only, the pushed step and 3 more: the map is then the validation's walk to the letter (recovery: its own
     # test)
@@ -39,7 +39,7 @@ def mc_pushes(exo, exo_mc_gait):  # type: ignore[no-untyped-def]
 @pytest.fixture(scope="module")
 def exo_pushes(exo, exo_gait):  # type: ignore[no-untyped-def]
     engine = make_engine(exo, exo_gait, SimConfig())
-    orbit = find_orbit(exo, exo_gait, engine=engine)
+    orbit = find_orbit(Walking(exo, exo_gait, engine=engine))
     yield engine, orbit
     engine.close()
 

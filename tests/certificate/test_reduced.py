@@ -8,6 +8,7 @@ import pytest
 from scipy import stats
 
 from robustgait import CertifyConfig
+from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.barrier import sample_ball
 from robustgait.certificate.reduced import (
     Coordinates,
@@ -18,7 +19,6 @@ from robustgait.certificate.reduced import (
     reduce_state,
     stance_jacobian,
 )
-from robustgait.certificate.search import find_orbit
 from robustgait.certificate.shape import Shape
 from robustgait.robots.model import mass_matrix
 from robustgait.rotations import quat_to_mat
@@ -67,7 +67,7 @@ def test_reduced_state_of_mirror_is_reflected(robot_gait):
 
 @pytest.fixture(scope="module")
 def fixed_point(exo, exo_gait):
-    return find_orbit(exo, exo_gait).fixed_point("heading")
+    return find_orbit(Walking(exo, exo_gait)).fixed_point("heading")
 
 
 def _state(name, exo, exo_gait, fp, **kw):

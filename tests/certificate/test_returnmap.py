@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from robustgait import CertifyConfig, RobustGaitError
+from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.reduced import (
     ReducedState,
     reduce_state,
@@ -15,7 +16,7 @@ from robustgait.certificate.reduced import (
 )
 from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
-from robustgait.certificate.search import find_orbit, initial_section
+from robustgait.certificate.search import initial_section
 
 # one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
 pytestmark = pytest.mark.xdist_group("returnmap_module")
@@ -26,7 +27,7 @@ def step_map(robot_gait):  # type: ignore[no-untyped-def]
     """The reduced map (omega, holonomic) at the orbit's x* of each flat-foot gait, and the orbit."""
     robot, gait = robot_gait
     cfg = CertifyConfig(disturbance="state")
-    orbit = find_orbit(robot, gait, cfg)
+    orbit = find_orbit(Walking(robot, gait), cfg)
     assert orbit.ok, orbit.describe()
     with FullStateMap(robot, gait, orbit.period) as fmap:
         yield ReducedMap(fmap, ReducedState.at("omega", robot, orbit.qpos, orbit.qvel, gait.stance, cfg), 1), orbit
@@ -85,7 +86,8 @@ def test_angular_only_changes_only_the_angular_velocity(step_map):
 def test_a_two_step_map_is_two_steps_unmirrored_and_a_one_step_map_mirrors(exo, exo_gait):
     """The stride map (k = 2) of a symmetric robot is the step map applied twice (each mirrored: the mirrors cancel),
     to rounding; a map of no steps is refused."""
-    q, v = find_orbit(exo, exo_gait).qpos[None], find_orbit(exo, exo_gait).qvel[None]
+    orbit = find_orbit(Walking(exo, exo_gait))
+    q, v = orbit.qpos[None], orbit.qvel[None]
     with FullStateMap(exo, exo_gait, 1) as step, FullStateMap(exo, exo_gait, 2) as stride:
         q1, v1, _ = step(*step(q, v)[:2])
         q2, v2, _ = stride(q, v)

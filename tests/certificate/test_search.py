@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from robustgait import CertifyConfig, walk
-from robustgait.certificate.orbit import Status, canonical_event_states, classify_walk, min_period, walk_orbit
-from robustgait.certificate.search import find_orbit, probe_impulse
+from robustgait.certificate import Walked, Walking, find_orbit
+from robustgait.certificate.orbit import Status, canonical_event_states, classify_walk, min_period
+from robustgait.certificate.search import probe_impulse
 from robustgait.config import SimConfig
 from robustgait.gait import State
 from tests.conftest import EXO_GAIT
@@ -23,7 +24,7 @@ pytestmark = pytest.mark.xdist_group("search_module")
 
 @pytest.fixture(scope="module")
 def exo_orbit(exo, exo_gait):  # type: ignore[no-untyped-def]
-    return find_orbit(exo, exo_gait)
+    return find_orbit(Walking(exo, exo_gait))
 
 
 def test_the_exo_gait_settles_on_a_stable_period_one_orbit(exo, exo_gait, exo_orbit):
@@ -50,7 +51,7 @@ def test_walk_and_the_certificate_report_the_same_orbit(exo, exo_gait, exo_orbit
     same switching states — the same settled step, period, band and x*."""
     from robustgait.cli import main
 
-    api = walk_orbit(exo, exo_gait, walk(exo, exo_gait, SimConfig(step_cap=300)), CertifyConfig())
+    api = find_orbit(Walked(exo, exo_gait, walk(exo, exo_gait, SimConfig(step_cap=300))), CertifyConfig())
     assert api.ok
     for field in ("settled", "period", "steps", "x_star_step"):
         assert getattr(api, field) == getattr(exo_orbit, field), field
@@ -67,19 +68,19 @@ def test_a_walk_says_whether_its_switching_events_settled_on_an_orbit(exo, exo_g
     recovery floor, the multi-contact gait in a wider one; both hold their band — the orbit the certificate's search
     finds (tests/certificate/test_search.py); a walk too short to see the band hold says so."""
     cfg = CertifyConfig()
-    o = walk_orbit(exo, exo_gait, walk(exo, exo_gait, steps=120), cfg)
+    o = find_orbit(Walked(exo, exo_gait, walk(exo, exo_gait, steps=120)), cfg)
     assert o.ok and o.period == 1 and o.sigma < 1e-3 and o.held == 64
     assert o.to_dict()["settled_at_step"] == o.settled
     mc_walk = walk(exo, exo_mc_gait, steps=120)
-    mc = walk_orbit(exo, exo_mc_gait, mc_walk, cfg)
+    mc = find_orbit(Walked(exo, exo_mc_gait, mc_walk), cfg)
     assert mc_walk.steps_taken == 120 and not mc_walk.fell and mc.ok
     assert mc.sigma > 10 * o.sigma and "settled at step" in mc.describe()
-    short = walk_orbit(exo, exo_gait, walk(exo, exo_gait, steps=50), cfg)
+    short = find_orbit(Walked(exo, exo_gait, walk(exo, exo_gait, steps=50)), cfg)
     assert short.status == "undecided" and "are needed to see the band hold" in short.reason
 
 
 def test_a_walk_too_short_to_tell_says_so(exo, exo_gait):
-    o = walk_orbit(exo, exo_gait, walk(exo, exo_gait, SimConfig(step_cap=20)), CertifyConfig())
+    o = find_orbit(Walked(exo, exo_gait, walk(exo, exo_gait, SimConfig(step_cap=20))), CertifyConfig())
     assert o.status == Status.UNDECIDED and "before its switching states settled" in o.reason
 
 
@@ -102,7 +103,7 @@ def test_a_gait_that_falls_in_the_search_is_refused_with_the_step(exo, exo_gait)
     s = exo_gait.initial_state
     kick = np.r_[0, 0, 0, 4.0, 0, 0, np.zeros(12)]
     kicked = dataclasses.replace(exo_gait, initial_state=State(s.qpos, s.qvel + kick))
-    o = find_orbit(exo, kicked)
+    o = find_orbit(Walking(exo, kicked))
     assert o.status == Status.FELL and "fell in step" in o.reason and o.band is None and o.probe is None
 
 
@@ -110,7 +111,8 @@ def test_a_gait_that_falls_in_the_search_is_refused_with_the_step(exo, exo_gait)
 def test_the_linearization_is_a_diagnostic_reported_only_where_it_holds(exo, exo_gait):
     """exo's smooth orbit: ρ the same at two finite-difference steps and confirmed along its eigenvector — reported;
     a verdict it never is (the orbit is ok either way)."""
-    o = find_orbit(exo, exo_gait, CertifyConfig(orbit=dataclasses.replace(CertifyConfig().orbit, linearization=True)))
+    o = find_orbit(Walking(exo, exo_gait),
+                   CertifyConfig(orbit=dataclasses.replace(CertifyConfig().orbit, linearization=True)))
     lin = o.linearization
     assert o.ok and lin is not None and lin.rho is not None and lin.rho_coarse is not None
     assert lin.defined, lin.reason
@@ -127,7 +129,7 @@ def test_a_robot_whose_sides_differ_walks_a_stride_map_orbit(t1):
     assert min_period(t1, "auto") == 2
     gen = generate_gait(t1)
     assert gen.gait is not None
-    o = find_orbit(t1, gen.gait)
+    o = find_orbit(Walking(t1, gen.gait))
     assert o.ok and o.period in (2, 4) and o.sides_differ, o.describe()
     del load_gait
 

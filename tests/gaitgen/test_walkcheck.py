@@ -79,12 +79,12 @@ def test_the_walk_plan_says_how_far_it_walks() -> None:
 @pytest.mark.slow
 def test_the_walk_check_walks_until_the_orbit_rule_has_its_answer(exo, exo_gait):  # type: ignore[no-untyped-def]
     """exo's gait: the check walks until its band has held, and reports the orbit the certificate's search finds."""
-    from robustgait.certificate.search import find_orbit
+    from robustgait.certificate import Walking, find_orbit
 
     cfg = Config()
     checked = walk_check(exo, exo_gait, cfg)
     assert checked.passed and checked.orbit == "ok"
-    orbit = find_orbit(exo, exo_gait, cfg.certify)
+    orbit = find_orbit(Walking(exo, exo_gait), cfg.certify)
     assert checked.taken == orbit.steps and f"settled by step {orbit.settled}" in checked.orbit_text
     short = walk_check(exo, exo_gait, replace(cfg, generate=replace(cfg.generate, walk_settle=False)))
     assert short.taken == 20 and short.orbit == ""

@@ -50,6 +50,7 @@ import numpy as np
 from mujoco import rollout
 
 from robustgait import load_gait, load_robot
+from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.barrier import distances, sample_ball, solve_radius
 from robustgait.certificate.certify import GaitCertificate, certify_gait
 from robustgait.certificate.estimators import certify_map_sequential
@@ -57,7 +58,6 @@ from robustgait.certificate.orbit import Orbit
 from robustgait.certificate.reduced import ReducedState
 from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
-from robustgait.certificate.search import find_orbit
 from robustgait.certificate.synthetic import BandMap, ConeMap
 from robustgait.config import CertifyConfig, GaitParams, GenerationConfig, SequentialConfig, SimConfig
 from robustgait.errors import RobustGaitError
@@ -82,7 +82,7 @@ class OrbitMaps:
     def __init__(self, robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig):
         self.engine: StepEngine = make_engine(robot, gait, sim)
         try:
-            self.orbit: Orbit = find_orbit(robot, gait, config, sim, engine=self.engine)
+            self.orbit: Orbit = find_orbit(Walking(robot, gait, sim, engine=self.engine), config)
             if not self.orbit.ok or self.orbit.qpos is None or self.orbit.qvel is None:
                 raise RobustGaitError(f"no orbit: {self.orbit.status}: {self.orbit.reason}")
             self.fmap = FullStateMap(robot, gait, self.orbit.period, engine=self.engine)

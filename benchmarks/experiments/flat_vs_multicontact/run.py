@@ -46,8 +46,8 @@ import mujoco
 import numpy as np
 
 from robustgait import load_gait, load_robot, walk
+from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.reduced import reduce_state
-from robustgait.certificate.search import find_orbit
 from robustgait.config import KINDS, CertifyConfig, CompareConfig, ValidateConfig
 from robustgait.gait import Gait
 from robustgait.io.studyfile import load_config
@@ -162,7 +162,7 @@ def orbit_scatter(robot: Robot, gait: Gait) -> dict[str, Any]:
     velocity, heading frame) over the band's successive switching states (canonical; median and max, rad/s). A
     certificate around a point cannot hold on a ball smaller than this scatter (docs/gaitgen.md)."""
     cfg = CertifyConfig(disturbance="state")
-    orbit = find_orbit(robot, gait, cfg)
+    orbit = find_orbit(Walking(robot, gait), cfg)
     out: dict[str, Any] = {"status": str(orbit.status), "steps": orbit.steps, "period": orbit.period,
                            "settled": orbit.settled, "sigma": orbit.sigma, "median": float("nan"),
                            "max": float("nan")}

@@ -41,11 +41,11 @@ from pathlib import Path
 import numpy as np
 
 from robustgait import load_gait, load_robot
+from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.numerics import fd_jacobian, spectral_radius
 from robustgait.certificate.orbit import Orbit
 from robustgait.certificate.reduced import section_coordinates
 from robustgait.certificate.returnmap import FullStateMap
-from robustgait.certificate.search import find_orbit
 from robustgait.config import CertifyConfig, SimConfig
 from robustgait.config.certify import OrbitConfig
 from robustgait.errors import RobustGaitError
@@ -175,7 +175,7 @@ def cmd_orbit(args: argparse.Namespace) -> None:
     orbits: dict[str, tuple[Robot, Gait, Orbit]] = {}
     for name, (robot, gait) in orbit_gaits(args).items():
         t0 = time.perf_counter()
-        orbit = find_orbit(robot, gait, cfg, sim)
+        orbit = find_orbit(Walking(robot, gait, sim), cfg)
         print(orbit_row(name, orbit, o.fd_agreement, time.perf_counter() - t0), flush=True)
         orbits[name] = (robot, gait, orbit)
     for name, (_, _, orbit) in orbits.items():

@@ -37,9 +37,9 @@ import mujoco
 import numpy as np
 
 from robustgait import load_gait, load_robot
+from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.certify import certify_gait
 from robustgait.certificate.estimators import certify_map_sequential
-from robustgait.certificate.search import find_orbit
 from robustgait.config import CertifyConfig, SimConfig
 from robustgait.sim.factory import make_engine
 from robustgait.validate.stats import wilson_interval
@@ -209,7 +209,7 @@ def cmd_push_sweep(args: argparse.Namespace) -> None:
     engine = make_engine(robot, gait, SimConfig(n_threads=args.threads))
     try:
         t0 = time.perf_counter()
-        orbit = find_orbit(robot, gait, cfg, validate=vcfg, engine=engine)
+        orbit = find_orbit(Walking(robot, gait, validate=vcfg, engine=engine), cfg)
         if not orbit.ok or orbit.qpos is None or orbit.qvel is None:
             raise SystemExit(f"push-sweep: no orbit ({orbit.status}: {orbit.reason})")
         print(f"## push-sweep: orbit in {time.perf_counter() - t0:.1f} s: {orbit.describe()}")

@@ -184,9 +184,9 @@ def run_gait(job: dict[str, Any]) -> dict[str, Any]:
 def cmd_scan(args: argparse.Namespace) -> None:
     import math
 
+    from robustgait.certificate import Walking, find_orbit
     from robustgait.certificate.band import band_coordinates
     from robustgait.certificate.push import push_phase, push_series
-    from robustgait.certificate.search import find_orbit
     from robustgait.config import CertifyConfig, SimConfig, ValidateConfig
     from robustgait.io.gaitfile import load_gait
     from robustgait.io.robotfile import load_robot
@@ -199,7 +199,7 @@ def cmd_scan(args: argparse.Namespace) -> None:
     cfg, vcfg = CertifyConfig(), ValidateConfig()
     engine = make_engine(robot, gait, SimConfig())
     t0 = time.perf_counter()
-    orbit = find_orbit(robot, gait, cfg, engine=engine)
+    orbit = find_orbit(Walking(robot, gait, engine=engine), cfg)
     if orbit.qpos is None or orbit.qvel is None or orbit.band is None:
         raise SystemExit(f"no orbit to push from: {orbit.describe()}")
     rng = np.random.default_rng(args.seed)

@@ -8,9 +8,10 @@ evenly spaced in grid order (all of them when the grid is smaller), each
 * solved cold by the gait generator (IPOPT, then its physics check): status, iterations, seconds;
 * walked ``--steps`` steps (default 300) with the spec's simulator (PD + feedforward): steps walked, fall reason,
   tracking RMS and max |q − y_d|, torque saturation (fraction of joint-steps at a limit);
-* the orbit of its switching states — the product's own classification (:func:`robustgait.certificate.orbit.walk_orbit`,
-  the one rule of walk, certify and studies: a band the states enter and hold, its period and scatter σ in band
-  coordinates). ``outcome``: ``p1``, ``p2``, ``p4`` (settled, of that period), ``unsettled``, ``fell``, ``nosolve``.
+* the orbit of its switching states — the product's own classification (:func:`robustgait.certificate.find_orbit`
+  of a ``Walked``, the one rule of walk, certify and studies: a band the states enter and hold, its period and
+  scatter σ in band coordinates). ``outcome``: ``p1``, ``p2``, ``p4`` (settled, of that period), ``unsettled``,
+  ``fell``, ``nosolve``.
 
 One JSON line per point on stdout (and ``--out FILE``), in completion order. Two worker processes (``--workers``),
 each niced and pinned to one BLAS thread, each building its own generator.
@@ -114,7 +115,7 @@ def worst_joints(robot: Any, tracking: dict[str, Any]) -> dict[str, Any]:
 def point(index: int, steps: int) -> dict[str, Any]:
     """One grid point: solve, walk, orbit (module docstring)."""
     from robustgait import walk
-    from robustgait.certificate.orbit import walk_orbit
+    from robustgait.certificate import Walked, find_orbit
     from robustgait.config import CertifyConfig, SimConfig
     from robustgait.learn.space import ActionSpace
 
@@ -139,7 +140,7 @@ def point(index: int, steps: int) -> dict[str, Any]:
     if w.steps_taken < steps:
         out["outcome"] = "fell"
         return out
-    o = walk_orbit(robot, res.gait, w, CertifyConfig())
+    o = find_orbit(Walked(robot, res.gait, w), CertifyConfig())
     out.update(outcome=f"p{o.period}" if o.ok else str(o.status), orbit_steps=o.steps, settled=o.settled,
                period=o.period if o.ok else None, sigma=o.sigma, orbit_reason=o.reason)
     return out

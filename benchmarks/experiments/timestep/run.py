@@ -32,8 +32,8 @@ from typing import Any
 import numpy as np
 
 from robustgait import CertifyConfig, SimConfig, certify_gait, load_gait, load_robot, walk
+from robustgait.certificate import Walked, find_orbit
 from robustgait.certificate.band import band_coordinates
-from robustgait.certificate.orbit import walk_orbit
 from robustgait.io.robotfile import read_mjcf
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine
@@ -105,7 +105,7 @@ def main() -> None:
             t0 = time.perf_counter()
             res = walk(robot, gait, sim, steps=args.steps)
             wall = time.perf_counter() - t0
-            orbit = walk_orbit(robot, gait, res, CertifyConfig())
+            orbit = find_orbit(Walked(robot, gait, res), CertifyConfig())
             row: dict[str, Any] = {"gait": Path(gpath).name, "timestep": h, "stable_pd": r, "steps": res.steps_taken,
                                    "fell": res.fell, "fall_reason": res.fall_reason, "walk_s": round(wall, 2),
                                    "walk_physics": res.physics_steps, "orbit": orbit.status.value,

@@ -27,7 +27,7 @@ from robustgait.certificate.push import PushMap
 from robustgait.certificate.reduced import Coordinates, ReducedState, section_dimension
 from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
-from robustgait.certificate.search import find_orbit, probe_impulse
+from robustgait.certificate.search import Walking, find_orbit, probe_impulse
 from robustgait.certificate.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
 from robustgait.config.certify import R_MAX_LIMIT
@@ -111,6 +111,15 @@ class GaitCertificate:
         """The certified figure (0 unless certified): J* [N s] of a push certificate, r* (``config.unit``) of a state
         certificate — :attr:`j_star` or :attr:`r_star` by name."""
         return self.certificate.r_star if self.certificate is not None else 0.0
+
+    @property
+    def estimate(self) -> float | None:
+        """The exploration's estimate of the figure (Ĵ or r̂), or the figure itself when the estimator made no
+        exploration (the uniform one); None without a certificate."""
+        c = self.certificate
+        if c is None:
+            return None
+        return float(c.estimate if c.estimate is not None else c.r_star)
 
     @property
     def j_star(self) -> float:
@@ -525,8 +534,8 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         replayed_orbit = orbit is not None
         if orbit is None:
             with tqdm(total=cfg.orbit.max_steps, desc="orbit", unit="step", disable=not progress, leave=False) as bar:
-                orbit = find_orbit(robot, gait, cfg, sim, validate=vcfg, engine=engine,
-                                   progress=lambda k: bar.update(k - bar.n))
+                orbit = find_orbit(Walking(robot, gait, sim, validate=vcfg, engine=engine,
+                                           progress=lambda k: bar.update(k - bar.n)), cfg)
         t1 = time.perf_counter()
 
         def result(status: Status, reason: str, **kw: Any) -> GaitCertificate:

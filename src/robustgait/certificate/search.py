@@ -12,8 +12,9 @@ the band come back to it (``docs/certificate.md``, "The orbit the gait walks").
    falls is a push beyond the gait's basin in its direction, which J* measures (:class:`.orbit.Probe`).
 3. **ρ** — with ``orbit.linearization``, the linearized map at x* as a diagnostic (:mod:`.linearization`).
 
-:func:`map_orbit` is the same search on a batched map instead of a walk (maps whose answer is known,
-:mod:`.synthetic`).
+:func:`find_orbit` is the one way in: a gait walked here (:class:`Walking`, the three steps above), a walk the caller
+already made (:class:`Walked`: step 1's classification alone) or a batched map instead of a walk (:class:`Iterated`,
+maps whose answer is known, :mod:`.synthetic`).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,7 +47,7 @@ from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine
 from robustgait.sim.factory import make_engine
-from robustgait.sim.walk import SwitchEvent, walk
+from robustgait.sim.walk import SwitchEvent, WalkResult, walk
 
 FloatArray = NDArray[np.float64]
 
@@ -79,17 +81,65 @@ def probe_stability(engine: StepEngine, orbit: Orbit, config: CertifyConfig, val
     return probe_of(size, o.probe_horizon, recovered, fall_step, left, pm.trace, o.probe_growth), pm.physics_steps
 
 
-def find_orbit(robot: Robot, gait: Gait, config: CertifyConfig | None = None, sim: SimConfig | None = None, *,
-               validate: ValidateConfig | None = None, engine: StepEngine | None = None,
-               progress: Callable[[int], None] | None = None) -> Orbit:
-    """The orbit of the gait's walk (module docstring): settled, stable, and with ``orbit.linearization`` ρ. Never
-    raises for a gait that falls or does not settle: the orbit's status says so (:class:`.orbit.Status`).
-    ``engine``: the gait's engine (built from ``sim`` otherwise, and closed); ``validate``: the push duration and
-    phases of the probe; ``progress(step)`` after each step of the walk."""
+@dataclass(frozen=True)
+class Walking:
+    """Switching states from walking ``gait`` on ``robot`` here (module docstring, steps 1–3): the walk stops where
+    the rule has its answer, then the orbit's stability is probed. ``sim``: the simulation options (an ``engine``
+    given is used as it is and left open; otherwise one is built from ``sim`` and closed); ``validate``: the push
+    duration and phases of the probe; ``progress(step)`` after each step of the walk."""
+
+    robot: Robot
+    gait: Gait
+    sim: SimConfig | None = None
+    validate: ValidateConfig | None = None
+    engine: StepEngine | None = None
+    progress: Callable[[int], None] | None = None
+
+
+@dataclass(frozen=True)
+class Walked:
+    """Switching states of a walk the caller already made (``result``, :func:`robustgait.sim.walk.walk` of ``gait``
+    on ``robot``): classified as they are (:func:`.orbit.walk_orbit`) — no simulation, no stability probe; the same
+    orbit :class:`Walking` finds once the walk went as far."""
+
+    robot: Robot
+    gait: Gait
+    result: WalkResult
+
+
+@dataclass(frozen=True)
+class Iterated:
+    """Switching states from iterating a batched map ``F``: (N, d) → (N, d) of band coordinates (NaN rows: the sample
+    fell) from ``x0`` (d,), probed with states perturbed by ``perturbation`` (u uniform on the unit L∞ sphere,
+    ``seed``); ``min_period`` the shortest period searched: maps whose answer is known (:mod:`.synthetic`)."""
+
+    F: Callable[[FloatArray], FloatArray]
+    x0: FloatArray
+    perturbation: float
+    min_period: int = 1
+    seed: int = 0
+
+
+def find_orbit(source: Walking | Walked | Iterated, config: CertifyConfig | None = None) -> Orbit:
+    """The orbit of a source of switching states, by the one rule (:class:`.orbit.Watch`) and the one probe verdict
+    (:func:`.orbit.probe_of`) with the options of ``config`` (``orbit``, ``map``, ``push``): a gait walked here
+    (:class:`Walking`: settled, stable, with ``orbit.linearization`` ρ), a walk already made (:class:`Walked`:
+    settled, not probed) or a batched map (:class:`Iterated`). Never raises for a gait that falls or does not
+    settle: the orbit's status says so (:class:`.orbit.Status`)."""
     cfg = config or CertifyConfig()
-    v = validate or ValidateConfig()
-    own = engine is None
-    eng = engine or make_engine(robot, gait, sim)
+    if isinstance(source, Walked):
+        return walk_orbit(source.robot, source.gait, source.result, cfg)
+    if isinstance(source, Iterated):
+        return _iterate(source, cfg)
+    return _walk_and_probe(source, cfg)
+
+
+def _walk_and_probe(source: Walking, cfg: CertifyConfig) -> Orbit:
+    """:func:`find_orbit` of a gait walked here (module docstring, steps 1–3)."""
+    robot, gait, progress = source.robot, source.gait, source.progress
+    v = source.validate or ValidateConfig()
+    own = source.engine is None
+    eng = source.engine or make_engine(robot, gait, source.sim)
     try:
         watch = SettlingWatch(robot, gait.stance, cfg)
 
@@ -136,17 +186,15 @@ def initial_section(robot: Robot, gait: Gait, engine: StepEngine) -> tuple[Float
     return qpos, qvel
 
 
-def map_orbit(F: Callable[[FloatArray], FloatArray], x0: FloatArray, config: CertifyConfig, *, perturbation: float,
-              min_period: int = 1, seed: int = 0) -> Orbit:
-    """The orbit search of this module on a batched map F: (N, d) → (N, d) of band coordinates (NaN rows: the
-    sample fell) instead of a walk: iterate F from x0 (d,) until the iterates settle (:func:`settle_window`, at most
-    ``orbit.max_steps`` maps), classify them (:func:`classify`), then probe stability with ``orbit.probe_pushes``
-    states x* + ``perturbation`` u (u uniform in the unit L∞ ball's surface, seeded), each iterated until it has
-    been back in the band for ``push.recovery_steps`` consecutive maps within ``orbit.probe_horizon`` maps: the
-    verdict of a robot's search, on a map whose answer is known (:mod:`.synthetic`)."""
+def _iterate(source: Iterated, config: CertifyConfig) -> Orbit:
+    """:func:`find_orbit` of a batched map (:class:`Iterated`): iterate F from x0 until the iterates settle (at most
+    ``orbit.max_steps`` maps) and their band held, then probe stability with ``orbit.probe_pushes`` states x* +
+    perturbation u, each iterated until it has been back in the band for ``push.recovery_steps`` consecutive maps
+    within ``orbit.probe_horizon`` maps: the verdict of a robot's search, on a map whose answer is known."""
+    F, perturbation = source.F, source.perturbation
     o, p = config.orbit, config.push
-    watch = Watch(o, min_period, p.recovery_radius, p.recovery_scatter)
-    x = np.asarray(x0, dtype=float)
+    watch = Watch(o, source.min_period, p.recovery_radius, p.recovery_scatter)
+    x = np.asarray(source.x0, dtype=float)
     fell: str | None = None
     while not watch.done:
         x = np.asarray(F(x[None]), dtype=float)[0]
@@ -158,7 +206,7 @@ def map_orbit(F: Callable[[FloatArray], FloatArray], x0: FloatArray, config: Cer
     z = np.array(watch.z)
     if i is None or orbit.band is None:
         return orbit
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(source.seed)
     u = rng.uniform(-1.0, 1.0, (o.probe_pushes, z.shape[1]))
     u /= np.abs(u).max(axis=1, keepdims=True)
     states = z[i] + perturbation * u

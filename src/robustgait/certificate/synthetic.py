@@ -15,7 +15,8 @@ either barrier). Only the volume fraction of the violating set in a ball matters
 * :class:`DivergingPush` — pushes that walk a few steps and fall later beyond a known critical impulse: the push
   certificate's recovery criterion (:mod:`.push`).
 
-Maps with known orbits, for the orbit search (:func:`.search.map_orbit`) and the linearization (:mod:`.numerics`):
+Maps with known orbits, for the orbit search (:func:`.search.find_orbit` of an :class:`.search.Iterated` map) and the
+linearization (:mod:`.numerics`):
 
 * :class:`LinearMap` — x* + A (x − x*) with a chosen spectrum (ρ known), optionally with a staircase of jumps along
   its first coordinate (piecewise smooth, as the simulated map is where a touchdown crosses a physics step).

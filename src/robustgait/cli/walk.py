@@ -12,15 +12,16 @@ SIM = {"--controller": "sim.controller", "--switching": "sim.switching", "--feed
 
 
 def _walk(args: argparse.Namespace) -> int:
-    from robustgait.certificate.orbit import canonical_event_states, walk_orbit
+    from robustgait.certificate.orbit import canonical_event_states
     from robustgait.certificate.reduced import reduce_state
+    from robustgait.certificate.search import Walked, find_orbit
     from robustgait.io.output import write_csv
     from robustgait.sim import walk
 
     config, robot, gait = inputs(args)
     with naming_file(args.gait):
         result = walk(robot, gait, config.sim, video=args.video, comfort=config.comfort)
-    orbit = walk_orbit(robot, gait, result, config.certify)
+    orbit = find_orbit(Walked(robot, gait, result), config.certify)
     if args.log is not None:
         xs = reduce_state(*canonical_event_states(robot, gait, result.events), config.certify.frame)
         write_csv(args.log, ["wx", "wy", "wz"], xs.tolist())

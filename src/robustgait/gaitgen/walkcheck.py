@@ -18,7 +18,8 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.certificate.orbit import Orbit, SettlingWatch, Status, walk_orbit
+from robustgait.certificate.orbit import Orbit, SettlingWatch, Status
+from robustgait.certificate.search import Walked, find_orbit
 from robustgait.config import Config, GaitParams
 from robustgait.config.regulator import placement_share, regulator_rule
 from robustgait.gait import Gait
@@ -235,7 +236,7 @@ def walk_check(robot: Robot, gait: Gait, config: Config, check: PhysicsCheck | N
     result = walk(robot, gait, config.sim, steps=steps, until=until)
     out = WalkCheck(least, result.steps_taken, result.fell, result.fall_reason, result.controller)
     if until is not None:
-        orbit = walk_orbit(robot, gait, result, config.certify)
+        orbit = find_orbit(Walked(robot, gait, result), config.certify)
         out.orbit = orbit.status.value
         out.orbit_text = orbit_summary(orbit) if not result.fell else orbit.reason
     if result.fell:

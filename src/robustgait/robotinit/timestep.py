@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.certificate.orbit import Status
-from robustgait.certificate.search import find_orbit
+from robustgait.certificate.search import Walking, find_orbit
 from robustgait.config import Config
 from robustgait.config.gait import reach_problem
 from robustgait.errors import RobustGaitError
@@ -205,7 +205,7 @@ def settled_walk(robot: Robot, gait: Gait, config: Config) -> Walked:
     c = config.certify
     certify = dataclasses.replace(c, orbit=dataclasses.replace(c.orbit, probe_impulse=0.0, linearization=False))
     t0 = time.perf_counter()
-    o = find_orbit(robot, gait, certify, config.sim)
+    o = find_orbit(Walking(robot, gait, config.sim), certify)
     return Walked(robot.dt, o.status.value, o.reason, o.steps, o.period,
                   None if o.band is None or not o.ok else np.array(o.band.centres), o.sides_differ, o.physics_steps,
                   time.perf_counter() - t0)

@@ -171,9 +171,9 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     time continuing across steps) is kept when ``keep_trajectory`` or ``video`` (an ``.mp4`` or ``.gif`` path,
     rendered after the walk by :func:`render_video`). The work is bounded before anything runs
     (:func:`check_walk_work`; a video's stricter limits, the output path checked). The orbit its switching events
-    settle on is the certificate's to say (:func:`robustgait.certificate.orbit.walk_orbit`). ``until(events)``, called
-    after each completed step, ends the walk early when it returns true (the orbit search stops where the switching
-    states have settled).
+    settle on is the certificate's to say (:func:`robustgait.certificate.find_orbit` of a ``Walked``).
+    ``until(events)``, called after each completed step, ends the walk early when it returns true (the orbit search
+    stops where the switching states have settled).
 
     ``comfort``: measure what a passenger feels over the steps it names (:mod:`robustgait.sim.comfort`,
     ``WalkResult.comfort``); None: not measured.

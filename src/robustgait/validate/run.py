@@ -30,7 +30,7 @@ from robustgait.certificate.certify import GaitCertificate, certify_gait, certif
 from robustgait.certificate.orbit import FixedPoint, Orbit
 from robustgait.certificate.push import recovered_steps
 from robustgait.certificate.reduced import ReducedState, section_dimension
-from robustgait.certificate.search import find_orbit
+from robustgait.certificate.search import Walking, find_orbit
 from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, PushConfig, SimConfig, ValidateConfig, to_dict
 from robustgait.config.certify import orbit_options
 from robustgait.config.work import Work, check_work
@@ -294,7 +294,7 @@ class Validator:
             ref.check_matches(certify)
         cert_cfg = ref.certify_config(base)
         if start is None and (orbit is None or not orbit.ok):
-            orbit = find_orbit(robot, gait, cert_cfg, self.sim, validate=self.config)
+            orbit = find_orbit(Walking(robot, gait, self.sim, validate=self.config), cert_cfg)
             if not orbit.ok:
                 raise RobustGaitError(f"the gait has no stable orbit to start the trials from ({orbit.status}: "
                                       f"{orbit.reason})")
