@@ -38,36 +38,16 @@ from robustgait.certificate.orbit import canonical_event_states
 from robustgait.sim import walk
 
 
-class _VariantHold(rule.Watch):
-    """The orbit rule with its hold test replaced by :meth:`judge_window`, called on each whole window of the hold
-    with the window's first step and its phase centres' deviations from the band's (k, d)."""
-
-    def judge_window(self, start: int, dev: np.ndarray) -> None:
-        raise NotImplementedError
-
-    def add(self, z: Any) -> bool:
-        if self.found is None or self.done:
-            return super().add(z)
-        self.z.append(np.asarray(z, dtype=float))
-        cfg, f = self.cfg, self.found
-        if self.held % cfg.window == 0:
-            steps = self.steps - cfg.window + 1 + np.arange(cfg.window)
-            centres, _ = rule.phase_stats(np.array(self.z[-cfg.window:]), steps, f.period)
-            self.judge_window(int(steps[0]), np.abs(centres - f.band.centres))
-        return self.done
-
-
-class BandHold(_VariantHold):
+class BandHold(rule.Watch):
     """The orbit rule with the hold test against the band's half-width max(ν, κ σ) per coordinate."""
 
-    def judge_window(self, start: int, dev: np.ndarray) -> None:
+    def hold_window(self, centres: np.ndarray) -> tuple[float, float] | None:
         assert self.found is not None
-        ratio = float((dev / self.found.band.half_width).max())
-        if ratio > 1.0:
-            self.left = (start, ratio, 1.0)
+        ratio = float((np.abs(centres - self.found.band.centres) / self.found.band.half_width).max())
+        return (ratio, 1.0) if ratio > 1.0 else None
 
 
-class HorizonHold(_VariantHold):
+class HorizonHold(rule.Watch):
     """The orbit rule with a hold window that moved within the band's half-width watched on to ``horizon`` steps."""
 
     horizon = 300
@@ -82,13 +62,15 @@ class HorizonHold(_VariantHold):
             return self.steps >= self.horizon
         return bool(super().done)
 
-    def judge_window(self, start: int, dev: np.ndarray) -> None:
+    def hold_window(self, centres: np.ndarray) -> tuple[float, float] | None:
         assert self.found is not None
-        cfg, band = self.cfg, self.found.band
+        band = self.found.band
+        dev = np.abs(centres - band.centres)
         if (dev / band.half_width).max() > 1.0:
-            self.left = (start, float(dev.max()), 1.0)
-        elif dev.max() > cfg.settle_multiple * max(cfg.floor, band.sigma):
+            return float(dev.max()), 1.0
+        if super().hold_window(centres) is not None:
             self.wandered = True
+        return None
 
 
 def verdict(watch: rule.Watch, z: np.ndarray, fell: str | None) -> str:

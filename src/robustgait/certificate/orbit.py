@@ -467,15 +467,22 @@ class Watch:
                 if isinstance(self.last, Settling):
                     self.found = self.last
         elif self.held % cfg.window == 0:  # a window of the hold completed: are its centres still the band's?
-            f = self.found
-            w = np.array(self.z[-cfg.window:])
             steps = self.steps - cfg.window + 1 + np.arange(cfg.window)
-            centres, _ = phase_stats(w, steps, f.period)
-            moved = float(np.abs(centres - f.band.centres).max())
-            allowed = cfg.settle_multiple * max(cfg.floor, f.band.sigma)
-            if moved > allowed:
-                self.left = (int(steps[0]), moved, allowed)
+            centres, _ = phase_stats(np.array(self.z[-cfg.window:]), steps, self.found.period)
+            left = self.hold_window(centres)
+            if left is not None:
+                self.left = (int(steps[0]), *left)
         return self.done
+
+    def hold_window(self, centres: FloatArray) -> tuple[float, float] | None:
+        """The hold test of one completed window, its phase centres (period, d) in band coordinates: None while they
+        stay within ``settle_multiple`` × max(``floor``, σ_B) of the band's centres, else (the largest move, that
+        bound). The one place the hold is judged (a variant rule overrides it)."""
+        assert self.found is not None
+        band = self.found.band
+        moved = float(np.abs(centres - band.centres).max())
+        allowed = self.cfg.settle_multiple * max(self.cfg.floor, band.sigma)
+        return (moved, allowed) if moved > allowed else None
 
     def orbit(self, fell: str | None = None) -> tuple[Orbit, int | None]:
         """The verdict on the states taken (the walk fell in the step after the last when ``fell`` names the reason),

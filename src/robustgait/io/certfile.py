@@ -41,7 +41,7 @@ class CertificateFile:
     def value(self) -> float:
         """The certified figure: ``j_star`` of a push certificate, else ``r_star`` (0 when neither is written:
         :func:`read_certificate` refuses such a file)."""
-        return float(self.j_star if self.j_star is not None else self.r_star or 0.0)
+        return certificate_figure({"j_star": self.j_star, "r_star": self.r_star or 0.0})
 
     def transform(self, src: str | Path) -> list[list[float]] | None:
         """T (k, k) of the certificate's coordinates, checked square of the size of x*; None if absent."""
@@ -92,5 +92,7 @@ def read_certificate(path: str | Path) -> CertificateFile:
 def certificate_figure(record: Mapping[str, Any]) -> float:
     """The certified figure of a certificate record (:meth:`~robustgait.certificate.certify.GaitCertificate.to_dict`,
     a file or a study's copy): ``j_star`` of a push certificate, ``r_star`` of a state certificate or of a push
-    certificate written before its figure was named. KeyError when it has neither."""
-    return float(record["j_star"] if "j_star" in record else record["r_star"])
+    certificate written before its figure was named (a ``j_star`` of None counts as absent). KeyError when it has
+    neither."""
+    j_star = record.get("j_star")
+    return float(j_star if j_star is not None else record["r_star"])

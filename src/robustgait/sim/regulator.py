@@ -396,7 +396,7 @@ def lateral_growth(engine: _Walker, options: str, share: float) -> float:
         raise ValueError("lateral_growth needs an engine whose step regulator runs")
     robot = engine.robot
     gait = engine.gaits[next(iter(engine.gaits))]
-    key = (robot.name, str(robot.spec.source), repr(robot.dt), gait.digest(), options, repr(share))
+    key = (robot.digest, gait.digest(), options, repr(share))
     if key in _GROWTH:
         return _GROWTH[key]
     kept = reg.share

@@ -275,14 +275,15 @@ def record_certificate(ev: Evaluation, gc: GaitCertificate, ranks_verified: bool
     if not gc.ok or gc.certificate is None:
         ev.status, ev.reason, ev.refusal = EvaluationStatus.NOT_CERTIFIED, f"{gc.status}: {gc.reason}", gc.status
         return
-    c = gc.certificate
-    ev.estimate = float(c.estimate if c.estimate is not None else c.r_star)
+    estimate = gc.estimate
+    assert estimate is not None  # a certificate was made
+    ev.estimate = estimate
     ev.certificate = gc.to_dict(samples=True)
-    if c.verified:
+    if gc.certificate.verified:
         ev.status, ev.reason, ev.verified_value = EvaluationStatus.CERTIFIED, "", float(gc.value)
     else:
         ev.status, ev.reason = EvaluationStatus.ESTIMATED, ""
-    ev.certificate_value = float(gc.value) if ranks_verified else ev.estimate
+    ev.certificate_value = float(gc.value) if ranks_verified else estimate
 
 
 def verify_gait(robot: Robot, gait: Gait, config: Config,
@@ -302,5 +303,5 @@ def verify_gait(robot: Robot, gait: Gait, config: Config,
     return {"status": EvaluationStatus.CERTIFIED if ok else EvaluationStatus.NOT_CERTIFIED,
             "reason": "" if ok else f"{gc.status}: {gc.reason}", "refusal": None if ok else gc.status.value,
             "verified_value": float(gc.value) if ok else None,
-            "estimate": None if c is None else float(c.estimate if c.estimate is not None else c.r_star),
+            "estimate": gc.estimate,
             "certificate": gc.to_dict(samples=True) if ok else None, "seconds": time.perf_counter() - t0}
