@@ -84,15 +84,20 @@ def body(name: str, joint: str, axis: str, limits: str, mass: float, com: str, i
             f'<inertial pos="{com}" mass="{mass}" diaginertia="{inertia}"/>{inner}</body>')
 
 
-def leg(s: str, y: float, foot: str, roll_axis: str, short: float = 0.0) -> str:
-    """A 6-joint leg (hip yaw, roll, pitch, knee, ankle pitch, roll) hanging from the waist at lateral offset y."""
+def leg(s: str, y: float, foot: str, roll_axis: str, short: float = 0.0, ankle_roll: bool = True) -> str:
+    """A 6-joint leg (hip yaw, roll, pitch, knee, ankle pitch, roll) hanging from the waist at lateral offset y;
+    without ``ankle_roll`` 5 joints, the foot on the ankle pitch (its body and the foot's as one, 1 kg)."""
     def frc(limit: int) -> str:
         return f'actuatorfrcrange="-{limit} {limit}"'
 
-    foot_body = body(f"{s}_foot", f"{s}_ankle_roll", "1 0 0", "-0.5 0.5", 0.8, "0.02 0 -0.03", "0.002 0.004 0.004",
-                     FEET[foot].format(s=s), extra=frc(40))
-    ankle = body(f"{s}_ankle", f"{s}_ankle_pitch", "0 1 0", "-1 1", 0.2, "0 0 0", "0.0002 0.0002 0.0002", foot_body,
-                 pos="0 0 -0.3", extra=frc(50))
+    if ankle_roll:
+        foot_body = body(f"{s}_foot", f"{s}_ankle_roll", "1 0 0", "-0.5 0.5", 0.8, "0.02 0 -0.03",
+                         "0.002 0.004 0.004", FEET[foot].format(s=s), extra=frc(40))
+        ankle = body(f"{s}_ankle", f"{s}_ankle_pitch", "0 1 0", "-1 1", 0.2, "0 0 0", "0.0002 0.0002 0.0002",
+                     foot_body, pos="0 0 -0.3", extra=frc(50))
+    else:
+        ankle = body(f"{s}_ankle", f"{s}_ankle_pitch", "0 1 0", "-1 1", 1.0, "0.02 0 -0.03", "0.002 0.004 0.004",
+                     FEET[foot].format(s=s), pos="0 0 -0.3", extra=frc(50))
     shin = body(f"{s}_shin", f"{s}_knee", "0 1 0", "0 2.2", 2.0, "0 0 -0.15", "0.02 0.02 0.002",
                 '<geom type="capsule" fromto="0 0 -0.02 0 0 -0.26" size="0.035"/>' + ankle, pos=f"0 0 {-0.3 + short}",
                 extra=frc(100))
@@ -114,16 +119,18 @@ def arm(s: str, y: float) -> str:
 
 def biped_xml(*, foot: str = "box", floor: bool = True, keyframe: bool = True, freejoint: bool = True,
               legs: tuple[str, ...] = ("left", "right"), right_short: float = 0.0, waist: float = 0.0,
-              collide: bool = True) -> str:
-    """A 20 kg humanoid: torso with a head (neck yaw) and two 2-joint arms, a waist (yaw) carrying two 6-joint legs.
-    The right hip roll's axis points the other way (-x), as some models have it. Torque limits: the legs' from
-    actuatorfrcrange, the arms' and neck's from motors' ctrlrange, the waist's from a position actuator's
-    forcerange × gear."""
+              collide: bool = True, ankle_roll: bool = True) -> str:
+    """A 20 kg humanoid: torso with a head (neck yaw) and two 2-joint arms, a waist (yaw) carrying two 6-joint legs
+    (``ankle_roll`` false: 5-joint legs, as Unitree H1's). The right hip roll's axis points the other way (-x), as
+    some models have it. Torque limits: the legs' from actuatorfrcrange, the arms' and neck's from motors' ctrlrange,
+    the waist's from a position actuator's forcerange × gear."""
     sides = {"left": 0.09, "right": -0.09}
     axes = {"left": "1 0 0", "right": "-1 0 0"}
-    legs_xml = "".join(leg(s, sides[s], foot, axes[s], right_short if s == "right" else 0.0) for s in legs)
+    legs_xml = "".join(leg(s, sides[s], foot, axes[s], right_short if s == "right" else 0.0, ankle_roll)
+                       for s in legs)
+    pose = "0 0 -0.3 0.6 -0.3" + (" 0" if ankle_roll else "")
     key = (f'<keyframe><key name="stand" qpos="0 0 0.9 1 0 0 0  0  0.3 -0.5 0.3 -0.5  {waist}  '
-           '0 0 -0.3 0.6 -0.3 0  0 0 -0.3 0.6 -0.3 0"/></keyframe>') if keyframe and len(legs) == 2 else ""
+           f'{pose}  {pose}"/></keyframe>') if keyframe and len(legs) == 2 else ""
     return textwrap.dedent(f"""\
         <mujoco model="Test Biped">
           <compiler angle="radian" autolimits="true"/>

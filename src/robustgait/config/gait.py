@@ -222,6 +222,9 @@ IMPACT_TANGENTIAL_FROUDE = 0.05
 # a robot spec's gait_quality.pelvis_angular_velocity when it sets none: × √(g / l) (1.5 rad/s at a 0.92 m leg,
 # 1.9 rad/s at a 0.55 m leg)
 PELVIS_RATE_FROUDE = 0.44
+# legs without an ankle roll land flat only under parallel legs: the step width must be the posture's sole spacing
+# to within this [m] (a pelvis level at touchdown; docs/robots.md, "Legs without an ankle roll")
+PARALLEL_LEGS_WIDTH_TOLERANCE = 0.001
 
 
 def relative_generation_defaults(scale: RobotScale) -> dict[str, Any]:

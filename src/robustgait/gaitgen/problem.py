@@ -43,7 +43,6 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import casadi as cs
-import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
@@ -55,6 +54,7 @@ from robustgait.dynamics import Dynamics, foot_frame, impact_residual
 from robustgait.errors import RobustGaitError
 from robustgait.gait import BEZIER_DEGREE
 from robustgait.robots import GaitQuality, Robot
+from robustgait.robots.legs import axis_kinds
 
 FloatArray = NDArray[np.float64]
 U_SCALE = 100.0
@@ -106,15 +106,12 @@ def double_support_free_joints(robot: Robot, side: str, names: tuple[str, ...] |
         if len(names) != 4 or missing:
             raise RobustGaitError(f"ds_free_joints must name 4 actuated joints, got {list(names)}")
         return [spec.joints.index(n) for n in names]
-    d = mujoco.MjData(m)
-    mujoco.mj_kinematics(m, d)
-    body = int(m.geom_bodyid[robot.sole_geom_id[side]])
-    chain: list[int] = []
-    while body != robot.base_body_id:
-        chain += [int(m.body_jntadr[body]) + k for k in range(int(m.body_jntnum[body]))]
-        body = int(m.body_parentid[body])
-    chain.reverse()  # hip to ankle
-    kinds = [("xyz")[int(np.argmax(np.abs(d.xaxis[j])))] for j in chain]
+    chain = list(robot.leg_joints[side])
+    if robot.ankle_rolls[side] is None:
+        raise RobustGaitError(f"the {side} leg ({', '.join(m.joint(j).name for j in chain)}) has no ankle roll: "
+                              "multi-contact gaits roll the heel's edge flat with it; generate flat-foot gaits "
+                              "(domains flat)")
+    kinds = list(axis_kinds(m, tuple(chain)))
     rolls = [j for j, k in zip(chain, kinds, strict=True) if k == "x"]
     yaws = [j for j, k in zip(chain, kinds, strict=True) if k == "z"]
     pitches = [j for j, k in zip(chain, kinds, strict=True) if k == "y"]
@@ -543,7 +540,11 @@ class GaitProblem:
         if i == n - 1:
             L, W = self._length, self._width
             if not multi:
-                self._add("landing_position", psw - cs.vertcat(L, side_sign * W, 0.0), 0.0, 0.0)
+                import os
+                if os.environ.get("RG_NOROLL"):
+                    self._add("landing_position", (psw - cs.vertcat(L, side_sign * W, 0.0))[[0, 2]], 0.0, 0.0)
+                else:
+                    self._add("landing_position", psw - cs.vertcat(L, side_sign * W, 0.0), 0.0, 0.0)
                 self._add("landing_orientation", cs.vertcat(Hsw[1, 0], Hsw[2, 0], Hsw[2, 1]), 0.0, 0.0)
                 Jsw = self._jac[(sw, "sole")](H, s)
                 ang = Jsw[3:, :] @ nu

@@ -13,7 +13,7 @@ from scipy.optimize import least_squares
 
 from robustgait.bezier import bernstein_basis, bezier, bezier_derivative, bezier_derivative_coeffs
 from robustgait.config import GaitParams, GenerationConfig
-from robustgait.config.gait import reach_problem
+from robustgait.config.gait import PARALLEL_LEGS_WIDTH_TOLERANCE, reach_problem
 from robustgait.domains import Contact
 from robustgait.dynamics import Dynamics, foot_frame
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait, State
@@ -305,7 +305,12 @@ class GaitGenerator:
             return (f"step width {params.step_width:g} m makes the feet collide: the soles are "
                     f"{2 * prob.half_width:.3f} m wide and need a {cfg.scaled('foot_gap'):g} m gap (width ≥ "
                     f"{min_width:.3f} m)")
-        return reach_problem(params, self.robot.scale, cfg)
+        robot = self.robot
+        if not robot.has_ankle_roll and abs(params.step_width - robot.sole_spacing) > PARALLEL_LEGS_WIDTH_TOLERANCE:
+            return (f"step width {params.step_width:g} m: the legs have no ankle roll, so both feet are flat only "
+                    f"under parallel legs, {robot.sole_spacing:.4g} m apart (the posture's sole spacing): set "
+                    f"step_width to it")
+        return reach_problem(params, robot.scale, cfg)
 
     def solve(self, params: GaitParams, warm_start: Gait | None = None) -> GaitGenResult:
         """Solve for one set of essential constraints; never raises on infeasible input or solver failure:

@@ -205,7 +205,8 @@ def advice(robot: Robot, gait: Gait, config: Config, cause: str, share: float | 
                        f"{gait.step_duration:.3g} s)")
         else:
             out.append("shorter, slower steps (--step-length, --step-duration)")
-        out.append("a wider step (--step-width)")
+        if robot.has_ankle_roll:  # without one the legs fix the width (docs/robots.md)
+            out.append("a wider step (--step-width)")
     if "torque" in cause:
         out.append("a slower gait or lower servo gains ([controller] in the robot spec)")
     if not out:

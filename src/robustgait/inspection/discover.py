@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from robustgait.errors import input_error
 from robustgait.inspection.model import RobotModel, geom_bottom
+from robustgait.robots.legs import ankle_roll_joint
 from robustgait.robots.soles import GEOM_TYPES, SOLE_TYPES, article, foot_up, geom_sole_points, on_sole
 
 SIDES = ("left", "right")
@@ -57,11 +58,13 @@ class FoundSole:
 
 @dataclass(frozen=True)
 class Leg:
-    """One leg: its joints from the branch body down to the foot (chain order) and its sole."""
+    """One leg: its joints from the branch body down to the foot (chain order), its sole and its ankle roll joint
+    (:func:`robustgait.robots.legs.ankle_roll_joint`; None: the leg has none)."""
 
     side: str
     joints: tuple[int, ...]
     sole: FoundSole
+    ankle_roll: int | None = None
 
     @property
     def foot(self) -> int:
@@ -91,7 +94,9 @@ class Legs:
     """Both legs, the body where their chains branch, and the lengths the scaling rules use (posture and zero
     configuration, [m]): ``standing_height`` base origin above the soles in the posture; ``leg_length`` the
     vertical distance from the first leg joint to the sole with every joint at 0; ``hip_spacing`` the lateral
-    distance between the two legs' first joints."""
+    distance between the two legs' first joints; ``sole_spacing`` the lateral distance between the soles' centres in
+    the posture; ``upper_body_height`` the height of the centre of mass of everything but the legs above the legs'
+    first joints in the posture."""
 
     left: Leg
     right: Leg
@@ -99,6 +104,13 @@ class Legs:
     standing_height: float
     leg_length: float
     hip_spacing: float
+    sole_spacing: float = 0.0
+    upper_body_height: float = 0.0
+
+    @property
+    def ankle_roll(self) -> bool:
+        """Whether both legs have an ankle roll."""
+        return self.left.ankle_roll is not None and self.right.ankle_roll is not None
 
     def __getitem__(self, side: str) -> Leg:
         return self.left if side == "left" else self.right
@@ -284,7 +296,8 @@ def find_legs(robot: RobotModel, foot_level: float, sole_tolerance: float) -> Le
         if not joints:
             raise input_error(src, f"the {side} foot '{robot.body_name(foot)}' has no joint between it and "
                               f"'{robot.body_name(branch)}', where the legs branch")
-        legs[side] = Leg(side, joints, find_sole(robot, d, foot, side, sole_tolerance))
+        legs[side] = Leg(side, joints, find_sole(robot, d, foot, side, sole_tolerance),
+                         ankle_roll_joint(robot.model, joints))
         _one_foot_body(robot, d, legs[side], int(robot.model.jnt_bodyid[joints[0]]), sole_tolerance)
     if len(legs["left"].joints) != len(legs["right"].joints):
         raise input_error(src, f"the legs differ: {len(legs['left'].joints)} joints on the left, "
@@ -298,7 +311,27 @@ def find_legs(robot: RobotModel, foot_level: float, sole_tolerance: float) -> Le
     if length <= 0.0:
         raise input_error(src, f"the first leg joint '{robot.joint_name(legs['left'].joints[0])}' is not above the "
                           "sole with every joint at 0: is the base's z axis up?")
-    return Legs(legs["left"], legs["right"], branch, height, length, float(abs(hips[0][1] - hips[1][1])))
+    centres = [_sole_centre(m, d, legs[s].sole.geoms) for s in SIDES]
+    return Legs(legs["left"], legs["right"], branch, height, length, float(abs(hips[0][1] - hips[1][1])),
+                sole_spacing=float(abs(centres[0][1] - centres[1][1])),
+                upper_body_height=_upper_body_height(robot, d, legs))
+
+
+def _sole_centre(m: mujoco.MjModel, d: mujoco.MjData, geoms: tuple[int, ...]) -> NDArray[np.float64]:
+    """The centre (3,) of the rectangle spanning a sole's ground points at the kinematics ``d`` (world frame)."""
+    pts = np.vstack([footprint_points(m, d, g) for g in geoms])
+    return np.asarray((pts.min(axis=0) + pts.max(axis=0)) / 2.0)
+
+
+def _upper_body_height(robot: RobotModel, d: mujoco.MjData, legs: dict[str, Leg]) -> float:
+    """How high the centre of mass of every body but the legs' lies above the legs' first joints [m], at ``d``."""
+    m = robot.model
+    leg_bodies = {b for leg in legs.values() for b in robot.subtree(int(m.jnt_bodyid[leg.joints[0]]))}
+    upper = [b for b in robot.subtree(robot.base) if b not in leg_bodies]
+    mass = np.array([m.body_mass[b] for b in upper])
+    com = (mass[:, None] * np.array([d.xipos[b] for b in upper])).sum(axis=0) / max(float(mass.sum()), 1e-12)
+    hips = np.mean([d.xanchor[leg.joints[0]][2] for leg in legs.values()])
+    return float(com[2] - hips)
 
 
 def torque_limits(robot: RobotModel) -> dict[int, TorqueLimit]:

@@ -27,7 +27,10 @@ GAIT_AXES = ("step_length", "step_duration", "step_width", "step_height")
 class RobotSize:
     """What the rules scale with: ``leg_length`` l [m] (first leg joint above the sole, straight legs),
     ``standing_height`` h [m] (base above the soles in the posture), ``mass`` [kg], ``gravity`` |g| [m/s²],
-    ``hip_spacing`` [m] (lateral distance of the legs' first joints), ``sole_length`` and ``sole_width`` [m]."""
+    ``hip_spacing`` [m] (lateral distance of the legs' first joints), ``sole_length`` and ``sole_width`` [m];
+    ``ankle_roll``: both legs have one; ``sole_spacing`` [m] (lateral distance of the soles' centres in the posture)
+    and ``upper_body_height`` [m] (the centre of mass of all but the legs above the legs' first joints), which set
+    the gait of legs without an ankle roll (:func:`hip_roll_angle`)."""
 
     leg_length: float
     standing_height: float
@@ -36,6 +39,9 @@ class RobotSize:
     hip_spacing: float
     sole_length: float
     sole_width: float
+    ankle_roll: bool = True
+    sole_spacing: float = 0.0
+    upper_body_height: float = 0.0
 
     @property
     def robot_scale(self) -> RobotScale:
@@ -64,9 +70,25 @@ def step_duration(size: RobotSize, rules: ScaleRules, multicontact: bool = False
 
 def step_width(size: RobotSize, rules: ScaleRules) -> float:
     """Default step width = the hip spacing (feet under the hips), at least sole width + c · the feet's clearance
-    (``generate.foot_gap``'s robot-relative rule) [m]."""
+    (``generate.foot_gap``'s robot-relative rule) [m]; legs without an ankle roll: the soles' spacing in the posture,
+    the only width at which both feet land flat under a level pelvis (:mod:`robustgait.robots.legs`)."""
+    if not size.ankle_roll:
+        return size.sole_spacing
     gap = float(relative_generation_defaults(size.robot_scale)["foot_gap"])
     return max(size.hip_spacing, size.sole_width + rules.step_width_gap * gap)
+
+
+def hip_roll_angle(size: RobotSize) -> float:
+    """φ = atan((w/2) / h_u) [rad] (w the soles' spacing, h_u the upper body's height over the hips): the pelvis roll
+    that carries the upper body's centre of mass over the stance foot. Legs without an ankle roll move their centre
+    of pressure sideways only so (the hip strategy): their gait-quality bound on the pelvis roll."""
+    return math.atan2(size.sole_spacing / 2.0, max(size.upper_body_height, 1e-9))
+
+
+def pelvis_roll_bound(size: RobotSize, rules: ScaleRules) -> float:
+    """The gait-quality bound on the pelvis roll [rad]: exo's (``robot.scale.pelvis_roll``), or for legs without an
+    ankle roll :func:`hip_roll_angle`, if larger."""
+    return rules.pelvis_roll if size.ankle_roll else max(rules.pelvis_roll, hip_roll_angle(size))
 
 
 def step_height(size: RobotSize, rules: ScaleRules) -> float:
@@ -75,8 +97,13 @@ def step_height(size: RobotSize, rules: ScaleRules) -> float:
 
 
 def angular_velocity_bound(size: RobotSize, rules: ScaleRules) -> float:
-    """Bound on each component of the pelvis angular velocity = c · √(g/l) [rad/s]."""
-    return rules.angular_velocity * math.sqrt(size.gravity / size.leg_length)
+    """Bound on each component of the pelvis angular velocity = c · √(g/l) [rad/s]; for legs without an ankle roll at
+    least 2π φ / T (φ the :func:`pelvis_roll_bound`, T the default step duration): the pelvis rolls over each stance
+    foot and back within a step."""
+    rate = rules.angular_velocity * math.sqrt(size.gravity / size.leg_length)
+    if size.ankle_roll:
+        return rate
+    return max(rate, 2.0 * math.pi * pelvis_roll_bound(size, rules) / step_duration(size, rules))
 
 
 def joint_velocity_bound(size: RobotSize, rules: ScaleRules) -> float:
@@ -157,8 +184,9 @@ class Scaled:
 
     gait: dict[str, float]
     action_space: dict[str, tuple[float, float, float]]
-    multicontact_action_space: dict[str, tuple[float, float, float]]
+    multicontact_action_space: dict[str, tuple[float, float, float]] | None
     angular_velocity: float
+    pelvis_roll: float
     joint_velocity: float
     pelvis_height: tuple[float, float]
     fall_height: float
@@ -174,17 +202,22 @@ def sig(x: float, digits: int = 3) -> float:
 
 def scale(size: RobotSize, rules: ScaleRules) -> Scaled:
     """All the rules applied to a robot (values rounded to 3 significant digits)."""
+    width = sig(step_width(size, rules), 3 if size.ankle_roll else 4)  # parallel legs: to 0.1 mm at a 0.2 m width
     gait = {"step_length": sig(step_length(size, rules)), "step_duration": sig(step_duration(size, rules)),
-            "step_width": sig(step_width(size, rules)), "step_height": sig(step_height(size, rules))}
+            "step_width": width, "step_height": sig(step_height(size, rules))}
     mc_gait = {**gait, "step_duration": sig(step_duration(size, rules, multicontact=True))}
     flat = {a: axis_range(a, gait[a], duration_rule(size, rules) if a == "step_duration"
                           else getattr(rules, f"action_{a}")) for a in GAIT_AXES}
-    mc = {a: axis_range(a, mc_gait[a], getattr(rules, f"multicontact_{a}")) for a in GAIT_AXES}
-    mc["rolling_fraction"] = rules.rolling_fraction
+    mc: dict[str, tuple[float, float, float]] | None = None
+    if size.ankle_roll:  # multi-contact gaits roll the heel's edge flat with the ankle roll
+        mc = {a: axis_range(a, mc_gait[a], getattr(rules, f"multicontact_{a}")) for a in GAIT_AXES}
+        mc["rolling_fraction"] = rules.rolling_fraction
+    else:  # the feet land flat at one width only: the axis holds it
+        flat["step_width"] = (width, width, flat["step_width"][2])
     band = pelvis_height_band(size, rules)
     return Scaled(
         gait=gait, action_space=flat, multicontact_action_space=mc,
-        angular_velocity=sig(angular_velocity_bound(size, rules)),
+        angular_velocity=sig(angular_velocity_bound(size, rules)), pelvis_roll=sig(pelvis_roll_bound(size, rules)),
         joint_velocity=sig(joint_velocity_bound(size, rules)),
         pelvis_height=(sig(band[0]), sig(band[1])),
         fall_height=sig(fall_height(size, rules)),

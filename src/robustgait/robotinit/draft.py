@@ -4,7 +4,8 @@ gains and scaled values, gathered in a :class:`Draft` that :mod:`.writer` render
 Every refusal is a one-line :class:`~robustgait.errors.RobustGaitError` raised before anything is written: no
 free joint (a URDF gets one), one leg, no sole, a sole that is not a box or a set of spheres/capsules/cylinders/
 boxes/meshes, a mirror that does not reflect the model, a leg whose joints' names say the other side. A sole that its
-model tilts in the posture (a foot plate's geoms rotated 90.5°) is levelled by the leg's ankle (:func:`level_soles`).
+model tilts in the posture (a foot plate's geoms rotated 90.5°) is levelled by the leg's ankle, and a centre of mass
+at the soles' edge is brought over them (:mod:`.posture`).
 """
 
 from __future__ import annotations
@@ -43,10 +44,11 @@ from robustgait.inspection.gains import (
     servo_timestep,
 )
 from robustgait.inspection.mirror import Mirror, Residual, find_mirror, fk_residual, name_partner
-from robustgait.inspection.model import RobotModel, clip_to_range, open_model
-from robustgait.inspection.scale import RobotSize, Scaled, scale
+from robustgait.inspection.model import RobotModel, open_model
+from robustgait.inspection.scale import RobotSize, Scaled, hip_roll_angle, scale
+from robustgait.robotinit.posture import centre_over_soles, level_soles, symmetric_angles
 from robustgait.robots.model import mass_matrix
-from robustgait.robots.soles import GEOM_TYPES, can_touch, sole_slopes
+from robustgait.robots.soles import GEOM_TYPES, can_touch
 
 if TYPE_CHECKING:
     from robustgait.robotinit.timestep import TimestepChoice
@@ -62,7 +64,8 @@ class Draft:
     order (the left leg's from the branch down, then the right leg's, then — ``--plan all`` — the others in model
     order); ``held``: the others. ``angles``: every joint's posture angle, made left/right symmetric
     (``asymmetry``: the largest change that took [rad]) and with its soles level (``levelled``: the largest ankle
-    change that took [rad], :func:`level_soles`). ``torque``: each joint's limit and its source (estimated
+    change that took [rad], :func:`~.posture.level_soles`), its mass over the soles (``centred``: the legs' lean that
+    took [rad], :func:`~.posture.centre_over_soles`). ``torque``: each joint's limit and its source (estimated
     where the model has none). ``timestep``: the spec's physics step (:func:`servo_timestep`; ``servo_frequency``
     [Hz]: the fastest servo's natural frequency on its swing inertia, before any lowering for stability).
     ``height``: the base's height above the floor standing in the posture [m].
@@ -81,6 +84,7 @@ class Draft:
     angles: dict[int, float]
     asymmetry: float
     levelled: float
+    centred: float
     torque: dict[int, TorqueLimit]
     loads: dict[int, JointLoad]
     gains: dict[int, PDGains]
@@ -131,54 +135,6 @@ def _floor_collides(robot: RobotModel, floor: Floor, legs: Legs) -> None:
             raise input_error(robot.path, f"the floor '{floor.name or 'unnamed plane'}' does not collide with the "
                               f"{side} sole's geoms (contype/conaffinity, or a <pair>): the robot would fall "
                               "through it")
-
-
-def symmetric_angles(robot: RobotModel, mirror: Mirror) -> tuple[dict[int, float], float]:
-    """The posture made left/right symmetric — a_j = (q_j + s_j q_partner) / 2, clipped to the joint's range — and
-    the largest change [rad] (a keyframe of a walking robot is usually symmetric: 0)."""
-    q = robot.angles
-    out = {j: clip_to_range(robot.model, j, (q[j] + mirror.sign[j] * q[mirror.partner[j]]) / 2) for j in q}
-    return out, max((abs(out[j] - q[j]) for j in q), default=0.0)
-
-
-# iterations of the ankle's Gauss-Newton levelling, its finite-difference step [rad] and the slope it stops at (a
-# slope below it, a model file's round-off, is left alone)
-LEVEL_ITERATIONS, LEVEL_STEP, LEVEL_SLOPE = 8, 1e-6, 1e-5
-
-
-def sole_tilt(robot: RobotModel, legs: Legs, side: str, angles: dict[int, float]) -> NDArray[np.float64]:
-    """The slopes (2,) of a sole's plane in the world (:func:`robustgait.robots.soles.sole_slopes` over the ground
-    points of its geoms, :func:`~.discover.footprint_points`, along x and y) with the joints at ``angles``."""
-    d = robot.kinematics(robot.qpos(angles))
-    pts = np.vstack([footprint_points(robot.model, d, g) for g in legs[side].sole.geoms])
-    return np.array(sole_slopes(pts[:, 0], pts[:, 1], pts[:, 2]))
-
-
-def level_soles(robot: RobotModel, legs: Legs, mirror: Mirror) -> float:
-    """Level the soles in the posture: the left leg's last two joints (its ankle) turned by Gauss-Newton on the slopes
-    of :func:`sole_tilt` (least squares: a leg whose ankle cannot level every slope levels what it can), the right
-    leg's mirrored onto it (the posture stays symmetric), each clipped to its range. Edits ``robot.angles``; returns
-    the largest change [rad] (0 for a model whose soles are level)."""
-    angles = dict(robot.angles)
-    ankle = legs.left.joints[-2:]
-    turned = False
-    for _ in range(LEVEL_ITERATIONS):
-        s = sole_tilt(robot, legs, "left", angles)
-        if float(np.abs(s).max()) <= LEVEL_SLOPE:
-            break
-        jac = np.column_stack([(sole_tilt(robot, legs, "left", angles | {j: angles[j] + LEVEL_STEP}) - s)
-                               / LEVEL_STEP for j in ankle])
-        step = np.linalg.lstsq(jac, -s, rcond=None)[0]
-        for j, dq in zip(ankle, step, strict=True):
-            angles[j] = clip_to_range(robot.model, j, angles[j] + float(dq))
-        turned = True
-    if not turned:  # level: the symmetric posture stays as it is (re-mirroring could move a clipped partner)
-        return 0.0
-    for j in ankle:
-        angles[mirror.partner[j]] = clip_to_range(robot.model, mirror.partner[j], mirror.sign[j] * angles[j])
-    change = max(abs(angles[j] - robot.angles[j]) for j in angles)
-    robot.angles = angles
-    return change
 
 
 def coupled_gains(robot: RobotModel, qpos: NDArray[np.float64], gains: dict[int, PDGains], dt: float,
@@ -256,6 +212,9 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     levelled = level_soles(robot, legs, mirror)
     if levelled > 0.0:
         legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the levelled posture
+    centred = centre_over_soles(robot, legs, mirror)
+    if centred > 0.0:
+        legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the leaned posture
     angles = robot.angles
     floor = find_floor(robot)
     _floor_collides(robot, floor, legs)
@@ -304,15 +263,26 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
                      "(closed linkages?): robustgait's servos drive every joint on its own; check that they agree")
     if asymmetry > 0.0:
         notes.append(f"the posture was not left/right symmetric: made symmetric (largest change {asymmetry:.3g} rad)")
+    if centred > 0.0:
+        notes.append(f"the centre of mass stood near the soles' edge in the posture: the legs leaned by {centred:.3g} "
+                     "rad at the ankles (the hips turned back as much) to bring it over the middle of the soles")
     if levelled > 0.0:
         notes.append(f"the soles were not level in the posture: each ankle turned by up to {levelled:.3g} rad to "
                      "level them")
     size = RobotSize(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,
                      gravity=gravity, hip_spacing=legs.hip_spacing,
-                     sole_length=legs.left.sole.length, sole_width=legs.left.sole.width)
+                     sole_length=legs.left.sole.length, sole_width=legs.left.sole.width, ankle_roll=legs.ankle_roll,
+                     sole_spacing=legs.sole_spacing, upper_body_height=legs.upper_body_height)
+    if not legs.ankle_roll:
+        last = robot.joint_name(legs.left.joints[-1])
+        notes.append(f"the legs have no ankle roll (the left leg ends at {last}): a flat stance foot cannot move the "
+                     "centre of pressure sideways by itself, so the hips balance sideways (the pelvis may roll "
+                     f"{hip_roll_angle(size):.3g} rad, carrying the upper body over the stance foot), both feet land "
+                     f"flat only under parallel legs (step width = the soles' spacing {legs.sole_spacing:.4g} m, not "
+                     "searched), and gaits are flat-foot (multi-contact rolls the heel with an ankle roll)")
     return Draft(robot=robot, config=config, name=config.name or spec_name(robot), legs=legs, floor=floor,
                  mirror=mirror, residual=residual, planned=planned, held=held, angles=angles, asymmetry=asymmetry,
-                 levelled=levelled,
+                 levelled=levelled, centred=centred,
                  torque=torque, loads=loads, gains=gains, size=size, scaled=scale(size, config.scale),
                  timestep=timestep, servo_frequency=servo_frequency, integrator=integrator, radius=radius,
                  height=height, notes=notes)

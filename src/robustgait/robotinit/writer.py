@@ -279,13 +279,19 @@ def _scaled(draft: Draft) -> list[str]:
         *_sim(draft),
         "", "[gait_quality]",
         "# angles: exo's hand-tuned bounds (an angle has no scale); rates ∝ √(g/l), heights ∝ h (robot.scale)",
-        f"pelvis_roll = {num(rules.pelvis_roll)}  # exo's (robot.scale.pelvis_roll)",
+        f"pelvis_roll = {num(s.pelvis_roll, 3)}  # "
+        + ("exo's (robot.scale.pelvis_roll)" if size.ankle_roll else
+           f"no ankle roll: atan((w/2) / h_u) = atan({size.sole_spacing / 2:.3g} / {size.upper_body_height:.3g}), the "
+           "roll that carries the upper body's centre of mass over the stance foot (the hips balance sideways)"),
         f"pelvis_yaw = {num(rules.pelvis_yaw)}  # exo's (robot.scale.pelvis_yaw)",
         f"pelvis_pitch = [{num(rules.pelvis_pitch[0])}, {num(rules.pelvis_pitch[1])}]  # exo's "
         "(robot.scale.pelvis_pitch)",
         f"pelvis_height = [{num(s.pelvis_height[0], 3)}, {num(s.pelvis_height[1], 3)}]  # "
         f"[{rules.pelvis_height[0]:g}, {rules.pelvis_height[1]:g}] × h",
-        f"pelvis_angular_velocity = {num(s.angular_velocity, 3)}  # {rules.angular_velocity:g} × {rate}",
+        f"pelvis_angular_velocity = {num(s.angular_velocity, 3)}  # "
+        + (f"{rules.angular_velocity:g} × {rate}" if size.ankle_roll else
+           "no ankle roll: 2π × pelvis_roll / the default step duration (the pelvis rolls over each stance foot "
+           f"and back within a step), at least {rules.angular_velocity:g} × {rate}"),
         f"swing_tilt = {num(rules.swing_tilt)}  # exo's (robot.scale.swing_tilt)",
         f"swing_yaw = {num(rules.swing_yaw)}  # exo's (robot.scale.swing_yaw)",
         f"joint_velocity = {num(s.joint_velocity, 3)}  # {rules.joint_velocity:g} × {rate}",
@@ -294,10 +300,14 @@ def _scaled(draft: Draft) -> list[str]:
         "(robot.scale.action_*)" + ("; narrow soles: steps end by robot.scale.narrow_step_duration × √(l/g)"
                                     if narrow_soles(draft.size) else ""),
         *(f"{a} = {axis(s.action_space[a])}" for a in GAIT_AXES),
-        "", "[action_space.multicontact]",
-        "# multi-contact studies (robot.scale.multicontact_*, rolling_fraction)",
-        *(f"{a} = {axis(v)}" for a, v in s.multicontact_action_space.items()),
     ]
+    if s.multicontact_action_space is None:
+        lines += ["# step_width: one value, the soles' spacing (no ankle roll); no [action_space.multicontact]: "
+                  "multi-contact gaits roll the heel's edge flat with an ankle roll, which these legs lack"]
+    else:
+        lines += ["", "[action_space.multicontact]",
+                  "# multi-contact studies (robot.scale.multicontact_*, rolling_fraction)",
+                  *(f"{a} = {axis(v)}" for a, v in s.multicontact_action_space.items())]
     return lines
 
 
@@ -306,7 +316,9 @@ def _posture(draft: Draft) -> list[str]:
     src = f"the keyframe '{r.keyframe}'" if r.keyframe is not None else "every joint at 0 clipped to its range"
     lines = ["", "[posture]", f"# cold-start posture of gait generation [rad]: {src}"
              + (" made left/right symmetric" if draft.asymmetry > 0 else "")
-             + (", its ankles turned to level the soles" if draft.levelled > 0 else "")]
+             + (", its ankles turned to level the soles" if draft.levelled > 0 else "")
+             + (", its legs leaned at the ankles to bring the centre of mass over the soles" if draft.centred > 0
+                else "")]
     lines += [f"{key(r.joint_name(j))} = {angle(draft.angles[j])}" for j in draft.planned]
     return lines
 
@@ -335,6 +347,9 @@ def _gait(draft: Draft) -> list[str]:
     c = duration_constant(size, rules)
     width_rule = (f"the hip spacing {size.hip_spacing:.3g} m" if s.gait["step_width"] == sig(size.hip_spacing)
                   else f"sole width + {rules.step_width_gap:g} × foot_gap (wider than the hips)")
+    if not size.ankle_roll:
+        width_rule = ("the soles' spacing in the posture: without an ankle roll both feet land flat only under "
+                      "parallel legs (gait generate refuses another width)")
     return [
         "", "[gait]",
         "# the robot's default gait (what `gait generate` uses without flags), scaled with the leg length l",
@@ -342,7 +357,7 @@ def _gait(draft: Draft) -> list[str]:
         f"step_duration = {num(s.gait['step_duration'], 3)}  # {c:g} × √(l/g) = {c:g} × {t:.3g} s (flat-foot"
         + ("; narrow soles: robot.scale.step_duration_narrow" if narrow_soles(size) else "")
         + f"; multi-contact: {rules.step_duration_multicontact:g} × √(l/g))",
-        f"step_width = {num(s.gait['step_width'], 3)}  # {width_rule}",
+        f"step_width = {num(s.gait['step_width'], 3 if size.ankle_roll else 4)}  # {width_rule}",
         f"step_height = {num(s.gait['step_height'], 3)}  # {rules.step_height:g} × l",
     ]
 

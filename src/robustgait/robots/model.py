@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from robustgait.config import GaitParams, RobotScale
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.robots.held import weld_joints
+from robustgait.robots.legs import ankle_roll_joint, foot_chain
 from robustgait.robots.solebox import SoleBox, sole_box
 from robustgait.robots.soles import ResolvedSole, resolve_floor, resolve_soles
 from robustgait.robots.spec import SIDES, RobotSpec
@@ -268,6 +269,35 @@ class Robot:
         """Each side's sole box as the pipeline reads it (:class:`~robustgait.robots.solebox.SoleBox`)."""
         return {side: sole_box(self.model, self.sole_geom_id[side], self.spec.source or self.spec.mjcf)
                 for side in SIDES}
+
+    @cached_property
+    def leg_joints(self) -> dict[str, tuple[int, ...]]:
+        """Each side's leg joints (model joint ids), hip to foot: the joints between the base and the sole's body."""
+        m = self.model
+        return {side: foot_chain(m, int(m.geom_bodyid[self.sole_geom_id[side]]), self.base_body_id)
+                for side in SIDES}
+
+    @cached_property
+    def ankle_rolls(self) -> dict[str, int | None]:
+        """Each side's ankle roll joint (model joint id; :func:`~robustgait.robots.legs.ankle_roll_joint`), None for
+        a leg without one."""
+        return {side: ankle_roll_joint(self.model, joints) for side, joints in self.leg_joints.items()}
+
+    @property
+    def has_ankle_roll(self) -> bool:
+        """Whether both legs have an ankle roll (``docs/robots.md``, "Legs without an ankle roll")."""
+        return all(j is not None for j in self.ankle_rolls.values())
+
+    @cached_property
+    def sole_spacing(self) -> float:
+        """The lateral distance [m] between the two sole boxes' bottom centres in the spec's posture, the base at the
+        origin and level: where flat feet stand under a level pelvis — for legs without an ankle roll, the only
+        step width at which both land flat with the pelvis level."""
+        d = mujoco.MjData(self.model)
+        d.qpos[self.qpos_idx] = self.spec.posture
+        mujoco.mj_kinematics(self.model, d)
+        left, right = (self.sole_boxes[s].bottom_centre(d) for s in SIDES)
+        return float(abs(left[1] - right[1]))
 
     @cached_property
     def scale(self) -> RobotScale:
