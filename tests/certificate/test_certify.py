@@ -116,11 +116,11 @@ def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
     qvel[3] = 6.0
     tipped = dataclasses.replace(stand, initial_state=dataclasses.replace(stand.initial_state, qvel=qvel))
     fell = certify_gait(exo, tipped, uniform())
-    assert fell.status == Status.FELL and fell.r_star == 0 and fell.vacuous
+    assert fell.status == Status.FELL and fell.value == 0 and fell.vacuous
     assert fell.certificate is None and fell.fixed_point is None and "fell in step 1" in fell.reason
     assert fell.steps_walked == 0
     none = certify_gait(exo, exo_gait, uniform(orbit=NEVER_SETTLES))
-    assert none.status == Status.UNSETTLED and none.r_star == 0 and none.steps_walked == 32
+    assert none.status == Status.UNSETTLED and none.value == 0 and none.steps_walked == 32
     res = json.loads(json.dumps(none.to_dict(), allow_nan=False))
     assert res["status"] == "unsettled" and res["r_star"] == 0 and res["vacuous"] and res["x_star"] is None
     assert res["orbit"]["settled_at_step"] is None and res["orbit"]["steps"] == 32 and res["orbit"]["sigma"] is None
@@ -135,7 +135,7 @@ def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
 
     monkeypatch.setattr(ReducedMap, "__call__", falls_at_x_star)
     unstable = certify_gait(exo, exo_gait, uniform(n_samples=4))
-    assert unstable.status == Status.UNSTABLE_FIXED_POINT and unstable.r_star == 0
+    assert unstable.status == Status.UNSTABLE_FIXED_POINT and unstable.value == 0
     assert unstable.fixed_point is not None and unstable.steps_walked == unstable.orbit.steps
     assert "falls from its own fixed point" in unstable.statement()
 
@@ -312,10 +312,10 @@ def test_stored_gaits_keep_their_r_star_for_seed_0(request, name, method):
                                                  horizon=1))
     assert gc.ok
     if (name, method) in PINNED:
-        assert gc.r_star == pytest.approx(PINNED[(name, method)], abs=1e-6)
+        assert gc.value == pytest.approx(PINNED[(name, method)], abs=1e-6)
     else:
         low, high = SPREAD[(name, method)]
-        assert low - (high - low) <= gc.r_star <= high + (high - low)
+        assert low - (high - low) <= gc.value <= high + (high - low)
 
 
 @pytest.mark.slow  # two certificates of the multi-contact gait
@@ -323,7 +323,7 @@ def test_a_certificate_is_the_same_bits_for_the_same_seed_on_one_machine(exo, ex
     """What is reproducible bit for bit: the same machine, gait and seed give the same certificate."""
     cfg = CertifyConfig(method="uniform", n_samples=40, seed=3, disturbance="state")
     a, b = certify_gait(exo, exo_mc_gait, cfg), certify_gait(exo, exo_mc_gait, cfg)
-    assert a.r_star == b.r_star and a.orbit is not None and b.orbit is not None
+    assert a.value == b.value and a.orbit is not None and b.orbit is not None
     np.testing.assert_array_equal(a.certificate.samples, b.certificate.samples)
     np.testing.assert_array_equal(a.certificate.images, b.certificate.images)
 
@@ -440,7 +440,7 @@ def test_a_verification_replays_its_estimates_exploration(exo, exo_gait):
     assert {k: v for k, v in a.items() if k not in changes} == {k: v for k, v in b.items() if k not in changes}
     # an estimate of another gait (its digest) gives no orbit: searched again, the same, and its exploration replayed
     searched = certify_gait(exo, exo_gait, cfg, explored={**estimate, "gait_digest": "another gait"})
-    assert not searched.replayed_orbit and searched.replayed_samples == 24 and searched.r_star == fresh.r_star
+    assert not searched.replayed_orbit and searched.replayed_samples == 24 and searched.value == fresh.value
     other = certify_gait(exo, exo_gait, dataclasses.replace(cfg, seed=4), explored=estimate, verify=False)
     assert other.replayed_samples == 0 and not other.replayed_orbit
 

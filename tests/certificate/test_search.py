@@ -142,7 +142,7 @@ def test_the_atalante_frost_gait_is_certified(atalante, atalante_gait):
 
     gc = certify_gait(atalante, atalante_gait)
     assert gc.ok, gc.reason
-    assert gc.orbit is not None and gc.orbit.period == 1 and gc.orbit.sigma < 0.02 and gc.r_star > 1.0
+    assert gc.orbit is not None and gc.orbit.period == 1 and gc.orbit.sigma < 0.02 and gc.j_star > 1.0
     assert gc.orbit.probe is not None and gc.orbit.probe.ok
 
 
@@ -161,5 +161,5 @@ def test_a_gait_that_falls_after_245_steps_is_refused(exo, exo_gait):
     res = walk(robot, exo_gait, SimConfig(step_cap=300))
     assert res.fell and res.steps_taken == 245
     gc = certify_gait(robot, exo_gait)
-    assert gc.status == Status.UNSETTLED and "then left that band" in gc.reason and gc.r_star == 0
+    assert gc.status == Status.UNSETTLED and "then left that band" in gc.reason and gc.value == 0
     assert gc.steps_walked < 100

@@ -120,7 +120,7 @@ def _walks_like_an_exoskeleton(robot, gait, max_speed_error=0.03):
 def test_default_gait_walks_and_gets_a_certificate(exo, default):
     _walks_like_an_exoskeleton(exo, default.gait)
     cert = certify_gait(exo, default.gait, CertifyConfig(method="uniform", disturbance="state", n_samples=50))
-    assert cert.ok and np.linalg.norm(cert.fixed_point.omega) <= 1.0 and cert.r_star > 0
+    assert cert.ok and np.linalg.norm(cert.fixed_point.omega) <= 1.0 and cert.value > 0
     # the sequential estimator, small: ε = 0.2 (17 verification samples), 40 exploration samples
     seq = certify_gait(exo, default.gait, CertifyConfig(method="sequential", disturbance="state",
                                                         sequential=SequentialConfig(epsilon=0.2, first_round=50,
@@ -128,7 +128,7 @@ def test_default_gait_walks_and_gets_a_certificate(exo, default):
                                                                                     budget=300)))
     c = seq.certificate
     assert seq.ok and c is not None and 0 < c.r_star <= cert.r_star  # round 1 is the uniform draw above
-    assert c.rounds[0].r_hat == cert.r_star and c.n_inside >= 17
+    assert c.rounds[0].r_hat == cert.value and c.n_inside >= 17
     assert c.violation_bound <= 0.2 or c.budget_exhausted
 
 

@@ -240,7 +240,7 @@ def test_the_narrow_footed_humanoid_is_certified_with_the_defaults(t1_narrow, na
 
     cert = certify_gait(t1_narrow, narrow_gait, Config().certify)
     assert cert.status == "ok", cert.reason
-    assert cert.controller == "pd+hlip" and cert.r_star > 0.5
+    assert cert.controller == "pd+hlip" and cert.value > 0.5
 
 
 @pytest.mark.slow

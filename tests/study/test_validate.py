@@ -43,7 +43,7 @@ def _evaluation(robot, gait, params, certify):  # type: ignore[no-untyped-def]
     ok = gc.ok and w.steps_taken == CAP
     return Evaluation(params=params, status="certified" if ok else "not_certified",
                       reason="" if ok else f"{gc.status}: {gc.reason}", step_cap=CAP,
-                      steps_taken=w.steps_taken, fell=w.fell, certificate_value=float(gc.r_star) if ok else 0.0,
+                      steps_taken=w.steps_taken, fell=w.fell, certificate_value=float(gc.value) if ok else 0.0,
                       certificate=gc.to_dict(samples=True) if ok else None, gait=gait)
 
 

@@ -255,7 +255,7 @@ def test_certificate_ref_round_trip_and_errors(tmp_path, exo, exo_gait, small_ce
     p = tmp_path / "cert.json"
     p.write_text(json.dumps(small_cert.to_dict()))
     ref = CertificateRef.load(p)
-    assert ref.r_star == small_cert.r_star and ref.map == "auto" and dict(ref.orbit)["map"] == "auto"
+    assert ref.value == small_cert.value and ref.map == "auto" and dict(ref.orbit)["map"] == "auto"
     np.testing.assert_allclose(ref.x_star, small_cert.certificate.x_star)
     assert ref.space == "omega" and ref.set == "ball" and ref.horizon == 1
     bad = tmp_path / "bad.json"
@@ -290,7 +290,7 @@ def test_a_push_certificate_with_an_unused_state_choice_still_loads(tmp_path, ex
     p = tmp_path / "push.json"
     p.write_text(json.dumps(d))
     ref = CertificateRef.load(p)
-    assert ref.space == "push" and ref.r_star == gc.r_star
+    assert ref.space == "push" and ref.value == gc.value
     assert ref.certify_config(CertifyConfig()).state_choice() == ("omega", "ball", 1)
 
 

@@ -123,7 +123,7 @@ class RawRollout:
 
 
 def summary(name: str, gcs: list[GaitCertificate], raw: list[float]) -> str:
-    r = np.array([g.r_star for g in gcs])
+    r = np.array([g.value for g in gcs])
     c = [g.certificate for g in gcs]
     bound = np.array([x.violation_bound for x in c if x is not None])
     n = np.array([x.n_samples for x in c if x is not None])
@@ -159,7 +159,7 @@ def cmd_seeds(args: argparse.Namespace) -> None:
                     c = gc.certificate
                     assert c is not None
                     tr = " ".join(f"{rd.kind[0]}{rd.samples_used}:{rd.r_hat:.4f}" for rd in c.rounds)
-                    print(f"  {gname} {method} seed {seed}: r* {gc.r_star:.4f} bound {c.violation_bound:.4f} "
+                    print(f"  {gname} {method} seed {seed}: r* {gc.value:.4f} bound {c.violation_bound:.4f} "
                           f"N {c.n_samples} {gc.seconds['total']:.1f} s (raw {speeds[-1]:.0f} steps/s)  {tr}",
                           flush=True)
             print(summary(f"{gname}, {method}", gcs, speeds), flush=True)
@@ -227,7 +227,7 @@ def cmd_barrier(args: argparse.Namespace) -> None:
             res = {}
             for barrier in ("ball", "paper"):
                 cfg = CertifyConfig(method=method, barrier=barrier, disturbance="state")  # type: ignore[arg-type]
-                res[barrier] = np.array([certify_gait(robot, gait, replace(cfg, seed=s), sim).r_star for s in seeds])
+                res[barrier] = np.array([certify_gait(robot, gait, replace(cfg, seed=s), sim).value for s in seeds])
             cells = " | ".join(f"{v.mean():.4f} ({v.min():.4f}–{v.max():.4f})" for v in res.values())
             print(f"| {gname} | {method} | {len(seeds)} | {cells} |", flush=True)
 
@@ -367,7 +367,7 @@ def cmd_horizon(args: argparse.Namespace) -> None:
             exc = gc.excursion
             ex = "" if not exc else " (" + ", ".join(f"{v:.2f}" for v in exc) + ")"
             n = gc.certificate.n_samples if gc.certificate else 0
-            cells.append(f"{gc.r_star:.4f}{ex} | {n}, {gc.seconds['total']:.0f} s")
+            cells.append(f"{gc.value:.4f}{ex} | {n}, {gc.seconds['total']:.0f} s")
         probe = ("<br>".join(probe_events(exo, res.gait, sim, args.probe, r) for r in (0.05, 0.5, 2.0))
                  if domains == ("flat",) else "(flat-foot only)")
         print(f"| {name} | " + " | ".join(cells) + f" | {probe} |", flush=True)
@@ -389,7 +389,7 @@ def cmd_states(args: argparse.Namespace) -> None:
     base = None
     for cfg in choices:
         gcs = [certify_gait(exo, res.gait, replace(cfg, seed=s), sim) for s in range(args.seeds)]
-        r = np.array([g.r_star for g in gcs])
+        r = np.array([g.value for g in gcs])
         wall = np.array([g.seconds["total"] for g in gcs])
         base = wall.mean() if base is None else base
         energy = [g.energy for g in gcs if g.energy is not None]

@@ -76,7 +76,7 @@ def measure(task: dict[str, Any]) -> dict[str, Any]:
                    "seconds": time.perf_counter() - t0, "note": w.controller_note}
     gcs = [certify_gait(robot, gait, CertifyConfig(disturbance="state", seed=seed), sim)
            for seed in range(max(task["seeds"], 1))]
-    out["certify"] = [{"r_star": gc.r_star, "status": gc.status, "seconds": gc.seconds["total"]} for gc in gcs]
+    out["certify"] = [{"r_star": gc.value, "status": gc.status, "seconds": gc.seconds["total"]} for gc in gcs]
     cert = gcs[0]  # seed 0: the certificate the validation checks
     kinds = list(KINDS) if task["kinds"] == "all" else task["kinds"].split(",")
     t1 = time.perf_counter()

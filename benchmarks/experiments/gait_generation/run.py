@@ -128,7 +128,7 @@ def main() -> None:
             print("default walk:", fmt_walk(walk_figures(robot, base.gait, args.samples)))
             if args.domains == "multicontact":
                 seq = certify_gait(robot, base.gait, CertifyConfig(method="sequential", disturbance="state"))
-                print(f"default gait, sequential certificate: {seq.status}, r* = {seq.r_star:.4f} rad/s, "
+                print(f"default gait, sequential certificate: {seq.status}, r* = {seq.value:.4f} rad/s, "
                       f"{seq.to_dict().get('n_samples')} samples")
     if args.no_grid:
         return

@@ -137,7 +137,7 @@ def one_gait(task: dict[str, Any]) -> dict[str, Any]:
         cfg = dataclasses.replace(base, **parse_config(text))
         t1 = time.perf_counter()
         gc = certify_gait(robot, gait, cfg, sim)
-        row = {"status": gc.status, "r_star": gc.r_star, "energy": gc.energy, "seconds": time.perf_counter() - t1,
+        row = {"status": gc.status, "r_star": gc.value, "energy": gc.energy, "seconds": time.perf_counter() - t1,
                "physics": gc.physics_steps, "samples": gc.certificate.n_samples if gc.certificate else 0,
                "bound": gc.certificate.violation_bound if gc.certificate else 1.0}
         if gc.ok and gc.coordinates is not None and gc.certificate is not None:
@@ -157,7 +157,7 @@ def one_gait(task: dict[str, Any]) -> dict[str, Any]:
         cfg = dataclasses.replace(base, disturbance="push")
         gc = certify_gait(robot, gait, cfg, sim)
         size = np.array(out["kinds"]["push"]["size"])
-        inside = size <= gc.r_star if (gc.certificate is None or gc.certificate.attained) else size < gc.r_star
+        inside = size <= gc.value if (gc.certificate is None or gc.certificate.attained) else size < gc.value
         out["push_cert"] = {"status": gc.status, "j_star": gc.r_star, "seconds": time.perf_counter() - t1,
                             "physics": gc.physics_steps, "inside": int(inside.sum()),
                             "fell_inside": int((inside & ~push_ok).sum()),

@@ -72,7 +72,7 @@ def cmd_push(args: argparse.Namespace) -> None:
         if failed:
             print(f"| {name} | {failed[0].status}: {failed[0].reason} | | | | | |", flush=True)
             continue
-        r = np.array([g.r_star for g in gcs])
+        r = np.array([g.value for g in gcs])
         wall = np.array([g.seconds["total"] for g in gcs])
         base = wall.mean() if base is None else base
         print(f"| {name} | {r.mean():.4g} ({r.min():.4g}–{r.max():.4g}) | "
@@ -114,7 +114,7 @@ def _push_gait(job: tuple[str, str]) -> dict:
         gc = certify_gait(exo, gait, cfg, sim)
         if not gc.ok:
             return {**out, "error": f"{name}: {gc.status}"}
-        out[name] = {"r_star": gc.r_star, "seconds": time.perf_counter() - t0, "physics": gc.physics_steps,
+        out[name] = {"r_star": gc.value, "seconds": time.perf_counter() - t0, "physics": gc.physics_steps,
                      "samples": gc.certificate.n_samples if gc.certificate else 0,
                      "attempts": sum(r.kind == "verify" for r in gc.certificate.rounds) if gc.certificate else 0,
                      "bound": gc.certificate.violation_bound if gc.certificate else 1.0}
@@ -216,7 +216,7 @@ def cmd_push_sweep(args: argparse.Namespace) -> None:
         pm = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push)
         t0 = time.perf_counter()
         cert = certify_map_sequential(pm, np.zeros(2), cfg)
-        j_star = cert.r_star
+        j_star = cert.value
         d = np.linalg.norm(cert.samples, axis=1)
         near = np.flatnonzero(cert.fell & (d < args.near * j_star))
         attempts = sum(r.kind == "verify" for r in cert.rounds)

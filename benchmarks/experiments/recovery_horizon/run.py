@@ -77,7 +77,7 @@ def certify_fields(robot: Any, gait: Any, sim: Any) -> tuple[Any, dict[str, Any]
     o = gc.orbit
     c = gc.certificate
     verify = [r for r in c.rounds if r.kind == "verify"] if c is not None else []
-    return gc, dict(status=str(gc.status), reason=gc.reason, j_star=gc.r_star if gc.ok else None,
+    return gc, dict(status=str(gc.status), reason=gc.reason, j_star=gc.value if gc.ok else None,
                     estimate=c.estimate if c is not None else None, attempts=len(verify),
                     first_passed=bool(verify and verify[0].passed),
                     certify_seconds=time.perf_counter() - t1, physics_steps=gc.physics_steps,

@@ -88,7 +88,7 @@ def profile_certify(robot: Robot, gait: Any) -> dict[str, Any]:
     io_seconds = time.perf_counter() - t0
     c = cert.certificate
     rounds = [] if c is None else [(r.kind, r.n_samples, r.passed) for r in c.rounds]
-    out = {"status": cert.status.value, "j_star": cert.r_star, "total_s": total, "orbit_s": cert.seconds["orbit"],
+    out = {"status": cert.status.value, "j_star": cert.value, "total_s": total, "orbit_s": cert.seconds["orbit"],
            "orbit_physics": cert.orbit_physics_steps, "sampling_s": cert.seconds["sampling"],
            "sampling_physics": cert.physics_steps, "pushes": sum(x["pushes"] for x in calls), "calls": calls,
            "stop_s": stop_seconds[0], "json_s": io_seconds, "json_bytes": len(text), "rounds": rounds,

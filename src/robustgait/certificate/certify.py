@@ -131,8 +131,10 @@ class GaitCertificate:
 
     @property
     def r_star(self) -> float:
-        """r* of a state certificate, in ``config.unit``; for a push certificate, its J* (the estimator's radius: the
-        name older code reads — :attr:`j_star` or :attr:`value` say what it is)."""
+        """r* of a state certificate, in ``config.unit``; raises :class:`RobustGaitError` for a push certificate (its
+        figure is :attr:`j_star`)."""
+        if self.config.disturbance == "push":
+            raise RobustGaitError("a push certificate's figure is j_star, not r_star")
         return self.value
 
     @property

@@ -48,7 +48,7 @@ def _validate(args: argparse.Namespace) -> int:
     energy = "" if c.energy is None else f", E* = {c.energy:.4g} J"
     kind = "disk of push impulses" if c.space == "push" else (f"{c.space} {c.set}, horizon {c.horizon}, {c.map} "
                                                                "map")
-    print(f"{robot.name}: {name} = {c.r_star:.4g} {R_MAX_UNIT[c.space]}{energy} ({'closed' if c.attained else 'open'} "
+    print(f"{robot.name}: {name} = {c.value:.4g} {R_MAX_UNIT[c.space]}{energy} ({'closed' if c.attained else 'open'} "
           f"{kind}, certificate {c.source}); {cfg.trials} trials per "
           f"kind, seed {cfg.seed}, success = no fall in {cfg.steps_after} steps after the first switching event")
     inside = f"|J| ≤ J*: fell in {cfg.steps_after} steps" if c.space == "push" else "falls inside the set"

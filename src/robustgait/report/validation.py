@@ -27,7 +27,7 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
     kinds = list(result.kinds.values())
     fig, axes = plt.subplots(len(kinds), 2, figsize=(11, 3.4 * len(kinds)), squeeze=False)
     ref = result.certificate
-    r_star, cunit = ref.r_star, R_MAX_UNIT[ref.space]
+    r_star, cunit = ref.value, R_MAX_UNIT[ref.space]
     star = radius_name(ref.space)
     for row, kr in zip(axes, kinds, strict=True):
         name, unit = kr.size_label

@@ -58,7 +58,7 @@ class CertificateRef:
     an energy state, the map, frame, reconstruction, the orbit search's options (``map`` and every ``orbit`` field:
     :func:`robustgait.config.certify.orbit_options`), and where it came from ("computed" or a file path)."""
 
-    r_star: float
+    value: float
     attained: bool
     x_star: tuple[float, ...]
     transform: tuple[tuple[float, ...], ...]
@@ -77,7 +77,8 @@ class CertificateRef:
         """JSON-ready (tuples as lists by the encoder): the figure by its name — ``j_star`` of a push certificate,
         ``r_star`` of a state certificate (:func:`robustgait.io.certfile.certificate_figure` reads both)."""
         out = asdict(self)
-        return {("j_star" if k == "r_star" and self.push is not None else k): v for k, v in out.items()}
+        figure = "j_star" if self.push is not None else "r_star"
+        return {(figure if k == "value" else k): v for k, v in out.items()}
 
     @staticmethod
     def of(gc: GaitCertificate) -> CertificateRef:
@@ -132,7 +133,7 @@ class CertificateRef:
     def inside(self, distance: FloatArray) -> NDArray[np.bool_]:
         """Membership in the certified set (closed if r* is attained, else open); NaN distances: False."""
         with np.errstate(invalid="ignore"):
-            return np.asarray(distance <= self.r_star if self.attained else distance < self.r_star)
+            return np.asarray(distance <= self.value if self.attained else distance < self.value)
 
 
 @dataclass
