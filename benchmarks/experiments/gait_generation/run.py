@@ -80,7 +80,7 @@ def walk_figures(robot: Robot, gait: Gait, samples: int) -> dict[str, object]:
         if c.fixed_point is not None:
             out["x_star"] = float(np.linalg.norm(c.fixed_point.omega))
         if c.ok:
-            out["r_star"] = c.r_star
+            out["r_star"] = c.value
         else:
             out["fall"] = f"certificate: {c.status}"
     return out

@@ -158,7 +158,7 @@ def one_gait(task: dict[str, Any]) -> dict[str, Any]:
         gc = certify_gait(robot, gait, cfg, sim)
         size = np.array(out["kinds"]["push"]["size"])
         inside = size <= gc.value if (gc.certificate is None or gc.certificate.attained) else size < gc.value
-        out["push_cert"] = {"status": gc.status, "j_star": gc.r_star, "seconds": time.perf_counter() - t1,
+        out["push_cert"] = {"status": gc.status, "j_star": gc.value, "seconds": time.perf_counter() - t1,
                             "physics": gc.physics_steps, "inside": int(inside.sum()),
                             "fell_inside": int((inside & ~push_ok).sum()),
                             "bound": gc.certificate.violation_bound if gc.certificate else 1.0}

@@ -126,7 +126,7 @@ def main() -> None:
                 for seed in range(args.seeds):
                     t0 = time.perf_counter()
                     c = certify_gait(robot, gait, CertifyConfig(seed=seed), sim)
-                    one = dict(status=c.status.value, j_star=c.r_star, certify_s=round(time.perf_counter() - t0, 1),
+                    one = dict(status=c.status.value, j_star=c.value, certify_s=round(time.perf_counter() - t0, 1),
                                pushes=c.certificate.n_samples if c.certificate else 0,
                                certify_physics=c.physics_steps + c.orbit_physics_steps)
                     if seed == 0:

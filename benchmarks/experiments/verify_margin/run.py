@@ -130,7 +130,7 @@ def measure(job: dict[str, Any]) -> dict[str, Any]:
         gc = certify_gait(robot, gait, cfg, sim)
         c = gc.certificate
         verify = [r for r in c.rounds if r.kind == "verify"] if c is not None else []
-        row["full"] = {"status": str(gc.status), "j_star": gc.r_star if gc.ok else None,
+        row["full"] = {"status": str(gc.status), "j_star": gc.value if gc.ok else None,
                        "estimate": None if c is None else c.estimate,
                        "first_passed": bool(verify and verify[0].passed), "attempts": len(verify),
                        "pushes": 0 if c is None else c.n_samples, "physics": gc.physics_steps,
@@ -257,7 +257,7 @@ def measure_margins(job: dict[str, Any]) -> dict[str, Any]:
         cert = gc.certificate
         verify = [r for r in cert.rounds if r.kind == "verify"] if cert is not None else []
         row["status"] = str(gc.status)
-        row["margins"][f"{c:g}"] = {"j_star": gc.r_star if gc.ok else None,
+        row["margins"][f"{c:g}"] = {"j_star": gc.value if gc.ok else None,
                                     "estimate": None if cert is None else cert.estimate,
                                     "first_passed": bool(verify and verify[0].passed), "attempts": len(verify),
                                     "pushes": 0 if cert is None else cert.n_samples, "physics": gc.physics_steps,
