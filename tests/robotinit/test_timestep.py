@@ -245,6 +245,7 @@ def test_init_chooses_a_step_that_check_passes(tmp_path: Path, capsys: pytest.Ca
         assert code == 0 and "walking the default gait" in err
     else:  # the spec the session's T1 fixture made with the same command (tests/conftest.py)
         spec = request.getfixturevalue("t1_spec")
+        capsys.readouterr()  # what the fixture printed when this test is the first to need it
     raw = tomllib.loads(spec.read_text())
     assert raw["sim"]["stable_pd"] is True and raw["sim"]["timestep"] in CANDIDATES
     assert raw["sim"]["timestep"] <= 0.002  # exo's flat gait passes at 2 ms, T1's at 1 ms (docs/robots.md)

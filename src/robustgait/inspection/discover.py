@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from robustgait.errors import input_error
 from robustgait.inspection.model import RobotModel, geom_bottom
 from robustgait.robots.legs import ankle_roll_joint
-from robustgait.robots.soles import GEOM_TYPES, SOLE_TYPES, article, foot_up, geom_sole_points, on_sole
+from robustgait.robots.soles import GEOM_TYPES, SOLE_TYPES, article, foot_up, geom_sole_points, on_sole, sole_up
 
 SIDES = ("left", "right")
 MIN_SOLE = 1e-3  # [m]: a sole narrower than this has no area to stand on (one sphere, a capsule on end)
@@ -191,12 +191,32 @@ def _geom_class(robot: RobotModel, body: int, g: int) -> str | None:
     return str(geoms[i].classname.name)
 
 
-def footprint_points(m: mujoco.MjModel, d: mujoco.MjData, g: int) -> NDArray[np.float64]:
+def footprint_points(m: mujoco.MjModel, d: mujoco.MjData, g: int, up: NDArray[np.float64] | None = None
+                     ) -> NDArray[np.float64]:
     """Where sole geom ``g`` meets the ground, (k, 3) world, at the kinematics ``d``
-    (:func:`robustgait.robots.soles.geom_sole_points` with up the foot body's axis closest to the world's z, as the
-    loader reads it: a foot the posture tilts keeps its whole tread)."""
-    rb = d.xmat[int(m.geom_bodyid[g])].reshape(3, 3)
-    return geom_sole_points(m, g, d.geom_xpos[g], d.geom_xmat[g].reshape(3, 3), rb @ foot_up(rb))
+    (:func:`robustgait.robots.soles.geom_sole_points` read along ``up`` (3,), world; default the foot body's axis
+    closest to the world's z: a foot the posture tilts keeps its whole tread)."""
+    if up is None:
+        rb = d.xmat[int(m.geom_bodyid[g])].reshape(3, 3)
+        up = rb @ foot_up(rb)
+    return geom_sole_points(m, g, d.geom_xpos[g], d.geom_xmat[g].reshape(3, 3), up)
+
+
+def tread_up(m: mujoco.MjModel, d: mujoco.MjData, geoms: tuple[int, ...]) -> NDArray[np.float64]:
+    """The up (3,), world, along which a foot's sole geoms are read at the kinematics ``d``, as the loader reads them
+    (:func:`robustgait.robots.soles.sole_up`: the foot body's axis closest to the vertical, or the vertical where
+    the tread along it spans more)."""
+    rf = d.xmat[int(m.geom_bodyid[geoms[0]])].reshape(3, 3)
+    return sole_up(lambda up: np.vstack([footprint_points(m, d, g, up) for g in geoms]), rf @ foot_up(rf),
+                   np.array([0.0, 0.0, 1.0]))
+
+
+def tread_points(m: mujoco.MjModel, d: mujoco.MjData, geoms: tuple[int, ...]) -> NDArray[np.float64]:
+    """A foot's ground points on its sole (k, 3), world, at the kinematics ``d``: its geoms' points along
+    :func:`tread_up`, filtered by :func:`robustgait.robots.soles.on_sole` (the tread, not an arch above it)."""
+    up = tread_up(m, d, geoms)
+    pts = np.vstack([footprint_points(m, d, g, up) for g in geoms])
+    return np.asarray(pts[on_sole(pts, up)])
 
 
 def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: float) -> FoundSole:
@@ -230,9 +250,10 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
                 raise input_error(src, f"the {side} sole geoms of body '{name}' are unnamed and share their default "
                                   "class with the body's other collision geoms: name them")
             sole_class = classes.pop()
-    per_geom = [footprint_points(m, d, g) for g in geoms]
+    up = tread_up(m, d, geoms)
+    per_geom = [footprint_points(m, d, g, up) for g in geoms]
     rf = d.xmat[foot].reshape(3, 3)
-    on = on_sole(np.vstack(per_geom), rf @ foot_up(rf))  # across the geoms, as the loader's sole box
+    on = on_sole(np.vstack(per_geom), up)  # across the geoms, as the loader's sole box
     pts = np.vstack(per_geom)[on]
     local = (pts - d.xpos[foot]) @ rf
     fwd = int(np.argmax(np.abs(rf[0, :])))  # the foot axes closest to forward and to left

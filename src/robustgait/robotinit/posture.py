@@ -9,11 +9,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.inspection.discover import SIDES, Legs, footprint_points
+from robustgait.inspection.discover import SIDES, Legs, tread_points
 from robustgait.inspection.mirror import Mirror
 from robustgait.inspection.model import RobotModel, clip_to_range
 from robustgait.robots.legs import ankle_joints, axis_kinds
-from robustgait.robots.soles import foot_up, on_sole, sole_slopes
+from robustgait.robots.soles import sole_slopes
 
 
 def symmetric_angles(robot: RobotModel, mirror: Mirror) -> tuple[dict[int, float], float]:
@@ -30,13 +30,10 @@ LEVEL_ITERATIONS, LEVEL_STEP, LEVEL_SLOPE = 8, 1e-6, 1e-5
 
 
 def sole_tilt(robot: RobotModel, legs: Legs, side: str, angles: dict[int, float]) -> NDArray[np.float64]:
-    """The slopes (2,) of a sole's plane in the world (:func:`robustgait.robots.soles.sole_slopes` over the ground
-    points of its geoms on the sole, :func:`~.discover.footprint_points` and :func:`robustgait.robots.soles.on_sole`:
-    the tread, not an arch above it, along x and y) with the joints at ``angles``."""
+    """The slopes (2,) of a sole's plane in the world (:func:`robustgait.robots.soles.sole_slopes` over its tread,
+    :func:`~.discover.tread_points`: not an arch above it, along x and y) with the joints at ``angles``."""
     d = robot.kinematics(robot.qpos(angles))
-    pts = np.vstack([footprint_points(robot.model, d, g) for g in legs[side].sole.geoms])
-    rf = d.xmat[legs[side].foot].reshape(3, 3)
-    pts = pts[on_sole(pts, rf @ foot_up(rf))]
+    pts = tread_points(robot.model, d, legs[side].sole.geoms)
     return np.array(sole_slopes(pts[:, 0], pts[:, 1], pts[:, 2]))
 
 
@@ -76,14 +73,9 @@ CENTRE_ITERATIONS, CENTRE_STEP, CENTRE_TOLERANCE = 8, 1e-6, 1e-4  # Newton on th
 
 def com_over_soles(robot: RobotModel, legs: Legs, angles: dict[int, float]) -> tuple[float, float, float]:
     """(the centre of mass's x, the soles' rearmost and foremost x) [m] in the base's frame with the joints at
-    ``angles``: the soles' extent over both feet's tread points (:func:`~.discover.footprint_points` on the sole)."""
+    ``angles``: the soles' extent over both feet's tread points (:func:`~.discover.tread_points`)."""
     d = robot.kinematics(robot.qpos(angles))
-    xs = []
-    for side in SIDES:
-        pts = np.vstack([footprint_points(robot.model, d, g) for g in legs[side].sole.geoms])
-        rf = d.xmat[legs[side].foot].reshape(3, 3)
-        xs.append(pts[on_sole(pts, rf @ foot_up(rf))][:, 0])
-    x = np.concatenate(xs)
+    x = np.concatenate([tread_points(robot.model, d, legs[side].sole.geoms)[:, 0] for side in SIDES])
     return float(d.subtree_com[robot.base][0]), float(x.min()), float(x.max())
 
 

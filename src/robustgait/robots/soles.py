@@ -19,6 +19,7 @@ stands on the foot geoms paired with its floor; its pairs stay as they are and k
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -228,6 +229,33 @@ def foot_up(rot: FloatArray) -> FloatArray:
     return np.asarray(np.eye(3)[k] * np.sign(rot[2, k]))
 
 
+def tread_spread(points: FloatArray, up: FloatArray) -> float:
+    """How much area the ground points (k, 3) on the sole along ``up`` (3,) span: the determinant of their
+    covariance in the plane normal to ``up`` (0 for a line or a point; rotation-invariant in that plane)."""
+    pts = np.asarray(points, dtype=float)
+    on = pts[on_sole(pts, up)]
+    if len(on) < 3:
+        return 0.0
+    e1 = np.cross(up, np.eye(3)[int(np.argmin(np.abs(up)))])
+    e1 /= float(np.linalg.norm(e1))
+    flat = np.column_stack([on @ e1, on @ np.cross(up, e1)])
+    return float(np.linalg.det(np.atleast_2d(np.cov(flat.T))))
+
+
+def sole_up(points_along: Callable[[FloatArray], FloatArray], body_up: FloatArray, vertical: FloatArray
+            ) -> FloatArray:
+    """The up a foot's sole is read along (3,): the foot body's axis closest to the vertical (``body_up``, so that a
+    foot the posture tilts keeps its whole tread), or the ``vertical`` itself where the ground points on the sole
+    along it span clearly more area (:func:`tread_spread`, by over 1 %): a foot body whose frame is tilted from its
+    sole (Berkeley Humanoid's, 10°) would keep only its heel along its own axis. ``points_along(up)``: the foot's
+    ground points (k, 3) read along ``up`` (:func:`geom_sole_points` of its geoms), in the frame of both vectors."""
+    body_up, vertical = np.asarray(body_up, dtype=float), np.asarray(vertical, dtype=float)
+    if np.allclose(body_up, vertical):
+        return body_up
+    along_body = tread_spread(points_along(body_up), body_up)
+    return vertical if tread_spread(points_along(vertical), vertical) > 1.01 * along_body else body_up
+
+
 def sole_slopes(along: FloatArray, across: FloatArray, height: FloatArray) -> tuple[float, float]:
     """The sole's plane through its ground points: the least-squares slopes (a, b) of height = c + a·along + b·across
     (points (k,) in a frame whose third axis is up, [m]); a direction the points do not span (a line of points, one
@@ -257,14 +285,22 @@ def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int],
     """
     body = int(model.geom_bodyid[geoms[0]])
     rb = data.xmat[body].reshape(3, 3)  # body axes in the world (columns)
-    up = foot_up(rb)
+
+    def points_along(up: FloatArray) -> FloatArray:  # the geoms' ground points in the body's frame
+        return np.concatenate([geom_sole_points(model, g, model.geom_pos[g], quat_to_mat(model.geom_quat[g]), up)
+                               for g in geoms])
+
+    up = sole_up(points_along, foot_up(rb), rb.T @ np.array([0.0, 0.0, 1.0]))
     up_k = int(np.argmax(np.abs(up)))
-    rest = [k for k in range(3) if k != up_k]
-    fwd_k = max(rest, key=lambda k: abs(float(rb[:, k] @ forward)))
-    fwd = np.eye(3)[fwd_k] * (1.0 if float(rb[:, fwd_k] @ forward) >= 0 else -1.0)
+    if np.allclose(np.abs(up), np.eye(3)[up_k]):  # a body axis: the box's axes are the body's
+        rest = [k for k in range(3) if k != up_k]
+        fwd_k = max(rest, key=lambda k: abs(float(rb[:, k] @ forward)))
+        fwd = np.eye(3)[fwd_k] * (1.0 if float(rb[:, fwd_k] @ forward) >= 0 else -1.0)
+    else:  # the vertical: forward within the plane normal to it
+        fwd = rb.T @ forward - float((rb.T @ forward) @ up) * up
+        fwd /= float(np.linalg.norm(fwd))
     left = np.cross(up, fwd)
-    points = np.concatenate([geom_sole_points(model, g, model.geom_pos[g], quat_to_mat(model.geom_quat[g]), up)
-                             for g in geoms])
+    points = points_along(up)
     on = on_sole(points, up)
     height = points @ up
     bottom = float(height[on].min())
