@@ -540,11 +540,7 @@ class GaitProblem:
         if i == n - 1:
             L, W = self._length, self._width
             if not multi:
-                import os
-                if os.environ.get("RG_NOROLL"):
-                    self._add("landing_position", (psw - cs.vertcat(L, side_sign * W, 0.0))[[0, 2]], 0.0, 0.0)
-                else:
-                    self._add("landing_position", psw - cs.vertcat(L, side_sign * W, 0.0), 0.0, 0.0)
+                self._add("landing_position", psw - cs.vertcat(L, side_sign * W, 0.0), 0.0, 0.0)
                 self._add("landing_orientation", cs.vertcat(Hsw[1, 0], Hsw[2, 0], Hsw[2, 1]), 0.0, 0.0)
                 Jsw = self._jac[(sw, "sole")](H, s)
                 ang = Jsw[3:, :] @ nu
