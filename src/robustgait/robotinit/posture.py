@@ -6,6 +6,7 @@ plate's geoms rotated 90.5°), and its centre of mass brought over the soles whe
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
@@ -82,7 +83,8 @@ def com_over_soles(robot: RobotModel, legs: Legs, angles: dict[int, float]) -> t
 def centre_over_soles(robot: RobotModel, legs: Legs, mirror: Mirror) -> float:
     """Bring the posture's centre of mass over the middle of the soles when it lies outside their middle
     :data:`STAND_FRACTION`: every leg leaned by one angle about its ankle pitch, the hip pitch turned back by as
-    much (soles and pelvis keep their orientation; the knees stay), the right leg's mirrored from the left. Edits
+    much about the world's y (its axis's sign read in the zero posture: soles and pelvis keep their orientation; the
+    knees stay), the right leg's mirrored from the left. Edits
     ``robot.angles``; returns the lean [rad] (0 when the mass already stands over the soles)."""
     com, rear, front = com_over_soles(robot, legs, robot.angles)
     margin = (1.0 - STAND_FRACTION) / 2.0 * (front - rear)
@@ -95,9 +97,15 @@ def centre_over_soles(robot: RobotModel, legs: Legs, mirror: Mirror) -> float:
     if ankle is None or len(pitches) < 2:
         return 0.0  # no ankle pitch to lean on: left as it is (robot check's stand says whether it stands)
 
+    # the hip pitch turns back by as much about the world's y: the same angle, or its opposite where the two axes point
+    # opposite ways along y
+    d0 = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d0)
+    back = -float(np.sign(d0.xaxis[ankle][1]) * np.sign(d0.xaxis[pitches[0]][1]))
+
     def leaned(lean: float) -> dict[int, float]:
         out = dict(robot.angles)
-        for j, delta in ((ankle, lean), (pitches[0], -lean)):
+        for j, delta in ((ankle, lean), (pitches[0], back * lean)):
             out[j] = clip_to_range(m, j, robot.angles[j] + delta)
             out[mirror.partner[j]] = clip_to_range(m, mirror.partner[j], mirror.sign[j] * out[j])
         return out
