@@ -339,8 +339,9 @@ def find_legs(robot: RobotModel, foot_level: float, sole_tolerance: float) -> Le
 
 
 def _sole_centre(m: mujoco.MjModel, d: mujoco.MjData, geoms: tuple[int, ...]) -> NDArray[np.float64]:
-    """The centre (3,) of the rectangle spanning a sole's ground points at the kinematics ``d`` (world frame)."""
-    pts = np.vstack([footprint_points(m, d, g) for g in geoms])
+    """The centre (3,) of the rectangle spanning a sole's tread (:func:`tread_points`) at the kinematics ``d`` (world
+    frame)."""
+    pts = tread_points(m, d, geoms)
     return np.asarray((pts.min(axis=0) + pts.max(axis=0)) / 2.0)
 
 

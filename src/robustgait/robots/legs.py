@@ -25,24 +25,27 @@ def axis_kinds(model: mujoco.MjModel, joints: tuple[int, ...]) -> tuple[str, ...
     return tuple(AXIS_KINDS[int(np.argmax(np.abs(d.xaxis[j])))] for j in joints)
 
 
+def _knee(kinds: tuple[str, ...]) -> int | None:
+    """The knee's index in a leg's joint kinds (hip to foot): the second pitch joint; None without one."""
+    pitches = [i for i, k in enumerate(kinds) if k == "y"]
+    return pitches[1] if len(pitches) >= 2 else None
+
+
 def ankle_joints(model: mujoco.MjModel, joints: tuple[int, ...]) -> tuple[int, ...]:
     """The joints below the knee (the second pitch joint) of a leg whose ``joints`` run hip to foot: its ankle (pitch,
     and roll when it has one); the last two joints for a leg without a knee."""
-    kinds = axis_kinds(model, joints)
-    pitches = [i for i, k in enumerate(kinds) if k == "y"]
-    if len(pitches) < 2:
-        return joints[-2:]
-    return joints[pitches[1] + 1:]
+    knee = _knee(axis_kinds(model, joints))
+    return joints[-2:] if knee is None else joints[knee + 1:]
 
 
 def ankle_roll_joint(model: mujoco.MjModel, joints: tuple[int, ...]) -> int | None:
     """The ankle roll of a leg whose ``joints`` run hip to foot: the last roll joint below the knee (the second pitch
     joint), or None when the leg has none (or no knee)."""
     kinds = axis_kinds(model, joints)
-    pitches = [i for i, k in enumerate(kinds) if k == "y"]
-    if len(pitches) < 2:
+    knee = _knee(kinds)
+    if knee is None:
         return None
-    below = [joints[i] for i in range(pitches[1] + 1, len(joints)) if kinds[i] == "x"]
+    below = [joints[i] for i in range(knee + 1, len(joints)) if kinds[i] == "x"]
     return below[-1] if below else None
 
 

@@ -431,9 +431,9 @@ class StepEngine:
             raise RobustGaitError(f"the gait has {len(self.graph)} domains, no domain {domain}")
         return qpos, qvel
 
-    def _step_batch(self, out_state: NDArray[np.float64], code: NDArray[np.int64], at: NDArray[np.int64], domain: int,
-               physics: int, traj: list[list[NDArray[np.float64]]], ctrls: list[list[NDArray[np.float64]]],
-               record: bool) -> StepBatch:
+    def _step_batch(self, out_state: NDArray[np.float64], code: NDArray[np.int64], at: NDArray[np.int64],
+                    domain: int, physics: int, traj: list[list[NDArray[np.float64]]],
+                    ctrls: list[list[NDArray[np.float64]]], record: bool) -> StepBatch:
         """The :class:`StepBatch` of a step's samples: their end states (K, nstate; NaN where they fell), event
         codes (0 an event, else 1 + the index of the fall reason), physics steps to the event, recorded pieces."""
         fell = code != 0

@@ -108,17 +108,17 @@ def check_walk_work(robot: Robot, gait: Gait, config: SimConfig, steps: int, vid
 
 @dataclass
 class _Run:
-    """A walk's state between its steps: the state (1, nq), (1, nv), time [s], lowest base height [m], recorded
-    trajectory chunks, whether and why it fell, the last finite configuration (nq,), physics steps so far."""
+    """A walk's state between its steps: the state (1, nq), (1, nv), lowest base height [m], the last finite
+    configuration (nq,), time [s], recorded trajectory chunks, whether and why it fell, physics steps so far."""
 
     qpos: NDArray[np.float64]
     qvel: NDArray[np.float64]
+    min_z: float
+    last: NDArray[np.float64]
     t: float = 0.0
-    min_z: float = np.inf
     chunks: list[NDArray[np.float64]] = field(default_factory=list)
     fell: bool = False
     reason: str | None = None
-    last: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     physics: int = 0
 
 
@@ -192,9 +192,8 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     eng = engine or make_engine(robot, gait, config)
     stats = TrackingStats()
     try:
-        run = _Run(gait.initial_state.qpos[None].copy(), gait.initial_state.qvel[None].copy())
-        start = run.last = run.qpos[0].copy()
-        run.min_z = float(start[2])
+        start = gait.initial_state.qpos.copy()
+        run = _Run(start[None].copy(), gait.initial_state.qvel[None].copy(), min_z=float(start[2]), last=start)
         heading = _heading(start)
         stance = gait.stance
         events: list[SwitchEvent] = []
