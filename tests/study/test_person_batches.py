@@ -11,6 +11,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from robustgait.cli.study import print_summary
@@ -30,6 +31,7 @@ from robustgait.study.evaluate import evaluate
 from robustgait.study.person import record_answer
 from robustgait.study.run import create_study, open_store, run_study
 from robustgait.study.status import study_status
+from tests.study.test_study import stored_and_refitted_posterior
 
 BATCH, OVERDRAW, FIRST = 3, 3, 2
 # evaluations walk 5 steps and certify with 10 uniform samples; a gait is shown only if its step is 0.14 m or longer
@@ -146,6 +148,10 @@ def test_the_floor_is_the_first_gait_of_a_first_batch_proposed_around_the_defaul
     shown = [t for t in mine if t["status"] == "certified" and t["verified_value"] is not None
              and t["verified_value"] >= floor["value"]]
     assert reference in shown and (len(shown) == 2 or len(mine) >= 2 + cfg.person.overdraw), mine
+    # the posterior the study stored for the report's map: the model refitted to the person's answer
+    k, stored, refit = stored_and_refitted_posterior(d)
+    assert k == 0 and float(np.ptp(refit)) > 0  # two gaits ranked: a map, not the prior's zeros
+    np.testing.assert_allclose(stored, refit, rtol=1e-6, atol=1e-9 * float(np.abs(refit).max()))
 
 
 def test_a_study_written_before_over_drawn_batches_evaluates_its_batch_alone(tmp_path):

@@ -16,6 +16,7 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from robustgait import GaitParams, Robot, RobustGaitError, load_robot
@@ -624,6 +625,43 @@ def test_status_report_and_compare(tmp_path, tiny_study):
     assert out["method"] == "uniform"
     txt = cli("study", "compare", str(study), str(study), "--seeds", "1", "--samples", "10")
     assert txt.returncode == 0 and "(uniform, N = 10)" in txt.stdout.splitlines()[0]
+
+
+def stored_and_refitted_posterior(directory: Path) -> tuple[int, np.ndarray, np.ndarray]:
+    """(k, the posterior mean the study stored after iteration k, the model refitted to the same history)."""
+    from robustgait.report.study import _grid_posterior
+    from robustgait.study.ranking import history_before, requirements
+    from robustgait.study.run import completed_batches, open_store
+
+    setup = load_config(directory)
+    cfg, space = setup.config.study, setup.action_space()
+    store = open_store(directory, setup, space)
+    try:
+        stored, batches, iterations = store.posterior(), completed_batches(store.records()), store.iterations()
+    finally:
+        store.close()
+    assert stored is not None and stored[1].shape == (space.size,)
+    history = history_before(stored[0] + 1, batches, cfg, iterations, requirements(cfg, space.names))
+    return stored[0], stored[1], _grid_posterior(space, cfg, history, stored[0], None)
+
+
+@pytest.mark.slow
+def test_the_report_draws_the_posterior_the_study_stored_without_torch(tmp_path, tiny_study):
+    """The study stores the learner's posterior over the grid when it closes an iteration (the tiny study's gaits tie:
+    the prior's zeros; a map with comparisons: tests/study/test_person_batches.py), and the report draws it without
+    importing torch."""
+    k, stored, refit = stored_and_refitted_posterior(tiny_study)
+    assert k == load_config(tiny_study).config.study.iterations - 1
+    np.testing.assert_allclose(stored, refit, rtol=1e-6, atol=1e-12)
+    study = tmp_path / "study"
+    shutil.copytree(tiny_study, study)
+    code = ("import sys; from robustgait.config import ReportConfig; from robustgait.report.study import "
+            "write_study_report; write_study_report(sys.argv[1], ReportConfig(video=False)); "
+            "print('torch' in sys.modules)")
+    res = subprocess.run([sys.executable, "-c", code, str(study)], capture_output=True, text=True, check=False)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip().splitlines()[-1] == "False"
+    assert (study / "report" / "posterior.png").stat().st_size > 10_000
 
 
 @pytest.mark.slow

@@ -22,6 +22,9 @@ Verify = Literal["shown", "all"]
 UNCERTIFIED_PENALTY = 0.5
 Lengthscale = Annotated[Float, Doc(gt=0.0, le=1e3)]
 CERTIFICATE_FIGURES = ("certificate_value", "r_star", "j_star")  # a requirement's names of the certificate figure
+# a study whose grid holds at most this many gaits stores the learner's posterior mean over it after each iteration,
+# so that the report draws its map without importing and refitting the preference model
+POSTERIOR_STORE_LIMIT = 20_000
 
 
 @config

@@ -86,6 +86,11 @@ class Learner:
             mu = posterior_mean(m, self._x[visited])
         return int(visited[int(np.argmax(mu))])
 
+    def grid_utility(self, model: Any) -> NDArray[np.float64]:
+        """The posterior mean utility (space.size,) of ``model`` (:meth:`model`) at every grid point."""
+        with torch_threads(1):
+            return np.asarray(posterior_mean(model, self._x), dtype=float)
+
     def predicted_utility(self, history: History, indices: Sequence[int], iteration: int = 0) -> NDArray[np.float64]:
         """The preference model's posterior mean utility (len(indices),) of the grid points ``indices`` given
         ``history`` (the prior's, zeros, before any comparison)."""

@@ -16,7 +16,7 @@ import base64
 import html
 from itertools import combinations
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import matplotlib
 
@@ -25,6 +25,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import MaxNLocator
+from numpy.typing import NDArray
 
 from robustgait.certificate.certify import certificate_from_record
 from robustgait.certificate.reduced import Coordinates
@@ -35,6 +36,11 @@ from robustgait.io.schema import read_json
 from robustgait.report.figures import _save, plot_certificate
 from robustgait.report.person import pareto_parts, person_parts
 from robustgait.study.status import figure_text
+
+if TYPE_CHECKING:
+    from robustgait.config import StudyConfig
+    from robustgait.learn.history import History
+    from robustgait.learn.space import ActionSpace
 
 OUTCOME_COLORS = {"certified": "tab:green", "estimated": "tab:cyan", "not_certified": "tab:olive", "fell": "tab:red",
                   "generation_failed": "0.3"}
@@ -117,8 +123,6 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
     """Posterior mean of the learner's preference model over two parameters; the others at the best gait's
     grid values; evaluated gaits on that slice marked."""
     from robustgait.io.studyfile import load_config
-    from robustgait.learn.learners import make_learner
-    from robustgait.learn.model import posterior_mean
     from robustgait.study.ranking import history_before, requirements
     from robustgait.study.run import completed_batches, open_store
 
@@ -133,14 +137,13 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
     try:
         batches = completed_batches(store.records())
         iterations = store.iterations()
+        stored = store.posterior()
     finally:
         store.close()
     # the last iteration ranked (a person study's pending batch has no answer yet: the one before it)
     k = max((i for i in range(cfg.iterations) if len(batches.get(i, [])) >= cfg.batch_size(i)
              and (not cfg.asks_a_person or "answer" in iterations.get(i, {}))), default=-1)
     history = history_before(k + 1, batches, cfg, iterations, requirements(cfg, space.names))
-    learner = make_learner(cfg.learner, space, cfg.learning, cfg.seed)
-    model = learner.model(history, max(k, 0))
     a, b = (space.names.index(n) for n in axes_names)
     base = space.coords(status["best"]["grid_index"]) if status["best"] else np.zeros(space.dim, dtype=np.int64)
     na, nb = space.shape[a], space.shape[b]
@@ -150,7 +153,7 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
             c = base.copy()
             c[a], c[b] = ia, ib
             idx[ib, ia] = space.index_of_coords(c)
-    mu = posterior_mean(model, space.normalized(idx.ravel())).reshape(nb, na)
+    mu = _grid_posterior(space, cfg, history, k, stored)[idx.ravel()].reshape(nb, na)
     fig, ax = plt.subplots(figsize=(6.5, 5))
     im = ax.imshow(mu, origin="lower", aspect="auto", cmap="viridis",
                    extent=(-0.5, na - 0.5, -0.5, nb - 0.5))
@@ -170,6 +173,19 @@ def plot_posterior(directory: Path, status: dict[str, Any], axes_names: tuple[st
     ax.set_ylabel(axes_names[1])
     ax.set_title(f"Posterior mean after {k + 1} iterations ({fixed}); ○ evaluated", fontsize=9)
     return _save(fig, path)
+
+
+def _grid_posterior(space: ActionSpace, cfg: StudyConfig, history: History, k: int,
+                    stored: tuple[int, NDArray[np.float64]] | None) -> NDArray[np.float64]:
+    """The learner's posterior mean (space.size,) after iteration ``k``: the one the study stored when it closed the
+    iteration, else (a study run before it was stored, a grid past the storing limit, no iteration closed) the
+    preference model fitted again to ``history``."""
+    if stored is not None and stored[0] == k:
+        return stored[1]
+    from robustgait.learn.learners import make_learner  # torch and BoTorch: only when nothing is stored
+
+    learner = make_learner(cfg.learner, space, cfg.learning, cfg.seed)
+    return learner.grid_utility(learner.model(history, max(k, 0)))
 
 
 def render_best_video(directory: Path, status: dict[str, Any], path: Path, steps: int | None = None,

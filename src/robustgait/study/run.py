@@ -41,6 +41,7 @@ from tqdm import tqdm
 
 from robustgait.certificate.certify import check_certify_work
 from robustgait.config import Config, GaitParams, RunConfig, StudyConfig, radius_name
+from robustgait.config.study import POSTERIOR_STORE_LIMIT
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait
 from robustgait.io.output import write_json
@@ -620,7 +621,11 @@ class StudyRunner:
         record = dict(iterations.get(k, {}))
         scores = batch_scores(self.config, batch, record, self.reqs)
         t0 = time.perf_counter()
-        rec = self.learner.recommend(history_before(k + 1, batches, self.config, iterations, self.reqs), k)
+        history = history_before(k + 1, batches, self.config, iterations, self.reqs)
+        model = self.learner.model(history, k)
+        rec = self.learner.recommend(history, k, model=model)
+        if self.space.size <= POSTERIOR_STORE_LIMIT:  # the report's map, without refitting the model
+            store.set_posterior(k, self.learner.grid_utility(model))
         rec_trial = next((r for i in sorted(batches) for r in batches[i] if r.index == rec), None)
         record.update({"trials": [r.number for r in batch], "scores": scores,
                        "comparisons": [[batch[w].number, batch[lo].number] for w, lo in batch_comparisons(scores)],

@@ -14,7 +14,8 @@ One Optuna trial per proposed gait. Its lifecycle is the storage contract (docs/
    parameters and attributes (``retry_of`` = the failed trial's number).
 
 Per-iteration records (proposals, learner seed, comparisons, recommendation) are study user attributes
-``iteration_NNN``: comparisons exist only once a whole batch is in, after its trials are complete. The verified
+``iteration_NNN``: comparisons exist only once a whole batch is in, after its trials are complete; the learner's
+posterior mean over the grid after the last closed iteration is ``posterior_mean``. The verified
 certificate of a gait whose trial holds an estimate is the study user attribute ``verified_NNNNNN`` (its grid index):
 a completed trial is never written again.
 """
@@ -27,11 +28,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from robustgait.errors import RobustGaitError
 from robustgait.learn.space import ActionSpace
 
 DB_FILE = "study.db"
 VERIFIED_PREFIX = "verified_"
+POSTERIOR_KEY = "posterior_mean"  # the learner's posterior mean over the grid after the last closed iteration
 
 STORED_NAMES = {"r_star": "certificate_value", "study_r_star": "study_certificate_value",
                 "r_star_critical": "certificate_value_critical"}
@@ -184,6 +189,19 @@ class StudyStore:
         """Grid index → its verification record (:meth:`set_verification`)."""
         return {int(key[len(VERIFIED_PREFIX):]): v for key, v in self.study.user_attrs.items()
                 if key.startswith(VERIFIED_PREFIX)}
+
+    def set_posterior(self, k: int, mean: NDArray[np.float64]) -> None:
+        """The learner's posterior mean utility (space.size,) over the whole grid after iteration ``k`` (the report's
+        map, drawn without refitting the model); replaces the previous iteration's."""
+        self.study.set_user_attr(POSTERIOR_KEY, {"iteration": k, "mean": [float(f"{v:.7g}") for v in mean.tolist()]})
+
+    def posterior(self) -> tuple[int, NDArray[np.float64]] | None:
+        """(k, mean (space.size,)) of :meth:`set_posterior`; None when none is stored (a study run before it was
+        stored, or a grid larger than ``config.study.POSTERIOR_STORE_LIMIT``)."""
+        rec = self.study.user_attrs.get(POSTERIOR_KEY)
+        if not isinstance(rec, Mapping) or len(rec.get("mean", ())) != self.space.size:
+            return None
+        return int(rec["iteration"]), np.asarray(rec["mean"], dtype=float)
 
     def iterations(self) -> dict[int, dict[str, Any]]:
         return {int(key.split("_")[1]): v for key, v in self.study.user_attrs.items() if key.startswith("iteration_")}
