@@ -506,6 +506,34 @@ def test_narrow_soles_get_shorter_default_steps_and_a_shorter_grid() -> None:
     assert scale(narrow, ScaleRules()).multicontact_action_space == scale(wide, ScaleRules()).multicontact_action_space
 
 
+def test_a_point_foot_walker_steps_end_at_its_lambda_t() -> None:
+    """Adam Lite's size: a walk that balances by foot placement (κ ≥ ``point_foot_share``) ends its step durations at
+    λT = ``point_foot_step`` — never below the default step, which walked; an ankle that holds the centre of mass
+    (κ below it), or no measurement, leaves the narrow-sole grid as it is, and nothing else of the spec moves."""
+    import math
+
+    from robustgait.inspection.scale import Balance
+
+    size = RobotSize(leg_length=0.896, standing_height=0.929, mass=58.2, gravity=9.81, hip_spacing=0.234,
+                     sole_length=0.22, sole_width=0.05)
+    rules = ScaleRules()
+    plain = scale(size, rules)
+    assert scale(size, rules, Balance(share=0.49, rate=3.3)) == plain
+    assert scale(size, rules, Balance(share=0.5, rate=3.3)) == scale(size, rules, Balance(share=1.0, rate=3.3))
+    capped = scale(size, rules, Balance(share=1.0, rate=3.3))
+    low, high, step = capped.action_space["step_duration"]
+    assert high * 3.3 == pytest.approx(rules.point_foot_step, abs=3.3 * step / 2 + 1e-9)  # the nearest grid point
+    default = plain.gait["step_duration"]
+    assert abs(low - rules.action_step_duration[0] * default) <= step / 2 + 1e-9  # the same low multiple, finer step
+    assert high < plain.action_space["step_duration"][1]
+    assert {k: v for k, v in capped.action_space.items() if k != "step_duration"} == {
+        k: v for k, v in plain.action_space.items() if k != "step_duration"}
+    assert dataclasses.replace(capped, action_space=plain.action_space) == plain
+    fast = scale(size, rules, Balance(share=1.0, rate=1.5 * rules.point_foot_step / default))  # default's λT 1.5 × cap
+    assert fast.action_space["step_duration"][1] >= default - fast.action_space["step_duration"][2] / 2
+    assert default == pytest.approx(2.0 * math.sqrt(0.896 / 9.81), rel=1e-2)
+
+
 def test_a_grid_stops_at_the_grid_point_nearest_its_high_multiple() -> None:
     # Booster T1's durations: 0.86–1.57 × 0.548 s = 0.47–0.86 s; the nice step 0.1 (not 0.078) must not stretch the
     # five steps to 1.0 s: the grid stops at 0.9 s, the grid point nearest 0.86 s

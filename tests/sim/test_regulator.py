@@ -265,3 +265,15 @@ def test_a_line_footed_humanoid_walks_with_the_hlip_gain_its_sole_leaves_to_the_
     assert not w.fell and w.steps_taken == 100
     weak = walk(robot, res.gait, SimConfig(regulator=RegulatorConfig(mode="on", gain_scale=0.22)), steps=100)
     assert weak.fell
+    # a point-foot walker: robot init measured it and ends the grid's step durations at λT = point_foot_step
+    import tomllib
+
+    from robustgait.config import ScaleRules
+
+    text = (d / "t1.toml").read_text()
+    assert "balances by foot placement" in text
+    low, high, step = tomllib.loads(text)["action_space"]["step_duration"]
+    lam = float(w.regulator["lambda"])
+    assert low <= robot.default_params.step_duration <= high + 1e-9
+    cap = max(ScaleRules().point_foot_step / lam, robot.default_params.step_duration)  # never below the default
+    assert high <= cap + step / 2 + 1e-9  # the grid point nearest the cap

@@ -47,6 +47,16 @@ class ScaleRules:
         "longest flat-foot step of the action space ÷ √(l/g) when the soles are narrow (sole width / leg length < "
         "sim.regulator.narrow_ratio): a long single support on a narrow sole falls whatever the next foothold",
         gt=0.0, le=20.0)] = 3.0
+    point_foot_share: Annotated[Float, Doc(
+        "a robot balances by foot placement (a point-foot walker) when the step regulator applies at least this share "
+        "κ of the H-LIP's stepping gain on its default gait (sim.regulator: the sole's width rule, raised to the whole "
+        "gain when the measured walk's lateral error grows past growth_limit: the ankle does not hold the centre of "
+        "mass)", gt=0.0, le=1.0)] = 0.5
+    point_foot_step: Annotated[Float, Doc(
+        "longest flat-foot step of a point-foot walker's action space (point_foot_share) as λT (λ = √(g/z0), the "
+        "H-LIP's rate at the default gait's CoM height z0): a CoM error grows as e^(λT) over a single support before "
+        "the next foothold corrects it; never below the default gait's own step, which walked", gt=0.0,
+        le=20.0)] = 2.0
     joint_margin_narrow: Annotated[Float, Doc(
         "generate.joint_margin written when the soles are narrow (sole width / leg length < "
         "sim.regulator.narrow_ratio), if above 0: the step regulator moves the swing foot by joint offsets, which a "

@@ -142,12 +142,32 @@ def narrow_soles(size: RobotSize) -> bool:
     return balance(size)[0]
 
 
-def duration_rule(size: RobotSize, rules: ScaleRules) -> tuple[float, float, int]:
+@dataclass(frozen=True)
+class Balance:
+    """The default gait's step-to-step balance as its walk measured it
+    (:func:`robustgait.robotinit.init.measured_balance`): ``share`` κ, the share of the H-LIP's stepping gain the step
+    regulator settled on (:meth:`robustgait.sim.regulator.StepRegulator.settle_share`), and ``rate`` λ = √(g/z0)
+    [1/s], the H-LIP's rate at the gait's CoM height z0."""
+
+    share: float
+    rate: float
+
+    def point_foot(self, rules: ScaleRules) -> bool:
+        """The robot balances by foot placement: κ ≥ ``point_foot_share`` (its ankle does not hold the centre of
+        mass)."""
+        return self.share >= rules.point_foot_share
+
+
+def duration_rule(size: RobotSize, rules: ScaleRules, balance: Balance | None = None) -> tuple[float, float, int]:
     """The flat-foot action space's duration axis rule: ``action_step_duration``, its high end capped at
-    ``narrow_step_duration`` · √(l/g) when the soles are narrow (:func:`narrow_soles`)."""
+    ``narrow_step_duration`` · √(l/g) when the soles are narrow (:func:`narrow_soles`), and for a point-foot walker
+    (:meth:`Balance.point_foot`) at λT = ``point_foot_step``, T ≤ ``point_foot_step`` / λ — never below the default
+    step, which walked."""
     low, high, points = rules.action_step_duration
     if narrow_soles(size):
         high = min(high, rules.narrow_step_duration / duration_constant(size, rules))
+    if balance is not None and balance.point_foot(rules):
+        high = min(high, max(1.0, rules.point_foot_step / (balance.rate * step_duration(size, rules))))
     return low, high, points
 
 
@@ -200,13 +220,14 @@ def sig(x: float, digits: int = 3) -> float:
     return round(x, digits - 1 - math.floor(math.log10(abs(x))))
 
 
-def scale(size: RobotSize, rules: ScaleRules) -> Scaled:
-    """All the rules applied to a robot (values rounded to 3 significant digits)."""
+def scale(size: RobotSize, rules: ScaleRules, balance: Balance | None = None) -> Scaled:
+    """All the rules applied to a robot (values rounded to 3 significant digits); ``balance``: the default gait's
+    measured balance, which bounds a point-foot walker's step durations (:func:`duration_rule`)."""
     width = sig(step_width(size, rules), 3 if size.ankle_roll else 4)  # parallel legs: to 0.1 mm at a 0.2 m width
     gait = {"step_length": sig(step_length(size, rules)), "step_duration": sig(step_duration(size, rules)),
             "step_width": width, "step_height": sig(step_height(size, rules))}
     mc_gait = {**gait, "step_duration": sig(step_duration(size, rules, multicontact=True))}
-    flat = {a: axis_range(a, gait[a], duration_rule(size, rules) if a == "step_duration"
+    flat = {a: axis_range(a, gait[a], duration_rule(size, rules, balance) if a == "step_duration"
                           else getattr(rules, f"action_{a}")) for a in GAIT_AXES}
     mc: dict[str, tuple[float, float, float]] | None = None
     if size.ankle_roll:  # multi-contact gaits roll the heel's edge flat with the ankle roll

@@ -45,7 +45,7 @@ from robustgait.inspection.gains import (
 )
 from robustgait.inspection.mirror import Mirror, Residual, find_mirror, fk_residual, name_partner
 from robustgait.inspection.model import RobotModel, open_model
-from robustgait.inspection.scale import RobotSize, Scaled, hip_roll_angle, scale
+from robustgait.inspection.scale import Balance, RobotSize, Scaled, hip_roll_angle, scale
 from robustgait.robotinit.posture import centre_over_soles, level_soles, symmetric_angles
 from robustgait.robots.model import mass_matrix
 from robustgait.robots.soles import GEOM_TYPES, can_touch
@@ -68,7 +68,8 @@ class Draft:
     took [rad], :func:`~.posture.centre_over_soles`). ``torque``: each joint's limit and its source (estimated
     where the model has none). ``timestep``: the spec's physics step (:func:`servo_timestep`; ``servo_frequency``
     [Hz]: the fastest servo's natural frequency on its swing inertia, before any lowering for stability).
-    ``height``: the base's height above the floor standing in the posture [m].
+    ``height``: the base's height above the floor standing in the posture [m]. ``balance``: the default gait's
+    measured step-to-step balance, when it bounds the scaled values (a point-foot walker's step durations).
     ``radius``: the spectral radius of one physics step of all the servos together (base held; < 1: they
     contract)."""
 
@@ -98,6 +99,7 @@ class Draft:
     notes: list[str] = field(default_factory=list)
     stable_pd: bool = False
     choice: TimestepChoice | None = None
+    balance: Balance | None = None
 
 
 def spec_name(robot: RobotModel) -> str:

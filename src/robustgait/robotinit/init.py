@@ -7,7 +7,10 @@ one whose drafted gains would be lowered to contract is above the servos' stabil
 robot init would write at h with stable PD, loaded as a robot; the default gait is generated once (the gains and the
 step do not enter the gait's optimisation) and walked at each candidate (:func:`.timestep.select_timestep`). When the
 default gait cannot be generated, no candidate is below the stability bound, or none is accurate enough, the timestep
-is the servo rule's (:func:`.gains.servo_timestep`, without stable PD), with a note saying why.
+is the servo rule's (:func:`.gains.servo_timestep`, without stable PD), with a note saying why. When the step
+regulator runs for the robot's soles, the default gait's walk also says whether its ankle holds the centre of mass
+(:func:`measured_balance`): a point-foot walker's step durations end at λT = ``robot.scale.point_foot_step``
+(:func:`with_balance`).
 """
 
 from __future__ import annotations
@@ -18,12 +21,16 @@ from collections.abc import Callable
 from pathlib import Path
 
 from robustgait.config import Config
+from robustgait.config.regulator import regulator_rule
 from robustgait.errors import RobustGaitError
+from robustgait.gait import Gait
+from robustgait.inspection.scale import Balance, scale
 from robustgait.io.robotfile import read_mjcf, spec_from_raw
 from robustgait.robotinit.draft import Draft, draft_at_timestep, draft_spec, lowered
 from robustgait.robotinit.timestep import candidate_timesteps, default_gait, ms, select_timestep
 from robustgait.robotinit.writer import render
 from robustgait.robots import Robot
+from robustgait.sim.engine import StepEngine
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -77,8 +84,42 @@ def init_spec(model: str | Path, spec_path: str | Path, config: Config,
     choice = dataclasses.replace(select_timestep(robot_at, gait, candidates, config, say=tell), excluded=excluded)
     if not choice.passed:  # no step is accurate enough with stable PD: the servo rule's
         draft.notes.append(f"{choice.note}: the timestep is the servo rule's, without stable PD")
-        return draft
+        return with_balance(draft, lambda: draft_robot(draft, spec_path), gait, config)
     out = draft_at_timestep(draft, choice.timestep, True, choice)
     if choice.note:
         out.notes.append(choice.note)
+    return with_balance(out, lambda: robot_at(choice.timestep), gait, config)
+
+
+def measured_balance(robot: Robot, gait: Gait, config: Config) -> Balance | None:
+    """The default gait's step-to-step balance on ``robot`` (:class:`~robustgait.inspection.scale.Balance`): the share
+    κ of the H-LIP gain its step regulator settles on by measuring the walk's lateral growth
+    (:func:`~robustgait.sim.regulator.lateral_growth`), and the H-LIP's rate λ; None when the regulator does not run
+    (``sim.regulator``: soles wide for the robot)."""
+    with StepEngine(robot, gait, config.sim) as engine:
+        reg = engine.regulator
+        return None if reg is None else Balance(reg.share, reg.lam)
+
+
+def with_balance(draft: Draft, robot: Callable[[], Robot], gait: Gait, config: Config) -> Draft:
+    """The draft with its scaled values bounded by the default gait's balance as ``robot()`` (the draft's robot)
+    walks it (:func:`measured_balance`; :func:`~robustgait.inspection.scale.duration_rule`: a point-foot walker's step
+    durations end at λT = ``robot.scale.point_foot_step``), and a note saying so; unchanged when the step regulator
+    does not run for the robot's soles (``sim.regulator``) or its ankle holds the centre of mass."""
+    if not regulator_rule(config.sim.regulator, draft.size.sole_width, draft.size.leg_length, 1)[0]:
+        return draft
+    rules = config.robot.scale
+    balance = measured_balance(robot(), gait, config)
+    if balance is None or not balance.point_foot(rules):
+        return draft
+    scaled = scale(draft.size, rules, balance)
+    if scaled == draft.scaled:
+        return draft
+    low, high, _ = scaled.action_space["step_duration"]
+    out = dataclasses.replace(draft, scaled=scaled, balance=balance, notes=list(draft.notes))
+    out.notes.append(f"the default gait balances by foot placement (the step regulator applies {balance.share:.2g} "
+                     f"of the H-LIP's stepping gain, at least robot.scale.point_foot_share {rules.point_foot_share:g}: "
+                     f"the ankle does not hold the centre of mass): its step durations end at λT = "
+                     f"{rules.point_foot_step:g} (λ = √(g/z0) = {balance.rate:.3g} 1/s), {low:g}–{high:g} s "
+                     "(robot.scale.point_foot_step)")
     return out

@@ -298,7 +298,10 @@ def _scaled(draft: Draft) -> list[str]:
         "", "[action_space]",
         "# studies search this grid, [low, high, step]: [low, high] = multiples of the [gait] default, a nice step "
         "(robot.scale.action_*)" + ("; narrow soles: steps end by robot.scale.narrow_step_duration × √(l/g)"
-                                    if narrow_soles(draft.size) else ""),
+                                    if narrow_soles(draft.size) else "")
+        + ("; the default gait balances by foot placement (robot.scale.point_foot_share: its ankle does not hold "
+           f"the centre of mass): steps end by λT = robot.scale.point_foot_step, λ = √(g/z0) = "
+           f"{draft.balance.rate:.3g} 1/s" if draft.balance is not None else ""),
         *(f"{a} = {axis(s.action_space[a])}" for a in GAIT_AXES),
     ]
     if s.multicontact_action_space is None:
