@@ -117,9 +117,9 @@ def with_balance(draft: Draft, robot: Callable[[], Robot], gait: Gait, config: C
         return draft
     low, high, _ = scaled.action_space["step_duration"]
     out = dataclasses.replace(draft, scaled=scaled, balance=balance, notes=list(draft.notes))
-    out.notes.append(f"the default gait balances by foot placement (the step regulator applies {balance.share:.2g} "
-                     f"of the H-LIP's stepping gain, at least robot.scale.point_foot_share {rules.point_foot_share:g}: "
-                     f"the ankle does not hold the centre of mass): its step durations end at λT = "
-                     f"{rules.point_foot_step:g} (λ = √(g/z0) = {balance.rate:.3g} 1/s), {low:g}–{high:g} s "
+    out.notes.append(f"the default gait balances by foot placement (the step regulator applies κ = "
+                     f"{balance.share:.2g} of the H-LIP's stepping gain, at least robot.scale.point_foot_share "
+                     f"{rules.point_foot_share:g}: the ankle does not hold the centre of mass): its step durations end "
+                     f"at λT = {rules.point_foot_step:g} (λ = √(g/z0) = {balance.rate:.3g} 1/s), {low:g}–{high:g} s "
                      "(robot.scale.point_foot_step)")
     return out
