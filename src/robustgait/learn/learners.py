@@ -71,10 +71,12 @@ class Learner:
         return order[:batch]
 
     def model(self, history: History, iteration: int = 0) -> Any:
-        """The preference model fitted to ``history`` (the prior if it holds no comparison)."""
+        """The preference model fitted to ``history`` (the prior if it holds no comparison), on one torch thread
+        wherever it is fitted (:func:`~robustgait.learn.model.torch_threads`)."""
         visited, comps = history.unique()
         x = self._x[visited] if visited.size else np.zeros((0, self.space.dim))
-        return preference_model(x, comps, self.config.model, seed=iteration_seed(self.seed, iteration, 7))
+        with torch_threads(1):
+            return preference_model(x, comps, self.config.model, seed=iteration_seed(self.seed, iteration, 7))
 
     def recommend(self, history: History, iteration: int = 0, model: Any = None) -> int | None:
         """The visited gait with the highest posterior mean (first visited among equals); None before any."""

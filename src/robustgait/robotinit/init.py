@@ -105,7 +105,8 @@ def with_balance(draft: Draft, robot: Callable[[], Robot], gait: Gait, config: C
     """The draft with its scaled values bounded by the default gait's balance as ``robot()`` (the draft's robot)
     walks it (:func:`measured_balance`; :func:`~robustgait.inspection.scale.duration_rule`: a point-foot walker's step
     durations end at λT = ``robot.scale.point_foot_step``), and a note saying so; unchanged when the step regulator
-    does not run for the robot's soles (``sim.regulator``) or its ankle holds the centre of mass."""
+    does not run for the robot's soles (``sim.regulator``) or applies less than ``robot.scale.point_foot_share`` of
+    the H-LIP's gain (the ankle holds the centre of mass)."""
     if not regulator_rule(config.sim.regulator, draft.size.sole_width, draft.size.leg_length, 1)[0]:
         return draft
     rules = config.robot.scale
