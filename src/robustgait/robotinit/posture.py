@@ -6,14 +6,13 @@ plate's geoms rotated 90.5°), and its centre of mass brought over the soles whe
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.inspection.discover import SIDES, Legs, tread_points
 from robustgait.inspection.mirror import Mirror
 from robustgait.inspection.model import RobotModel, clip_to_range
-from robustgait.robots.legs import ankle_joints, axis_kinds
+from robustgait.robots.legs import ankle_joints, axis_kinds, zero_axes
 from robustgait.robots.soles import sole_slopes
 
 
@@ -99,9 +98,8 @@ def centre_over_soles(robot: RobotModel, legs: Legs, mirror: Mirror) -> float:
 
     # the hip pitch turns back by as much about the world's y: the same angle, or its opposite where the two axes point
     # opposite ways along y
-    d0 = mujoco.MjData(m)
-    mujoco.mj_kinematics(m, d0)
-    back = -float(np.sign(d0.xaxis[ankle][1]) * np.sign(d0.xaxis[pitches[0]][1]))
+    axes = zero_axes(m, (ankle, pitches[0]))
+    back = -float(np.sign(axes[0, 1]) * np.sign(axes[1, 1]))
 
     def leaned(lean: float) -> dict[int, float]:
         out = dict(robot.angles)

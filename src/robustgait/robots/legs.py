@@ -13,16 +13,22 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
+from numpy.typing import NDArray
 
 AXIS_KINDS = "xyz"  # roll, pitch, yaw: the world axis a joint's axis is closest to
 
 
-def axis_kinds(model: mujoco.MjModel, joints: tuple[int, ...]) -> tuple[str, ...]:
-    """Each joint's kind, ``x`` (roll), ``y`` (pitch) or ``z`` (yaw): the world axis its axis is closest to in the
-    model's zero posture (``qpos0``)."""
+def zero_axes(model: mujoco.MjModel, joints: tuple[int, ...]) -> NDArray[np.float64]:
+    """Each joint's axis (len(joints), 3), world, in the model's zero posture (``qpos0``)."""
     d = mujoco.MjData(model)
     mujoco.mj_kinematics(model, d)
-    return tuple(AXIS_KINDS[int(np.argmax(np.abs(d.xaxis[j])))] for j in joints)
+    return np.array([d.xaxis[j] for j in joints], dtype=float).reshape(len(joints), 3)
+
+
+def axis_kinds(model: mujoco.MjModel, joints: tuple[int, ...]) -> tuple[str, ...]:
+    """Each joint's kind, ``x`` (roll), ``y`` (pitch) or ``z`` (yaw): the world axis its axis is closest to in the
+    model's zero posture (:func:`zero_axes`)."""
+    return tuple(AXIS_KINDS[int(np.argmax(np.abs(a)))] for a in zero_axes(model, joints))
 
 
 def _knee(kinds: tuple[str, ...]) -> int | None:
