@@ -247,8 +247,9 @@ def sole_up(points_along: Callable[[FloatArray], FloatArray], body_up: FloatArra
     """The up a foot's sole is read along (3,): the foot body's axis closest to the vertical (``body_up``, so that a
     foot the posture tilts keeps its whole tread), or the ``vertical`` itself where the ground points on the sole
     along it span clearly more area (:func:`tread_spread`, by over 1 %): a foot body whose frame is tilted from its
-    sole (Berkeley Humanoid's, 10°) would keep only its heel along its own axis. ``points_along(up)``: the foot's
-    ground points (k, 3) read along ``up`` (:func:`geom_sole_points` of its geoms), in the frame of both vectors."""
+    sole would keep only its heel along its own axis (docs/robots.md, "Soles, floor, URDF"). ``points_along(up)``:
+    the foot's ground points (k, 3) read along ``up`` (:func:`geom_sole_points` of its geoms), in the frame of both
+    vectors."""
     body_up, vertical = np.asarray(body_up, dtype=float), np.asarray(vertical, dtype=float)
     if np.allclose(body_up, vertical):
         return body_up
