@@ -26,6 +26,11 @@ the check's outcome, whether it solved again and why, and the steps the written 
 (:func:`robustgait.study.evaluate.evaluate`, the defaults: generate, walk to the cap, certify, and the one retry with a
 joint margin after a fall at a joint limit): status, reason, J*, whether it was generated again and why, seconds.
 
+``promise SPEC GAIT CERT``: the certificate's promise where it is made: ``validate --disturbance push`` with every
+push drawn below J* (``validate.push_dv_max`` = J* / m, so the impulses are uniform in [0, J*] instead of up to the
+default Δv_max, where few land below J* on a robot whose J* is small against its mass): pushes, falls within 20 steps,
+and the falls' upper 95 % bound, as one JSON line.
+
 ``growth SPEC GAIT``: the regulator's own growth probe (:func:`robustgait.sim.regulator.lateral_growth`) under
 each share κ of ``--shares``: how much a lateral CoM error grows per step (``fell``: a probe walk fell) — does the
 ankle hold it, or does it grow as on a point foot (e^{λT} per step)?
@@ -213,6 +218,25 @@ def study_evaluate(spec: Path, points: list[float]) -> list[dict[str, Any]]:
     return rows
 
 
+def promise(spec: Path, gait: Path, cert: Path, trials: int, label: str) -> dict[str, Any]:
+    from robustgait import load_robot
+
+    j_star = float(json.loads(cert.read_text())["j_star"])
+    dv = j_star / load_robot(spec).mass
+    cmd = ("validate", str(gait), "--robot", str(spec), "--certificate", str(cert), "--disturbance", "push",
+           "--trials", str(trials), "--override", f"validate.push_dv_max={dv:.6g}", "--json")
+    code, text, sec = cli(*cmd)
+    row: dict[str, Any] = {"commit": git_commit(), "date": str(date.today()), "robot": label,
+                           "command": "robustgait " + " ".join(cmd), "exit": code, "seconds": round(sec, 1),
+                           "j_star": j_star}
+    if code:
+        return row | {"error": _last(text)}
+    push = json.loads(_last(text))["kinds"]["push"]
+    inside = push["certificate_check"]["inside"]
+    return row | {"trials": trials, "below_j_star": inside["n"], "below_j_star_fell": inside["k"],
+                  "fell_upper_95": round(inside["high"], 4)}
+
+
 def growth(spec: Path, gait_path: Path, shares: list[float]) -> list[dict[str, Any]]:
     from robustgait import Config, load_gait, load_robot
     from robustgait.sim.factory import make_engine
@@ -256,6 +280,12 @@ def main() -> None:
     e = sub.add_parser("evaluate")
     e.add_argument("spec", type=Path)
     e.add_argument("--params", type=float, nargs="+", required=True, help="L T W H per point")
+    pr = sub.add_parser("promise")
+    pr.add_argument("spec", type=Path)
+    pr.add_argument("gait", type=Path)
+    pr.add_argument("cert", type=Path)
+    pr.add_argument("--trials", type=int, default=200)
+    pr.add_argument("--label", default="")
     g = sub.add_parser("growth")
     g.add_argument("spec", type=Path)
     g.add_argument("gait", type=Path)
@@ -273,6 +303,8 @@ def main() -> None:
         study_evaluate(args.spec, args.params)
     elif args.cmd == "sweep":
         sweep(args.spec, args.durations, args.widths, args.shares, args.steps)
+    elif args.cmd == "promise":
+        print(json.dumps(promise(args.spec, args.gait, args.cert, args.trials, args.label or str(args.spec))))
     else:
         growth(args.spec, args.gait, args.shares)
 
