@@ -146,11 +146,14 @@ def narrow_soles(size: RobotSize) -> bool:
 class Balance:
     """The default gait's step-to-step balance as its walk measured it
     (:func:`robustgait.robotinit.init.measured_balance`): ``share`` κ, the share of the H-LIP's stepping gain the step
-    regulator settled on (:meth:`robustgait.sim.regulator.StepRegulator.settle_share`), and ``rate`` λ = √(g/z0)
-    [1/s], the H-LIP's rate at the gait's CoM height z0."""
+    regulator settled on (:meth:`robustgait.sim.regulator.StepRegulator.settle_share`), ``rate`` λ = √(g/z0)
+    [1/s], the H-LIP's rate at the gait's CoM height z0, and ``narrow_step_fails``: the narrowest step width of a
+    point-foot walker's window, at the default length, duration and height, does not pass ``gait generate``
+    (:func:`robustgait.robotinit.init.narrowest_step`)."""
 
     share: float
     rate: float
+    narrow_step_fails: bool = False
 
     def point_foot(self, rules: ScaleRules) -> bool:
         """The robot balances by foot placement: κ ≥ ``point_foot_share`` (its ankle does not hold the centre of
@@ -168,6 +171,17 @@ def duration_rule(size: RobotSize, rules: ScaleRules, balance: Balance | None = 
         high = min(high, rules.narrow_step_duration / duration_constant(size, rules))
     if balance is not None and balance.point_foot(rules):
         high = min(high, max(1.0, rules.point_foot_step / (balance.rate * step_duration(size, rules))))
+    return low, high, points
+
+
+def width_rule(rules: ScaleRules, balance: Balance | None = None) -> tuple[float, float, int]:
+    """The flat-foot action space's width axis rule: ``action_step_width``, its low end raised to the default width
+    for a point-foot walker (:meth:`Balance.point_foot`) whose narrowest step of that rule does not pass ``gait
+    generate`` (:attr:`Balance.narrow_step_fails`): the window then starts where a step was seen to walk, as the
+    duration rule's ends never below the default step."""
+    low, high, points = rules.action_step_width
+    if balance is not None and balance.point_foot(rules) and balance.narrow_step_fails:
+        low = max(low, 1.0)
     return low, high, points
 
 
@@ -222,13 +236,14 @@ def sig(x: float, digits: int = 3) -> float:
 
 def scale(size: RobotSize, rules: ScaleRules, balance: Balance | None = None) -> Scaled:
     """All the rules applied to a robot (values rounded to 3 significant digits); ``balance``: the default gait's
-    measured balance, which bounds a point-foot walker's step durations (:func:`duration_rule`)."""
+    measured balance, which bounds a point-foot walker's step durations and widths (:func:`duration_rule`,
+    :func:`width_rule`)."""
     width = sig(step_width(size, rules), 3 if size.ankle_roll else 4)  # parallel legs: to 0.1 mm at a 0.2 m width
     gait = {"step_length": sig(step_length(size, rules)), "step_duration": sig(step_duration(size, rules)),
             "step_width": width, "step_height": sig(step_height(size, rules))}
     mc_gait = {**gait, "step_duration": sig(step_duration(size, rules, multicontact=True))}
-    flat = {a: axis_range(a, gait[a], duration_rule(size, rules, balance) if a == "step_duration"
-                          else getattr(rules, f"action_{a}")) for a in GAIT_AXES}
+    rule = {"step_duration": duration_rule(size, rules, balance), "step_width": width_rule(rules, balance)}
+    flat = {a: axis_range(a, gait[a], rule.get(a, getattr(rules, f"action_{a}"))) for a in GAIT_AXES}
     mc: dict[str, tuple[float, float, float]] | None = None
     if size.ankle_roll:  # multi-contact gaits roll the heel's edge flat with the ankle roll
         mc = {a: axis_range(a, mc_gait[a], getattr(rules, f"multicontact_{a}")) for a in GAIT_AXES}

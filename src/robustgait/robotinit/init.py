@@ -9,8 +9,9 @@ step do not enter the gait's optimisation) and walked at each candidate (:func:`
 default gait cannot be generated, no candidate is below the stability bound, or none is accurate enough, the timestep
 is the servo rule's (:func:`.gains.servo_timestep`, without stable PD), with a note saying why. When the step
 regulator runs for the robot's soles, the default gait's walk also says whether its ankle holds the centre of mass
-(:func:`measured_balance`): a point-foot walker's step durations end at λT = ``robot.scale.point_foot_step``
-(:func:`with_balance`).
+(:func:`measured_balance`): a point-foot walker's step durations end at λT = ``robot.scale.point_foot_step``, and
+its step widths start at the default width when the window's narrowest step does not pass ``gait generate``
+(:func:`narrowest_step`, :func:`with_balance`).
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ from robustgait.config import Config
 from robustgait.config.regulator import regulator_rule
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
+from robustgait.gaitgen import GaitGenerator
+from robustgait.gaitgen.walkcheck import generate_walking
 from robustgait.inspection.scale import Balance, scale
 from robustgait.io.robotfile import read_mjcf, spec_from_raw
 from robustgait.robotinit.draft import Draft, draft_at_timestep, draft_spec, lowered
@@ -84,11 +87,11 @@ def init_spec(model: str | Path, spec_path: str | Path, config: Config,
     choice = dataclasses.replace(select_timestep(robot_at, gait, candidates, config, say=tell), excluded=excluded)
     if not choice.passed:  # no step is accurate enough with stable PD: the servo rule's
         draft.notes.append(f"{choice.note}: the timestep is the servo rule's, without stable PD")
-        return with_balance(draft, lambda: draft_robot(draft, spec_path), gait, config)
+        return with_balance(draft, lambda: draft_robot(draft, spec_path), gait, config, tell)
     out = draft_at_timestep(draft, choice.timestep, True, choice)
     if choice.note:
         out.notes.append(choice.note)
-    return with_balance(out, lambda: robot_at(choice.timestep), gait, config)
+    return with_balance(out, lambda: robot_at(choice.timestep), gait, config, tell)
 
 
 def measured_balance(robot: Robot, gait: Gait, config: Config) -> Balance | None:
@@ -101,12 +104,32 @@ def measured_balance(robot: Robot, gait: Gait, config: Config) -> Balance | None
         return None if reg is None else Balance(reg.share, reg.lam)
 
 
-def with_balance(draft: Draft, robot: Callable[[], Robot], gait: Gait, config: Config) -> Draft:
+def narrowest_step(robot: Robot, width: float, config: Config) -> str:
+    """Why the robot's default flat-foot gait with step width ``width`` [m] does not pass ``gait generate`` — its
+    solve, its walk check and the one retry (:func:`~robustgait.gaitgen.walkcheck.generate_walking`) — in one line;
+    "" when it passes. Never raises for a failed solve or walk."""
+    cfg = dataclasses.replace(config, generate=dataclasses.replace(config.generate, domains="flat"))
+    params = dataclasses.replace(robot.default_params.resolved("flat"), step_width=width)
+    try:
+        checked = generate_walking(robot, params, cfg, GaitGenerator(robot, cfg.generate))
+    except RobustGaitError as exc:
+        return str(exc)
+    if checked.result.gait is None:
+        return f"its solve failed ({checked.result.status}: {checked.result.reason})"
+    if checked.walked is not None and not checked.walked.passed:
+        return checked.walked.text()
+    return ""
+
+
+def with_balance(draft: Draft, robot: Callable[[], Robot], gait: Gait, config: Config,
+                 say: Callable[[str], None] | None = None) -> Draft:
     """The draft with its scaled values bounded by the default gait's balance as ``robot()`` (the draft's robot)
-    walks it (:func:`measured_balance`; :func:`~robustgait.inspection.scale.duration_rule`: a point-foot walker's step
-    durations end at λT = ``robot.scale.point_foot_step``), and a note saying so; unchanged when the step regulator
-    does not run for the robot's soles (``sim.regulator``) or applies less than ``robot.scale.point_foot_share`` of
-    the H-LIP's gain (the ankle holds the centre of mass)."""
+    walks it (:func:`measured_balance`), and notes saying so: a point-foot walker's step durations end at λT =
+    ``robot.scale.point_foot_step`` (:func:`~robustgait.inspection.scale.duration_rule`), and its step widths start at
+    the default width when the window's narrowest step does not pass ``gait generate`` (:func:`narrowest_step`,
+    :func:`~robustgait.inspection.scale.width_rule`). Unchanged when the step regulator does not run for the robot's
+    soles (``sim.regulator``) or applies less than ``robot.scale.point_foot_share`` of the H-LIP's gain (the ankle
+    holds the centre of mass). ``say(line)`` is told what it walks."""
     if not regulator_rule(config.sim.regulator, draft.size.sole_width, draft.size.leg_length, 1)[0]:
         return draft
     rules = config.robot.scale
@@ -114,13 +137,24 @@ def with_balance(draft: Draft, robot: Callable[[], Robot], gait: Gait, config: C
     if balance is None or not balance.point_foot(rules):
         return draft
     scaled = scale(draft.size, rules, balance)
+    notes = list(draft.notes)
+    narrow, default_width = scaled.action_space["step_width"][0], scaled.gait["step_width"]
+    if narrow < default_width:
+        (say or (lambda line: None))(f"walking the narrowest step of the window (step width {narrow:g} m) ...")
+        why = narrowest_step(robot(), narrow, config)
+        if why:
+            balance = dataclasses.replace(balance, narrow_step_fails=True)
+            scaled = scale(draft.size, rules, balance)
+            low, high, _ = scaled.action_space["step_width"]
+            notes.append(f"the default gait at the window's narrowest step width, {narrow:g} m, does not pass gait "
+                         f"generate ({why}): a point-foot walker's step widths start at the default "
+                         f"{default_width:g} m, {low:g}–{high:g} m (robot.scale.action_step_width)")
     if scaled == draft.scaled:
         return draft
     low, high, _ = scaled.action_space["step_duration"]
-    out = dataclasses.replace(draft, scaled=scaled, balance=balance, notes=list(draft.notes))
-    out.notes.append(f"the default gait balances by foot placement (the step regulator applies κ = "
-                     f"{balance.share:.2g} of the H-LIP's stepping gain, at least robot.scale.point_foot_share "
-                     f"{rules.point_foot_share:g}: the ankle does not hold the centre of mass): its step durations end "
-                     f"at λT = {rules.point_foot_step:g} (λ = √(g/z0) = {balance.rate:.3g} 1/s), {low:g}–{high:g} s "
-                     "(robot.scale.point_foot_step)")
-    return out
+    notes.insert(len(draft.notes), f"the default gait balances by foot placement (the step regulator applies κ = "
+                 f"{balance.share:.2g} of the H-LIP's stepping gain, at least robot.scale.point_foot_share "
+                 f"{rules.point_foot_share:g}: the ankle does not hold the centre of mass): its step durations end "
+                 f"at λT = {rules.point_foot_step:g} (λ = √(g/z0) = {balance.rate:.3g} 1/s), {low:g}–{high:g} s "
+                 "(robot.scale.point_foot_step)")
+    return dataclasses.replace(draft, scaled=scaled, balance=balance, notes=notes)

@@ -301,7 +301,9 @@ def _scaled(draft: Draft) -> list[str]:
                                     if narrow_soles(draft.size) else "")
         + ("; the default gait balances by foot placement (robot.scale.point_foot_share: its ankle does not hold "
            f"the centre of mass): steps end by λT = robot.scale.point_foot_step, λ = √(g/z0) = "
-           f"{draft.balance.rate:.3g} 1/s" if draft.balance is not None else ""),
+           f"{draft.balance.rate:.3g} 1/s" if draft.balance is not None else "")
+        + ("; its narrowest step did not pass gait generate: widths start at the default"
+           if draft.balance is not None and draft.balance.narrow_step_fails else ""),
         *(f"{a} = {axis(s.action_space[a])}" for a in GAIT_AXES),
     ]
     if s.multicontact_action_space is None:
