@@ -534,6 +534,27 @@ def test_a_point_foot_walker_steps_end_at_its_lambda_t() -> None:
     assert default == pytest.approx(2.0 * math.sqrt(0.896 / 9.81), rel=1e-2)
 
 
+def test_a_point_foot_walker_whose_narrowest_step_fails_steps_from_its_default_width() -> None:
+    """Adam Lite's size: when the window's narrowest step does not pass gait generate, a point-foot walker's widths
+    start at the grid point nearest the default width (which walked) and end where they did; the failure moves
+    nothing for an ankle that holds (κ below ``point_foot_share``), and nothing but the width axis moves."""
+    from robustgait.inspection.scale import Balance
+
+    size = RobotSize(leg_length=0.896, standing_height=0.929, mass=58.2, gravity=9.81, hip_spacing=0.192,
+                     sole_length=0.22, sole_width=0.05)
+    rules = ScaleRules()
+    walks = scale(size, rules, Balance(share=1.0, rate=3.3))
+    fails = scale(size, rules, Balance(share=1.0, rate=3.3, narrow_step_fails=True))
+    default = walks.gait["step_width"]
+    low, high, step = fails.action_space["step_width"]
+    assert walks.action_space["step_width"][0] < default - step  # the rule's 0.88 × reaches below the default
+    assert abs(low - default) <= step / 2 + 1e-9 and low > walks.action_space["step_width"][0]
+    assert high == pytest.approx(walks.action_space["step_width"][1], abs=step)
+    assert {k: v for k, v in fails.action_space.items() if k != "step_width"} == {
+        k: v for k, v in walks.action_space.items() if k != "step_width"}
+    assert scale(size, rules, Balance(share=0.49, rate=3.3, narrow_step_fails=True)) == scale(size, rules)
+
+
 def test_a_grid_stops_at_the_grid_point_nearest_its_high_multiple() -> None:
     # Booster T1's durations: 0.86–1.57 × 0.548 s = 0.47–0.86 s; the nice step 0.1 (not 0.078) must not stretch the
     # five steps to 1.0 s: the grid stops at 0.9 s, the grid point nearest 0.86 s
