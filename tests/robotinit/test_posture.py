@@ -14,7 +14,7 @@ from robustgait.config import RobotConfig
 from robustgait.inspection.discover import find_legs
 from robustgait.inspection.mirror import find_mirror
 from robustgait.inspection.model import open_model
-from robustgait.robotinit.posture import STAND_FRACTION, centre_over_soles, com_over_soles
+from robustgait.robotinit.posture import centre_over_soles, com_over_soles
 from tests.inspection.test_inspection import SERVO_RULE, biped_xml, run, write
 
 
@@ -28,9 +28,9 @@ def test_a_mass_over_the_heels_is_brought_over_the_middle_of_the_soles(tmp_path:
     robot = open_model(write(tmp_path, heel_heavy_xml()))
     legs = find_legs(robot, cfg.foot_level, cfg.sole_tolerance)
     com, rear, front = com_over_soles(robot, legs, robot.angles)
-    assert (com - rear) / (front - rear) < (1 - STAND_FRACTION) / 2  # the case this is for
+    assert (com - rear) / (front - rear) < (1 - cfg.stand_fraction) / 2  # the case this is for
     before = dict(robot.angles)
-    lean = centre_over_soles(robot, legs, find_mirror(robot, cfg.mirror_tolerance))
+    lean = centre_over_soles(robot, legs, find_mirror(robot, cfg.mirror_tolerance), cfg.stand_fraction)
     assert 0.0 < lean < 0.5
     com, rear, front = com_over_soles(robot, legs, robot.angles)
     assert com == pytest.approx((rear + front) / 2, abs=2e-4)
@@ -56,5 +56,5 @@ def test_a_model_standing_over_its_soles_keeps_its_posture(tmp_path: Path):
     robot = open_model(write(tmp_path, biped_xml()))
     legs = find_legs(robot, cfg.foot_level, cfg.sole_tolerance)
     before = dict(robot.angles)
-    assert centre_over_soles(robot, legs, find_mirror(robot, cfg.mirror_tolerance)) == 0.0
+    assert centre_over_soles(robot, legs, find_mirror(robot, cfg.mirror_tolerance), cfg.stand_fraction) == 0.0
     assert robot.angles == before and np.isfinite(list(before.values())).all()

@@ -170,6 +170,10 @@ class RobotConfig:
                                         "height (else one leg)", gt=0.0, le=1.0)] = 0.1
     sole_tolerance: Annotated[Float, Doc("a foot's collision geoms within this height of its lowest point form the "
                                          "sole", unit="m", gt=0.0, le=0.05)] = 0.005
+    stand_fraction: Annotated[Float, Doc(
+        "the posture's centre of mass stands over the soles when it lies within this middle fraction of their length "
+        "(a servo-held stand with the mass over the last tenth of the sole tips over it); robot init leans the legs "
+        "to bring it to the middle otherwise", gt=0.0, le=1.0)] = 0.8
     mirror_tolerance: Annotated[Float, Doc("largest mirror residual: position error of a body, and how far a "
                                            "partner's axis line may pass from the reflected anchor (a model file's "
                                            "placement rounding is not an asymmetry)", unit="m", gt=0.0,

@@ -214,7 +214,7 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     levelled = level_soles(robot, legs, mirror)
     if levelled > 0.0:
         legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the levelled posture
-    centred = centre_over_soles(robot, legs, mirror)
+    centred = centre_over_soles(robot, legs, mirror, config.stand_fraction)
     if centred > 0.0:
         legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the leaned posture
     angles = robot.angles

@@ -65,9 +65,6 @@ def level_soles(robot: RobotModel, legs: Legs, mirror: Mirror) -> float:
     return change
 
 
-# the posture's centre of mass stands over the soles when it lies within this middle fraction of their length (a
-# servo-held stand with the mass over the last tenth of the sole tips over it); brought to the middle otherwise
-STAND_FRACTION = 0.8
 CENTRE_ITERATIONS, CENTRE_STEP, CENTRE_TOLERANCE = 8, 1e-6, 1e-4  # Newton on the lean [rad], stop within [m]
 
 
@@ -79,14 +76,14 @@ def com_over_soles(robot: RobotModel, legs: Legs, angles: dict[int, float]) -> t
     return float(d.subtree_com[robot.base][0]), float(x.min()), float(x.max())
 
 
-def centre_over_soles(robot: RobotModel, legs: Legs, mirror: Mirror) -> float:
+def centre_over_soles(robot: RobotModel, legs: Legs, mirror: Mirror, stand_fraction: float) -> float:
     """Bring the posture's centre of mass over the middle of the soles when it lies outside their middle
-    :data:`STAND_FRACTION`: every leg leaned by one angle about its ankle pitch, the hip pitch turned back by as
-    much about the world's y (its axis's sign read in the zero posture: soles and pelvis keep their orientation; the
-    knees stay), the right leg's mirrored from the left. Edits
-    ``robot.angles``; returns the lean [rad] (0 when the mass already stands over the soles)."""
+    ``stand_fraction`` (``robot.stand_fraction``): every leg leaned by one angle about its ankle pitch, the hip
+    pitch turned back by as much about the world's y (its axis's sign read in the zero posture: soles and pelvis keep
+    their orientation; the knees stay), the right leg's mirrored from the left. Edits ``robot.angles``; returns the
+    lean [rad] (0 when the mass already stands over the soles)."""
     com, rear, front = com_over_soles(robot, legs, robot.angles)
-    margin = (1.0 - STAND_FRACTION) / 2.0 * (front - rear)
+    margin = (1.0 - stand_fraction) / 2.0 * (front - rear)
     if rear + margin <= com <= front - margin:
         return 0.0
     m, chain = robot.model, legs.left.joints
