@@ -71,7 +71,10 @@ def test_the_gait_is_solved_again_only_after_a_joint_reached_its_limit(exo):  # 
 
 def test_the_walk_plan_says_how_far_it_walks() -> None:
     cfg = Config()
-    assert walk_plan(cfg) == "at least 20 steps, on until its switching states settle and hold 64 steps: at most 164"
+    assert walk_plan(cfg) == ("at least 20 steps, on until its switching states settle and hold 64 steps: at most 164, "
+                              "or 300 if they do not settle")
+    stop = replace(cfg, generate=replace(cfg.generate, walk_unsettled=0))
+    assert walk_plan(stop) == "at least 20 steps, on until its switching states settle and hold 64 steps: at most 164"
     fixed = replace(cfg, generate=replace(cfg.generate, walk_settle=False, walk_steps=30))
     assert walk_plan(fixed) == "30 steps"
 
@@ -88,6 +91,20 @@ def test_the_walk_check_walks_until_the_orbit_rule_has_its_answer(exo, exo_gait)
     assert checked.taken == orbit.steps and f"settled by step {orbit.settled}" in checked.orbit_text
     short = walk_check(exo, exo_gait, replace(cfg, generate=replace(cfg.generate, walk_settle=False)))
     assert short.taken == 20 and short.orbit == ""
+
+
+@pytest.mark.slow
+def test_a_walk_that_does_not_settle_is_walked_on_to_see_whether_it_falls(exo, exo_gait):  # type: ignore[no-untyped-def]
+    """exo's gait under an orbit rule it cannot meet (a band 1e-3 of its scatter wide): the rule answers unsettled at
+    its max_steps, and the check walks on to generate.walk_unsettled steps — or stops at the answer with 0."""
+    cfg = Config()
+    strict = replace(cfg.certify, orbit=replace(cfg.certify.orbit, max_steps=32, settle_multiple=1e-3, drift=1e-3))
+    on = replace(cfg, certify=strict, generate=replace(cfg.generate, walk_unsettled=60))
+    checked = walk_check(exo, exo_gait, on)
+    assert checked.orbit == "unsettled" and checked.passed and checked.taken == 60
+    assert checked.text().startswith("walked 60 steps under pd; its switching states did not settle")
+    stop = walk_check(exo, exo_gait, replace(on, generate=replace(on.generate, walk_unsettled=0)))
+    assert stop.orbit == "unsettled" and stop.passed and 20 <= stop.taken < 60
 
 
 @pytest.mark.slow

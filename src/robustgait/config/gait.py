@@ -132,6 +132,10 @@ class GenerationConfig:
     walk_settle: Annotated[bool, Doc("the walk check goes on until the orbit rule (certify.orbit) has its answer: "
                                      "the switching states settled and held their band, or did not settle by "
                                      "orbit.max_steps; a fall before then fails the check")] = True
+    walk_unsettled: Annotated[Int, Doc("when the orbit rule answers that the switching states did not settle (a "
+                                       "drift, a turn, a slow fall), the walk check walks on to this many steps, and "
+                                       "a fall within them fails it (0: it stops at the answer)", ge=0,
+                                       le=1000)] = 300
     retry_joint_margin: Annotated[Float, Doc(
         "when the walk check's gait fell after one of its joints reached the end of its range and its joint_margin "
         "is below this, gait generate solves once more with this margin (0: never)", unit="rad", ge=0.0,

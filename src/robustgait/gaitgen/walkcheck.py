@@ -2,8 +2,9 @@
 physics check passed can still fall in MuJoCo — a joint-space tracking controller has no balance feedback of its
 own, a narrow sole tips, and a walk whose corrections drive a joint to the end of its range falls tens of steps
 later. ``gait generate`` walks it under the configured controller until the certificate's orbit rule has its answer
-(the switching states settled and held their band, or did not settle), at least ``generate.walk_steps`` steps, before
-it calls it good; when it falls, the walk's record gives the probable cause and what to try.
+(the switching states settled and held their band, or did not settle — then on to ``generate.walk_unsettled``
+steps, as a drift may be a slow fall), at least ``generate.walk_steps`` steps, before it calls it good; when it
+falls, the walk's record gives the probable cause and what to try.
 """
 
 from __future__ import annotations
@@ -218,8 +219,9 @@ def walk_check(robot: Robot, gait: Gait, config: Config, check: PhysicsCheck | N
     """Walk ``gait`` with ``config.sim`` (its controller and regulator) from its initial state, at least
     ``config.generate.walk_steps`` steps and, with ``generate.walk_settle``, on until the orbit rule of
     ``config.certify`` has its answer (:class:`~robustgait.certificate.orbit.SettlingWatch`: at most
-    ``orbit.max_steps`` + ``orbit.hold_steps`` steps); when it falls, walk it again to its fall with its trajectory
-    kept, and say why and what to try. A ``walk_steps`` of 0 skips the walk (a pass)."""
+    ``orbit.max_steps`` + ``orbit.hold_steps`` steps) — and when that answer is ``unsettled``, on to
+    ``generate.walk_unsettled`` steps (a drift may be a slow fall); when it falls, walk it again to its fall with its
+    trajectory kept, and say why and what to try. A ``walk_steps`` of 0 skips the walk (a pass)."""
     least = config.generate.walk_steps
     if least == 0:
         return WalkCheck(0, 0, False, None, config.sim.controller)
@@ -235,9 +237,12 @@ def walk_check(robot: Robot, gait: Gait, config: Config, check: PhysicsCheck | N
             return done and len(events) >= least
 
     result = walk(robot, gait, config.sim, steps=steps, until=until)
+    orbit = None if until is None else find_orbit(Walked(robot, gait, result), config.certify)
+    on = config.generate.walk_unsettled
+    if orbit is not None and orbit.status == Status.UNSETTLED and not result.fell and on > result.steps_taken:
+        result = walk(robot, gait, config.sim, steps=on)  # the walk is deterministic: the same steps, then on
     out = WalkCheck(least, result.steps_taken, result.fell, result.fall_reason, result.controller)
-    if until is not None:
-        orbit = find_orbit(Walked(robot, gait, result), config.certify)
+    if orbit is not None:
         out.orbit = orbit.status.value
         out.orbit_text = orbit_summary(orbit) if not result.fell else orbit.reason
     if result.fell:
@@ -268,8 +273,9 @@ def walk_plan(config: Config) -> str:
     if not config.generate.walk_settle:
         return f"{least} steps"
     o = config.certify.orbit
+    on = config.generate.walk_unsettled
     return (f"at least {least} steps, on until its switching states settle and hold {o.hold_steps} steps: at most "
-            f"{max(least, o.max_steps + o.hold_steps)}")
+            f"{max(least, o.max_steps + o.hold_steps)}" + (f", or {on} if they do not settle" if on else ""))
 
 
 def retry_margin(robot: Robot, config: Config, walked: WalkCheck) -> float | None:
