@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from robustgait.errors import input_error
 from robustgait.inspection.model import RobotModel, geom_bottom
-from robustgait.robots.legs import ankle_roll_joint
+from robustgait.robots.legs import ankle_roll_joint, closed_chain, closed_chain_problem
 from robustgait.robots.soles import GEOM_TYPES, SOLE_TYPES, article, foot_up, geom_sole_points, on_sole, sole_up
 
 SIDES = ("left", "right")
@@ -317,6 +317,9 @@ def find_legs(robot: RobotModel, foot_level: float, sole_tolerance: float) -> Le
         if not joints:
             raise input_error(src, f"the {side} foot '{robot.body_name(foot)}' has no joint between it and "
                               f"'{robot.body_name(branch)}', where the legs branch")
+        loop = closed_chain(robot.model, int(robot.model.jnt_bodyid[joints[0]]))
+        if loop is not None:
+            raise input_error(src, closed_chain_problem(side, loop))
         legs[side] = Leg(side, joints, find_sole(robot, d, foot, side, sole_tolerance),
                          ankle_roll_joint(robot.model, joints))
         _one_foot_body(robot, d, legs[side], int(robot.model.jnt_bodyid[joints[0]]), sole_tolerance)

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from robustgait.config import GaitParams, RobotScale
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.robots.held import weld_joints
-from robustgait.robots.legs import ankle_roll_joint, foot_chain
+from robustgait.robots.legs import ankle_roll_joint, closed_chain, closed_chain_problem, foot_chain
 from robustgait.robots.solebox import SoleBox, sole_box
 from robustgait.robots.soles import ResolvedSole, resolve_floor, resolve_soles
 from robustgait.robots.spec import SIDES, RobotSpec
@@ -204,6 +204,10 @@ class Robot:
         self.servo_kd = np.concatenate([self.kd, [servo_damping(x.kp, x.kd, dt, spec.stable_pd) for x in spec.held]])
         self.servo_limit = np.concatenate([self.torque_limit, [h.torque_limit for h in spec.held]])
         self.joint_range = np.array([m.jnt_range[i] if m.jnt_limited[i] else (-np.inf, np.inf) for i in ids])
+        for side, joints in self.leg_joints.items():
+            loop = closed_chain(m, int(m.jnt_bodyid[joints[0]])) if joints else None
+            if loop is not None:
+                raise input_error(spec.source, closed_chain_problem(side, loop))
 
     @cached_property
     def planned(self) -> Robot:
