@@ -130,7 +130,7 @@ def test_the_loaders_sole_box_is_the_tread(shape: str) -> None:
     """The virtual sole box over a mesh foot spans its tread (0.2 × 0.1 m centred at x 0.03), to 1 mm, whatever
     rises above it (toe, chamfer, heel cup, arch)."""
     m, d = foot_model(SHAPES[shape])
-    centre, rot, half = sole_rectangle(m, d, list(range(m.ngeom)), np.array([1.0, 0.0, 0.0]))
+    centre, rot, half, _ = sole_rectangle(m, d, list(range(m.ngeom)), np.array([1.0, 0.0, 0.0]))
     assert np.allclose(rot, np.eye(3), atol=1e-6)
     assert 2 * half[0] == pytest.approx(X1 - X0, abs=MM) and 2 * half[1] == pytest.approx(2 * HALF_WIDTH, abs=MM)
     assert np.allclose(centre[:2], [(X0 + X1) / 2, 0.0], atol=MM)

@@ -30,7 +30,16 @@ from numpy.typing import NDArray
 from robustgait.errors import input_error
 from robustgait.inspection.model import RobotModel, geom_bottom
 from robustgait.robots.legs import ankle_roll_joint, closed_chain, closed_chain_problem
-from robustgait.robots.soles import GEOM_TYPES, SOLE_TYPES, article, foot_up, geom_sole_points, on_sole, sole_up
+from robustgait.robots.soles import (
+    GEOM_TYPES,
+    SOLE_TYPES,
+    article,
+    foot_up,
+    geom_sole_points,
+    on_sole,
+    sole_up,
+    tread_problem,
+)
 
 SIDES = ("left", "right")
 MIN_SOLE = 1e-3  # [m]: a sole narrower than this has no area to stand on (one sphere, a capsule on end)
@@ -263,6 +272,10 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
     if min(length, width) < MIN_SOLE:
         raise input_error(src, f"no sole found for the {side} leg: the lowest geometry of body '{name}' spans "
                           f"{length:.3g} × {width:.3g} m, no area to stand on (add a box geom under the foot)")
+    problem = tread_problem(side, f"{len(geoms)} {'geom' if len(geoms) == 1 else 'geoms'} of body '{name}'",
+                            local[:, [fwd, lft]])
+    if problem is not None:
+        raise input_error(src, problem)
     return FoundSole(foot, geoms, kind, sole_class, length, width, bottom, _tread(m, geoms, per_geom, on))
 
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -49,6 +50,11 @@ SOLE_PLANE_TOLERANCE = 0.002
 # ... plus this slope times their horizontal distance from it: a sole a model tilts by up to atan(slope) ≈ 1° in its
 # foot's frame (a foot plate's geoms rotated 90.5° rather than 90°) spans its whole length
 SOLE_TILT_SLOPE = 0.0175
+# a tread whose contact polygon covers less than this share of the rectangle around it is refused: the planner keeps
+# the centre of pressure inside that rectangle, where a triangle (a heel point and a toe bar: 0.5) has no contact at
+# the heel's corners; a disk (π/4 ≈ 0.79, its 8 rim points 0.71–0.83) or a trapezoid whose heel is a quarter as wide
+# (0.63) is kept
+MIN_TREAD_FILL = 0.6
 
 
 def article(noun: str) -> str:
@@ -272,10 +278,51 @@ def sole_slopes(along: FloatArray, across: FloatArray, height: FloatArray) -> tu
     return slopes[0], slopes[1]
 
 
+class SoleRectangle(NamedTuple):
+    """A foot's sole as a box in the foot body's frame (:func:`sole_rectangle`): ``centre`` (3,), ``rot`` (3, 3)
+    whose columns are the box's x (toe), y (left) and z (up) axes, ``half`` sizes (3,) [m], and the ``tread``: the
+    ground points on the sole (k, 2), (toe, left) [m]."""
+
+    centre: FloatArray
+    rot: FloatArray
+    half: FloatArray
+    tread: FloatArray
+
+
+def tread_fill(points: FloatArray) -> float:
+    """The share of the rectangle around planar points (k, 2) [m] that their convex hull covers, in [0, 1]: 1 for a
+    rectangle's corners, 0.5 for a triangle; 0 when they span no area."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    pts = np.asarray(points, dtype=float)
+    box = float(np.prod(np.ptp(pts, axis=0))) if len(pts) else 0.0
+    if box <= 0.0 or len(pts) < 3:
+        return 0.0
+    try:
+        return min(1.0, float(ConvexHull(pts).volume) / box)  # a 2-D hull's volume is its area
+    except QhullError:  # collinear points
+        return 0.0
+
+
+def tread_problem(side: str, what: str, points: FloatArray) -> str | None:
+    """The one-line refusal of a sole whose tread (its ground points (k, 2) [m]) covers less than
+    :data:`MIN_TREAD_FILL` of the rectangle around it (:func:`tread_fill`), naming the sole (``what``) and what to
+    change; None when it is a sole robustgait can bound."""
+    fill = tread_fill(points)
+    if fill <= 0.0 or fill >= MIN_TREAD_FILL:
+        return None
+    size = np.ptp(np.asarray(points, dtype=float), axis=0)
+    return (f"the {side} sole ({what}) is not a rectangle: its contact polygon covers {100 * fill:.0f} % of the "
+            f"{size[0]:.3g} × {size[1]:.3g} m rectangle around it (a triangle of a heel point and a toe bar covers "
+            f"50 %), and robustgait keeps the centre of pressure inside that rectangle: add a box geom under the foot "
+            f"spanning its tread, or a sphere at each of its four corners, and name it as the sole "
+            f"(legs.{side}.sole_geom)")
+
+
 def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int], forward: FloatArray
-                   ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """The sole of a foot's geoms as a box in the foot body's frame: (centre (3,), rotation (3, 3) whose columns
-    are the box's x (toe), y (left) and z (up) axes, half-sizes (3,)), at the posture of ``data``.
+                   ) -> SoleRectangle:
+    """The sole of a foot's geoms as a box in the foot body's frame (:class:`SoleRectangle`), at the posture of
+    ``data``.
 
     Up is the body axis closest to the world's vertical (:func:`foot_up`) and toe the remaining body axis closest
     to ``forward`` (the base's x axis in the world), so the box is aligned with the foot. The sole's points are the
@@ -317,7 +364,7 @@ def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int],
                      VIRTUAL_SOLE_THICKNESS / 2])
     centre = ((along.max() + along.min()) / 2 * fwd + (across.max() + across.min()) / 2 * left
               + (bottom + half[2]) * up)
-    return centre, np.column_stack([fwd, left, up]), half
+    return SoleRectangle(centre, np.column_stack([fwd, left, up]), half, np.column_stack([along, across]))
 
 
 def resolve_soles(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel) -> dict[str, ResolvedSole]:
@@ -346,10 +393,13 @@ def resolve_sole(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel, sid
     mujoco.mj_kinematics(model, data)
     base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, spec.base_body)
     forward = data.xmat[base].reshape(3, 3)[:, 0]
-    centre, rot, half = sole_rectangle(model, data, ids, forward)
+    centre, rot, half, tread = sole_rectangle(model, data, ids, forward)
     if min(half[0], half[1]) <= 1e-4:
         raise input_error(src, f"the {side} sole ({leg.describe()}) spans no area ({2 * half[0]:.3g} × "
                           f"{2 * half[1]:.3g} m): name geoms that cover the foot's support")
+    problem = tread_problem(side, leg.describe(), tread)
+    if problem is not None:
+        raise input_error(src, problem)
     body = bodies[int(model.geom_bodyid[ids[0]])]
     if not body.name:
         body.name = f"robustgait_{side}_foot"
