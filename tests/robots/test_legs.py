@@ -59,6 +59,21 @@ def test_robot_init_writes_the_gait_parallel_legs_allow(h1_spec: Path):
     assert "no ankle roll" in text
 
 
+def test_a_width_of_four_digits_is_the_one_value_its_axis_holds(tmp_path: Path) -> None:
+    """Legs 0.1807 m apart (Unitree H1's are 0.4057 m): the action space's one width is the [gait] width to the digit,
+    not 3 digits of it, which parallel legs could not land at (every grid gait failed to solve)."""
+    from robustgait.cli import main
+
+    xml = h1_like_xml().replace('pos="0 0.09 -0.05"', 'pos="0 0.09035 -0.05"').replace(
+        'pos="0 -0.09 -0.05"', 'pos="0 -0.09035 -0.05"')
+    assert main(["robot", "init", str(write(tmp_path, xml, "h1.xml")), "-o", str(tmp_path / "h1.toml"),
+                 *SERVO_RULE]) == 0
+    robot = load_robot(tmp_path / "h1.toml")
+    assert robot.default_params.step_width == pytest.approx(0.1807, abs=1e-9)
+    space = robot.spec.action_space
+    assert space is not None and list(space["step_width"].grid()) == [robot.default_params.step_width]
+
+
 def test_generation_refuses_what_the_legs_cannot_do(h1_spec: Path, capsys: pytest.CaptureFixture[str]):
     """Another step width, or a multi-contact gait: one line naming the legs' reason, exit 2, nothing written."""
     out = h1_spec.parent / "g.json"

@@ -268,8 +268,8 @@ def _scaled(draft: Draft) -> list[str]:
     s, size, rules = draft.scaled, draft.size, draft.config.scale
     rate = f"√(g/l) = {math.sqrt(size.gravity / size.leg_length):.3g}/s"
 
-    def axis(v: tuple[float, float, float]) -> str:
-        return f"[{num(v[0], 3)}, {num(v[1], 3)}, {num(v[2], 3)}]"
+    def axis(v: tuple[float, float, float]) -> str:  # as many digits as [gait]'s: a one-value axis holds its default
+        return f"[{num(v[0])}, {num(v[1])}, {num(v[2])}]"
 
     lines = [
         "", "[fall]",
