@@ -148,6 +148,41 @@ def test_warm_start_converges_faster(gen, default):
     assert mirrored.success and mirrored.iterations == warm.iterations
 
 
+@pytest.mark.xdist_group("exo_generator")  # one worker computes the shared module fixture
+@pytest.mark.slow
+def test_a_cold_start_that_does_not_converge_is_continued_from_the_default_gait(exo, gen, monkeypatch):
+    """The first cold solve of L 0.17 is made to stop at IPOPT's iteration limit (the solve itself stubbed); the
+    generator then solves it from the robot's default gait, says so, and counts both solves; a pre-check's refusal, a
+    user's warm start or ``continuation = false`` are not continued."""
+    from robustgait.gaitgen.solve import GaitGenResult
+
+    real, calls = gen._solve, []
+
+    def cold_stalls(p, warm, continued=""):  # type: ignore[no-untyped-def]
+        calls.append((p.step_length, warm is None, continued))
+        if warm is None and p.step_length == 0.17:
+            return GaitGenResult(False, "Maximum_Iterations_Exceeded", "IPOPT: Maximum_Iterations_Exceeded",
+                                 p.resolved("flat"), iterations=300, solve_seconds=1.0)
+        return real(p, warm, continued)
+
+    monkeypatch.setattr(gen, "_solve", cold_stalls)
+    res = gen.solve(GaitParams(step_length=0.17))
+    assert res.success and res.continued == "Maximum_Iterations_Exceeded" and res.iterations > 300
+    assert res.summary()["continued"] == "Maximum_Iterations_Exceeded" and "continued" not in gen.solve(
+        GaitParams(step_length=0.18)).summary()
+    assert res.gait.solver["continued_from"] == ("the robot's default gait (the cold start: "
+                                                  "Maximum_Iterations_Exceeded)")
+    default = gen.default_gait()
+    assert default is not None and default.params.step_length == exo.default_params.step_length
+    assert sum(1 for c in calls if c[0] == exo.default_params.step_length) == 1  # solved once, then kept
+    warm = gen.solve(GaitParams(step_length=0.17), warm_start=default)
+    assert warm.success and not warm.continued
+    assert gen.solve(GaitParams(step_width=0.05)).continued == ""  # Infeasible_Parameters: no other start helps
+    monkeypatch.setattr(gen, "config", dataclasses.replace(gen.config, continuation=False))
+    off = gen.solve(GaitParams(step_length=0.17))
+    assert not off.success and off.status == "Maximum_Iterations_Exceeded" and not off.continued
+
+
 @pytest.mark.slow
 def test_grid_over_the_action_space_walks(exo, gen):
     """The corners of the action space — step length × duration (default width, height), then width × height —

@@ -126,6 +126,10 @@ class GenerationConfig:
     max_step_height: Annotated[Float, Doc("highest swing clearance a robot is asked for, in leg lengths (checked "
                                           "before any solve)", gt=0.0, le=1.0)] = 0.3
     max_iter: Annotated[Int, Doc("IPOPT iteration limit", ge=1, le=100_000)] = 300
+    continuation: Annotated[bool, Doc("when a solve from the cold start (the posture) does not converge — IPOPT stops "
+                                      "at max_iter, fails to restore feasibility or finds the problem locally "
+                                      "infeasible — solve again warm-started from the robot's default gait (solved "
+                                      "once per generator); a warm start given by the user is not replaced")] = True
     walk_steps: Annotated[Int, Doc("least steps the generated gait must walk in MuJoCo under the configured "
                                    "controller before gait generate calls it good (0: no walk check)", ge=0,
                                    le=1000)] = 20

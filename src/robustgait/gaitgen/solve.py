@@ -47,14 +47,22 @@ class GaitGenResult:
     objective: float = float("nan")
     nodes: list[NodeStates] | None = None
     check: PhysicsCheck | None = None
+    continued: str = ""
 
     def summary(self) -> dict[str, Any]:
-        """JSON-ready outcome (without the gait itself)."""
-        return {"success": self.success, "status": self.status, "reason": self.reason,
-                "params": self.params.to_dict() if self.params else None, "iterations": self.iterations,
-                "solve_seconds": self.solve_seconds,
-                "objective": self.objective if np.isfinite(self.objective) else None,
-                "check": self.check.to_dict() if self.check else None}
+        """JSON-ready outcome (without the gait itself); ``continued`` only when the solve was continued from the
+        robot's default gait (:meth:`GaitGenerator.solve`): the cold solve's status."""
+        out = {"success": self.success, "status": self.status, "reason": self.reason,
+               "params": self.params.to_dict() if self.params else None, "iterations": self.iterations,
+               "solve_seconds": self.solve_seconds,
+               "objective": self.objective if np.isfinite(self.objective) else None,
+               "check": self.check.to_dict() if self.check else None}
+        return out | ({"continued": self.continued} if self.continued else {})
+
+
+# IPOPT's statuses of a solve that did not converge from its start (another start may): continued from the default gait
+NOT_CONVERGED = frozenset({"Maximum_Iterations_Exceeded", "Restoration_Failed", "Infeasible_Problem_Detected",
+                           "Search_Direction_Becomes_Too_Small", "Diverging_Iterates", "Error_In_Step_Computation"})
 
 
 def joint_trajectories(beta: FloatArray, taus: FloatArray, duration: float
@@ -253,6 +261,7 @@ class GaitGenerator:
         self.solver = cs.nlpsol(f"robustgait_{cfg.domains}", "ipopt", nlp, opts)
         self.build_seconds = time.perf_counter() - t0
         self.n_variables, self.n_constraints = int(prob.x.numel()), int(prob.g.numel())
+        self._default: tuple[Gait | None] | None = None  # the default gait once solved (default_gait)
 
     def initial_guess(self, params: GaitParams, warm_start: Gait | None = None) -> FloatArray:
         """x₀ from a warm-start gait's β (relabeled to this stance if needed; a flat gait seeds the single
@@ -315,7 +324,32 @@ class GaitGenerator:
     def solve(self, params: GaitParams, warm_start: Gait | None = None) -> GaitGenResult:
         """Solve for one set of essential constraints; never raises on infeasible input or solver failure:
         a failed result carries the pre-check's reason, IPOPT's status or the physics check's failures. A step
-        duration that is not set is the domain graph's default."""
+        duration that is not set is the domain graph's default.
+
+        Continuation (``generate.continuation``): when the cold start (no ``warm_start``) does not converge
+        (:data:`NOT_CONVERGED`), the problem is solved again from the robot's default gait (:meth:`default_gait`); the
+        result then says so (``continued``: the cold solve's status; its iterations and seconds are counted) and its
+        gait's solver report names the start (``continued_from``)."""
+        res = self._solve(params, warm_start)
+        if warm_start is not None or res.success or res.status not in NOT_CONVERGED or not self.config.continuation:
+            return res
+        base = self.default_gait()
+        if base is None or base.params == res.params:
+            return res
+        again = self._solve(params, base, continued=res.status)
+        again.iterations += res.iterations
+        again.solve_seconds += res.solve_seconds
+        return again
+
+    def default_gait(self) -> Gait | None:
+        """The robot's default gait (its spec's ``[gait]``, the domain graph's duration when unset) solved from the cold
+        start, once per generator; None when it does not solve."""
+        if self._default is None:
+            self._default = (self._solve(self.robot.default_params, None).gait,)
+        return self._default[0]
+
+    def _solve(self, params: GaitParams, warm_start: Gait | None, continued: str = "") -> GaitGenResult:
+        """One IPOPT solve from ``warm_start`` (the cold start when None) and the physics check (:meth:`solve`)."""
         prob = self.problem
         params = params.resolved(prob.graph.name)
         reason = self.precheck(params)
@@ -335,7 +369,8 @@ class GaitGenerator:
         durations = domain_durations(prob, params)
         betas, states = unpack(prob, x, durations)
         res = GaitGenResult(success=ok, status=status, reason="" if ok else f"IPOPT: {status}", params=params,
-                            iterations=iters, solve_seconds=secs, objective=float(sol["f"]), nodes=states)
+                            iterations=iters, solve_seconds=secs, objective=float(sol["f"]), nodes=states,
+                            continued=continued)
         if ok:
             res.check = check = check_solution(self.dyn, prob, params, states, durations)
             if check.passed:
@@ -360,6 +395,8 @@ class GaitGenerator:
         margin = float(prob.config.scaled("joint_margin"))
         if margin > 0:  # provenance of a gait planned inside its joint ranges (without one, the file is unchanged)
             solver["joint_margin"] = margin
+        if res.continued:  # provenance of a solve continued from the default gait (solve)
+            solver["continued_from"] = f"the robot's default gait (the cold start: {res.continued})"
         fitted = []
         for beta, out, taus, ns, duration in zip(betas, prob.outputs, prob.domain_taus, states, durations, strict=True):
             b = beta.copy()
