@@ -534,25 +534,28 @@ def test_a_point_foot_walker_steps_end_at_its_lambda_t() -> None:
     assert default == pytest.approx(2.0 * math.sqrt(0.896 / 9.81), rel=1e-2)
 
 
-def test_a_point_foot_walker_whose_narrowest_step_fails_steps_from_its_default_width() -> None:
-    """Adam Lite's size: when the window's narrowest step does not pass gait generate, a point-foot walker's widths
-    start at the grid point nearest the default width (which walked) and end where they did; the failure moves
-    nothing for an ankle that holds (κ below ``point_foot_share``), and nothing but the width axis moves."""
+def test_a_point_foot_walker_whose_tried_end_fails_stops_that_axis_at_its_default() -> None:
+    """Adam Lite's size: when the window's narrowest step (or its longest) does not pass gait generate, a point-foot
+    walker's widths start (its lengths end) at the grid point nearest the default, which walked, and the other end
+    stays; the failure moves nothing for an ankle that holds (κ below ``point_foot_share``), and nothing but that
+    axis moves."""
     from robustgait.inspection.scale import Balance
 
     size = RobotSize(leg_length=0.896, standing_height=0.929, mass=58.2, gravity=9.81, hip_spacing=0.192,
                      sole_length=0.22, sole_width=0.05)
     rules = ScaleRules()
     walks = scale(size, rules, Balance(share=1.0, rate=3.3))
-    fails = scale(size, rules, Balance(share=1.0, rate=3.3, narrow_step_fails=True))
-    default = walks.gait["step_width"]
-    low, high, step = fails.action_space["step_width"]
-    assert walks.action_space["step_width"][0] < default - step  # the rule's 0.88 × reaches below the default
-    assert abs(low - default) <= step / 2 + 1e-9 and low > walks.action_space["step_width"][0]
-    assert high == pytest.approx(walks.action_space["step_width"][1], abs=step)
-    assert {k: v for k, v in fails.action_space.items() if k != "step_width"} == {
-        k: v for k, v in walks.action_space.items() if k != "step_width"}
-    assert scale(size, rules, Balance(share=0.49, rate=3.3, narrow_step_fails=True)) == scale(size, rules)
+    for axis, end in (("step_width", 0), ("step_length", 1)):
+        fails = scale(size, rules, Balance(share=1.0, rate=3.3, ends_fail=(axis,)))
+        default = walks.gait[axis]
+        moved, step = fails.action_space[axis][end], fails.action_space[axis][2]
+        assert abs(walks.action_space[axis][end] - default) > step  # the rule reaches past the default there
+        assert abs(moved - default) <= step / 2 + 1e-9
+        other = fails.action_space[axis][1 - end]
+        assert other == pytest.approx(walks.action_space[axis][1 - end], abs=step)
+        assert {k: v for k, v in fails.action_space.items() if k != axis} == {
+            k: v for k, v in walks.action_space.items() if k != axis}
+        assert scale(size, rules, Balance(share=0.49, rate=3.3, ends_fail=(axis,))) == scale(size, rules)
 
 
 def test_a_grid_stops_at_the_grid_point_nearest_its_high_multiple() -> None:

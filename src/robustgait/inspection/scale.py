@@ -147,13 +147,13 @@ class Balance:
     """The default gait's step-to-step balance as its walk measured it
     (:func:`robustgait.robotinit.init.measured_balance`): ``share`` κ, the share of the H-LIP's stepping gain the step
     regulator settled on (:meth:`robustgait.sim.regulator.StepRegulator.settle_share`), ``rate`` λ = √(g/z0)
-    [1/s], the H-LIP's rate at the gait's CoM height z0, and ``narrow_step_fails``: the narrowest step width of a
-    point-foot walker's window, at the default length, duration and height, does not pass ``gait generate``
-    (:func:`robustgait.robotinit.init.narrowest_step`)."""
+    [1/s], the H-LIP's rate at the gait's CoM height z0, and ``ends_fail``: the axes of :data:`TRIED_ENDS` whose end
+    of a point-foot walker's window, with the other parameters at the default, does not pass ``gait generate``
+    (:func:`robustgait.robotinit.init.window_end`)."""
 
     share: float
     rate: float
-    narrow_step_fails: bool = False
+    ends_fail: tuple[str, ...] = ()
 
     def point_foot(self, rules: ScaleRules) -> bool:
         """The robot balances by foot placement: κ ≥ ``point_foot_share`` (its ankle does not hold the centre of
@@ -174,14 +174,22 @@ def duration_rule(size: RobotSize, rules: ScaleRules, balance: Balance | None = 
     return low, high, points
 
 
-def width_rule(rules: ScaleRules, balance: Balance | None = None) -> tuple[float, float, int]:
-    """The flat-foot action space's width axis rule: ``action_step_width``, its low end raised to the default width
-    for a point-foot walker (:meth:`Balance.point_foot`) whose narrowest step of that rule does not pass ``gait
-    generate`` (:attr:`Balance.narrow_step_fails`): the window then starts where a step was seen to walk, as the
-    duration rule's ends never below the default step."""
-    low, high, points = rules.action_step_width
-    if balance is not None and balance.point_foot(rules) and balance.narrow_step_fails:
-        low = max(low, 1.0)
+# the end of each axis that robot init tries for a point-foot walker, with the other parameters at the default: the
+# narrowest step (less room for the feet to correct sideways) and the longest (the centre of pressure nearer the toe)
+TRIED_ENDS = {"step_width": 0, "step_length": 1}  # axis → index of the end in (low, high)
+
+
+def tried_rule(axis: str, rules: ScaleRules, balance: Balance | None = None) -> tuple[float, float, int]:
+    """The flat-foot action space's rule of an axis of :data:`TRIED_ENDS` (``action_{axis}``), its tried end moved to
+    the default for a point-foot walker (:meth:`Balance.point_foot`) whose gait at that end does not pass ``gait
+    generate`` (:attr:`Balance.ends_fail`): the window then stops where a step was seen to walk, as the duration
+    rule's end is never below the default step."""
+    low, high, points = getattr(rules, f"action_{axis}")
+    if balance is not None and balance.point_foot(rules) and axis in balance.ends_fail:
+        if TRIED_ENDS[axis] == 0:
+            low = max(low, 1.0)
+        else:
+            high = min(high, 1.0)
     return low, high, points
 
 
@@ -236,13 +244,14 @@ def sig(x: float, digits: int = 3) -> float:
 
 def scale(size: RobotSize, rules: ScaleRules, balance: Balance | None = None) -> Scaled:
     """All the rules applied to a robot (values rounded to 3 significant digits); ``balance``: the default gait's
-    measured balance, which bounds a point-foot walker's step durations and widths (:func:`duration_rule`,
-    :func:`width_rule`)."""
+    measured balance, which bounds a point-foot walker's step durations, widths and lengths (:func:`duration_rule`,
+    :func:`tried_rule`)."""
     width = sig(step_width(size, rules), 3 if size.ankle_roll else 4)  # parallel legs: to 0.1 mm at a 0.2 m width
     gait = {"step_length": sig(step_length(size, rules)), "step_duration": sig(step_duration(size, rules)),
             "step_width": width, "step_height": sig(step_height(size, rules))}
     mc_gait = {**gait, "step_duration": sig(step_duration(size, rules, multicontact=True))}
-    rule = {"step_duration": duration_rule(size, rules, balance), "step_width": width_rule(rules, balance)}
+    rule = {"step_duration": duration_rule(size, rules, balance)} | {a: tried_rule(a, rules, balance)
+                                                                      for a in TRIED_ENDS}
     flat = {a: axis_range(a, gait[a], rule.get(a, getattr(rules, f"action_{a}"))) for a in GAIT_AXES}
     mc: dict[str, tuple[float, float, float]] | None = None
     if size.ankle_roll:  # multi-contact gaits roll the heel's edge flat with the ankle roll

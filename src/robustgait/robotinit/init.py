@@ -10,8 +10,8 @@ default gait cannot be generated, no candidate is below the stability bound, or 
 is the servo rule's (:func:`.gains.servo_timestep`, without stable PD), with a note saying why. When the step
 regulator runs for the robot's soles, the default gait's walk also says whether its ankle holds the centre of mass
 (:func:`measured_balance`): a point-foot walker's step durations end at λT = ``robot.scale.point_foot_step``, and
-its step widths start at the default width when the window's narrowest step does not pass ``gait generate``
-(:func:`narrowest_step`, :func:`with_balance`).
+its window's narrowest and longest steps are tried: one that does not pass ``gait generate`` moves that end of the
+window to the default (:func:`window_end`, :func:`with_balance`).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.gaitgen import GaitGenerator
 from robustgait.gaitgen.walkcheck import generate_walking
-from robustgait.inspection.scale import Balance, scale
+from robustgait.inspection.scale import TRIED_ENDS, Balance, scale
 from robustgait.io.robotfile import read_mjcf, spec_from_raw
 from robustgait.robotinit.draft import Draft, draft_at_timestep, draft_spec, lowered
 from robustgait.robotinit.timestep import candidate_timesteps, default_gait, ms, select_timestep
@@ -104,12 +104,12 @@ def measured_balance(robot: Robot, gait: Gait, config: Config) -> Balance | None
         return None if reg is None else Balance(reg.share, reg.lam)
 
 
-def narrowest_step(robot: Robot, width: float, config: Config) -> str:
-    """Why the robot's default flat-foot gait with step width ``width`` [m] does not pass ``gait generate`` — its
-    solve, its walk check and the one retry (:func:`~robustgait.gaitgen.walkcheck.generate_walking`) — in one line;
-    "" when it passes. Never raises for a failed solve or walk."""
+def window_end(robot: Robot, axis: str, value: float, config: Config) -> str:
+    """Why the robot's default flat-foot gait with ``axis`` (a GaitParams field) at ``value`` does not pass ``gait
+    generate`` — its solve, its walk check and the one retry (:func:`~robustgait.gaitgen.walkcheck.generate_walking`)
+    — in one line; "" when it passes. Never raises for a failed solve or walk."""
     cfg = dataclasses.replace(config, generate=dataclasses.replace(config.generate, domains="flat"))
-    params = dataclasses.replace(robot.default_params.resolved("flat"), step_width=width)
+    params = dataclasses.replace(robot.default_params.resolved("flat"), **{axis: value})
     try:
         checked = generate_walking(robot, params, cfg, GaitGenerator(robot, cfg.generate))
     except RobustGaitError as exc:
@@ -125,9 +125,10 @@ def with_balance(draft: Draft, robot: Callable[[], Robot], gait: Gait, config: C
                  say: Callable[[str], None] | None = None) -> Draft:
     """The draft with its scaled values bounded by the default gait's balance as ``robot()`` (the draft's robot)
     walks it (:func:`measured_balance`), and notes saying so: a point-foot walker's step durations end at λT =
-    ``robot.scale.point_foot_step`` (:func:`~robustgait.inspection.scale.duration_rule`), and its step widths start at
-    the default width when the window's narrowest step does not pass ``gait generate`` (:func:`narrowest_step`,
-    :func:`~robustgait.inspection.scale.width_rule`). Unchanged when the step regulator does not run for the robot's
+    ``robot.scale.point_foot_step`` (:func:`~robustgait.inspection.scale.duration_rule`), and each end of
+    :data:`~robustgait.inspection.scale.TRIED_ENDS` (the narrowest step, the longest) that does not pass ``gait
+    generate`` with the other parameters at the default (:func:`window_end`) moves to the default
+    (:func:`~robustgait.inspection.scale.tried_rule`). Unchanged when the step regulator does not run for the robot's
     soles (``sim.regulator``) or applies less than ``robot.scale.point_foot_share`` of the H-LIP's gain (the ankle
     holds the centre of mass). ``say(line)`` is told what it walks."""
     if not regulator_rule(config.sim.regulator, draft.size.sole_width, draft.size.leg_length, 1)[0]:
@@ -137,18 +138,25 @@ def with_balance(draft: Draft, robot: Callable[[], Robot], gait: Gait, config: C
     if balance is None or not balance.point_foot(rules):
         return draft
     scaled = scale(draft.size, rules, balance)
-    notes = list(draft.notes)
-    narrow, default_width = scaled.action_space["step_width"][0], scaled.gait["step_width"]
-    if narrow < default_width:
-        (say or (lambda line: None))(f"walking the narrowest step of the window (step width {narrow:g} m) ...")
-        why = narrowest_step(robot(), narrow, config)
+    notes, tell = list(draft.notes), say or (lambda line: None)
+    failed: dict[str, tuple[float, str]] = {}
+    for axis, end in TRIED_ENDS.items():
+        value, default = scaled.action_space[axis][end], scaled.gait[axis]
+        if (value - default) * (1 if end else -1) <= 0:  # the window does not reach past the default there
+            continue
+        tell(f"walking the window's {'longest' if end else 'narrowest'} step ({axis.replace('_', ' ')} {value:g} m)"
+             " ...")
+        why = window_end(robot(), axis, value, config)
         if why:
-            balance = dataclasses.replace(balance, narrow_step_fails=True)
-            scaled = scale(draft.size, rules, balance)
-            low, high, _ = scaled.action_space["step_width"]
-            notes.append(f"the default gait at the window's narrowest step width, {narrow:g} m, does not pass gait "
-                         f"generate ({why}): a point-foot walker's step widths start at the default "
-                         f"{default_width:g} m, {low:g}–{high:g} m (robot.scale.action_step_width)")
+            failed[axis] = (value, why)
+    if failed:
+        balance = dataclasses.replace(balance, ends_fail=tuple(failed))
+        scaled = scale(draft.size, rules, balance)
+        for axis, (value, why) in failed.items():
+            low, high, _ = scaled.action_space[axis]
+            notes.append(f"the default gait with {axis} {value:g} m, the window's end, does not pass gait generate "
+                         f"({why}): a point-foot walker's {axis} window stops at the default "
+                         f"{scaled.gait[axis]:g} m, {low:g}–{high:g} m (robot.scale.action_{axis})")
     if scaled == draft.scaled:
         return draft
     low, high, _ = scaled.action_space["step_duration"]

@@ -302,8 +302,8 @@ def _scaled(draft: Draft) -> list[str]:
         + ("; the default gait balances by foot placement (robot.scale.point_foot_share: its ankle does not hold "
            f"the centre of mass): steps end by λT = robot.scale.point_foot_step, λ = √(g/z0) = "
            f"{draft.balance.rate:.3g} 1/s" if draft.balance is not None else "")
-        + ("; its narrowest step did not pass gait generate: widths start at the default"
-           if draft.balance is not None and draft.balance.narrow_step_fails else ""),
+        + (f"; the default gait at the window's end of {' and '.join(draft.balance.ends_fail)} did not pass gait "
+           "generate: that end is the default" if draft.balance is not None and draft.balance.ends_fail else ""),
         *(f"{a} = {axis(s.action_space[a])}" for a in GAIT_AXES),
     ]
     if s.multicontact_action_space is None:
