@@ -1,6 +1,7 @@
-"""Closed-chain legs (robustgait.robots.legs.closed_chain, docs/robots.md "What robot init refuses"): an ankle driven
-through a rod — an equality constraint that ties a body or joint of a leg — is refused in one line naming the
-constraint and what a user changes, by robot init and by the loader; an equality elsewhere (the arms) is a note."""
+"""Closed-chain legs (robustgait.robots.legs.closed_chain; docs/robots.md, "Your robot: robot init and robot
+check"): an ankle driven through a rod — an equality constraint that ties a body or joint of a leg — is refused in
+one line naming the constraint and what a user changes, by robot init and by the loader; an equality elsewhere (the
+arms) is a note."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""A tread that is not a rectangle (robustgait.robots.soles.tread_problem, docs/robots.md "Soles and floor"): the
+"""A tread that is not a rectangle (robustgait.robots.soles.tread_problem, docs/robots.md, "Soles, floor, URDF"): the
 planner keeps the centre of pressure in the rectangle around the sole's ground points, so a tread whose contact
 polygon covers much less of it — Unitree H1's heel point and toe bar, a triangle — is refused in one line naming
 the shape and what to change, by robot init and by the loader; rectangles, disks and trapezoids are kept."""

@@ -7,6 +7,10 @@ knee. A leg without one (Unitree H1's) cannot turn its flat foot about the foot'
 shank cannot lean sideways, so neither can the stance leg, and the centre of pressure moves sideways only as the
 whole body does (the hips roll the upper body over the stance foot); two flat feet lie under parallel legs, so the
 feet land flat at the spacing of the legs alone. The spec's consequences are :func:`robustgait.inspection.scale`'s.
+
+A leg is planned as a serial chain, each joint driven by its own servo: :func:`closed_chain` finds an equality
+constraint that closes a loop through it (an ankle driven through rods), which robot init and the loader refuse
+(``docs/robots.md``, "Your robot: robot init and robot check").
 """
 
 from __future__ import annotations
@@ -110,4 +114,3 @@ def closed_chain_problem(side: str, clause: str) -> str:
     return (f"the {side} leg is a closed chain: {clause}; robustgait plans serial legs whose joints its servos drive "
             "one by one — model the leg as a serial chain (the ankle's pitch and roll as joints driven directly, the "
             "linkage's bodies and the equality constraint removed)")
-
