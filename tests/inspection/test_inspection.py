@@ -558,6 +558,25 @@ def test_a_point_foot_walker_whose_tried_end_fails_stops_that_axis_at_its_defaul
         assert scale(size, rules, Balance(share=0.49, rate=3.3, ends_fail=(axis,))) == scale(size, rules)
 
 
+def test_the_width_axis_starts_where_the_feet_do_not_touch() -> None:
+    """Robotis OP3's size: 0.88 × its 0.104 m default width rounds to a 0.09 m grid point, narrower than its 0.078 m
+    soles and their 0.013 m gap allow (gait generation refuses 0.09); the axis starts at the next grid point, for the
+    flat-foot and the multi-contact grids, and nothing else moves."""
+    from robustgait.inspection.scale import above_least, least_width
+
+    size = RobotSize(leg_length=0.279, standing_height=0.3, mass=3.15, gravity=9.81, hip_spacing=0.104,
+                     sole_length=0.12, sole_width=0.078)
+    out = scale(size, ScaleRules())
+    least = least_width(size)
+    assert least == pytest.approx(0.078 + 0.013, abs=1e-9)
+    for space in (out.action_space, out.multicontact_action_space):
+        assert space is not None
+        low, high, step = space["step_width"]
+        assert least <= low < least + step and low <= high
+    assert above_least((0.2, 0.3, 0.02), 0.15) == (0.2, 0.3, 0.02)  # already clear: unchanged
+    assert above_least((0.09, 0.1, 0.01), 0.2) == (0.1, 0.1, 0.01)  # none clears: the high end only
+
+
 def test_a_grid_stops_at_the_grid_point_nearest_its_high_multiple() -> None:
     # Booster T1's durations: 0.86–1.57 × 0.548 s = 0.47–0.86 s; the nice step 0.1 (not 0.078) must not stretch the
     # five steps to 1.0 s: the grid stops at 0.9 s, the grid point nearest 0.86 s

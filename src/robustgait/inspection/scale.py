@@ -78,6 +78,21 @@ def step_width(size: RobotSize, rules: ScaleRules) -> float:
     return max(size.hip_spacing, size.sole_width + rules.step_width_gap * gap)
 
 
+def least_width(size: RobotSize) -> float:
+    """The narrowest step width gait generation takes [m]: the sole's width + ``generate.foot_gap`` as the spec writes
+    it (the robot-relative rule, 3 significant digits), its pre-check that the soles do not touch."""
+    return size.sole_width + sig(float(relative_generation_defaults(size.robot_scale)["foot_gap"]))
+
+
+def above_least(axis: tuple[float, float, float], least: float) -> tuple[float, float, float]:
+    """A step-width axis [low, high, step] whose low end is the first grid point at or above ``least`` [m] (its high end
+    when none is): a grid point narrower than the feet allow is never solved."""
+    low, high, step = axis
+    if low >= least - 1e-9:
+        return axis
+    return min(round(math.ceil(least / step - 1e-9) * step, 9), high), high, step
+
+
 def hip_roll_angle(size: RobotSize) -> float:
     """φ = atan((w/2) / h_u) [rad] (w the soles' spacing, h_u the upper body's height over the hips): the pelvis roll
     that carries the upper body's centre of mass over the stance foot. Legs without an ankle roll move their centre
@@ -257,6 +272,8 @@ def scale(size: RobotSize, rules: ScaleRules, balance: Balance | None = None) ->
     if size.ankle_roll:  # multi-contact gaits roll the heel's edge flat with the ankle roll
         mc = {a: axis_range(a, mc_gait[a], getattr(rules, f"multicontact_{a}")) for a in GAIT_AXES}
         mc["rolling_fraction"] = rules.rolling_fraction
+        flat["step_width"] = above_least(flat["step_width"], least_width(size))
+        mc["step_width"] = above_least(mc["step_width"], least_width(size))
     else:  # the feet land flat at one width only: the axis holds it
         flat["step_width"] = (width, width, flat["step_width"][2])
     band = pelvis_height_band(size, rules)
