@@ -50,3 +50,22 @@ def test_a_foot_frame_tilted_from_its_sole_stands_on_the_whole_sole(tmp_path: Pa
     code, out, _ = run(capsys, "robot", "check", tmp_path / "b.toml", "--no-timestep")
     assert "soles: ok" in out and "stand: ok" in out, out
     assert np.isfinite(robot.mass)
+
+
+def test_a_box_sole_the_keyframe_tilts_is_read_on_its_face(tmp_path: Path, capsys: pytest.CaptureFixture[str]):
+    """Apptronik Apollo's case: the foot frame pitched from its box sole (as above) and a keyframe that stands the box
+    2.5° off level. Read along the foot's axis or the vertical, only an edge of the box was on the sole ("spans 0 × 0
+    m"); a sole that is one box is read along its own face, and robot init levels it."""
+    tilt = 0.044  # [rad] ≈ 2.5°
+    xml = tilted_frame_xml().replace("0.6 -0.3 0", f"0.6 {-0.3 + tilt:g} 0")
+    assert xml.count(f"0.6 {-0.3 + tilt:g} 0") == 2  # both legs' keyframe ankles
+    code, out, err = run(capsys, "robot", "init", write(tmp_path, xml), "-o", tmp_path / "b.toml", *SERVO_RULE)
+    assert code == 0, err
+    lengths = [float(v) for v in re.findall(r"sole 1 unnamed geoms of '\w+', ([0-9.]+) × 0.1 m", out)]
+    assert len(lengths) == 2 and min(lengths) > 0.19, out
+    assert "the soles were not level in the posture: each ankle turned by up to 0.04" in out
+    robot = load_robot(tmp_path / "b.toml")
+    d = mujoco.MjData(robot.model)
+    d.qpos[robot.qpos_idx] = robot.spec.posture
+    mujoco.mj_kinematics(robot.model, d)
+    assert all(sole.tilt(d) < 1e-3 for sole in robot.sole_boxes.values())

@@ -214,7 +214,13 @@ def footprint_points(m: mujoco.MjModel, d: mujoco.MjData, g: int, up: NDArray[np
 def tread_up(m: mujoco.MjModel, d: mujoco.MjData, geoms: tuple[int, ...]) -> NDArray[np.float64]:
     """The up (3,), world, along which a foot's sole geoms are read at the kinematics ``d``, as the loader reads them
     (:func:`robustgait.robots.soles.sole_up`: the foot body's axis closest to the vertical, or the vertical where
-    the tread along it spans more)."""
+    the tread along it spans more); a sole that is one box: its own axis closest to the vertical, as the loader's
+    sole box is (:func:`robustgait.robots.solebox.sole_box`) — its bottom face is the tread however the posture tilts
+    it (a keyframe that stands the box 2.5° off level kept an edge of it along the others)."""
+    if len(geoms) == 1 and GEOM_TYPES[int(m.geom_type[geoms[0]])] == "box":
+        rg = d.geom_xmat[geoms[0]].reshape(3, 3)
+        k = int(np.argmax(np.abs(rg[2, :])))
+        return np.asarray(rg[:, k] * np.sign(rg[2, k]))
     rf = d.xmat[int(m.geom_bodyid[geoms[0]])].reshape(3, 3)
     return sole_up(lambda up: np.vstack([footprint_points(m, d, g, up) for g in geoms]), rf @ foot_up(rf),
                    np.array([0.0, 0.0, 1.0]))
