@@ -170,6 +170,12 @@ class GenerationConfig:
         return value
 
 
+def least_step_width(sole_width: float, foot_gap: float) -> float:
+    """The narrowest step width [m] gait generation takes: a sole's width plus the gap ``generate.foot_gap`` [m] the
+    two soles keep (its pre-check; :meth:`robustgait.gaitgen.GaitGenerator.precheck`)."""
+    return sole_width + foot_gap
+
+
 def reach_problem(params: GaitParams, scale: RobotScale, config: GenerationConfig) -> str | None:
     """Why a robot of leg length l (``scale``) cannot be asked for resolved ``params``, in one clause, or None: a step
     longer than ``max_step_length`` × l, a speed whose Froude number (L/T)² / (g l) exceeds ``max_froude`` (a walk,

@@ -13,7 +13,7 @@ from scipy.optimize import least_squares
 
 from robustgait.bezier import bernstein_basis, bezier, bezier_derivative, bezier_derivative_coeffs
 from robustgait.config import GaitParams, GenerationConfig
-from robustgait.config.gait import PARALLEL_LEGS_WIDTH_TOLERANCE, reach_problem
+from robustgait.config.gait import PARALLEL_LEGS_WIDTH_TOLERANCE, least_step_width, reach_problem
 from robustgait.domains import Contact
 from robustgait.dynamics import Dynamics, foot_frame
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait, State
@@ -309,7 +309,7 @@ class GaitGenerator:
     def precheck(self, params: GaitParams) -> str | None:
         """A readable reason why ``params`` cannot be walked by this robot, or None (IPOPT decides the rest)."""
         prob, cfg = self.problem, self.config
-        min_width = 2 * prob.half_width + cfg.scaled("foot_gap")
+        min_width = least_step_width(2 * prob.half_width, cfg.scaled("foot_gap"))
         if params.step_width < min_width:
             return (f"step width {params.step_width:g} m makes the feet collide: the soles are "
                     f"{2 * prob.half_width:.3f} m wide and need a {cfg.scaled('foot_gap'):g} m gap (width ≥ "

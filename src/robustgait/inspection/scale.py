@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass
 
 from robustgait.config import GaitParams, RobotScale, ScaleRules, field_at, relative_generation_defaults
+from robustgait.config.gait import least_step_width
 from robustgait.config.regulator import RegulatorConfig, regulator_rule
 
 # the [generation] keys a written spec carries (the landing-velocity bounds are left to the loader's rules, which
@@ -81,7 +82,7 @@ def step_width(size: RobotSize, rules: ScaleRules) -> float:
 def least_width(size: RobotSize) -> float:
     """The narrowest step width gait generation takes [m]: the sole's width + ``generate.foot_gap`` as the spec writes
     it (the robot-relative rule, 3 significant digits), its pre-check that the soles do not touch."""
-    return size.sole_width + sig(float(relative_generation_defaults(size.robot_scale)["foot_gap"]))
+    return least_step_width(size.sole_width, sig(float(relative_generation_defaults(size.robot_scale)["foot_gap"])))
 
 
 def above_least(axis: tuple[float, float, float], least: float) -> tuple[float, float, float]:
