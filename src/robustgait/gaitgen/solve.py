@@ -331,10 +331,13 @@ class GaitGenerator:
         result then says so (``continued``: the cold solve's status; its iterations and seconds are counted) and its
         gait's solver report names the start (``continued_from``)."""
         res = self._solve(params, warm_start)
+        default = self.robot.default_params.resolved(self.problem.graph.name)
+        if warm_start is None and res.params == default and self._default is None:
+            self._default = (res.gait,)  # this was the default gait's own cold solve: kept, never solved again
         if warm_start is not None or res.success or res.status not in NOT_CONVERGED or not self.config.continuation:
             return res
         base = self.default_gait()
-        if base is None or base.params == res.params:
+        if base is None or res.params == default:
             return res
         again = self._solve(params, base, continued=res.status)
         again.iterations += res.iterations
