@@ -33,7 +33,7 @@ def test_a_point_foot_walker_whose_narrowest_step_fails_starts_its_widths_at_the
     monkeypatch.setattr(robotinit, "measured_balance", lambda robot, gait, cfg: balance)
     tried: list[tuple[str, float]] = []
 
-    def narrow_fails(robot: object, axis: str, value: float, cfg: Config) -> str:
+    def narrow_fails(robot: object, axis: str, value: float, cfg: Config, generator: object = None) -> str:
         tried.append((axis, value))
         return "the gait fell in step 3 under pd+hlip (stub)" if axis == "step_width" else ""
 
@@ -54,13 +54,14 @@ def test_a_point_foot_walker_whose_narrowest_step_fails_starts_its_widths_at_the
     assert any("balances by foot placement" in n for n in out.notes)
     assert "the window's end of step_width did not pass gait generate" in render(out, tmp_path / "spec.toml")
 
-    monkeypatch.setattr(robotinit, "window_end", lambda robot, axis, value, cfg: "")  # both walk: the rule's window
+    # both walk: the rule's window
+    monkeypatch.setattr(robotinit, "window_end", lambda robot, axis, value, cfg, generator=None: "")
     walks = robotinit.with_balance(draft, lambda: None, None, config)  # type: ignore[arg-type,return-value]
     assert walks.scaled == scale(draft.size, config.robot.scale, balance)
     assert walks.balance is not None and walks.balance.ends_fail == ()
     assert not any("the window's end" in n for n in walks.notes)
 
-    monkeypatch.setattr(robotinit, "window_end", lambda robot, axis, value, cfg: "fell (stub)")  # both fail
+    monkeypatch.setattr(robotinit, "window_end", lambda robot, axis, value, cfg, generator=None: "fell (stub)")
     both = robotinit.with_balance(draft, lambda: None, None, config)  # type: ignore[arg-type,return-value]
     assert both.balance is not None and both.balance.ends_fail == ("step_width", "step_length")
     high_l, step_l = both.scaled.action_space["step_length"][1:]

@@ -17,6 +17,7 @@ window to the default (:func:`window_end`, :func:`with_balance`).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -104,14 +105,17 @@ def measured_balance(robot: Robot, gait: Gait, config: Config) -> Balance | None
         return None if reg is None else Balance(reg.share, reg.lam)
 
 
-def window_end(robot: Robot, axis: str, value: float, config: Config) -> str:
+def window_end(robot: Robot, axis: str, value: float, config: Config,
+               generator: Callable[[], GaitGenerator] | None = None) -> str:
     """Why the robot's default flat-foot gait with ``axis`` (a GaitParams field) at ``value`` does not pass ``gait
     generate`` — its solve, its walk check and the one retry (:func:`~robustgait.gaitgen.walkcheck.generate_walking`)
-    — in one line; "" when it passes. Never raises for a failed solve or walk."""
+    — in one line; "" when it passes. ``generator()``: the flat-foot generator of ``robot`` to use (one is built
+    when None). Never raises for a failed solve or walk."""
     cfg = dataclasses.replace(config, generate=dataclasses.replace(config.generate, domains="flat"))
     params = dataclasses.replace(robot.default_params.resolved("flat"), **{axis: value})
     try:
-        checked = generate_walking(robot, params, cfg, GaitGenerator(robot, cfg.generate))
+        gen = generator() if generator is not None else GaitGenerator(robot, cfg.generate)
+        checked = generate_walking(robot, params, cfg, gen)
     except RobustGaitError as exc:
         return str(exc)
     if checked.result.gait is None:
@@ -134,19 +138,22 @@ def with_balance(draft: Draft, robot: Callable[[], Robot], gait: Gait, config: C
     if not regulator_rule(config.sim.regulator, draft.size.sole_width, draft.size.leg_length, 1)[0]:
         return draft
     rules = config.robot.scale
-    balance = measured_balance(robot(), gait, config)
+    drafted = robot()
+    balance = measured_balance(drafted, gait, config)
     if balance is None or not balance.point_foot(rules):
         return draft
     scaled = scale(draft.size, rules, balance)
     notes, tell = list(draft.notes), say or (lambda line: None)
     failed: dict[str, tuple[float, str]] = {}
+    # one flat-foot generator for every end tried, built by the first
+    generator = functools.cache(lambda: GaitGenerator(drafted, dataclasses.replace(config.generate, domains="flat")))
     for axis, end in TRIED_ENDS.items():
         value, default = scaled.action_space[axis][end], scaled.gait[axis]
         if (value - default) * (1 if end else -1) <= 0:  # the window does not reach past the default there
             continue
         tell(f"walking the window's {'longest' if end else 'narrowest'} step ({axis.replace('_', ' ')} {value:g} m)"
              " ...")
-        why = window_end(robot(), axis, value, config)
+        why = window_end(drafted, axis, value, config, generator)
         if why:
             failed[axis] = (value, why)
     if failed:
