@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from robustgait.errors import input_error
 from robustgait.io.robotfile import ModelKind, read_model
+from robustgait.robots.legs import subtree
 from robustgait.robots.soles import GEOM_TYPES, collides, hull_vertices
 
 FREE = int(mujoco.mjtJoint.mjJNT_FREE)
@@ -81,9 +82,8 @@ class RobotModel:
         return d
 
     def subtree(self, body: int) -> list[int]:
-        """``body`` and every body below it."""
-        m = self.model
-        return [b for b in range(m.nbody) if b == body or body in self.ancestors(b)]
+        """``body`` and every body below it (:func:`robustgait.robots.legs.subtree`)."""
+        return subtree(self.model, body)
 
     def ancestors(self, body: int) -> list[int]:
         """The bodies above ``body``, nearest first, up to the world body (0) excluded."""

@@ -73,12 +73,13 @@ EQUALITY_KINDS = {int(mujoco.mjtEq.mjEQ_CONNECT): "connect", int(mujoco.mjtEq.mj
                   int(mujoco.mjtEq.mjEQ_JOINT): "joint"}
 
 
-def subtree(model: mujoco.MjModel, root: int) -> set[int]:
-    """The body ``root`` and every body below it (ids)."""
-    out = {int(root)}
+def subtree(model: mujoco.MjModel, root: int) -> list[int]:
+    """The body ``root`` and every body below it (ids, ascending)."""
+    out, inside = [int(root)], {int(root)}
     for b in range(int(root) + 1, model.nbody):  # a body's id is larger than its parent's
-        if int(model.body_parentid[b]) in out:
-            out.add(b)
+        if int(model.body_parentid[b]) in inside:
+            out.append(b)
+            inside.add(b)
     return out
 
 
@@ -87,7 +88,7 @@ def closed_chain(model: mujoco.MjModel, leg_root: int) -> str | None:
     the leg's first joint, and every body under it) to anything — a closed linkage such as an ankle driven through
     rods (``connect``/``weld`` of two bodies, a ``joint`` coupling) — said in a clause naming it and what it ties;
     None when the leg is a serial chain. Other kinds (tendon, flex, distance) are not read."""
-    leg = subtree(model, leg_root)
+    leg = set(subtree(model, leg_root))
     for e in range(model.neq):
         if not model.eq_active0[e]:
             continue
