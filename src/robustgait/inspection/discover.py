@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from robustgait.errors import input_error
 from robustgait.inspection.model import RobotModel, geom_bottom
 from robustgait.robots.legs import ankle_roll_joint, closed_chain, closed_chain_problem
+from robustgait.robots.solebox import box_up
 from robustgait.robots.soles import (
     GEOM_TYPES,
     SOLE_TYPES,
@@ -219,8 +220,8 @@ def tread_up(m: mujoco.MjModel, d: mujoco.MjData, geoms: tuple[int, ...]) -> NDA
     it (a keyframe that stands the box 2.5° off level kept an edge of it along the others)."""
     if len(geoms) == 1 and GEOM_TYPES[int(m.geom_type[geoms[0]])] == "box":
         rg = d.geom_xmat[geoms[0]].reshape(3, 3)
-        k = int(np.argmax(np.abs(rg[2, :])))
-        return np.asarray(rg[:, k] * np.sign(rg[2, k]))
+        normal, up = box_up(rg)
+        return np.asarray(rg[:, normal] * up)
     rf = d.xmat[int(m.geom_bodyid[geoms[0]])].reshape(3, 3)
     return sole_up(lambda up: np.vstack([footprint_points(m, d, g, up) for g in geoms]), rf @ foot_up(rf),
                    np.array([0.0, 0.0, 1.0]))

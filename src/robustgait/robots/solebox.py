@@ -70,6 +70,13 @@ class SoleBox:
         return float(np.arccos(min(1.0, abs(float(rot[2, self.normal])))))
 
 
+def box_up(rot: FloatArray) -> tuple[int, float]:
+    """The axis of a box whose rotation is ``rot`` (3, 3; its axes in the world, columns) closest to the world's
+    vertical — the normal of the face it stands on — and the sign (±1) that turns that axis up."""
+    normal = int(np.argmax(np.abs(rot[2])))
+    return normal, 1.0 if rot[2, normal] > 0 else -1.0
+
+
 def sole_box(model: mujoco.MjModel, geom: int, source: str | Path | None = None) -> SoleBox:
     """The :class:`SoleBox` of box geom ``geom`` of ``model``, its axes read in the model's zero posture (where
     ``robot init`` levels the soles). A geom that is not a box is an input error naming ``source`` (the robot's
@@ -82,9 +89,9 @@ def sole_box(model: mujoco.MjModel, geom: int, source: str | Path | None = None)
     mujoco.mj_kinematics(model, d)
     rot = d.geom_xmat[geom].reshape(3, 3)  # the geom's axes in the world (columns)
     size = np.asarray(model.geom_size[geom], dtype=float)
-    normal = int(np.argmax(np.abs(rot[2])))
+    normal, up = box_up(rot)
     long = max((k for k in range(3) if k != normal), key=lambda k: float(size[k]))
     wide = 3 - normal - long
-    return SoleBox(geom=int(geom), normal=normal, up=1.0 if rot[2, normal] > 0 else -1.0, long=long,
+    return SoleBox(geom=int(geom), normal=normal, up=up, long=long,
                    forward=1.0 if rot[0, long] >= 0 else -1.0, half_length=float(size[long]),
                    half_width=float(size[wide]), half_thickness=float(size[normal]))
