@@ -69,3 +69,20 @@ def test_a_box_sole_the_keyframe_tilts_is_read_on_its_face(tmp_path: Path, capsy
     d.qpos[robot.qpos_idx] = robot.spec.posture
     mujoco.mj_kinematics(robot.model, d)
     assert all(sole.tilt(d) < 1e-3 for sole in robot.sole_boxes.values())
+
+
+def test_a_box_sole_turned_in_its_foot_is_measured_as_the_loader_reads_it(tmp_path: Path,
+                                                                         capsys: pytest.CaptureFixture[str]):
+    """Apptronik Apollo's box sole lies 17° from its foot body's axes. Robot init measured its extent along those
+    axes (wider and longer than the box), so its sole width, and what followed from it (the regulator's rule in its
+    notes), differed from the loaded robot's box. A sole that is one box is measured by its own sizes."""
+    turn = 0.3  # [rad] about the foot's vertical
+    xml = biped_xml(foot="box").replace('pos="0.03 0 -0.05"/>', f'pos="0.03 0 -0.05" euler="0 0 {turn}"/>')
+    assert xml.count(f'euler="0 0 {turn}"') == 2
+    code, _, err = run(capsys, "robot", "init", write(tmp_path, xml), "-o", tmp_path / "b.toml", *SERVO_RULE)
+    assert code == 0, err
+    sizes = re.findall(r"a box, sole ([0-9.]+) × ([0-9.]+) m", (tmp_path / "b.toml").read_text())
+    assert sizes == [("0.2", "0.1")] * 2, sizes  # along the foot's axes: 0.221 × 0.155 m
+    robot = load_robot(tmp_path / "b.toml")
+    for sole in robot.sole_boxes.values():
+        assert (2 * sole.half_length, 2 * sole.half_width) == (pytest.approx(0.2), pytest.approx(0.1))

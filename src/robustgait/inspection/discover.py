@@ -276,11 +276,18 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
     lft = int(np.argmax(np.abs(rf[1, :])))
     length = float(np.ptp(local[:, fwd]))
     width = float(np.ptp(local[:, lft]))
+    one_box = len(geoms) == 1 and GEOM_TYPES[int(m.geom_type[geoms[0]])] == "box"
+    if one_box:
+        # one box is the sole itself, as the loader reads it (robots.solebox.sole_box): its own sizes and a
+        # rectangle, not its extent along the foot body's axes, which a box turned in the foot would widen
+        normal, _ = box_up(d.geom_xmat[geoms[0]].reshape(3, 3))
+        sizes = [2.0 * float(m.geom_size[geoms[0]][k]) for k in range(3) if k != normal]
+        length, width = max(sizes), min(sizes)
     if min(length, width) < MIN_SOLE:
         raise input_error(src, f"no sole found for the {side} leg: the lowest geometry of body '{name}' spans "
                           f"{length:.3g} × {width:.3g} m, no area to stand on (add a box geom under the foot)")
-    problem = tread_problem(side, f"{len(geoms)} {'geom' if len(geoms) == 1 else 'geoms'} of body '{name}'",
-                            local[:, [fwd, lft]])
+    problem = None if one_box else tread_problem(
+        side, f"{len(geoms)} {'geom' if len(geoms) == 1 else 'geoms'} of body '{name}'", local[:, [fwd, lft]])
     if problem is not None:
         raise input_error(src, problem)
     return FoundSole(foot, geoms, kind, sole_class, length, width, bottom, _tread(m, geoms, per_geom, on))
