@@ -13,7 +13,7 @@ import pytest
 
 from robustgait.cli import main
 from robustgait.config import Config, SimConfig
-from robustgait.config.regulator import RegulatorConfig, placement_share, regulator_rule
+from robustgait.config.regulator import RegulatorConfig, carry_phase, placement_share, regulator_rule
 from robustgait.errors import RobustGaitError
 from robustgait.sim.engine import StepEngine
 from robustgait.sim.factory import make_engine
@@ -277,3 +277,18 @@ def test_a_line_footed_humanoid_walks_with_the_hlip_gain_its_sole_leaves_to_the_
     assert low <= robot.default_params.step_duration <= high + 1e-9
     cap = max(ScaleRules().point_foot_step / lam, robot.default_params.step_duration)  # never below the default
     assert high <= cap + step / 2 + 1e-9  # the grid point nearest the cap
+
+
+def test_the_step_start_blend_lengthens_with_the_share_of_the_gain(exo, exo_gait):  # type: ignore[no-untyped-def]
+    """τ_c = carry_tau + carry_share κ: a point-foot walker's larger landing corrections are blended out of the next
+    stance leg more slowly; no blend stays no blend."""
+    cfg = RegulatorConfig()
+    assert carry_phase(cfg, 0.0) == pytest.approx(cfg.carry_tau)
+    assert carry_phase(cfg, 1.0) == pytest.approx(cfg.carry_tau + cfg.carry_share)
+    assert carry_phase(replace(cfg, carry_tau=0.0), 1.0) == 0.0
+    assert carry_phase(replace(cfg, carry_tau=0.9, carry_share=0.5), 1.0) == 1.0
+    reg = StepEngine(exo, exo_gait, ON).regulator
+    assert reg is not None and reg.carry_tau == pytest.approx(carry_phase(ON.regulator, 0.25))
+    reg.set_share(1.0)
+    assert reg.carry_tau == pytest.approx(carry_phase(ON.regulator, 1.0)) and reg.carry_tau > carry_phase(
+        ON.regulator, 0.25)

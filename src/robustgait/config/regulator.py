@@ -48,7 +48,11 @@ class RegulatorConfig:
                                      le=1.0)] = 0.7
     carry_tau: Annotated[Float, Doc(
         "phase by which the joint error at the step start (the previous step's landing correction) is blended out "
-        "of the references (0: not blended)", ge=0.0, le=1.0)] = 0.2
+        "of the references with no foot placement (κ = 0; 0: not blended); it grows by carry_share × κ", ge=0.0,
+        le=1.0)] = 0.2
+    carry_share: Annotated[Float, Doc(
+        "added to carry_tau per unit of the share κ of the H-LIP gain applied: the larger the landing corrections, "
+        "the longer the next stance leg takes to blend them out", ge=0.0, le=1.0)] = 0.2
     max_step_change: Annotated[Float, Doc("largest change of the landing point per axis, as a fraction of the leg "
                                           "length", gt=0.0, le=1.0)] = 0.2
     foot_gap: Annotated[Float, Doc("least lateral gap between the soles' edges a correction leaves, as a fraction "
@@ -63,6 +67,16 @@ def placement_share(config: RegulatorConfig, sole_width: float, leg_length: floa
     if config.gain_scale is not None:
         return config.gain_scale
     return max(0.0, 1.0 - (sole_width / leg_length / config.placement_width) ** 2)
+
+
+def carry_phase(config: RegulatorConfig, share: float) -> float:
+    """τ_c = ``carry_tau`` + ``carry_share`` κ, clipped to [0, 1]: the phase by which the step-start joint error e0 is
+    blended out of the references when the regulator applies the share κ ∈ [0, 1] of the H-LIP gain. e0 holds the
+    previous landing correction, which grows with κ; blending a larger one out as fast moves the stance leg faster
+    and tips a narrow sole. 0 when ``carry_tau`` is 0 (no blend)."""
+    if config.carry_tau <= 0.0:
+        return 0.0
+    return min(1.0, config.carry_tau + config.carry_share * share)
 
 
 def regulator_rule(config: RegulatorConfig, sole_width: float, leg_length: float, domains: int

@@ -19,7 +19,8 @@ does, at the next foothold:
    posture with the orientation rows held at zero — the foot still lands flat. The offset is blended
    in with a quintic in phase, reaching its target at ``land_tau``; it is continuous across updates.
 4. At the step start the joints differ from the references by e0 (the previous landing correction, now in the
-   stance leg, and any tracking error); e0 is blended out of the references by ``carry_tau`` instead of being a
+   stance leg, and any tracking error); e0 is blended out of the references by τ_c = ``carry_tau`` + ``carry_share`` κ
+   (:func:`~robustgait.config.regulator.carry_phase`) instead of being a
    step in the servos' error (Morris & Grizzle, IEEE TAC 54(8), 2009: hybrid-invariant deformation of the outputs).
 
 The servos then track y_d + o with controls c = y_d + o + (kd (ẏ_d + ȯ) + u_ff) / kp; each sample gets its own
@@ -39,7 +40,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config.regulator import RegulatorConfig, placement_share, regulator_rule
+from robustgait.config.regulator import RegulatorConfig, carry_phase, placement_share, regulator_rule
 from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.sim import hlip
@@ -226,6 +227,7 @@ class StepRegulator:
         self.rho = hlip.closed_loop_radius(a, b, self.hlip_gain)
         self.share = placement_share(config, 2.0 * robot.scale.sole_half_width, robot.leg_length)
         self.gain = self.share * self.hlip_gain
+        self.carry_tau = carry_phase(config, self.share)
         self.growth: float | None = None        # the walk's lateral growth per step under the rule's κ, if measured
         self.growth_whole: float | None = None  # and under κ = 1, when the first was above the limit
         self.max_change = config.max_step_change * leg
@@ -247,9 +249,11 @@ class StepRegulator:
         return self.config.gain_scale is None and self.share < 1.0
 
     def set_share(self, share: float) -> None:
-        """Apply ``share`` κ of the H-LIP gain from now on."""
+        """Apply ``share`` κ of the H-LIP gain from now on, and the step-start blend that goes with it
+        (:func:`~robustgait.config.regulator.carry_phase`)."""
         self.share = share
         self.gain = share * self.hlip_gain
+        self.carry_tau = carry_phase(self.config, share)
 
     def settle_share(self, measure: Callable[[float], float]) -> None:
         """κ from the walk itself, ``measure(κ)`` its lateral growth per step under κ (:func:`lateral_growth`): the
@@ -290,7 +294,7 @@ class StepRegulator:
         self._s0 = np.zeros(kk)
         q = states[:, 1:1 + self.robot.model.nq][:, self.robot.qpos_idx]
         y0 = desired_outputs(self._gaits[stance], np.zeros(1))[0][0]
-        self._e0 = np.nan_to_num(q - y0) if self.config.carry_tau > 0 else np.zeros((kk, m))
+        self._e0 = np.nan_to_num(q - y0) if self.carry_tau > 0 else np.zeros((kk, m))
 
     def _blend(self, tau: Array) -> tuple[Array, Array]:
         """S and dS/dτ of the landing blend at phases τ (…)."""
@@ -340,11 +344,11 @@ class StepRegulator:
         diff = (goal - o0)[:, None, :]
         off = o0[:, None, :] + frac[..., None] * diff                                       # (A, n, m)
         rate = dfrac[..., None] * diff / self.period
-        if cfg.carry_tau > 0:
-            c, dc = quintic_blend(tau / cfg.carry_tau)
+        if self.carry_tau > 0:
+            c, dc = quintic_blend(tau / self.carry_tau)
             e0 = self._e0[active][:, None, :]
             off = off + (1.0 - c)[None, :, None] * e0
-            rate = rate - (dc / (cfg.carry_tau * self.period))[None, :, None] * e0
+            rate = rate - (dc / (self.carry_tau * self.period))[None, :, None] * e0
         servo = off + self._ratio * rate
         nu = self.robot.model.nu
         if servo.shape[2] == nu:
