@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from robustgait.errors import input_error
 from robustgait.inspection.model import RobotModel, geom_bottom
 from robustgait.robots.legs import ankle_roll_joint, closed_chain, closed_chain_problem
-from robustgait.robots.solebox import box_up
+from robustgait.robots.solebox import box_up, sole_box
 from robustgait.robots.soles import (
     GEOM_TYPES,
     SOLE_TYPES,
@@ -38,6 +38,7 @@ from robustgait.robots.soles import (
     foot_up,
     geom_sole_points,
     on_sole,
+    one_box,
     sole_up,
     tread_problem,
 )
@@ -218,7 +219,7 @@ def tread_up(m: mujoco.MjModel, d: mujoco.MjData, geoms: tuple[int, ...]) -> NDA
     the tread along it spans more); a sole that is one box: its own axis closest to the vertical, as the loader's
     sole box is (:func:`robustgait.robots.solebox.sole_box`) — its bottom face is the tread however the posture tilts
     it (a keyframe that stands the box 2.5° off level kept an edge of it along the others)."""
-    if len(geoms) == 1 and GEOM_TYPES[int(m.geom_type[geoms[0]])] == "box":
+    if one_box(m, geoms):
         rg = d.geom_xmat[geoms[0]].reshape(3, 3)
         normal, up = box_up(rg)
         return np.asarray(rg[:, normal] * up)
@@ -251,7 +252,7 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
                               "a mesh, or add a box geom under the foot")
     names = [robot.geom_name(g) for g in geoms]
     sole_class = None
-    if len(geoms) == 1 and all(names) and GEOM_TYPES[int(m.geom_type[geoms[0]])] == "box":
+    if one_box(m, geoms) and all(names):
         kind = "geom"
     elif all(names):
         kind = "geoms"
@@ -274,19 +275,18 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
     local = (pts - d.xpos[foot]) @ rf
     fwd = int(np.argmax(np.abs(rf[0, :])))  # the foot axes closest to forward and to left
     lft = int(np.argmax(np.abs(rf[1, :])))
-    length = float(np.ptp(local[:, fwd]))
-    width = float(np.ptp(local[:, lft]))
-    one_box = len(geoms) == 1 and GEOM_TYPES[int(m.geom_type[geoms[0]])] == "box"
-    if one_box:
-        # one box is the sole itself, as the loader reads it (robots.solebox.sole_box): its own sizes and a
-        # rectangle, not its extent along the foot body's axes, which a box turned in the foot would widen
-        normal, _ = box_up(d.geom_xmat[geoms[0]].reshape(3, 3))
-        sizes = [2.0 * float(m.geom_size[geoms[0]][k]) for k in range(3) if k != normal]
-        length, width = max(sizes), min(sizes)
+    box = one_box(m, geoms)
+    if box:
+        # one box is the sole itself, as the loader reads it: its own sizes and a rectangle, not its extent along the
+        # foot body's axes, which a box turned in the foot would widen
+        read = sole_box(m, geoms[0], src)
+        length, width = 2.0 * read.half_length, 2.0 * read.half_width
+    else:
+        length, width = float(np.ptp(local[:, fwd])), float(np.ptp(local[:, lft]))
     if min(length, width) < MIN_SOLE:
         raise input_error(src, f"no sole found for the {side} leg: the lowest geometry of body '{name}' spans "
                           f"{length:.3g} × {width:.3g} m, no area to stand on (add a box geom under the foot)")
-    problem = None if one_box else tread_problem(
+    problem = None if box else tread_problem(
         side, f"{len(geoms)} {'geom' if len(geoms) == 1 else 'geoms'} of body '{name}'", local[:, [fwd, lft]])
     if problem is not None:
         raise input_error(src, problem)

@@ -19,7 +19,7 @@ stands on the foot geoms paired with its floor; its pairs stay as they are and k
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
@@ -76,6 +76,12 @@ class ResolvedSole:
     sensor: tuple[mujoco.mjtObj, str]
     geoms: tuple[int, ...]
     virtual: bool
+
+
+def one_box(model: mujoco.MjModel, geoms: Sequence[int]) -> bool:
+    """Whether the sole geoms ``geoms`` of ``model`` are one box: that box is the sole itself, read by its own faces
+    and sizes (:func:`robustgait.robots.solebox.sole_box`), not a virtual sole spanning ground points."""
+    return len(geoms) == 1 and GEOM_TYPES[int(model.geom_type[geoms[0]])] == "box"
 
 
 def collides(model: mujoco.MjModel, g: int) -> bool:
@@ -384,7 +390,7 @@ def resolve_sole(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel, sid
     src = spec.source or spec.mjcf
     leg = spec.legs[side]
     name = model.geom(ids[0]).name
-    if len(ids) == 1 and SOLE_TYPES[int(model.geom_type[ids[0]])] == "box":
+    if one_box(model, ids):
         if not name:  # an unnamed box (named by its body): our sensors need a name
             name = virtual_sole_name(side)
             geoms[ids[0]].name = name

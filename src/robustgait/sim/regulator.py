@@ -227,7 +227,6 @@ class StepRegulator:
         self.rho = hlip.closed_loop_radius(a, b, self.hlip_gain)
         self.share = placement_share(config, 2.0 * robot.scale.sole_half_width, robot.leg_length)
         self.gain = self.share * self.hlip_gain
-        self.carry_tau = carry_phase(config, self.share)
         self.growth: float | None = None        # the walk's lateral growth per step under the rule's κ, if measured
         self.growth_whole: float | None = None  # and under κ = 1, when the first was above the limit
         self.max_change = config.max_step_change * leg
@@ -248,12 +247,17 @@ class StepRegulator:
         the sole's width rule leaves part of the gain out."""
         return self.config.gain_scale is None and self.share < 1.0
 
-    def set_share(self, share: float) -> None:
-        """Apply ``share`` κ of the H-LIP gain from now on, and the step-start blend that goes with it
+    @property
+    def carry_tau(self) -> float:
+        """τ_c, the phase by which the step-start error is blended out under the current share κ
         (:func:`~robustgait.config.regulator.carry_phase`)."""
+        return carry_phase(self.config, self.share)
+
+    def set_share(self, share: float) -> None:
+        """Apply ``share`` κ of the H-LIP gain from now on (and the step-start blend that goes with it,
+        :attr:`carry_tau`)."""
         self.share = share
         self.gain = share * self.hlip_gain
-        self.carry_tau = carry_phase(self.config, share)
 
     def settle_share(self, measure: Callable[[float], float]) -> None:
         """κ from the walk itself, ``measure(κ)`` its lateral growth per step under κ (:func:`lateral_growth`): the
@@ -344,11 +348,12 @@ class StepRegulator:
         diff = (goal - o0)[:, None, :]
         off = o0[:, None, :] + frac[..., None] * diff                                       # (A, n, m)
         rate = dfrac[..., None] * diff / self.period
-        if self.carry_tau > 0:
-            c, dc = quintic_blend(tau / self.carry_tau)
+        carry = self.carry_tau
+        if carry > 0:
+            c, dc = quintic_blend(tau / carry)
             e0 = self._e0[active][:, None, :]
             off = off + (1.0 - c)[None, :, None] * e0
-            rate = rate - (dc / (self.carry_tau * self.period))[None, :, None] * e0
+            rate = rate - (dc / (carry * self.period))[None, :, None] * e0
         servo = off + self._ratio * rate
         nu = self.robot.model.nu
         if servo.shape[2] == nu:
