@@ -296,7 +296,10 @@ class Certificate:
     :func:`violation_bound`); budget_exhausted: the sequential estimator ran out of samples before a
     verification batch passed (then there is no statement). estimate: the sequential estimator's r̂ after its
     exploration, before any verification (None for ``uniform``); verified: false for the sequential estimator's
-    exploration alone (``verify=False``: r* is then the estimate, with no statement).
+    exploration alone (``verify=False``: r* is then the estimate, with no statement). curve: a push certificate's
+    fitted fall curve at the end (:meth:`.fallcurve.FallCurve.summary`: pushes, falls, s₅₀, slope, Ĵ and its 90 %
+    interval); its exploration pushes inside J* may have fallen (the statement rests on the verification batch alone,
+    :mod:`.pushfit`).
     """
 
     r_star: float
@@ -320,6 +323,7 @@ class Certificate:
     budget_exhausted: bool = False
     estimate: float | None = None
     verified: bool = True
+    curve: dict[str, float | int] | None = None
 
     @property
     def n_samples(self) -> int:
@@ -379,6 +383,7 @@ class Certificate:
             "budget_exhausted": bool(self.budget_exhausted),
             "estimate": None if self.estimate is None else float(self.estimate),
             "verified": bool(self.verified),
+            "curve": self.curve,
             "statement": self.statement(),
             "basis": self.basis,
             "rounds": [asdict(r) for r in self.rounds],

@@ -29,7 +29,7 @@ from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
 from robustgait.certificate.search import Walking, find_orbit, probe_impulse
 from robustgait.certificate.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
-from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
+from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict, verification_beta
 from robustgait.config.certify import R_MAX_LIMIT
 from robustgait.config.work import Work, check_work
 from robustgait.errors import RobustGaitError
@@ -42,18 +42,21 @@ from robustgait.sim.factory import make_engine
 
 def push_basis(c: Certificate, config: CertifyConfig) -> str:
     """Why a push certificate's bound holds, in pushes and J* (the estimator words it in samples and r*): the
-    verification batch (sequential; its β_a from ``config``) or the union bound over the samples (uniform)."""
+    verification batch, drawn in the disk the fitted fall curve placed (sequential; its β_a from ``config``), or the
+    union bound over the samples (uniform)."""
     inside = "≤" if c.attained else "<"
     if c.method == "sequential":
         verify = [r for r in c.rounds if r.kind == "verify"]
         n_a, attempt = verify[-1].n_samples, len(verify)
-        beta_a = config.estimator.beta_of(config.beta, attempt)
-        explored = "" if c.estimate is None else (f"{verify[-1].radius / c.estimate:.2g} × the estimate Ĵ = "
-                                                  f"{c.estimate:.4g} N s of ")
+        beta_a = verification_beta(config.beta, attempt, config.push.first_share)
         n_explore = c.n_samples - sum(r.n_samples for r in verify)
-        return (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed ({explored}"
-                f"{n_explore} exploration pushes): none fell (verification attempt {attempt}: (1 − ε)^{n_a} ≤ "
-                f"β_{attempt} = {100.0 * beta_a:.3g}%)")
+        estimate = "" if c.estimate is None else f"; the estimate Ĵ = {c.estimate:.4g} N s"
+        earlier = c.n_samples - n_a
+        pushes = f"{earlier}" if earlier == n_explore else f"{earlier} ({n_explore} of exploration)"
+        return (f"a batch of {n_a} fresh pushes drawn uniformly in the disk after J* was fixed (the largest disk whose "
+                f"batch the fall curve fitted to the {pushes} earlier pushes predicted to pass with probability "
+                f"{config.push.pass_probability:g}{estimate}): none fell "
+                f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ β_{attempt} = {100.0 * beta_a:.3g}%)")
     return (f"of {c.n_samples} pushes uniform in the disk |J| ≤ r_max = {c.r_max:g} N s, the {c.n_inside} "
             f"with |J| {inside} J* did not fall (union bound over the {c.n_samples + 1} possible choices of J*)")
 
@@ -96,6 +99,7 @@ class GaitCertificate:
     controller_note: str = ""
     orbit: Orbit | None = None
     orbit_physics_steps: int = 0  # simulated by the orbit search (its walk, the probe, ρ)
+    verify_physics_steps: int = 0  # of physics_steps, simulated by a push certificate's verification batches
     sigma: float | None = None
     replayed_samples: int = 0  # exploration samples answered from an earlier run's (certify_gait's ``explored``)
     replayed_orbit: bool = False  # the orbit was the earlier run's, not searched again
@@ -252,6 +256,7 @@ class GaitCertificate:
         if self.orbit is not None and (state := orbit_state(self.orbit)) is not None:
             out["orbit_state"] = state
         out.update({"physics_steps": self.physics_steps, "orbit_physics_steps": self.orbit_physics_steps,
+                    "verify_physics_steps": self.verify_physics_steps,
                     "replayed_samples": self.replayed_samples, "replayed_orbit": self.replayed_orbit,
                     "gait_digest": self.gait_digest, "robot_digest": self.robot_digest, "config": to_dict(cfg),
                     "sim": to_dict(self.sim), "seconds": self.seconds})
@@ -440,6 +445,7 @@ class _Sampled:
     coords: Coordinates
     steps: int
     replayed: int
+    verify_steps: int = 0
     map_residual: float | None = None
     ball: Certificate | None = None
     excursion: list[float] | None = None
@@ -461,7 +467,7 @@ def _sample_pushes(engine: StepEngine, orbit: Orbit, cfg: CertifyConfig, vcfg: V
     if cert.basis:
         cert = dataclasses.replace(cert, basis=push_basis(cert, cfg))
     return _Sampled(cert, coords, pushes.physics_steps + exploring.physics_steps,
-                    0 if replay is None else replay.replayed)
+                    0 if replay is None else replay.replayed, verify_steps=pushes.physics_steps)
 
 
 def _sample_states(robot: Robot, gait: Gait, engine: StepEngine, orbit: Orbit, cfg: CertifyConfig,
@@ -570,6 +576,7 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
         t3 = time.perf_counter()
         return result(Status.OK, "", certificate=sampled.cert, fixed_point=fp, map_residual=sampled.map_residual,
                       physics_steps=sampled.steps, replayed_samples=sampled.replayed, coordinates=sampled.coords,
+                      verify_physics_steps=sampled.verify_steps,
                       ball=sampled.ball, excursion=sampled.excursion, sigma=sampled.sigma,
                       seconds={"orbit": t1 - t0, "sampling": t3 - t2, "total": t3 - t0,
                                "sim_steps_per_s": sampled.steps / max(t3 - t2, 1e-9)})

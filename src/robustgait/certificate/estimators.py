@@ -15,15 +15,17 @@
      (relative depth log-uniform in [``min_depth``, 1]). After each round r̂ = the exact r* of all samples so
      far; it only shrinks. Exploration may use any distribution and any map — a cheaper one than the map certified
      (``explore``: the push certificate's exploration pushes stop sooner) —: it only proposes;
-  3. verification attempt a = 1, 2, …: the radius r_a = ``verify_margin`` × r̂ is fixed, then a fresh batch of n_a
+  3. verification attempt a = 1, 2, …: the radius r_a = ``verify_margin`` × r̂ is fixed (a push certificate's: the
+     largest radius whose batch the fall curve fitted to every sample so far predicts to pass with probability
+     ``push.pass_probability``, :mod:`.fallcurve`; its estimate is the curve's Ĵ), then a fresh batch of n_a
      samples i.i.d. uniform in B(r_a) is drawn and evaluated on the certified map, with n_a the least n such that
      (1 − ε)^n ≤ β_a (β_1 = s β, β_a = (1 − s) β / 2^(a−1) after, s = ``first_share``). If no sample of the batch
-     violates the condition at r_a (r_a stays the supremum of the feasible radii up to r_a over every sample so
-     far) the certificate is r* = r_a; otherwise r̂ shrinks, ``explore_after_failure`` more exploration samples
-     follow and attempt a + 1 is drawn. With ``verify_chunk`` > 0 the batch is evaluated in chunks, the samples
-     farthest from x* first (where a violation is likeliest), and abandoned at the first chunk with a violation
-     (it cannot pass then); the whole batch is still drawn, so the streams stay aligned. When the next batch would
-     exceed ``budget`` samples the estimator stops and says there is no statement.
+     violates the condition at r_a (and, but for a push certificate, r_a stays the supremum of the feasible radii up
+     to r_a over every sample so far) the certificate is r* = r_a; otherwise r̂ shrinks, ``explore_after_failure``
+     more exploration samples follow and attempt a + 1 is drawn. With ``verify_chunk`` > 0 the batch is evaluated in
+     chunks, the samples farthest from x* first (where a violation is likeliest), and abandoned at the first chunk
+     with a violation (it cannot pass then); the whole batch is still drawn, so the streams stay aligned. When the
+     next batch would exceed ``budget`` samples the estimator stops and says there is no statement.
 
   ``verify=False`` stops after exploration: r̂ is an *estimate* (no statement), what a study ranks gaits by.
 
@@ -67,6 +69,7 @@ from robustgait.certificate.barrier import (
     solve_radius,
     violation_end,
 )
+from robustgait.certificate.fallcurve import FallCurve, fit_fall_curve
 from robustgait.config import Barrier, CertifyConfig, SequentialConfig, verification_beta, verification_size
 from robustgait.errors import RobustGaitError
 
@@ -193,10 +196,12 @@ class _Pool:
         self.r_hat = self._solve(self.r_max).r_star
         self.rounds.append(Round(kind, float(radius), int(x0.shape[0]), self.used, float(self.r_hat), None))
 
-    def verify(self, radius: float, x0: FloatArray, chunk: int = 0) -> bool:
+    def verify(self, radius: float, x0: FloatArray, chunk: int = 0, batch_only: bool = False) -> bool:
         """Evaluate a verification batch x0 (uniform in B(radius)) on the certified map and add it as a round. It
         passes when ``radius`` is still the supremum of the feasible radii up to it over every sample so far: no sample
-        of the batch violates the condition there (nor chains a violation up to it).
+        of the batch violates the condition there (nor chains a violation up to it); with ``batch_only``, when no
+        sample of the batch violates the condition at ``radius`` (the earlier samples are the exploration's: a radius
+        placed by the fall curve may hold an exploration sample that fell).
 
         ``chunk`` > 0: evaluate x0 in chunks of that many samples, the farthest from x* first, and abandon the rest
         of the batch at the first chunk that fails it — the batch cannot pass then, and its remaining samples would
@@ -205,12 +210,18 @@ class _Pool:
         x0 = x0 if order is None else x0[order]
         step = chunk if chunk > 0 else x0.shape[0]
         n_used = 0
+        first = self.used
         sol = self._solve(radius)
         for start in range(0, x0.shape[0], max(step, 1)):
             part = x0[start:start + step]
             self._evaluate(self.P, part)
             n_used += part.shape[0]
-            sol = self._solve(radius)
+            if batch_only:
+                d, s = self.d[first:], self.s[first:]
+                sol = RadiusSolution(radius, True) if not np.any((d <= radius) & (s > radius)) else \
+                    RadiusSolution(float(d[(d <= radius) & (s > radius)].min()), False)
+            else:
+                sol = self._solve(radius)
             if sol.r_star != radius:
                 break
         passed = sol.r_star == radius
@@ -218,6 +229,13 @@ class _Pool:
         self.verified = sol if passed else None
         self.rounds.append(Round("verify", float(radius), int(n_used), self.used, float(self.r_hat), passed))
         return passed
+
+    def fall_curve(self) -> FallCurve:
+        """The fall curve (:func:`.fallcurve.fit_fall_curve`) of every sample so far: its distance from x* as its
+        size, violated somewhere (fell) as its outcome, r_max as the cap."""
+        d = self.d
+        keep = d > 0.0
+        return fit_fall_curve(d[keep], (self.s > self.d)[keep], self.r_max)
 
     def elites(self, k: int) -> FloatArray:
         """Unit directions (≤ k, n) of the samples violated somewhere (s > d, falls included) with d ≥ r̂,
@@ -245,6 +263,7 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
     cfg = full.estimator
     xs = _check_point("x_star", x_star)
     r, a, b, seed, barrier = full.radius, full.alpha, full.beta, full.seed, full.barrier
+    level = full.push.pass_probability if full.disturbance == "push" else None  # the push batch's fall curve
     n = xs.shape[0]
     explore_rng = np.random.default_rng([seed, 1])
     verify_rng = np.random.default_rng([seed, 2])
@@ -252,6 +271,7 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
     pool.add("uniform", r, sample_ball(cfg.first_round, n, r, xs, np.random.default_rng(seed)))
     explore_left, attempt, passed = cfg.explore, 0, False
     estimate: float | None = None
+    curve: FallCurve | None = None
     verifying = verify is not False
     while pool.r_hat > 0.0:
         room = cfg.budget - pool.used - (cfg.batch_size(b, attempt + 1) if verifying else 0)
@@ -260,8 +280,10 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
             pool.add("explore", pool.r_hat, propose_round(explore_rng, m, xs, pool.r_hat, pool.elites(cfg.elites), cfg))
             explore_left -= m
             room -= m
+        if level is not None:
+            curve = pool.fall_curve()
         if estimate is None:
-            estimate = pool.r_hat
+            estimate = pool.r_hat if curve is None else curve.estimate(cfg.epsilon)
             verifying = verify(estimate) if callable(verify) else verify
         if pool.r_hat == 0.0 or not verifying:
             break
@@ -269,27 +291,38 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
         n_a = cfg.batch_size(b, attempt)
         if pool.used + n_a > cfg.budget:
             break
-        radius = cfg.verify_margin * pool.r_hat
-        if pool.verify(radius, sample_ball(n_a, n, radius, xs, verify_rng), cfg.verify_chunk):
+        radius = cfg.verify_margin * pool.r_hat if curve is None else curve.verification_radius(n_a, level or 0.0)
+        if radius <= 0.0:
+            break
+        if pool.verify(radius, sample_ball(n_a, n, radius, xs, verify_rng), cfg.verify_chunk, curve is not None):
             passed = True
             break
         explore_left = cfg.explore_after_failure
 
     x0_all, x1_all = np.concatenate(pool.x0), np.concatenate(pool.x1)
     solution = pool.verified if passed else None
+    if not verifying and curve is not None and estimate is not None:  # the estimate alone is the fitted Ĵ
+        solution = RadiusSolution(estimate, True)
     cert = certificate_from_samples(x0_all, x1_all, xs, alpha=a, r_max=r, beta=b, seed=seed, barrier=barrier,
                                     solution=solution)
-    assert passed or cert.r_star == pool.r_hat
+    assert passed or cert.r_star == (pool.r_hat if solution is None else solution.r_star)
     cert = replace(cert, method="sequential", rounds=tuple(pool.rounds), sample_round=np.concatenate(pool.round_of),
-                   estimate=float(pool.r_hat if estimate is None else estimate), verified=verifying)
+                   estimate=float(pool.r_hat if estimate is None else estimate), verified=verifying,
+                   curve=None if curve is None else pool.fall_curve().summary(cfg.epsilon))
     if passed:
         n_a = pool.rounds[-1].n_samples
         beta_text = "β/2" if cfg.first_share == 0.5 and attempt == 1 else (
             f"{cfg.first_share:g} β" if attempt == 1 else f"β_{attempt}")
-        basis = (f"a batch of {n_a} fresh samples drawn uniformly in this ball after r* was fixed all satisfy it "
-                 f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ {beta_text}; r* is exact for all "
-                 f"{cert.n_samples} samples of {len(pool.rounds)} rounds)" if cfg.verify_margin == 1.0 else
-                 f"a batch of {n_a} fresh samples drawn uniformly in this ball after r* = {cfg.verify_margin:g} r̂ "
-                 f"was fixed all satisfy it (verification attempt {attempt}: (1 − ε)^{n_a} ≤ {beta_text})")
+        if level is not None:
+            basis = (f"a batch of {n_a} fresh samples drawn uniformly in this ball after r* was fixed — the largest "
+                     f"ball whose batch the fall curve fitted to the earlier samples predicted to pass with probability"
+                     f" {level:g} — all satisfy it (verification attempt {attempt}: (1 − ε)^{n_a} ≤ {beta_text})")
+        elif cfg.verify_margin == 1.0:
+            basis = (f"a batch of {n_a} fresh samples drawn uniformly in this ball after r* was fixed all satisfy it "
+                     f"(verification attempt {attempt}: (1 − ε)^{n_a} ≤ {beta_text}; r* is exact for all "
+                     f"{cert.n_samples} samples of {len(pool.rounds)} rounds)")
+        else:
+            basis = (f"a batch of {n_a} fresh samples drawn uniformly in this ball after r* = {cfg.verify_margin:g} "
+                     f"r̂ was fixed all satisfy it (verification attempt {attempt}: (1 − ε)^{n_a} ≤ {beta_text})")
         return replace(cert, violation_bound=verification_bound(n_a, b, attempt, cfg.first_share), basis=basis)
     return replace(cert, violation_bound=1.0, budget_exhausted=verifying and pool.r_hat > 0.0)

@@ -32,7 +32,7 @@ STATE_CHOICE_DEFAULTS: dict[str, str | int] = {"state": "omega", "set": "ball", 
 # io/certfile.py), and its orbit is found again by the orbit search
 RETIRED_FIELDS = ("fp_tol", "fp_window", "fp_metric", "fp_min_steps", "fp_max_steps", "fp_newton_iterations",
                   "fp_newton_tol", "fp_fd_step", "fp_fd_jump", "fp_rho_max", "stride_fallback")
-RETIRED_PUSH_FIELDS = ("steps", "recovery_band_steps")
+RETIRED_PUSH_FIELDS = ("steps", "recovery_band_steps", "verify_margin")
 
 
 def without_retired(certify: dict[str, object]) -> dict[str, object]:
@@ -200,10 +200,12 @@ class OrbitConfig:
 class PushConfig:
     """The push certificate J* (``disturbance = push``, :mod:`robustgait.certificate.push`): when a pushed walk has
     failed — it fell within the pushed step and ``horizon`` more —, when it may stop early — back in its orbit's band
-    for ``recovery_steps`` consecutive steps (recovered) —, and the sizes of the sequential estimator's first round
-    and exploration, smaller than a state certificate's since the failing set of a 2-D impulse disk needs less
-    exploration (the statement does not depend on it; ε, β, the budget and the rest are ``sequential``'s). Push
-    duration and phases are the validation's (``validate.push_duration``, ``validate.push_phase``)."""
+    for ``recovery_steps`` consecutive steps (recovered) —, the sizes of the sequential estimator's first round and
+    exploration, smaller than a state certificate's since the failing set of a 2-D impulse disk needs less
+    exploration (the statement does not depend on it; ε, β, the budget and the rest are ``sequential``'s), and where
+    its verification batch is drawn: in the largest disk the gait's fitted fall curve predicts to pass
+    (``pass_probability``, :mod:`robustgait.certificate.fallcurve`). Push duration and phases are the validation's
+    (``validate.push_duration``, ``validate.push_phase``)."""
 
     horizon: Annotated[Int, Doc("steps after the pushed one within which a fall is a failure (the statement's "
                                 "horizon)", ge=1, le=100)] = 20
@@ -227,9 +229,10 @@ class PushConfig:
     verify_chunk: Annotated[Int, Doc("verification pushes simulated per chunk, the largest first; a batch is "
                                      "abandoned at the first chunk with a fall inside the disk verified (0: the "
                                      "whole batch at once)", ge=0, le=10_000)] = 25
-    verify_margin: Annotated[Float, Doc("the disk a verification batch is drawn in, as a fraction of the explored "
-                                        "estimate Ĵ: J* is this fraction of Ĵ when the batch passes (below 1: fewer "
-                                        "failed batches, a smaller J*)", gt=0.0, le=1.0)] = 0.8
+    pass_probability: Annotated[Float, Doc(
+        "the verification disk is the largest whose batch the gait's fall curve, fitted to the exploration's pushes, "
+        "predicts to pass (no fall) with this probability (posterior-predictive; docs/certificate.md): higher, a "
+        "smaller J* and fewer failed batches", gt=0.0, lt=1.0)] = 0.9
     first_share: Annotated[Float, Doc("share of β spent on the first verification batch (the rest halves over the "
                                       "further batches; 0.5: β/2, β/4, …): a larger share, a smaller first batch",
                                       gt=0.0, lt=1.0)] = 0.9
@@ -307,7 +310,7 @@ class CertifyConfig:
         p = self.push
         return dataclasses.replace(self.sequential, first_round=p.first_round, explore=p.explore,
                                    explore_after_failure=p.explore_after_failure, verify_chunk=p.verify_chunk,
-                                   verify_margin=p.verify_margin, first_share=p.first_share)
+                                   first_share=p.first_share)
 
     def __post_init__(self) -> None:
         if self.disturbance == "push" and self.chooses_a_state:

@@ -134,7 +134,7 @@ def load_config(directory: str | Path) -> StudySetup:
     if isinstance(certify, dict) and ("push_steps" in certify or isinstance(certify.get("push"), dict)):
         push = {**(certify.get("push") or {})}
         push.setdefault("verify_chunk", 0)  # written before chunked verification: whole verification batches
-        if "verify_margin" not in push:  # written before cheap exploration: exploration pushes were the statement's
+        if "explore_horizon" not in push:  # written before cheap exploration: exploration pushes were the statement's
             push.update({"explore_horizon": push.get("horizon", 20),
                          "explore_recovery_radius": push.get("recovery_radius", 0.03),
                          "explore_recovery_steps": push.get("recovery_steps", 2), "verify_margin": 1.0,
