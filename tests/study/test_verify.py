@@ -40,14 +40,18 @@ def test_an_old_study_file_verifies_every_gait(tmp_path: Path) -> None:
     path = d / "study.json"
     raw = json.loads(path.read_text())
     raw["config"]["study"].pop("verify")
-    for key in ("verify_margin", "first_share", "explore_horizon", "explore_recovery_radius",
+    for key in ("pass_probability", "first_share", "explore_horizon", "explore_recovery_radius",
                 "explore_recovery_steps"):
         raw["config"]["certify"]["push"].pop(key)
     path.write_text(json.dumps(raw))
     cfg = load_config(d).config
     assert cfg.study.verify == "all" and cfg.study.verifies_all
     p = cfg.certify.push
-    assert (p.verify_margin, p.first_share, p.explore_horizon, p.explore_recovery_steps) == (1.0, 0.5, 3, 2)
+    assert (p.first_share, p.explore_horizon, p.explore_recovery_steps) == (0.5, 3, 2)
+    # a study written with the constant margin of before reads, its verification disk now placed by the fall curve
+    raw["config"]["certify"]["push"]["verify_margin"] = 0.8
+    path.write_text(json.dumps(raw))
+    assert load_config(d).config.certify.push.pass_probability == PushConfig().pass_probability
 
 
 def test_a_requirement_on_the_certificate_verifies_every_gait() -> None:

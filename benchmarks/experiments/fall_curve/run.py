@@ -146,7 +146,9 @@ def cmd_run(args: argparse.Namespace) -> None:
              "params": p, "gait": g, "domains": args.domains, "seed": seed, "push": push,
              "explore_only": args.explore_only} for p, g in points for seed in seeds]
     jobs = [j for j in jobs if j["label"] not in done]
-    commit, day = git_commit(), date.today().isoformat()
+    import robustgait  # the checkout measured: this one, or another's src first on PYTHONPATH
+
+    commit, day = git_commit(Path(robustgait.__file__).resolve().parents[2]), date.today().isoformat()
     print(f"# fall_curve run {day} at {commit}: {args.robot}, {len(jobs)} gaits to go, {args.workers} workers")
     with ProcessPoolExecutor(args.workers) as pool:
         futures = [pool.submit(measure, j) for j in jobs]
