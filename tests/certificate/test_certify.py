@@ -397,8 +397,9 @@ def test_push_certificate(exo, exo_gait):
 
 @pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
 def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_gait):
-    """The statement of a sequential J* names its passing batch (size, attempt and β, from the rounds), the share of
-    the exploration's estimate it was drawn in, in pushes and the disk, not the state certificate's ball and r*."""
+    """The statement of a sequential J* names its passing batch (size, attempt and β, from the rounds), where its disk
+    came from (the fall curve fitted to the earlier pushes, at the pass probability; the estimate Ĵ), in pushes and
+    the disk, not the state certificate's ball and r*."""
     gc = certify_gait(exo, exo_gait, CertifyConfig(
         disturbance="push", seed=3, push={"horizon": 6, "first_round": 8, "explore": 8, "explore_after_failure": 8},
         sequential=SequentialConfig(epsilon=0.2, budget=400)))
@@ -406,10 +407,11 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
     verify = [r for r in c.rounds if r.kind == "verify"]
     assert gc.ok and c.method == "sequential" and verify[-1].passed and c.violation_bound <= 0.2
     text = gc.statement()
-    explored = c.n_samples - sum(r.n_samples for r in verify)
-    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed "
-            f"({verify[-1].radius / c.estimate:.2g} × the estimate Ĵ = {c.estimate:.4g} N s of {explored} exploration "
-            f"pushes): none fell (verification attempt {len(verify)}:") in text
+    earlier = c.n_samples - verify[-1].n_samples
+    assert (f"a batch of {verify[-1].n_samples} fresh pushes drawn uniformly in the disk after J* was fixed (the "
+            f"largest disk whose batch the fall curve fitted to the {earlier}") in text
+    assert (f"predicted to pass with probability 0.9; the estimate Ĵ = {c.estimate:.4g} N s): none fell (verification "
+            f"attempt {len(verify)}:") in text
     assert c.estimate is not None and c.r_star == pytest.approx(verify[-1].radius)
     # what a failure is: a fall within the pushed step and push.horizon more (a walk back in the band stops there)
     assert "make the robot fall within that step and 6 more (a pushed walk stops once recovered: 2 consecutive" in text

@@ -8,7 +8,8 @@ gait generated cold (``--domains``), then the default certificate (:func:`robust
 batch passed, attempts, pushes, physics steps (all, the verification's, the orbit search's), the ratio to the
 statement's minimum (the first batch's size × the mean physics steps of a verification push), CPU seconds and the
 fitted curve. The yardstick (:func:`common.yardstick`) is measured once per worker, beside the gaits. One JSON line
-per gait and seed; a killed run continues (a row already in ``--out`` is skipped). ``--explore-only``: the
+per gait and seed (``--samples``: with every push of the certificate, its impulse, whether it fell and its round); a
+killed run continues (a row already in ``--out`` is skipped). ``--explore-only``: the
 exploration alone, with the verification radius its curve gives at each pass probability of :data:`LEVELS`.
 
 ``report FILES [--before OLD.jsonl ...] [--s50 PREDICTORS.jsonl]``: per robot, the share of first batches that passed,
@@ -98,6 +99,9 @@ def measure(job: dict[str, Any]) -> dict[str, Any]:
                first_passed=bool(verify and verify[0].passed), attempts=len(verify), pushes=c.n_samples,
                physics=total, verify_physics=verify_physics, orbit_physics=gc.orbit_physics_steps,
                ratio=total / (first_n * per_push) if per_push else None, curve=getattr(c, "curve", None))
+    if job.get("samples"):  # every push: impulse (heading frame; its phase is push.push_phase of it), fell, round
+        row.update(impulses=[[float(v) for v in x] for x in c.samples], fell=[bool(f) for f in c.fell],
+                   sample_round=[int(k) for k in c.round_of_sample], rounds=[r.kind for r in c.rounds])
     return row
 
 
@@ -144,7 +148,7 @@ def cmd_run(args: argparse.Namespace) -> None:
     jobs = [{"robot": args.robot, "label": (Path(g).stem if g else label_of(p)) + (f"_seed{seed}" if args.seeds > 1
                                                                                    else ""),
              "params": p, "gait": g, "domains": args.domains, "seed": seed, "push": push,
-             "explore_only": args.explore_only} for p, g in points for seed in seeds]
+             "explore_only": args.explore_only, "samples": args.samples} for p, g in points for seed in seeds]
     jobs = [j for j in jobs if j["label"] not in done]
     import robustgait  # the checkout measured: this one, or another's src first on PYTHONPATH
 
@@ -275,6 +279,8 @@ def main() -> None:
     r.add_argument("--seed", type=int, default=0)
     r.add_argument("--seeds", type=int, default=1, help="certify each gait with seeds seed … seed + seeds − 1")
     r.add_argument("--push", default="{}", help="JSON overrides of certify.push")
+    r.add_argument("--samples", action="store_true", help="also every push of the certificate: impulse, fell, round "
+                   "(for fitting other fall models offline)")
     r.add_argument("--explore-only", action="store_true", help="the exploration alone, and the verification "
                    "radius at each pass probability of LEVELS")
     r.add_argument("--workers", type=int, default=2)

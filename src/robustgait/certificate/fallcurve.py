@@ -47,9 +47,9 @@ MU_STEP = 0.08
 SLOPES = np.geomspace(0.7, 70.0, 28)
 FLOORS = np.linspace(0.0, 0.98, 36)
 # grid points whose posterior mass together is below this are dropped after a fit
-NEGLIGIBLE = 1e-9
+NEGLIGIBLE = 1e-6
 # the tables of G_b and H_b: x on a uniform grid; below it, their first-order tails
-_X = np.linspace(-30.0, 30.0, 1201)
+_X = np.linspace(-30.0, 30.0, 601)
 
 
 def fall_probability(s: ArrayLike, mu: ArrayLike, b: ArrayLike, floor: ArrayLike = 0.0) -> FloatArray:
@@ -64,9 +64,9 @@ def fall_probability(s: ArrayLike, mu: ArrayLike, b: ArrayLike, floor: ArrayLike
 @functools.cache
 def _table(b: float, k: int) -> FloatArray:
     """ln of (k/b) ∫₀^∞ σ(x − τ) e^{−kτ/b} dτ on the grid :data:`_X`: G_b (k = 2, the disk average) and H_b (k = 1,
-    the average along a segment), by composite Gauss–Legendre (unit panels, 8 nodes) on τ ∈ [0, max(x, 0) + 40]
+    the average along a segment), by composite Gauss–Legendre (unit panels, 6 nodes) on τ ∈ [0, max(x, 0) + 40]
     (beyond it σ(x − τ) < e^{−40})."""
-    nodes, weights = np.polynomial.legendre.leggauss(8)
+    nodes, weights = np.polynomial.legendre.leggauss(6)
     panels = np.arange(0.0, float(_X[-1]) + 40.0, 1.0)
     tau = (panels[:, None] + 0.5 * (nodes[None, :] + 1.0)).ravel()
     w = np.tile(0.5 * weights, panels.size)
