@@ -126,6 +126,7 @@ def test_an_estimate_alone_and_a_verification_decided_by_it() -> None:
     assert json.loads(json.dumps(est.to_dict()))["verified"] is False
 
 
+@pytest.mark.slow  # seconds: a push certificate three times; CI runs it
 def test_a_replayed_exploration_gives_the_same_certificate_without_evaluating_it_again() -> None:
     """A verification run whose exploration map replays an earlier estimate's samples and images (:class:`Replay`)
     makes the same certificate, sample for sample, as one that evaluates them, and evaluates only what the estimate
