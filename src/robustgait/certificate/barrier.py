@@ -297,9 +297,9 @@ class Certificate:
     verification batch passed (then there is no statement). estimate: the sequential estimator's r̂ after its
     exploration, before any verification (None for ``uniform``); verified: false for the sequential estimator's
     exploration alone (``verify=False``: r* is then the estimate, with no statement). curve: a push certificate's
-    fitted fall curve at the end (:meth:`.fallcurve.FallCurve.summary`: pushes, falls, s₅₀, slope, Ĵ and its 90 %
-    interval); its exploration pushes inside J* may have fallen (the statement rests on the verification batch alone,
-    :mod:`.pushfit`).
+    fitted fall curve at the end (:meth:`.fallcurve.FallCurve.summary`: pushes, falls, s₅₀, slope, floor and Ĵ); its
+    exploration pushes inside J* may have fallen (the statement rests on the verification batch alone,
+    :mod:`.estimators`).
     """
 
     r_star: float

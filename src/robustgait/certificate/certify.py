@@ -29,7 +29,7 @@ from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
 from robustgait.certificate.search import Walking, find_orbit, probe_impulse
 from robustgait.certificate.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
-from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict, verification_beta
+from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
 from robustgait.config.certify import R_MAX_LIMIT
 from robustgait.config.work import Work, check_work
 from robustgait.errors import RobustGaitError
@@ -48,7 +48,7 @@ def push_basis(c: Certificate, config: CertifyConfig) -> str:
     if c.method == "sequential":
         verify = [r for r in c.rounds if r.kind == "verify"]
         n_a, attempt = verify[-1].n_samples, len(verify)
-        beta_a = verification_beta(config.beta, attempt, config.push.first_share)
+        beta_a = config.estimator.beta_of(config.beta, attempt)
         n_explore = c.n_samples - sum(r.n_samples for r in verify)
         estimate = "" if c.estimate is None else f"; the estimate Ĵ = {c.estimate:.4g} N s"
         earlier = c.n_samples - n_a

@@ -172,6 +172,7 @@ class _Pool:
         self.rounds: list[Round] = []
         self.r_hat = r_max
         self.verified: RadiusSolution | None = None  # the radius the last passed verification batch certified
+        self._curve: tuple[int, FallCurve] | None = None  # the last fall curve and the samples it was fitted to
 
     @property
     def used(self) -> int:
@@ -187,8 +188,9 @@ class _Pool:
         self.s = np.concatenate([self.s, violation_end(d, p, self.alpha, self.barrier)])
         self.round_of.append(np.full(d.size, len(self.rounds), dtype=np.int64))
 
-    def _solve(self, r_max: float) -> RadiusSolution:
-        return solve_radius(self.d, self.p, alpha=self.alpha, r_max=r_max, barrier=self.barrier)
+    def _solve(self, r_max: float, since: int = 0) -> RadiusSolution:
+        """:func:`.barrier.solve_radius` up to ``r_max`` over the samples from index ``since`` on."""
+        return solve_radius(self.d[since:], self.p[since:], alpha=self.alpha, r_max=r_max, barrier=self.barrier)
 
     def add(self, kind: str, radius: float, x0: FloatArray) -> None:
         """Evaluate the exploration map on x0, add the samples as a round and recompute r̂."""
@@ -216,12 +218,7 @@ class _Pool:
             part = x0[start:start + step]
             self._evaluate(self.P, part)
             n_used += part.shape[0]
-            if batch_only:
-                d, s = self.d[first:], self.s[first:]
-                sol = RadiusSolution(radius, True) if not np.any((d <= radius) & (s > radius)) else \
-                    RadiusSolution(float(d[(d <= radius) & (s > radius)].min()), False)
-            else:
-                sol = self._solve(radius)
+            sol = self._solve(radius, since=first if batch_only else 0)
             if sol.r_star != radius:
                 break
         passed = sol.r_star == radius
@@ -232,10 +229,12 @@ class _Pool:
 
     def fall_curve(self) -> FallCurve:
         """The fall curve (:func:`.fallcurve.fit_fall_curve`) of every sample so far: its distance from x* as its
-        size, violated somewhere (fell) as its outcome, r_max as the cap."""
-        d = self.d
-        keep = d > 0.0
-        return fit_fall_curve(d[keep], (self.s > self.d)[keep], self.r_max)
+        size, violated somewhere (fell) as its outcome, r_max as the cap; fitted again only when samples were added
+        since the last fit."""
+        if self._curve is None or self._curve[0] != self.used:
+            keep = self.d > 0.0
+            self._curve = (self.used, fit_fall_curve(self.d[keep], (self.s > self.d)[keep], self.r_max))
+        return self._curve[1]
 
     def elites(self, k: int) -> FloatArray:
         """Unit directions (≤ k, n) of the samples violated somewhere (s > d, falls included) with d ≥ r̂,
@@ -291,7 +290,11 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
         n_a = cfg.batch_size(b, attempt)
         if pool.used + n_a > cfg.budget:
             break
-        radius = cfg.verify_margin * pool.r_hat if curve is None else curve.verification_radius(n_a, level or 0.0)
+        if level is None:
+            radius = cfg.verify_margin * pool.r_hat
+        else:
+            assert curve is not None  # fitted above whenever there is a level
+            radius = curve.verification_radius(n_a, level)
         if radius <= 0.0:
             break
         if pool.verify(radius, sample_ball(n_a, n, radius, xs, verify_rng), cfg.verify_chunk, curve is not None):

@@ -149,10 +149,10 @@ class FallCurve:
         with np.errstate(divide="ignore"):
             return float(self.weights @ np.exp(n * np.log1p(-v)))
 
-    def _largest(self, excess: Callable[[float], float], upper: float) -> float:
-        """The largest r ≤ ``upper`` (and ``cap``) with excess(r) ≤ 0, excess increasing in r: Brent's method in ln r
-        to 1e-6 (0 when excess stays positive down to 1e-9 of ``upper``)."""
-        hi = min(upper, self.cap)
+    def _largest(self, excess: Callable[[float], float]) -> float:
+        """The largest r ≤ ``cap`` with excess(r) ≤ 0, excess increasing in r: Brent's method in ln r to 1e-6 (0 when
+        excess stays positive down to 1e-9 of ``cap``)."""
+        hi = self.cap
         if excess(hi) <= 0.0:
             return hi
         lo = hi
@@ -165,12 +165,11 @@ class FallCurve:
 
     def estimate(self, epsilon: float) -> float:
         """Ĵ: the push size r_ε whose disk has the predicted share ε of falls, E[V(r_ε)] = ε (at most ``cap``)."""
-        return self._largest(lambda r: self.fall_share(r) - epsilon, self.cap)
+        return self._largest(lambda r: self.fall_share(r) - epsilon)
 
-    def verification_radius(self, n: int, level: float, upper: float | None = None) -> float:
-        """The largest r ≤ ``upper`` (default ``cap``) whose :meth:`pass_probability` for a batch of n is at least
-        ``level``."""
-        return self._largest(lambda r: level - self.pass_probability(r, n), self.cap if upper is None else upper)
+    def verification_radius(self, n: int, level: float) -> float:
+        """The largest r ≤ ``cap`` whose :meth:`pass_probability` for a batch of n is at least ``level``."""
+        return self._largest(lambda r: level - self.pass_probability(r, n))
 
     def slope(self) -> float:
         """The posterior mean of b."""

@@ -137,8 +137,7 @@ def load_config(directory: str | Path) -> StudySetup:
         if "explore_horizon" not in push:  # written before cheap exploration: exploration pushes were the statement's
             push.update({"explore_horizon": push.get("horizon", 20),
                          "explore_recovery_radius": push.get("recovery_radius", 0.03),
-                         "explore_recovery_steps": push.get("recovery_steps", 2), "verify_margin": 1.0,
-                         "first_share": 0.5})
+                         "explore_recovery_steps": push.get("recovery_steps", 2), "first_share": 0.5})
         # format 3 as first written had a push_steps key: the fixed horizon the recovery band retired
         certify = {k: v for k, v in certify.items() if k != "push_steps"} | {"push": push}
         raw = {**raw, "config": {**raw["config"], "certify": certify}}
