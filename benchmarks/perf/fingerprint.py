@@ -1,7 +1,8 @@
 """The same results before and after a change that must not change behaviour: a fingerprint of the default gaits,
 their certificates and a validation under every disturbance kind.
 
-    python benchmarks/perf/fingerprint.py OUT.json [--compare BEFORE.json] [--no-t1] [--t1-spec SPEC]
+    python benchmarks/perf/fingerprint.py OUT.json [--compare BEFORE.json] [--renamed OLD=NEW ...] [--added KEY ...]
+        [--no-t1] [--t1-spec SPEC]
 
 Records, through the CLI a user runs (``--json`` outputs, every figure to the last digit; wall times and paths
 dropped):
@@ -13,7 +14,10 @@ dropped):
   ``../shared/robots``, or with ``--no-t1``).
 
 ``--compare`` prints each entry as ``same`` or ``DIFFERS`` (with the first differing key) and exits 1 on any
-difference.
+difference. A change that renames keys without changing a figure is compared with ``--renamed OLD=NEW`` (the before's
+key OLD read as NEW, at any depth) and ``--added KEY`` (a key the after writes and the before did not, ignored),
+each said in the output: e.g. ``--renamed j_star=value --renamed r_star=value --added figure`` for the certificate's
+figure named ``value``.
 """
 from __future__ import annotations
 
@@ -79,6 +83,15 @@ def record(t1_spec: Path | None) -> dict[str, Any]:
     return out
 
 
+def _normalized(v: Any, renamed: dict[str, str], added: set[str]) -> Any:
+    """``v`` with the keys of ``renamed`` renamed and those of ``added`` dropped, at every depth."""
+    if isinstance(v, dict):
+        return {renamed.get(k, k): _normalized(x, renamed, added) for k, x in v.items() if k not in added}
+    if isinstance(v, list):
+        return [_normalized(x, renamed, added) for x in v]
+    return v
+
+
 def _first_difference(a: Any, b: Any, where: str = "") -> str | None:
     if isinstance(a, dict) and isinstance(b, dict):
         for k in sorted(set(a) | set(b)):
@@ -103,6 +116,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", type=Path)
     ap.add_argument("--compare", type=Path)
+    ap.add_argument("--renamed", action="append", default=[], metavar="OLD=NEW",
+                    help="compare the before's key OLD as NEW (a rename that changes no figure)")
+    ap.add_argument("--added", action="append", default=[], metavar="KEY", help="a key new in the after: ignored")
     ap.add_argument("--no-t1", action="store_true")
     ap.add_argument("--t1-spec", type=Path, default=T1_SPEC, help="T1's spec (default: robots/t1/spec.toml)")
     args = ap.parse_args()
@@ -112,7 +128,12 @@ def main() -> None:
     args.out.write_text(json.dumps(rec, indent=1, sort_keys=True) + "\n")
     print(f"wrote {args.out}: {', '.join(rec)}")
     if args.compare:
-        before = json.loads(args.compare.read_text())
+        renamed = dict(r.split("=", 1) for r in args.renamed)
+        added = set(args.added)
+        if renamed or added:
+            print(f"compared with keys renamed {renamed} and added keys ignored {sorted(added)}")
+        before = _normalized(json.loads(args.compare.read_text()), renamed, added)
+        rec = _normalized(rec, renamed, added)
         bad = 0
         for k in sorted(set(before) | set(rec)):
             d = _first_difference(before.get(k), rec.get(k), k)

@@ -49,7 +49,7 @@ def main() -> None:
     setup = time.perf_counter() - t0
     threads = v.sim.threads
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; mujoco "
-          f"{mujoco.__version__}; threads {threads}; {robot.name}, dt {robot.dt} s; r* = {v.certificate.r_star:.4f}; "
+          f"{mujoco.__version__}; threads {threads}; {robot.name}, dt {robot.dt} s; r* = {v.certificate.radius:.4f}; "
           f"certificate + fixed point {setup:.2f} s")
     fp = v.fixed_point
     ours, raws, walls = [], [], []

@@ -85,11 +85,11 @@ def test_recovery_refuses_the_late_falls_a_fall_only_certificate_certifies():
     falls_only = certify_map_sequential(model.map(3, None), np.zeros(2), cfg)
     recovery = certify_map_sequential(model.map(3, 0.5), np.zeros(2), cfg)
     # without recovery J* lies above the true critical impulse: pushes just below it walk 4 steps and fall later
-    assert falls_only.r_star > model.critical * 1.05
-    j = np.column_stack([np.linspace(0, falls_only.r_star * 0.999, 400), np.zeros(400)])
+    assert falls_only.radius > model.critical * 1.05
+    j = np.column_stack([np.linspace(0, falls_only.radius * 0.999, 400), np.zeros(400)])
     late, _ = model.walk(j, 19)
     assert (late > 0).any()
     # with it (a radius below the unstable point d_u = 1) J* stays below J_u: no push under it falls in 20 steps
-    assert recovery.r_star < model.critical and recovery.violation_bound <= 0.02
-    j = np.column_stack([np.linspace(0, recovery.r_star * 0.999, 400), np.zeros(400)])
+    assert recovery.radius < model.critical and recovery.violation_bound <= 0.02
+    j = np.column_stack([np.linspace(0, recovery.radius * 0.999, 400), np.zeros(400)])
     assert (model.walk(j, 19)[0] == 0).all()

@@ -117,7 +117,7 @@ def test_invariant_radius_matches_brute_force(case: tuple[np.ndarray, np.ndarray
     assert ref_strict - 1e-7 <= r_star <= ref_lenient + 1e-7
 
     cert = certificate_from_samples(x0, x1, x_star, alpha=alpha, r_max=r_max, beta=0.05, barrier=barrier)  # type: ignore[arg-type]
-    assert cert.r_star == r_star
+    assert cert.radius == r_star
     inside = d <= r_star if cert.attained else d < r_star
     assert cert.n_inside == int(inside.sum())
     assert np.all(cert.margins[inside] >= -1e-12)
@@ -140,10 +140,10 @@ def test_feasible_set_need_not_be_an_interval() -> None:
     assert sol == (1.0, True)
     # with r_max inside the bad interval, the supremum is 0.5, not attained
     sol = solve_radius(np.array([0.5]), np.array([p]), alpha=alpha, r_max=0.6)
-    assert sol.r_star == 0.5 and not sol.attained
+    assert sol.radius == 0.5 and not sol.attained
     # a fall at 0.8 after the gap [0.7, 0.8): radii just below 0.8 are feasible, so r* = 0.8 (not 0.5)
     sol = solve_radius(np.array([0.5, 0.8]), np.array([p, np.inf]), alpha=alpha, r_max=1.0)
-    assert sol.r_star == 0.8 and not sol.attained
+    assert sol.radius == 0.8 and not sol.attained
 
 
 def test_paper_barrier_condition_and_interval() -> None:
@@ -164,7 +164,7 @@ def test_paper_barrier_condition_and_interval() -> None:
     x_star = np.zeros(3)
     cb = certify_map(lambda x: 1.02 * x + 0.02 * x**2, x_star, uniform(r_max=0.9, seed=3))
     cp = certify_map(lambda x: 1.02 * x + 0.02 * x**2, x_star, uniform(r_max=0.9, seed=3, barrier="paper"))
-    assert cp.r_star > cb.r_star and cp.barrier == "paper" and "paper barrier" in cp.statement()
+    assert cp.radius > cb.radius and cp.barrier == "paper" and "paper barrier" in cp.statement()
 
 
 def test_touching_intervals_and_boundary_at_r_max() -> None:
@@ -198,7 +198,7 @@ def test_fell_sample_gives_unattained_supremum() -> None:
 def test_linear_contraction_gives_r_max() -> None:
     x_star = np.array([0.3, -0.2, 1.0])
     cert = certify_map(lambda x: x_star + 0.5 * (x - x_star), x_star, uniform(r_max=1.5, n_samples=500, seed=1))
-    assert cert.r_star == 1.5 and cert.attained
+    assert cert.radius == 1.5 and cert.attained
     assert cert.n_inside == 500 and not cert.fell.any()
     assert np.all(cert.margins >= 0)
 
@@ -206,7 +206,7 @@ def test_linear_contraction_gives_r_max() -> None:
 def test_expanding_direction_drives_r_star_to_zero() -> None:
     # P(x) = diag(0.5, 0.5, 1.5) x: points on the third axis leave every ball, so the true r* is 0.
     D = np.diag([0.5, 0.5, 1.5])
-    radii = [certify_map(lambda x: x @ D, np.zeros(3), uniform(n_samples=N, seed=0)).r_star for N in (50, 500, 5000)]
+    radii = [certify_map(lambda x: x @ D, np.zeros(3), uniform(n_samples=N, seed=0)).radius for N in (50, 500, 5000)]
     assert radii[0] > radii[1] > radii[2]
     assert radii[2] < 0.25
 
@@ -220,7 +220,7 @@ def test_cubic_map_hand_derived_radius() -> None:
     # samples), i.e. 1 ≤ r* ≤ 1 + t with P(no d_i in (1, 1+t)) = (1 − t/2)^N ≈ e^{−Nt/2}: t = 24/N.
     for N in (400, 4000):
         cert = certify_map(lambda x: x**3, np.zeros(1), uniform(r_max=2.0, n_samples=N, seed=2))
-        assert 1.0 <= cert.r_star <= 1.0 + 24.0 / N
+        assert 1.0 <= cert.radius <= 1.0 + 24.0 / N
         assert not cert.attained
 
 
@@ -235,7 +235,7 @@ def test_fell_region_hand_derived_radius() -> None:
 
     for N in (300, 3000):
         cert = certify_map(P, np.zeros(2), uniform(r_max=2.0, n_samples=N, seed=3))
-        assert a <= cert.r_star <= a + 24.0 / (a * N)
+        assert a <= cert.radius <= a + 24.0 / (a * N)
         assert not cert.attained
         assert cert.n_inside == int(np.sum(np.linalg.norm(cert.samples, axis=1) <= a))
 
@@ -277,7 +277,7 @@ def test_certificate_statement_and_json() -> None:
     text = cert.statement()
     assert "95%" in text and f"{100 * cert.violation_bound:.3g}%" in text and "\n" not in text
     d = json.loads(json.dumps(cert.to_dict(), allow_nan=False))
-    assert d["r_star"] == cert.r_star and d["n_inside"] == cert.n_inside
+    assert d["value"] == cert.radius and d["verified"] and d["n_inside"] == cert.n_inside
     fell = np.asarray(d["fell"])
     assert fell.any() and all(d["images"][i] is None for i in np.flatnonzero(fell))
     assert all(d["margins"][i] is None for i in np.flatnonzero(fell))

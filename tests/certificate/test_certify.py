@@ -45,11 +45,11 @@ def seq_cert(robot_gait):
 def test_certificate_is_consistent(small_cert):
     c = small_cert.certificate
     assert small_cert.status == Status.OK and small_cert.ok and small_cert.steps_walked == small_cert.orbit.steps
-    assert c.method == "uniform" and len(c.rounds) == 1 and c.rounds[0].r_hat == c.r_star
-    assert 0 <= c.r_star <= 1.0 and c.n_samples == 24
+    assert c.method == "uniform" and len(c.rounds) == 1 and c.rounds[0].r_hat == c.radius
+    assert 0 <= c.radius <= 1.0 and c.n_samples == 24
     np.testing.assert_array_equal(c.fell, np.isnan(c.images).any(axis=1))
     d = np.linalg.norm(c.samples - c.x_star, axis=1)
-    inside = d < c.r_star
+    inside = d < c.radius
     assert np.all(c.margins[inside] >= 0) and inside.sum() <= c.n_inside
     assert np.all(d <= 1.0 + 1e-12)
     assert small_cert.map_residual < 0.05 and small_cert.sigma is not None and small_cert.sigma < 0.05
@@ -80,11 +80,11 @@ def test_sequential_certificate(robot_gait, seq_cert):
     assert c.budget_exhausted or (c.rounds[-1].passed and c.violation_bound <= 0.2)
     assert all(b.r_hat <= a.r_hat for a, b in itertools.pairwise(c.rounds))
     d = np.linalg.norm(c.samples - c.x_star, axis=1)
-    assert np.all(c.margins[d < c.r_star] >= 0)
+    assert np.all(c.margins[d < c.radius] >= 0)
     # round 1 is the uniform estimator's draw (16 samples, seed 3): relative to x*, it depends on the seed only
     u = certify_gait(*robot_gait, uniform(n_samples=16, r_max=1.0, seed=3))
     np.testing.assert_array_equal(c.samples[:16], u.certificate.samples)
-    assert c.rounds[0].r_hat == u.r_star
+    assert c.rounds[0].r_hat == u.radius
     res = json.loads(json.dumps(seq_cert.to_dict(), allow_nan=False))
     assert res["method"] == "sequential" and res["status"] == "ok" and len(res["rounds"]) == len(c.rounds)
     assert res["config"]["sequential"]["epsilon"] == 0.2 and len(res["sample_round"]) == c.n_samples
@@ -122,7 +122,8 @@ def test_gait_failures_are_results(exo, exo_gait, monkeypatch):
     none = certify_gait(exo, exo_gait, uniform(orbit=NEVER_SETTLES))
     assert none.status == Status.UNSETTLED and none.value == 0 and none.steps_walked == 32
     res = json.loads(json.dumps(none.to_dict(), allow_nan=False))
-    assert res["status"] == "unsettled" and res["r_star"] == 0 and res["vacuous"] and res["x_star"] is None
+    assert res["status"] == "unsettled" and res["value"] == 0 and not res["verified"] and res["vacuous"]
+    assert res["x_star"] is None
     assert res["orbit"]["settled_at_step"] is None and res["orbit"]["steps"] == 32 and res["orbit"]["sigma"] is None
     # the reduced map falling from x̄* itself: its image of x̄* is replaced by a fall
     real_call = ReducedMap.__call__
@@ -181,10 +182,10 @@ def test_cli_certify_json(capsys, tmp_path):
                         "--json", "--plot", str(tmp_path / "c.png"), "-o", str(tmp_path / "c.json"))
     res = json.loads(out)
     assert code == 0
-    for key in ("j_star", "x_star", "fixed_point_step", "sigma", "period", "n_samples", "n_fell", "map",
-                "reconstruction", "seconds"):  # a push certificate: its figure is J*
+    for key in ("value", "estimate", "verified", "x_star", "fixed_point_step", "sigma", "period", "n_samples", "n_fell",
+                "map", "reconstruction", "seconds"):
         assert key in res
-    assert "r_star" not in res
+    assert res["figure"] == "J*" and res["unit"] == "N s" and not {"r_star", "j_star"} & set(res)
     assert res["n_samples"] == 12 and res["map"] == "auto" and res["period"] == 1
     assert res["reconstruction"] == "holonomic" and res["sigma"] is None and res["orbit"]["sigma"] < 1e-3
     assert len(json.loads((tmp_path / "c.json").read_text())["samples"]) == 12
@@ -335,7 +336,7 @@ def test_energy_state_certificate(exo, exo_gait, state, dim):
     gc = certify_gait(exo, exo_gait, uniform(state=state, n_samples=12, seed=1))
     c, co = gc.certificate, gc.coordinates
     assert gc.ok and c.samples.shape == (12, dim) and co.space == state and co.unit == "√J"
-    assert gc.energy == pytest.approx(c.r_star**2 / 2)  # a ball of the energy metric: E* = r*²/2
+    assert gc.energy == pytest.approx(c.radius**2 / 2)  # a ball of the energy metric: E* = r*²/2
     assert c.r_max == 10.0  # r_max unset: the energy states' default
     res = json.loads(json.dumps(gc.to_dict(), allow_nan=False))
     assert res["state"] == state and res["unit"] == "√J" and res["energy"] == pytest.approx(gc.energy)
@@ -354,7 +355,7 @@ def test_ellipsoid_certificate_with_its_ball(exo, exo_gait, tmp_path):
     assert gc.ok and sh.fallback == "" and sh.fit.used == 12 and sh.fit.spectral_radius < 1
     assert np.all(np.linalg.eigvalsh(sh.s) > 0) and np.linalg.det(sh.s) == pytest.approx(1.0)
     assert gc.ball is not None and gc.ball.n_samples == 16
-    assert gc.volume_ratio == pytest.approx((gc.r_star / gc.ball.r_star) ** 3)
+    assert gc.volume_ratio == pytest.approx((gc.value / gc.ball.radius) ** 3)
     res = json.loads(json.dumps(gc.to_dict(), allow_nan=False))
     assert res["set"] == "ellipsoid" and res["ball"]["volume_ratio"] == pytest.approx(gc.volume_ratio)
     assert len(res["coordinates"]["shape"]["S"]) == 3
@@ -388,7 +389,7 @@ def test_push_certificate(exo, exo_gait):
     # the image of a push is the origin (absorbed) or a fall: J* is the smallest impulse that fell (or r_max)
     d = np.linalg.norm(c.samples, axis=1)
     assert np.all(np.isnan(c.images[c.fell])) and np.all(c.images[~c.fell] == 0)
-    assert c.r_star == pytest.approx(d[c.fell].min() if c.fell.any() else c.r_max)
+    assert c.radius == pytest.approx(d[c.fell].min() if c.fell.any() else c.r_max)
     text = gc.statement()
     assert "N s" in text and "pushes" in text and "union bound over the 13 possible choices of J*" in text
     assert f"the {c.n_inside} with |J|" in text and "ball" not in text and "r*" not in text
@@ -401,8 +402,8 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
     came from (the fall curve fitted to the earlier pushes, at the pass probability; the estimate Ĵ), in pushes and
     the disk, not the state certificate's ball and r*."""
     gc = certify_gait(exo, exo_gait, CertifyConfig(
-        disturbance="push", seed=3, push={"horizon": 6, "first_round": 8, "explore": 8, "explore_after_failure": 8},
-        sequential=SequentialConfig(epsilon=0.2, budget=400)))
+        disturbance="push", seed=3, push={"horizon": 6},
+        sequential=SequentialConfig(epsilon=0.2, budget=400, first_round=8, explore=8, explore_after_failure=8)))
     c = gc.certificate
     verify = [r for r in c.rounds if r.kind == "verify"]
     assert gc.ok and c.method == "sequential" and verify[-1].passed and c.violation_bound <= 0.2
@@ -412,7 +413,7 @@ def test_sequential_push_certificate_states_its_verification_in_pushes(exo, exo_
             f"largest disk whose batch the fall curve fitted to the {earlier}") in text
     assert (f"predicted to pass with probability 0.9; the estimate Ĵ = {c.estimate:.4g} N s): none fell (verification "
             f"attempt {len(verify)}:") in text
-    assert c.estimate is not None and c.r_star == pytest.approx(verify[-1].radius)
+    assert c.estimate is not None and c.radius == pytest.approx(verify[-1].radius)
     # what a failure is: a fall within the pushed step and push.horizon more (a walk back in the band stops there)
     assert "make the robot fall within that step and 6 more (a pushed walk stops once recovered: 2 consecutive" in text
     assert "every coordinate of the switching state within 0.03 of its orbit's band" in text
@@ -429,8 +430,8 @@ def test_a_verification_replays_its_estimates_exploration(exo, exo_gait):
     an estimate): the same certificate, to the last bit, with the estimate's pushes replayed rather than walked again;
     its orbit taken from the estimate's record (same robot, gait and options); an estimate made with other options is
     ignored."""
-    cfg = CertifyConfig(disturbance="push", seed=3, push={"horizon": 4, "explore_horizon": 3, "first_round": 12,
-                                                          "explore": 12}, sequential=SequentialConfig(epsilon=0.2))
+    cfg = CertifyConfig(disturbance="push", seed=3, push={"horizon": 4, "explore_horizon": 3},
+                        sequential=SequentialConfig(epsilon=0.2, first_round=12, explore=12))
     estimate = json.loads(json.dumps(certify_gait(exo, exo_gait, cfg, verify=False).to_dict()))
     fresh = certify_gait(exo, exo_gait, cfg)
     again = certify_gait(exo, exo_gait, cfg, explored=estimate)
@@ -465,11 +466,19 @@ def test_cli_validate_refuses_a_certificate_of_another_state(capsys, tmp_path):
 
 
 def test_a_certificates_figure_is_named_for_what_it_is(small_cert):
-    """A state certificate's figure is r_star (j_star is refused by name) and its JSON writes r_star; a push
-    certificate's JSON writes j_star (tests/io/test_io.py reads both)."""
-    assert small_cert.value == small_cert.r_star and "r_star" in small_cert.to_dict()
+    """A certificate's figure is ``value`` everywhere, its name beside it: a state certificate's is r* (``j_star`` is
+    refused by name), a push certificate's J* in N s (tests/io/test_io.py reads the files of older versions)."""
+    d = small_cert.to_dict()
+    assert small_cert.value == small_cert.r_star == small_cert.certificate.radius == d["value"]
+    assert d["figure"] == "r*" and d["verified"] and d["estimate"] == small_cert.estimate
+    assert not {"r_star", "j_star"} & set(d)
     with pytest.raises(RobustGaitError, match="r_star, not j_star"):
         _ = small_cert.j_star
     push = dataclasses.replace(small_cert, config=CertifyConfig(disturbance="push"))
     d = push.to_dict()
-    assert push.j_star == push.value and d["j_star"] == push.value and "r_star" not in d
+    assert push.j_star == push.value == d["value"] and d["figure"] == "J*" and d["unit"] == "N s"
+    assert not {"r_star", "j_star"} & set(d)
+    # an exploration alone certifies nothing: its figure is the estimate, its value 0
+    explored = dataclasses.replace(small_cert, certificate=dataclasses.replace(small_cert.certificate, verified=False))
+    d = explored.to_dict()
+    assert explored.value == 0.0 == d["value"] and not d["verified"] and d["estimate"] == explored.estimate > 0

@@ -75,7 +75,7 @@ def test_exploration_on_a_cheaper_map_verification_on_the_certified_one() -> Non
             return m(x)
         return f
 
-    cfg = CertifyConfig(seed=3, r_max=60.0, disturbance="push", push={"first_share": 0.9})
+    cfg = CertifyConfig(seed=3, r_max=60.0, disturbance="push", sequential={"first_share": 0.9})
     cert = certify_map_sequential(counted("P", truth), np.zeros(2), cfg,
                                   explore=counted("explore", PushThresholdMap(j0=30.0, a=0.3, b=0.4)))
     verify = [r for r in cert.rounds if r.kind == "verify"]
@@ -83,8 +83,8 @@ def test_exploration_on_a_cheaper_map_verification_on_the_certified_one() -> Non
     assert cert.estimate is not None and verify[0].radius < cert.estimate and cert.curve is not None
     assert verify[0].n_samples == 154 or not verify[0].passed  # the first batch at 0.9 β (or abandoned)
     if cert.violation_bound < 1.0:
-        assert cert.verified and cert.r_star == pytest.approx(verify[-1].radius) and cert.attained
-        assert truth.violating_fraction(cert.r_star) <= 0.02
+        assert cert.verified and cert.radius == pytest.approx(verify[-1].radius) and cert.attained
+        assert truth.violating_fraction(cert.radius) <= 0.02
 
 
 @pytest.mark.slow
@@ -99,7 +99,7 @@ def test_coverage_first_batches_and_cheap_exploration() -> None:
             cfg = CertifyConfig(seed=seed, r_max=60.0, disturbance="push", push={"pass_probability": level})
             cert = certify_map_sequential(truth, np.zeros(2), cfg, explore=explore)
             if cert.violation_bound < 1.0:
-                wrong[level] += truth.violating_fraction(cert.r_star) > 0.02
+                wrong[level] += truth.violating_fraction(cert.radius) > 0.02
             v = next(r for r in cert.rounds if r.kind == "verify")
             first[level] += bool(v.passed)
             js[level].append(v.radius)
@@ -115,11 +115,11 @@ def test_an_estimate_alone_and_a_verification_decided_by_it() -> None:
     cfg = CertifyConfig(seed=1, r_max=60.0, disturbance="push")
     est = certify_map_sequential(P, np.zeros(2), cfg, verify=False)
     assert not est.verified and est.violation_bound == 1.0 and not est.budget_exhausted
-    assert est.r_star == est.estimate and all(r.kind != "verify" for r in est.rounds)
+    assert est.radius == est.estimate and all(r.kind != "verify" for r in est.rounds)
     assert "estimate" in est.statement() and "not verified" in est.statement()
     seen: list[float] = []
     below = certify_map_sequential(P, np.zeros(2), cfg, verify=lambda j: seen.append(j) or j >= 1e3)
-    assert seen == [est.estimate] and not below.verified and below.r_star == est.r_star
+    assert seen == [est.estimate] and not below.verified and below.radius == est.radius
     above = certify_map_sequential(P, np.zeros(2), cfg, verify=lambda j: j >= 1.0)
     assert above.verified and above.estimate == est.estimate
     assert any(r.kind == "verify" for r in above.rounds)
@@ -184,27 +184,27 @@ def test_sequential_converges_to_the_true_radius_and_uniform_overestimates() -> 
     seeds = range(6)
     errors = []
     for explore in (50, 200, 800):
-        r = np.array([certify_map_sequential(P, X_STAR, seq(s, explore=explore, budget=5000)).r_star for s in seeds])
-        assert np.all(r >= P.r_star)  # an estimate from samples can only be too large
-        errors.append(float(np.mean(r / P.r_star - 1)))
+        r = np.array([certify_map_sequential(P, X_STAR, seq(s, explore=explore, budget=5000)).radius for s in seeds])
+        assert np.all(r >= P.radius)  # an estimate from samples can only be too large
+        errors.append(float(np.mean(r / P.radius - 1)))
     assert errors[0] > errors[1] > errors[2]
     assert errors[2] < 0.002
     # the paper's estimator, N = 200 uniform in B(2): ~1.6 samples in the cone, far beyond r0
-    paper = np.array([certify_map(P, X_STAR, uniform(n_samples=200, seed=s)).r_star for s in range(10)])
-    assert np.all(paper >= P.r_star) and np.median(paper) > 2 * P.r_star
+    paper = np.array([certify_map(P, X_STAR, uniform(n_samples=200, seed=s)).radius for s in range(10)])
+    assert np.all(paper >= P.radius) and np.median(paper) > 2 * P.radius
 
 
 def test_certificate_rounds_and_statement() -> None:
     P = ConeMap(X_STAR, r0=0.3, half_angle=0.2003)
     c = certify_map_sequential(P, X_STAR, seq(3))
-    cfg = SequentialConfig()
+    cfg = SequentialConfig().resolved("state")
     kinds = [r.kind for r in c.rounds]
     assert kinds[0] == "uniform" and kinds[-1] == "verify" and set(kinds[1:-1]) == {"explore"}
     assert c.rounds[-1].passed and c.rounds[-1].n_samples == verification_size(0.02, 0.05, 1) == 183
     assert sum(r.n_samples for r in c.rounds) == c.n_samples == c.rounds[-1].samples_used
     assert c.n_samples == cfg.first_round + cfg.explore + 183
     r_hat = [r.r_hat for r in c.rounds]
-    assert all(b <= a for a, b in itertools.pairwise(r_hat)) and r_hat[-1] == c.r_star
+    assert all(b <= a for a, b in itertools.pairwise(r_hat)) and r_hat[-1] == c.radius
     # each round sampled inside the ball of the r̂ it started from
     d = np.linalg.norm(c.samples - X_STAR, axis=1)
     for k, rd in enumerate(c.rounds):
@@ -212,7 +212,7 @@ def test_certificate_rounds_and_statement() -> None:
         assert np.all(d[c.round_of_sample == k] <= rd.radius * (1 + 1e-12))
     assert c.method == "sequential" and not c.budget_exhausted and not c.vacuous
     assert c.violation_bound == verification_bound(183, 0.05, 1) <= 0.02
-    assert c.n_inside >= 183 and np.all(c.margins[d < c.r_star] >= 0)
+    assert c.n_inside >= 183 and np.all(c.margins[d < c.radius] >= 0)
     text = c.statement()
     assert "95%" in text and "183 fresh samples" in text and "\n" not in text
     js = json.loads(json.dumps(c.to_dict(), allow_nan=False))
@@ -234,7 +234,7 @@ def test_budget_spent_and_vacuous_statements() -> None:
               certify_map_sequential(lambda x: x + shift, X_STAR, seq(1, budget=800))):
         assert c.vacuous and c.n_inside == 0 and c.violation_bound == 1.0
         assert "vacuous" in c.statement()
-        assert c.r_star == np.min(np.linalg.norm(c.samples - X_STAR, axis=1))
+        assert c.radius == np.min(np.linalg.norm(c.samples - X_STAR, axis=1))
 
 
 # ------------------------------------------------------------------------------------------ coverage
@@ -248,7 +248,7 @@ def _naive_rule(P: BandMap, seed: int, eps: float, beta: float, budget: int) -> 
     x1 = P(x0)
     while x0.shape[0] + 25 <= budget:
         d, p = distances(x0, x1, X_STAR)
-        r = solve_radius(d, p, alpha=0.05, r_max=2.0).r_star
+        r = solve_radius(d, p, alpha=0.05, r_max=2.0).radius
         if np.count_nonzero(d < r) >= need:
             return r
         new = sample_ball(25, 3, r, X_STAR, rng)
@@ -267,7 +267,7 @@ def test_coverage_of_the_sequential_statement(a: float, c: float) -> None:
     for seed in range(runs):
         cert = certify_map_sequential(P, X_STAR, seq(seed, beta, epsilon=eps, budget=600, first_round=50, round_size=50,
                                                      explore=100, explore_after_failure=50))
-        wrong += cert.violation_bound < 1.0 and P.violating_fraction(cert.r_star) > eps
+        wrong += cert.violation_bound < 1.0 and P.violating_fraction(cert.radius) > eps
     # one-sided binomial test at level 0.001: 200 runs with a failure rate ≤ β give > 20 failures w.p. 0.0012
     assert wrong <= 20
     if c == 0.0:  # the check has power: a bound that ignores the data-dependent choice of r̂ fails it
@@ -294,7 +294,7 @@ def test_coverage_of_the_sequential_statement_in_12_d(a: float, c: float) -> Non
         cert = certify_map_sequential(P, x_star, seq(seed, beta, epsilon=eps, budget=600, first_round=50,
                                                      round_size=50, explore=100, explore_after_failure=50))
         issued += cert.violation_bound < 1.0
-        wrong += cert.violation_bound < 1.0 and P.violating_fraction(cert.r_star) > eps
+        wrong += cert.violation_bound < 1.0 and P.violating_fraction(cert.radius) > eps
     assert wrong <= 20  # as in 3-D: > 20 of 200 would reject "failure rate ≤ β" at level 0.001
     if c > 0.0:  # certificates are issued (25 of 200 here: a verification batch of 35 passes where the fraction is
         assert issued >= 10  # small), so the check is not passed by refusing
@@ -302,8 +302,8 @@ def test_coverage_of_the_sequential_statement_in_12_d(a: float, c: float) -> Non
 
 def test_push_threshold_map_truth() -> None:
     P = PushThresholdMap(j0=20.0, a=0.3, b=0.4)
-    assert P.r_star == pytest.approx(8.4)
-    assert P.violating_fraction(P.r_star) == 0.0 and P.violating_fraction(12.0) > 0.0
+    assert P.radius == pytest.approx(8.4)
+    assert P.violating_fraction(P.radius) == 0.0 and P.violating_fraction(12.0) > 0.0
     j = sample_ball(50_000, 2, 20.0, np.zeros(2), np.random.default_rng(1))
     fell = np.isnan(P(j)[:, 0])
     # the hashed phases behave as uniform draws: the quadrature's fraction is the sampled one
@@ -321,14 +321,14 @@ def test_coverage_of_the_push_certificate() -> None:
     for seed in range(runs):
         cfg = CertifyConfig(seed=seed, beta=beta, r_max=60.0, disturbance="push",
                             sequential=SequentialConfig(epsilon=eps, budget=800, round_size=50))
-        assert cfg.estimator.first_round == cfg.push.first_round
+        assert cfg.estimator.first_round == 50  # a push certificate's default
         cert = certify_map_sequential(P, np.zeros(2), cfg)
         if cert.violation_bound < 1.0:
-            js.append(cert.r_star)
-            wrong += P.violating_fraction(cert.r_star) > eps
+            js.append(cert.radius)
+            wrong += P.violating_fraction(cert.radius) > eps
     assert len(js) > runs // 2 and wrong <= 9  # 60 runs at a failure rate ≤ β: > 9 has probability < 0.003
     # J* is the fall curve's disk, near the true threshold (at most ε of the disk beyond it)
-    assert 0.6 * P.r_star <= np.median(js) <= 1.25 * P.r_star
+    assert 0.6 * P.radius <= np.median(js) <= 1.25 * P.radius
 
 
 @pytest.mark.slow
@@ -342,11 +342,11 @@ def test_chunked_verification_abandons_a_failing_batch_and_keeps_a_passing_one()
     for seed in range(12):
         # drawn where the curve predicts a pass only half the time, so that some first batches fail
         whole = certify_map_sequential(P, np.zeros(2), CertifyConfig(seed=seed, r_max=60.0, disturbance="push",
-                                                                     push={"verify_chunk": 0,
-                                                                           "pass_probability": 0.3}))
+                                                                     sequential={"verify_chunk": 0},
+                                                                     push={"pass_probability": 0.3}))
         chunked = certify_map_sequential(P, np.zeros(2), CertifyConfig(seed=seed, r_max=60.0, disturbance="push",
-                                                                       push={"verify_chunk": 25,
-                                                                             "pass_probability": 0.3}))
+                                                                       sequential={"verify_chunk": 25},
+                                                                       push={"pass_probability": 0.3}))
         first = next(k for k, r in enumerate(whole.rounds) if r.kind == "verify")
         w, c = whole.rounds[first], chunked.rounds[first]
         assert whole.rounds[:first] == chunked.rounds[:first]  # the same rounds up to the first verification
@@ -377,7 +377,7 @@ def test_common_random_numbers_across_maps() -> None:
     xa, xb = np.array([0.4, 0.2, 0.3]), np.array([-1.0, 2.0, 0.5])
     ca = certify_map_sequential(lambda x: xa + 0.5 * (x - xa), xa, seq(7))
     cb = certify_map_sequential(lambda x: xb + 0.8 * (x - xb), xb, seq(7))
-    assert ca.r_star == cb.r_star == 2.0 and ca.n_samples == cb.n_samples
+    assert ca.radius == cb.radius == 2.0 and ca.n_samples == cb.n_samples
     np.testing.assert_allclose(ca.samples - xa, cb.samples - xb, atol=1e-12)
     # with data-dependent radii: the first round is identical; exploration draws the same directions and
     # radius fractions (global proposals) and verification the same directions and fractions, scaled by r̂
@@ -394,7 +394,7 @@ def test_common_random_numbers_across_maps() -> None:
 
     np.testing.assert_allclose(verify_rel(c1, xa), verify_rel(c2, xb), atol=1e-12)
     # exploration: the same stream gives the same global proposals relative to r̂ (no elites)
-    cfg = SequentialConfig()
+    cfg = SequentialConfig().resolved("state")
     g1 = propose_round(np.random.default_rng([7, 1]), 50, xa, 0.3, np.empty((0, 3)), cfg)
     g2 = propose_round(np.random.default_rng([7, 1]), 50, xb, 1.2, np.empty((0, 3)), cfg)
     np.testing.assert_allclose((g1 - xa) / 0.3, (g2 - xb) / 1.2, atol=1e-12)
@@ -406,11 +406,11 @@ def test_first_round_is_the_uniform_estimator() -> None:
     u = certify_map(P, X_STAR, uniform(n_samples=200, seed=5))
     s = certify_map_sequential(P, X_STAR, seq(5))
     np.testing.assert_array_equal(s.samples[:200], u.samples)
-    assert s.rounds[0].r_hat == u.r_star and u.rounds[0].r_hat == u.r_star
+    assert s.rounds[0].r_hat == u.radius and u.rounds[0].r_hat == u.radius
 
 
 def test_local_proposals_follow_the_elites() -> None:
-    cfg = SequentialConfig(local_fraction=1.0, spread=0.05, min_depth=1e-3)
+    cfg = SequentialConfig(local_fraction=1.0, spread=0.05, min_depth=1e-3).resolved("state")
     elite = np.array([[0.0, 0.0, 1.0]])
     x = propose_round(np.random.default_rng(0), 400, X_STAR, 0.5, elite, cfg)
     dx = x - X_STAR

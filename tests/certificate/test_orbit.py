@@ -129,7 +129,7 @@ def test_period_two_and_four_orbits_are_recognised_and_certified_on_their_own_ma
     np.testing.assert_allclose(Fk(x_star[None])[0], x_star, atol=1e-6)
     cfg = CertifyConfig(disturbance="state", method="uniform", r_max=0.05, n_samples=200)
     own = certify_map(Fk, x_star, cfg)
-    assert own.r_star > 0.0 and not own.vacuous
+    assert own.radius > 0.0 and not own.vacuous
     assert certify_map(F, x_star, cfg).vacuous  # every sample's image is the orbit's next point, far away
 
 

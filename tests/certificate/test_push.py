@@ -94,7 +94,7 @@ def test_multicontact_push_certificate(exo, exo_mc_gait, tmp_path):
     c = gc.certificate
     assert gc.ok and c.samples.shape == (10, 2) and gc.config.unit == "N s"
     d = np.linalg.norm(c.samples, axis=1)
-    assert c.r_star == pytest.approx(d[c.fell].min() if c.fell.any() else 100.0)
+    assert c.radius == pytest.approx(d[c.fell].min() if c.fell.any() else 100.0)
     engine = make_engine(exo, exo_mc_gait)  # at most the pushed step and one more, each two domains
     assert 0 < gc.physics_steps <= 10 * 2 * sum(engine.horizons)
     engine.close()

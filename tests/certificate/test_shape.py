@@ -80,5 +80,5 @@ def test_an_ellipsoid_certifies_what_no_ball_can() -> None:
         return linear(np.linalg.solve(t, z.T).T) @ t.T
 
     ell = certify_map_sequential(in_z, z_star, cfg)
-    assert ball.r_star < 0.05 and ell.r_star == 1.0 and ell.violation_bound <= 0.02
-    assert volume_ratio(ell.r_star, ball.r_star, 3) > 1000
+    assert ball.radius < 0.05 and ell.radius == 1.0 and ell.violation_bound <= 0.02
+    assert volume_ratio(ell.radius, ball.radius, 3) > 1000

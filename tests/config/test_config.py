@@ -143,7 +143,7 @@ def test_flags_override_the_file_and_the_overrides(tmp_path, capsys):
     path = tmp_path / "c.toml"
     path.write_text("[certify]\nn_samples = 10\nalpha = 0.2\n[certify.sequential]\nspread = 0.3\n")
     args = build_parser().parse_args(["certify", str(EXO_GAIT), "--robot", "exo", "--config", str(path), "--samples",
-                                      "12", "--override", "certify.alpha=0.3"])
+                                      "12", "--method", "uniform", "--override", "certify.alpha=0.3"])
     cfg = config_from(args)
     assert (cfg.certify.n_samples, cfg.certify.alpha, cfg.certify.sequential.spread) == (12, 0.3, 0.3)
     assert to_dict(cfg)["sim"] == to_dict(Config())["sim"]  # what the file does not set keeps its default

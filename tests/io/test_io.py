@@ -382,17 +382,21 @@ def test_every_file_limit_is_documented():
 
 
 def test_a_certificate_file_names_its_figure_and_older_files_still_read(tmp_path):
-    """A push certificate's figure is j_star, a state certificate's r_star; a push certificate written before its
-    figure was named (r_star) still reads, with the same figure; a file with neither is refused in one line."""
+    """A certificate's figure is ``value``; files written before it had one name (``j_star`` of a push certificate,
+    ``r_star``) still read, with the same figure; an exploration alone's radius is its estimate; a file with no figure
+    is refused in one line."""
     from robustgait import RobustGaitError
-    from robustgait.io.certfile import certificate_figure, read_certificate
+    from robustgait.io.certfile import certificate_radius, certificate_value, read_certificate
 
     base = {"status": "ok", "attained": True, "x_star": [0.0, 0.0], "map": "step", "frame": "heading",
             "reconstruction": "holonomic", "config": {"disturbance": "push"}}
-    for key in ("j_star", "r_star"):
+    for key in ("value", "j_star", "r_star"):
         path = tmp_path / f"{key}.json"
         path.write_text(json.dumps({**base, key: 12.5}))
-        assert read_certificate(path).value == 12.5 and certificate_figure({**base, key: 12.5}) == 12.5
+        assert read_certificate(path).radius == 12.5 and certificate_radius({**base, key: 12.5}) == 12.5
+        assert certificate_value({**base, key: 12.5}) == 12.5
+    explored = {**base, "value": 0.0, "estimate": 14.0, "verified": False}
+    assert certificate_radius(explored) == 14.0 and certificate_value(explored) == 0.0
     bad = tmp_path / "none.json"
     bad.write_text(json.dumps(base))
     with pytest.raises(RobustGaitError, match="no figure"):

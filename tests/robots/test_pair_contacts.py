@@ -117,7 +117,7 @@ def test_the_stored_gait_walks_and_certifies_as_on_exo(pair_exo: Robot, exo: Rob
     assert certs[1].ok
     a, b = (c.certificate for c in certs)
     np.testing.assert_array_equal(b.fell, a.fell)
-    assert b.r_star == pytest.approx(a.r_star, abs=1e-6)
+    assert b.radius == pytest.approx(a.radius, abs=1e-6)
     np.testing.assert_allclose(b.x_star, a.x_star, atol=1e-6)
 
 

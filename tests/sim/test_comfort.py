@@ -292,15 +292,15 @@ def test_report_figure_and_table_of_a_studys_comfort(tmp_path, exo_walk):
     c = exo_walk.comfort.to_dict()
     slower = {**c, "speed": 0.1, "pelvis_acc_vertical_rms": 2.0, "cost_of_transport": None}
     trial = {"state": "COMPLETE", "reused_from": None, "params": {"step_length": 0.15}, "status": "certified",
-             "certificate_value": 20.0, "comfort": c}
+             "value": 20.0, "estimate": 21.0, "verified": True, "comfort": c}
     status = {"certificate": "push", "unit": "N s", "config": to_dict(Config()),
-              "trials": [{**trial, "number": 0}, {**trial, "number": 1, "status": "fell", "certificate_value": 0.0,
+              "trials": [{**trial, "number": 0}, {**trial, "number": 1, "status": "fell", "value": None,
                                                    "comfort": slower},
                          {**trial, "number": 2, "reused_from": 0}, {**trial, "number": 3, "comfort": None}]}
     assert [t["number"] for t in measured_trials(status)] == [0, 1]
     header, rows = comfort_rows(status)
     assert len(header) == 4 + len(COLUMNS) and [r[0] for r in rows] == ["0", "1"]
-    assert rows[0][3] == "20" and rows[1][3] == "—" and rows[1][header.index("cost of transport")] == "—"
+    assert rows[0][3] == "20 (verified)" and rows[1][3] == "—" and rows[1][header.index("cost of transport")] == "—"
     assert rows[0][header.index("speed [m/s]")] == f"{c['speed']:.3f}"
     png = plot_comfort(status, tmp_path / "comfort.png")
     assert png.stat().st_size > 10_000

@@ -45,7 +45,8 @@ def comfort(speed: float, acc: float = 1.0, impact: float = 5.0) -> dict:  # typ
 def record(slot: int, value: float, status: str = "certified", speed: float = 0.2, length: float = 0.16,
            iteration: int = 0) -> TrialRecord:
     result = {"status": status, "steps_taken": 50 if status != "fell" else 10, "step_cap": 50,
-              "certificate_value": value, "mean_speed": speed, "comfort": comfort(speed) if status != "fell" else None,
+              "value": value if status == "certified" else None, "estimate": value, "verified": status == "certified",
+              "mean_speed": speed, "comfort": comfort(speed) if status != "fell" else None,
               "reason": ""}
     params = {"step_length": length, "step_duration": 0.8, "step_width": 0.24, "step_height": 0.06}
     return TrialRecord(slot, "COMPLETE", iteration, slot, slot, params, None, result, None, None, {})
@@ -116,12 +117,14 @@ def test_labels_compare_gaits_across_batches():
 
 
 def test_the_floor_is_a_fraction_of_the_default_gait_or_set():
-    ref = {"params": {"step_length": 0.15}, "status": "certified", "certificate_value": 18.0, "comfort": None}
+    ref = {"params": {"step_length": 0.15}, "status": "certified", "value": 18.0, "estimate": 19.0, "verified": True,
+           "comfort": None}
     rec = floor_record(Config(), ref)
     assert rec["value"] == pytest.approx(0.75 * 18.0) and rec["source"] == "person.floor_fraction"
-    assert rec["reference"]["certificate_value"] == 18.0
+    assert rec["reference"]["value"] == 18.0 and rec["reference"]["estimate"] == 19.0 and rec["reference"]["verified"]
     assert floor_record(Config(person=PersonConfig(floor=12.5)), None) == {"value": 12.5, "source": "person.floor"}
-    fell = floor_record(Config(), {**ref, "status": "fell", "certificate_value": 0.0, "reason": "fell in step 3"})
+    fell = floor_record(Config(), {**ref, "status": "fell", "value": None, "estimate": None, "verified": False,
+                                   "reason": "fell in step 3"})
     assert fell["value"] == 0.0 and "not certified" in fell["note"]
     assert automatic_answer(3, "why")["ranks"] == [None, None, None]
 
@@ -172,14 +175,16 @@ def test_requirements_rank_failing_gaits_below_all_others_keeping_their_order():
 
 
 def test_a_requirement_on_the_certificate_accepts_its_other_names():
-    """``certificate_value`` is the study's certificate figure; ``r_star`` and ``j_star`` name it too (requirement
-    strings stored in a study's config keep the name they were written with)."""
-    reqs = requirements(StudyConfig(require=("certificate_value>=22", "r_star>=22", "j_star >= 22")), PARAMS)
-    assert [q.figure for q in reqs] == ["certificate_value"] * 3
-    assert [q.text for q in reqs] == ["certificate_value>=22", "r_star>=22", "j_star >= 22"]
-    low, high = record(0, 20.0), record(1, 25.0)
-    assert [[q.holds(r.params, r.result or {}) for q in reqs] for r in (low, high)] == [[False] * 3, [True] * 3]
-    assert "certificate_value" in figure_names(PARAMS) and "r_star" not in figure_names(PARAMS)
+    """``value`` is the study's verified certificate figure; ``j_star``, ``r_star`` and ``certificate_value`` (the name
+    studies wrote before) name it too (requirement strings stored in a study's config keep the name they were written
+    with)."""
+    texts = ("value>=22", "certificate_value>=22", "r_star>=22", "j_star >= 22")
+    reqs = requirements(StudyConfig(require=texts), PARAMS)
+    assert [q.figure for q in reqs] == ["value"] * 4 and [q.text for q in reqs] == list(texts)
+    low, high, estimated = record(0, 20.0), record(1, 25.0), record(2, 25.0, status="estimated")
+    assert [[q.holds(r.params, r.result or {}) for q in reqs] for r in (low, high, estimated)] == [
+        [False] * 4, [True] * 4, [False] * 4]  # an estimate meets no requirement on the verified figure
+    assert "value" in figure_names(PARAMS) and "r_star" not in figure_names(PARAMS)
 
 
 def test_a_requirement_on_an_unrecorded_figure_is_refused_before_the_study_exists(tmp_path):
@@ -216,7 +221,8 @@ def test_non_dominated_rows():
 def test_pareto_over_certificate_speed_and_a_comfort_figure():
     def trial(n: int, r: float, v: float, acc: float, status: str = "certified", index: int | None = None) -> dict:  # type: ignore[type-arg]
         return {"number": n, "state": "COMPLETE", "status": status, "grid_index": n if index is None else index,
-                "params": {"step_length": 0.1 + n / 100}, "certificate_value": r, "gait_file": None,
+                "params": {"step_length": 0.1 + n / 100}, "value": r if status == "certified" else None,
+                "estimate": r, "verified": status == "certified", "gait_file": None,
                 "comfort": {"speed": v, "pelvis_acc_vertical_rms": acc}}
 
     st = {"unit": "N s", "certificate": "push", "trials": [

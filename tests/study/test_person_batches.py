@@ -111,8 +111,8 @@ def test_batches_are_full_and_evaluations_ahead_are_the_evaluations(tmp_path, ca
     setup = load_config(d)
     t = ahead[0]
     fresh = evaluate(load_robot(setup.robot), GaitParams(**t["params"]), setup.config)  # ahead: the evaluation
-    assert (fresh.status, fresh.steps_taken, fresh.certificate_value) == (t["status"], t["steps_taken"],
-                                                                          t["certificate_value"])
+    assert (fresh.status, fresh.steps_taken, fresh.value, fresh.estimate) == (t["status"], t["steps_taken"],
+                                                                              t["value"], t["estimate"])
 
 
 @pytest.mark.slow
@@ -126,9 +126,9 @@ def test_the_floor_is_the_first_gait_of_a_first_batch_proposed_around_the_defaul
 
     cfg = Config(study=StudyConfig(iterations=1, batch=3, first_batch=2, seed=0, metric="simulated-person"),
                  sim=SimConfig(step_cap=5), comfort=ComfortConfig(skip_steps=1, steps=3),
-                 certify=CertifyConfig(sequential=SequentialConfig(epsilon=0.2),
-                                       push=PushConfig(first_round=10, explore=10, explore_after_failure=10, horizon=3,
-                                                       explore_horizon=3)))
+                 certify=CertifyConfig(sequential=SequentialConfig(epsilon=0.2, first_round=10, explore=10,
+                                                                  explore_after_failure=10),
+                                       push=PushConfig(horizon=3, explore_horizon=3)))
     d = create_study(tmp_path / "s", "exo", cfg)
     run_study(d, progress=False, run=RunConfig(workers=2))
     st = study_status(d)
@@ -137,16 +137,16 @@ def test_the_floor_is_the_first_gait_of_a_first_batch_proposed_around_the_defaul
                   key=lambda t: t["slot"])
     reference = mine[0]
     assert reference["grid_index"] == space.nearest(cfg.params.to_dict())
-    assert reference["status"] == "certified" and reference["verified_value"] > 0
+    assert reference["status"] == "certified" and reference["value"] > 0
     floor = st["person"]["floor"]
     assert floor["reference"]["params"] == reference["params"]
-    assert floor["value"] == pytest.approx(0.75 * reference["verified_value"])
+    assert floor["value"] == pytest.approx(0.75 * reference["value"])
     assert st["state"] == "complete" and st["trials_planned"] == 2
     ball = predicted_to_clear(space, [(cfg.params.to_dict(), 1.0)], 0.75, 0.2, 0.1)
     proposals = st["iterations"][0]["proposals"]
     assert ball[proposals[:cfg.study.batch_size(0) + cfg.person.overdraw]].all() and ball.sum() < space.size
-    shown = [t for t in mine if t["status"] == "certified" and t["verified_value"] is not None
-             and t["verified_value"] >= floor["value"]]
+    shown = [t for t in mine if t["status"] == "certified" and t["value"] is not None
+             and t["value"] >= floor["value"]]
     assert reference in shown and (len(shown) == 2 or len(mine) >= 2 + cfg.person.overdraw), mine
     # the posterior the study stored for the report's map: the model refitted to the person's answer
     k, stored, refit = stored_and_refitted_posterior(d)

@@ -7,14 +7,17 @@ import pytest
 
 from robustgait.certificate.orbit import Status
 from robustgait.config import Config
-from robustgait.study.evaluate import Evaluation, EvaluationStatus, fell_undisturbed, refusal_of, retry_after_fall
+from robustgait.study.evaluate import Evaluation, fell_undisturbed, refusal_of, retry_after_fall
+from robustgait.study.outcome import EvaluationStatus
+from robustgait.study.storage import current_evaluation
 
 
 def evaluation(status: str, reason: str = "", steps: int = 50, gait: object = None) -> Evaluation:
-    """An evaluation as a study stores it (its refusal the certificate's status its reason names)."""
+    """An evaluation as a study makes it: a refused one's refusal is the certificate's status its reason opens with."""
+    head = reason.split(":", 1)[0]
+    refusal = Status(head) if status == "not_certified" and head in {s.value for s in Status} else None
     return Evaluation(params=Config().params, status=EvaluationStatus(status), reason=reason, step_cap=50,
-                      steps_taken=steps, gait=gait,  # type: ignore[arg-type]
-                      refusal=refusal_of({"status": status, "reason": reason}))
+                      steps_taken=steps, gait=gait, refusal=refusal)  # type: ignore[arg-type]
 
 
 def test_a_refusal_travels_as_the_certificates_status() -> None:
@@ -30,7 +33,9 @@ def test_a_refusal_travels_as_the_certificates_status() -> None:
     # an unrelated reason is not read as a status once the refusal is stored
     assert refusal_of({**stored, "reason": "fell: …"}) is Status.UNSTABLE
     old = {k: v for k, v in stored.items() if k != "refusal"}
-    assert refusal_of(old) is Status.UNSTABLE  # the reason's first word, as older studies wrote it
+    assert refusal_of(old) is None  # the reason is not parsed where a status is read
+    assert refusal_of(current_evaluation(old)) is Status.UNSTABLE  # an older study's record, upgraded once on reading
+    assert Evaluation.from_dict({**old, "gait": None}).refusal is Status.UNSTABLE
     assert refusal_of({"status": "certified", "reason": ""}) is None
     assert refusal_of({"status": "not_certified", "reason": "not certified yet"}) is None
 

@@ -140,11 +140,12 @@ def test_a_push_study_written_before_chunked_verification_keeps_whole_batches(tm
     push = {"steps": 3, "first_round": 50, "explore": 100, "explore_after_failure": 50}
     raw = {"format_version": 3, "robot": "exo", "config": {"certify": {"push": push}}}
     (tmp_path / "study.json").write_text(json.dumps(raw))
-    assert load_config(tmp_path).config.certify.push.verify_chunk == 0  # as it was run
-    assert Config().certify.push.verify_chunk == 25 and Config().certify.sequential.verify_chunk == 0
+    assert load_config(tmp_path).config.certify.estimator.verify_chunk == 0  # as it was run
+    assert Config().certify.estimator.verify_chunk == 25  # a push certificate's default now
+    assert replace(Config().certify, disturbance="state").estimator.verify_chunk == 0
     chunked = {"certify": {"push": {**push, "verify_chunk": 5}}}
     (tmp_path / "study.json").write_text(json.dumps({**raw, "config": chunked}))
-    assert load_config(tmp_path).config.certify.push.verify_chunk == 5
+    assert load_config(tmp_path).config.certify.estimator.verify_chunk == 5
 
 
 def test_a_push_study_with_a_state_choice_it_never_used_still_loads(tmp_path):
@@ -176,9 +177,11 @@ def test_a_study_written_before_the_orbit_check_resumes_with_the_rules_it_ran_wi
     old = load_config(tmp_path).config
     assert old.study.uncertified_penalty == 0.0
     # one stored batch: certified with r* = 0, walked the cap without a certificate, fell
-    results = [{"status": "certified", "steps_taken": 5, "step_cap": 5, "certificate_value": 0.0},
-               {"status": "not_certified", "steps_taken": 5, "step_cap": 5, "certificate_value": 0.0},
-               {"status": "fell", "steps_taken": 2, "step_cap": 5, "certificate_value": 0.0}]
+    results = [{"status": "certified", "steps_taken": 5, "step_cap": 5, "value": 0.0, "estimate": 0.0,
+                "verified": True},
+               {"status": "not_certified", "steps_taken": 5, "step_cap": 5, "value": None, "estimate": None,
+                "verified": False},
+               {"status": "fell", "steps_taken": 2, "step_cap": 5, "value": None, "estimate": None, "verified": False}]
     records = [TrialRecord(i, "COMPLETE", 0, i, 10 + i, {}, None, r, None, None, {}) for i, r in enumerate(results)]
     batches = completed_batches(records)
     assert history_before(1, batches, replace(old.study, batch=3)).comparisons == ((0, 2), (1, 2))  # as it ran
@@ -247,7 +250,8 @@ def test_storage_contract_round_trip(tmp_path):
     store.enqueue(0, 1, 839, {"seeds": {"learner": 0, "certify": 0}})
     a = store.start()
     assert a is not None and (a.iteration, a.slot, a.index) == (0, 0, 17) and a.params == space.value(17)
-    result = {"status": "certified", "steps_taken": 5, "certificate_value": 0.25, "step_cap": 5, "reason": ""}
+    result = {"status": "certified", "steps_taken": 5, "value": 0.25, "estimate": 0.3, "verified": True, "step_cap": 5,
+              "reason": ""}
     store.complete(a.number, result, 5.25, {})
     b = store.start()
     assert b is not None and b.index == 839
@@ -288,8 +292,8 @@ def test_a_study_evaluated_before_comfort_figures_still_reads(tmp_path):
     a = store.start()
     assert a is not None
     old = {"params": TINY.params.to_dict(), "status": "fell", "reason": "fell in step 3 (tilt)", "step_cap": 5,
-           "steps_taken": 2, "fell": True, "fall_reason": "tilt", "mean_speed": 0.1, "certificate_value": 0.0,
-           "generation": {}, "certificate": None, "seconds": {}}
+           "steps_taken": 2, "fell": True, "fall_reason": "tilt", "mean_speed": 0.1, "value": None, "estimate": None,
+           "verified": False, "generation": {}, "certificate": None, "seconds": {}}
     store.complete(a.number, old, 2.0, {})
     store.close()
     st = study_status(d)
@@ -298,10 +302,10 @@ def test_a_study_evaluated_before_comfort_figures_still_reads(tmp_path):
     assert measured_trials(st) == [] and comfort_rows(st)[1] == []
 
 
-def test_a_study_stored_with_r_star_reads_its_certificate_value(tmp_path):
-    """A study whose records name the certificate figure ``r_star`` (the trial's attributes, its stored evaluation, the
-    floor's reference, a validation summary): every reader sees it as ``certificate_value``, with the same value and
-    the same score; a certificate's own ``r_star`` is kept."""
+def test_a_study_stored_with_older_names_reads_its_figure(tmp_path):
+    """A study whose records name the certificate figure ``r_star`` or ``certificate_value`` (the trial's attributes,
+    its stored evaluation, the floor's reference, a validation summary): every reader sees it as ``value`` (verified),
+    ``estimate`` and ``verified``, with the same score; a certificate's own ``r_star`` is kept."""
     import optuna
 
     from robustgait.io.output import write_json
@@ -309,7 +313,7 @@ def test_a_study_stored_with_r_star_reads_its_certificate_value(tmp_path):
     from robustgait.study.person import stored_floor
     from robustgait.study.ranking import outcome_of, study_score
     from robustgait.study.run import open_store
-    from robustgait.study.storage import current_names
+    from robustgait.study.storage import current_evaluation, current_names
     from robustgait.study.validate import FORMAT_VERSION, load_summaries, summary_path
 
     d = tmp_path / "s"
@@ -332,15 +336,21 @@ def test_a_study_stored_with_r_star_reads_its_certificate_value(tmp_path):
         floor = stored_floor(store)
     finally:
         store.close()
-    assert rec.result is not None and rec.result["certificate_value"] == 21.5 and "r_star" not in rec.result
-    assert rec.result["certificate"]["r_star"] == 21.5  # the certificate's field
-    assert rec.attrs["certificate_value"] == 21.5 and "r_star" not in rec.attrs
-    assert outcome_of(rec).certificate_value == 21.5 and study_score(TINY.study, rec) == 5 + 21.5
-    assert Evaluation.from_dict({**stored, "gait": None}).certificate_value == 21.5
-    assert floor is not None and floor["reference"]["certificate_value"] == 21.5 and floor["value"] == 16.125
+    assert rec.result is not None and rec.result["value"] == rec.result["estimate"] == 21.5
+    assert "r_star" not in rec.result
+    assert rec.result["verified"] and rec.result["certificate"]["r_star"] == 21.5  # the certificate's field
+    assert rec.attrs["value"] == 21.5 and "r_star" not in rec.attrs
+    assert outcome_of(rec, False).figure == 21.5 and study_score(TINY.study, rec) == 5 + 21.5
+    assert Evaluation.from_dict({**stored, "gait": None}).value == 21.5
+    assert floor is not None and floor["reference"]["value"] == 21.5 and floor["value"] == 16.125
     st = study_status(d)
-    assert st["trials"][0]["certificate_value"] == 21.5 and st["person"] is None
-    assert current_names({"r_star": 1.0, "certificate_value": 2.0}) == {"certificate_value": 2.0}
+    assert st["trials"][0]["value"] == 21.5 and st["trials"][0]["verified"] and st["person"] is None
+    assert current_names({"r_star": 1.0, "certificate_value": 2.0}) == {"value": 1.0}
+    # a study that ranked on estimates: certificate_value was the estimate, verified_value the verified figure
+    ranked = {"status": "certified", "certificate_value": 30.0, "estimate": 30.0, "verified_value": 24.0}
+    assert current_evaluation(ranked) == {"status": "certified", "value": 24.0, "estimate": 30.0, "verified": True}
+    estimated = {"status": "estimated", "certificate_value": 30.0, "estimate": 30.0, "verified_value": None}
+    assert current_evaluation(estimated) == {"status": "estimated", "value": None, "estimate": 30.0, "verified": False}
     # a study validation summary written with the keys r_star, study_r_star, r_star_critical
     corr = {"x": "J*", "y": "push success", "n": 1, "rho": None, "p": None, "defined": False, "reason": "one gait"}
     summary_path(d, "push").parent.mkdir()
@@ -349,9 +359,9 @@ def test_a_study_stored_with_r_star_reads_its_certificate_value(tmp_path):
         "gaits": [{"label": "g", "r_star": 21.0, "study_r_star": 21.5}], "skipped": [{"label": "h", "r_star": 0.0}],
         "correlations": {"r_star": corr, "r_star_critical": corr}})
     summary = load_summaries(d)["push"]
-    assert summary["gaits"] == [{"label": "g", "certificate_value": 21.0, "study_certificate_value": 21.5}]
-    assert summary["skipped"] == [{"label": "h", "certificate_value": 0.0}]
-    assert list(summary["correlations"]) == ["certificate_value", "certificate_value_critical"]
+    assert summary["gaits"] == [{"label": "g", "value": 21.0, "study_value": 21.5}]
+    assert summary["skipped"] == [{"label": "h", "value": 0.0}]
+    assert list(summary["correlations"]) == ["value", "value_critical"]
 
 
 def test_create_study_refuses_existing_and_bad_robot(tmp_path, capsys):
@@ -443,27 +453,29 @@ def exo_generator():
 def test_evaluate_never_raises_and_records_stages(exo_generator):
     robot, gen = exo_generator
     good = evaluate(robot, GaitParams(), TINY, generator=gen)
-    assert good.status == "certified" and good.steps_taken == 5 and not good.fell and good.certificate_value > 0
+    assert good.status == "certified" and good.steps_taken == 5 and not good.fell and good.value is not None
+    assert good.verified and 0 < good.value <= good.estimate
     assert good.comfort is not None and good.comfort["first_step"] == 2 and good.comfort["steps"] == 3
     assert good.summary()["comfort"] == good.comfort
-    assert good.certificate is not None and good.certificate["j_star"] == good.certificate_value  # a push certificate
+    assert good.certificate is not None and good.certificate["value"] == good.value  # a push certificate
+    assert good.certificate["figure"] == "J*" and good.summary()["verified"]
     assert set(good.seconds) >= {"generate", "walk", "certify", "total"} and good.gait is not None
     assert "build" not in good.seconds  # the generator was given
     bad = evaluate(robot, GaitParams(step_width=0.1), TINY, generator=gen)  # the feet would collide
     assert bad.status == "generation_failed" and "Infeasible_Parameters" in bad.reason and bad.gait is None
-    assert bad.steps_taken == 0 and bad.certificate_value == 0.0 and bad.outcome().steps_taken == 0
+    assert bad.steps_taken == 0 and bad.value is None and bad.estimate is None and not bad.verified
     # a fall: the same robot with a fall criterion its pelvis cannot meet (base above 0.99 m)
     strict_spec = replace(robot.spec, fall=FallCriteria(min_base_height=0.99, max_tilt=0.8))
     strict = Robot(strict_spec, read_mjcf(strict_spec))
     falls = evaluate(strict, GaitParams(), TINY, generator=gen)
-    assert falls.status == "fell" and falls.fell and falls.fall_reason == "base_low" and falls.certificate_value == 0.0
+    assert falls.status == "fell" and falls.fell and falls.fall_reason == "base_low" and falls.value is None
     assert falls.reason == f"fell in step {falls.steps_taken + 1} (base_low)" and "certify" not in falls.seconds
     # walks the cap but has no certificate: an orbit search that cannot settle
     never = OrbitConfig(max_steps=32, floor=1e-12, drift=1e-9)
     no_fp = replace(TINY, certify=replace(TINY.certify, orbit=never))
     nc = evaluate(robot, GaitParams(), no_fp, generator=gen)
-    assert nc.status == "not_certified" and nc.steps_taken == 5 and nc.certificate_value == 0.0
-    assert nc.reason.startswith("unsettled: ") and nc.outcome().walked_cap and not nc.outcome().certified
+    assert nc.status == "not_certified" and nc.steps_taken == 5 and nc.value is None and nc.refusal == "unsettled"
+    assert nc.reason.startswith("unsettled: ")
     # an evaluation is a function of the parameters and the config alone (what resume and reuse rely on)
     again = evaluate(robot, GaitParams(), TINY, generator=gen)
     assert without_times(again.to_dict()) == without_times(good.to_dict())
@@ -477,14 +489,14 @@ def comparable(directory: Path) -> dict:  # type: ignore[type-arg]
     done = [t for t in st["trials"] if t["state"] == "COMPLETE"]
     by_number = {t["number"]: t for t in done}
     slot = {t["number"]: (t["iteration"], t["slot"]) for t in done}
-    keys = ("params", "status", "reason", "steps_taken", "fell", "certificate_value", "score", "x_star")
+    keys = ("params", "status", "reason", "steps_taken", "fell", "value", "estimate", "verified", "score", "x_star")
     return {
         "trials": sorted(((t["iteration"], t["slot"]), {k: t[k] for k in keys}) for t in done),
         "iterations": [(it["proposals"], sorted((slot[w], slot[lo]) for w, lo in it["comparisons"]),
                         it["best"]["grid_index"]) for it in st["iterations"]],
         "reused": sorted((slot[t["number"]], slot[t["reused_from"]]) for t in done if t["reused_from"] is not None
                          and t["reused_from"] in by_number),
-        "best": (st["best"]["params"], st["best"]["certificate_value"], st["best"]["steps_taken"]),
+        "best": (st["best"]["params"], st["best"]["value"], st["best"]["estimate"], st["best"]["steps_taken"]),
     }
 
 
@@ -583,9 +595,10 @@ def test_status_report_and_compare(tmp_path, tiny_study):
     res = cli("study", "status", str(study), "--json")
     st = json.loads(res.stdout)
     assert st["trials_done"] == st["trials_planned"] == 6 and st["state"] == "complete"
-    assert set(st["best"]) >= {"params", "certificate_value", "steps_taken", "gait_file"}
+    assert set(st["best"]) >= {"params", "value", "estimate", "verified", "steps_taken", "gait_file"}
     assert len(st["trials"]) == 6
-    assert all({"params", "certificate_value", "steps_taken", "status"} <= set(t) for t in st["trials"])
+    assert all({"params", "value", "estimate", "verified", "unit", "steps_taken", "status"} <= set(t)
+               for t in st["trials"])
     walked = [t for t in st["trials"] if t["status"] in ("certified", "not_certified")]
     assert walked and all(t["comfort"]["steps"] == 3 and t["comfort"]["speed"] > 0 for t in walked)
     assert st["best"]["comfort"] is not None and st["best"]["comfort"]["cost_of_transport"] > 0
@@ -619,7 +632,7 @@ def test_status_report_and_compare(tmp_path, tiny_study):
               "--json")
     out = json.loads(cmp.stdout)
     a, b = out["studies"]
-    assert out["seeds"] == [1000, 1001] and a["certificate_values"] == b["certificate_values"] and out["winner"] is None
+    assert out["seeds"] == [1000, 1001] and a["values"] == b["values"] and out["winner"] is None
     assert a["steps_taken"] == 5 and len(a["certificates"]) == 2
     # the text names the estimator in its own words: the reference study certifies with the uniform estimator
     assert out["method"] == "uniform"
@@ -712,13 +725,13 @@ def test_the_progress_bar_and_status_say_a_refused_gait_is_refused():
     from robustgait.study.storage import TrialRecord
     from robustgait.study.trials import outcome_line
 
-    results = [{"status": "certified", "certificate_value": 21.5, "steps_taken": 50},
-               {"status": "not_certified", "certificate_value": 0.0, "steps_taken": 50,
+    results = [{"status": "certified", "value": 21.5, "estimate": 25.0, "verified": True, "steps_taken": 50},
+               {"status": "not_certified", "value": None, "steps_taken": 50, "refusal": "unsettled",
                 "reason": "unsettled: its band keeps moving …"},
-               {"status": "not_certified", "certificate_value": 0.0, "steps_taken": 50,
+               {"status": "not_certified", "value": None, "steps_taken": 50, "refusal": "unstable",
                 "reason": "unstable: the walk settled …"},
-               {"status": "fell", "certificate_value": 0.0, "steps_taken": 12},
-               {"status": "generation_failed", "certificate_value": 0.0, "steps_taken": 0}]
+               {"status": "fell", "value": None, "steps_taken": 12},
+               {"status": "generation_failed", "value": None, "steps_taken": 0}]
     lines = [outcome_line(r, "J*") for r in results]
     assert lines == ["J* 21.500, steps 50", "refused (unsettled), steps 50", "refused (unstable), steps 50",
                      "fell in step 13", "generation failed"]

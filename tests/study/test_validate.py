@@ -43,7 +43,8 @@ def _evaluation(robot, gait, params, certify):  # type: ignore[no-untyped-def]
     ok = gc.ok and w.steps_taken == CAP
     return Evaluation(params=params, status="certified" if ok else "not_certified",
                       reason="" if ok else f"{gc.status}: {gc.reason}", step_cap=CAP,
-                      steps_taken=w.steps_taken, fell=w.fell, certificate_value=float(gc.value) if ok else 0.0,
+                      steps_taken=w.steps_taken, fell=w.fell, value=float(gc.value) if ok else None,
+                      estimate=gc.estimate if ok else None,
                       certificate=gc.to_dict(samples=True) if ok else None, gait=gait)
 
 
@@ -113,10 +114,10 @@ def test_every_unique_gait_meets_the_same_disturbances(small_study, first_run):
     assert "no gait file" in skipped[30]["why"]
     assert rows[50]["start"] == "initial_state" and rows[50]["status"] == "not_certified"
     assert rows[10]["start"] == rows[20]["start"] == "fixed_point" and rows[40]["start"] == "initial_state"
-    assert rows[40]["status"] == "not_certified" and rows[40]["certificate_value"] == 0.0
+    assert rows[40]["status"] == "not_certified" and rows[40]["value"] == 0.0
     assert rows[40]["certificate_check"] is None
-    assert rows[10]["certificate_value"] > 0 and rows[10]["certificate"]["j_star"] == rows[10]["certificate_value"]
-    assert rows[10]["study_certificate_value"] == rows[10]["certificate_value"]
+    assert rows[10]["value"] > 0 and rows[10]["certificate"]["value"] == rows[10]["value"]
+    assert rows[10]["study_value"] == rows[10]["value"]
     for r in rows.values():
         s = r["success"]
         assert s["n"] == SMALL.trials and s["low"] <= s["rate"] <= s["high"] and 0 <= s["k"] <= s["n"]
@@ -145,8 +146,8 @@ def test_correlations_have_n_and_p_or_a_reason(small_study, first_run):
     # every validated gait walked the cap (a certificate needs it): undefined, and said why
     assert steps == {"x": "steps taken", "y": "push success", "n": 4, "rho": None, "p": None, "defined": False,
                      "reason": "steps taken is the same for every gait (5): every validated gait walked the step cap"}
-    assert set(out["correlations"]) == {"certificate_value", "certificate_value_critical", "steps_taken"}
-    r = out["correlations"]["certificate_value"]
+    assert set(out["correlations"]) == {"value", "value_critical", "steps_taken"}
+    r = out["correlations"]["value"]
     assert r["n"] == 4 and set(r) == {"x", "y", "n", "rho", "p", "defined", "reason"}
     rates = [g["success"]["rate"] for g in out["gaits"]]
     if r["defined"]:
@@ -229,10 +230,10 @@ def test_another_state_certifies_every_gait_again(small_study, first_run, capsys
     for i in (10, 20):
         cert = rows[i]["certificate"]
         assert cert["space"] == "centroidal" and cert["source"] == "computed" and len(cert["x_star"]) == 6
-        assert rows[i]["certificate_value"] == cert["r_star"]
-        assert rows[i]["study_certificate_value"] == study_rows[i]["certificate_value"]
-        assert cert["energy"] == pytest.approx(cert["r_star"] ** 2 / 2)
-    assert rows[40]["start"] == "initial_state" and rows[40]["certificate_value"] == 0.0
+        assert rows[i]["value"] == cert["value"]
+        assert rows[i]["study_value"] == study_rows[i]["value"]
+        assert cert["energy"] == pytest.approx(cert["value"] ** 2 / 2)
+    assert rows[40]["start"] == "initial_state" and rows[40]["value"] == 0.0
     # the same pushes as the study's own validation (the draws depend on the seed only)
     mine = json.loads(next((small_study / VALIDATION_DIR / RUNS_DIR).glob(f"push-{out['config_key']}/*.json"))
                       .read_text())["result"]["trials_detail"]
@@ -285,16 +286,16 @@ def test_study_validate_on_a_study_run_end_to_end(tmp_path, tiny_study):
     st = json.loads(cli("study", "status", str(d), "--json").stdout)
     assert a["n_validated"] + len(a["skipped"]) == st["unique_gaits"] and a["n_validated"] >= 1
     for key, c in a["correlations"].items():
-        # J* against the success rate of every validated gait; certificate_value_critical against s₅₀ of the gaits
+        # J* against the success rate of every validated gait; value_critical against s₅₀ of the gaits
         # with a fit
-        fitted = [g for g in a["gaits"] if key != "certificate_value_critical" or g["critical"]["s50"] is not None]
-        assert c["n"] == len(fitted) and (key == "certificate_value_critical" or c["n"] == a["n_validated"])
+        fitted = [g for g in a["gaits"] if key != "value_critical" or g["critical"]["s50"] is not None]
+        assert c["n"] == len(fitted) and (key == "value_critical" or c["n"] == a["n_validated"])
         if c["defined"]:
             assert -1 <= c["rho"] <= 1 and 0 <= c["p"] <= 1
-            x = [g["certificate_value" if c["x"] in ("r*", "J*") else "steps_taken"] for g in fitted]
+            x = [g["value" if c["x"] in ("r*", "J*") else "steps_taken"] for g in fitted]
             from scipy.stats import spearmanr
 
-            y = [g["critical"]["s50"] if key == "certificate_value_critical" else g["success"]["rate"] for g in fitted]
+            y = [g["critical"]["s50"] if key == "value_critical" else g["success"]["rate"] for g in fitted]
             ref = spearmanr(x, y)
             assert math.isclose(c["rho"], ref.statistic) and math.isclose(c["p"], ref.pvalue)
         else:

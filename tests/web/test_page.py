@@ -34,7 +34,8 @@ COMFORT = {"speed": 0.2, "cadence": 86.0, "pelvis_acc_vertical_rms": 1.4, "pelvi
 
 def result(value: float, status: str = "certified") -> dict:  # type: ignore[type-arg]
     return {"status": status, "reason": "", "steps_taken": 50, "step_cap": 50, "fell": False, "fall_reason": None,
-            "mean_speed": 0.2, "certificate_value": value, "comfort": COMFORT, "gait_file": None,
+            "mean_speed": 0.2, "value": value if status == "certified" else None, "estimate": value,
+            "verified": status == "certified", "comfort": COMFORT, "gait_file": None,
             "certificate_file": None, "seconds": {}}
 
 
@@ -126,7 +127,8 @@ def test_the_pending_batch_shows_only_gaits_above_the_floor(served):
     assert status == 200 and st["phase"] == "waiting" and st["iteration"] == 0
     assert [g["name"] for g in st["batch"]] == ["A", "B"]  # C (J* 5 < floor 10) is not shown
     assert st["hidden"] == [{"slot": 2, "name": "C", "why": "certified 5 N s, below the floor 10 N s"}]
-    assert st["batch"][0]["certificate_value"] == 20.0 and st["batch"][0]["figures"][0]["name"] == "speed"
+    assert st["batch"][0]["value"] == 20.0 and st["batch"][0]["verified"]
+    assert st["batch"][0]["figures"][0]["name"] == "speed"
     assert st["batch"][0]["video"] is None  # not rendered (the fixture renders none)
     video = page.directory / "gaits" / gait_label(page.space, 3) / "person.mp4"
     video.parent.mkdir(parents=True)

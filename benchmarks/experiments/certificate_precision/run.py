@@ -176,7 +176,7 @@ def _naive(P: ConeMap | BandMap, seed: int, eps: float, beta: float, budget: int
     x1 = P(x0)
     while True:
         d, p = distances(x0, x1, P.x_star)
-        r = solve_radius(d, p, alpha=0.05, r_max=2.0).r_star
+        r = solve_radius(d, p, alpha=0.05, r_max=2.0).radius
         if np.count_nonzero(d < r) >= need:
             return r
         if x0.shape[0] + 50 > budget or r == 0.0:
@@ -206,8 +206,8 @@ def cmd_coverage(args: argparse.Namespace) -> None:
             c = certify_map_sequential(P, xs, CertifyConfig(seed=seed, beta=beta, disturbance="state", sequential=seq))
             if c.violation_bound < 1.0:
                 certified += 1
-                fails += P.violating_fraction(c.r_star) > eps
-            rs.append(c.r_star)
+                fails += P.violating_fraction(c.radius) > eps
+            rs.append(c.radius)
             ns.append(c.n_samples)
         naive = [_naive(P, seed, eps, beta, args.budget) for seed in range(args.runs)]
         naive_fails = sum(r is not None and P.violating_fraction(r) > eps for r in naive)
@@ -242,7 +242,7 @@ def row(gc: GaitCertificate) -> str:
     c, fp, o, s = gc.certificate, gc.fixed_point, gc.orbit, gc.seconds
     assert c is not None and fp is not None and o is not None and o.sigma is not None and gc.map_residual is not None
     x = ", ".join(f"{v:.4f}" for v in fp.omega)
-    return (f"{gc.config.map:6s} {gc.config.reconstruction:12s} r* {c.r_star:.4f}{'' if c.attained else ' (sup)'}  "
+    return (f"{gc.config.map:6s} {gc.config.reconstruction:12s} r* {c.radius:.4f}{'' if c.attained else ' (sup)'}  "
             f"x* [{x}] after step {fp.step:3d}  orbit period {o.period}, settled at step {o.settled}, σ "
             f"{o.sigma:.2g}  map residual {gc.map_residual:.2e}  fell {int(c.fell.sum()):3d}  inside "
             f"{c.n_inside:3d}  orbit {s['orbit']:.2f} s  sampling {s['sampling']:.2f} s  "

@@ -56,6 +56,7 @@ from robustgait.robots import Robot
 from robustgait.robots.model import CONTACT_SENSORS
 from robustgait.rotations import quat_to_mat, roll_pitch_yaw
 from robustgait.study.compare import compare_studies
+from robustgait.study.outcome import known_figure
 from robustgait.study.status import study_status
 from robustgait.validate import validate_gait
 
@@ -244,10 +245,10 @@ def main() -> None:
             gif = args.out / f"{args.robot}_best_{name}.gif"
             walk(robot, gait, steps=args.gif_steps, video=gif)
             media = {"tiles": tiles.name, "video": gif.name}
-        record["gaits"][name] = {"params": best["params"], "study_r_star": best["certificate_value"],
-                                 "r_star": r["certificate_values"],
+        record["gaits"][name] = {"params": best["params"], "study_r_star": known_figure(best),
+                                 "r_star": r["values"],
                                  "walk": wf, "validation": {k: kr.summary() for k, kr in v.kinds.items()},
-                                 "certificate_r_star": v.certificate.r_star, "media": media}
+                                 "certificate_r_star": v.certificate.radius, "media": media}
     (args.out / f"compare_{args.robot}.json").write_text(json.dumps(record, indent=1, default=float))
     print_table(record)
 

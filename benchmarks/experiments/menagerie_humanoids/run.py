@@ -56,6 +56,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py
 from common import cli, git_commit, grid_params
+from robustgait.io.certfile import certificate_radius
 
 
 def strip(src: Path, out: Path) -> dict[str, Any]:
@@ -121,7 +122,7 @@ def run(model: Path, d: Path, steps: int) -> dict[str, Any]:
     row["walk"] |= {"steps_taken": w.get("steps_taken"), "fell": w.get("fell"), "controller": w.get("controller"),
                     "orbit": (w.get("orbit") or {}).get("status")}
     c = stage("certify", "certify", str(gait), "--robot", str(spec), "-o", str(cert), "--json", parse=True)
-    row["certify"] |= {"status": c.get("status"), "j_star": c.get("j_star", c.get("r_star"))}
+    row["certify"] |= {"status": c.get("status"), "j_star": c.get("value", c.get("j_star", c.get("r_star")))}
     if row["certify"]["exit"] == 0 and c.get("status") == "ok":
         v = stage("validate", "validate", str(gait), "--robot", str(spec), "--certificate", str(cert),
                   "--disturbance", "push", "--json", parse=True)
@@ -209,7 +210,8 @@ def study_evaluate(spec: Path, points: list[float]) -> list[dict[str, Any]]:
         params = GaitParams(step_length=length, step_duration=duration, step_width=width, step_height=height)
         ev = evaluate(robot, params, cfg, generator=gen)
         row = {"commit": git_commit(), "date": str(date.today()), "robot": robot.name, "params": params.to_dict(),
-               "status": ev.status, "reason": ev.reason, "j_star": ev.certificate_value, "steps_taken": ev.steps_taken,
+               "status": ev.status, "reason": ev.reason,
+               "j_star": ev.value if ev.value is not None else ev.estimate, "steps_taken": ev.steps_taken,
                "retried": ev.retried,
                "joint_margin": (ev.gait.solver or {}).get("joint_margin") if ev.gait is not None else None,
                "seconds": {k: round(v, 1) for k, v in ev.seconds.items()}}
@@ -221,7 +223,7 @@ def study_evaluate(spec: Path, points: list[float]) -> list[dict[str, Any]]:
 def promise(spec: Path, gait: Path, cert: Path, trials: int, label: str) -> dict[str, Any]:
     from robustgait import load_robot
 
-    j_star = float(json.loads(cert.read_text())["j_star"])
+    j_star = certificate_radius(json.loads(cert.read_text()))
     dv = j_star / load_robot(spec).mass
     cmd = ("validate", str(gait), "--robot", str(spec), "--certificate", str(cert), "--disturbance", "push",
            "--trials", str(trials), "--override", f"validate.push_dv_max={dv:.6g}", "--json")

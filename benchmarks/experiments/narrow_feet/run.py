@@ -76,7 +76,7 @@ def default(d: Path, steps: int) -> dict[str, Any]:
     code, text, sec = cli("certify", "--robot", robot, str(d / "gait.json"), "--json")
     c = json.loads(text.strip().splitlines()[-1]) if code == 0 else {}
     row["certify"] = {"exit": code, "seconds": round(sec, 1), "status": c.get("status"),
-                      "j_star": c.get("j_star", c.get("r_star")),
+                      "j_star": c.get("value", c.get("j_star", c.get("r_star"))),
                       "error": None if code == 0 else text.strip().splitlines()[-1]}
     code, text, sec = cli("gait", "generate", "--robot", robot, "-o", str(d / "gait_off.json"), "--override",
                            "sim.regulator.mode=off")
@@ -98,7 +98,7 @@ def exo(seeds: int) -> dict[str, Any]:
                                    f"sim.regulator.mode={mode}", "--override", f"certify.seed={seed}")
             c = json.loads(text.strip().splitlines()[-1]) if code == 0 else {}
             runs.append({"seed": seed, "exit": code, "status": c.get("status"),
-                         "j_star": c.get("j_star", c.get("r_star")), "seconds": round(sec, 1)})
+                         "j_star": c.get("value", c.get("j_star", c.get("r_star"))), "seconds": round(sec, 1)})
         row[mode] = runs
     return row
 

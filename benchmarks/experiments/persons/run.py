@@ -36,6 +36,7 @@ from cache import CachedExecutor, EvaluationCache
 
 from robustgait.config import Config, SimulatedPersonConfig, StudyConfig, to_dict
 from robustgait.learn.person import SimulatedPerson
+from robustgait.study.outcome import known_figure
 from robustgait.study.run import create_study, run_study
 from robustgait.study.status import study_status
 
@@ -47,7 +48,7 @@ def known(cache: EvaluationCache) -> list[dict[str, Any]]:
         ev = cache.full(cache.params(i))
         if ev is not None:
             out.append({"index": i, "params": cache.params(i), "status": ev["status"],
-                        "r_star": ev["certificate_value"],
+                        "r_star": known_figure(ev) or 0.0,
                         "comfort": ev.get("comfort")})
     return out
 
@@ -82,9 +83,9 @@ def run_person(cache: EvaluationCache, out: Path, seed: int, learner: str, args:
     by_number = {t["number"]: t for t in st["trials"]}
     shown_below = sum(1 for a in st["person"]["answers"] for n, rank in zip(st["iterations"][a["iteration"]]["trials"],
                                                                              a["ranks"], strict=True)
-                      if rank is not None and by_number[n]["certificate_value"] < floor)
+                      if rank is not None and (known_figure(by_number[n]) or 0.0) < floor)
     return {"person": seed, "learner": learner, "floor": floor, "recommendation": st["best"]["params"],
-            "rec_r_star": st["best"]["certificate_value"], "shown_below_floor": shown_below,
+            "rec_r_star": known_figure(st["best"]), "shown_below_floor": shown_below,
             "shown": sum(r is not None for a in st["person"]["answers"] for r in a["ranks"]),
             "wall": wall, "computed": {k: cache.computed[k] - before[k] for k in before}}
 

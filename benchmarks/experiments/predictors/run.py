@@ -147,7 +147,7 @@ def one_gait(task: dict[str, Any]) -> dict[str, Any]:
             z[reached] = co.to_z(red.phi(first_push[reached, :nq], first_push[reached, nq:]))
             d = np.linalg.norm(z - co.x_star, axis=1)
             with np.errstate(invalid="ignore"):
-                inside = (d <= c.r_star) if c.attained else (d < c.r_star)
+                inside = (d <= c.radius) if c.attained else (d < c.radius)
             row.update({"inside": int(inside.sum()), "fell_inside": int((inside & ~push_ok).sum()),
                         "volume_ratio": gc.volume_ratio, "excursion": gc.excursion,
                         "fallback": co.shape.fallback if cfg.set == "ellipsoid" else None})

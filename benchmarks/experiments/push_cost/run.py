@@ -10,7 +10,7 @@
 * ``push-gaits`` (not part of ``all``): per gait of ``--gaits`` (a glob, e.g. the gait files of studies; ``--limit``
   of them evenly spaced), omega/ball, then J* for each ``--gait-variants``
   (``name:verify_chunk/horizon[/explore_after_failure]``; default: whole verification batches,
-  ``push.verify_chunk = 0``, and as shipped, chunked; both at the shipped horizon of 20), one after the other in
+  ``sequential.verify_chunk = 0``, and as shipped, chunked; both at the shipped horizon of 20), one after the other in
   one worker: their wall-time and physics-step ratios and verification attempts; then each variant's check against
   the gaits' validation pushes in ``experiments/predictors/data/exo.jsonl`` (pushes ≤ J* that fell).
 * ``push-sweep`` (not part of ``all``): where one exo gait's pushes fail (the default gait or ``--exo-gait``): its
@@ -40,7 +40,7 @@ from robustgait import load_gait, load_robot
 from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.certify import certify_gait
 from robustgait.certificate.estimators import certify_map_sequential
-from robustgait.config import CertifyConfig, SimConfig
+from robustgait.config import CertifyConfig, SequentialConfig, SimConfig
 from robustgait.sim.factory import make_engine
 from robustgait.validate.stats import wilson_interval
 
@@ -63,8 +63,10 @@ def cmd_push(args: argparse.Namespace) -> None:
           "(range) | orbit search: mean | ratio to omega/ball |")
     print("|---|---|---|---|---|---|---|")
     cfgs = [("omega/ball", CertifyConfig(disturbance="state"))] + [
-        (f"push {f}/{e}/{a}/{k}", CertifyConfig(disturbance="push", push=PushConfig(
-            first_round=f, explore=e, explore_after_failure=a, horizon=k))) for f, e, a, k in variants]
+        (f"push {f}/{e}/{a}/{k}", CertifyConfig(disturbance="push", push=PushConfig(horizon=k),
+                                                sequential=SequentialConfig(first_round=f, explore=e,
+                                                                            explore_after_failure=a)))
+        for f, e, a, k in variants]
     base = None
     for name, cfg in cfgs:
         gcs = [certify_gait(exo, gait, replace(cfg, seed=s), sim) for s in range(args.seeds)]
@@ -105,9 +107,8 @@ def _push_gait(job: tuple[str, str]) -> dict:
     sim = SimConfig(n_threads=1)
     out: dict = {"gait": Path(path).parent.name}
     runs = [("omega", CertifyConfig(disturbance="state"))] + [
-        (name, CertifyConfig(disturbance="push", push=PushConfig(
-            verify_chunk=chunk, horizon=horizon,
-            explore_after_failure=PushConfig.explore_after_failure if after is None else after)))
+        (name, CertifyConfig(disturbance="push", push=PushConfig(horizon=horizon), sequential=SequentialConfig(
+            verify_chunk=chunk, explore_after_failure=after)))
         for name, chunk, horizon, after in _variants(spec)]
     for name, cfg in runs:
         t0 = time.perf_counter()

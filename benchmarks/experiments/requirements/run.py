@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from robustgait.config import Config, RunConfig, StudyConfig
+from robustgait.study.outcome import known_figure
 from robustgait.study.pareto import pareto
 from robustgait.study.run import create_study, run_study
 from robustgait.study.status import study_status
@@ -43,9 +44,9 @@ def one(d: Path, require: tuple[str, ...], workers: int) -> dict:  # type: ignor
             "load": [load0, os.getloadavg()[0]],
             "unique": len(done), "meet_requirements": len(meets),
             "certified": sum(t["status"] == "certified" for t in done),
-            "best": {"params": best["params"], "r_star": best["certificate_value"],
+            "best": {"params": best["params"], "r_star": known_figure(best),
                      "comfort": {k: (best["comfort"] or {}).get(k) for k in FIGURES}},
-            "front": [{"params": r["params"], "r_star": r["certificate_value"], "speed": r["speed"],
+            "front": [{"params": r["params"], "r_star": known_figure(r), "speed": r["speed"],
                        "pelvis_acc_vertical_rms": r["pelvis_acc_vertical_rms"]} for r in front["front"]]}
 
 

@@ -41,6 +41,7 @@ from robustgait.config import (
 from robustgait.io.studyfile import load_config
 from robustgait.study.compare import compare_studies, recertify
 from robustgait.study.evaluate import evaluate
+from robustgait.study.outcome import known_figure
 from robustgait.study.run import create_study, run_study
 from robustgait.study.status import study_status
 
@@ -100,27 +101,28 @@ def main() -> None:
         for it in st["iterations"]:
             b = it["best"]
             if b:
-                print(f"  iteration {it['iteration'] + 1:2d}: best {b['certificate_value']:.4f}, "
+                print(f"  iteration {it['iteration'] + 1:2d}: best {known_figure(b) or 0.0:.4f}, "
                       f"{b['steps_taken']} steps, {', '.join(f'{v:g}' for v in b['params'].values())}")
         if best:
             gait = load_gait(Path(run["directory"]) / best["gait_file"], robot)
             again = recertify(robot, gait, cert0, fresh, cfg0.sim, cfg0.validate)
-            r = np.array([c["certificate_value"] for c in again])
-            print(f"  best gait: {best['certificate_value']:.4f} (study seed), {best['steps_taken']} steps; "
+            r = np.array([c["value"] for c in again])
+            print(f"  best gait: {known_figure(best) or 0.0:.4f} (study seed), {best['steps_taken']} steps; "
                   f"fresh seeds {fresh[0]}–{fresh[-1]}: {name} {r.mean():.4f} ± "
                   f"{r.std(ddof=1) if r.size > 1 else 0:.4f} {unit}")
-    rd = np.array([c["certificate_value"] for c in default_fresh]) if default_fresh else np.zeros(1)
+    rd = np.array([c["value"] for c in default_fresh]) if default_fresh else np.zeros(1)
     sd = rd.std(ddof=1) if rd.size > 1 else 0.0
     print(f"\ndefault gait {cfg0.params.to_dict()}: {default.status}, {default.steps_taken} steps, {name} "
-          f"{default.certificate_value:.4f} (study seed); fresh seeds: {rd.mean():.4f} ± {sd:.4f}")
+          f"{default.value if default.value is not None else default.estimate or 0.0:.4f} (study seed); "
+          f"fresh seeds: {rd.mean():.4f} ± {sd:.4f}")
     if len(runs) == 2:
         cmp = compare_studies(runs[0]["directory"], runs[1]["directory"],
                               CompareConfig(seeds=args.compare_seeds, seed_base=args.seed + 1000))
         print("\nstudy compare (A = " + runs[0]["metric"] + ", B = " + runs[1]["metric"] + "):")
         for ab, s in zip("AB", cmp["studies"], strict=True):
             print(f"  {ab}: {', '.join(f'{v:g}' for v in s['params'].values())}: {name} "
-                  f"{s['certificate_value_mean']:.4f} ± {s['certificate_value_sd']:.4f} "
-                  f"[{', '.join(f'{v:.3f}' for v in s['certificate_values'])}], {s['steps_taken']} steps")
+                  f"{s['value_mean']:.4f} ± {s['value_sd']:.4f} "
+                  f"[{', '.join(f'{v:.3f}' for v in s['values'])}], {s['steps_taken']} steps")
         w = cmp["winner"]
         print(f"  higher mean {name}: " + ("tie" if w is None else runs[w]["metric"]) +
               f" (per seed: {cmp['wins_per_seed'][0]} vs {cmp['wins_per_seed'][1]})")

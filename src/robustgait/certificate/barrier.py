@@ -141,7 +141,7 @@ def violation_end(d: ArrayLike, p: ArrayLike, alpha: float, barrier: Barrier = "
 class RadiusSolution(NamedTuple):
     """r* (the supremum of the feasible radii in [0, r_max]) and whether r* itself is feasible."""
 
-    r_star: float
+    radius: float
     attained: bool
 
 
@@ -250,7 +250,7 @@ def invariant_radius(x0: ArrayLike, x1: ArrayLike, x_star: ArrayLike, *, alpha: 
     """
     a0, a1, xs = _check_samples(x0, x1, x_star)
     d, p = distances(a0, a1, xs)
-    return solve_radius(d, p, alpha=alpha, r_max=r_max, barrier=barrier).r_star
+    return solve_radius(d, p, alpha=alpha, r_max=r_max, barrier=barrier).radius
 
 
 def distances(x0: FloatArray, x1: FloatArray, x_star: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -285,9 +285,9 @@ class Round:
 class Certificate:
     """A DTBF certificate of the ball B_{r*}(x*) from sampled images of the return map.
 
-    Fields: r_star (supremum of feasible radii), attained (r* itself feasible; if False the certified
-    set is the open ball, see :func:`solve_radius`), x_star (n,), alpha, r_max, samples (N, n),
-    images (N, n) (NaN rows where fell), fell (N,), margins (N,) = :func:`barrier_margin` at r*
+    Fields: radius (r* of a state certificate, J* of a push certificate: the supremum of feasible radii), attained (r*
+    itself feasible; if False the certified set is the open ball, see :func:`solve_radius`), x_star (n,), alpha,
+    r_max, samples (N, n), images (N, n) (NaN rows where fell), fell (N,), margins (N,) = :func:`barrier_margin` at r*
     (−inf where fell), n_inside (samples in the certified ball: d_i ≤ r* if attained else d_i < r*;
     all have margin ≥ 0), seed (None if the samples were supplied), confidence = 1 − β and
     violation_bound = ε (1 when there is no statement). barrier: ``ball`` or ``paper``; method: the
@@ -302,7 +302,7 @@ class Certificate:
     :mod:`.estimators`).
     """
 
-    r_star: float
+    radius: float
     attained: bool
     x_star: FloatArray
     alpha: float
@@ -344,18 +344,18 @@ class Certificate:
     def statement(self) -> str:
         """One readable sentence with the confidence statement (or why there is none)."""
         ball = "closed" if self.attained else "open"
-        where = f"the {ball} ball of radius r* = {self.r_star:.6g} around x*"
+        where = f"the {ball} ball of radius r* = {self.radius:.6g} around x*"
         cond = f"the DTBF condition (alpha = {self.alpha:g}" + (", paper barrier H = r − ‖x − x*‖²)"
                                                                 if self.barrier == "paper" else ")")
         if not self.verified:
-            return (f"r̂ = {self.r_star:.6g} is an estimate from {self.n_samples} exploration samples, not verified: "
+            return (f"r̂ = {self.radius:.6g} is an estimate from {self.n_samples} exploration samples, not verified: "
                     "no confidence statement.")
         if self.vacuous:
             return (f"No sample lies in {where}: the certificate is vacuous (no confidence statement; "
                     f"{self.n_samples} samples, method {self.method}).")
         if self.budget_exhausted:
             return (f"The sample budget was spent ({self.n_samples} samples) before a verification batch passed: "
-                    f"r* = {self.r_star:.6g} is the exact supremum of the feasible radii for these samples under "
+                    f"r* = {self.radius:.6g} is the exact supremum of the feasible radii for these samples under "
                     f"{cond}, but there is no confidence statement.")
         basis = self.basis or (
             f"{self.n_inside} of {self.n_samples} uniform samples in B(x*, r_max = {self.r_max:g}) lie in it and "
@@ -364,9 +364,10 @@ class Certificate:
                 f"volume of {where} violates {cond}: {basis}.")
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict (lists and floats; fell images and their −inf margins are None)."""
+        """JSON-ready dict (lists and floats; fell images and their −inf margins are None). ``value`` is the certified
+        radius, 0 unless ``verified`` (an exploration alone certifies nothing: its radius is ``estimate``)."""
         return {
-            "r_star": float(self.r_star),
+            "value": float(self.radius) if self.verified else 0.0,
             "attained": bool(self.attained),
             "x_star": [float(v) for v in self.x_star],
             "alpha": float(self.alpha),
@@ -426,11 +427,11 @@ def certificate_from_samples(
     sol = solution if solution is not None else solve_radius(d, p, alpha=a, r_max=r_max, barrier=barrier)
     fell = _fell_rows(a1)
     images = np.where(fell[:, None], np.nan, a1)
-    inside = d <= sol.r_star if sol.attained else d < sol.r_star
+    inside = d <= sol.radius if sol.attained else d < sol.radius
     n_inside = int(np.count_nonzero(inside))
     n = a0.shape[0]
     return Certificate(
-        r_star=sol.r_star,
+        radius=sol.radius,
         attained=sol.attained,
         x_star=_frozen(xs),
         alpha=a,
@@ -438,13 +439,13 @@ def certificate_from_samples(
         samples=_frozen(a0),
         images=_frozen(images),
         fell=_frozen(fell),
-        margins=_frozen(barrier_margin(a0, images, xs, sol.r_star, a, barrier)),
+        margins=_frozen(barrier_margin(a0, images, xs, sol.radius, a, barrier)),
         n_inside=n_inside,
         seed=seed,
         confidence=1.0 - b,
         violation_bound=violation_bound(n_inside, n, b),
         barrier=barrier,
-        rounds=(Round("uniform", float(r_max), n, n, sol.r_star),),
+        rounds=(Round("uniform", float(r_max), n, n, sol.radius),),
         sample_round=_frozen(np.zeros(n, dtype=np.int64)),
     )
 

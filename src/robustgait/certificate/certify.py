@@ -34,7 +34,7 @@ from robustgait.config.certify import R_MAX_LIMIT
 from robustgait.config.work import Work, check_work
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.io.certfile import certificate_figure
+from robustgait.io.certfile import certificate_radius
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine, step_physics_steps
 from robustgait.sim.factory import make_engine
@@ -72,12 +72,12 @@ class GaitCertificate:
     and scatter σ, the probe, ρ when asked). certificate (the barrier :class:`Certificate` in the certificate's
     coordinates: r*, samples, images, margins, rounds, statement), coordinates (z = T x̄ of the reduced state, the
     shape of the set; :class:`Coordinates`), fixed_point (x*: a switching state of the settled walk) and map_residual
-    ‖P(x̄*) − x̄*‖ (certificate coordinates, one map) are None where the certificate did not get that far. r_star is 0
-    unless ok. sigma: a state certificate's σ, the orbit's own scatter about x̄* in the certificate's coordinates (the
-    last window's switching states of x*'s phase): an r* not above it certifies nothing the walk does not already do.
-    ball: for an ellipsoid certified with ``ellipsoid.compare_ball``, the ball certified beside it (its volume ratio:
-    :attr:`volume_ratio`). excursion: horizon k ≥ 2, per j = 1 … k the largest ‖P^j(z) − z*‖ over the samples in the
-    certified set.
+    ‖P(x̄*) − x̄*‖ (certificate coordinates, one map) are None where the certificate did not get that far. :attr:`value`
+    is 0 unless ok and verified. sigma: a state certificate's σ, the orbit's own scatter about x̄* in the certificate's
+    coordinates (the last window's switching states of x*'s phase): an r* not above it certifies nothing the walk
+    does not already do. ball: for an ellipsoid certified with ``ellipsoid.compare_ball``, the ball certified beside
+    it (its volume ratio: :attr:`volume_ratio`). excursion: horizon k ≥ 2, per j = 1 … k the largest ‖P^j(z) − z*‖
+    over the samples in the certified set.
     """
 
     status: Status
@@ -112,9 +112,26 @@ class GaitCertificate:
 
     @property
     def value(self) -> float:
-        """The certified figure (0 unless certified): J* [N s] of a push certificate, r* (``config.unit``) of a state
-        certificate — :attr:`j_star` or :attr:`r_star` by name."""
-        return self.certificate.r_star if self.certificate is not None else 0.0
+        """The certified figure, in :attr:`unit`: J* [N s] of a push certificate, r* of a state certificate
+        (:attr:`j_star` or :attr:`r_star` by name) — 0 unless certified and verified (an exploration alone certifies
+        nothing: its figure is :attr:`estimate`)."""
+        c = self.certificate
+        return float(c.radius) if c is not None and c.verified else 0.0
+
+    @property
+    def verified(self) -> bool:
+        """Whether :attr:`value` is a verified figure (a certificate whose estimator verified its radius)."""
+        return self.certificate is not None and self.certificate.verified
+
+    @property
+    def figure(self) -> str:
+        """The figure's name: ``J*`` (push) or ``r*`` (state), :func:`~robustgait.config.radius_name`."""
+        return radius_name(self.config.space)
+
+    @property
+    def unit(self) -> str:
+        """The figure's unit (``N s`` for J*; r*'s is the state's)."""
+        return self.config.unit
 
     @property
     def estimate(self) -> float | None:
@@ -123,7 +140,7 @@ class GaitCertificate:
         c = self.certificate
         if c is None:
             return None
-        return float(c.estimate if c.estimate is not None else c.r_star)
+        return float(c.estimate if c.estimate is not None else c.radius)
 
     @property
     def j_star(self) -> float:
@@ -144,7 +161,7 @@ class GaitCertificate:
     @property
     def below_scatter(self) -> bool:
         """A state certificate whose r* is not above the orbit's own scatter σ: vacuous."""
-        return self.certificate is not None and self.sigma is not None and self.certificate.r_star <= self.sigma
+        return self.certificate is not None and self.sigma is not None and self.certificate.radius <= self.sigma
 
     @property
     def vacuous(self) -> bool:
@@ -156,14 +173,14 @@ class GaitCertificate:
         """E* [J] of an energy state: every perturbation adding at most E* of kinetic energy is in the set."""
         if self.coordinates is None or self.certificate is None:
             return None
-        return self.coordinates.energy(self.certificate.r_star)
+        return self.coordinates.energy(self.certificate.radius)
 
     @property
     def volume_ratio(self) -> float | None:
         """vol(certified ellipsoid) / vol(certified ball), when both were certified."""
         if self.ball is None or self.certificate is None or self.coordinates is None:
             return None
-        return volume_ratio(self.certificate.r_star, self.ball.r_star, self.coordinates.dim)
+        return volume_ratio(self.certificate.radius, self.ball.radius, self.coordinates.dim)
 
     def statement(self) -> str:
         """The certificate in words: what it promises, with its confidence, its horizon and its basis."""
@@ -174,7 +191,7 @@ class GaitCertificate:
         if not c.verified:
             name = radius_name(cfg.space)
             unit = "N s" if cfg.disturbance == "push" else cfg.unit
-            return (f"{name} ≈ {c.r_star:.4g} {unit} is an estimate from {c.n_samples} exploration "
+            return (f"{name} ≈ {c.radius:.4g} {unit} is an estimate from {c.n_samples} exploration "
                     f"{'pushes' if cfg.disturbance == 'push' else 'samples'}, not verified: no confidence statement "
                     f"(robustgait certify verifies it).")
         if cfg.disturbance != "push":
@@ -191,7 +208,7 @@ class GaitCertificate:
                      f"coordinate of the switching state within {p.recovery_radius:g} of its orbit's band in band "
                      f"coordinates, or {p.recovery_scatter:g}× the orbit's own scatter)")
         return (f"With confidence {100.0 * c.confidence:g}%, at most {100.0 * c.violation_bound:.3g}% of the pushes "
-                f"with impulse |J| {inside} J* = {c.r_star:.4g} N s (uniform in that disk; {v.push_duration:g} s long, "
+                f"with impulse |J| {inside} J* = {c.radius:.4g} N s (uniform in that disk; {v.push_duration:g} s long, "
                 f"starting at a phase in [{v.push_phase[0]:g}, {v.push_phase[1]:g}] of the step) {fail}: {basis}.")
 
     def _scatter_clause(self) -> str:
@@ -206,20 +223,25 @@ class GaitCertificate:
         return f" The orbit's own switching states scatter σ = {self.sigma:.3g} {unit} about x̄*."
 
     def to_dict(self, *, samples: bool = True) -> dict[str, Any]:
-        """JSON-ready; everything but ``seconds`` is deterministic for a given seed."""
+        """JSON-ready; everything but ``seconds`` is deterministic for a given seed. The figure: ``figure`` (``J*`` or
+        ``r*``), ``value`` (the certified figure, 0 unless verified), ``estimate`` (the exploration's, None without a
+        certificate), ``verified`` and ``unit``."""
         fp, cfg = self.fixed_point, self.config
         out: dict[str, Any] = {
             "robot": self.robot,
             "status": str(self.status),
             "reason": self.reason,
-            "r_star": 0.0,
+            "figure": self.figure,
+            "value": 0.0,
+            "estimate": None,
+            "verified": False,
             "vacuous": True,
             "steps_walked": self.steps_walked,
             "state": cfg.state,
             "set": cfg.set,
             "horizon": cfg.horizon,
             "disturbance": cfg.disturbance,
-            "unit": cfg.unit,
+            "unit": self.unit,
             "x_star": None,
             "omega_star": None if fp is None else [float(v) for v in fp.omega],
             "fixed_point_step": None if fp is None else fp.step,
@@ -244,11 +266,12 @@ class GaitCertificate:
                     c.pop(key)
             c["statement"] = self.statement()
             out.update(c)
+            out["estimate"] = self.estimate  # the uniform estimator's is its radius
             out["vacuous"] = self.vacuous
         if self.coordinates is not None:
             out["coordinates"] = self.coordinates.to_dict()
         if self.ball is not None:
-            out["ball"] = {"r_star": self.ball.r_star, "attained": self.ball.attained,
+            out["ball"] = {"value": self.ball.radius, "attained": self.ball.attained,
                            "n_samples": self.ball.n_samples, "violation_bound": self.ball.violation_bound,
                            "statement": self.ball.statement(), "volume_ratio": self.volume_ratio}
         if self.excursion is not None:
@@ -262,8 +285,6 @@ class GaitCertificate:
                     "sim": to_dict(self.sim), "seconds": self.seconds})
         if self.validate is not None:
             out["push"] = {"duration": self.validate.push_duration, "phase": list(self.validate.push_phase)}
-        if cfg.disturbance == "push":  # the figure by its name: J* [N s] (a state certificate's stays r_star)
-            out = {("j_star" if k == "r_star" else k): v for k, v in out.items()}
         return out
 
 
@@ -290,8 +311,9 @@ def _estimate(P: BatchMap, x_star: np.ndarray, cfg: CertifyConfig, progress: boo
 
 def certificate_from_record(d: Mapping[str, Any]) -> Certificate:
     """A :class:`Certificate` from its JSON (:meth:`GaitCertificate.to_dict` with samples): null image rows
-    back to NaN, null margins back to −inf; its radius the certified figure (``j_star`` or ``r_star``)."""
-    d = {**d, "r_star": certificate_figure(d)}
+    back to NaN, null margins back to −inf; its radius the certified figure, or the estimate of an exploration alone
+    (:func:`~robustgait.io.certfile.certificate_radius`: files of every version)."""
+    d = {**d, "radius": certificate_radius(d)}
     fell = np.asarray(d["fell"], dtype=bool)
     n = len(d["x_star"])
     images = np.array([[np.nan] * n if row is None else row for row in d["images"]], dtype=float)
@@ -391,7 +413,7 @@ class _Paths:
         path = coords.to_z(np.concatenate(self.parts, axis=1).reshape(-1, coords.dim)).reshape(
             len(self.parts[0]), -1, coords.dim)
         d = np.linalg.norm(np.asarray(cert.samples) - cert.x_star, axis=1)
-        inside = d <= cert.r_star if cert.attained else d < cert.r_star
+        inside = d <= cert.radius if cert.attained else d < cert.radius
         if not inside.any():
             return [0.0] * path.shape[0]
         dist = np.linalg.norm(path[:, inside] - coords.x_star, axis=2)

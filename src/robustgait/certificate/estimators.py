@@ -70,7 +70,8 @@ from robustgait.certificate.barrier import (
     violation_end,
 )
 from robustgait.certificate.fallcurve import FallCurve, fit_fall_curve
-from robustgait.config import Barrier, CertifyConfig, SequentialConfig, verification_beta, verification_size
+from robustgait.config import Barrier, CertifyConfig, verification_beta, verification_size
+from robustgait.config.certify import Estimator
 from robustgait.errors import RobustGaitError
 
 __all__ = [
@@ -101,7 +102,7 @@ def _unit(v: FloatArray) -> FloatArray:
 
 
 def propose_round(rng: np.random.Generator, m: int, x_star: FloatArray, r_hat: float, elites: FloatArray,
-                  config: SequentialConfig) -> FloatArray:
+                  config: Estimator) -> FloatArray:
     """m exploration proposals (m, n) inside B(x*, r̂).
 
     Draws, in this order and whatever the data (common random numbers): g (m, n) ~ N(0, I) and w (m, 3) ~
@@ -195,7 +196,7 @@ class _Pool:
     def add(self, kind: str, radius: float, x0: FloatArray) -> None:
         """Evaluate the exploration map on x0, add the samples as a round and recompute r̂."""
         self._evaluate(self.explore, x0)
-        self.r_hat = self._solve(self.r_max).r_star
+        self.r_hat = self._solve(self.r_max).radius
         self.rounds.append(Round(kind, float(radius), int(x0.shape[0]), self.used, float(self.r_hat), None))
 
     def verify(self, radius: float, x0: FloatArray, chunk: int = 0, batch_only: bool = False) -> bool:
@@ -219,10 +220,10 @@ class _Pool:
             self._evaluate(self.P, part)
             n_used += part.shape[0]
             sol = self._solve(radius, since=first if batch_only else 0)
-            if sol.r_star != radius:
+            if sol.radius != radius:
                 break
-        passed = sol.r_star == radius
-        self.r_hat = self._solve(self.r_max).r_star
+        passed = sol.radius == radius
+        self.r_hat = self._solve(self.r_max).radius
         self.verified = sol if passed else None
         self.rounds.append(Round("verify", float(radius), int(n_used), self.used, float(self.r_hat), passed))
         return passed
@@ -308,7 +309,7 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
         solution = RadiusSolution(estimate, True)
     cert = certificate_from_samples(x0_all, x1_all, xs, alpha=a, r_max=r, beta=b, seed=seed, barrier=barrier,
                                     solution=solution)
-    assert passed or cert.r_star == (pool.r_hat if solution is None else solution.r_star)
+    assert passed or cert.radius == (pool.r_hat if solution is None else solution.radius)
     cert = replace(cert, method="sequential", rounds=tuple(pool.rounds), sample_round=np.concatenate(pool.round_of),
                    estimate=float(pool.r_hat if estimate is None else estimate), verified=verifying,
                    curve=None if curve is None else pool.fall_curve().summary(cfg.epsilon))

@@ -66,7 +66,7 @@ class ConeMap:
             raise RobustGaitError("need r0 > 0 and 0 < half_angle < π/2")
 
     @property
-    def r_star(self) -> float:
+    def radius(self) -> float:
         return float(self.r0)
 
     @property
@@ -108,7 +108,7 @@ class BandMap:
             raise RobustGaitError("need a, c ≥ 0, a + c r_max ≤ 1 and bands ≥ 1")
 
     @property
-    def r_star(self) -> float:
+    def radius(self) -> float:
         return 0.0 if self.a > 0.0 or self.c > 0.0 else float(self.r_max)
 
     @property
@@ -150,7 +150,7 @@ class PushThresholdMap:
             raise RobustGaitError("need j0 > 0, 0 ≤ a < 1 and 0 ≤ b < 1")
 
     @property
-    def r_star(self) -> float:
+    def radius(self) -> float:
         return float(self.j0 * (1.0 - self.a) * (1.0 - self.b))
 
     def threshold(self, theta: FloatArray, phase: FloatArray) -> FloatArray:

@@ -69,7 +69,7 @@ def _certify(args: argparse.Namespace) -> int:
         assert fp is not None and co is not None and gc.orbit is not None
         energy = "" if gc.energy is None else f", E* = {gc.energy:.4g} J"
         kind = _certificate_kind(cfg)
-        print(f"{name} = {c.r_star:.4g} {cfg.unit}{energy}  ({kind}, {cfg.barrier} barrier, α = {cfg.alpha:g}, "
+        print(f"{name} = {c.radius:.4g} {cfg.unit}{energy}  ({kind}, {cfg.barrier} barrier, α = {cfg.alpha:g}, "
               f"{cfg.method}: N = {c.n_samples}, seed {cfg.seed})")
         print(f"orbit: {gc.orbit.describe()}")
         print(f"x*: the switching state after step {fp.step}, ω* = [{', '.join(f'{v:.4f}' for v in fp.omega)}] rad/s"
@@ -85,7 +85,7 @@ def _certify(args: argparse.Namespace) -> int:
                       f"linearization spectral radius {sh.fit.spectral_radius:.3g}, relative residual "
                       f"{sh.fit.relative_residual:.2g} on {sh.fit.used} samples")
             if gc.ball is not None:
-                print(f"ball of the same state: r* = {gc.ball.r_star:.4g} {cfg.unit}; volume ratio ellipsoid / ball "
+                print(f"ball of the same state: r* = {gc.ball.radius:.4g} {cfg.unit}; volume ratio ellipsoid / ball "
                       f"= {gc.volume_ratio:.3g}")
         if gc.excursion is not None:
             print("largest ‖P^j(z) − z*‖ over the samples inside, j = 1 … k: "
@@ -140,13 +140,15 @@ def _barrier_eval(args: argparse.Namespace) -> int:
 
 
 def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    c = command(sub, "certify", "robustness certificate of a gait: r* (DTBF on the Poincaré map, in a reduced state) "
-                "or J* (pushes); exit 1 if the gait falls, its switching states settle in no band, or small pushes "
-                "do not come back to it (r* = 0)", _certify, CERTIFY)
+    c = command(sub, "certify", "robustness certificate of a gait: J* by default (the push impulse it survives, with "
+                "a stated confidence; --disturbance state: r*, DTBF on the Poincaré map in a reduced state); exit 1 "
+                "if the gait falls, its switching states settle in no band, or small pushes do not come back to it "
+                "(its figure is then 0)", _certify, CERTIFY)
     c.add_argument("gait", help=GAIT_HELP)
     c.add_argument("--robot", required=True, help=ROBOT_HELP)
     c.add_argument("--plot", metavar="CERT.png", type=output_path("plot"),
-                   help="draw the invariant set (samples, r* sphere, projections): .png, .pdf or .svg")
+                   help="draw the certificate: the pushes and the J* disk (a state certificate: its samples, the r* "
+                   "sphere, projections): .png, .pdf or .svg")
     c.add_argument("-o", "--output", metavar="CERT.json", type=output_path("json"),
                    help="write the full certificate with samples")
     c.add_argument("--json", action="store_true", help="print one JSON object (without the samples)")

@@ -142,8 +142,9 @@ def add_flags(parser: argparse.ArgumentParser, table: Sequence[Flag]) -> None:
     known: list[Flag] = getattr(parser, "robustgait_flags", [])
     for f in table:
         info = f.field
+        also = f" (also sets {', '.join(f.paths[1:])})" if len(f.paths) > 1 else ""
         kw: dict[str, Any] = {"dest": "cfg:" + "|".join(f.paths), "default": argparse.SUPPRESS,
-                              "help": help_text(info)}
+                              "help": help_text(info) + also}
         if info.scalar is bool and info.arity is None:
             kw["action"] = argparse.BooleanOptionalAction
         else:
@@ -193,11 +194,13 @@ def config_from(args: argparse.Namespace, base: Config | None = None) -> Config:
     config = base or Config()
     if getattr(args, "config_file", None):
         config = read_config(args.config_file, config)
+    set_by: dict[str, str] = {}  # each field set on the command line → what set it
     for text in getattr(args, "overrides", None) or []:
         try:
             config = with_overrides(config, _override(text))
         except ConfigError as exc:
             raise RobustGaitError(f"{OVERRIDE_OPTION} {text}: {exc}") from None
+        set_by[text.split("=", 1)[0].strip()] = f"{OVERRIDE_OPTION} {text}"
     given: dict[str, Any] = {}
     flag_of: dict[str, str] = {}
     for f in getattr(args, "robustgait_flags", []):
@@ -206,15 +209,29 @@ def config_from(args: argparse.Namespace, base: Config | None = None) -> Config:
             for p in f.paths:
                 given = merge(given, nest(p, getattr(args, key)))
                 flag_of[p] = f.flag
-    if not given:
-        return config
-    try:
-        return with_overrides(config, given)
-    except ConfigError as exc:
-        text = str(exc)
-        field, _, problem = text.partition(": ")
-        flag = flag_of.get(field) or next((fl for p, fl in flag_of.items() if field.startswith(p)), None)
-        raise RobustGaitError(f"argument {flag}: {problem}" if flag else text) from None
+                set_by[p] = f"argument {f.flag}"
+    if given:
+        try:
+            config = with_overrides(config, given)
+        except ConfigError as exc:
+            text = str(exc)
+            field, _, problem = text.partition(": ")
+            flag = flag_of.get(field) or next((fl for p, fl in flag_of.items() if field.startswith(p)), None)
+            raise RobustGaitError(f"argument {flag}: {problem}" if flag else text) from None
+    _check_applies(config, set_by, getattr(args, "certificate", "certify"))
+    return config
+
+
+def _check_applies(config: Config, set_by: Mapping[str, str], certificate: str) -> None:
+    """Refuse a certificate option set on the command line that does nothing to the command's certificate
+    (``certificate``: ``study``, a study's :attr:`~robustgait.config.Config.study_certify`; else ``certify``):
+    one line naming what set it and why (:meth:`~robustgait.config.CertifyConfig.inapplicable`)."""
+    cert = config.study_certify if certificate == "study" else config.certify
+    for path, source in set_by.items():
+        head, _, rest = path.partition(".")
+        why = cert.inapplicable(rest) if head == "certify" else None
+        if why is not None:
+            raise RobustGaitError(f"{source}: {why}")
 
 
 # ----------------------------------------------------------------------------------------------- outputs

@@ -39,6 +39,11 @@ def serve(directory: str, run: RunConfig, config: Config, args: argparse.Namespa
     return True
 
 
+def _figure(row: dict[str, Any]) -> str:
+    """A front row's certificate figure: the verified value, or "≈ estimate" for one only estimated."""
+    return f"{row['value']:.3f}" if row["verified"] else f"≈ {row['estimate']:.3f}"
+
+
 def _study_pareto(args: argparse.Namespace) -> int:
     from robustgait.study.pareto import study_pareto
 
@@ -53,7 +58,7 @@ def _study_pareto(args: argparse.Namespace) -> int:
           f"{'speed [m/s]':>11}  {fig} [{out['unit']}]")
     for r in out["front"]:
         params = ", ".join(f"{v:g}" for v in r["params"].values())
-        print(f"  {r['trial']:>5}  {params:<24} {r['certificate_value']:>10.3f} {r['speed']:>11.3f}  {r[fig]:.3g}")
+        print(f"  {r['trial']:>5}  {params:<24} {_figure(r):>10} {r['speed']:>11.3f}  {r[fig]:.3g}")
     return 0
 
 

@@ -14,6 +14,7 @@ from robustgait.cli.common import ROBOT_HELP, command
 from robustgait.cli.options import FlagTable, config_from
 from robustgait.config import DEMO_DIRECTORY, DEMO_ROBOT, Config, RunConfig, radius_name
 from robustgait.errors import RobustGaitError
+from robustgait.study.outcome import EvaluationStatus
 
 RUN: FlagTable = {"--executor": "run.executor", "--workers": "run.workers", "--address": "run.address"}
 STUDY: FlagTable = {"--metric": "study.metric", "--learner": "study.learner", "--iterations": "study.iterations",
@@ -168,9 +169,11 @@ def _study_status(args: argparse.Namespace) -> int:
             print(f"{it['iteration'] + 1:>9}  {'—':>8}  {'':9}  {'—':>5}  "
                   f"{'running' if it['trials'] else 'not started'}")
         else:
-            verified = bool(b["verified"] and b["verified_value"] is not None)
-            value = b["verified_value"] if verified else b["certificate_value"]
-            print(f"{it['iteration'] + 1:>9}  {value:>8.4f}  {'verified' if verified else 'estimated':9}  "
+            verified = bool(b["verified"])
+            value = b["value"] if verified else b["estimate"]
+            shown = "—" if value is None else f"{value:.4f}"
+            how = "verified" if verified else EvaluationStatus.ESTIMATED.value
+            print(f"{it['iteration'] + 1:>9}  {shown:>8}  {how:9}  "
                   f"{b['steps_taken']:>5}  " + ", ".join(f"{v:g}" for v in b["params"].values()))
     return 0
 
@@ -198,9 +201,9 @@ def _study_compare(args: argparse.Namespace) -> int:
     for name, s in zip("AB", res["studies"], strict=True):
         params = ", ".join(f"{v:g}" for v in s["params"].values())
         print(f"{name} {s['directory']} ({s['learner']}, {s['metric']}): gait ({params}), {s['steps_taken']} steps, "
-              f"{_name(res)} = {s['certificate_value_mean']:.4g} ± {s['certificate_value_sd']:.4g} {res['unit']}  "
-              f"[{', '.join(f'{r:.3f}' for r in s['certificate_values'])}] "
-              f"(study: {s['study_certificate_value']:.4f})")
+              f"{_name(res)} = {s['value_mean']:.4g} ± {s['value_sd']:.4g} {res['unit']}  "
+              f"[{', '.join(f'{r:.3f}' for r in s['values'])}] "
+              f"(study: {'—' if s['study_value'] is None else format(s['study_value'], '.4f')})")
     w = res["winner"]
     print(f"equal mean {_name(res)}" if w is None else f"higher mean {_name(res)}: {'AB'[w]} (per seed: A wins "
           f"{res['wins_per_seed'][0]}, B wins {res['wins_per_seed'][1]})")
@@ -242,7 +245,7 @@ def _study_validate(args: argparse.Namespace) -> int:
             c = r["critical"]
             crit = (f"{c['s50']:.4g} ± {c['s50_se'] or 0:.2g} {unit}" if c["s50"] is not None else f"— ({c['note']})")
             sr = r["success"]
-            print(f"  {r['label']:<26} {r['status']:<13} {r['certificate_value']:>7.4f} "
+            print(f"  {r['label']:<26} {r['status']:<13} {r['value']:>7.4f} "
                   f"{r['steps_taken']:>3}/{r['step_cap']:<3}  "
                   f"{sr['k']}/{sr['n']} = {sr['rate']:.2f} [{sr['low']:.2f}, {sr['high']:.2f}]{'':<4} {crit}")
         for sk in s["skipped"]:
@@ -284,6 +287,7 @@ def _run_flags(p: argparse.ArgumentParser) -> None:
 def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     s = sub.add_parser("study", help="learn the most robust gait: the simulation-in-the-loop preference study")
     ssub = s.add_subparsers(dest="study_command", required=True, parser_class=type(s))
+    s.set_defaults(certificate="study")  # certificate options are checked against the study's certificate
     from robustgait.cli import person
 
     r = command(ssub, "run", "start a study in a new directory and run it to its budget (--metric person: serve its "
@@ -321,4 +325,5 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
 
     dm = command(sub, "demo", "the main job on shipped defaults: a small study of push robustness (J*) on exo + report",
                  _demo, {"--workers": "run.workers"})
+    dm.set_defaults(certificate="study")
     dm.add_argument("--dir", default=DEMO_DIRECTORY, help=f"study directory (default ./{DEMO_DIRECTORY})")

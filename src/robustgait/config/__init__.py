@@ -169,11 +169,9 @@ class Config:
 PRESETS: dict[str, dict[str, Any]] = {
     # `robustgait demo`: a study of exo ranked by J* (the default metric, its gaits ranked on their estimates), 3
     # iterations × 4 gaits, on 2 workers, the gaits it shows verified with a lighter statement (ε = 0.05: a first
-    # verification batch of 60 pushes) so that it ends in minutes on 2 cores. The state options (fewer exploration
-    # samples) serve `--override study.metric=robustness`.
+    # verification batch of 60 pushes) so that it ends in minutes on 2 cores.
     "demo": {"study": {"iterations": 3, "batch": 4},
-             "certify": {"sequential": {"epsilon": 0.05, "explore": 200, "explore_after_failure": 100,
-                                        "budget": 1500}},
+             "certify": {"sequential": {"epsilon": 0.05, "budget": 1500}},
              "run": {"workers": 2}},
 }
 

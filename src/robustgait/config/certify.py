@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from robustgait.config.base import Bool, Doc, FieldProblem, Float, Int, config
 
@@ -34,14 +34,37 @@ RETIRED_FIELDS = ("fp_tol", "fp_window", "fp_metric", "fp_min_steps", "fp_max_st
                   "fp_newton_tol", "fp_fd_step", "fp_fd_jump", "fp_rho_max", "stride_fallback")
 RETIRED_PUSH_FIELDS = ("steps", "recovery_band_steps", "verify_margin")
 
+# the estimator's options whose default depends on what is certified (SequentialConfig: unset, the disturbance's);
+# a push certificate's failing set, in a 2-D disk of impulses, needs less exploration than a state certificate's
+ESTIMATOR_DEFAULTS: dict[str, dict[str, int | float]] = {
+    "push": {"first_round": 50, "explore": 100, "explore_after_failure": 50, "verify_chunk": 25, "first_share": 0.9},
+    "state": {"first_round": 200, "explore": 600, "explore_after_failure": 200, "verify_chunk": 0, "first_share": 0.5},
+}
+# which estimator options apply to which certificate (``inapplicable``): the rest apply to every sequential one
+STATE_ONLY_ESTIMATOR_FIELDS = ("verify_margin",)  # a push certificate's disk comes from its fall curve
+
 
 def without_retired(certify: dict[str, object]) -> dict[str, object]:
     """A ``[certify]`` table as written by an older version, without :data:`RETIRED_FIELDS` and, in its ``push``
-    table, :data:`RETIRED_PUSH_FIELDS` (the rest is read as it is)."""
+    table, :data:`RETIRED_PUSH_FIELDS`. A table written when the push certificate had its own round sizes (``push``'s
+    first_round, explore, explore_after_failure, verify_chunk, first_share) has them moved to ``sequential``: unset
+    where both were their defaults, else the values of its disturbance (the rest is read as it is)."""
     out = {k: v for k, v in certify.items() if k not in RETIRED_FIELDS}
     push = out.get("push")
     if isinstance(push, dict):
-        out["push"] = {k: v for k, v in push.items() if k not in RETIRED_PUSH_FIELDS}
+        keys = ESTIMATOR_DEFAULTS["push"]
+        given = out.get("sequential")
+        seq: dict[str, object] = dict(given) if isinstance(given, dict) else {}
+        out["push"] = {k: v for k, v in push.items() if k not in RETIRED_PUSH_FIELDS and k not in keys}
+        if any(k in push for k in keys):  # written before the estimator's options were one table
+            is_push = out.get("disturbance", "push") == "push"
+            for k, push_default in keys.items():
+                v, state_v = push.get(k, push_default), seq.get(k, ESTIMATOR_DEFAULTS["state"][k])
+                if v == push_default and state_v == ESTIMATOR_DEFAULTS["state"][k]:
+                    seq[k] = None
+                else:
+                    seq[k] = v if is_push else state_v
+            out["sequential"] = seq
     return out
 
 
@@ -91,11 +114,13 @@ class SequentialConfig:
     epsilon: Annotated[Float, Doc("bound on the violating volume fraction of B(r*) to certify", gt=0.0,
                                   lt=1.0)] = 0.02
     budget: Annotated[Int, Doc("most map evaluations in all rounds", ge=1, le=10_000)] = 3000
-    first_round: Annotated[Int, Doc("round 1: uniform samples in B(r_max)", ge=1, le=10_000)] = 200
+    first_round: Annotated[Int | None, Doc(
+        "round 1: uniform samples in B(r_max) (unset: 50 pushes, 200 states)", ge=1, le=10_000)] = None
     round_size: Annotated[Int, Doc("proposals per exploration round", ge=1, le=10_000)] = 50
-    explore: Annotated[Int, Doc("exploration samples before the first verification", ge=0, le=100_000)] = 600
-    explore_after_failure: Annotated[Int, Doc("exploration samples before each further verification", ge=0,
-                                              le=100_000)] = 200
+    explore: Annotated[Int | None, Doc("exploration samples before the first verification (unset: 100 pushes, 600 "
+                                       "states)", ge=0, le=100_000)] = None
+    explore_after_failure: Annotated[Int | None, Doc("exploration samples before each further verification (unset: "
+                                                     "50 pushes, 200 states)", ge=0, le=100_000)] = None
     local_fraction: Annotated[Float, Doc("share of local proposals (around the violating samples closest to x*)",
                                          ge=0.0, le=1.0)] = 0.5
     spread: Annotated[Float, Doc("σ of the local directions, u = (u_elite + σ g)/‖·‖", gt=0.0, le=10.0)] = 0.15
@@ -103,14 +128,45 @@ class SequentialConfig:
                                le=1000)] = 8
     min_depth: Annotated[Float, Doc("smallest relative depth 1 − d/r̂ of a local proposal (log-uniform depths)",
                                     gt=0.0, lt=1.0)] = 1e-3
-    verify_chunk: Annotated[Int, Doc("evaluate a verification batch in chunks of this many samples, farthest from x* "
-                                     "first, and abandon it at the first chunk that shrinks r̂ (0: the whole batch at "
-                                     "once)", ge=0, le=10_000)] = 0
-    verify_margin: Annotated[Float, Doc("the radius a verification batch is drawn in, as a fraction of the explored "
-                                        "r̂ (below 1: fewer failed batches, a smaller certified radius)", gt=0.0,
-                                        le=1.0)] = 1.0
-    first_share: Annotated[Float, Doc("share of β spent on the first verification attempt (the rest halves over the "
-                                      "further attempts; 0.5: β/2, β/4, …)", gt=0.0, lt=1.0)] = 0.5
+    verify_chunk: Annotated[Int | None, Doc(
+        "evaluate a verification batch in chunks of this many samples, farthest from x* first, and abandon it at the "
+        "first chunk with a violation inside the radius verified (0: the whole batch at once; unset: 25 pushes, 0 "
+        "states)", ge=0, le=10_000)] = None
+    verify_margin: Annotated[Float, Doc("state certificates: the radius a verification batch is drawn in, as a "
+                                        "fraction of the explored r̂ (below 1: fewer failed batches, a smaller "
+                                        "certified radius; a push certificate's disk comes from its fall curve, "
+                                        "push.pass_probability)", gt=0.0, le=1.0)] = 1.0
+    first_share: Annotated[Float | None, Doc(
+        "share of β spent on the first verification attempt (the rest halves over the further attempts; 0.5: β/2, "
+        "β/4, …; a larger share, a smaller first batch; unset: 0.9 pushes, 0.5 states)", gt=0.0, lt=1.0)] = None
+
+    def resolved(self, disturbance: str) -> Estimator:
+        """The options in effect for a certificate of ``disturbance``: each unset one at its default
+        (:data:`ESTIMATOR_DEFAULTS`)."""
+        defaults = ESTIMATOR_DEFAULTS[disturbance]
+        values: dict[str, Any] = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        values.update({k: v for k, v in defaults.items() if values[k] is None})
+        return Estimator(**values)
+
+
+@dataclasses.dataclass(frozen=True)
+class Estimator:
+    """The sequential estimator's options in effect for one certificate (:meth:`SequentialConfig.resolved`: every
+    option set; the fields are :class:`SequentialConfig`'s)."""
+
+    epsilon: float
+    budget: int
+    first_round: int
+    round_size: int
+    explore: int
+    explore_after_failure: int
+    local_fraction: float
+    spread: float
+    elites: int
+    min_depth: float
+    verify_chunk: int
+    verify_margin: float
+    first_share: float
 
     def beta_of(self, beta: float, attempt: int) -> float:
         """β_a of verification attempt a (:func:`verification_beta` with this estimator's ``first_share``)."""
@@ -200,12 +256,11 @@ class OrbitConfig:
 class PushConfig:
     """The push certificate J* (``disturbance = push``, :mod:`robustgait.certificate.push`): when a pushed walk has
     failed — it fell within the pushed step and ``horizon`` more —, when it may stop early — back in its orbit's band
-    for ``recovery_steps`` consecutive steps (recovered) —, the sizes of the sequential estimator's first round and
-    exploration, smaller than a state certificate's since the failing set of a 2-D impulse disk needs less
-    exploration (the statement does not depend on it; ε, β, the budget and the rest are ``sequential``'s), and where
-    its verification batch is drawn: in the largest disk the gait's fitted fall curve predicts to pass
-    (``pass_probability``, :mod:`robustgait.certificate.fallcurve`). Push duration and phases are the validation's
-    (``validate.push_duration``, ``validate.push_phase``)."""
+    for ``recovery_steps`` consecutive steps (recovered) —, how exploration pushes are judged, and where its
+    verification batch is drawn: in the largest disk the gait's fitted fall curve predicts to pass
+    (``pass_probability``, :mod:`robustgait.certificate.fallcurve`). The estimator's options (round sizes, ε, β's
+    shares, the budget) are ``sequential``'s, with a push certificate's defaults (:data:`ESTIMATOR_DEFAULTS`). Push
+    duration and phases are the validation's (``validate.push_duration``, ``validate.push_phase``)."""
 
     horizon: Annotated[Int, Doc("steps after the pushed one within which a fall is a failure (the statement's "
                                 "horizon)", ge=1, le=100)] = 20
@@ -222,20 +277,10 @@ class PushConfig:
     r_max_scale: Annotated[Float, Doc(
         "certify.r_max of a push certificate when not set: this multiple of the robot's momentum at its pendulum "
         "speed, m √(g l) (the disk of the first round; J* is at most r_max)", gt=0.0, le=10.0)] = 0.25
-    first_round: Annotated[Int, Doc("round 1: uniform pushes in the disk of radius r_max", ge=1, le=10_000)] = 50
-    explore: Annotated[Int, Doc("exploration pushes before the first verification", ge=0, le=100_000)] = 100
-    explore_after_failure: Annotated[Int, Doc("exploration pushes before each further verification", ge=0,
-                                              le=100_000)] = 50
-    verify_chunk: Annotated[Int, Doc("verification pushes simulated per chunk, the largest first; a batch is "
-                                     "abandoned at the first chunk with a fall inside the disk verified (0: the "
-                                     "whole batch at once)", ge=0, le=10_000)] = 25
     pass_probability: Annotated[Float, Doc(
         "the verification disk is the largest whose batch the gait's fall curve, fitted to the exploration's pushes, "
         "predicts to pass (no fall) with this probability (posterior-predictive; docs/certificate.md): higher, a "
         "smaller J* and fewer failed batches", gt=0.0, lt=1.0)] = 0.9
-    first_share: Annotated[Float, Doc("share of β spent on the first verification batch (the rest halves over the "
-                                      "further batches; 0.5: β/2, β/4, …): a larger share, a smaller first batch",
-                                      gt=0.0, lt=1.0)] = 0.9
     explore_horizon: Annotated[Int, Doc("exploration: steps after the pushed one within which an exploration push "
                                         "fails (exploration only places the verified disk; the statement rests on "
                                         "the verification batch, at horizon)", ge=1, le=100)] = 8
@@ -269,8 +314,9 @@ class CertifyConfig:
     reduced state and reconstruction, and the fixed-point search."""
 
     method: Annotated[Method, Doc(
-        "r* estimator: sequential (rounds inside B(r̂) until a fresh batch certifies the violating fraction ≤ "
-        "epsilon) or uniform (the paper's N samples in B(r_max))")] = "sequential"
+        "the estimator of J* or r*: sequential (rounds of exploration, then a fresh batch drawn after the radius is "
+        "fixed certifies the violating fraction ≤ epsilon) or uniform (the paper's N samples in B(r_max))"
+    )] = "sequential"
     state: Annotated[State, Doc(
         "reduced state certified: omega (the paper's base angular velocity, rad/s), centroidal (centroidal momentum, "
         "kinetic-energy metric) or velocity (every contact-consistent velocity, kinetic-energy metric)")] = "omega"
@@ -302,15 +348,28 @@ class CertifyConfig:
     orbit: OrbitConfig = dataclasses.field(default_factory=OrbitConfig)
 
     @property
-    def estimator(self) -> SequentialConfig:
-        """The sequential estimator's options in effect: ``sequential``, with the push certificate's round sizes for
-        ``disturbance = push``."""
-        if self.disturbance != "push":
-            return self.sequential
-        p = self.push
-        return dataclasses.replace(self.sequential, first_round=p.first_round, explore=p.explore,
-                                   explore_after_failure=p.explore_after_failure, verify_chunk=p.verify_chunk,
-                                   first_share=p.first_share)
+    def estimator(self) -> Estimator:
+        """The sequential estimator's options in effect: ``sequential``, each unset option at this certificate's
+        default (:data:`ESTIMATOR_DEFAULTS`)."""
+        return self.sequential.resolved(self.disturbance)
+
+    def inapplicable(self, path: str) -> str | None:
+        """Why the option at ``path`` (relative to this config: ``sequential.spread``, ``push.horizon``, ``n_samples``)
+        does nothing to this certificate, or None when it applies — an option set for a certificate it does not apply
+        to is an error, never ignored (``--override``, flags)."""
+        head, _, name = path.partition(".")
+        if head == "sequential" and self.method != "sequential":
+            return f"the sequential estimator's options do nothing to method = {self.method}"
+        if head == "sequential" and name in STATE_ONLY_ESTIMATOR_FIELDS and self.disturbance == "push":
+            return ("a push certificate draws its verification disk from its fall curve (push.pass_probability), not "
+                    f"sequential.{name}")
+        if head == "n_samples" and self.method != "uniform":
+            return "n_samples is the uniform estimator's; the sequential estimator's budget is sequential.budget"
+        if head == "push" and self.disturbance != "push":
+            return "push options do nothing to a state certificate (disturbance = state)"
+        if head == "ellipsoid" and (self.disturbance == "push" or self.set != "ellipsoid"):
+            return "ellipsoid options do nothing unless set = ellipsoid"
+        return None
 
     def __post_init__(self) -> None:
         if self.disturbance == "push" and self.chooses_a_state:

@@ -21,7 +21,11 @@ Verify = Literal["shown", "all"]
 # above every faller (≤ cap − 1)
 UNCERTIFIED_PENALTY = 0.5
 Lengthscale = Annotated[Float, Doc(gt=0.0, le=1e3)]
-CERTIFICATE_FIGURES = ("certificate_value", "r_star", "j_star")  # a requirement's names of the certificate figure
+FIGURE_ALIASES = {"j_star": "value", "r_star": "value", "certificate_value": "value"}
+"""Other names a requirement may give the certificate's figure ``value`` (J* of a push certificate, r* of a state
+certificate; ``certificate_value`` as studies wrote it before); a requirement's text keeps the name it was written
+with."""
+CERTIFICATE_FIGURES = ("value", *FIGURE_ALIASES)  # a requirement's names of the certificate figure
 # a study whose grid holds at most this many gaits stores the learner's posterior mean over it after each iteration,
 # so that the report draws its map without importing and refitting the preference model
 POSTERIOR_STORE_LIMIT = 20_000
@@ -81,7 +85,7 @@ class StudyConfig:
                                   "web page (person) or a simulated one (simulated-person)")] = "push"
     require: Annotated[tuple[Str, ...], Doc(
         "requirements FIGURE OP NUMBER on recorded figures (speed>=0.2; OP >= <= > <; a comfort figure, "
-        "certificate_value (the study's J* or r*; also named r_star or j_star), steps_taken, mean_speed or a gait "
+        "value (the certificate's verified J* or r*; also named j_star or r_star), steps_taken, mean_speed or a gait "
         "parameter), comma-separated: a gait failing one ranks below all that meet them")] = ()
     verify: Annotated[Verify, Doc(
         "which gaits get the verified certificate: shown (the learner ranks every gait on its certificate's estimate "

@@ -1,6 +1,7 @@
 """Certificate files (``robustgait certify -o CERT.json``): the part of their schema that validation reads back
-(``robustgait validate --certificate``), and the certified figure of a certificate record (``j_star`` of a push
-certificate, ``r_star`` of a state certificate; older push certificates wrote ``r_star``)."""
+(``robustgait validate --certificate``), and the certified figure of a certificate record (``value``, with
+``estimate`` and ``verified``; files written before the figure had one name hold it as ``j_star`` of a push
+certificate or ``r_star``)."""
 
 from __future__ import annotations
 
@@ -24,7 +25,8 @@ class CertificateFile:
     its other keys are ignored): status, r*, whether the supremum is attained, z* (the centre in the certificate's
     coordinates), the map, frame, reconstruction, the coordinates' transform T (z = T x̄; absent in certificates of the
     base angular velocity written before states were a choice: the identity), E* and the certificate's config (its
-    state, set, horizon and fixed-point search)."""
+    state, set, horizon and fixed-point search). The figure is ``value`` (``verified``; an exploration alone: its
+    ``estimate``); older files name it ``j_star`` or ``r_star``."""
 
     attained: Bool
     x_star: Annotated[list[Float], at.MinLen(1), at.MaxLen(1000)]
@@ -34,14 +36,14 @@ class CertificateFile:
     config: dict[str, Any] = dataclasses.field(default_factory=dict)
     coordinates: dict[str, Any] | None = None
     energy: Annotated[Float, Doc(ge=0.0)] | None = None
-    r_star: Annotated[Float, Doc(ge=0.0)] | None = None  # a state certificate's r* (a push certificate's J*, before
-    j_star: Annotated[Float, Doc(ge=0.0)] | None = None  # its figure was named j_star)
+    value: Annotated[Float, Doc(ge=0.0)] | None = None
+    estimate: Annotated[Float, Doc(ge=0.0)] | None = None
+    verified: Bool = True
 
     @property
-    def value(self) -> float:
-        """The certified figure: ``j_star`` of a push certificate, else ``r_star`` (0 when neither is written:
-        :func:`read_certificate` refuses such a file)."""
-        return certificate_figure({"j_star": self.j_star, "r_star": self.r_star or 0.0})
+    def radius(self) -> float:
+        """The certificate's radius (:func:`certificate_radius`; :func:`read_certificate` refuses a file without)."""
+        return certificate_radius({"value": self.value, "estimate": self.estimate, "verified": self.verified})
 
     def transform(self, src: str | Path) -> list[list[float]] | None:
         """T (k, k) of the certificate's coordinates, checked square of the size of x*; None if absent."""
@@ -77,22 +79,38 @@ class CertificateFile:
         return cfg
 
 
+LEGACY_FIGURE_KEYS = ("j_star", "r_star")  # a certificate file's figure before it was named value (push: j_star)
+
+
 def read_certificate(path: str | Path) -> CertificateFile:
     """Read and validate a certificate JSON; one that records a failed certificate is refused (one line)."""
     raw = read_json(path, "certificate file")
     if isinstance(raw, dict) and raw.get("status", "ok") != "ok":  # a failed certificate has no ball to check
         raise input_error(path, f"the certificate has status {raw['status']!r} ({raw.get('reason', '')}): nothing "
                           "to validate against")
+    if isinstance(raw, dict) and raw.get("value") is None:  # written before the figure was named value
+        old = next((raw[k] for k in LEGACY_FIGURE_KEYS if raw.get(k) is not None), None)
+        raw = {k: v for k, v in raw.items() if k not in LEGACY_FIGURE_KEYS} | {"value": old}
     out = validate(raw, CertificateFile, path, "json")
-    if out.j_star is None and out.r_star is None:
-        raise input_error(path, "the certificate has no figure (j_star or r_star)")
+    if out.value is None:
+        raise input_error(path, "the certificate has no figure (value)")
     return out
 
 
-def certificate_figure(record: Mapping[str, Any]) -> float:
-    """The certified figure of a certificate record (:meth:`~robustgait.certificate.certify.GaitCertificate.to_dict`,
-    a file or a study's copy): ``j_star`` of a push certificate, ``r_star`` of a state certificate or of a push
-    certificate written before its figure was named (a ``j_star`` of None counts as absent). KeyError when it has
-    neither."""
-    j_star = record.get("j_star")
-    return float(j_star if j_star is not None else record["r_star"])
+def certificate_radius(record: Mapping[str, Any]) -> float:
+    """The radius of a certificate record (:meth:`~robustgait.certificate.certify.GaitCertificate.to_dict`, a file or
+    a study's copy): its ``value`` when ``verified``, else its ``estimate`` (an exploration alone); a record written
+    before the figure was named ``value``: ``j_star`` (push), else ``r_star`` (None counts as absent). KeyError when
+    it has none."""
+    for key in LEGACY_FIGURE_KEYS:
+        if record.get(key) is not None and record.get("value") is None:
+            return float(record[key])
+    if not record.get("verified", True) and record.get("estimate") is not None:
+        return float(record["estimate"])
+    return float(record["value"])
+
+
+def certificate_value(record: Mapping[str, Any]) -> float:
+    """The certified figure of a certificate record (0 unless verified; files of every version, as
+    :func:`certificate_radius`)."""
+    return certificate_radius(record) if record.get("verified", True) else 0.0

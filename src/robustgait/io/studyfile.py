@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from robustgait.config import STATE_CHOICE_DEFAULTS, Config, GenerationConfig, from_dict, study_disturbance, to_dict
-from robustgait.config.certify import without_retired
+from robustgait.config.certify import ESTIMATOR_DEFAULTS, without_retired
 from robustgait.errors import input_error
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
@@ -133,7 +133,9 @@ def load_config(directory: str | Path) -> StudySetup:
     certify = raw["config"].get("certify") if isinstance(raw, dict) and isinstance(raw.get("config"), dict) else None
     if isinstance(certify, dict) and ("push_steps" in certify or isinstance(certify.get("push"), dict)):
         push = {**(certify.get("push") or {})}
-        push.setdefault("verify_chunk", 0)  # written before chunked verification: whole verification batches
+        if "push_steps" in certify or any(k in push for k in ESTIMATOR_DEFAULTS["push"]):
+            # written when the push table held its round sizes; before chunked verification: whole batches
+            push.setdefault("verify_chunk", 0)
         if "explore_horizon" not in push:  # written before cheap exploration: exploration pushes were the statement's
             push.update({"explore_horizon": push.get("horizon", 20),
                          "explore_recovery_radius": push.get("recovery_radius", 0.03),

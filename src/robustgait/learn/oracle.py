@@ -33,13 +33,13 @@ from robustgait.errors import RobustGaitError
 @dataclass(frozen=True)
 class Outcome:
     """What an oracle sees of one evaluated gait: steps completed (0 if generation failed), the step cap
-    of the walk, the certificate's figure (``certificate_value``: r* for the robustness metric, J* for the push metric;
-    0 when the gait was not certified), and whether it was certified (a gait that fell is never certified; only a
-    walker's flag counts)."""
+    of the walk, the certificate's figure the study ranks by (``figure``: r* for the robustness metric, J* for the push
+    metric; 0 when the gait was not certified), and whether it was certified (a gait that fell is never certified; only
+    a walker's flag counts)."""
 
     steps_taken: int
     step_cap: int
-    certificate_value: float = 0.0
+    figure: float = 0.0
     certified: bool = True
     meets: bool = True  # the study's requirements (study.require) hold
 
@@ -59,7 +59,7 @@ def score(metric: Metric | str, outcome: Outcome, penalty: float = UNCERTIFIED_P
         if not outcome.walked_cap:
             base = float(outcome.steps_taken)
         else:
-            base = (float(outcome.step_cap + outcome.certificate_value) if outcome.certified
+            base = (float(outcome.step_cap + outcome.figure) if outcome.certified
                     else float(outcome.step_cap) - penalty)
     elif metric == "stability":
         base = float(outcome.steps_taken)

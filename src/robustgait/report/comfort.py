@@ -9,6 +9,9 @@ from typing import Any
 
 from robustgait.config import radius_name
 from robustgait.report.figures import _save, plt
+from robustgait.report.marks import labelled, plotted_figure
+from robustgait.study.outcome import known_figure
+from robustgait.study.status import figure_text
 
 # the table's columns: (header, figure, scale, digits); the figures' units are robustgait.sim.comfort.FIGURES'
 COLUMNS: tuple[tuple[str, str, float, int], ...] = (
@@ -43,12 +46,13 @@ def _cell(comfort: dict[str, Any], key: str, scale: float, digits: int) -> str:
 def comfort_rows(status: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
     """The header and one row per measured gait: trial, parameters, outcome, the certificate, then :data:`COLUMNS`."""
     name = radius_name(status["certificate"])
-    header = ["trial", "params", "outcome", f"{name} [{status.get('unit', 'rad/s')}]", *(c[0] for c in COLUMNS)]
+    unit = status.get("unit", "rad/s")
+    header = ["trial", "params", "outcome", labelled(name, unit), *(c[0] for c in COLUMNS)]
     rows = []
     for t in measured_trials(status):
         c = t["comfort"]
         rows.append([str(t["number"]), ", ".join(f"{v:g}" for v in t["params"].values()), str(t["status"]),
-                     f"{t['certificate_value']:.4g}" if t["status"] == "certified" else "—",
+                     figure_text(t, ""),
                      *(_cell(c, key, scale, digits) for _, key, scale, digits in COLUMNS)])
     return header, rows
 
@@ -56,7 +60,8 @@ def comfort_rows(status: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
 def plot_comfort(status: dict[str, Any], path: str | Path) -> Path:
     """Two panels over the measured gaits: the certificate (J* or r*) against the forward speed, coloured by the
     vertical pelvis acceleration RMS; and against the vertical pelvis acceleration RMS, coloured by the cost of
-    transport. Certified gaits are dots, the others crosses at 0."""
+    transport. Verified gaits are dots, gaits whose figure is only an estimate triangles at the estimate, the others
+    (refused, fell) crosses at 0."""
     trials = measured_trials(status)
     name = radius_name(status["certificate"])
     unit = status.get("unit", "rad/s")
@@ -65,20 +70,22 @@ def plot_comfort(status: dict[str, Any], path: str | Path) -> Path:
             (a1, "speed", "pelvis_acc_vertical_rms", "forward speed [m/s]", "vertical pelvis acc. RMS [m/s²]"),
             (a2, "pelvis_acc_vertical_rms", "cost_of_transport", "vertical pelvis acceleration RMS [m/s²]",
              "cost of transport")):
-        for certified, marker in ((True, "o"), (False, "x")):
-            pts = [t for t in trials if (t["status"] == "certified") == certified]
+        groups = (("o", "verified", lambda t: bool(t.get("verified"))),
+                  ("^", "estimate, not verified", lambda t: not t.get("verified") and known_figure(t) is not None),
+                  ("x", "no certificate (0)", lambda t: known_figure(t) is None))
+        for marker, label, member in groups:
+            pts = [t for t in trials if member(t)]
             if not pts:
                 continue
             colors = [t["comfort"].get(c_key) for t in pts]
-            sc = ax.scatter([t["comfort"][x_key] for t in pts],
-                            [t["certificate_value"] if certified else 0.0 for t in pts],
+            sc = ax.scatter([t["comfort"][x_key] for t in pts], [plotted_figure(t) for t in pts],
                             c=[math.nan if v is None else v for v in colors], cmap="viridis", marker=marker, s=36,
-                            label="certified" if certified else "not certified (0)")
+                            label=label)
         if trials:
             fig.colorbar(sc, ax=ax, label=c_label)
             ax.legend(fontsize=8)
         ax.set_xlabel(x_label)
-        ax.set_ylabel(f"{name} [{unit}]")
+        ax.set_ylabel(labelled(name, unit))
     fig.suptitle(f"{name} and what the passenger feels ({len(trials)} gaits; steps measured after "
                  f"{status['config']['comfort']['skip_steps']} skipped)")
     return _save(fig, path)

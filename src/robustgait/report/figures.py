@@ -99,8 +99,8 @@ def plot_certificate(cert: Certificate, path: str | Path, *, title: str = "", co
     s_inv_view = view.T @ np.linalg.inv(s_mat) @ view
     labels = _axis_labels(coordinates, k, shaped)
     masks = outcome_masks(cert)
-    r = cert.r_star
-    rb = ball.r_star if ball is not None else (r if not shaped else None)
+    r = cert.radius
+    rb = ball.radius if ball is not None else (r if not shaped else None)
     longest = float(1.0 / np.sqrt(w.min())) if shaped else 1.0
     half = float(cert.r_max if r <= 0 else min(cert.r_max * longest, 3.0 * r * longest))
     near = np.all(np.abs(yv) <= half, axis=1)
@@ -157,7 +157,7 @@ def _plot_push_certificate(cert: Certificate, path: str | Path, title: str) -> P
     j = np.asarray(cert.samples)
     size = np.linalg.norm(j, axis=1)
     fell = np.asarray(cert.fell, dtype=bool)
-    r = cert.r_star
+    r = cert.radius
     fig = plt.figure(figsize=(14, 10))
     ax = fig.add_subplot(2, 2, 1)
     ax.scatter(j[~fell, 0], j[~fell, 1], s=9, c=COLORS["satisfies"], label=f"walked on ({int((~fell).sum())})")
@@ -206,11 +206,11 @@ def _plot_distances(cert: Certificate, ax: Axes) -> None:
     for name, m in masks.items():
         ax.scatter(d[m], np.full(int(m.sum()), top) if name == "fell" else p[m], s=6, c=COLORS[name],
                    marker="x" if name == "fell" else "o", label=f"{name} ({int(m.sum())})")
-    dd = np.linspace(0, max(cert.r_star, 1e-12), 100)
-    ax.plot(dd, np.sqrt(cert.alpha * cert.r_star ** 2 + (1 - cert.alpha) * dd ** 2), "b--", lw=0.8,
+    dd = np.linspace(0, max(cert.radius, 1e-12), 100)
+    ax.plot(dd, np.sqrt(cert.alpha * cert.radius ** 2 + (1 - cert.alpha) * dd ** 2), "b--", lw=0.8,
             label="DTBF boundary at r*")
     ax.plot([0, top], [0, top], color="0.6", lw=0.6)
-    ax.axvline(cert.r_star, color="tab:blue", ls=":", lw=0.8)
+    ax.axvline(cert.radius, color="tab:blue", ls=":", lw=0.8)
     ax.set_xlabel("‖x − x*‖ (sample)")
     ax.set_ylabel("‖P(x) − x*‖ (image; falls at the top)")
     ax.legend(fontsize=8)
@@ -235,7 +235,7 @@ def _plot_rounds(cert: Certificate, ax_d: Axes, ax_r: Axes, name: str = "r") -> 
     r_hat = np.array([cert.r_max] + [rd.r_hat for rd in cert.rounds])
     for ax in (ax_d, ax_r):
         ax.step(used, r_hat, where="post", color="tab:blue", label=f"{hat} after each round")
-        ax.axhline(cert.r_star, color="tab:blue", ls=":", lw=0.8)
+        ax.axhline(cert.radius, color="tab:blue", ls=":", lw=0.8)
         ax.set_yscale("log")
         ax.set_xlabel("samples used")
     for rd in cert.rounds:
@@ -248,7 +248,7 @@ def _plot_rounds(cert: Certificate, ax_d: Axes, ax_r: Axes, name: str = "r") -> 
     handles, labels = ax_r.get_legend_handles_labels()
     uniq = dict(zip(labels, handles, strict=True))
     ax_r.legend(uniq.values(), uniq.keys(), fontsize=8)
-    ax_r.set_title(f"{cert.method}: {star} = {cert.r_star:.4g}, bound {100 * cert.violation_bound:.3g}% at "
+    ax_r.set_title(f"{cert.method}: {star} = {cert.radius:.4g}, bound {100 * cert.violation_bound:.3g}% at "
                    f"{100 * cert.confidence:g}%", fontsize=9)
 
 

@@ -12,8 +12,10 @@ from typing import Any
 
 from robustgait.config import radius_name
 from robustgait.report.figures import _save, plt
+from robustgait.report.marks import labelled, plotted_figure
 from robustgait.sim.comfort import FIGURES
 from robustgait.study.pareto import pareto
+from robustgait.study.status import figure_text
 from robustgait.study.verify import params_label
 
 
@@ -22,18 +24,26 @@ def _params(p: dict[str, float]) -> str:
 
 
 def plot_pareto(front: dict[str, Any], path: Path) -> Path:
-    """Certificate against speed, coloured by the comfort figure; the non-dominated gaits circled."""
+    """Certificate against speed, coloured by the comfort figure (dots verified, triangles estimates); the
+    non-dominated gaits circled."""
     rows = front["gaits"]
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    sc = ax.scatter([r["speed"] for r in rows], [r["certificate_value"] for r in rows],
-                    c=[r[front["figure"]] for r in rows], cmap="viridis_r", s=30)
-    fig.colorbar(sc, ax=ax, label=f"{front['figure'].replace('_', ' ')} [{front['unit']}]")
+    color = [r[front["figure"]] for r in rows]
+    lo, hi = min(color, default=0.0), max(color, default=1.0)
+    sc = None
+    for marker, label, verified in (("o", "verified", True), ("^", "estimate, not verified", False)):
+        pts = [r for r in rows if bool(r["verified"]) == verified]
+        if pts:
+            sc = ax.scatter([r["speed"] for r in pts], [plotted_figure(r) for r in pts], marker=marker, label=label,
+                            c=[r[front["figure"]] for r in pts], cmap="viridis_r", vmin=lo, vmax=hi, s=30)
+    if sc is not None:
+        fig.colorbar(sc, ax=ax, label=labelled(front["figure"].replace("_", " "), front["unit"]))
     on = [r for r in rows if r["front"]]
-    ax.scatter([r["speed"] for r in on], [r["certificate_value"] for r in on], s=140, facecolors="none",
+    ax.scatter([r["speed"] for r in on], [plotted_figure(r) for r in on], s=140, facecolors="none",
                edgecolors="tab:red", label=f"non-dominated ({len(on)})")
     name = radius_name(front["certificate"])
     ax.set_xlabel("speed [m/s]")
-    ax.set_ylabel(f"{name} [{front['certificate_unit']}]")
+    ax.set_ylabel(labelled(name, front["certificate_unit"]))
     ax.set_title(f"Trade-offs: {name} ↑, speed ↑, {front['figure'].replace('_', ' ')} ↓", fontsize=10)
     ax.legend(fontsize=8)
     return _save(fig, path)
@@ -41,9 +51,9 @@ def plot_pareto(front: dict[str, Any], path: Path) -> Path:
 
 def pareto_table(front: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
     name = radius_name(front["certificate"])
-    header = ["trial", "gait (L, T, W, h)", f"{name} [{front['certificate_unit']}]", "speed [m/s]",
-              f"{front['figure']} [{front['unit']}]"]
-    return header, [[str(r["trial"]), _params(r["params"]), f"{r['certificate_value']:.3f}", f"{r['speed']:.3f}",
+    header = ["trial", "gait (L, T, W, h)", labelled(name, front["certificate_unit"]), "speed [m/s]",
+              labelled(front["figure"], front["unit"])]
+    return header, [[str(r["trial"]), _params(r["params"]), figure_text(r, "", 4), f"{r['speed']:.3f}",
                      f"{r[front['figure']]:.3g}"] for r in front["front"]]
 
 
@@ -87,7 +97,8 @@ def person_parts(status: dict[str, Any], table: Any) -> list[str]:
     name, unit = radius_name(status["certificate"]), status["unit"]
     floor = p.get("floor") or {}
     ref = floor.get("reference")
-    of_ref = "" if not ref else (f": {floor.get('fraction')} × the reference gait's {ref['certificate_value']:.4g}"
+    of_ref = "" if not ref else (f": {floor.get('fraction')} × the reference gait's "
+                                 f"{figure_text(ref, unit) if ref.get('verified') else 'value 0 (not certified)'}"
                                  + (f" ({params_label(ref['params'])})" if ref.get("params") else ""))
     text = (f"<h2>The person's answers</h2><p>Shown: gaits certified at or above the floor {name} ≥ "
             f"{floor.get('value', 0):.4g} {unit} ({html.escape(str(floor.get('source')))}{of_ref})"
@@ -99,8 +110,8 @@ def person_parts(status: dict[str, Any], table: Any) -> list[str]:
     best = status.get("best")
     if best is not None:
         c = best.get("comfort") or {}
-        rows = [[f"{name} [{unit}]", f"{best['certificate_value']:.4g}"]] + [
-            [f"{n} [{FIGURES[n][0]}]", "—" if c.get(n) is None else f"{c[n]:.4g}"] for n in FIGURES if n in c]
+        rows = [[labelled(name, unit), figure_text(best, "")]] + [
+            [labelled(n, FIGURES[n][0]), "—" if c.get(n) is None else f"{c[n]:.4g}"] for n in FIGURES if n in c]
         parts.append(f"<h3>The recommendation: {_params(best['params'])} (trial {best['trial']})</h3>"
                      + table(rows, ["figure", "value"]))
     return parts

@@ -34,7 +34,16 @@ from robustgait.errors import RobustGaitError, input_error
 from robustgait.io.output import write_text
 from robustgait.io.schema import read_json
 from robustgait.report.figures import _save, plot_certificate
+from robustgait.report.marks import (
+    OUTCOME_COLORS,
+    OUTCOME_LABELS,
+    OUTCOME_MARKERS,
+    labelled,
+    plot_marked,
+    plotted_figure,
+)
 from robustgait.report.person import pareto_parts, person_parts
+from robustgait.study.outcome import EvaluationStatus, status_of
 from robustgait.study.status import figure_text
 
 if TYPE_CHECKING:
@@ -42,27 +51,23 @@ if TYPE_CHECKING:
     from robustgait.learn.history import History
     from robustgait.learn.space import ActionSpace
 
-OUTCOME_COLORS = {"certified": "tab:green", "estimated": "tab:cyan", "not_certified": "tab:olive", "fell": "tab:red",
-                  "generation_failed": "0.3"}
-OUTCOME_MARKERS = {"certified": "o", "estimated": "^", "not_certified": "s", "fell": "x", "generation_failed": "+"}
 REPORT_DIR = "report"
 
 
 def plot_history(status: dict[str, Any], path: Path) -> Path:
-    """Per iteration: r* and steps of every evaluated gait (dots, by outcome) and of the learner's best
-    after the iteration (line)."""
+    """Per iteration: the certificate's figure (verified, or the estimate, marked as one) and the steps of every
+    evaluated gait (by outcome) and of the learner's best after the iteration (line)."""
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     for t in status["trials"]:
         if t["state"] != "COMPLETE":
             continue
         st = t["status"]
         kw = {"c": OUTCOME_COLORS.get(st, "k"), "marker": OUTCOME_MARKERS.get(st, "o"), "s": 18, "alpha": 0.7}
-        a1.scatter(t["iteration"] + 1, t["certificate_value"], **kw)
+        a1.scatter(t["iteration"] + 1, plotted_figure(t), **kw)
         a2.scatter(t["iteration"] + 1, t["steps_taken"], **kw)
     its = [it for it in status["iterations"] if it["best"] is not None]
     x = [it["iteration"] + 1 for it in its]
-    a1.plot(x, [it["best"]["certificate_value"] for it in its], "-", color="tab:blue", lw=2,
-            label="learner's best (posterior mean)")
+    plot_marked(a1, x, [it["best"] for it in its], label="learner's best (posterior mean)", color="tab:blue")
     a2.plot(x, [it["best"]["steps_taken"] for it in its], "-", color="tab:blue", lw=2)
     observed, best_so_far = [], None  # the highest oracle score evaluated up to each iteration
     for it in status["iterations"]:
@@ -71,12 +76,12 @@ def plot_history(status: dict[str, Any], path: Path) -> Path:
             best_so_far = b
         if best_so_far is not None and it["best"] is not None:
             observed.append((it["iteration"] + 1, best_so_far))
-    a1.plot([i for i, _ in observed], [b["certificate_value"] for _, b in observed], "--", color="0.4", lw=1.2,
-            label="best evaluated so far")
+    plot_marked(a1, [i for i, _ in observed], [b for _, b in observed], label="best evaluated so far", color="0.4",
+                ls="--")
     a2.plot([i for i, _ in observed], [b["steps_taken"] for _, b in observed], "--", color="0.4", lw=1.2)
     for name, c in OUTCOME_COLORS.items():
-        a1.scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=name.replace("_", " "))
-    a1.set_ylabel(f"{radius_name(status['certificate'])} [{status.get('unit', 'rad/s')}]")
+        a1.scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=OUTCOME_LABELS[name])
+    a1.set_ylabel(labelled(radius_name(status["certificate"]), status.get("unit", "rad/s")))
     a1.legend(fontsize=8, loc="best")
     cap = status["config"]["sim"]["step_cap"]
     a2.axhline(cap, color="0.6", ls="--", lw=0.8)
@@ -91,7 +96,7 @@ def plot_explored(status: dict[str, Any], path: Path) -> Path:
     """Every pair of parameters: the evaluated gaits coloured by outcome (marker size ∝ r* or J*, the largest the
     study's largest)."""
     trials = [t for t in status["trials"] if t["state"] == "COMPLETE" and t["reused_from"] is None]
-    top = max((float(t["certificate_value"] or 0) for t in trials), default=0.0) or 1.0
+    top = max((plotted_figure(t) for t in trials), default=0.0) or 1.0
     names = list(trials[0]["params"]) if trials else []
     pairs = list(combinations(range(len(names)), 2))
     cols = min(3, max(1, len(pairs)))
@@ -102,7 +107,7 @@ def plot_explored(status: dict[str, Any], path: Path) -> Path:
         for t in trials:
             st = t["status"]
             ax.scatter(t["params"][names[i]], t["params"][names[j]], c=OUTCOME_COLORS.get(st, "k"),
-                       marker=OUTCOME_MARKERS.get(st, "o"), s=20 + 120 * float(t["certificate_value"] or 0) / top,
+                       marker=OUTCOME_MARKERS.get(st, "o"), s=20 + 120 * plotted_figure(t) / top,
                        alpha=0.6)
         if best is not None:
             ax.scatter(best["params"][names[i]], best["params"][names[j]], s=260, facecolors="none",
@@ -112,7 +117,7 @@ def plot_explored(status: dict[str, Any], path: Path) -> Path:
     for ax in axes.ravel()[len(pairs):]:
         ax.axis("off")
     for name, c in OUTCOME_COLORS.items():
-        axes.ravel()[0].scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=name.replace("_", " "))
+        axes.ravel()[0].scatter([], [], c=c, marker=OUTCOME_MARKERS[name], label=OUTCOME_LABELS[name])
     axes.ravel()[0].scatter([], [], s=120, facecolors="none", edgecolors="tab:blue", label="best")
     axes.ravel()[0].legend(fontsize=7)
     fig.suptitle(f"Explored gait parameters (marker size ∝ {radius_name(status['certificate'])})")
@@ -266,7 +271,7 @@ def write_study_report(directory: str | Path, config: ReportConfig | None = None
         name = radius_name("push" if raw.get("disturbance") == "push" else "state")
         what = f"{raw.get('state', 'omega')} {raw.get('set', 'ball')}" if name == "r*" else "pushes"
         p = plot_certificate(cert, out / "certificate.png", coordinates=coords,
-                             title=f"best gait: {name} = {cert.r_star:.4g} {raw.get('unit', 'rad/s')} ({what})")
+                             title=f"best gait: {name} = {cert.radius:.4g} {raw.get('unit', 'rad/s')} ({what})")
         parts.append(f"<h2>Certificate of the best gait</h2>{_img(p)}"
                      f"<p>{html.escape(str(raw.get('statement') or cert.statement()))}</p>")
     else:
@@ -295,7 +300,7 @@ def verify_recommended(directory: Path, status: dict[str, Any], figure: str) -> 
 
     entries = [status["best"], status["best_observed"], *(e for it in status["iterations"]
                                                          for e in (it["best"], it["batch_best"]))]
-    indices = [e["grid_index"] for e in entries if e is not None and e.get("status") == "estimated"]
+    indices = [e["grid_index"] for e in entries if e is not None and status_of(e) == EvaluationStatus.ESTIMATED]
     done = verify_now(directory, indices) > 0
     try:
         front = study_pareto(directory, figure, verify=False)["front"]
@@ -341,7 +346,7 @@ def _validation_parts(d: Path, status: dict[str, Any], out: Path, notes: list[st
     for kind, s in summaries.items():
         png = plot_study_validation(s, out / f"validation_{kind}.png")
         cfg = s["config"]
-        rows = [[r["label"], r["status"], _fmt(r["certificate_value"], 4), f"{r['steps_taken']}/{r['step_cap']}",
+        rows = [[r["label"], r["status"], _fmt(r["value"], 4), f"{r['steps_taken']}/{r['step_cap']}",
                  f"{r['success']['k']}/{r['success']['n']} = {r['success']['rate']:.2f} [{r['success']['low']:.2f}, "
                  f"{r['success']['high']:.2f}]",
                  "—" if r["critical"]["s50"] is None else f"{r['critical']['s50']:.4g} {s['unit']}"]

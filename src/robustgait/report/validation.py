@@ -14,6 +14,7 @@ from scipy.special import expit
 
 from robustgait.config import R_MAX_UNIT, CertifyConfig, radius_name
 from robustgait.report.figures import _save, plt
+from robustgait.study.outcome import EvaluationStatus
 from robustgait.validate.stats import binned_rates, correlation_text
 
 if TYPE_CHECKING:
@@ -27,7 +28,7 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
     kinds = list(result.kinds.values())
     fig, axes = plt.subplots(len(kinds), 2, figsize=(11, 3.4 * len(kinds)), squeeze=False)
     ref = result.certificate
-    r_star, cunit = ref.value, R_MAX_UNIT[ref.space]
+    radius, cunit = ref.value, R_MAX_UNIT[ref.space]
     star = radius_name(ref.space)
     for row, kr in zip(axes, kinds, strict=True):
         name, unit = kr.size_label
@@ -56,7 +57,7 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
         for ok, color, label in ((True, "tab:green", "walked"), (False, "tab:red", "fell")):
             m = reached & (kr.success == ok)
             a2.scatter(kr.size[m], kr.distance[m], s=8, c=color, label=f"{label} ({int(m.sum())})")
-        a2.axhline(r_star, color="tab:blue", lw=1, label=f"{star} = {r_star:.3g} {cunit}")
+        a2.axhline(radius, color="tab:blue", lw=1, label=f"{star} = {radius:.3g} {cunit}")
         chk = kr.certificate_check()
         inside = chk["inside"]
         n_in = getattr(inside, "n", 0)
@@ -74,7 +75,8 @@ def plot_validation(result: ValidationResult, path: str | Path, *, title: str = 
     return _save(fig, path)
 
 
-_STUDY_MARKERS = {"certified": "o", "not_certified": "s", "fell": "X"}
+_STUDY_MARKERS = {EvaluationStatus.CERTIFIED.value: "o", EvaluationStatus.NOT_CERTIFIED.value: "s",
+                  EvaluationStatus.FELL.value: "X"}
 
 
 def plot_study_validation(summary: dict[str, Any], path: str | Path) -> Path:
@@ -94,7 +96,7 @@ def plot_study_validation(summary: dict[str, Any], path: str | Path) -> Path:
     cmap = plt.get_cmap("viridis")
     cert = CertifyConfig(**{k: v for k, v in summary["certify"].items() if k in ("state", "disturbance")})
     star = radius_name(cert.space)
-    panels = ((axes[0], "certificate_value", f"{star} ({cert.space}) [{cert.unit}]"),
+    panels = ((axes[0], "value", f"{star} ({cert.space}) [{cert.unit}]"),
               (axes[1], "steps_taken", f"steps taken in the study (cap {cap})"))
     for ax, key, label in panels:
         x = np.array([r[key] for r in rows], dtype=float)

@@ -45,15 +45,15 @@ def ms(h: float) -> str:
 
 
 @dataclass(frozen=True)
-class Walked:
+class TimestepWalk:
     """One walk of a gait until the orbit rule's answer: its ``timestep`` [s], the orbit's ``status``
-    (:class:`~robustgait.certificate.orbit.Status` value) and ``reason`` (empty when ok), ``steps`` walked, the
+    (:class:`~robustgait.certificate.orbit.Status`) and ``reason`` (empty when ok), ``steps`` walked, the
     settled band's ``period`` and ``centres`` (k, d) in band coordinates (None when it did not settle),
     ``sides_differ`` (its period was searched from 2: the robot's left and right differ), ``physics_steps`` simulated
     and the wall ``seconds``."""
 
     timestep: float
-    status: str
+    status: Status
     reason: str
     steps: int
     period: int
@@ -64,15 +64,15 @@ class Walked:
 
     @property
     def settled(self) -> bool:
-        return self.status == Status.OK.value and self.centres is not None
+        return self.status == Status.OK and self.centres is not None
 
     def describe(self) -> str:
         """A clause: ``settled (period 2)``, ``fell in step 57``, ``did not settle``."""
         if self.settled:
             return f"settled (period {self.period})"
-        if self.status == Status.FELL.value:
+        if self.status == Status.FELL:
             return f"fell in step {self.steps + 1}"
-        return "did not settle" if self.status == Status.UNSETTLED.value else str(self.status)
+        return "did not settle" if self.status == Status.UNSETTLED else str(self.status)
 
 
 @dataclass(frozen=True)
@@ -81,8 +81,8 @@ class Trial:
     difference of their settled band centres, band coordinates; None unless both settled)."""
 
     timestep: float
-    coarse: Walked
-    fine: Walked
+    coarse: TimestepWalk
+    fine: TimestepWalk
     error: float | None
 
     @property
@@ -161,7 +161,7 @@ def band_difference(a: FloatArray, b: FloatArray, stride: int = 1) -> float:
     return float(min(np.max(np.abs(ta - np.roll(tb, s, axis=0))) for s in range(0, n, max(1, stride))))
 
 
-def trial_error(coarse: Walked, fine: Walked) -> float | None:
+def trial_error(coarse: TimestepWalk, fine: TimestepWalk) -> float | None:
     """The error of a trial (:func:`band_difference` of the settled centres), None unless both walks settled."""
     if coarse.centres is None or fine.centres is None or not (coarse.settled and fine.settled):
         return None
@@ -199,22 +199,22 @@ def default_gait(robot: Robot, config: Config) -> tuple[Gait | None, str]:
     return res.gait, ""
 
 
-def settled_walk(robot: Robot, gait: Gait, config: Config) -> Walked:
+def settled_walk(robot: Robot, gait: Gait, config: Config) -> TimestepWalk:
     """The gait walked from its start with ``config.sim`` until the orbit rule of ``config.certify`` has its answer
     (:func:`robustgait.certificate.search.find_orbit`, no stability probe, no linearization)."""
     c = config.certify
     certify = dataclasses.replace(c, orbit=dataclasses.replace(c.orbit, probe_impulse=0.0, linearization=False))
     t0 = time.perf_counter()
     o = find_orbit(Walking(robot, gait, config.sim), certify)
-    return Walked(robot.dt, o.status.value, o.reason, o.steps, o.period,
+    return TimestepWalk(robot.dt, o.status, o.reason, o.steps, o.period,
                   None if o.band is None or not o.ok else np.array(o.band.centres), o.sides_differ, o.physics_steps,
                   time.perf_counter() - t0)
 
 
-WalkCache = dict[tuple[float, tuple[float, ...], tuple[float, ...]], Walked]
+WalkCache = dict[tuple[float, tuple[float, ...], tuple[float, ...]], TimestepWalk]
 
 
-def _walk(robot: Robot, gait: Gait, config: Config, cache: WalkCache) -> Walked:
+def _walk(robot: Robot, gait: Gait, config: Config, cache: WalkCache) -> TimestepWalk:
     """:func:`settled_walk`, once per physics step and servos: the reference of one candidate is the walk of the next
     when its gains are the same."""
     key = (robot.dt, tuple(robot.servo_kp.tolist()), tuple(robot.servo_kd.tolist()))

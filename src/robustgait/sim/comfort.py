@@ -31,7 +31,8 @@ FloatArray = NDArray[np.float64]
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
 AXES = ("forward", "lateral", "vertical")
 
-# every figure of a Comfort: name → (unit, what it is); the per-joint torques are dicts joint → N m
+# every figure of a Comfort: name → (unit, what it is; the unit '' for a dimensionless figure); the per-joint torques
+# are dicts joint → N m
 FIGURES: dict[str, tuple[str, str]] = {
     "speed": ("m/s", "forward speed of the pelvis over the measured steps"),
     "step_length": ("m", "forward distance per step"),
@@ -42,7 +43,7 @@ FIGURES: dict[str, tuple[str, str]] = {
        for s in ("rms", "peak") for a in AXES},
     "torque_rms": ("N m", "joint torque RMS over the servoed joints (planned and held) and the measured physics steps"),
     "torque_peak": ("N m", "largest |joint torque|"),
-    "cost_of_transport": ("1", "mechanical cost of transport Σ|τ·q̇| dt / (m g d)"),
+    "cost_of_transport": ("", "mechanical cost of transport Σ|τ·q̇| dt / (m g d)"),
     "impact_force": ("N", "largest peak normal force of a landing sole after touchdown"),
     "impact_force_ratio": ("body weights", "impact_force / (m g)"),
     "touchdown_speed": ("m/s", "largest speed of a landing sole at touchdown"),

@@ -20,18 +20,19 @@ from robustgait.io.robotfile import load_robot
 from robustgait.io.studyfile import load_config
 from robustgait.robots import Robot
 from robustgait.sim import walk
+from robustgait.study.outcome import known_figure
 from robustgait.study.status import study_status
 
 
 def recertify(robot: Robot, gait: Gait, config: CertifyConfig, seeds: Sequence[int],
               sim: SimConfig | None = None, validate: ValidateConfig | None = None) -> list[dict[str, Any]]:
     """Certify ``gait`` once per seed (``config`` with its seed replaced); a failed certificate (a fall, no
-    fixed point) counts 0 with its status and reason. Per seed: ``seed``, ``certificate_value`` (J* or r*, the
-    certificate's ``r_star``), ``status``, ``reason``, ``n_inside``."""
+    fixed point) counts 0 with its status and reason. Per seed: ``seed``, ``value`` (the verified J* or
+    r*), ``status``, ``reason``, ``n_inside``."""
     out = []
     for s in seeds:
         gc = certify_gait(robot, gait, dataclasses.replace(config, seed=int(s)), sim, validate=validate)
-        out.append({"seed": int(s), "certificate_value": float(gc.value) if gc.ok else 0.0, "status": gc.status,
+        out.append({"seed": int(s), "value": float(gc.value) if gc.ok else 0.0, "status": gc.status,
                     "reason": gc.reason, "n_inside": gc.certificate.n_inside if gc.certificate is not None else 0})
     return out
 
@@ -39,8 +40,9 @@ def recertify(robot: Robot, gait: Gait, config: CertifyConfig, seeds: Sequence[i
 def compare_studies(dir_a: str | Path, dir_b: str | Path, config: CompareConfig | None = None) -> dict[str, Any]:
     """Best gait of each study (the learner's recommendation), re-certified with seeds ``seed_base`` …
     ``seed_base + seeds − 1`` (study A's certificate and simulation options; ``config.samples`` overrides N)
-    and walked to study A's step cap. Per study: ``study_certificate_value`` (the study's record of its best gait),
-    ``certificate_values`` (one per seed), their ``certificate_value_mean`` and ``certificate_value_sd``, each in
+    and walked to study A's step cap. Per study: ``study_value`` (the study's record of its best gait: the
+    verified value, else its estimate),
+    ``values`` (one per seed), their ``value_mean`` and ``value_sd``, each in
     ``unit``. ``winner``: the study whose gait has the higher mean certificate value (None on a tie)."""
     config = config or CompareConfig()
     dirs = [Path(dir_a), Path(dir_b)]
@@ -61,22 +63,22 @@ def compare_studies(dir_a: str | Path, dir_b: str | Path, config: CompareConfig 
         gait = load_gait(d / best["gait_file"], robot)
         w = walk(robot, gait, sim)
         certs = recertify(robot, gait, certify, seed_list, sim, setups[0].config.validate)
-        r = np.array([c["certificate_value"] for c in certs])
+        r = np.array([c["value"] for c in certs])
         studies.append({"directory": str(d), "metric": cfg.metric, "learner": cfg.learner, "robot": setup.robot,
-                        "params": best["params"], "study_certificate_value": best["certificate_value"],
-                        "steps_taken": w.steps_taken, "fell": w.fell, "certificate_values": r.tolist(),
-                        "certificate_value_mean": float(r.mean()),
-                        "certificate_value_sd": float(r.std(ddof=1)) if r.size > 1 else 0.0, "certificates": certs})
-    ma, mb = studies[0]["certificate_value_mean"], studies[1]["certificate_value_mean"]
+                        "params": best["params"], "study_value": known_figure(best),
+                        "steps_taken": w.steps_taken, "fell": w.fell, "values": r.tolist(),
+                        "value_mean": float(r.mean()),
+                        "value_sd": float(r.std(ddof=1)) if r.size > 1 else 0.0, "certificates": certs})
+    ma, mb = studies[0]["value_mean"], studies[1]["value_mean"]
     same = (dataclasses.replace(setups[0].config.study_certify, seed=0), setups[0].config.sim) == (
         dataclasses.replace(setups[1].config.study_certify, seed=0), setups[1].config.sim)
     return {"seeds": seed_list, "method": certify.method, "n_samples": certify.n_samples,
             "epsilon": certify.sequential.epsilon, "step_cap": cap, "unit": certify.unit,
             "certificate": certify.space, "studies": studies,
             "winner": None if ma == mb else (0 if ma > mb else 1),
-            "wins_per_seed": [int(np.sum(np.array(studies[0]["certificate_values"])
-                                         > np.array(studies[1]["certificate_values"]))),
-                              int(np.sum(np.array(studies[1]["certificate_values"])
-                                         > np.array(studies[0]["certificate_values"])))],
+            "wins_per_seed": [int(np.sum(np.array(studies[0]["values"])
+                                         > np.array(studies[1]["values"]))),
+                              int(np.sum(np.array(studies[1]["values"])
+                                         > np.array(studies[0]["values"])))],
             "note": "" if same else "the studies used different certificate options; both gaits were "
                                     "re-certified with study A's"}

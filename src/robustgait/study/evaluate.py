@@ -18,43 +18,24 @@ from typing import TYPE_CHECKING, Any
 from robustgait.certificate.certify import GaitCertificate, certify_gait
 from robustgait.certificate.orbit import Status as OrbitStatus
 from robustgait.config import Config, GaitParams
-from robustgait.config.base import TextEnum
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.io.gaitfile import gait_from_dict
-from robustgait.learn.oracle import Outcome
 from robustgait.robots import Robot
 from robustgait.sim import walk
-from robustgait.study.storage import current_names
+from robustgait.study.outcome import EvaluationStatus
+from robustgait.study.storage import current_evaluation
 
 if TYPE_CHECKING:
     from robustgait.gaitgen import GaitGenerator
 
-class EvaluationStatus(TextEnum):
-    """How an evaluation ended (:class:`Evaluation`): equal to its value, the text a study stores."""
-
-    CERTIFIED = "certified"
-    ESTIMATED = "estimated"
-    GENERATION_FAILED = "generation_failed"
-    FELL = "fell"
-    NOT_CERTIFIED = "not_certified"
-
-
-STATUSES: tuple[EvaluationStatus, ...] = tuple(EvaluationStatus)
-RANKED: tuple[EvaluationStatus, ...] = (EvaluationStatus.CERTIFIED, EvaluationStatus.ESTIMATED)
-"""The statuses of a gait with a certificate figure the study ranks by: verified, or estimated by exploration."""
-
-
 def refusal_of(result: Mapping[str, Any]) -> OrbitStatus | None:
     """The certificate's status of a refused gait (``not_certified``) from its stored record
-    (:meth:`Evaluation.summary`, a verification's record): its ``refusal``; a record written before refusals were
-    stored names it only as its reason's first word, which is read then. None for any other outcome."""
-    if result.get("status") != EvaluationStatus.NOT_CERTIFIED:
+    (:meth:`Evaluation.summary`, a verification's record): its ``refusal``. None for any other outcome, and for a
+    record written before refusals were stored."""
+    if result.get("status") != EvaluationStatus.NOT_CERTIFIED or result.get("refusal") is None:
         return None
-    if result.get("refusal") is not None:
-        return OrbitStatus(result["refusal"])
-    head = str(result.get("reason") or "").split(":", 1)[0]
-    return OrbitStatus(head) if head in {s.value for s in OrbitStatus} else None
+    return OrbitStatus(result["refusal"])
 
 
 @dataclass
@@ -67,11 +48,10 @@ class Evaluation:
     ``refusal``, its :class:`robustgait.certificate.orbit.Status` — ``unsettled``, ``unstable``, ``fell`` in the
     orbit search, ``unstable_fixed_point``; the oracles rank it below every certified or estimated gait)
     (:class:`EvaluationStatus`); reason: why, in one line ('' when certified or estimated). generation:
-    :meth:`GaitGenResult.summary`. certificate_value: the figure the study ranks by (``config.study_certify``: J* in N s
-    for a push certificate, r* in the state's unit for a state certificate; :func:`robustgait.config.radius_name` names
-    it): the verified value when the study verifies every gait (:attr:`~robustgait.config.StudyConfig.verifies_all`),
-    else the estimate; 0 unless certified or estimated. estimate: the exploration's estimate (None before the
-    certificate). verified_value: the verified value (None unless verified). certificate:
+    :meth:`GaitGenResult.summary`. The certificate's figure (``config.study_certify``: J* in N s for a push
+    certificate, r* in the state's unit for a state certificate; :func:`robustgait.config.radius_name` names it):
+    value, the verified figure (None unless verified: :attr:`verified`); estimate, the exploration's (None before the
+    certificate). The study ranks by one of them (:func:`robustgait.study.ranking.ranked_figure`). certificate:
     :meth:`GaitCertificate.to_dict` with the samples (None unless certified or estimated). comfort: what a passenger
     feels on the walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`, ``config.comfort``; None when the walk completed
     no measured step or the gait was not generated). seconds: per stage (generate, walk, certify; build when
@@ -89,19 +69,20 @@ class Evaluation:
     fell: bool = False
     fall_reason: str | None = None
     mean_speed: float | None = None
-    certificate_value: float = 0.0
     generation: dict[str, Any] = field(default_factory=dict)
     certificate: dict[str, Any] | None = None
     comfort: dict[str, Any] | None = None
     gait: Gait | None = None
     seconds: dict[str, float] = field(default_factory=dict)
     retried: dict[str, Any] | None = None
+    value: float | None = None
     estimate: float | None = None
-    verified_value: float | None = None
     refusal: OrbitStatus | None = None
 
-    def outcome(self) -> Outcome:
-        return Outcome(self.steps_taken, self.step_cap, self.certificate_value, self.status in RANKED)
+    @property
+    def verified(self) -> bool:
+        """Whether the certificate's figure was verified (:attr:`value` is set)."""
+        return self.value is not None
 
     def certificate_summary(self) -> dict[str, Any] | None:
         """The certificate without its samples (what a study keeps in its database)."""
@@ -115,9 +96,9 @@ class Evaluation:
         return {"params": self.params.to_dict(), "status": self.status, "reason": self.reason,
                 "step_cap": self.step_cap, "steps_taken": self.steps_taken, "fell": self.fell,
                 "fall_reason": self.fall_reason, "mean_speed": self.mean_speed,
-                "certificate_value": self.certificate_value, "generation": self.generation,
-                "certificate": self.certificate_summary(), "comfort": self.comfort, "seconds": self.seconds,
-                "retried": self.retried, "estimate": self.estimate, "verified_value": self.verified_value,
+                "value": self.value, "estimate": self.estimate, "verified": self.verified,
+                "generation": self.generation, "certificate": self.certificate_summary(), "comfort": self.comfort,
+                "seconds": self.seconds, "retried": self.retried,
                 "refusal": None if self.refusal is None else self.refusal.value}
 
     def to_dict(self) -> dict[str, Any]:
@@ -128,20 +109,16 @@ class Evaluation:
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Evaluation:
         """An evaluation from :meth:`to_dict` or a study's stored record (read by
-        :func:`~robustgait.study.storage.current_names`)."""
-        d = current_names(d)
+        :func:`~robustgait.study.storage.current_evaluation`)."""
+        d = current_evaluation(d)
         return cls(params=GaitParams(**d["params"]), status=EvaluationStatus(d["status"]), reason=d["reason"],
                    step_cap=d["step_cap"],
                    steps_taken=d["steps_taken"], fell=d["fell"], fall_reason=d["fall_reason"],
-                   mean_speed=d["mean_speed"], certificate_value=d["certificate_value"],
+                   mean_speed=d["mean_speed"], value=d["value"], estimate=d["estimate"],
                    generation=d["generation"],
                    certificate=d["certificate"], comfort=d.get("comfort"),  # absent: evaluated before comfort
                    gait=gait_from_dict(d["gait"]) if d.get("gait") else None, seconds=d["seconds"],
                    retried=d.get("retried"),  # absent: evaluated before the retry
-                   # absent: evaluated before estimates, when every certified value was verified
-                   estimate=d.get("estimate"),
-                   verified_value=d.get("verified_value", d["certificate_value"] if d["status"] == "certified"
-                                        else None),
                    refusal=refusal_of(d))
 
 
@@ -262,16 +239,15 @@ def certify_evaluation(robot: Robot, ev: Evaluation, config: Config | None = Non
         (lambda estimate: estimate >= verify_above) if verify_above is not None else False)
     # a fall, no stable orbit: a status, not an exception
     gc = certify_gait(robot, ev.gait, cfg.study_certify, cfg.sim, validate=cfg.validate, verify=verify)
-    record_certificate(ev, gc, everything)
+    record_certificate(ev, gc)
     ev.seconds["certify"] = time.perf_counter() - t0
     ev.seconds["total"] = ev.seconds.get("total", 0.0) + ev.seconds["certify"]
     return ev
 
 
-def record_certificate(ev: Evaluation, gc: GaitCertificate, ranks_verified: bool) -> None:
+def record_certificate(ev: Evaluation, gc: GaitCertificate) -> None:
     """Put a gait's certificate in its evaluation: the status (``certified`` when verified, ``estimated`` when only
-    explored, ``not_certified`` with the refusal's status and reason), the estimate, the verified value and the figure
-    the study ranks by (the verified value when ``ranks_verified``, else the estimate)."""
+    explored, ``not_certified`` with the refusal's status and reason), the estimate and the verified value."""
     if not gc.ok or gc.certificate is None:
         ev.status, ev.reason, ev.refusal = EvaluationStatus.NOT_CERTIFIED, f"{gc.status}: {gc.reason}", gc.status
         return
@@ -279,19 +255,18 @@ def record_certificate(ev: Evaluation, gc: GaitCertificate, ranks_verified: bool
     assert estimate is not None  # a certificate was made
     ev.estimate = estimate
     ev.certificate = gc.to_dict(samples=True)
-    if gc.certificate.verified:
-        ev.status, ev.reason, ev.verified_value = EvaluationStatus.CERTIFIED, "", float(gc.value)
+    if gc.verified:
+        ev.status, ev.reason, ev.value = EvaluationStatus.CERTIFIED, "", float(gc.value)
     else:
         ev.status, ev.reason = EvaluationStatus.ESTIMATED, ""
-    ev.certificate_value = float(gc.value) if ranks_verified else estimate
 
 
 def verify_gait(robot: Robot, gait: Gait, config: Config,
                 explored: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """The verified certificate of a study's gait (``config.study_certify``, verified whatever its estimate): a record
     with its ``status`` (``certified`` or ``not_certified``), ``reason``, ``refusal`` (the certificate's status value
-    when refused, else None), ``verified_value`` (None unless certified),
-    ``estimate``, ``certificate`` (:meth:`GaitCertificate.to_dict` with the samples; None when refused) and ``seconds``.
+    when refused, else None), ``value`` (the verified figure, None unless certified), ``estimate``, ``verified``,
+    ``certificate`` (:meth:`GaitCertificate.to_dict` with the samples; None when refused) and ``seconds``.
     Deterministic for a gait and a configuration, as the evaluation is: the same orbit and exploration as its
     estimate — ``explored``, the estimate's certificate with its samples, is replayed rather than simulated again
     (:func:`~robustgait.certificate.certify.certify_gait`), with the same result."""
@@ -302,6 +277,5 @@ def verify_gait(robot: Robot, gait: Gait, config: Config,
     ok = gc.ok and c is not None
     return {"status": EvaluationStatus.CERTIFIED if ok else EvaluationStatus.NOT_CERTIFIED,
             "reason": "" if ok else f"{gc.status}: {gc.reason}", "refusal": None if ok else gc.status.value,
-            "verified_value": float(gc.value) if ok else None,
-            "estimate": gc.estimate,
+            "value": float(gc.value) if ok else None, "estimate": gc.estimate, "verified": ok,
             "certificate": gc.to_dict(samples=True) if ok else None, "seconds": time.perf_counter() - t0}

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 
 from robustgait.errors import RobustGaitError
 from robustgait.sim.comfort import FIGURES
+from robustgait.study.outcome import known_figure
 
 HIGHER_IS_BETTER = ("speed", "step_length", "cadence")  # not a cost: refused as the comfort objective
 
@@ -27,27 +28,26 @@ def non_dominated(objectives: NDArray[np.float64]) -> NDArray[np.bool_]:
 
 def front_rows(trials: list[dict[str, Any]], figure: str) -> list[dict[str, Any]]:
     """The rows of :func:`pareto` from trials as ``study status`` lists them
-    (:func:`~robustgait.study.trials.trial_summary`), each marked ``front`` or not."""
+    (:func:`~robustgait.study.trials.trial_summary`) that have a certificate figure
+    (:func:`~robustgait.study.outcome.known_figure`), each marked ``front`` or not."""
     if figure not in FIGURES or figure in HIGHER_IS_BETTER:
         costs = ", ".join(n for n in FIGURES if n not in HIGHER_IS_BETTER)
         raise RobustGaitError(f"report.pareto_figure: {figure!r} is not a comfort cost (one of {costs})")
     seen: set[int] = set()
     rows = []
     for t in trials:
-        if t["state"] != "COMPLETE" or t["status"] not in ("certified", "estimated") or t["grid_index"] in seen:
+        if t["state"] != "COMPLETE" or known_figure(t) is None or t["grid_index"] in seen:
             continue
         c = t.get("comfort") or {}
         if c.get(figure) is None or c.get("speed") is None:
             continue
         seen.add(t["grid_index"])
-        verified = bool(t.get("verified"))
-        value = t["verified_value"] if verified else t.get("estimate", t["certificate_value"])
-        rows.append({"trial": t["number"], "grid_index": t["grid_index"], "params": t["params"],
-                     "certificate_value": value, "verified": verified, "speed": c["speed"],
-                     figure: c[figure], "gait_file": t["gait_file"]})
-    obj = np.array([[r["certificate_value"], r["speed"], -r[figure]] for r in rows]).reshape(-1, 3)
+        rows.append({"trial": t["number"], "grid_index": t["grid_index"], "params": t["params"], "status": t["status"],
+                     "value": t["value"], "estimate": t["estimate"], "verified": bool(t.get("verified")),
+                     "speed": c["speed"], figure: c[figure], "gait_file": t["gait_file"]})
+    obj = np.array([[known_figure(r), r["speed"], -r[figure]] for r in rows], dtype=float).reshape(-1, 3)
     front = non_dominated(obj) if rows else np.zeros(0, dtype=bool)
     for r, f in zip(rows, front, strict=True):
         r["front"] = bool(f)
-    rows.sort(key=lambda r: -r["certificate_value"])
+    rows.sort(key=lambda r: -float(known_figure(r) or 0.0))
     return rows

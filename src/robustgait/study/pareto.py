@@ -15,8 +15,8 @@ from robustgait.study.front import front_rows
 def pareto(status: dict[str, Any], figure: str) -> dict[str, Any]:
     """From :func:`robustgait.study.status.study_status`: every certified or estimated unique gait with its
     certificate, speed and ``figure``, whether it is on the front, sorted by the certificate (descending): per gait
-    ``trial``, ``grid_index``, ``params``, ``certificate_value`` (in ``certificate_unit``: the verified value, else the
-    estimate), ``verified``, ``speed``, ``figure``, ``gait_file``, ``front``."""
+    ``trial``, ``grid_index``, ``params``, ``status``, ``value`` (in ``certificate_unit``; None unless ``verified``),
+    ``estimate``, ``verified``, ``speed``, ``figure``, ``gait_file``, ``front``."""
     rows = front_rows(status["trials"], figure)
     return {"figure": figure, "unit": FIGURES[figure][0], "certificate_unit": status["unit"],
             "certificate": status["certificate"], "gaits": rows, "front": [r for r in rows if r["front"]]}

@@ -24,8 +24,9 @@ from robustgait.config import Config
 from robustgait.errors import RobustGaitError
 from robustgait.learn.person import SimulatedPerson
 from robustgait.learn.space import ActionSpace
-from robustgait.study.ranking import LABELS, Requirement, shown, verified_value
-from robustgait.study.storage import StudyStore, TrialRecord, current_names
+from robustgait.study.outcome import EvaluationStatus, status_of, verified_value
+from robustgait.study.ranking import LABELS, Requirement, shown
+from robustgait.study.storage import StudyStore, TrialRecord, current_evaluation
 
 FLOOR_ATTR = "floor"
 _ANSWER_LOCK = threading.Lock()  # one answer at a time in this process (the page's server threads, the runner)
@@ -48,11 +49,13 @@ def floor_record(config: Config, reference: dict[str, Any] | None) -> dict[str, 
         return {"value": float(p.floor), "source": "person.floor"}
     if reference is None:
         raise RobustGaitError("the floor needs its reference gait's evaluation")
-    value = verified_value(reference) or 0.0
+    verified = verified_value(reference)
+    value = verified or 0.0
     rec = {"value": p.floor_fraction * value, "source": "person.floor_fraction", "fraction": p.floor_fraction,
            "reference": {"params": reference.get("params"), "status": reference.get("status"),
-                         "certificate_value": value, "comfort": reference.get("comfort")}}
-    if reference.get("status") != "certified":
+                         "value": verified, "estimate": reference.get("estimate"), "verified": verified is not None,
+                         "comfort": reference.get("comfort")}}
+    if status_of(reference) != EvaluationStatus.CERTIFIED:
         rec["note"] = (f"the reference gait was not certified ({reference.get('status')}: {reference.get('reason')}): "
                        "floor 0, every certified gait is shown")
     return rec
@@ -111,11 +114,11 @@ class Floor:
 
 def stored_floor(store: StudyStore) -> dict[str, Any] | None:
     """The study's floor as stored (the study attribute ``floor``, :func:`floor_record`; None while not set), its
-    reference evaluation read by :func:`~robustgait.study.storage.current_names`."""
+    reference evaluation read by :func:`~robustgait.study.storage.current_evaluation`."""
     rec = store.user_attrs().get(FLOOR_ATTR)
     if not isinstance(rec, dict) or not isinstance(rec.get("reference"), dict):
         return rec
-    return {**rec, "reference": current_names(rec["reference"])}
+    return {**rec, "reference": current_evaluation(rec["reference"])}
 
 
 def hidden_reason(r: TrialRecord, floor: float, reqs: Sequence[Requirement], unit: str) -> str | None:
@@ -123,9 +126,10 @@ def hidden_reason(r: TrialRecord, floor: float, reqs: Sequence[Requirement], uni
     if shown(r, floor, reqs):
         return None
     res = r.result or {}
-    if res.get("status") == "estimated":
-        return f"estimated {float(res['certificate_value']):.3g} {unit}, below the floor {floor:.3g} {unit}"
-    if res.get("status") != "certified":
+    status = status_of(res)
+    if status == EvaluationStatus.ESTIMATED:
+        return f"estimated {float(res['estimate']):.3g} {unit}, below the floor {floor:.3g} {unit}"
+    if status != EvaluationStatus.CERTIFIED:
         return f"{res.get('status')}: {res.get('reason') or ''}".strip(": ")
     value = verified_value(res) or 0.0
     if value < floor:

@@ -13,18 +13,16 @@ from dataclasses import dataclass
 from typing import Any
 
 from robustgait.config import StudyConfig, parse_requirement
+from robustgait.config.study import FIGURE_ALIASES
 from robustgait.errors import RobustGaitError
 from robustgait.learn.history import History
 from robustgait.learn.oracle import Outcome, person_scores, score
 from robustgait.sim.comfort import FIGURES
-from robustgait.study.evaluate import RANKED
+from robustgait.study.outcome import RANKED, EvaluationStatus, ranked_figure, status_of
 from robustgait.study.storage import TrialRecord
 
 LABELS = ("bad", "neutral", "good")  # a person's ordinal labels, worst first (ROIAL's)
-OUTCOME_FIGURES = ("certificate_value", "steps_taken", "mean_speed")
-FIGURE_ALIASES = {"r_star": "certificate_value", "j_star": "certificate_value"}
-"""Other names a requirement may give an outcome figure: ``r_star`` and ``j_star`` name the study's certificate figure
-(a requirement's ``text`` keeps the name it was written with)."""
+OUTCOME_FIGURES = ("value", "steps_taken", "mean_speed")  # value: the certificate's verified figure
 _OPS: dict[str, Callable[[float, float], bool]] = {">=": operator.ge, "<=": operator.le, ">": operator.gt,
                                                    "<": operator.lt}
 
@@ -38,7 +36,7 @@ def figure_names(param_names: Sequence[str]) -> tuple[str, ...]:
 @dataclass(frozen=True)
 class Requirement:
     """``figure op value`` (``speed >= 0.2``); ``figure`` is the recorded figure's name (an alias of
-    :data:`FIGURE_ALIASES` resolved: ``r_star >= 10`` checks ``certificate_value``)."""
+    :data:`~robustgait.config.study.FIGURE_ALIASES` resolved: ``j_star >= 10`` checks the certificate's ``value``)."""
 
     text: str
     figure: str
@@ -68,8 +66,9 @@ def requirements(config: StudyConfig, param_names: Sequence[str]) -> list[Requir
 
 
 def figure_value(name: str, params: Mapping[str, float], result: Mapping[str, Any]) -> float | None:
-    """A recorded figure of an evaluated gait: a comfort figure, certificate_value/steps_taken/mean_speed, a gait
-    parameter."""
+    """A recorded figure of an evaluated gait: a comfort figure; ``value`` (the certificate's verified figure: a study
+    with a requirement on it verifies every gait), ``steps_taken``, ``mean_speed``; a gait parameter. None when it was
+    not measured."""
     if name in params:
         return float(params[name])
     if name in OUTCOME_FIGURES:
@@ -79,46 +78,32 @@ def figure_value(name: str, params: Mapping[str, float], result: Mapping[str, An
     return None if v is None else float(v)
 
 
-def outcome_of(r: TrialRecord, reqs: Sequence[Requirement] = ()) -> Outcome:
-    """The oracle's view of a stored evaluation (certified: its ``status`` is one with a certificate figure, verified
-    or estimated, :data:`~robustgait.study.evaluate.RANKED`; meets: the requirements)."""
+def meets(r: TrialRecord, reqs: Sequence[Requirement]) -> bool:
+    """Whether a stored evaluation meets every requirement."""
+    return all(q.holds(r.params, r.result or {}) for q in reqs)
+
+
+def outcome_of(r: TrialRecord, ranks_verified: bool, reqs: Sequence[Requirement] = ()) -> Outcome:
+    """The oracle's view of a stored evaluation: its figure the one the study ranks by
+    (:func:`~robustgait.study.outcome.ranked_figure`); certified: its ``status`` is one with a certificate figure,
+    verified or estimated (:data:`~robustgait.study.outcome.RANKED`); meets: the requirements."""
     res = r.result or {}
-    return Outcome(int(res["steps_taken"]), int(res["step_cap"]), float(res["certificate_value"]),
-                   res.get("status") in RANKED, all(q.holds(r.params, res) for q in reqs))
-
-
-def verified_value(result: Mapping[str, Any]) -> float | None:
-    """The verified certificate figure of a stored evaluation (None: not verified). An evaluation stored before
-    estimates has no ``verified_value``: its ``certified`` value was verified."""
-    if "verified_value" in result:
-        v = result["verified_value"]
-        return None if v is None else float(v)
-    return float(result["certificate_value"]) if result.get("status") == "certified" else None
+    return Outcome(int(res["steps_taken"]), int(res["step_cap"]), ranked_figure(res, ranks_verified),
+                   status_of(res) in RANKED, meets(r, reqs))
 
 
 def study_score(config: StudyConfig, r: TrialRecord, reqs: Sequence[Requirement] = ()) -> float:
     """The study's oracle score of a stored evaluation — recomputed from it whenever a study is resumed (the history
     the learner reproduces), with the study's own ``uncertified_penalty``."""
-    return score(config.metric, outcome_of(r, reqs), config.uncertified_penalty)
-
-
-def figure_of(result: Mapping[str, Any], verification: Mapping[str, Any] | None = None) -> float:
-    """What a stored evaluation says of its gait's certificate figure: the verified value (the evaluation's, or that
-    of its later ``verification``), else the estimate, else 0 (fell, refused, not generated)."""
-    if verification is not None and verification.get("verified_value") is not None:
-        return float(verification["verified_value"])
-    v = verified_value(result)
-    if v is not None:
-        return v
-    return float(result["certificate_value"]) if result.get("status") == "estimated" else 0.0
+    return score(config.metric, outcome_of(r, config.verifies_all, reqs), config.uncertified_penalty)
 
 
 def shown(r: TrialRecord, floor: float, reqs: Sequence[Requirement]) -> bool:
     """Whether a person may be shown this gait: certified, its verified certificate at or above the floor,
     requirements met."""
     res = r.result or {}
-    v = verified_value(res)
-    return res.get("status") == "certified" and v is not None and v >= floor and outcome_of(r, reqs).meets
+    v = res.get("value")
+    return status_of(res) == EvaluationStatus.CERTIFIED and v is not None and v >= floor and meets(r, reqs)
 
 
 def batch_scores(config: StudyConfig, batch: Sequence[TrialRecord], record: Mapping[str, Any],

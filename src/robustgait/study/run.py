@@ -57,6 +57,7 @@ from robustgait.sim.walk import check_walk_work
 from robustgait.study.ahead import Ahead
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.executors import Executor, WorkerSpec, make_executor
+from robustgait.study.outcome import EvaluationStatus, known_figure, status_of, verified_value
 from robustgait.study.person import (
     FLOOR_ATTR,
     Floor,
@@ -69,14 +70,12 @@ from robustgait.study.person import (
 from robustgait.study.ranking import (  # history_before, study_score: re-exported by robustgait.study.run
     Requirement,
     batch_scores,
-    figure_of,
     history_before,
     requirements,
     shown,
     study_score,
-    verified_value,
 )
-from robustgait.study.storage import StudyStore, TrialRecord, completed_batches, current_names, default_url
+from robustgait.study.storage import StudyStore, TrialRecord, completed_batches, current_evaluation, default_url
 from robustgait.study.trials import outcome_line
 from robustgait.study.verify import CERTIFICATE_FILE, ESTIMATE_FILE, GAITS_DIR, Verifier, gait_label
 
@@ -407,7 +406,7 @@ class StudyRunner:
         if not self.config.asks_a_person or not person.region:
             return None
         verifications = store.verifications()
-        observed = [(r.params, figure_of(r.result, verifications.get(r.index))) for r in store.records()
+        observed = [(r.params, known_figure(r.result, verifications.get(r.index)) or 0.0) for r in store.records()
                     if r.state == "COMPLETE" and r.result is not None
                     and (r.iteration < k or (within and r.iteration == k))]
         if not observed and person.floor is None:
@@ -418,7 +417,7 @@ class StudyRunner:
             return None
         reference = (store.user_attrs().get(FLOOR_ATTR) or {}).get("reference")
         if reference and reference.get("params") and self.floor.index is None:  # in the batch: among the records
-            value = verified_value(current_names(reference))
+            value = verified_value(current_evaluation(reference))
             observed.insert(0, ({**self.setup.config.params.to_dict(), **reference["params"]}, value or 0.0))
         return predicted_to_clear(self.space, observed, self.floor.value, person.region_lengthscale,
                                   person.region_prior)
@@ -592,7 +591,7 @@ class StudyRunner:
             write_json(self.directory / rel / "gait.json", result["gait"])
             out["gait_file"] = str(rel / "gait.json")
         if result.get("certificate") is not None:
-            name = ESTIMATE_FILE if result.get("status") == "estimated" else CERTIFICATE_FILE
+            name = ESTIMATE_FILE if status_of(result) == EvaluationStatus.ESTIMATED else CERTIFICATE_FILE
             write_json(self.directory / rel / name, result["certificate"])
             out["certificate_file"] = str(rel / name)
             out["certificate"] = Evaluation.from_dict({**result, "gait": None}).certificate_summary()

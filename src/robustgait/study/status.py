@@ -7,8 +7,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from robustgait.config import radius_name
 from robustgait.io.studyfile import environment_changes, load_config
-from robustgait.study.evaluate import EvaluationStatus, refusal_of
+from robustgait.study.evaluate import refusal_of
+from robustgait.study.outcome import EvaluationStatus, status_of
 from robustgait.study.person import pending_iteration, stored_floor
 from robustgait.study.run import completed_batches, is_running, open_store
 from robustgait.study.storage import TrialRecord
@@ -17,13 +19,13 @@ from robustgait.study.trials import trial_summary
 
 def figure_text(entry: dict[str, Any], unit: str, digits: int = 4) -> str:
     """A gait's certificate figure as a person reads it (an entry of ``trials`` or ``best``): the verified value,
-    "≈ the estimate (estimated)" for a gait whose certificate was only estimated, or "—" for one without."""
-    if entry.get("verified") and entry.get("verified_value") is not None:
-        return f"{entry['verified_value']:.{digits}g} {unit} (verified)"
-    if entry.get("status") == "estimated" and entry.get("estimate") is not None:
-        return f"≈ {entry['estimate']:.{digits}g} {unit} (estimated)"
-    if entry.get("status") == "certified" and entry.get("certificate_value") is not None:
-        return f"{entry['certificate_value']:.{digits}g} {unit}"
+    "≈ the estimate (estimated)" for a gait whose certificate was only estimated, or "—" for one without (``unit``
+    empty: the number alone)."""
+    unit = f" {unit}" if unit else ""
+    if entry.get("verified") and entry.get("value") is not None:
+        return f"{entry['value']:.{digits}g}{unit} (verified)"
+    if status_of(entry) == EvaluationStatus.ESTIMATED and entry.get("estimate") is not None:
+        return f"≈ {entry['estimate']:.{digits}g}{unit} (estimated)"
     return "—"
 
 
@@ -35,8 +37,8 @@ def _best_entry(r: TrialRecord | None, records: dict[int, TrialRecord],
     s = trial_summary(r, verifications.get(r.index))
     v = trial_summary(src, verifications.get(r.index))
     return {"trial": r.number, "iteration": r.iteration, "params": r.params, "grid_index": r.index,
-            "certificate_value": s["certificate_value"], "estimate": s["estimate"],
-            "verified_value": s["verified_value"], "verified": s["verified"], "steps_taken": s["steps_taken"],
+            "value": s["value"], "estimate": s["estimate"], "verified": s["verified"],
+            "steps_taken": s["steps_taken"],
             "status": s["status"], "score": r.value, "comfort": s["comfort"], "gait_file": v["gait_file"],
             "certificate_file": v["certificate_file"]}
 
@@ -88,17 +90,18 @@ def study_status(directory: str | Path) -> dict[str, Any]:
     """JSON-ready: ``trials_done``, ``trials_planned``, ``state`` (complete | running | stopped),
     ``person`` (a person study: its ``floor``, the ``pending`` iteration, every ``answer``, the gaits evaluated
     ``ahead`` of an answer and how many of them were then proposed; else None), ``require``,
-    ``best`` (the learner's recommendation after the last finished iteration: trial, params, certificate_value — the
-    study's certificate figure, J* or r* as ``certificate`` names it, in ``unit``, as the study ranked it —, its
-    ``estimate``, ``verified_value`` and whether it is ``verified``, steps_taken, comfort, gait file), ``verify``
-    (``study.verify``: which gaits get the verified certificate),
-    ``best_observed`` (the evaluated gait with the highest oracle score), one record per iteration and one per trial
-    (``trials``, including FAIL trials of interrupted runs, each with its ``certificate_value``), each with its
+    ``best`` (the learner's recommendation after the last finished iteration: trial, params, the certificate's figure —
+    ``figure_name`` J* or r*, in ``unit`` — as ``value`` (verified; None unless ``verified``) and ``estimate``
+    (:func:`~robustgait.study.outcome.known_figure` reads the best known), steps_taken, comfort, gait file),
+    ``verify`` (``study.verify``: which gaits get the verified certificate), ``best_observed`` (the evaluated gait with
+    the highest oracle score), one record per iteration and one per trial (``trials``, including FAIL trials of
+    interrupted runs, :func:`~robustgait.study.trials.trial_summary`, each with its ``unit``), each with its
     ``comfort`` figures (``docs/comfort.md``; None when not measured or evaluated before they existed), and
     ``outcomes`` (:func:`outcome_counts`), ``utilisation`` (:func:`utilisation`)."""
     d = Path(directory)
     setup = load_config(d)
     cfg = setup.config.study
+    unit = setup.config.study_certify.unit
     space = setup.action_space()
     store = open_store(d, setup, space)
     try:
@@ -140,7 +143,8 @@ def study_status(directory: str | Path) -> dict[str, Any]:
                             for key in ("evaluated", "used")}}
     return {"directory": str(d.resolve()), "state": state, "robot": setup.robot, "metric": cfg.metric,
             "require": list(cfg.require), "person": person,
-            "unit": setup.config.study_certify.unit, "certificate": setup.config.study_certify.space,
+            "unit": unit, "certificate": setup.config.study_certify.space,
+            "figure_name": radius_name(setup.config.study_certify.space),
             "learner": cfg.learner, "seed": cfg.seed, "trials_done": done, "trials_planned": cfg.trials_planned,
             "iterations_done": len(finished), "iterations_planned": cfg.iterations,
             "unique_gaits": len({r.index for r in complete}),
@@ -149,6 +153,7 @@ def study_status(directory: str | Path) -> dict[str, Any]:
             "best": _best_entry(best, by_number, verifications),
             "best_observed": _best_entry(observed, by_number, verifications), "verify": cfg.verify,
             "iterations": per_iteration,
-            "trials": [trial_summary(r, verifications.get(r.index)) for r in sorted(records, key=lambda r: r.number)],
+            "trials": [{**trial_summary(r, verifications.get(r.index)), "unit": unit}
+                       for r in sorted(records, key=lambda r: r.number)],
             "config": setup.to_dict()["config"], "environment": setup.environment,
             "environment_changes": environment_changes(setup.environment)}

@@ -31,31 +31,62 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.certificate.orbit import Status as OrbitStatus
 from robustgait.errors import RobustGaitError
 from robustgait.learn.space import ActionSpace
+from robustgait.study.outcome import RANKED, EvaluationStatus, status_of
 
 DB_FILE = "study.db"
 VERIFIED_PREFIX = "verified_"
 POSTERIOR_KEY = "posterior_mean"  # the learner's posterior mean over the grid after the last closed iteration
 
-STORED_NAMES = {"r_star": "certificate_value", "study_r_star": "study_certificate_value",
-                "r_star_critical": "certificate_value_critical"}
-"""Keys a stored study record may hold → the names this package reads them by (the certificate figure, J* [N s] of a
-push certificate or r* of a state certificate, is ``certificate_value``)."""
+STORED_NAMES = {"r_star": "value", "certificate_value": "value", "study_r_star": "study_value",
+                "study_certificate_value": "study_value", "r_star_critical": "value_critical",
+                "certificate_value_critical": "value_critical"}
+"""Keys a stored study record may hold → the names this package reads them by: the certificate's figure (J* [N s] of a
+push certificate, r* of a state certificate) is ``value``, a study's own record of it ``study_value``."""
+OLD_FIGURE_KEYS = ("certificate_value", "r_star", "verified_value")
+"""The keys an evaluation's figure was stored under before it had one name (:func:`current_evaluation`)."""
 
 
 def current_names(record: Mapping[str, Any]) -> dict[str, Any]:
-    """``record`` (a trial's attributes, a stored evaluation, the floor's reference evaluation, a row or the
-    correlations of a study validation summary) with its top-level keys named as this package reads them
-    (:data:`STORED_NAMES`): ``r_star`` is read as ``certificate_value``; a key already under its current name wins.
-    Nested records keep their keys (a certificate's own ``r_star`` is the certificate's field)."""
+    """``record`` (a trial's attributes, a row or the correlations of a study validation summary) with its top-level
+    keys named as this package reads them (:data:`STORED_NAMES`); a key already under its current name wins. Nested
+    records keep their keys. An evaluation's record: :func:`current_evaluation`."""
     out: dict[str, Any] = {}
     for key, value in record.items():
         name = STORED_NAMES.get(key)
         if name is None:
             out[key] = value
-        elif name not in record:
+        elif name not in record and name not in out:
             out[name] = value
+    return out
+
+
+def current_evaluation(record: Mapping[str, Any]) -> dict[str, Any]:
+    """An evaluation's stored record (:meth:`~robustgait.study.evaluate.Evaluation.summary`, a verification's record, a
+    person study's reference) with its figure as ``value`` (the verified figure, None unless verified), ``estimate``
+    (the exploration's, None without one) and ``verified``. A record written before the figure had one name held
+    ``certificate_value`` (or ``r_star``: the figure the study ranked by — the estimate of an ``estimated`` gait) and
+    ``verified_value`` (absent before estimates, when every ``certified`` figure was verified). A refused gait's record
+    written before refusals were stored named the certificate's status only as its reason's first word: its
+    ``refusal`` is read from there, once, here."""
+    out = dict(record)
+    if status_of(record) == EvaluationStatus.NOT_CERTIFIED and "refusal" not in record:
+        head = str(record.get("reason") or "").split(":", 1)[0]
+        out["refusal"] = head if head in {s.value for s in OrbitStatus} else None
+    if "verified" in record or not any(k in record for k in OLD_FIGURE_KEYS):
+        return out
+    out = {k: v for k, v in out.items() if k not in OLD_FIGURE_KEYS}
+    ranked = record.get("certificate_value", record.get("r_star"))
+    status = status_of(record)
+    value = (record["verified_value"] if "verified_value" in record
+             else ranked if status == EvaluationStatus.CERTIFIED else None)
+    estimate = record.get("estimate")
+    if estimate is None and status in RANKED:
+        estimate = ranked
+    out.update(value=None if value is None else float(value), estimate=None if estimate is None else float(estimate),
+               verified=value is not None)
     return out
 
 
@@ -138,7 +169,7 @@ class StudyStore:
         from optuna.trial import TrialState
 
         trial = self._running.pop(number)
-        for key in ("status", "steps_taken", "certificate_value"):
+        for key in ("status", "steps_taken", "value", "estimate"):
             trial.set_user_attr(key, result[key])
         for key, v in extra.items():
             trial.set_user_attr(key, v)
@@ -166,7 +197,7 @@ class StudyStore:
             if "iteration" not in a:
                 continue  # not one of ours
             if isinstance(a.get("result"), Mapping):
-                a["result"] = current_names(a["result"])
+                a["result"] = current_evaluation(a["result"])
             params = dict(t.params) or dict(t.system_attrs.get("fixed_params", {}))
             out.append(TrialRecord(t.number, t.state.name, a["iteration"], a["slot"], a["grid_index"], params,
                                    t.value if t.state.name == "COMPLETE" else None,
@@ -186,8 +217,8 @@ class StudyStore:
         self.study.set_user_attr(f"{VERIFIED_PREFIX}{index:06d}", record)
 
     def verifications(self) -> dict[int, dict[str, Any]]:
-        """Grid index → its verification record (:meth:`set_verification`)."""
-        return {int(key[len(VERIFIED_PREFIX):]): v for key, v in self.study.user_attrs.items()
+        """Grid index → its verification record (:meth:`set_verification`, read by :func:`current_evaluation`)."""
+        return {int(key[len(VERIFIED_PREFIX):]): current_evaluation(v) for key, v in self.study.user_attrs.items()
                 if key.startswith(VERIFIED_PREFIX)}
 
     def set_posterior(self, k: int, mean: NDArray[np.float64]) -> None:

@@ -52,10 +52,11 @@ from tqdm import tqdm
 from robustgait.config import KINDS, CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
 from robustgait.config.certify import orbit_options
 from robustgait.errors import RobustGaitError, input_error
-from robustgait.io.certfile import certificate_figure
+from robustgait.io.certfile import certificate_value
 from robustgait.io.output import write_json
 from robustgait.io.schema import read_json
 from robustgait.io.studyfile import load_config
+from robustgait.study.outcome import EvaluationStatus
 from robustgait.study.storage import current_names
 from robustgait.validate.disturbances import SIZE_LABELS
 from robustgait.validate.stats import Correlation, spearman
@@ -68,7 +69,7 @@ FORMAT_VERSION = 2
 @dataclass(frozen=True)
 class StudyGait:
     """One unique gait of a study as the study saw it: the trials that proposed it, its parameters and
-    outcome (``status``, ``certificate_value`` — J* or r*, 0 unless certified —, ``steps_taken`` of ``step_cap``), and
+    outcome (``status``, ``value`` — its verified J* or r*, 0 unless certified —, ``steps_taken`` of ``step_cap``), and
     its files (relative to the study directory; None when not written)."""
 
     label: str
@@ -77,7 +78,7 @@ class StudyGait:
     params: dict[str, float]
     status: str
     reason: str
-    certificate_value: float
+    value: float
     steps_taken: int
     step_cap: int
     gait_file: str | None
@@ -106,9 +107,9 @@ def study_gaits(directory: Path) -> tuple[dict[str, Any], list[StudyGait]]:
         label = Path(gait_file).parent.name if gait_file else params_label(t["params"])
         out.append(StudyGait(label, tuple(x["number"] for x in ts), int(t["grid_index"]), dict(t["params"]),
                              str(t["status"]), str(t["reason"] or ""),
-                             float(t["certificate_value"] or 0.0),
+                             float(t["value"] or 0.0),
                              int(t["steps_taken"] or 0), int(t["step_cap"] or st["config"]["sim"]["step_cap"]),
-                             gait_file, t["certificate_file"] if t["status"] == "certified" else None))
+                             gait_file, t["certificate_file"] if t["verified"] else None))
     return st, sorted(out, key=lambda g: g.trials[0])
 
 
@@ -279,7 +280,7 @@ def validate_study(directory: str | Path, config: ValidateConfig | None = None,
         if k not in KINDS:
             raise RobustGaitError(f"unknown disturbance {k!r} (choose from {', '.join(KINDS)} or all)")
     status, gaits = study_gaits(d)
-    estimated = [g.grid_index for g in gaits if g.status == "estimated"]
+    estimated = [g.grid_index for g in gaits if g.status == EvaluationStatus.ESTIMATED]
     if estimated and not recertify:  # the validation checks verified certificates: verified on demand
         from robustgait.study.verify import verify_now
 
@@ -358,20 +359,20 @@ def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim:
                  stored: dict[str, dict[str, Any]], cached: set[str], errors: dict[str, str],
                  seconds: float) -> dict[str, Any]:
     """JSON-ready summary of one kind: ``gaits`` (one row per validated gait: the study's view of it — params,
-    status, ``study_certificate_value``, steps — the ``certificate_value`` its trials were checked against (J* or r*
-    of its certificate file, 0 without one) and its success rate with the 95 % Wilson interval, the size at which half
-    fail, the certificate check, where its trials started, whether it came from an earlier run), ``skipped`` (with
-    the reason) and ``skipped_counts``, and ``correlations`` (Spearman ρ, p, n of the certificate value with the
-    success rate (``certificate_value``) and with s₅₀ (``certificate_value_critical``), of steps taken with the
-    success rate (``steps_taken``), or undefined with the reason)."""
+    status, ``study_value``, steps — the ``value`` its trials were checked against (J* or r* of its certificate file,
+    0 without one) and its success rate with the 95 % Wilson interval, the size at which half fail, the certificate
+    check, where its trials started, whether it came from an earlier run), ``skipped`` (with the reason) and
+    ``skipped_counts``, and ``correlations`` (Spearman ρ, p, n of the certificate's value with the success rate
+    (``value``) and with s₅₀ (``value_critical``), of steps taken with the success rate (``steps_taken``), or undefined
+    with the reason)."""
     name, unit = SIZE_LABELS[kind]
     rows, skipped = [], []
     for g in gaits:
         if g.label in stored:
             res = stored[g.label]["result"]
             cert = stored[g.label]["certificate"]
-            rows.append({**g.row(), "certificate_value": certificate_figure(cert) if g.certificate_file else 0.0,
-                         "study_certificate_value": g.certificate_value,
+            rows.append({**g.row(), "value": certificate_value(cert) if g.certificate_file else 0.0,
+                         "study_value": g.value,
                          "start": "fixed_point" if g.certificate_file else "initial_state",
                          "certificate": stored[g.label]["certificate"], "success": res["success"],
                          "critical": res["critical"], "size_range": res["size_range"],
@@ -384,7 +385,7 @@ def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim:
             skipped.append({**g.row(), "why": errors.get(g.label, "not validated")})
     counts: dict[str, int] = {}
     for s in skipped:
-        what = "generation_failed" if s["gait_file"] is None else "refused"
+        what = EvaluationStatus.GENERATION_FAILED.value if s["gait_file"] is None else "refused"
         counts[what] = counts.get(what, 0) + 1
     success = np.array([r["success"]["rate"] for r in rows], dtype=float)
     y = f"{kind} success"
@@ -393,13 +394,13 @@ def kind_summary(kind: str, config: ValidateConfig, certify: CertifyConfig, sim:
     corr_steps = spearman(steps, success, "steps taken", y)
     if corr_steps.reason.startswith("steps taken is the same") and steps[0] == cap:
         corr_steps = replace(corr_steps, reason=f"{corr_steps.reason}: every validated gait walked the step cap")
-    value = np.array([r["certificate_value"] for r in rows], dtype=float)
+    value = np.array([r["value"] for r in rows], dtype=float)
     s50 = np.array([np.nan if r["critical"]["s50"] is None else r["critical"]["s50"] for r in rows], dtype=float)
     has = np.isfinite(s50)
     star = radius_name(certify.space)  # the certificate the gaits carry
     correlations: dict[str, Correlation] = {
-        "certificate_value": spearman(value, success, star, y),
-        "certificate_value_critical": spearman(value[has], s50[has], star, f"{kind} s₅₀ (gaits with a fit)"),
+        "value": spearman(value, success, star, y),
+        "value_critical": spearman(value[has], s50[has], star, f"{kind} s₅₀ (gaits with a fit)"),
         "steps_taken": corr_steps}
     return {"format_version": FORMAT_VERSION, "kind": kind, "size": name, "unit": unit, "config": to_dict(config),
             "certify": to_dict(certify), "sim": to_dict(sim), "config_key": key,

@@ -21,6 +21,7 @@ from robustgait.io.schema import read_json
 from robustgait.learn.space import ActionSpace
 from robustgait.study.executors import Executor
 from robustgait.study.front import front_rows
+from robustgait.study.outcome import EvaluationStatus, status_of
 from robustgait.study.storage import StudyStore, TrialRecord, completed_batches, default_url
 from robustgait.study.trials import trial_summary
 
@@ -79,7 +80,8 @@ class Verifier:
         for index in indices:
             r = evaluated.get(index)
             res = (r.result or {}) if r is not None else {}
-            if index in done or index in running or res.get("status") != "estimated" or not res.get("gait_file"):
+            if (index in done or index in running or status_of(res) != EvaluationStatus.ESTIMATED
+                    or not res.get("gait_file")):
                 continue
             gait = read_json(self.directory / res["gait_file"], "gait")
             key = verification_key(index)
@@ -124,7 +126,7 @@ def verify_now(directory: Path, indices: list[int], *, progress: bool = True) ->
         done = store.verifications()
         evaluated = {r.index: r for r in store.records() if r.state == "COMPLETE" and r.reused_from is None}
         todo = [i for i in dict.fromkeys(indices) if i not in done and i in evaluated
-                and (evaluated[i].result or {}).get("status") == "estimated"
+                and status_of(evaluated[i].result or {}) == EvaluationStatus.ESTIMATED
                 and (evaluated[i].result or {}).get("gait_file")]
         if not todo:
             return 0
@@ -143,7 +145,7 @@ def stored_estimate(directory: Path, result: dict[str, Any]) -> dict[str, Any] |
     """The estimate's certificate of a trial's ``result`` (``estimate.json``, with its samples: its exploration is
     replayed by the verification), or None when the trial holds none or its file is gone."""
     name = result.get("certificate_file")
-    if result.get("status") != "estimated" or not name or not (directory / name).is_file():
+    if status_of(result) != EvaluationStatus.ESTIMATED or not name or not (directory / name).is_file():
         return None
     out = read_json(directory / name, "estimate")
     return out if isinstance(out, dict) else None

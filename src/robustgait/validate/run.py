@@ -31,7 +31,18 @@ from robustgait.certificate.orbit import FixedPoint, Orbit
 from robustgait.certificate.push import recovered_steps
 from robustgait.certificate.reduced import ReducedState, section_dimension
 from robustgait.certificate.search import Walking, find_orbit
-from robustgait.config import KINDS, CertifyConfig, Frame, MapKind, PushConfig, SimConfig, ValidateConfig, to_dict
+from robustgait.config import (
+    KINDS,
+    R_MAX_UNIT,
+    CertifyConfig,
+    Frame,
+    MapKind,
+    PushConfig,
+    SimConfig,
+    ValidateConfig,
+    radius_name,
+    to_dict,
+)
 from robustgait.config.certify import orbit_options
 from robustgait.config.work import Work, check_work
 from robustgait.domains import step_segments
@@ -74,11 +85,9 @@ class CertificateRef:
     push: PushConfig | None = None  # a push certificate's pushed walk: its horizon and recovery
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready (tuples as lists by the encoder): the figure by its name — ``j_star`` of a push certificate,
-        ``r_star`` of a state certificate (:func:`robustgait.io.certfile.certificate_figure` reads both)."""
-        out = asdict(self)
-        figure = "j_star" if self.push is not None else "r_star"
-        return {(figure if k == "value" else k): v for k, v in out.items()}
+        """JSON-ready (tuples as lists by the encoder): the radius validated against as ``value``, with its
+        ``figure`` (``J*`` or ``r*``) and ``unit``."""
+        return {**asdict(self), "figure": radius_name(self.space), "unit": R_MAX_UNIT[self.space]}
 
     @staticmethod
     def of(gc: GaitCertificate) -> CertificateRef:
@@ -100,7 +109,7 @@ class CertificateRef:
         cfg = c.certify_config(path)
         k = len(c.x_star)
         t = c.transform(path) or np.eye(k).tolist()
-        return CertificateRef(c.value, c.attained, tuple(c.x_star), tuple(tuple(row) for row in t), cfg.space,
+        return CertificateRef(c.radius, c.attained, tuple(c.x_star), tuple(tuple(row) for row in t), cfg.space,
                               cfg.set, cfg.horizon, c.energy, cfg.map, cfg.frame, cfg.reconstruction,
                               tuple(orbit_options(cfg).items()), str(path),
                               cfg.push if cfg.disturbance == "push" else None)

@@ -84,16 +84,16 @@ def page_state(setup: StudySetup, snap: StudySnapshot, *, study: str, reqs: Sequ
 
 
 def gait_view(r: TrialRecord, figures: Sequence[str], *, blind: bool) -> dict[str, Any]:
-    """One gait as the page shows it: ``slot``, ``iteration``; not blind, also ``params``, ``certificate_value``
-    (the study's certificate figure, named by the state's ``certificate``, in its ``unit``) and ``figures`` (those of
-    ``figures`` that are comfort figures, in that order: ``{"name", "value" (None when not finite or not recorded),
-    "unit", "what"}``)."""
+    """One gait as the page shows it: ``slot``, ``iteration``; not blind, also ``params``, the study's certificate
+    figure (named by the state's ``certificate``, in its ``unit``) as ``value`` (verified; None unless ``verified``) and
+    ``estimate``, and ``figures`` (those of ``figures`` that are comfort figures, in that order: ``{"name", "value"
+    (None when not finite or not recorded), "unit" ('' for a dimensionless figure), "what"}``)."""
     res = r.result or {}
     comfort = res.get("comfort") or {}
     view: dict[str, Any] = {"slot": r.slot, "iteration": r.iteration}
     if not blind:
         view["params"] = r.params
-        view["certificate_value"] = res.get("certificate_value")
+        view.update(value=res.get("value"), estimate=res.get("estimate"), verified=bool(res.get("verified")))
         view["figures"] = [{"name": n, "value": _finite(comfort.get(n)), "unit": FIGURES[n][0],
                             "what": FIGURES[n][1]} for n in figures if n in FIGURES]
     return view
