@@ -26,6 +26,27 @@ EXO_GAIT = REPO / "tests" / "data" / "exo_gait.json"
 EXO_MC_GAIT = REPO / "tests" / "data" / "exo_multicontact_gait.json"
 T1_MODEL = REPO.parent / "shared" / "robots" / "booster_t1" / "t1.xml"
 
+class WorkStarted(AssertionError):
+    """A test that must end before any work built a simulation engine or a gait problem."""
+
+
+@pytest.fixture
+def no_work(monkeypatch):  # type: ignore[no-untyped-def]
+    """Fail the test if a simulation engine (:class:`robustgait.sim.engine.StepEngine`) or a gait problem
+    (:class:`robustgait.gaitgen.GaitGenerator`) is built: what "refused before any work" means, whatever the machine's
+    speed."""
+    from robustgait.gaitgen.solve import GaitGenerator
+    from robustgait.sim.engine import StepEngine
+
+    def started(what: str):  # type: ignore[no-untyped-def]
+        def refuse(*args, **kwargs):  # type: ignore[no-untyped-def]
+            raise WorkStarted(f"{what} was built: the input should have been refused before any work")
+        return refuse
+
+    monkeypatch.setattr(StepEngine, "__init__", started("a simulation engine"))
+    monkeypatch.setattr(GaitGenerator, "__init__", started("a gait problem"))
+
+
 needs_atalante = pytest.mark.skipif(not (ATALANTE_DIR / "loadedExo.xml").is_file(),
                                     reason="../shared/atalante (AMBER lab model) is not beside the repository")
 

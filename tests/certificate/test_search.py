@@ -69,7 +69,7 @@ def test_a_walk_says_whether_its_switching_events_settled_on_an_orbit(exo, exo_g
     finds (tests/certificate/test_search.py); a walk too short to see the band hold says so."""
     cfg = CertifyConfig()
     o = find_orbit(Walked(exo, exo_gait, walk(exo, exo_gait, steps=120)), cfg)
-    assert o.ok and o.period == 1 and o.sigma < 1e-3 and o.held == 64
+    assert o.ok and o.period == 1 and o.sigma < 1e-3 and o.held == cfg.orbit.hold_steps  # held its whole hold
     assert o.to_dict()["settled_at_step"] == o.settled
     mc_walk = walk(exo, exo_mc_gait, steps=120)
     mc = find_orbit(Walked(exo, exo_mc_gait, mc_walk), cfg)
@@ -148,9 +148,11 @@ def test_the_atalante_frost_gait_is_certified(atalante, atalante_gait):
 
 @pytest.mark.slow  # a walk of 245 steps and the search's 63
 def test_a_gait_that_falls_after_245_steps_is_refused(exo, exo_gait):
-    """exo's stored gait on a 3.5° slope 6° off downhill: it turns away from downhill ever faster and falls at step
-    245, undisturbed. Its switching states look settled for dozens of steps; the band's hold sees them move: refused
-    (unsettled), long before the fall."""
+    """exo's stored gait on a 3.5° slope 6° off downhill: it turns away from downhill ever faster and falls,
+    undisturbed, after some 245 steps (245 here; a slow divergence, so its step moves with round-off: held to
+    200–290). Its switching states look settled for dozens of steps; the band's hold sees them move: refused
+    (unsettled), long
+    before the fall."""
     from robustgait import load_robot
     from robustgait.certificate.certify import certify_gait
 
@@ -159,7 +161,7 @@ def test_a_gait_that_falls_after_245_steps_is_refused(exo, exo_gait):
     robot.model.opt.gravity[:] = 9.81 * np.array([np.sin(slope) * np.cos(azimuth), np.sin(slope) * np.sin(azimuth),
                                                   -np.cos(slope)])
     res = walk(robot, exo_gait, SimConfig(step_cap=300))
-    assert res.fell and res.steps_taken == 245
+    assert res.fell and 200 <= res.steps_taken <= 290
     gc = certify_gait(robot, exo_gait)
     assert gc.status == Status.UNSETTLED and "then left that band" in gc.reason and gc.value == 0
-    assert gc.steps_walked < 100
+    assert gc.steps_walked < 100 < res.steps_taken

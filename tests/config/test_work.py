@@ -5,7 +5,6 @@ line before any work. No simulation: the checks are called on the gaits' duratio
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import pytest
 
@@ -186,12 +185,11 @@ def test_a_mistaken_timestep_is_refused(exo, exo_gait, monkeypatch):
       "certify.push.horizon=30"], "study: one evaluation of a 1.1 s gait: certify.orbit.max_steps 100 + "
      "certify.sequential.budget 10000 × 31 steps"),
 ])
-def test_mistaken_settings_are_one_line_exit_2_before_any_work(tmp_path, exo_gait, argv, message):
+def test_mistaken_settings_are_one_line_exit_2_before_any_work(tmp_path, exo_gait, argv, message, no_work):
     g, long = save_gait(exo_gait, tmp_path / "g.json"), tmp_path / "long.json"
     save_gait(dataclasses.replace(exo_gait, domains=(dataclasses.replace(exo_gait.domains[0], duration=5.0),)), long)
-    t0 = time.perf_counter()
     code, out, err = cli(*(a.format(g=g, long=long, t=tmp_path) for a in argv))
-    assert code == 2 and out == "" and time.perf_counter() - t0 < 10
+    assert code == 2 and out == ""
     one_error_line(err, message)
     assert not (tmp_path / "s").exists()
 

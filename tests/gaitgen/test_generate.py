@@ -325,24 +325,21 @@ def test_cli_multicontact_bad_rolling_fraction(tmp_path, capsys):
     assert not out.exists()
 
 
-def test_a_request_no_leg_of_that_size_walks_is_refused_before_any_solve(tmp_path, capsys):
+def test_a_request_no_leg_of_that_size_walks_is_refused_before_any_solve(tmp_path, capsys, no_work):
     """Step length in leg lengths, speed as a Froude number, swing height in leg lengths: a request far beyond exo
     (0.7 m in 0.2 s, 0.3 m high: 3.5 m/s, Froude 1.36) is refused in one line, exit 2, nothing written, without
     building the problem; every point of exo's action spaces passes."""
-    import time
-
     from robustgait.cli import main
     from robustgait.config.gait import reach_problem
     from robustgait.learn.space import ActionSpace
 
     exo = load_robot("exo")
     cfg = GenerationConfig()
-    t0 = time.perf_counter()
     out = tmp_path / "g.json"
     code = main(["gait", "generate", "--robot", "exo", "--step-length", "0.7", "--step-duration", "0.2",
                  "--step-height", "0.3", "-o", str(out)])
     err = capsys.readouterr().err
-    assert code == 2 and time.perf_counter() - t0 < 5 and not out.exists()
+    assert code == 2 and not out.exists()  # before the problem is built (no_work)
     assert len(err.strip().splitlines()) == 1 and "Froude number 1.36, beyond generate.max_froude = 0.5" in err
     assert "beyond generate.max_step_height" in reach_problem(
         GaitParams(step_length=0.2, step_duration=0.8, step_height=0.3), exo.scale, cfg)

@@ -8,7 +8,6 @@ import io
 import json
 import os
 import stat
-import time
 from pathlib import Path
 
 import numpy as np
@@ -83,11 +82,10 @@ def gait_file(tmp_path, gait_dict):
     (lambda d: d.__setitem__("solver", {"a": [1, {"b": float("nan")}]}), "solver.a[1].b: must be a finite number"),
     (lambda d: d.pop("domains"), "domains: required, but missing"),
 ])
-def test_bad_gait_json_is_one_line_exit_2(gait_file, mutate, message):
+def test_bad_gait_json_is_one_line_exit_2(gait_file, mutate, message, no_work):
     p = gait_file(mutate)
-    t0 = time.perf_counter()
     code, out, err = cli("walk", p, "--robot", "exo", "--steps", "2")
-    assert code == 2 and out == "" and time.perf_counter() - t0 < 10
+    assert code == 2 and out == ""
     one_error_line(err, f"{p}: ", message)
 
 
@@ -268,9 +266,8 @@ def test_bad_arguments_are_one_line_exit_2(tmp_path, gait_file, argv, message):
     assert sorted(tmp_path.iterdir()) == before
 
 
-def test_total_work_is_bounded_before_simulating(tmp_path, gait_file):
+def test_total_work_is_bounded_before_simulating(tmp_path, gait_file, no_work):
     slow = gait_file(lambda d: d["domains"][0].__setitem__("duration", 10.0))
-    t0 = time.perf_counter()
     code, _, err = cli("walk", slow, "--robot", "exo", "--steps", "1000", "--video", tmp_path / "v.mp4")
     assert code == 2
     one_error_line(err, f"{slow}: 1000 steps (sim.step_cap) with a video: 1000 simulated steps of up to 15 s",
@@ -282,16 +279,14 @@ def test_total_work_is_bounded_before_simulating(tmp_path, gait_file):
     code, _, err = cli("walk", gait_file(), "--robot", "exo", "--steps", "200", "--video", tmp_path / "v.gif")
     assert code == 2
     one_error_line(err, "v.gif: this walk could last 210 s, 6300 frames at 30 fps: a .gif holds at most 3600")
-    assert time.perf_counter() - t0 < 5 and not (tmp_path / "v.mp4").exists()
+    assert not (tmp_path / "v.mp4").exists()
 
 
-def test_generate_checks_its_output_before_the_solve(tmp_path):
-    t0 = time.perf_counter()
+def test_generate_checks_its_output_before_the_solve(tmp_path, no_work):
     for target in ("/missing/dir/x.json", str(tmp_path / "x.yaml"), str(tmp_path)):
         code, _, err = cli("gait", "generate", "--robot", "exo", "-o", target)
-        assert code == 2
+        assert code == 2  # before the problem is built (no_work)
         one_error_line(err, "argument -o/--output")
-    assert time.perf_counter() - t0 < 3.0  # the problem build alone takes seconds
 
 
 def test_outputs_never_replace_links_fifos_or_devices(tmp_path, gait_file):

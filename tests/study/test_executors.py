@@ -31,6 +31,31 @@ def alive(procs: dict[int, int]) -> dict[int, str]:
     return out
 
 
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time [s] a process has used (/proc; 0 if it is gone)."""
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return 0.0
+    fields = text[text.rindex(")") + 2:].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def workers_at_work(procs: dict[int, int], cpu: float = 0.5) -> bool:
+    """Whether every evaluating process below the study (its Python workers or Ray actors; not multiprocessing's
+    resource tracker, which only waits) has used ``cpu`` s of CPU: well past its start, whose first act is to arm
+    its death with its parent (:func:`robustgait.study.executors.die_with_parent`)."""
+    workers = []
+    for pid in alive(procs):
+        try:
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace")
+        except OSError:
+            continue
+        if ("multiprocessing" in cmd and "resource_tracker" not in cmd) or "ray::Evaluation" in cmd:
+            workers.append(pid)
+    return bool(workers) and all(cpu_seconds(pid) >= cpu for pid in workers)
+
+
 def kill_study_and_watch(tmp_path: Path, extra: list[str], ready: Callable[[dict[int, str]], bool], timeout: float
                          ) -> tuple[dict[int, int], float]:
     """Start ``study run`` with ``extra`` options in its own session, wait until ``ready`` says yes to the processes
@@ -48,8 +73,11 @@ def kill_study_and_watch(tmp_path: Path, extra: list[str], ready: Callable[[dict
             assert time.monotonic() - t0 < 180, f"the study started only {alive(procs)}"
             time.sleep(0.2)
             procs = descendants(proc.pid)
-        time.sleep(1.0)  # past the workers' start-up (die_with_parent is their first act) and a guard's look
-        procs = descendants(proc.pid)
+        while not workers_at_work(procs):  # past their start-up, which arms their death with the study
+            assert proc.poll() is None, "the study ended before it could be killed"
+            assert time.monotonic() - t0 < 180, f"the workers did not start working: {alive(procs)}"
+            time.sleep(0.1)
+            procs = descendants(proc.pid)
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait()
         killed = time.monotonic()

@@ -136,7 +136,7 @@ def run_gait(job: dict[str, Any]) -> dict[str, Any]:
     from robustgait.io.gaitfile import save_gait
     from robustgait.io.robotfile import load_robot
     from robustgait.sim import walk
-    from robustgait.study.validate import _orbitless_start
+    from robustgait.study.validate import orbitless_start
     from robustgait.validate.run import Validator
     from robustgait.validate.stats import logistic_fit
 
@@ -159,7 +159,7 @@ def run_gait(job: dict[str, Any]) -> dict[str, Any]:
     o = gc.orbit
     # the validation's pushes: from the certificate's x*, or the orbit's, or the gait's first switching state
     vcfg = ValidateConfig(trials=job["trials"])
-    start, ref = _orbitless_start(robot, gait, CertifyConfig())
+    start, ref = orbitless_start(robot, gait, CertifyConfig())
     certificate: Any = gc if gc.ok else ref
     if not gc.ok and o is not None and o.qpos is not None:
         start = o.fixed_point("heading")

@@ -155,7 +155,7 @@ class _Task:
     recertify: bool = False  # certify it again with ``certify`` instead of reading the study's certificate
 
 
-def _orbitless_start(robot: Any, gait: Any, c: CertifyConfig) -> tuple[Any, Any]:
+def orbitless_start(robot: Any, gait: Any, c: CertifyConfig) -> tuple[Any, Any]:
     """A start and a :class:`CertificateRef` of r* = 0 for a gait without a certified fixed point: its initial
     state as a section state (a multi-contact gait walked to its first heel strike), x̄ of that state (the
     certificate's state, identity transform) as the 'centre' (there is no set: nothing lies inside it)."""
@@ -201,7 +201,7 @@ def _validate_one(task: _Task) -> dict[str, Any]:
         elif task.certificate:
             start, ref = None, task.certificate
         else:
-            start, ref = _orbitless_start(robot, gait, task.certify)
+            start, ref = orbitless_start(robot, gait, task.certify)
         with Validator(robot, gait, task.config, certify=task.certify, sim=task.sim, certificate=ref,
                        start=start) as v:
             kinds = {k: v.run(k).to_dict(trials=True) for k in task.kinds}
