@@ -84,7 +84,7 @@ def test_sequential_certificate(robot_gait, seq_cert):
     # round 1 is the uniform estimator's draw (16 samples, seed 3): relative to x*, it depends on the seed only
     u = certify_gait(*robot_gait, uniform(n_samples=16, r_max=1.0, seed=3))
     np.testing.assert_array_equal(c.samples[:16], u.certificate.samples)
-    assert c.rounds[0].r_hat == u.radius
+    assert c.rounds[0].r_hat == u.value
     res = json.loads(json.dumps(seq_cert.to_dict(), allow_nan=False))
     assert res["method"] == "sequential" and res["status"] == "ok" and len(res["rounds"]) == len(c.rounds)
     assert res["config"]["sequential"]["epsilon"] == 0.2 and len(res["sample_round"]) == c.n_samples
