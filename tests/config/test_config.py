@@ -215,3 +215,42 @@ def test_the_configuration_page_lists_every_field():
 
     page = (Path(__file__).resolve().parents[2] / "docs" / "configuration.md").read_text()
     assert Config.markdown() in page, "docs/configuration.md is stale: robustgait config show --markdown"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["certify", "{g}", "--robot", "exo", "--override", "certify.sequential.verify_margin=0.5"],
+     "--override certify.sequential.verify_margin=0.5: a push certificate draws its verification disk from its fall "
+     "curve"),
+    (["certify", "{g}", "--robot", "exo", "--disturbance", "state", "--override", "certify.push.horizon=5"],
+     "--override certify.push.horizon=5: push options do nothing to a state certificate"),
+    (["certify", "{g}", "--robot", "exo", "--samples", "20"],
+     "argument --samples: n_samples is the uniform estimator's"),
+    (["certify", "{g}", "--robot", "exo", "--method", "uniform", "--override", "certify.sequential.explore=10"],
+     "the sequential estimator's options do nothing to method = uniform"),
+    (["certify", "{g}", "--robot", "exo", "--disturbance", "state", "--override", "certify.ellipsoid.fit_samples=9"],
+     "ellipsoid options do nothing unless set = ellipsoid"),
+    # a study's certificate is the study's (study_certify): J* for the push metric, whatever certify.disturbance says
+    (["study", "run", "{t}/s", "--robot", "exo", "--override", "certify.disturbance=state", "--override",
+      "certify.sequential.verify_margin=0.9"], "a push certificate draws its verification disk"),
+])
+def test_an_option_that_does_nothing_to_the_certificate_is_refused(tmp_path, capsys, no_work, argv, message):
+    """One estimator configuration: an option set for a certificate it does not apply to is an error — one line,
+    exit 2, nothing written — never silently ignored."""
+    code = main([a.format(g=EXO_GAIT, t=tmp_path) for a in argv])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "s").exists()
+
+
+def test_the_estimator_resolves_its_defaults_by_what_is_certified():
+    """[certify.sequential] serves both certificates: the unset round sizes are the push certificate's (50, 100, 50,
+    25 pushes, 0.9 of β first) or the state certificate's (200, 600, 200, 0, 0.5); a value set applies to both."""
+    push, state = CertifyConfig().estimator, CertifyConfig(disturbance="state").estimator
+    assert (push.first_round, push.explore, push.explore_after_failure, push.verify_chunk, push.first_share) == (
+        50, 100, 50, 25, 0.9)
+    assert (state.first_round, state.explore, state.explore_after_failure, state.verify_chunk, state.first_share) == (
+        200, 600, 200, 0, 0.5)
+    both = SequentialConfig(explore=70)
+    assert CertifyConfig(sequential=both).estimator.explore == CertifyConfig(
+        disturbance="state", sequential=both).estimator.explore == 70
+    assert CertifyConfig().inapplicable("sequential.epsilon") is None  # ε, β's shares and the budget serve both
