@@ -41,23 +41,33 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def workers_at_work(procs: dict[int, int], cpu: float = 0.5) -> bool:
-    """Whether every evaluating process below the study (its Python workers or Ray actors; not multiprocessing's
-    resource tracker, which only waits) has used ``cpu`` s of CPU: well past its start, whose first act is to arm
-    its death with its parent (:func:`robustgait.study.executors.die_with_parent`)."""
-    workers = []
-    for pid in alive(procs):
-        try:
-            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace")
-        except OSError:
-            continue
-        if ("multiprocessing" in cmd and "resource_tracker" not in cmd) or "ray::Evaluation" in cmd:
-            workers.append(pid)
+def cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+    except OSError:
+        return ""
+
+
+def local_worker(pid: int, name: str) -> bool:
+    """A local executor's worker: a multiprocessing child, not its resource tracker (which only waits)."""
+    cmd = cmdline(pid)
+    return "multiprocessing" in cmd and "resource_tracker" not in cmd
+
+
+def ray_actor(pid: int, name: str) -> bool:
+    return name.startswith("ray::Evaluation")
+
+
+def workers_at_work(procs: dict[int, int], worker: Callable[[int, str], bool], cpu: float = 0.5) -> bool:
+    """Whether every evaluating process below the study (``worker`` says which) has used ``cpu`` s of CPU: well past
+    its start, whose first act is to arm its death with its parent
+    (:func:`robustgait.study.executors.die_with_parent`)."""
+    workers = [pid for pid, name in alive(procs).items() if worker(pid, name)]
     return bool(workers) and all(cpu_seconds(pid) >= cpu for pid in workers)
 
 
-def kill_study_and_watch(tmp_path: Path, extra: list[str], ready: Callable[[dict[int, str]], bool], timeout: float
-                         ) -> tuple[dict[int, int], float]:
+def kill_study_and_watch(tmp_path: Path, extra: list[str], ready: Callable[[dict[int, str]], bool], timeout: float,
+                         worker: Callable[[int, str], bool] = local_worker) -> tuple[dict[int, int], float]:
     """Start ``study run`` with ``extra`` options in its own session, wait until ``ready`` says yes to the processes
     below it (pid → name), SIGKILL it alone, and wait up to ``timeout`` s for them to go: (the processes it had,
     seconds until all went or the timeout)."""
@@ -73,7 +83,7 @@ def kill_study_and_watch(tmp_path: Path, extra: list[str], ready: Callable[[dict
             assert time.monotonic() - t0 < 180, f"the study started only {alive(procs)}"
             time.sleep(0.2)
             procs = descendants(proc.pid)
-        while not workers_at_work(procs):  # past their start-up, which arms their death with the study
+        while not workers_at_work(procs, worker):  # past their start-up, which arms their death with the study
             assert proc.poll() is None, "the study ended before it could be killed"
             assert time.monotonic() - t0 < 180, f"the workers did not start working: {alive(procs)}"
             time.sleep(0.1)
@@ -111,7 +121,8 @@ def test_a_sigkilled_ray_study_leaves_no_ray_process_behind(tmp_path):
     def actors_up(p: dict[int, str]) -> bool:
         return sum(name.startswith("ray::Evaluation") for name in p.values()) == 2
 
-    procs, took = kill_study_and_watch(tmp_path, ["--executor", "ray", "--workers", "2"], actors_up, timeout=5.0)
+    procs, took = kill_study_and_watch(tmp_path, ["--executor", "ray", "--workers", "2"], actors_up, timeout=5.0,
+                                       worker=ray_actor)
     assert len(procs) >= 9  # GCS, raylet, monitor, dashboard, log monitor, 2 agents, 2 actors (and the guard)
     left = alive(procs)
     assert not left, f"left running {took:.1f} s after the study was killed: {left}"
