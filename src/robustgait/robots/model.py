@@ -325,7 +325,7 @@ class Robot:
         buf = np.empty(mujoco.mj_sizeModel(self.model), dtype=np.uint8)
         mujoco.mj_saveModel(self.model, None, buf)
         spec = {k: v for k, v in dataclasses.asdict(self.spec).items() if not isinstance(v, PurePath)
-                and not (k in CLOSED_CHAIN_FIELDS and not v)}  # a serial robot's digest as before they existed
+                and not (k in CLOSED_CHAIN_FIELDS and not v)}  # empty closed-chain fields leave a serial digest alone
         return hashlib.sha256(buf.tobytes() + repr(spec).encode()).hexdigest()
 
     def mjspec(self) -> mujoco.MjSpec:
