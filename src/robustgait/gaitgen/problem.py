@@ -53,6 +53,15 @@ from robustgait.domains import Contact, domain_graph, other_side
 from robustgait.dynamics import Dynamics, foot_frame, impact_residual
 from robustgait.errors import RobustGaitError
 from robustgait.gait import BEZIER_DEGREE
+from robustgait.gaitgen.layout import (  # noqa: F401 (re-exported: the problem's layout and rows)
+    DomainLayout,
+    Layout,
+    impulse_rows,
+    inner_range,
+    make_layout,
+    trapezoid_weights,
+    wrench_rows,
+)
 from robustgait.robots import GaitQuality, Robot
 from robustgait.robots.legs import axis_kinds
 
@@ -123,102 +132,6 @@ def double_support_free_joints(robot: Robot, side: str, names: tuple[str, ...] |
     return [ids.index(j) for j in picked]
 
 
-@dataclass
-class DomainLayout:
-    """Where one domain's variables sit in the NLP vector: its Bézier β, per-node variables (joints s, ṡ, s̈,
-    base position p, roll-pitch-yaw, velocity ν_b, acceleration ν̇_b, torques u, contact wrenches λ), and the
-    post-impact velocity ν⁺ and impulses Λ of the transition that ends it."""
-
-    beta: slice
-    nodes: list[dict[str, slice]]
-    nu_plus: slice
-    impulse: slice
-
-
-@dataclass
-class Layout:
-    """The NLP vector x (scaled units): the domains' blocks in order. ``beta``, ``nodes``, ``nu_plus`` and
-    ``impulse`` are domain 0's."""
-
-    m: int
-    domains: list[DomainLayout]
-    size: int
-
-    @property
-    def beta(self) -> slice:
-        return self.domains[0].beta
-
-    @property
-    def nodes(self) -> list[dict[str, slice]]:
-        return self.domains[0].nodes
-
-    @property
-    def nu_plus(self) -> slice:
-        return self.domains[0].nu_plus
-
-    @property
-    def impulse(self) -> slice:
-        return self.domains[0].impulse
-
-
-def make_layout(m: int, n_nodes: list[int], wrench_rows: list[int], impulse_rows: list[int]) -> Layout:
-    """Per domain d: β (m·8), n_nodes[d] nodes with a contact wrench of wrench_rows[d], ν⁺ (6 + m) and an
-    impulse of impulse_rows[d] (the target contact set's rows)."""
-    k = 0
-
-    def take(size: int) -> slice:
-        nonlocal k
-        s = slice(k, k + size)
-        k += size
-        return s
-
-    doms = []
-    for n, wr, ir in zip(n_nodes, wrench_rows, impulse_rows, strict=True):
-        beta = take(m * (BEZIER_DEGREE + 1))
-        nodes = [{"s": take(m), "sd": take(m), "sdd": take(m), "p": take(3), "rpy": take(3), "vb": take(6),
-                  "ab": take(6), "u": take(m), "lam": take(wr)} for _ in range(n)]
-        doms.append(DomainLayout(beta, nodes, take(6 + m), take(ir)))
-    return Layout(m, doms, k)
-
-
-def wrench_rows(c: Contact, lam: cs.SX, config: GenerationConfig, half_length: float, half_width: float
-                ) -> list[tuple[str, cs.SX, float, float]]:
-    """Contact wrench conditions (expr ≤ 0 unless noted) of one contact, world axes at its frame:
-
-    flat (f, n) ∈ R⁶: f_z ≥ f_min, friction pyramid |f_x|, |f_y| ≤ μ f_z, centre of pressure inside the sole
-    less a margin (|n_y| ≤ a f_z, |n_x| ≤ b f_z), |n_z| ≤ μ_t f_z. Line (f_x, f_y, f_z, n_x, n_z): f_z ≥
-    f_line, the same pyramid, the centre of pressure along the edge inside the sole (|n_x| ≤ b f_z; the edge
-    runs along world y), |n_z| ≤ μ_t f_z. Returns (name, expr, lower, upper) rows.
-    """
-    mu, mut = config.friction, config.torsional_friction
-    ax, ay = half_length - config.scaled("cop_margin"), half_width - config.scaled("cop_margin")
-    f = lam[:3]
-    least = config.scaled("min_normal_force") if c.kind == "flat" else config.scaled("min_line_force")
-    rows = [("normal_force", f[2], least, cs.inf),
-            ("friction", cs.vertcat(f[0] - mu * f[2], -f[0] - mu * f[2], f[1] - mu * f[2], -f[1] - mu * f[2]),
-             -cs.inf, 0.0)]
-    if c.kind == "flat":
-        tq = lam[3:]
-        rows += [("cop", cs.vertcat(-tq[1] - ax * f[2], tq[1] - ax * f[2], tq[0] - ay * f[2], -tq[0] - ay * f[2]),
-                  -cs.inf, 0.0),
-                 ("yaw_moment", cs.vertcat(tq[2] - mut * f[2], -tq[2] - mut * f[2]), -cs.inf, 0.0)]
-    else:
-        nx, nz = lam[3], lam[4]
-        rows += [("cop", cs.vertcat(nx - ay * f[2], -nx - ay * f[2]), -cs.inf, 0.0),
-                 ("yaw_moment", cs.vertcat(nz - mut * f[2], -nz - mut * f[2]), -cs.inf, 0.0)]
-    return rows
-
-
-def impulse_rows(contacts: tuple[Contact, ...], imp: cs.SX, mu: float) -> cs.SX:
-    """Each contact's impulse pushes (Λ_z ≥ 0) inside the friction pyramid (rows ≥ 0)."""
-    out, k = [], 0
-    for c in contacts:
-        fx, fy, fz = imp[k], imp[k + 1], imp[k + 2]
-        out += [fz, mu * fz - fx, mu * fz + fx, mu * fz - fy, mu * fz + fy]
-        k += c.n_rows
-    return cs.vertcat(*out)
-
-
 def gait_quality(robot: Robot) -> GaitQuality:
     """The robot spec's gait-quality bounds, with a joint-speed bound of 10 rad/s per joint and a pelvis rate bound of
     :data:`~robustgait.config.gait.PELVIS_RATE_FROUDE` √(g / l) when it sets none."""
@@ -233,9 +146,10 @@ def gait_quality(robot: Robot) -> GaitQuality:
 
 @dataclass(frozen=True)
 class NodeSymbols:
-    """One node's NLP symbols, unscaled: joints s, ṡ, s̈ (m,) [rad, rad/s, rad/s²]; base pose H (4 × 4, from the
-    position p [m] and roll-pitch-yaw [rad]), velocity ν_b = (ṗ, ω) and acceleration ν̇_b (6,); ν = (ν_b, ṡ)
-    (6 + m,); torques u (m,) [N m]; contact wrenches λ (the domain's contact rows) [N, N m]."""
+    """One node's NLP symbols, unscaled: joints s, ṡ, s̈ (n,) [rad, rad/s, rad/s²] — the m planned ones, then a closed
+    chain's passive ones; base pose H (4 × 4, from the position p [m] and roll-pitch-yaw [rad]), velocity ν_b = (ṗ, ω)
+    and acceleration ν̇_b (6,); ν = (ν_b, ṡ) (6 + n,); torques u (m,) [N m]; contact wrenches λ (the domain's contact
+    rows) [N, N m]; loop forces λ_h (the loops' rows) [N or N m]."""
 
     s: cs.SX
     sd: cs.SX
@@ -248,6 +162,7 @@ class NodeSymbols:
     lam: cs.SX
     H: cs.SX
     nu: cs.SX
+    lamh: cs.SX
 
 
 @dataclass(frozen=True)
@@ -258,23 +173,6 @@ class NodeRows:
     i: int
     start: int
     stop: int
-
-
-def trapezoid_weights(n: int) -> FloatArray:
-    """The trapezoid rule's weights (n,) on n equally spaced nodes of [0, 1]: 1/(n − 1), halved at both ends."""
-    w = np.full(n, 1.0 / (n - 1))
-    w[[0, -1]] *= 0.5
-    return w
-
-
-def inner_range(joint_range: FloatArray, margin: float) -> FloatArray:
-    """Each joint's range (m, 2) [rad] less ``margin`` at each finite end, the margin at most a quarter of the range
-    (a narrow range keeps half of itself): [lo + μ, hi − μ], μ = min(margin, (hi − lo)/4); an unlimited end stays
-    infinite."""
-    lo, hi = joint_range[:, 0], joint_range[:, 1]
-    width = np.where(np.isfinite(lo) & np.isfinite(hi), hi - lo, np.inf)
-    mu = np.minimum(margin, width / 4.0)
-    return np.stack([lo + mu, hi - mu], axis=1)
 
 
 class GaitProblem:
@@ -321,9 +219,15 @@ class GaitProblem:
         self.domain_taus = [np.linspace(0.0, 1.0, n) for n in counts]
         self.taus = self.domain_taus[0]
         self.n = counts[0]
+        # a closed chain's passive joints and loop rows (robustgait.closure): node variables and forces
+        self.n_passive = dyn.n_joints - m
+        if dyn.loops and graph.name != "flat":
+            raise RobustGaitError(f"{robot.name}: gait generation plans a robot with closed chains on flat feet only "
+                                  f"(domains flat), not {graph.name}")
+        self.n_loop = int(dyn.loop_fun.size1_out(0)) if dyn.loops else 0
         self.layout = make_layout(
             m, counts, [sum(c.n_rows for c in dom.contacts) for dom in graph.domains],
-            [sum(c.n_rows for c in graph.target_contacts(d)) for d in range(len(graph))])
+            [sum(c.n_rows for c in graph.target_contacts(d)) for d in range(len(graph))], self.n_passive, self.n_loop)
         st, sw = config.stance, other_side(config.stance)
         self.stance, self.swing = st, sw
         self.free = (double_support_free_joints(robot, sw, config.ds_free_joints) if graph.name == "multicontact"
@@ -375,10 +279,13 @@ class GaitProblem:
     def _node_symbols(self, d: int, i: int) -> NodeSymbols:
         """Node i of domain d's symbols (:class:`NodeSymbols`), torques and wrenches unscaled (×100, ×1000)."""
         node, x = self.layout.domains[d].nodes[i], self.x
-        pb, rpy, vb, sd = x[node["p"]], x[node["rpy"]], x[node["vb"]], x[node["sd"]]
+        pb, rpy, vb = x[node["p"]], x[node["rpy"]], x[node["vb"]]
+        s, sd, sdd = (cs.vertcat(x[node[k]], x[node[k.replace("s", "sp", 1)]]) if self.n_passive else x[node[k]]
+                      for k in ("s", "sd", "sdd"))
         H = cs.vertcat(cs.horzcat(rpy_to_matrix(rpy), pb), cs.horzcat(cs.SX.zeros(1, 3), cs.SX.ones(1, 1)))
-        return NodeSymbols(s=x[node["s"]], sd=sd, sdd=x[node["sdd"]], pb=pb, rpy=rpy, vb=vb, ab=x[node["ab"]],
-                           u=U_SCALE * x[node["u"]], lam=F_SCALE * x[node["lam"]], H=H, nu=cs.vertcat(vb, sd))
+        return NodeSymbols(s=s, sd=sd, sdd=sdd, pb=pb, rpy=rpy, vb=vb, ab=x[node["ab"]],
+                           u=U_SCALE * x[node["u"]], lam=F_SCALE * x[node["lam"]], H=H, nu=cs.vertcat(vb, sd),
+                           lamh=U_SCALE * x[node["lamh"]])
 
     def _add_node(self, d: int, i: int) -> None:
         """All rows of node i of domain d, in this order: Bézier outputs, continuity (first node of a later domain),
@@ -390,6 +297,8 @@ class GaitProblem:
         if d > 0 and i == 0:
             self._add_continuity(d, v)
         Jc = self._add_holonomic_contacts(d, i, v)
+        if self.n_loop:
+            self._add_loops(d, i, v)
         M = self._add_dynamics(v, Jc)
         self._add_contact_wrenches(d, v)
         if dom.guard == "touchdown":
@@ -454,7 +363,9 @@ class GaitProblem:
         base position [m] and roll-pitch-yaw [rad] of its last node, and its post-impact velocity ν⁺ = (ν_b, ṡ).
         The contacts' pose and velocity then hold already and are not imposed again at this node."""
         x, prev = self.x, self.layout.domains[d - 1]
-        self._add("continuity", cs.vertcat(v.s - x[prev.nodes[-1]["s"]],
+        last = prev.nodes[-1]
+        s_last = cs.vertcat(x[last["s"]], x[last["sp"]]) if self.n_passive else x[last["s"]]
+        self._add("continuity", cs.vertcat(v.s - s_last,
                                            v.pb - x[prev.nodes[-1]["p"]], v.rpy - x[prev.nodes[-1]["rpy"]],
                                            v.vb - x[prev.nu_plus][:6], v.sd - x[prev.nu_plus][6:]), 0.0, 0.0)
 
@@ -489,12 +400,30 @@ class GaitProblem:
             Js.append(J)
         return cs.vertcat(*Js)
 
+    def _add_loops(self, d: int, i: int, v: NodeSymbols) -> None:
+        """The closed chains held (k rows each, :attr:`robustgait.dynamics.Dynamics.loop_fun`): φ(s) = 0 [m or rad]
+        (``loop_position``), J_h ṡ = 0 (``loop_velocity``), J_h s̈ + J̇_h ṡ = 0 (``loop_acceleration``), the first two
+        not at a later domain's first node (implied by :meth:`_add_continuity`), as the contacts are."""
+        phi, vel, acc, _ = self.dyn.loop_fun(v.s, v.sd, v.sdd)
+        if not (d > 0 and i == 0):
+            self._add("loop_position", phi, 0.0, 0.0)
+            self._add("loop_velocity", vel, 0.0, 0.0)
+        self._add("loop_acceleration", acc, 0.0, 0.0)
+
+    def _loop_jacobian(self, s: cs.SX) -> cs.SX:
+        """The loops' Jacobian in adam's mixed velocities, [0, J_h(s)] (k × (6 + n)): the rows do not move with the
+        base."""
+        return cs.horzcat(cs.SX.zeros(self.n_loop, 6), self.dyn.loop_fun(s, s, s)[3])
+
     def _add_dynamics(self, v: NodeSymbols, Jc: cs.SX) -> cs.SX:
-        """The equations of motion (6 + m rows [N, N m] / 100, ``dynamics``): (M(q) + diag(armature)) ν̇ + h(q, ν)
-        = (0, u) + J_cᵀ λ. Returns the mass matrix with armature ((6 + m) × (6 + m)) for the impact."""
+        """The equations of motion (6 + n rows [N, N m] / 100, ``dynamics``): (M(q) + diag(armature)) ν̇ + h(q, ν)
+        = (0, u, 0) + J_cᵀ λ + J_hᵀ λ_h (J_h: :meth:`_loop_jacobian`; the passive joints have no torque). Returns
+        the mass matrix with armature ((6 + n) × (6 + n)) for the impact."""
         M = self._mass(v.H, v.s)
-        tau = cs.vertcat(cs.SX.zeros(6), v.u)
+        tau = cs.vertcat(cs.SX.zeros(6), v.u, cs.SX.zeros(self.n_passive))
         dyn_res = M @ cs.vertcat(v.ab, v.sdd) + self._bias(v.H, v.s, v.vb, v.sd) - tau - Jc.T @ v.lam
+        if self.n_loop:
+            dyn_res = dyn_res - self._loop_jacobian(v.s).T @ v.lamh
         self._add("dynamics", dyn_res / ROW_SCALE, 0.0, 0.0)
         return M
 
@@ -581,6 +510,8 @@ class GaitProblem:
         target = self.graph.target_contacts(d)  # J: their Jacobian rows stacked (Σ rows × (6 + m))
         Jt = cs.vertcat(*(self._jac[(c.side(st), c.frame_kind())](H, s)[list(c.rows), :] for c in target))
         nup, imp = x[dl.nu_plus], U_SCALE * x[dl.impulse]
+        if self.n_loop:  # the loops hold through the impact: their rows join the target contacts'
+            Jt = cs.vertcat(Jt, self._loop_jacobian(s))
         momentum, contact = impact_residual(M, Jt, nu, nup, imp)
         self._add("impact_map", momentum / ROW_SCALE, 0.0, 0.0)
         self._add("impact_contact", contact, 0.0, 0.0)
@@ -595,7 +526,7 @@ class GaitProblem:
         """Joint velocities periodic after relabeling (m rows [rad/s], ``velocity_periodicity``): ṡ_0(0) = R ṡ⁺
         with ṡ⁺ the last domain's post-impact joint velocities."""
         sd0 = self.x[self.layout.domains[0].nodes[0]["sd"]]
-        self._add("velocity_periodicity", sd0 - cs.mtimes(cs.DM(self.mirror), nup[6:]), 0.0, 0.0)
+        self._add("velocity_periodicity", sd0 - cs.mtimes(cs.DM(self.mirror), nup[6:6 + self.m]), 0.0, 0.0)
 
     def _add_position_periodicity(self) -> None:
         """Joint positions periodic after relabeling (m rows [rad], ``position_periodicity``): β_0[:, 0] =
@@ -621,15 +552,18 @@ class GaitProblem:
         return cost
 
     def _bounds(self) -> tuple[FloatArray, FloatArray]:
-        """Variable bounds: joint range on β (less ``joint_margin``: :func:`inner_range`), torque limits, and the
-        gait-quality bands on the node variables (pelvis roll-pitch-yaw and height relative to the stance sole, its
-        angular velocity, joint speeds)."""
+        """Variable bounds: joint range on β (less ``joint_margin``: :func:`inner_range`) and on a closed chain's
+        passive joints, torque limits, and the gait-quality bands on the node variables (pelvis roll-pitch-yaw and
+        height relative to the stance sole, its angular velocity, joint speeds)."""
         lay, robot, q = self.layout, self.dyn.robot, self.quality
         lo, hi = np.full(lay.size, -np.inf), np.full(lay.size, np.inf)
         rng = inner_range(robot.joint_range, self.config.scaled("joint_margin"))
         rpy_lo = np.array([-q.pelvis_roll, q.pelvis_pitch[0], -q.pelvis_yaw])
         rpy_hi = np.array([q.pelvis_roll, q.pelvis_pitch[1], q.pelvis_yaw])
         jv = np.asarray(q.joint_velocity)
+        m = robot.model  # a closed chain's passive joints: their ranges
+        prange = np.array([m.joint(j).range if m.joint(j).limited[0] else (-np.inf, np.inf)
+                           for j in self.dyn.passive]).reshape(-1, 2)
         for dl, out in zip(lay.domains, self.outputs, strict=True):
             blo = np.repeat(rng[:, :1], BEZIER_DEGREE + 1, axis=1)
             bhi = np.repeat(rng[:, 1:], BEZIER_DEGREE + 1, axis=1)
@@ -650,4 +584,5 @@ class GaitProblem:
                 a = slice(node["ab"].start, node["ab"].start + 3)
                 lo[a], hi[a] = -q.pelvis_acceleration, q.pelvis_acceleration
                 lo[node["sd"]], hi[node["sd"]] = -jv, jv
+                lo[node["sp"]], hi[node["sp"]] = prange[:, 0], prange[:, 1]
         return lo, hi

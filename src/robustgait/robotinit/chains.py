@@ -47,7 +47,7 @@ def loop_lines(robot: RobotModel, opened: dict[str, float]) -> list[str]:
     where = f"the keyframe '{robot.keyframe}'" if robot.keyframe is not None else "the posture's first guess"
     lines = ["", "[loops]",
              "# closed kinematic chains: the model's equality constraints (MuJoCo keeps them in simulation; gait "
-             "generation does not plan them yet); [kind, end, end]",
+             "generation holds them as holonomic constraints, not converged yet); [kind, end, end]",
              f"# residual: MuJoCo's equality residual ‖r‖ at {where}, then with the passive joints solved "
              f"(springs held; tolerance {LOOP_TOLERANCE * 1e3:g} mm: robustgait.config.robot.LOOP_TOLERANCE)"]
     for lp in robot.loops:

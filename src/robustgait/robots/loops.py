@@ -40,6 +40,7 @@ LOOP_KINDS = {int(mujoco.mjtEq.mjEQ_CONNECT): "connect", int(mujoco.mjtEq.mjEQ_W
               int(mujoco.mjtEq.mjEQ_JOINT): "joint"}
 # Gauss-Newton iterations of :func:`close_loops`; a singular value below this fraction of the largest is a null motion
 CLOSE_ITERATIONS, NULL_FRACTION = 200, 1e-8
+LOOP_CLOSE_TOLERANCE = 1e-8  # [m] the residual to which :func:`complete_rods` closes the rods' loops (/100 inside)
 MAX_STEP = 0.2  # [rad or m]: the largest change of a degree of freedom in one Gauss-Newton step of close_loops
 
 
@@ -294,3 +295,26 @@ def undriven_motion(model: mujoco.MjModel, qpos: FloatArray, loops: tuple[Loop, 
     weight[:, leaf] = 0.0
     k = int(np.argmax(np.abs(weight).max(axis=1)))
     return owner[int(np.argmax(np.abs(weight[k])))]
+
+
+def complete_rods(model: mujoco.MjModel, qpos: FloatArray, qvel: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``qpos`` (nq,), ``qvel`` (nv,) with the ball joints of the model's closed chains solved from every other joint:
+    positions by :func:`close_loops` from the model's ``qpos0`` quaternion (springs and hinges as given), velocities
+    the least-norm v_b with J_b v_b = −J_rest v_rest on the loops' rows (:func:`loop_rows`; a rod's spin stays 0). A
+    model without ball joints in loops is returned as given."""
+    loops, passive = closed_chains(model)
+    balls = tuple(j for j in passive if int(model.jnt_type[j]) == BALL)
+    if not balls:
+        return qpos, qvel
+    q, v = np.array(qpos, dtype=float), np.array(qvel, dtype=float)
+    for j in balls:
+        adr = int(model.jnt_qposadr[j])
+        q[adr:adr + 4] = model.qpos0[adr:adr + 4]
+    q = close_loops(model, q, loops, balls, LOOP_CLOSE_TOLERANCE)
+    data = mujoco.MjData(model)
+    data.qpos[:] = q
+    _, jac = loop_rows(model, data, loops)
+    dofs = list(joint_dofs(model, balls))
+    v[dofs] = 0.0
+    v[dofs] = -np.linalg.lstsq(jac[:, dofs], jac @ v, rcond=None)[0]
+    return q, v
