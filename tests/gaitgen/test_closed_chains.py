@@ -1,7 +1,9 @@
 """Closed chains in the gait problem (robustgait.closure, robustgait.dynamics, gaitgen; docs/gaitgen.md, "Closed
 chains"), on the inline biped of tests/robots/test_loops.py: a knee driving a passive tarsus through a rod on a ball
 joint, a shin spring, line feet. The planning model drops the rods for distance rows; its kinematics must be MuJoCo's,
-and the initial guess built from any β must satisfy every equality row the loops add."""
+and the initial guess built from any β must satisfy every equality row the loops add. Its feet are lines: the stance
+foot stands on its line, free to roll (robustgait.gaitgen.linefoot), and the default gait solves with the loop rows
+held at every node."""
 
 from __future__ import annotations
 
@@ -16,7 +18,7 @@ from robustgait.config import GenerationConfig
 from robustgait.dynamics import Dynamics, base_transform
 from robustgait.gait import BEZIER_DEGREE
 from robustgait.gaitgen.problem import GaitProblem
-from robustgait.gaitgen.solve import kinematic_states, pack
+from robustgait.gaitgen.solve import GaitGenerator, kinematic_states, pack, unpack
 from robustgait.gaitgen.states import to_mujoco_state
 from robustgait.robots import Robot
 from robustgait.robots.loops import closed_chains, loop_residuals
@@ -85,7 +87,7 @@ def test_the_loop_rows_vanish_where_mujocos_loops_close(chain: Robot, dyn: Dynam
 
 def test_the_initial_guess_holds_the_loops_and_the_dynamics(chain: Robot, dyn: Dynamics) -> None:
     prob = GaitProblem(dyn, GenerationConfig(nodes=5))
-    assert prob.n_passive == 4 and prob.n_loop == 4
+    assert prob.n_passive == 4 and prob.n_loop == 4 and prob.line_feet
     posture = np.asarray(chain.spec.posture)
     beta = np.repeat(posture[:, None], BEZIER_DEGREE + 1, axis=1)
     beta[[chain.spec.joints.index(f"{x}_hip_pitch") for x in ("left", "right")], -1] += 0.1  # a moving β
@@ -94,6 +96,35 @@ def test_the_initial_guess_holds_the_loops_and_the_dynamics(chain: Robot, dyn: D
     x0 = pack(prob, [beta], [states])
     p = [params.step_length, params.step_duration, params.step_width, params.step_height, 0.0]
     g = np.asarray(cs.Function("g", [prob.x, prob.p], [prob.g])(x0, p)).ravel()
-    for name in ("loop_position", "loop_velocity", "loop_acceleration", "dynamics", "stance_position",
-                 "stance_velocity", "stance_acceleration", "impact_map", "impact_contact", "bezier"):
+    for name in ("loop_position", "loop_velocity", "loop_acceleration", "stance_position", "stance_orientation",
+                 "stance_velocity", "stance_acceleration", "stance_roll", "roll_collocation", "roll_periodicity",
+                 "impact_map", "impact_contact", "bezier"):
         assert np.abs(g[prob.rows[name]]).max() < 1e-8, name
+    # the guess holds the stance foot flat, which takes a roll moment a line cannot: it shows in the dynamics' moment
+    # and joint rows only, never in the base's forces (rows 0-2 of each node's 6 + n)
+    forces = [r for start in prob.rows["dynamics"][::6 + dyn.n_joints] for r in range(start, start + 3)]
+    assert np.abs(g[forces]).max() < 1e-8
+
+
+@pytest.mark.slow  # one IPOPT solve, about 15 s
+def test_the_default_gait_solves_with_the_loops_closed(chain: Robot) -> None:
+    gen = GaitGenerator(chain)
+    prob, params = gen.problem, chain.default_params.resolved("flat")
+    x0 = gen.initial_guess(params)
+    p = [params.step_length, params.step_duration, params.step_width, params.step_height, params.rolling_fraction]
+    sol = gen.solver(x0=x0, p=p, lbx=prob.lbx, ubx=prob.ubx, lbg=prob.lbg, ubg=prob.ubg)
+    assert gen.solver.stats()["success"]
+    x = np.asarray(sol["x"]).ravel()
+    g = np.asarray(cs.Function("g", [prob.x, prob.p], [prob.g])(x, p)).ravel()
+    assert np.maximum(prob.lbg - g, g - prob.ubg).max() < 1e-8
+    # the loops closed at every node: the NLP's rows, and MuJoCo's own connects on the solution's states
+    for name in ("loop_position", "loop_velocity", "loop_acceleration"):
+        assert np.abs(g[prob.rows[name]]).max() < 1e-8, name
+    _, states = unpack(prob, x, [params.step_duration])
+    loops, _ = closed_chains(chain.model)
+    for H, s, vb, sd in zip(states[0].H, states[0].s, states[0].vb, states[0].sd, strict=True):
+        qpos, _ = to_mujoco_state(chain, H, s, vb, sd)
+        assert max(loop_residuals(chain.model, qpos, loops).values()) < 1e-8
+    # the stance foot rolls on its line (the degree of freedom a flat sole would lock), periodic after relabeling
+    roll = np.array([x[node["roll"]] for node in prob.layout.nodes])
+    assert np.abs(roll[:, 0]).max() > 0.01

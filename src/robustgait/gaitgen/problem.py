@@ -13,6 +13,9 @@ coordinates of adam):
   edge's midpoint fixed and its direction along world y (pitch free) — and the equations of motion
   M(q) ν̇ + h(q, ν) = B u + J_cᵀ λ hold. With flat single support and Bézier joints the state is fixed by
   kinematics, so nothing is integrated; double support closes a kinematic loop through both legs.
+* Line feet (a robot whose soles are lines; flat graph): the soles stand on their lines (``line`` contacts, 5 rows,
+  no roll moment), and the stance foot's roll — the one degree of freedom the joints leave — is integrated node to
+  node (:mod:`.linefoot`); the swing foot lands free to roll, the next step starting from its roll mirrored.
 * Contact wrenches (:func:`wrench_rows`): normal force, friction pyramid, centre of pressure inside the sole
   (or along the edge), yaw moment. Limits: joint range (on β: the convex hull property bounds the whole
   curve), torque limits, joint speeds, and the gait-quality bands on the pelvis (roll, pitch, yaw, height,
@@ -49,21 +52,22 @@ from numpy.typing import NDArray
 from robustgait.bezier import bernstein_basis, bezier_derivative_coeffs
 from robustgait.config import GenerationConfig
 from robustgait.config.gait import PELVIS_RATE_FROUDE
-from robustgait.domains import Contact, domain_graph, other_side
+from robustgait.domains import Contact, domain_graph, on_line_feet, other_side
 from robustgait.dynamics import Dynamics, foot_frame, impact_residual
 from robustgait.errors import RobustGaitError
 from robustgait.gait import BEZIER_DEGREE
 from robustgait.gaitgen.layout import (  # noqa: F401 (re-exported: the problem's layout and rows)
     DomainLayout,
     Layout,
+    double_support_free_joints,
     impulse_rows,
     inner_range,
     make_layout,
     trapezoid_weights,
     wrench_rows,
 )
+from robustgait.gaitgen.linefoot import roll_collocation, roll_periodicity, roll_rows
 from robustgait.robots import GaitQuality, Robot
-from robustgait.robots.legs import axis_kinds
 
 FloatArray = NDArray[np.float64]
 U_SCALE = 100.0
@@ -98,38 +102,6 @@ def swing_toe_down(swing_tilt: float, toe_off_pitch: float, until: float, tau: f
     if until <= 0.0:
         return swing_tilt
     return max(swing_tilt, toe_off_pitch * (1.0 - tau / until))
-
-
-def double_support_free_joints(robot: Robot, side: str, names: tuple[str, ...] | None = None) -> list[int]:
-    """Joints (spec order) of the ``side`` leg that are *not* Bézier outputs in double support.
-
-    With two line contacts (10 rows) the 18 coordinates keep 8 degrees of freedom, so only 8 joints can be
-    outputs; the base and 4 joints follow from the loop closure (a square 10 × 10 system at position,
-    velocity and acceleration level). The 4 must make that system regular: the front leg's hip roll (lateral
-    position), hip yaw (the heel edge's yaw), knee (distance) and ankle roll (the edge's roll) do — chosen by
-    the joint axes in the model's zero posture (x: roll, z: yaw, y: pitch; the knee is the second pitch joint
-    from the hip, the ankle roll the last roll joint), or given by ``names``."""
-    spec, m = robot.spec, robot.model
-    if names is not None:
-        missing = [n for n in names if n not in spec.joints]
-        if len(names) != 4 or missing:
-            raise RobustGaitError(f"ds_free_joints must name 4 actuated joints, got {list(names)}")
-        return [spec.joints.index(n) for n in names]
-    chain = list(robot.leg_joints[side])
-    if robot.ankle_rolls[side] is None:
-        raise RobustGaitError(f"the {side} leg ({', '.join(m.joint(j).name for j in chain)}) has no ankle roll: "
-                              "multi-contact gaits roll the heel's edge flat with it; generate flat-foot gaits "
-                              "(domains flat)")
-    kinds = list(axis_kinds(m, tuple(chain)))
-    rolls = [j for j, k in zip(chain, kinds, strict=True) if k == "x"]
-    yaws = [j for j, k in zip(chain, kinds, strict=True) if k == "z"]
-    pitches = [j for j, k in zip(chain, kinds, strict=True) if k == "y"]
-    if len(rolls) < 2 or not yaws or len(pitches) < 2:
-        raise RobustGaitError(f"cannot pick the double-support free joints of the {side} leg from its joint axes "
-                              f"({', '.join(m.joint(j).name for j in chain)}): set GenerationConfig.ds_free_joints")
-    picked = [rolls[0], yaws[0], pitches[1], rolls[-1]]
-    ids = [m.joint(n).id for n in spec.joints]
-    return [ids.index(j) for j in picked]
 
 
 def gait_quality(robot: Robot) -> GaitQuality:
@@ -201,6 +173,8 @@ class GaitProblem:
                 self._add_node(d, i)
                 self.node_rows.append(NodeRows(d, i, start, self._n_rows))
         self._add_position_periodicity()
+        if self.line_feet:
+            self._add_roll_collocation()
         self.g = cs.vertcat(*self._g)
         self.lbg, self.ubg = np.array(self._lbg), np.array(self._ubg)
         self.cost = self._cost()
@@ -213,6 +187,10 @@ class GaitProblem:
         half extents [m] and the mirror R (m × m: permutation and signs)."""
         dyn, config, robot = self.dyn, self.config, self.dyn.robot
         self.graph = graph = domain_graph(config.domains)
+        # line feet (docs/gaitgen.md, "Line feet"): the flat graph's soles stand on their lines, free to roll
+        self.line_feet = graph.name == "flat" and all(robot.spec.feet.get(s) == "line" for s in ("left", "right"))
+        if self.line_feet:
+            self.graph = graph = on_line_feet(graph)
         self.quality = gait_quality(robot)
         self.m = m = robot.n_joints
         counts = [config.nodes] + [config.ds_nodes] * (len(graph) - 1)
@@ -227,7 +205,8 @@ class GaitProblem:
         self.n_loop = int(dyn.loop_fun.size1_out(0)) if dyn.loops else 0
         self.layout = make_layout(
             m, counts, [sum(c.n_rows for c in dom.contacts) for dom in graph.domains],
-            [sum(c.n_rows for c in graph.target_contacts(d)) for d in range(len(graph))], self.n_passive, self.n_loop)
+            [sum(c.n_rows for c in graph.target_contacts(d)) for d in range(len(graph))], self.n_passive, self.n_loop,
+            3 if self.line_feet else 0)
         st, sw = config.stance, other_side(config.stance)
         self.stance, self.swing = st, sw
         self.free = (double_support_free_joints(robot, sw, config.ds_free_joints) if graph.name == "multicontact"
@@ -299,6 +278,8 @@ class GaitProblem:
         Jc = self._add_holonomic_contacts(d, i, v)
         if self.n_loop:
             self._add_loops(d, i, v)
+        if self.line_feet:
+            self._add_stance_roll(d, i, v)
         M = self._add_dynamics(v, Jc)
         self._add_contact_wrenches(d, v)
         if dom.guard == "touchdown":
@@ -309,6 +290,11 @@ class GaitProblem:
             nup = self._add_impact(d, v, M)
             if d == len(self.graph) - 1:
                 self._add_velocity_periodicity(nup)
+            if self.line_feet:
+                Hsw = self._fk[(self.swing, "sole")](v.H, v.s)
+                first = self.x[self.layout.nodes[0]["roll"]][:2]
+                self._add("roll_periodicity", roll_periodicity(first, Hsw[:3, :3], self._jac[(self.swing, "sole")](
+                    v.H, v.s), nup), 0.0, 0.0)
 
     def node_kind(self, d: int, i: int) -> tuple[int, bool, bool, bool, bool]:
         """What node i of domain d's rows depend on besides its variables and its Bézier basis values — the
@@ -380,7 +366,8 @@ class GaitProblem:
     def _add_holonomic_contacts(self, d: int, i: int, v: NodeSymbols) -> cs.SX:
         """Each contact c of domain d held (``<name>_position``, ``_orientation``, ``_velocity``,
         ``_acceleration``): its frame at :meth:`_contact_target` (3 rows [m]); flat: R[1,0] = R[2,0] = R[2,1] = 0,
-        line: R[0,1] = R[2,1] = 0 (edge along world y, pitch free); J_c ν = 0 (6 or 5 rows); J_c ν̇ + J̇_c ν = 0, alone
+        toe/heel line: R[0,1] = R[2,1] = 0 (edge along world y, pitch free), line foot: R[1,0] = R[2,0] = 0 (the foot
+        along world x, roll free); J_c ν = 0 (6 or 5 rows); J_c ν̇ + J̇_c ν = 0, alone
         at a later domain's first node (:meth:`_add_continuity`). Returns J_c stacked (contact rows × (6 + m))."""
         st, H, s, nu = self.stance, v.H, v.s, v.nu
         Js = []
@@ -388,11 +375,11 @@ class GaitProblem:
             key = (c.side(st), c.frame_kind())
             Hc = self._fk[key](H, s)
             J = self._jac[key](H, s)[list(c.rows), :]
-            name = "stance" if c.leg == "stance" and c.kind == "flat" else f"{c.leg}_{c.kind}"
+            name = "stance" if c.leg == "stance" and c.kind in ("flat", "line") else f"{c.leg}_{c.kind}"
             if not (d > 0 and i == 0):
                 self._add(f"{name}_position", Hc[:3, 3] - self._contact_target(c), 0.0, 0.0)
                 orient = (cs.vertcat(Hc[1, 0], Hc[2, 0], Hc[2, 1]) if c.kind == "flat"
-                          else cs.vertcat(Hc[0, 1], Hc[2, 1]))
+                          else cs.vertcat(Hc[1, 0], Hc[2, 0]) if c.kind == "line" else cs.vertcat(Hc[0, 1], Hc[2, 1]))
                 self._add(f"{name}_orientation", orient, 0.0, 0.0)
                 self._add(f"{name}_velocity", J @ nu, 0.0, 0.0)
             self._add(f"{name}_acceleration",
@@ -409,6 +396,23 @@ class GaitProblem:
             self._add("loop_position", phi, 0.0, 0.0)
             self._add("loop_velocity", vel, 0.0, 0.0)
         self._add("loop_acceleration", acc, 0.0, 0.0)
+
+    def _add_stance_roll(self, d: int, i: int, v: NodeSymbols) -> None:
+        """On line feet, the node's stance-foot roll, rate and acceleration variables tied to the model (3 rows [rad,
+        rad/s, rad/s²], ``stance_roll``; :func:`~robustgait.gaitgen.linefoot.roll_rows`)."""
+        key = (self.stance, "sole")
+        Hc = self._fk[key](v.H, v.s)
+        self._add("stance_roll", roll_rows(self.x[self.layout.domains[d].nodes[i]["roll"]], Hc[:3, :3],
+                                           self._jac[key](v.H, v.s), self._jdot[key](v.H, v.s, v.vb, v.sd), v.nu,
+                                           cs.vertcat(v.ab, v.sdd)), 0.0, 0.0)
+
+    def _add_roll_collocation(self) -> None:
+        """On line feet, the stance foot's roll integrated node to node (2 (N − 1) rows [rad, rad/s],
+        ``roll_collocation``; :func:`~robustgait.gaitgen.linefoot.roll_collocation`, h = T / (N − 1))."""
+        nodes, h = self.layout.nodes, self._durations[0] / (self.n - 1)
+        for k in range(self.n - 1):
+            self._add("roll_collocation", roll_collocation(self.x[nodes[k]["roll"]], self.x[nodes[k + 1]["roll"]], h),
+                      0.0, 0.0)
 
     def _loop_jacobian(self, s: cs.SX) -> cs.SX:
         """The loops' Jacobian in adam's mixed velocities, [0, J_h(s)] (k × (6 + n)): the rows do not move with the
@@ -439,9 +443,10 @@ class GaitProblem:
 
     def _add_swing_foot(self, v: NodeSymbols, i: int, n: int) -> None:
         """The swing sole S in single support (p_S [m], R_S). Inner nodes: 0 ≤ z_S ≤ h, corners ≥ flat_approach z_S
-        (0 multi-contact), R_S[2,0], R_S[2,1] within the swing tilt (multi-contact: toe up to the heel-strike pitch,
-        down per :func:`swing_toe_down`), |R_S[1,0]| ≤ sin(swing_yaw), ±y_S ≥ 2b + foot_gap. τ = ½: z_S = h. τ = 1:
-        flat at (L, ±W, 0), R_S[1,0] = R_S[2,0] = R_S[2,1] = 0 (flat graph) or heel edge at (L − a, ±W, 0),
+        (0 multi-contact), R_S[2,0], R_S[2,1] (R_S[2,0] only on line feet) within the swing tilt (multi-contact: toe
+        up to the heel-strike pitch, down per :func:`swing_toe_down`), |R_S[1,0]| ≤ sin(swing_yaw), ±y_S ≥ 2b +
+        foot_gap. τ = ½: z_S = h. τ = 1: flat at (L, ±W, 0), R_S[1,0] = R_S[2,0] = R_S[2,1] = 0 (flat graph; line
+        feet: roll free, R_S[2,1] not held) or heel edge at (L − a, ±W, 0),
         R_S[0,1] = R_S[2,1] = 0, R_S[2,0] within the heel-strike pitch (multi-contact); touchdown velocity bounded
         (vertical, tangential [m/s], angular [rad/s])."""
         config, quality, sw, multi = self.config, self.quality, self.swing, self._multi
@@ -460,7 +465,10 @@ class GaitProblem:
             pitch_hi = math.sin(config.heel_strike_pitch[1]) if multi else tilt
             pitch_lo = -math.sin(swing_toe_down(quality.swing_tilt, config.toe_off_pitch[1],
                                                 quality.swing_toe_down_until, i / (n - 1))) if multi else -tilt
-            self._add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [pitch_lo, -tilt], [pitch_hi, tilt])
+            if self.line_feet:  # a line has no edge to touch the ground when it rolls: its pitch only
+                self._add("swing_tilt", Hsw[2, 0], pitch_lo, pitch_hi)
+            else:
+                self._add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [pitch_lo, -tilt], [pitch_hi, tilt])
             self._add("swing_yaw", Hsw[1, 0], -math.sin(quality.swing_yaw), math.sin(quality.swing_yaw))
             self._add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.scaled("foot_gap")), 0.0,
                       cs.inf)
@@ -470,7 +478,8 @@ class GaitProblem:
             L, W = self._length, self._width
             if not multi:
                 self._add("landing_position", psw - cs.vertcat(L, side_sign * W, 0.0), 0.0, 0.0)
-                self._add("landing_orientation", cs.vertcat(Hsw[1, 0], Hsw[2, 0], Hsw[2, 1]), 0.0, 0.0)
+                roll = [] if self.line_feet else [Hsw[2, 1]]  # a line foot lands free to roll
+                self._add("landing_orientation", cs.vertcat(Hsw[1, 0], Hsw[2, 0], *roll), 0.0, 0.0)
                 Jsw = self._jac[(sw, "sole")](H, s)
                 ang = Jsw[3:, :] @ nu
             else:

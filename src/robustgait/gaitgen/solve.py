@@ -141,11 +141,12 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
         return closed_chain_states(dyn, prob, s, sd, sdd)
     n = len(taus)
     keys = [foot_frame(c.side(prob.stance), c.frame_kind()) for c in dom.contacts]
-    rows = [list(c.rows) for c in dom.contacts]
+    # one stance foot (flat or on its line) held flat: its whole frame fixes the base; λ keeps the contact's rows
+    single = len(dom.contacts) == 1 and dom.contacts[0].kind in ("flat", "line") and dom.contacts[0].leg == "stance"
+    rows = [list(range(6)) if single else list(c.rows) for c in dom.contacts]
     nl = sum(len(r) for r in rows)
     out = {k: np.zeros((n, d)) for k, d in (("vb", 6), ("ab", 6), ("u", m), ("lam", nl))}
     Hs = np.zeros((n, 4, 4))
-    single = len(dom.contacts) == 1 and dom.contacts[0].kind == "flat" and dom.contacts[0].leg == "stance"
     free = [j for j in range(m) if j not in prob.outputs[domain]]
     cols = list(range(6)) + [6 + j for j in free]  # the unknown velocities: base and free joints
     known = [6 + j for j in prob.outputs[domain]]
@@ -187,8 +188,8 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
         qvel_plus, impulse = dyn.impact_map(qpos, qvel, target[0].side(prob.stance))
     else:
         qvel_plus, impulse = dyn.impact_map(qpos, qvel, target, prob.stance)
-    return NodeStates(Hs, s, sd, sdd, out["vb"], out["ab"], out["u"], out["lam"], dyn.to_mixed(qpos, qvel_plus),
-                      impulse)
+    lam = out["lam"][:, list(dom.contacts[0].rows)] if single else out["lam"]
+    return NodeStates(Hs, s, sd, sdd, out["vb"], out["ab"], out["u"], lam, dyn.to_mixed(qpos, qvel_plus), impulse)
 
 
 def passive_motion(dyn: Dynamics, s: FloatArray, sd: FloatArray, sdd: FloatArray
@@ -240,11 +241,13 @@ def closed_chain_states(dyn: Dynamics, prob: GaitProblem, s: FloatArray, sd: Flo
         lamh.append(np.linalg.solve(Jh[:, m:].T, rhs[6 + m:] - J[:, 6 + m:].T @ lam[i]))
         u[i] = rhs[6:6 + m] - J[:, 6:6 + m].T @ lam[i] - Jh[:, :m].T @ lamh[-1]
     H, nu = Hs[-1], np.concatenate([vb[-1], sd[-1]])
-    Jt = np.asarray(kd.jacobian_fun(foot_frame(prob.swing, "sole"))(H, s[-1]))
+    target = list(prob.graph.target_contacts(0)[0].rows)  # the swing sole's rows: flat, or its line
+    Jt = np.asarray(kd.jacobian_fun(foot_frame(prob.swing, "sole"))(H, s[-1]))[target]
     Jh = np.asarray(dyn.loop_fun(s[-1], sd[-1], sdd[-1])[3], dtype=float)
     Jall = np.vstack([Jt, np.hstack([np.zeros((len(Jh), 6)), Jh])])
     nu_plus, impulse = impact_map(np.asarray(dyn.inertia(H, s[-1])), Jall, nu)
-    return NodeStates(Hs, s, sd, sdd, vb, ab, u, lam, nu_plus, impulse, np.array(lamh))
+    stance = list(prob.graph.domains[0].contacts[0].rows)  # the sole held flat; λ keeps the contact's rows
+    return NodeStates(Hs, s, sd, sdd, vb, ab, u, lam[:, stance], nu_plus, impulse, np.array(lamh))
 
 
 def fit_bezier(taus: FloatArray, s: FloatArray, sd: FloatArray, sdd: FloatArray, duration: float) -> FloatArray:
