@@ -20,8 +20,12 @@ from robustgait.inspection.model import open_model
 from robustgait.robots.loops import (
     close_loops,
     closed_chains,
+    closed_state,
     find_springs,
     loop_residuals,
+    loop_rows,
+    padded_state,
+    reduced_state,
     undriven_motion,
 )
 from tests.inspection.test_inspection import SERVO_RULE, run, write
@@ -197,3 +201,28 @@ def test_the_quaternion_of_the_rod_stays_unit(tmp_path: Path) -> None:
     r = open_model(write(tmp_path, chain_xml(), "chain.xml"))
     for quat in r.balls.values():
         assert float(np.linalg.norm(quat)) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_a_gait_files_state_drops_the_passive_joints_and_closing_it_closes_the_loops(tmp_path: Path) -> None:
+    m = mujoco.MjModel.from_xml_path(str(write(tmp_path, chain_xml(), "chain.xml")))
+    loops, passive = closed_chains(m)
+    rng = np.random.default_rng(1)
+    q, v = m.key_qpos[0].copy(), rng.normal(0.0, 0.5, m.nv)
+    for s in ("left", "right"):
+        q[m.jnt_qposadr[m.joint(f"{s}_knee").id]] = 0.4
+    q = close_loops(m, q, loops, tuple(j for j in passive if m.jnt_stiffness[j] == 0), 1e-8)
+    qr, vr = reduced_state(m, passive, q, v)
+    assert qr.shape == (7 + 8,) and vr.shape == (6 + 8,)  # base, and 4 planned joints per leg
+    qp, vp = padded_state(m, passive, qr, vr)
+    assert np.array_equal(reduced_state(m, passive, qp, vp)[0], qr)
+    qc, vc = closed_state(m, passive, qr, vr)
+    assert np.allclose(reduced_state(m, passive, qc, vc)[0], qr, atol=0, rtol=0)
+    assert max(loop_residuals(m, qc, loops).values()) < 1e-8
+    assert np.allclose(qc[m.jnt_qposadr[[sp.joint for sp in find_springs(m, passive)]]], 0.0)  # springref, at rest
+    data = mujoco.MjData(m)
+    data.qpos[:] = qc
+    _, jac = loop_rows(m, data, loops)
+    assert np.abs(jac @ vc).max() < 1e-10  # the passive joints' rates hold the loops
+    # the tarsus the loops close is the one they closed before (the same branch)
+    tarsus = [m.jnt_qposadr[m.joint(f"{s}_tarsus").id] for s in ("left", "right")]
+    assert np.abs(qc[tarsus] - q[tarsus]).max() < 1e-6

@@ -28,6 +28,7 @@ from robustgait.gaitgen.problem import (
 )
 from robustgait.gaitgen.states import NodeStates, to_mujoco_state
 from robustgait.robots import Robot
+from robustgait.robots.loops import reduced_state
 
 FloatArray = NDArray[np.float64]
 
@@ -459,6 +460,8 @@ class GaitGenerator:
         q0, v0 = robot.expand_state(*to_mujoco_state(robot.planned, first.H[0], first.s[0], first.vb[0], first.sd[0]))
         q1, v1 = robot.expand_state(*to_mujoco_state(robot.planned, section.H[-1], section.s[-1], section.vb[-1],
                                                      section.sd[-1]))
+        if robot.passive_ids:  # a gait file holds the base, planned and held joints only (the loops close the rest)
+            (q0, v0), (q1, v1) = (reduced_state(robot.model, robot.passive_ids, q, v) for q, v in ((q0, v0), (q1, v1)))
         solver = {"status": res.status, "iterations": res.iterations, "solve_seconds": res.solve_seconds,
                   "build_seconds": self.build_seconds, "objective": res.objective,
                   "nodes": sum(len(ns.s) for ns in states), "variables": self.n_variables,

@@ -318,3 +318,51 @@ def complete_rods(model: mujoco.MjModel, qpos: FloatArray, qvel: FloatArray) -> 
     v[dofs] = 0.0
     v[dofs] = -np.linalg.lstsq(jac[:, dofs], jac @ v, rcond=None)[0]
     return q, v
+
+
+def passive_addresses(model: mujoco.MjModel, passive: tuple[int, ...]) -> tuple[list[int], list[int]]:
+    """The qpos and qvel addresses of the joints ``passive`` (4 and 3 for a ball joint, 1 and 1 for a hinge)."""
+    qadr = [int(model.jnt_qposadr[j]) + k for j in passive for k in range(4 if int(model.jnt_type[j]) == BALL else 1)]
+    return qadr, list(joint_dofs(model, passive))
+
+
+def reduced_state(model: mujoco.MjModel, passive: tuple[int, ...], qpos: FloatArray, qvel: FloatArray
+                  ) -> tuple[FloatArray, FloatArray]:
+    """A state of ``model`` (..., nq), (..., nv) without the coordinates of its ``passive`` joints: the base, planned
+    and held joints in model order (a gait file's state). A model without passive joints is returned as given."""
+    qadr, vadr = passive_addresses(model, passive)
+    return (np.delete(np.asarray(qpos, dtype=float), qadr, axis=-1),
+            np.delete(np.asarray(qvel, dtype=float), vadr, axis=-1))
+
+
+def padded_state(model: mujoco.MjModel, passive: tuple[int, ...], qpos: FloatArray, qvel: FloatArray
+                 ) -> tuple[FloatArray, FloatArray]:
+    """A :func:`reduced_state` (..., nq − p_q), (..., nv − p_v) in the model's size (..., nq), (..., nv): the passive
+    joints at the model's ``qpos0`` and at rest, the loops not closed (:func:`closed_state` closes them)."""
+    qadr, vadr = passive_addresses(model, passive)
+    qpos, qvel = np.asarray(qpos, dtype=float), np.asarray(qvel, dtype=float)
+    q = np.broadcast_to(model.qpos0, (*qpos.shape[:-1], model.nq)).copy()
+    v = np.zeros((*qvel.shape[:-1], model.nv))
+    q[..., np.setdiff1d(np.arange(model.nq), qadr)] = qpos
+    v[..., np.setdiff1d(np.arange(model.nv), vadr)] = qvel
+    return q, v
+
+
+def closed_state(model: mujoco.MjModel, passive: tuple[int, ...], qpos: FloatArray, qvel: FloatArray
+                 ) -> tuple[FloatArray, FloatArray]:
+    """The full state (nq,), (nv,) of a :func:`reduced_state` (qpos, qvel): each passive spring at its springref and
+    at rest, every other passive joint solved from the loops — positions by :func:`close_loops` from the model's
+    ``qpos0``, velocities the least-norm v_p with J_p v_p = −J_rest v_rest on the loops' rows (:func:`loop_rows`)."""
+    q, v = padded_state(model, passive, qpos, qvel)
+    springs = {sp.joint: sp.springref for sp in find_springs(model, passive)}
+    for j, ref in springs.items():
+        q[int(model.jnt_qposadr[j])] = ref
+    solved = tuple(j for j in passive if j not in springs)
+    loops, _ = closed_chains(model)
+    q = close_loops(model, q, loops, solved, LOOP_CLOSE_TOLERANCE)
+    data = mujoco.MjData(model)
+    data.qpos[:] = q
+    _, jac = loop_rows(model, data, loops)
+    dofs = list(joint_dofs(model, solved))
+    v[dofs] = -np.linalg.lstsq(jac[:, dofs], jac @ v, rcond=None)[0]
+    return q, v
