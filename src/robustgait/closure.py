@@ -40,7 +40,7 @@ POINT_INERTIA = 1e-9  # [kg m²] the diagonal inertia given to a lumped point ma
 class PlanLoop:
     """One holonomic row set of the planning model: ``kind`` ``distance`` (a rod on a ball joint, 1 row), ``connect``
     (the independent directions of an anchor offset, up to 3 rows) or ``spring`` (1 row). ``frames``: the adam frames
-    of its two anchors; ``ancestor``: the body in whose frame a connect's offset is measured; ``length``: a distance
+    of its two anchors; ``ancestor``: the body in whose frame a connect's offset is taken; ``length``: a distance
     row's L [m]; ``joint``, ``ref``: a spring's joint name and springref [rad or m]."""
 
     key: str
