@@ -13,6 +13,10 @@ leg becomes the next step's stance). Contacts:
   edge's midpoint is fixed and the edge keeps its direction (the foot's y axis stays the world's y axis),
   so the foot can only pitch about the edge (5 rows: position, and the angular velocity about world x and
   z); wrench (f_x, f_y, f_z, n_x, n_z) at the edge's midpoint, world axes.
+* ``line`` — a foot without width (its sole a line heel to toe) standing on that line (FROST's line contact along
+  the foot): the sole frame's position is fixed and its x axis stays the world's x axis, so the foot can only roll
+  about the line (5 rows: position, and the angular velocity about world y and z); wrench (f_x, f_y, f_z, n_y, n_z)
+  at the sole frame, world axes — no roll moment. :func:`on_line_feet` puts a graph's flat soles on it.
 
 Graphs: ``flat`` — one domain, single support with the stance sole flat, ended by the swing sole landing
 flat (touchdown). ``multicontact`` (paper Fig. 2b) — single support with the stance sole flat, ended by
@@ -30,17 +34,18 @@ from typing import Literal
 from robustgait.errors import RobustGaitError
 
 Leg = Literal["stance", "swing"]
-ContactKind = Literal["flat", "toe", "heel"]
+ContactKind = Literal["flat", "toe", "heel", "line"]
 Guard = Literal["touchdown", "foot_flat"]
 GRAPH_NAMES = ("flat", "multicontact")
 # rows of a frame's 6 × nv (linear; angular, world axes) Jacobian that a contact fixes
 CONTACT_ROWS: dict[str, tuple[int, ...]] = {"flat": (0, 1, 2, 3, 4, 5), "toe": (0, 1, 2, 3, 5),
-                                            "heel": (0, 1, 2, 3, 5)}
+                                            "heel": (0, 1, 2, 3, 5), "line": (0, 1, 2, 4, 5)}
 
 
 @dataclass(frozen=True)
 class Contact:
-    """One foot's contact: which leg (in the step's labels) and how (flat sole, toe line, heel line)."""
+    """One foot's contact: which leg (in the step's labels) and how (flat sole, toe line, heel line, the line of a
+    foot without width)."""
 
     leg: Leg
     kind: ContactKind
@@ -58,8 +63,9 @@ class Contact:
         return stance if self.leg == "stance" else other_side(stance)
 
     def frame_kind(self) -> str:
-        """The foot frame the contact acts at: the sole frame, or the toe / heel edge midpoint."""
-        return "sole" if self.kind == "flat" else self.kind
+        """The foot frame the contact acts at: the sole frame (flat sole, line foot), or the toe / heel edge
+        midpoint."""
+        return "sole" if self.kind in ("flat", "line") else self.kind
 
     def relabeled(self) -> Contact:
         return Contact("swing" if self.leg == "stance" else "stance", self.kind)
@@ -105,6 +111,14 @@ def domain_graph(name: str) -> DomainGraph:
     if name not in GRAPHS:
         raise RobustGaitError(f"unknown domain graph {name!r} (choose from {', '.join(GRAPHS)})")
     return GRAPHS[name]
+
+
+def on_line_feet(graph: DomainGraph) -> DomainGraph:
+    """``graph`` (its name kept) with each flat sole contact a ``line`` contact: the graph of a robot whose feet are
+    lines, which can roll about them and take no roll moment."""
+    doms = tuple(DomainSpec(d.name, tuple(Contact(c.leg, "line") if c.kind == "flat" else c for c in d.contacts),
+                            d.guard) for d in graph.domains)
+    return DomainGraph(graph.name, doms)
 
 
 def other_side(side: str) -> str:

@@ -50,9 +50,12 @@ import numpy as np
 from adam.casadi import KinDynComputations
 from numpy.typing import ArrayLike, NDArray
 
+from robustgait.closure import PlanLoop, plan_loops
+from robustgait.config.robot import LOOP_TOLERANCE
 from robustgait.domains import Contact
 from robustgait.errors import input_error
 from robustgait.robots import Robot
+from robustgait.robots.loops import BALL, NULL_FRACTION, close_loops, closed_chains
 from robustgait.robots.spec import SIDES
 from robustgait.rotations import quat_to_mat
 
@@ -136,10 +139,13 @@ def _symmetrize(m: mujoco.MjModel, robot: Robot, frames: dict[str, dict[str, tup
             frames[side][kind] = (R.T @ (target - d.xpos[body[side]]), frames[side][kind][1])
 
 
-def _adam_model(robot: Robot) -> mujoco.MjModel:
-    """The robot's model prepared for adam: foot frames added, joint frames moved, statics massless."""
+def _adam_model(robot: Robot) -> tuple[mujoco.MjModel, list[PlanLoop], tuple[int, ...]]:
+    """The robot's model prepared for adam: foot frames added, joint frames moved, statics massless, and a closed
+    chain's rods replaced by distance rows (:func:`robustgait.closure.plan_loops`). Returns it, the loops' rows and the
+    passive joints (ids in ``robot.model``) that stay coordinates."""
     mjs = robot.mjspec()
     m = robot.model
+    loops, hinges = plan_loops(mjs, m, robot.spec.source or robot.spec.mjcf) if robot.passive_ids else ([], ())
     frames = {side: _sole_frames(robot, side) for side in SIDES}
     _symmetrize(m, robot, frames)
     for side in SIDES:
@@ -170,7 +176,27 @@ def _adam_model(robot: Robot) -> mujoco.MjModel:
                 m.body_ipos[b] -= p
                 m.jnt_pos[j] = 0.0
                 m.body_pos[np.flatnonzero(m.body_parentid == b)] -= p
-    return m
+            _zero_reference(m, j)
+    return m, loops, hinges
+
+
+def _zero_reference(m: mujoco.MjModel, j: int) -> None:
+    """Joint ``j`` of ``m`` (at the body's origin) measured from 0 instead of its reference ``qpos0`` (in place): MuJoCo
+    turns a hinge's body by R(a, q − q_ref) from its ``body_quat`` (a slide moves it by (q − q_ref) a), adam by R(a, q)
+    (by q a), so the body's own pose is taken back by the reference — quat ← quat R(a, −q_ref) (pos ← pos − q_ref R a)
+    — and ``qpos0`` set to 0. A joint whose reference is 0 is left alone."""
+    adr = int(m.jnt_qposadr[j])
+    ref, b, axis = float(m.qpos0[adr]), int(m.jnt_bodyid[j]), m.jnt_axis[j]
+    if ref == 0.0 or int(m.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
+        return
+    if int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE):
+        turn, out = np.zeros(4), np.zeros(4)
+        mujoco.mju_axisAngle2Quat(turn, axis, -ref)
+        mujoco.mju_mulQuat(out, m.body_quat[b], turn)
+        m.body_quat[b] = out
+    else:
+        m.body_pos[b] -= ref * (quat_to_rotation(m.body_quat[b]) @ axis)
+    m.qpos0[adr] = 0.0
 
 
 class Dynamics:
@@ -190,14 +216,20 @@ class Dynamics:
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", message="Gimbal lock")
             try:
+                model, self.loops, hinges = _adam_model(self.robot)
+                self.passive: tuple[str, ...] = tuple(str(m.joint(j).name) for j in hinges)
                 self.kindyn = KinDynComputations.from_mujoco_model(
-                    _adam_model(self.robot), joints_name_list=list(self.robot.spec.joints),
+                    model, joints_name_list=[*self.robot.spec.joints, *self.passive],
                     gravity=np.concatenate([self.gravity, np.zeros(3)]))
             except ValueError as exc:
                 raise input_error(self.robot.spec.mjcf, f"adam-robotics cannot build the model: {exc}") from None
         self.frames: tuple[str, ...] = tuple(self.kindyn.rbdalgos.model.frames)
-        self._perm = np.zeros((self.robot.n_joints, self.nv - 6))
-        self._perm[np.arange(self.robot.n_joints), self.robot.dof_idx - 6] = 1.0
+        # adam's joints: the planned ones (spec order), then the passive hinges of closed chains (model order)
+        self.qpos_idx = np.concatenate([robot.qpos_idx, [m.jnt_qposadr[j] for j in hinges]]).astype(np.int64)
+        self.dof_idx = np.concatenate([robot.dof_idx, [m.jnt_dofadr[j] for j in hinges]]).astype(np.int64)
+        self.n_joints = int(self.dof_idx.size)
+        self._perm = np.zeros((self.n_joints, self.nv - 6))
+        self._perm[np.arange(self.n_joints), self.dof_idx - 6] = 1.0
         self._fk: dict[str, cs.Function] = {}
 
     @property
@@ -215,7 +247,7 @@ class Dynamics:
         """The rotor inertias on the mass matrix's diagonal in adam's mixed coordinates (6 + n,): the floating base's
         ``dof_armature`` (one value for all six, so a rotation of the base's velocity leaves it as it is), then the
         joints' in spec order."""
-        return np.concatenate([self.armature[:6], self.armature[self.robot.dof_idx]])
+        return np.concatenate([self.armature[:6], self.armature[self.dof_idx]])
 
     def inertia(self, H: Any, s: Any) -> Any:
         """M(q) + diag(armature) ((6 + n) × (6 + n)), adam's mixed coordinates: the mass matrix of the equations of
@@ -228,6 +260,82 @@ class Dynamics:
         """CasADi function ``(H, s, ν_base, ṡ) -> h`` (n+6,): Coriolis, centrifugal and gravity, mixed."""
         return self.kindyn.bias_force_fun()
 
+    @cached_property
+    def closed_posture(self) -> Array:
+        """The joints s (n,) of the spec's posture (the model's ``qpos0`` where it sets none) with the passive joints
+        solved so that the model's loops close (:func:`robustgait.robots.loops.close_loops`; springs held at their
+        angle, a hinge first clipped into its range): where the loop rows' directions are picked and the passive
+        joints' Newton iterations start."""
+        robot, m = self.robot, self.robot.model
+        q = m.qpos0.copy()
+        if robot.spec.posture:
+            q[robot.qpos_idx] = robot.spec.posture
+        loops, passive = closed_chains(m)
+        for j in passive:
+            if int(m.jnt_type[j]) != BALL and m.jnt_limited[j]:
+                q[m.jnt_qposadr[j]] = np.clip(q[m.jnt_qposadr[j]], *m.jnt_range[j])
+        q = close_loops(m, q, loops, tuple(j for j in passive if m.jnt_stiffness[j] == 0), LOOP_TOLERANCE)
+        return self.joint_positions(q)
+
+    def _loop_offsets(self, s: cs.SX) -> list[cs.SX]:
+        """Each loop's rows before selection (:mod:`robustgait.closure`) at joints s (n,), the base at the identity:
+        a rod's distance row (|p_a − p_b|² − L²) / (2 L) [m] (1), a connect's anchor offset R_ancᵀ (p_a − p_b) [m] (3),
+        a spring's s_j − springref [rad] (1)."""
+        eye, names = cs.DM.eye(4), [*self.robot.spec.joints, *self.passive]
+        out = []
+        for lp in self.loops:
+            if lp.kind == "spring":
+                out.append(s[names.index(lp.joint)] - lp.ref)
+                continue
+            d = self.frame_fun(lp.frames[0])(eye, s)[:3, 3] - self.frame_fun(lp.frames[1])(eye, s)[:3, 3]
+            if lp.kind == "distance":
+                out.append((cs.sumsqr(d) - lp.length**2) / (2.0 * lp.length))
+            else:
+                R = cs.DM.eye(3) if lp.ancestor == "world" else self.frame_fun(lp.ancestor)(eye, s)[:3, :3]
+                out.append(R.T @ d)
+        return out
+
+    @cached_property
+    def loop_fun(self) -> cs.Function:
+        """CasADi function ``(s, ṡ, s̈) -> (φ, J_h ṡ, J_h s̈ + J̇_h ṡ, J_h)`` of the loops' holonomic rows φ(s) (k,)
+        [m or rad] (:meth:`_loop_offsets`; a connect's offset projected on its independent directions, the left
+        singular vectors of its Jacobian at :attr:`closed_posture` whose singular values exceed
+        :data:`robustgait.robots.loops.NULL_FRACTION` of the largest), J_h = ∂φ/∂s (k, n). The rows do not depend on
+        the base: in adam's mixed coordinates their Jacobian is [0 (k × 6), J_h]. Raises RobustGaitError when the rows
+        do not fix the passive joints (J_h's passive columns not square and regular at the posture)."""
+        n, m = self.n_joints, self.robot.n_joints
+        s, sd, sdd = (cs.SX.sym(k, n) for k in ("s", "sd", "sdd"))
+        s0 = self.closed_posture
+        blocks = []
+        for lp, r in zip(self.loops, self._loop_offsets(s), strict=True):
+            if lp.kind == "connect":
+                U, sv, _ = np.linalg.svd(np.asarray(cs.Function("J", [s], [cs.jacobian(r, s)])(s0)))
+                r = cs.mtimes(cs.DM(U[:, :int(np.sum(sv > NULL_FRACTION * sv.max()))]).T, r)
+            blocks.append(r)
+        phi = cs.vertcat(*blocks)
+        J = cs.jacobian(phi, s)
+        vel = cs.mtimes(J, sd)
+        fun = cs.Function("loops", [s, sd, sdd], [phi, vel, cs.mtimes(J, sdd) + cs.mtimes(cs.jacobian(vel, s), sd), J],
+                          ["s", "sd", "sdd"], ["phi", "vel", "acc", "J"])
+        Jp = np.asarray(fun(s0, np.zeros(n), np.zeros(n))[3])[:, m:]
+        if Jp.shape[0] != Jp.shape[1] or np.linalg.matrix_rank(Jp) < Jp.shape[1]:
+            raise input_error(self.robot.spec.source or self.robot.spec.mjcf,
+                              f"the closed chains' {Jp.shape[0]} independent rows (rank {np.linalg.matrix_rank(Jp)}) "
+                              f"do not fix the {Jp.shape[1]} passive joints the gait problem keeps")
+        return fun
+
+    def close_passive(self, s: ArrayLike, iterations: int = 50, tol: float = 1e-12) -> Array:
+        """Joints s (n,) with the passive ones (the last n − m) moved so that φ(s) = 0: Newton steps
+        Δs_p = −J_p⁻¹ φ (:attr:`loop_fun`) from the passive values given, until ‖φ‖∞ ≤ ``tol``."""
+        q, m = np.array(s, dtype=float), self.robot.n_joints
+        zero = np.zeros(self.n_joints)
+        for _ in range(iterations):
+            phi, _, _, J = (np.asarray(v, dtype=float) for v in self.loop_fun(q, zero, zero))
+            if phi.size == 0 or np.abs(phi).max() <= tol:
+                break
+            q[m:] -= np.linalg.solve(J[:, m:], phi.ravel())
+        return q
+
     def frame_fun(self, frame: str) -> cs.Function:
         """CasADi function ``(H, s) -> H_frame`` (4, 4): world pose of an adam frame or link."""
         if frame not in self._fk:
@@ -235,12 +343,13 @@ class Dynamics:
         return self._fk[frame]
 
     def joint_positions(self, qpos: ArrayLike) -> Array:
-        """Joint angles ``s`` (n,) in spec order from MuJoCo's ``qpos``."""
-        return np.asarray(qpos, dtype=float)[self.robot.qpos_idx]
+        """Joint angles ``s`` (n,) in adam's order (spec order, then passive hinges) from MuJoCo's ``qpos``."""
+        return np.asarray(qpos, dtype=float)[self.qpos_idx]
 
     def velocity_map(self, qpos: ArrayLike) -> Array:
-        """``T`` (nv, nv) with ``ν_mixed = T qvel``; orthogonal, so ``qvel = Tᵀ ν_mixed``."""
-        T = np.zeros((self.nv, self.nv))
+        """``T`` (6 + n, nv) with ``ν_mixed = T qvel``; orthonormal rows, so ``qvel = Tᵀ ν_mixed`` (square and
+        orthogonal unless a closed chain's rods on ball joints, not in adam's model, leave columns out)."""
+        T = np.zeros((6 + self.n_joints, self.nv))
         T[:3, :3] = np.eye(3)
         T[3:6, 3:6] = quat_to_rotation(np.asarray(qpos, dtype=float)[3:7])
         T[6:, 6:] = self._perm

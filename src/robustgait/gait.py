@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from robustgait.config import GaitParams
 from robustgait.errors import RobustGaitError
+from robustgait.robots.loops import closed_state, padded_state, passive_addresses, reduced_state
 
 if TYPE_CHECKING:
     from robustgait.robots import Robot
@@ -122,10 +123,26 @@ class Gait:
             names = ", ".join(f"{n} = {a:g}" for n, a in self.held) or "none"
             raise RobustGaitError(f"held: the gait holds {names}, robot '{robot.name}' holds "
                                   f"{', '.join(f'{n} = {a:g}' for n, a in held) or 'none'} (joints.held)")
+        nq, nv = robot.model.nq, robot.model.nv
+        if robot.passive_ids:  # a gait file holds no passive joints (robots.loops.reduced_state)
+            qadr, vadr = passive_addresses(robot.model, robot.passive_ids)
+            nq, nv = nq - len(qadr), nv - len(vadr)
         for key, s in (("initial_state", self.initial_state), ("pre_impact_state", self.pre_impact_state)):
-            if s is not None and (s.qpos.shape != (robot.model.nq,) or s.qvel.shape != (robot.model.nv,)):
+            if s is not None and (s.qpos.shape != (nq,) or s.qvel.shape != (nv,)):
                 raise RobustGaitError(f"{key}: sizes ({s.qpos.size}, {s.qvel.size}), robot '{robot.name}' "
-                                      f"needs ({robot.model.nq}, {robot.model.nv})")
+                                      f"needs ({nq}, {nv})")
+
+    def closed(self, robot: Robot) -> Gait:
+        """This gait with its states in ``robot``'s full size, the loops of a robot with closed chains closed
+        (:func:`robustgait.robots.loops.closed_state`; a gait file holds no passive joints): what the simulator
+        starts from. A robot without passive joints gets the gait as it is."""
+        if not robot.passive_ids:
+            return self
+
+        def close(s: State | None) -> State | None:
+            return None if s is None else State(*closed_state(robot.model, robot.passive_ids, s.qpos, s.qvel))
+
+        return replace(self, initial_state=close(self.initial_state), pre_impact_state=close(self.pre_impact_state))
 
     def mirrored(self, robot: Robot) -> Gait:
         """The same gait written for the other stance leg (robot's permutation and signs)."""
@@ -134,7 +151,13 @@ class Gait:
                      for d in self.domains)
 
         def mirror(s: State | None) -> State | None:
-            return None if s is None else State(*robot.mirror_state(s.qpos, s.qvel))
+            if s is None:
+                return None
+            if not robot.passive_ids:
+                return State(*robot.mirror_state(s.qpos, s.qvel))
+            # a state without passive joints (robots.loops.reduced_state): mirrored in the model's size
+            m, p = robot.model, robot.passive_ids
+            return State(*reduced_state(m, p, *robot.mirror_state(*padded_state(m, p, s.qpos, s.qvel))))
 
         return replace(self, stance="left" if self.stance == "right" else "right", domains=doms,
                        initial_state=mirror(self.initial_state), pre_impact_state=mirror(self.pre_impact_state))

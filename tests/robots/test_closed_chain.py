@@ -1,7 +1,6 @@
-"""Closed-chain legs (robustgait.robots.legs.closed_chain; docs/robots.md, "Your robot: robot init and robot
-check"): an ankle driven through a rod — an equality constraint that ties a body or joint of a leg — is refused in
-one line naming the constraint and what a user changes, by robot init and by the loader; an equality elsewhere (the
-arms) is a note."""
+"""Equality constraints of a serial robot's joints (robustgait.robots.loops.find_loops; docs/robots.md, "Closed chains,
+springs and line feet"): an equality none of whose joints is passive — every joint servoed — is found in the joints it
+ties and kept by MuJoCo, a note of robot init; closed chains with passive joints: tests/robots/test_loops.py."""
 
 from __future__ import annotations
 
@@ -12,8 +11,8 @@ import mujoco
 import pytest
 
 from robustgait import load_robot
-from robustgait.errors import RobustGaitError
-from robustgait.robots.legs import closed_chain, subtree
+from robustgait.robots.legs import subtree
+from robustgait.robots.loops import find_loops
 from tests.inspection.test_inspection import SERVO_RULE, biped_xml, run, write
 
 
@@ -33,39 +32,30 @@ RODS = ''.join(f'<connect name="{s}_ankle_rod" body1="{s}_crank" body2="{s}_foot
 COUPLED = '<joint name="knee_to_ankle" joint1="left_ankle_pitch" joint2="left_knee" polycoef="0 -0.5 0 0 0"/>'
 
 
-def test_a_rod_driven_ankle_is_refused_by_robot_init_in_one_line(tmp_path: Path,
-                                                                 capsys: pytest.CaptureFixture[str]) -> None:
-    model = write(tmp_path, with_equality(biped_xml(keyframe=False), RODS, CRANK))  # the cranks shift its qpos
+def test_a_rod_whose_joints_all_have_servos_is_a_note_not_a_closed_chain(tmp_path: Path,
+                                                                        capsys: pytest.CaptureFixture[str]) -> None:
+    """The test biped's legs have no motors and its crank collides: no joint of the rod's loop is passive
+    (robots.loops.passive_joints), so the servos drive each of them and MuJoCo keeps the equality, said in a note;
+    the spec loads."""
+    model = write(tmp_path, with_equality(biped_xml(keyframe=False), RODS, CRANK))
     spec = tmp_path / "biped.toml"
-    code, _, err = run(capsys, "robot", "init", model, "-o", spec, *SERVO_RULE)
-    assert code == 2 and not spec.exists()
-    line = err.strip()
-    assert "\n" not in line and line.startswith("robustgait: error:")
-    assert ("the left leg is a closed chain: equality constraint 'left_ankle_rod' (connect) ties 'left_crank' to "
-            "'left_foot'") in line
-    assert "model the leg as a serial chain" in line
+    code, out, err = run(capsys, "robot", "init", model, "-o", spec, *SERVO_RULE)
+    assert code == 0, err
+    assert "note: the model has 2 equality constraints (closed linkages?)" in out
+    assert "[loops]" not in spec.read_text() and "left_crank_joint" in spec.read_text()
+    load_robot(spec)
 
 
 def test_the_constraint_is_found_in_the_leg_it_ties_and_nowhere_else(tmp_path: Path) -> None:
     m = mujoco.MjModel.from_xml_path(str(write(tmp_path, with_equality(biped_xml(), COUPLED))))
     left, right, torso = m.body("left_hip").id, m.body("right_hip").id, m.body("torso").id
     assert m.body("left_foot").id in subtree(m, left) and m.body("right_foot").id not in subtree(m, left)
-    assert closed_chain(m, left) == ("equality constraint 'knee_to_ankle' (joint) ties 'left_ankle_pitch' to "
-                                     "'left_knee'")
-    assert closed_chain(m, right) is None and torso not in subtree(m, left)
+    (loop,) = find_loops(m)
+    assert (loop.key, loop.kind, loop.ends) == ("knee_to_ankle", "joint", ("left_ankle_pitch", "left_knee"))
+    assert {m.joint(j).name for j in loop.joints} == {"left_ankle_pitch", "left_knee"}
+    assert torso not in subtree(m, left) and right not in subtree(m, left)
     serial = mujoco.MjModel.from_xml_path(str(write(tmp_path, biped_xml(), "serial.xml")))
-    assert closed_chain(serial, serial.body("left_hip").id) is None
-
-
-def test_the_loader_refuses_a_spec_whose_model_ties_a_leg(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    model = write(tmp_path, biped_xml())
-    spec = tmp_path / "biped.toml"
-    code, _, err = run(capsys, "robot", "init", model, "-o", spec, *SERVO_RULE)
-    assert code == 0, err
-    load_robot(spec)  # the serial legs load
-    write(tmp_path, with_equality(biped_xml(), COUPLED))  # the same file, its left knee now drives the ankle
-    with pytest.raises(RobustGaitError, match="the left leg is a closed chain: equality constraint 'knee_to_ankle'"):
-        load_robot(spec)
+    assert find_loops(serial) == ()
 
 
 def test_an_equality_outside_the_legs_is_a_note(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

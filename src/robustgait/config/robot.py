@@ -195,3 +195,8 @@ class RobotConfig:
         c = self.timestep_candidates
         if not c or any(a <= b for a, b in itertools.pairwise(c)):
             raise FieldProblem("timestep_candidates", f"must be one or more timesteps, largest first, got {list(c)}")
+
+
+LOOP_TOLERANCE = 1e-4
+"""[m] the largest gap robot init leaves in a closed chain of its posture (MuJoCo's equality residual, after solving
+the passive joints): a loop that stays further open cannot close at the keyframe (``robots.loops.close_loops``)."""

@@ -101,6 +101,8 @@ def _wrench_figures(c: Contact, lam: FloatArray, prob: GaitProblem) -> tuple[flo
     ax, ay = prob.half_length - cfg.scaled("cop_margin"), prob.half_width - cfg.scaled("cop_margin")
     if c.kind == "flat":
         margin = min(ax - abs(-lam[4] / fz), ay - abs(lam[3] / fz))
+    elif c.kind == "line":  # a line foot's (n_y, n_z): the centre of pressure along the foot
+        margin = ax - abs(lam[3] / fz)
     else:
         margin = ay - abs(lam[3] / fz)
     return fz, friction, float(margin)
@@ -140,11 +142,12 @@ def _check_node(dyn: Dynamics, prob: GaitProblem, params: GaitParams, d: mujoco.
     j = 0
     for c in contacts:
         point, rot = dyn.frame_pose(foot_frame(c.side(stance), c.frame_kind()), qpos)
-        orient = (rot[1, 0], rot[2, 0], rot[2, 1]) if c.kind == "flat" else (rot[0, 1], rot[2, 1])
+        orient = ((rot[1, 0], rot[2, 0], rot[2, 1]) if c.kind == "flat" else (rot[1, 0], rot[2, 0]) if c.kind == "line"
+                  else (rot[0, 1], rot[2, 1]))
         worst.drift = max(worst.drift, float(np.linalg.norm(point - _target(c, prob, params))),
                           float(np.max(np.abs(orient))))
         fz, fr, cm = _wrench_figures(c, ns.lam[i][j:j + c.n_rows], prob)
-        floor = cfg.scaled("min_normal_force") if c.kind == "flat" else cfg.scaled("min_line_force")
+        floor = cfg.scaled("min_normal_force") if c.kind in ("flat", "line") else cfg.scaled("min_line_force")
         worst.fz_min, worst.friction = min(worst.fz_min, fz), max(worst.friction, fr)
         worst.cop_margin, worst.force_short = min(worst.cop_margin, cm), max(worst.force_short, floor - fz)
         j += c.n_rows

@@ -13,6 +13,9 @@ coordinates of adam):
   edge's midpoint fixed and its direction along world y (pitch free) — and the equations of motion
   M(q) ν̇ + h(q, ν) = B u + J_cᵀ λ hold. With flat single support and Bézier joints the state is fixed by
   kinematics, so nothing is integrated; double support closes a kinematic loop through both legs.
+* Line feet (a robot whose soles are lines; flat graph): the soles stand on their lines (``line`` contacts, 5 rows,
+  no roll moment), and the stance foot's roll — the one degree of freedom the joints leave — is integrated node to
+  node (:mod:`.linefoot`); the swing foot lands free to roll, the next step starting from its roll mirrored.
 * Contact wrenches (:func:`wrench_rows`): normal force, friction pyramid, centre of pressure inside the sole
   (or along the edge), yaw moment. Limits: joint range (on β: the convex hull property bounds the whole
   curve), torque limits, joint speeds, and the gait-quality bands on the pelvis (roll, pitch, yaw, height,
@@ -49,12 +52,22 @@ from numpy.typing import NDArray
 from robustgait.bezier import bernstein_basis, bezier_derivative_coeffs
 from robustgait.config import GenerationConfig
 from robustgait.config.gait import PELVIS_RATE_FROUDE
-from robustgait.domains import Contact, domain_graph, other_side
+from robustgait.domains import Contact, domain_graph, on_line_feet, other_side
 from robustgait.dynamics import Dynamics, foot_frame, impact_residual
 from robustgait.errors import RobustGaitError
 from robustgait.gait import BEZIER_DEGREE
+from robustgait.gaitgen.layout import (  # noqa: F401 (re-exported: the problem's layout and rows)
+    DomainLayout,
+    Layout,
+    double_support_free_joints,
+    impulse_rows,
+    inner_range,
+    make_layout,
+    trapezoid_weights,
+    wrench_rows,
+)
+from robustgait.gaitgen.linefoot import roll_collocation, roll_periodicity, roll_rows
 from robustgait.robots import GaitQuality, Robot
-from robustgait.robots.legs import axis_kinds
 
 FloatArray = NDArray[np.float64]
 U_SCALE = 100.0
@@ -91,134 +104,6 @@ def swing_toe_down(swing_tilt: float, toe_off_pitch: float, until: float, tau: f
     return max(swing_tilt, toe_off_pitch * (1.0 - tau / until))
 
 
-def double_support_free_joints(robot: Robot, side: str, names: tuple[str, ...] | None = None) -> list[int]:
-    """Joints (spec order) of the ``side`` leg that are *not* Bézier outputs in double support.
-
-    With two line contacts (10 rows) the 18 coordinates keep 8 degrees of freedom, so only 8 joints can be
-    outputs; the base and 4 joints follow from the loop closure (a square 10 × 10 system at position,
-    velocity and acceleration level). The 4 must make that system regular: the front leg's hip roll (lateral
-    position), hip yaw (the heel edge's yaw), knee (distance) and ankle roll (the edge's roll) do — chosen by
-    the joint axes in the model's zero posture (x: roll, z: yaw, y: pitch; the knee is the second pitch joint
-    from the hip, the ankle roll the last roll joint), or given by ``names``."""
-    spec, m = robot.spec, robot.model
-    if names is not None:
-        missing = [n for n in names if n not in spec.joints]
-        if len(names) != 4 or missing:
-            raise RobustGaitError(f"ds_free_joints must name 4 actuated joints, got {list(names)}")
-        return [spec.joints.index(n) for n in names]
-    chain = list(robot.leg_joints[side])
-    if robot.ankle_rolls[side] is None:
-        raise RobustGaitError(f"the {side} leg ({', '.join(m.joint(j).name for j in chain)}) has no ankle roll: "
-                              "multi-contact gaits roll the heel's edge flat with it; generate flat-foot gaits "
-                              "(domains flat)")
-    kinds = list(axis_kinds(m, tuple(chain)))
-    rolls = [j for j, k in zip(chain, kinds, strict=True) if k == "x"]
-    yaws = [j for j, k in zip(chain, kinds, strict=True) if k == "z"]
-    pitches = [j for j, k in zip(chain, kinds, strict=True) if k == "y"]
-    if len(rolls) < 2 or not yaws or len(pitches) < 2:
-        raise RobustGaitError(f"cannot pick the double-support free joints of the {side} leg from its joint axes "
-                              f"({', '.join(m.joint(j).name for j in chain)}): set GenerationConfig.ds_free_joints")
-    picked = [rolls[0], yaws[0], pitches[1], rolls[-1]]
-    ids = [m.joint(n).id for n in spec.joints]
-    return [ids.index(j) for j in picked]
-
-
-@dataclass
-class DomainLayout:
-    """Where one domain's variables sit in the NLP vector: its Bézier β, per-node variables (joints s, ṡ, s̈,
-    base position p, roll-pitch-yaw, velocity ν_b, acceleration ν̇_b, torques u, contact wrenches λ), and the
-    post-impact velocity ν⁺ and impulses Λ of the transition that ends it."""
-
-    beta: slice
-    nodes: list[dict[str, slice]]
-    nu_plus: slice
-    impulse: slice
-
-
-@dataclass
-class Layout:
-    """The NLP vector x (scaled units): the domains' blocks in order. ``beta``, ``nodes``, ``nu_plus`` and
-    ``impulse`` are domain 0's."""
-
-    m: int
-    domains: list[DomainLayout]
-    size: int
-
-    @property
-    def beta(self) -> slice:
-        return self.domains[0].beta
-
-    @property
-    def nodes(self) -> list[dict[str, slice]]:
-        return self.domains[0].nodes
-
-    @property
-    def nu_plus(self) -> slice:
-        return self.domains[0].nu_plus
-
-    @property
-    def impulse(self) -> slice:
-        return self.domains[0].impulse
-
-
-def make_layout(m: int, n_nodes: list[int], wrench_rows: list[int], impulse_rows: list[int]) -> Layout:
-    """Per domain d: β (m·8), n_nodes[d] nodes with a contact wrench of wrench_rows[d], ν⁺ (6 + m) and an
-    impulse of impulse_rows[d] (the target contact set's rows)."""
-    k = 0
-
-    def take(size: int) -> slice:
-        nonlocal k
-        s = slice(k, k + size)
-        k += size
-        return s
-
-    doms = []
-    for n, wr, ir in zip(n_nodes, wrench_rows, impulse_rows, strict=True):
-        beta = take(m * (BEZIER_DEGREE + 1))
-        nodes = [{"s": take(m), "sd": take(m), "sdd": take(m), "p": take(3), "rpy": take(3), "vb": take(6),
-                  "ab": take(6), "u": take(m), "lam": take(wr)} for _ in range(n)]
-        doms.append(DomainLayout(beta, nodes, take(6 + m), take(ir)))
-    return Layout(m, doms, k)
-
-
-def wrench_rows(c: Contact, lam: cs.SX, config: GenerationConfig, half_length: float, half_width: float
-                ) -> list[tuple[str, cs.SX, float, float]]:
-    """Contact wrench conditions (expr ≤ 0 unless noted) of one contact, world axes at its frame:
-
-    flat (f, n) ∈ R⁶: f_z ≥ f_min, friction pyramid |f_x|, |f_y| ≤ μ f_z, centre of pressure inside the sole
-    less a margin (|n_y| ≤ a f_z, |n_x| ≤ b f_z), |n_z| ≤ μ_t f_z. Line (f_x, f_y, f_z, n_x, n_z): f_z ≥
-    f_line, the same pyramid, the centre of pressure along the edge inside the sole (|n_x| ≤ b f_z; the edge
-    runs along world y), |n_z| ≤ μ_t f_z. Returns (name, expr, lower, upper) rows.
-    """
-    mu, mut = config.friction, config.torsional_friction
-    ax, ay = half_length - config.scaled("cop_margin"), half_width - config.scaled("cop_margin")
-    f = lam[:3]
-    least = config.scaled("min_normal_force") if c.kind == "flat" else config.scaled("min_line_force")
-    rows = [("normal_force", f[2], least, cs.inf),
-            ("friction", cs.vertcat(f[0] - mu * f[2], -f[0] - mu * f[2], f[1] - mu * f[2], -f[1] - mu * f[2]),
-             -cs.inf, 0.0)]
-    if c.kind == "flat":
-        tq = lam[3:]
-        rows += [("cop", cs.vertcat(-tq[1] - ax * f[2], tq[1] - ax * f[2], tq[0] - ay * f[2], -tq[0] - ay * f[2]),
-                  -cs.inf, 0.0),
-                 ("yaw_moment", cs.vertcat(tq[2] - mut * f[2], -tq[2] - mut * f[2]), -cs.inf, 0.0)]
-    else:
-        nx, nz = lam[3], lam[4]
-        rows += [("cop", cs.vertcat(nx - ay * f[2], -nx - ay * f[2]), -cs.inf, 0.0),
-                 ("yaw_moment", cs.vertcat(nz - mut * f[2], -nz - mut * f[2]), -cs.inf, 0.0)]
-    return rows
-
-
-def impulse_rows(contacts: tuple[Contact, ...], imp: cs.SX, mu: float) -> cs.SX:
-    """Each contact's impulse pushes (Λ_z ≥ 0) inside the friction pyramid (rows ≥ 0)."""
-    out, k = [], 0
-    for c in contacts:
-        fx, fy, fz = imp[k], imp[k + 1], imp[k + 2]
-        out += [fz, mu * fz - fx, mu * fz + fx, mu * fz - fy, mu * fz + fy]
-        k += c.n_rows
-    return cs.vertcat(*out)
-
-
 def gait_quality(robot: Robot) -> GaitQuality:
     """The robot spec's gait-quality bounds, with a joint-speed bound of 10 rad/s per joint and a pelvis rate bound of
     :data:`~robustgait.config.gait.PELVIS_RATE_FROUDE` √(g / l) when it sets none."""
@@ -233,9 +118,10 @@ def gait_quality(robot: Robot) -> GaitQuality:
 
 @dataclass(frozen=True)
 class NodeSymbols:
-    """One node's NLP symbols, unscaled: joints s, ṡ, s̈ (m,) [rad, rad/s, rad/s²]; base pose H (4 × 4, from the
-    position p [m] and roll-pitch-yaw [rad]), velocity ν_b = (ṗ, ω) and acceleration ν̇_b (6,); ν = (ν_b, ṡ)
-    (6 + m,); torques u (m,) [N m]; contact wrenches λ (the domain's contact rows) [N, N m]."""
+    """One node's NLP symbols, unscaled: joints s, ṡ, s̈ (n,) [rad, rad/s, rad/s²] — the m planned ones, then a closed
+    chain's passive ones; base pose H (4 × 4, from the position p [m] and roll-pitch-yaw [rad]), velocity ν_b = (ṗ, ω)
+    and acceleration ν̇_b (6,); ν = (ν_b, ṡ) (6 + n,); torques u (m,) [N m]; contact wrenches λ (the domain's contact
+    rows) [N, N m]; loop forces λ_h (the loops' rows) [N or N m]."""
 
     s: cs.SX
     sd: cs.SX
@@ -248,6 +134,7 @@ class NodeSymbols:
     lam: cs.SX
     H: cs.SX
     nu: cs.SX
+    lamh: cs.SX
 
 
 @dataclass(frozen=True)
@@ -258,23 +145,6 @@ class NodeRows:
     i: int
     start: int
     stop: int
-
-
-def trapezoid_weights(n: int) -> FloatArray:
-    """The trapezoid rule's weights (n,) on n equally spaced nodes of [0, 1]: 1/(n − 1), halved at both ends."""
-    w = np.full(n, 1.0 / (n - 1))
-    w[[0, -1]] *= 0.5
-    return w
-
-
-def inner_range(joint_range: FloatArray, margin: float) -> FloatArray:
-    """Each joint's range (m, 2) [rad] less ``margin`` at each finite end, the margin at most a quarter of the range
-    (a narrow range keeps half of itself): [lo + μ, hi − μ], μ = min(margin, (hi − lo)/4); an unlimited end stays
-    infinite."""
-    lo, hi = joint_range[:, 0], joint_range[:, 1]
-    width = np.where(np.isfinite(lo) & np.isfinite(hi), hi - lo, np.inf)
-    mu = np.minimum(margin, width / 4.0)
-    return np.stack([lo + mu, hi - mu], axis=1)
 
 
 class GaitProblem:
@@ -303,6 +173,8 @@ class GaitProblem:
                 self._add_node(d, i)
                 self.node_rows.append(NodeRows(d, i, start, self._n_rows))
         self._add_position_periodicity()
+        if self.line_feet:
+            self._add_roll_collocation()
         self.g = cs.vertcat(*self._g)
         self.lbg, self.ubg = np.array(self._lbg), np.array(self._ubg)
         self.cost = self._cost()
@@ -315,15 +187,26 @@ class GaitProblem:
         half extents [m] and the mirror R (m × m: permutation and signs)."""
         dyn, config, robot = self.dyn, self.config, self.dyn.robot
         self.graph = graph = domain_graph(config.domains)
+        # line feet (docs/gaitgen.md, "Line feet"): the flat graph's soles stand on their lines, free to roll
+        self.line_feet = graph.name == "flat" and all(robot.spec.feet.get(s) == "line" for s in ("left", "right"))
+        if self.line_feet:
+            self.graph = graph = on_line_feet(graph)
         self.quality = gait_quality(robot)
         self.m = m = robot.n_joints
         counts = [config.nodes] + [config.ds_nodes] * (len(graph) - 1)
         self.domain_taus = [np.linspace(0.0, 1.0, n) for n in counts]
         self.taus = self.domain_taus[0]
         self.n = counts[0]
+        # a closed chain's passive joints and loop rows (robustgait.closure): node variables and forces
+        self.n_passive = dyn.n_joints - m
+        if dyn.loops and graph.name != "flat":
+            raise RobustGaitError(f"{robot.name}: gait generation plans a robot with closed chains on flat feet only "
+                                  f"(domains flat), not {graph.name}")
+        self.n_loop = int(dyn.loop_fun.size1_out(0)) if dyn.loops else 0
         self.layout = make_layout(
             m, counts, [sum(c.n_rows for c in dom.contacts) for dom in graph.domains],
-            [sum(c.n_rows for c in graph.target_contacts(d)) for d in range(len(graph))])
+            [sum(c.n_rows for c in graph.target_contacts(d)) for d in range(len(graph))], self.n_passive, self.n_loop,
+            3 if self.line_feet else 0)
         st, sw = config.stance, other_side(config.stance)
         self.stance, self.swing = st, sw
         self.free = (double_support_free_joints(robot, sw, config.ds_free_joints) if graph.name == "multicontact"
@@ -375,10 +258,13 @@ class GaitProblem:
     def _node_symbols(self, d: int, i: int) -> NodeSymbols:
         """Node i of domain d's symbols (:class:`NodeSymbols`), torques and wrenches unscaled (×100, ×1000)."""
         node, x = self.layout.domains[d].nodes[i], self.x
-        pb, rpy, vb, sd = x[node["p"]], x[node["rpy"]], x[node["vb"]], x[node["sd"]]
+        pb, rpy, vb = x[node["p"]], x[node["rpy"]], x[node["vb"]]
+        s, sd, sdd = (cs.vertcat(x[node[k]], x[node[k.replace("s", "sp", 1)]]) if self.n_passive else x[node[k]]
+                      for k in ("s", "sd", "sdd"))
         H = cs.vertcat(cs.horzcat(rpy_to_matrix(rpy), pb), cs.horzcat(cs.SX.zeros(1, 3), cs.SX.ones(1, 1)))
-        return NodeSymbols(s=x[node["s"]], sd=sd, sdd=x[node["sdd"]], pb=pb, rpy=rpy, vb=vb, ab=x[node["ab"]],
-                           u=U_SCALE * x[node["u"]], lam=F_SCALE * x[node["lam"]], H=H, nu=cs.vertcat(vb, sd))
+        return NodeSymbols(s=s, sd=sd, sdd=sdd, pb=pb, rpy=rpy, vb=vb, ab=x[node["ab"]],
+                           u=U_SCALE * x[node["u"]], lam=F_SCALE * x[node["lam"]], H=H, nu=cs.vertcat(vb, sd),
+                           lamh=U_SCALE * x[node["lamh"]])
 
     def _add_node(self, d: int, i: int) -> None:
         """All rows of node i of domain d, in this order: Bézier outputs, continuity (first node of a later domain),
@@ -390,6 +276,10 @@ class GaitProblem:
         if d > 0 and i == 0:
             self._add_continuity(d, v)
         Jc = self._add_holonomic_contacts(d, i, v)
+        if self.n_loop:
+            self._add_loops(d, i, v)
+        if self.line_feet:
+            self._add_stance_roll(d, i, v)
         M = self._add_dynamics(v, Jc)
         self._add_contact_wrenches(d, v)
         if dom.guard == "touchdown":
@@ -400,6 +290,11 @@ class GaitProblem:
             nup = self._add_impact(d, v, M)
             if d == len(self.graph) - 1:
                 self._add_velocity_periodicity(nup)
+            if self.line_feet:
+                Hsw = self._fk[(self.swing, "sole")](v.H, v.s)
+                first = self.x[self.layout.nodes[0]["roll"]][:2]
+                self._add("roll_periodicity", roll_periodicity(first, Hsw[:3, :3], self._jac[(self.swing, "sole")](
+                    v.H, v.s), nup), 0.0, 0.0)
 
     def node_kind(self, d: int, i: int) -> tuple[int, bool, bool, bool, bool]:
         """What node i of domain d's rows depend on besides its variables and its Bézier basis values — the
@@ -454,7 +349,9 @@ class GaitProblem:
         base position [m] and roll-pitch-yaw [rad] of its last node, and its post-impact velocity ν⁺ = (ν_b, ṡ).
         The contacts' pose and velocity then hold already and are not imposed again at this node."""
         x, prev = self.x, self.layout.domains[d - 1]
-        self._add("continuity", cs.vertcat(v.s - x[prev.nodes[-1]["s"]],
+        last = prev.nodes[-1]
+        s_last = cs.vertcat(x[last["s"]], x[last["sp"]]) if self.n_passive else x[last["s"]]
+        self._add("continuity", cs.vertcat(v.s - s_last,
                                            v.pb - x[prev.nodes[-1]["p"]], v.rpy - x[prev.nodes[-1]["rpy"]],
                                            v.vb - x[prev.nu_plus][:6], v.sd - x[prev.nu_plus][6:]), 0.0, 0.0)
 
@@ -469,7 +366,8 @@ class GaitProblem:
     def _add_holonomic_contacts(self, d: int, i: int, v: NodeSymbols) -> cs.SX:
         """Each contact c of domain d held (``<name>_position``, ``_orientation``, ``_velocity``,
         ``_acceleration``): its frame at :meth:`_contact_target` (3 rows [m]); flat: R[1,0] = R[2,0] = R[2,1] = 0,
-        line: R[0,1] = R[2,1] = 0 (edge along world y, pitch free); J_c ν = 0 (6 or 5 rows); J_c ν̇ + J̇_c ν = 0, alone
+        toe/heel line: R[0,1] = R[2,1] = 0 (edge along world y, pitch free), line foot: R[1,0] = R[2,0] = 0 (the foot
+        along world x, roll free); J_c ν = 0 (6 or 5 rows); J_c ν̇ + J̇_c ν = 0, alone
         at a later domain's first node (:meth:`_add_continuity`). Returns J_c stacked (contact rows × (6 + m))."""
         st, H, s, nu = self.stance, v.H, v.s, v.nu
         Js = []
@@ -477,11 +375,11 @@ class GaitProblem:
             key = (c.side(st), c.frame_kind())
             Hc = self._fk[key](H, s)
             J = self._jac[key](H, s)[list(c.rows), :]
-            name = "stance" if c.leg == "stance" and c.kind == "flat" else f"{c.leg}_{c.kind}"
+            name = "stance" if c.leg == "stance" and c.kind in ("flat", "line") else f"{c.leg}_{c.kind}"
             if not (d > 0 and i == 0):
                 self._add(f"{name}_position", Hc[:3, 3] - self._contact_target(c), 0.0, 0.0)
                 orient = (cs.vertcat(Hc[1, 0], Hc[2, 0], Hc[2, 1]) if c.kind == "flat"
-                          else cs.vertcat(Hc[0, 1], Hc[2, 1]))
+                          else cs.vertcat(Hc[1, 0], Hc[2, 0]) if c.kind == "line" else cs.vertcat(Hc[0, 1], Hc[2, 1]))
                 self._add(f"{name}_orientation", orient, 0.0, 0.0)
                 self._add(f"{name}_velocity", J @ nu, 0.0, 0.0)
             self._add(f"{name}_acceleration",
@@ -489,12 +387,47 @@ class GaitProblem:
             Js.append(J)
         return cs.vertcat(*Js)
 
+    def _add_loops(self, d: int, i: int, v: NodeSymbols) -> None:
+        """The closed chains held (k rows each, :attr:`robustgait.dynamics.Dynamics.loop_fun`): φ(s) = 0 [m or rad]
+        (``loop_position``), J_h ṡ = 0 (``loop_velocity``), J_h s̈ + J̇_h ṡ = 0 (``loop_acceleration``), the first two
+        not at a later domain's first node (implied by :meth:`_add_continuity`), as the contacts are."""
+        phi, vel, acc, _ = self.dyn.loop_fun(v.s, v.sd, v.sdd)
+        if not (d > 0 and i == 0):
+            self._add("loop_position", phi, 0.0, 0.0)
+            self._add("loop_velocity", vel, 0.0, 0.0)
+        self._add("loop_acceleration", acc, 0.0, 0.0)
+
+    def _add_stance_roll(self, d: int, i: int, v: NodeSymbols) -> None:
+        """On line feet, the node's stance-foot roll, rate and acceleration variables tied to the model (3 rows [rad,
+        rad/s, rad/s²], ``stance_roll``; :func:`~robustgait.gaitgen.linefoot.roll_rows`)."""
+        key = (self.stance, "sole")
+        Hc = self._fk[key](v.H, v.s)
+        self._add("stance_roll", roll_rows(self.x[self.layout.domains[d].nodes[i]["roll"]], Hc[:3, :3],
+                                           self._jac[key](v.H, v.s), self._jdot[key](v.H, v.s, v.vb, v.sd), v.nu,
+                                           cs.vertcat(v.ab, v.sdd)), 0.0, 0.0)
+
+    def _add_roll_collocation(self) -> None:
+        """On line feet, the stance foot's roll integrated node to node (2 (N − 1) rows [rad, rad/s],
+        ``roll_collocation``; :func:`~robustgait.gaitgen.linefoot.roll_collocation`, h = T / (N − 1))."""
+        nodes, h = self.layout.nodes, self._durations[0] / (self.n - 1)
+        for k in range(self.n - 1):
+            self._add("roll_collocation", roll_collocation(self.x[nodes[k]["roll"]], self.x[nodes[k + 1]["roll"]], h),
+                      0.0, 0.0)
+
+    def _loop_jacobian(self, s: cs.SX) -> cs.SX:
+        """The loops' Jacobian in adam's mixed velocities, [0, J_h(s)] (k × (6 + n)): the rows do not move with the
+        base."""
+        return cs.horzcat(cs.SX.zeros(self.n_loop, 6), self.dyn.loop_fun(s, s, s)[3])
+
     def _add_dynamics(self, v: NodeSymbols, Jc: cs.SX) -> cs.SX:
-        """The equations of motion (6 + m rows [N, N m] / 100, ``dynamics``): (M(q) + diag(armature)) ν̇ + h(q, ν)
-        = (0, u) + J_cᵀ λ. Returns the mass matrix with armature ((6 + m) × (6 + m)) for the impact."""
+        """The equations of motion (6 + n rows [N, N m] / 100, ``dynamics``): (M(q) + diag(armature)) ν̇ + h(q, ν)
+        = (0, u, 0) + J_cᵀ λ + J_hᵀ λ_h (J_h: :meth:`_loop_jacobian`; the passive joints have no torque). Returns
+        the mass matrix with armature ((6 + n) × (6 + n)) for the impact."""
         M = self._mass(v.H, v.s)
-        tau = cs.vertcat(cs.SX.zeros(6), v.u)
+        tau = cs.vertcat(cs.SX.zeros(6), v.u, cs.SX.zeros(self.n_passive))
         dyn_res = M @ cs.vertcat(v.ab, v.sdd) + self._bias(v.H, v.s, v.vb, v.sd) - tau - Jc.T @ v.lam
+        if self.n_loop:
+            dyn_res = dyn_res - self._loop_jacobian(v.s).T @ v.lamh
         self._add("dynamics", dyn_res / ROW_SCALE, 0.0, 0.0)
         return M
 
@@ -510,9 +443,10 @@ class GaitProblem:
 
     def _add_swing_foot(self, v: NodeSymbols, i: int, n: int) -> None:
         """The swing sole S in single support (p_S [m], R_S). Inner nodes: 0 ≤ z_S ≤ h, corners ≥ flat_approach z_S
-        (0 multi-contact), R_S[2,0], R_S[2,1] within the swing tilt (multi-contact: toe up to the heel-strike pitch,
-        down per :func:`swing_toe_down`), |R_S[1,0]| ≤ sin(swing_yaw), ±y_S ≥ 2b + foot_gap. τ = ½: z_S = h. τ = 1:
-        flat at (L, ±W, 0), R_S[1,0] = R_S[2,0] = R_S[2,1] = 0 (flat graph) or heel edge at (L − a, ±W, 0),
+        (0 multi-contact), R_S[2,0], R_S[2,1] (R_S[2,0] only on line feet) within the swing tilt (multi-contact: toe
+        up to the heel-strike pitch, down per :func:`swing_toe_down`), |R_S[1,0]| ≤ sin(swing_yaw), ±y_S ≥ 2b +
+        foot_gap. τ = ½: z_S = h. τ = 1: flat at (L, ±W, 0), R_S[1,0] = R_S[2,0] = R_S[2,1] = 0 (flat graph; line
+        feet: roll free, R_S[2,1] not held) or heel edge at (L − a, ±W, 0),
         R_S[0,1] = R_S[2,1] = 0, R_S[2,0] within the heel-strike pitch (multi-contact); touchdown velocity bounded
         (vertical, tangential [m/s], angular [rad/s])."""
         config, quality, sw, multi = self.config, self.quality, self.swing, self._multi
@@ -531,7 +465,10 @@ class GaitProblem:
             pitch_hi = math.sin(config.heel_strike_pitch[1]) if multi else tilt
             pitch_lo = -math.sin(swing_toe_down(quality.swing_tilt, config.toe_off_pitch[1],
                                                 quality.swing_toe_down_until, i / (n - 1))) if multi else -tilt
-            self._add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [pitch_lo, -tilt], [pitch_hi, tilt])
+            if self.line_feet:  # a line has no edge to touch the ground when it rolls: its pitch only
+                self._add("swing_tilt", Hsw[2, 0], pitch_lo, pitch_hi)
+            else:
+                self._add("swing_tilt", cs.vertcat(Hsw[2, 0], Hsw[2, 1]), [pitch_lo, -tilt], [pitch_hi, tilt])
             self._add("swing_yaw", Hsw[1, 0], -math.sin(quality.swing_yaw), math.sin(quality.swing_yaw))
             self._add("feet_apart", side_sign * psw[1] - (2 * self.half_width + config.scaled("foot_gap")), 0.0,
                       cs.inf)
@@ -541,7 +478,8 @@ class GaitProblem:
             L, W = self._length, self._width
             if not multi:
                 self._add("landing_position", psw - cs.vertcat(L, side_sign * W, 0.0), 0.0, 0.0)
-                self._add("landing_orientation", cs.vertcat(Hsw[1, 0], Hsw[2, 0], Hsw[2, 1]), 0.0, 0.0)
+                roll = [] if self.line_feet else [Hsw[2, 1]]  # a line foot lands free to roll
+                self._add("landing_orientation", cs.vertcat(Hsw[1, 0], Hsw[2, 0], *roll), 0.0, 0.0)
                 Jsw = self._jac[(sw, "sole")](H, s)
                 ang = Jsw[3:, :] @ nu
             else:
@@ -581,6 +519,8 @@ class GaitProblem:
         target = self.graph.target_contacts(d)  # J: their Jacobian rows stacked (Σ rows × (6 + m))
         Jt = cs.vertcat(*(self._jac[(c.side(st), c.frame_kind())](H, s)[list(c.rows), :] for c in target))
         nup, imp = x[dl.nu_plus], U_SCALE * x[dl.impulse]
+        if self.n_loop:  # the loops hold through the impact: their rows join the target contacts'
+            Jt = cs.vertcat(Jt, self._loop_jacobian(s))
         momentum, contact = impact_residual(M, Jt, nu, nup, imp)
         self._add("impact_map", momentum / ROW_SCALE, 0.0, 0.0)
         self._add("impact_contact", contact, 0.0, 0.0)
@@ -595,7 +535,7 @@ class GaitProblem:
         """Joint velocities periodic after relabeling (m rows [rad/s], ``velocity_periodicity``): ṡ_0(0) = R ṡ⁺
         with ṡ⁺ the last domain's post-impact joint velocities."""
         sd0 = self.x[self.layout.domains[0].nodes[0]["sd"]]
-        self._add("velocity_periodicity", sd0 - cs.mtimes(cs.DM(self.mirror), nup[6:]), 0.0, 0.0)
+        self._add("velocity_periodicity", sd0 - cs.mtimes(cs.DM(self.mirror), nup[6:6 + self.m]), 0.0, 0.0)
 
     def _add_position_periodicity(self) -> None:
         """Joint positions periodic after relabeling (m rows [rad], ``position_periodicity``): β_0[:, 0] =
@@ -621,15 +561,18 @@ class GaitProblem:
         return cost
 
     def _bounds(self) -> tuple[FloatArray, FloatArray]:
-        """Variable bounds: joint range on β (less ``joint_margin``: :func:`inner_range`), torque limits, and the
-        gait-quality bands on the node variables (pelvis roll-pitch-yaw and height relative to the stance sole, its
-        angular velocity, joint speeds)."""
+        """Variable bounds: joint range on β (less ``joint_margin``: :func:`inner_range`) and on a closed chain's
+        passive joints, torque limits, and the gait-quality bands on the node variables (pelvis roll-pitch-yaw and
+        height relative to the stance sole, its angular velocity, joint speeds)."""
         lay, robot, q = self.layout, self.dyn.robot, self.quality
         lo, hi = np.full(lay.size, -np.inf), np.full(lay.size, np.inf)
         rng = inner_range(robot.joint_range, self.config.scaled("joint_margin"))
         rpy_lo = np.array([-q.pelvis_roll, q.pelvis_pitch[0], -q.pelvis_yaw])
         rpy_hi = np.array([q.pelvis_roll, q.pelvis_pitch[1], q.pelvis_yaw])
         jv = np.asarray(q.joint_velocity)
+        m = robot.model  # a closed chain's passive joints: their ranges
+        prange = np.array([m.joint(j).range if m.joint(j).limited[0] else (-np.inf, np.inf)
+                           for j in self.dyn.passive]).reshape(-1, 2)
         for dl, out in zip(lay.domains, self.outputs, strict=True):
             blo = np.repeat(rng[:, :1], BEZIER_DEGREE + 1, axis=1)
             bhi = np.repeat(rng[:, 1:], BEZIER_DEGREE + 1, axis=1)
@@ -650,4 +593,5 @@ class GaitProblem:
                 a = slice(node["ab"].start, node["ab"].start + 3)
                 lo[a], hi[a] = -q.pelvis_acceleration, q.pelvis_acceleration
                 lo[node["sd"]], hi[node["sd"]] = -jv, jv
+                lo[node["sp"]], hi[node["sp"]] = prange[:, 0], prange[:, 1]
         return lo, hi

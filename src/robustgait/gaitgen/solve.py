@@ -15,7 +15,7 @@ from robustgait.bezier import bernstein_basis, bezier, bezier_derivative, bezier
 from robustgait.config import GaitParams, GenerationConfig
 from robustgait.config.gait import PARALLEL_LEGS_WIDTH_TOLERANCE, least_step_width, reach_problem
 from robustgait.domains import Contact
-from robustgait.dynamics import Dynamics, foot_frame
+from robustgait.dynamics import Dynamics, foot_frame, impact_map
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait, State
 from robustgait.gaitgen.check import PhysicsCheck, check_solution
 from robustgait.gaitgen.derivatives import derivative_functions
@@ -28,6 +28,7 @@ from robustgait.gaitgen.problem import (
 )
 from robustgait.gaitgen.states import NodeStates, to_mujoco_state
 from robustgait.robots import Robot
+from robustgait.robots.loops import reduced_state
 
 FloatArray = NDArray[np.float64]
 
@@ -137,13 +138,16 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
     taus = prob.domain_taus[domain]
     dom = prob.graph.domains[domain]
     s, sd, sdd = joint_trajectories(beta, taus, duration)
+    if prob.n_loop:
+        return closed_chain_states(dyn, prob, s, sd, sdd)
     n = len(taus)
     keys = [foot_frame(c.side(prob.stance), c.frame_kind()) for c in dom.contacts]
-    rows = [list(c.rows) for c in dom.contacts]
+    # one stance foot (flat or on its line) held flat: its whole frame fixes the base; λ keeps the contact's rows
+    single = len(dom.contacts) == 1 and dom.contacts[0].kind in ("flat", "line") and dom.contacts[0].leg == "stance"
+    rows = [list(range(6)) if single else list(c.rows) for c in dom.contacts]
     nl = sum(len(r) for r in rows)
     out = {k: np.zeros((n, d)) for k, d in (("vb", 6), ("ab", 6), ("u", m), ("lam", nl))}
     Hs = np.zeros((n, 4, 4))
-    single = len(dom.contacts) == 1 and dom.contacts[0].kind == "flat" and dom.contacts[0].leg == "stance"
     free = [j for j in range(m) if j not in prob.outputs[domain]]
     cols = list(range(6)) + [6 + j for j in free]  # the unknown velocities: base and free joints
     known = [6 + j for j in prob.outputs[domain]]
@@ -185,8 +189,66 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
         qvel_plus, impulse = dyn.impact_map(qpos, qvel, target[0].side(prob.stance))
     else:
         qvel_plus, impulse = dyn.impact_map(qpos, qvel, target, prob.stance)
-    return NodeStates(Hs, s, sd, sdd, out["vb"], out["ab"], out["u"], out["lam"], dyn.to_mixed(qpos, qvel_plus),
-                      impulse)
+    lam = out["lam"][:, list(dom.contacts[0].rows)] if single else out["lam"]
+    return NodeStates(Hs, s, sd, sdd, out["vb"], out["ab"], out["u"], lam, dyn.to_mixed(qpos, qvel_plus), impulse)
+
+
+def passive_motion(dyn: Dynamics, s: FloatArray, sd: FloatArray, sdd: FloatArray
+                   ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The joints s, ṡ, s̈ (n, m + p) of a robot with closed chains from the planned ones (n, m): each node's passive
+    joints solved from φ(s) = 0 (:meth:`Dynamics.close_passive`, from the previous node's, the first from the closed
+    posture's), ṡ_p = −J_p⁻¹ J_a ṡ_a and s̈_p = −J_p⁻¹ (J_a s̈_a + J̇_h ṡ) (J_h = [J_a, J_p],
+    :attr:`Dynamics.loop_fun`)."""
+    m, n_all = s.shape[1], dyn.n_joints
+    out = [np.zeros((len(s), n_all)) for _ in range(3)]
+    guess = dyn.closed_posture[m:]
+    for i in range(len(s)):
+        q = dyn.close_passive(np.concatenate([s[i], guess]))
+        guess = q[m:]
+        v = np.concatenate([sd[i], np.zeros(n_all - m)])
+        _, _, _, J = (np.asarray(x, dtype=float) for x in dyn.loop_fun(q, v, v))
+        v[m:] = -np.linalg.solve(J[:, m:], J[:, :m] @ sd[i])
+        a = np.concatenate([sdd[i], np.zeros(n_all - m)])
+        acc = np.asarray(dyn.loop_fun(q, v, a)[2], dtype=float).ravel()
+        a[m:] = -np.linalg.solve(J[:, m:], acc)
+        out[0][i], out[1][i], out[2][i] = q, v, a
+    return out[0], out[1], out[2]
+
+
+def closed_chain_states(dyn: Dynamics, prob: GaitProblem, s: FloatArray, sd: FloatArray, sdd: FloatArray
+                        ) -> NodeStates:
+    """:func:`kinematic_states` of single support on a flat stance sole for a robot with closed chains: the passive
+    joints from the loops (:func:`passive_motion`), the base from the stance sole, and from the 6 + m + p equations
+    of motion — square in (λ, u, λ_h) — the stance wrench λ (base rows), the loop forces λ_h (passive rows: the
+    passive joints have no torque) and the torques u; the rigid impact onto the swing sole with the loops held
+    (:func:`robustgait.dynamics.impact_map` on [J_sw; 0, J_h], adam's mixed coordinates)."""
+    kd, m = dyn.kindyn, prob.m
+    s, sd, sdd = passive_motion(dyn, s, sd, sdd)
+    n = len(s)
+    key = foot_frame(prob.stance, "sole")
+    Hs = np.zeros((n, 4, 4))
+    vb, ab, lam, u, lamh = np.zeros((n, 6)), np.zeros((n, 6)), np.zeros((n, 6)), np.zeros((n, m)), []
+    for i in range(n):
+        H = Hs[i] = np.linalg.inv(np.asarray(dyn.frame_fun(key)(np.eye(4), s[i])))
+        J = np.asarray(kd.jacobian_fun(key)(H, s[i]))
+        vb[i] = -np.linalg.solve(J[:, :6], J[:, 6:] @ sd[i])
+        nu = np.concatenate([vb[i], sd[i]])
+        jd = np.asarray(kd.jacobian_dot_fun(key)(H, s[i], vb[i], sd[i]))
+        ab[i] = -np.linalg.solve(J[:, :6], J[:, 6:] @ sdd[i] + jd @ nu)
+        M = np.asarray(dyn.inertia(H, s[i]))
+        rhs = M @ np.concatenate([ab[i], sdd[i]]) + np.asarray(dyn.bias_force_fun(H, s[i], vb[i], sd[i])).ravel()
+        Jh = np.asarray(dyn.loop_fun(s[i], sd[i], sdd[i])[3], dtype=float)
+        lam[i] = np.linalg.solve(J[:, :6].T, rhs[:6])
+        lamh.append(np.linalg.solve(Jh[:, m:].T, rhs[6 + m:] - J[:, 6 + m:].T @ lam[i]))
+        u[i] = rhs[6:6 + m] - J[:, 6:6 + m].T @ lam[i] - Jh[:, :m].T @ lamh[-1]
+    H, nu = Hs[-1], np.concatenate([vb[-1], sd[-1]])
+    target = list(prob.graph.target_contacts(0)[0].rows)  # the swing sole's rows: flat, or its line
+    Jt = np.asarray(kd.jacobian_fun(foot_frame(prob.swing, "sole"))(H, s[-1]))[target]
+    Jh = np.asarray(dyn.loop_fun(s[-1], sd[-1], sdd[-1])[3], dtype=float)
+    Jall = np.vstack([Jt, np.hstack([np.zeros((len(Jh), 6)), Jh])])
+    nu_plus, impulse = impact_map(np.asarray(dyn.inertia(H, s[-1])), Jall, nu)
+    stance = list(prob.graph.domains[0].contacts[0].rows)  # the sole held flat; λ keeps the contact's rows
+    return NodeStates(Hs, s, sd, sdd, vb, ab, u, lam[:, stance], nu_plus, impulse, np.array(lamh))
 
 
 def fit_bezier(taus: FloatArray, s: FloatArray, sd: FloatArray, sdd: FloatArray, duration: float) -> FloatArray:
@@ -208,7 +270,11 @@ def pack(prob: GaitProblem, betas: list[FloatArray], states: list[NodeStates]) -
         b[out] = beta[out]  # a domain's non-output rows are unused and fixed at 0
         x[dl.beta] = b.ravel(order="F")
         for i, node in enumerate(dl.nodes):
-            x[node["s"]], x[node["sd"]], x[node["sdd"]] = ns.s[i], ns.sd[i], ns.sdd[i]
+            m = prob.m  # the planned joints; a closed chain's passive ones after them
+            x[node["s"]], x[node["sd"]], x[node["sdd"]] = ns.s[i][:m], ns.sd[i][:m], ns.sdd[i][:m]
+            if prob.n_passive:
+                x[node["sp"]], x[node["spd"]], x[node["spdd"]] = ns.s[i][m:], ns.sd[i][m:], ns.sdd[i][m:]
+                x[node["lamh"]] = ns.lamh[i] / U_SCALE
             x[node["p"]] = ns.H[i, :3, 3]
             x[node["rpy"]] = matrix_to_rpy(ns.H[i, :3, :3])
             x[node["vb"]], x[node["ab"]] = ns.vb[i], ns.ab[i]
@@ -234,9 +300,12 @@ def unpack(prob: GaitProblem, x: FloatArray, durations: list[float]) -> tuple[li
             H[i, :3, :3] = np.asarray(cs.evalf(rpy_to_matrix(r)))
             H[i, :3, 3] = x[node["p"]]
         get = lambda key, scale=1.0, nodes=dl.nodes: np.array([x[nd[key]] * scale for nd in nodes])  # noqa: E731
+        if prob.n_passive:  # a closed chain's passive joints follow the planned ones
+            s, sd, sdd = (np.hstack([a, get(k)]) for a, k in ((s, "sp"), (sd, "spd"), (sdd, "spdd")))
         betas.append(beta)
         states.append(NodeStates(H, s, sd, sdd, get("vb"), get("ab"), get("u", U_SCALE), get("lam", F_SCALE),
-                                 x[dl.nu_plus].copy(), x[dl.impulse] * U_SCALE))
+                                 x[dl.nu_plus].copy(), x[dl.impulse] * U_SCALE,
+                                 *((get("lamh", U_SCALE),) if prob.n_loop else ())))
     return betas, states
 
 
@@ -391,6 +460,8 @@ class GaitGenerator:
         q0, v0 = robot.expand_state(*to_mujoco_state(robot.planned, first.H[0], first.s[0], first.vb[0], first.sd[0]))
         q1, v1 = robot.expand_state(*to_mujoco_state(robot.planned, section.H[-1], section.s[-1], section.vb[-1],
                                                      section.sd[-1]))
+        if robot.passive_ids:  # a gait file holds the base, planned and held joints only (the loops close the rest)
+            (q0, v0), (q1, v1) = (reduced_state(robot.model, robot.passive_ids, q, v) for q, v in ((q0, v0), (q1, v1)))
         solver = {"status": res.status, "iterations": res.iterations, "solve_seconds": res.solve_seconds,
                   "build_seconds": self.build_seconds, "objective": res.objective,
                   "nodes": sum(len(ns.s) for ns in states), "variables": self.n_variables,

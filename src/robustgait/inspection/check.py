@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from robustgait.config import RobotCheckConfig, RobotConfig
 from robustgait.inspection.gains import static_torques, tipping_stiffness
 from robustgait.inspection.mirror import Mirror, fk_residual, mass_asymmetry, mirror_from_names
-from robustgait.inspection.model import RobotModel, geom_bottom
+from robustgait.inspection.model import RobotModel, geom_bottom, with_closed_chains
 from robustgait.robots import Robot
 from robustgait.robots.spec import SIDES
 
@@ -51,8 +51,8 @@ def inspected(robot: Robot) -> RobotModel:
     m = robot.model
     angles = {m.joint(j).id: a for j, a in zip(robot.spec.joints, robot.spec.posture, strict=True)}
     angles |= {m.joint(h.name).id: h.angle for h in robot.spec.held}
-    return RobotModel(robot.spec.source or Path(robot.spec.mjcf), "mjcf", robot.mjspec(), m, robot.base_body_id, None,
-                      angles)
+    return with_closed_chains(RobotModel(robot.spec.source or Path(robot.spec.mjcf), "mjcf", robot.mjspec(), m,
+                                         robot.base_body_id, None, angles))
 
 
 def standing_qpos(robot: Robot, rm: RobotModel) -> NDArray[np.float64]:

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from robustgait.errors import input_error
 from robustgait.inspection.model import RobotModel, geom_bottom
-from robustgait.robots.legs import ankle_roll_joint, closed_chain, closed_chain_problem
+from robustgait.robots.legs import ankle_roll_joint
 from robustgait.robots.solebox import box_up, sole_box
 from robustgait.robots.soles import (
     GEOM_TYPES,
@@ -55,7 +55,7 @@ class FoundSole:
     closest to left, [m]) and the foot's bottom height at the posture (``bottom``, base at height 0). What a model
     offers, before any spec exists; how a spec's sole is built into the robot's model is
     :class:`robustgait.robots.soles.ResolvedSole`. ``tread``: how many of each mesh geom's convex-hull vertices are
-    on the sole (what ``robot init``'s comment says)."""
+    on the sole (what ``robot init``'s comment says); ``foot``: ``flat`` or ``line`` (:func:`sole_kind`)."""
 
     body: int
     geoms: tuple[int, ...]
@@ -65,6 +65,7 @@ class FoundSole:
     width: float
     bottom: float
     tread: tuple[tuple[int, int], ...] = ()  # (mesh geom, its hull vertices on the sole) for each mesh geom
+    foot: str = "flat"  # flat, or line: no support width (:func:`sole_kind`)
 
 
 @dataclass(frozen=True)
@@ -184,10 +185,11 @@ def branch_body(robot: RobotModel, left: int, right: int) -> int:
 
 
 def chain_joints(robot: RobotModel, top: int, foot: int) -> tuple[int, ...]:
-    """The joints of the bodies strictly below ``top`` down to ``foot``, from the top down."""
+    """The planned or held joints (not passive: a closed chain's, :attr:`RobotModel.passive`) of the bodies strictly
+    below ``top`` down to ``foot``, from the top down."""
     bodies = [foot, *robot.ancestors(foot)]
     bodies = bodies[: bodies.index(top)]
-    return tuple(j for b in reversed(bodies) for j in robot.body_joints(b))
+    return tuple(j for b in reversed(bodies) for j in robot.body_joints(b) if j not in robot.passive)
 
 
 def _geom_class(robot: RobotModel, body: int, g: int) -> str | None:
@@ -283,14 +285,33 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
         length, width = 2.0 * read.half_length, 2.0 * read.half_width
     else:
         length, width = float(np.ptp(local[:, fwd])), float(np.ptp(local[:, lft]))
-    if min(length, width) < MIN_SOLE:
+    foot_kind = sole_kind(pts, length, width)
+    if foot_kind == "point":
         raise input_error(src, f"no sole found for the {side} leg: the lowest geometry of body '{name}' spans "
-                          f"{length:.3g} × {width:.3g} m, no area to stand on (add a box geom under the foot)")
-    problem = None if box else tread_problem(
+                          f"{length:.3g} × {width:.3g} m, no area to stand on (a point foot, which robustgait does not "
+                          "plan yet: add a box geom under the foot, or a capsule along it: a line foot)")
+    if foot_kind == "line":
+        length, width = float(np.max(np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=-1))), 0.0
+    problem = None if box or foot_kind == "line" else tread_problem(
         side, f"{len(geoms)} {'geom' if len(geoms) == 1 else 'geoms'} of body '{name}'", local[:, [fwd, lft]])
     if problem is not None:
         raise input_error(src, problem)
-    return FoundSole(foot, geoms, kind, sole_class, length, width, bottom, _tread(m, geoms, per_geom, on))
+    return FoundSole(foot, geoms, kind, sole_class, length, width, bottom, _tread(m, geoms, per_geom, on), foot_kind)
+
+
+def sole_kind(points: NDArray[np.float64], length: float, width: float) -> str:
+    """A sole's kind by its ground points (k, 3) on the sole and its extent along the foot (``length``, ``width``
+    [m]): ``flat`` when both reach :data:`MIN_SOLE`; ``line`` when its points lie on one segment at least
+    :data:`MIN_SOLE` long and no wider than :data:`MIN_SOLE` across it (one capsule along the foot: no support width);
+    ``point`` otherwise (one sphere, a capsule on end)."""
+    if min(length, width) >= MIN_SOLE:
+        return "flat"
+    if len(points) < 2:
+        return "point"
+    centred = points - points.mean(axis=0)
+    sv = np.linalg.svd(centred, compute_uv=False)
+    spread = 2.0 * sv / np.sqrt(len(points))  # extent along the principal axes (exact for two points)
+    return "line" if spread[0] >= MIN_SOLE and (len(sv) < 2 or spread[1] < MIN_SOLE) else "point"
 
 
 def _tread(m: mujoco.MjModel, geoms: tuple[int, ...], per_geom: list[NDArray[np.float64]], on: NDArray[np.bool_]
@@ -344,9 +365,6 @@ def find_legs(robot: RobotModel, foot_level: float, sole_tolerance: float) -> Le
         if not joints:
             raise input_error(src, f"the {side} foot '{robot.body_name(foot)}' has no joint between it and "
                               f"'{robot.body_name(branch)}', where the legs branch")
-        loop = closed_chain(robot.model, int(robot.model.jnt_bodyid[joints[0]]))
-        if loop is not None:
-            raise input_error(src, closed_chain_problem(side, loop))
         legs[side] = Leg(side, joints, find_sole(robot, d, foot, side, sole_tolerance),
                          ankle_roll_joint(robot.model, joints))
         _one_foot_body(robot, d, legs[side], int(robot.model.jnt_bodyid[joints[0]]), sole_tolerance)

@@ -139,20 +139,25 @@ def find_mirror(robot: RobotModel, tolerance: float) -> Mirror:
 
 def body_partners(robot: RobotModel, partner: Mapping[int, int], d: mujoco.MjData, tolerance: float
                   ) -> dict[int, int]:
-    """Each robot body's partner: the body of its first joint's partner; a body without a joint: the child of its
-    parent's partner at its reflected position (``d``: every joint at 0)."""
+    """Each robot body's partner: the body of its first joint's partner; a body without a joint, or whose joints are
+    passive (a closed chain's: not in ``partner``): the child of its parent's partner at its reflected position
+    (``d``: every joint at 0)."""
     m, src = robot.model, robot.path
     out = {robot.base: robot.base}
+
+    def driven(body: int) -> list[int]:
+        return [j for j in robot.body_joints(body) if j in partner]
+
     for b in robot.subtree(robot.base):
         if b == robot.base:
             continue
-        joints = robot.body_joints(b)
+        joints = driven(b)
         if joints:
             out[b] = int(m.jnt_bodyid[partner[joints[0]]])
             continue
         parent = out.get(int(m.body_parentid[b]))
         found = [c for c in range(m.nbody) if parent is not None and int(m.body_parentid[c]) == parent
-                 and not robot.body_joints(c) and float(np.linalg.norm(d.xpos[c] - S @ d.xpos[b])) <= tolerance]
+                 and not driven(c) and float(np.linalg.norm(d.xpos[c] - S @ d.xpos[b])) <= tolerance]
         if len(found) != 1:
             raise input_error(src, f"the mirror does not reflect the model: body '{robot.body_name(b)}' has "
                               f"{len(found) or 'no'} mirror image{'s' if len(found) > 1 else ''}")

@@ -55,6 +55,10 @@ def _joints(item: Any) -> Any:
     return Annotated[list[item], at.MinLen(1), at.MaxLen(L.MAX_JOINTS)]
 
 
+FootKind = Literal["flat", "line", "point"]
+Loop = Annotated[tuple[Literal["connect", "weld", "joint"], Name, Name], Doc("[kind, end, end]")]
+SpringValues = Annotated[tuple[Annotated[Float, Doc(ge=0.0, le=1e9)], Annotated[Float, Doc(ge=-1e3, le=1e3)]],
+                         Doc("[stiffness, springref]")]
 HeldServo = Annotated[tuple[Annotated[Float, L.KP], Annotated[Float, L.KD], Annotated[Float, L.TORQUE_LIMIT]],
                       Doc("[kp, kd, torque_limit]")]
 
@@ -67,6 +71,9 @@ class JointsTable:
     torque_limit: _joints(Annotated[Float, L.TORQUE_LIMIT])  # type: ignore[valid-type]
     held: dict[Name, Annotated[Float, L.POSTURE]] = dataclasses.field(default_factory=dict)
     held_servo: dict[Name, HeldServo] = dataclasses.field(default_factory=dict)
+    passive: Annotated[list[Name], at.MaxLen(L.MAX_JOINTS), Doc(
+        "closed chains' joints neither planned nor held, solved from their loops")] = dataclasses.field(
+        default_factory=list)
 
 
 @table
@@ -75,6 +82,7 @@ class LegTable:
     sole_geoms: Annotated[list[Name], at.MinLen(1), at.MaxLen(64)] | None = None
     sole_body: Name | None = None
     sole_class: Name | None = None
+    foot: FootKind = "flat"
 
 
 @table
@@ -171,6 +179,8 @@ class SpecFile:
     add_floor: Annotated[bool, Field(strict=True)] = False
     generation: dict[Name, Any] = dataclasses.field(default_factory=dict)
     gait: dict[Name, Any] = dataclasses.field(default_factory=dict)
+    loops: dict[Name, Loop] = dataclasses.field(default_factory=dict)
+    springs: dict[Name, SpringValues] = dataclasses.field(default_factory=dict)
 
 
 def _band(src: Path, key: str, band: tuple[float, float]) -> tuple[float, float]:
@@ -374,7 +384,26 @@ def spec_from_raw(raw: object, path: Path) -> RobotSpec:
         held=_held(s, path, names),
         generation=_section(s.generation, GenerationConfig, path, "generation", ROBOT_SCALED),
         gait=_section(s.gait, GaitParams, path, "gait", GAIT_PARAM_NAMES),
+        passive=_passive(s, path, names),
+        loops={k: (v[0], v[1], v[2]) for k, v in s.loops.items()},
+        springs={k: (float(v[0]), float(v[1])) for k, v in s.springs.items()},
+        feet={side: getattr(s.legs, side).foot for side in ("left", "right") if getattr(s.legs, side).foot != "flat"},
     )
+
+
+def _passive(s: SpecFile, path: Path, planned: tuple[str, ...]) -> tuple[str, ...]:
+    """The passive joints (``joints.passive``): each once, neither planned nor held; a spring is a passive joint."""
+    passive = tuple(s.joints.passive)
+    for name in passive:
+        if passive.count(name) > 1:
+            raise field_error(path, "joints.passive", f"joint {name!r} is listed twice")
+        if name in planned or name in s.joints.held:
+            raise field_error(path, "joints.passive", f"joint {name!r} is also planned or held: a joint is planned, "
+                              "held or passive")
+    for name in s.springs:
+        if name not in passive:
+            raise field_error(path, f"springs.{name}", "not a passive joint (joints.passive)")
+    return passive
 
 
 def read_spec(path: str | Path) -> RobotSpec:

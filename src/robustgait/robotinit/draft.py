@@ -210,12 +210,15 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     find_legs(robot, config.foot_level, config.sole_tolerance)  # one leg, no sole ...: said before the mirror
     mirror = find_mirror(robot, config.mirror_tolerance)
     robot.angles, asymmetry = symmetric_angles(robot, mirror)
+    robot.close()  # a closed chain's passive joints solved again from the planned ones (robots.loops)
     legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the symmetric posture
     levelled = level_soles(robot, legs, mirror)
     if levelled > 0.0:
+        robot.close()
         legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the levelled posture
     centred = centre_over_soles(robot, legs, mirror, config.stand_fraction)
     if centred > 0.0:
+        robot.close()
         legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the leaned posture
     angles = robot.angles
     floor = find_floor(robot)
@@ -260,9 +263,19 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     timestep = servo_timestep(float(robot.model.opt.timestep), servo_frequency, config.servo_steps,
                               math.sqrt(legs.leg_length / gravity), config.scale.timestep)
     gains, radius = drafted_gains(robot, loads, torque, config, qpos, timestep, integrator)
-    if robot.model.neq:
-        notes.append(f"the model has {robot.model.neq} equality constraint{'s' if robot.model.neq > 1 else ''} "
-                     "(closed linkages?): robustgait's servos drive every joint on its own; check that they agree")
+    other = robot.model.neq - len(robot.loops)
+    if other:
+        notes.append(f"the model has {other} equality constraint{'s' if other > 1 else ''} "
+                     + ("besides its closed chains' " if robot.loops else "")
+                     + "(closed linkages?): robustgait's servos drive every joint on its own; check that they agree")
+    if robot.loops:
+        notes.append(f"{len(robot.loops)} closed chain{'s' if len(robot.loops) > 1 else ''} ([loops]): "
+                     f"{len(robot.passive)} passive joints ({sum(1 for j in robot.passive if j not in robot.solved)} "
+                     "of them springs, held at their posture angle) solved from the loops in the posture, largest "
+                     f"residual {max(robot.opened.values()) * 1e3:.3g} mm at the keyframe, "
+                     f"{max(robot.loop_residuals().values()) * 1e3:.2g} mm in the posture; gait generation holds them "
+                     "as holonomic constraints but does not converge on closed chains and line feet yet "
+                     "(docs/robots.md, \"Closed chains, springs and line feet\")")
     if asymmetry > 0.0:
         notes.append(f"the posture was not left/right symmetric: made symmetric (largest change {asymmetry:.3g} rad)")
     if centred > 0.0:

@@ -20,7 +20,8 @@ def symmetric_angles(robot: RobotModel, mirror: Mirror) -> tuple[dict[int, float
     """The posture made left/right symmetric — a_j = (q_j + s_j q_partner) / 2, clipped to the joint's range — and
     the largest change [rad] (a keyframe of a walking robot is usually symmetric: 0)."""
     q = robot.angles
-    out = {j: clip_to_range(robot.model, j, (q[j] + mirror.sign[j] * q[mirror.partner[j]]) / 2) for j in q}
+    out = {j: clip_to_range(robot.model, j, (q[j] + mirror.sign[j] * q[mirror.partner[j]]) / 2) if j in mirror.partner
+           else q[j] for j in q}  # a passive joint (not in the mirror) is solved from its loop afterwards
     return out, max((abs(out[j] - q[j]) for j in q), default=0.0)
 
 

@@ -3,10 +3,8 @@ with a comment saying where it came from, and the summary ``robot init`` prints.
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import re
 from pathlib import Path
 
 import mujoco
@@ -15,30 +13,12 @@ import numpy as np
 from robustgait.inspection.discover import SIDES, FoundSole
 from robustgait.inspection.mirror import mass_asymmetry
 from robustgait.inspection.scale import GAIT_AXES, balance, duration_constant, narrow_soles, sig
+from robustgait.robotinit.chains import loop_lines, passive_lines
 from robustgait.robotinit.draft import INTEGRATOR_NAMES, Draft
 from robustgait.robotinit.timestep import TimestepChoice, ms
+from robustgait.robotinit.tomltext import angle, key, num, text
 from robustgait.robots.soles import GEOM_TYPES, SOLE_PLANE_TOLERANCE, SOLE_TILT_SLOPE
 from robustgait.robots.spec import FallCriteria
-
-BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
-
-
-def num(x: float, digits: int = 4) -> str:
-    """A number as the spec shows it: ``digits`` significant digits, a TOML float."""
-    return repr(float(sig(float(x), digits)))
-
-
-def angle(x: float) -> str:
-    """An angle [rad] to 1e-6 (symmetric: angle(−x) is −angle(x), as the loader's mirror check needs)."""
-    return repr(round(float(x), 6) + 0.0)
-
-
-def key(name: str) -> str:
-    return name if BARE_KEY.match(name) else json.dumps(name)
-
-
-def text(s: str) -> str:
-    return json.dumps(s, ensure_ascii=False)
 
 
 def _rows(items: list[tuple[str, str]], indent: str = "  ") -> list[str]:
@@ -75,6 +55,10 @@ def _sole_lines(draft: Draft, side: str, sole: FoundSole) -> list[str]:
         if sole.sole_class is not None:
             lines.append(f"sole_class = {text(sole.sole_class)}  # just the sole's geoms: the body's other "
                          "collision geoms are of other classes")
+    if sole.foot != "flat":
+        lines.append(f"foot = {text(sole.foot)}  # its ground points lie on a line {sole.length:.3g} m long: no "
+                     "support width (the centre of pressure moves along the line only; lateral balance by foot "
+                     "placement)")
     return lines + _tread_lines(draft, sole)
 
 
@@ -150,6 +134,7 @@ def _joints(draft: Draft) -> list[str]:
         f"[kg m²]; the servos contract at the {draft.timestep:g} s step ({draft.integrator}, see [sim])",
         "kd = [", *_rows(kd), "]",
         "torque_limit = [", *_rows(tl), "]",
+        *passive_lines(r),
     ]
 
 
@@ -338,12 +323,18 @@ def _generation(draft: Draft) -> list[str]:
         f"min_normal_force = {num(g['min_normal_force'], 3)}  # {g['min_normal_force'] / weight:.0%} of the weight "
         f"m g = {weight:.4g} N",
         f"min_line_force = {num(g['min_line_force'], 3)}  # {g['min_line_force'] / weight:.0%} of the weight",
-        f"cop_margin = {num(g['cop_margin'], 3)}  # {g['cop_margin'] / (size.sole_width / 2):.2g} × the sole's "
+        f"cop_margin = {num(g['cop_margin'], 3)}  # {_of_half_width(g['cop_margin'], size.sole_width)} the sole's "
         f"half-width {size.sole_width / 2:.3g} m",
-        f"foot_gap = {num(g['foot_gap'], 3)}  # {g['foot_gap'] / (size.sole_width / 2):.2g} × the sole's half-width",
+        f"foot_gap = {num(g['foot_gap'], 3)}  # {_of_half_width(g['foot_gap'], size.sole_width)} the sole's "
+        "half-width",
         *([f"joint_margin = {num(g['joint_margin'], 3)}  # narrow soles: room at each joint limit for the step "
            "regulator's corrections (robot.scale.joint_margin_narrow)"] if "joint_margin" in g else []),
     ]
+
+
+def _of_half_width(value: float, width: float) -> str:
+    """``k ×`` a value's multiple of a sole's half-width, or what a line foot (no width) makes of it."""
+    return f"{value / (width / 2):.2g} ×" if width > 0 else "a line foot: a share of"
 
 
 def _gait(draft: Draft) -> list[str]:
@@ -373,7 +364,8 @@ def render(draft: Draft, spec_path: str | Path) -> str:
     lines = [*_header(draft, p), *_joints(draft), *_held(draft)]
     for side in SIDES:
         lines += ["", *_sole_lines(draft, side, draft.legs[side].sole)]
-    lines += [*_mirror(draft), *_scaled(draft), *_posture(draft), *_generation(draft), *_gait(draft)]
+    lines += [*_mirror(draft), *loop_lines(draft.robot, draft.robot.opened), *_scaled(draft), *_posture(draft),
+              *_generation(draft), *_gait(draft)]
     return "\n".join(lines) + "\n"
 
 

@@ -8,9 +8,8 @@ shank cannot lean sideways, so neither can the stance leg, and the centre of pre
 whole body does (the hips roll the upper body over the stance foot); two flat feet lie under parallel legs, so the
 feet land flat at the spacing of the legs alone. The spec's consequences are :func:`robustgait.inspection.scale`'s.
 
-A leg is planned as a serial chain, each joint driven by its own servo: :func:`closed_chain` finds an equality
-constraint that closes a loop through it (an ankle driven through rods), which robot init and the loader refuse
-(``docs/robots.md``, "Your robot: robot init and robot check").
+A leg's planned joints are a serial chain from the hip to the foot; the passive joints of a closed chain through it
+(Cassie's tarsus, driven by its knee through a rod) are not among them (:mod:`robustgait.robots.loops`).
 """
 
 from __future__ import annotations
@@ -69,10 +68,6 @@ def foot_chain(model: mujoco.MjModel, foot_body: int, base_body: int) -> tuple[i
     return tuple(reversed(chain))
 
 
-EQUALITY_KINDS = {int(mujoco.mjtEq.mjEQ_CONNECT): "connect", int(mujoco.mjtEq.mjEQ_WELD): "weld",
-                  int(mujoco.mjtEq.mjEQ_JOINT): "joint"}
-
-
 def subtree(model: mujoco.MjModel, root: int) -> list[int]:
     """The body ``root`` and every body below it (ids, ascending)."""
     out, inside = [int(root)], {int(root)}
@@ -81,37 +76,3 @@ def subtree(model: mujoco.MjModel, root: int) -> list[int]:
             out.append(b)
             inside.add(b)
     return out
-
-
-def closed_chain(model: mujoco.MjModel, leg_root: int) -> str | None:
-    """The first active equality constraint that ties a body or joint of the leg below body ``leg_root`` (the body of
-    the leg's first joint, and every body under it) to anything — a closed linkage such as an ankle driven through
-    rods (``connect``/``weld`` of two bodies, a ``joint`` coupling) — said in a clause naming it and what it ties;
-    None when the leg is a serial chain. Other kinds (tendon, flex, distance) are not read."""
-    leg = set(subtree(model, leg_root))
-    for e in range(model.neq):
-        if not model.eq_active0[e]:
-            continue
-        kind = int(model.eq_type[e])
-        a, b = int(model.eq_obj1id[e]), int(model.eq_obj2id[e])
-        if kind in (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD)):
-            ends = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, x) or f"body {x}" for x in (a, b)]
-            inside = a in leg or b in leg
-        elif kind == int(mujoco.mjtEq.mjEQ_JOINT):
-            ends = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, x) or f"joint {x}" for x in (a, b) if x >= 0]
-            inside = any(int(model.jnt_bodyid[x]) in leg for x in (a, b) if x >= 0)
-        else:
-            continue
-        if inside:
-            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, e)
-            what = f"equality constraint {name!r}" if name else f"equality constraint {e}"
-            return f"{what} ({EQUALITY_KINDS[kind]}) ties {' to '.join(repr(x) for x in ends)}"
-    return None
-
-
-def closed_chain_problem(side: str, clause: str) -> str:
-    """The one-line refusal of a leg that is a closed chain (:func:`closed_chain`'s ``clause``): the feature and what a
-    user changes."""
-    return (f"the {side} leg is a closed chain: {clause}; robustgait plans serial legs whose joints its servos drive "
-            "one by one — model the leg as a serial chain (the ankle's pitch and roll as joints driven directly, the "
-            "linkage's bodies and the equality constraint removed)")

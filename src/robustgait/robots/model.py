@@ -30,10 +30,11 @@ from numpy.typing import NDArray
 from robustgait.config import GaitParams, RobotScale
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.robots.held import weld_joints
-from robustgait.robots.legs import ankle_roll_joint, closed_chain, closed_chain_problem, foot_chain
+from robustgait.robots.legs import ankle_roll_joint, foot_chain
+from robustgait.robots.loops import DOF_SIZE, QPOS_SIZE, check_closed_chains
 from robustgait.robots.solebox import SoleBox, sole_box
 from robustgait.robots.soles import ResolvedSole, resolve_floor, resolve_soles
-from robustgait.robots.spec import SIDES, RobotSpec
+from robustgait.robots.spec import CLOSED_CHAIN_FIELDS, SIDES, RobotSpec
 
 INTEGRATORS = {
     "euler": mujoco.mjtIntegrator.mjINT_EULER,
@@ -178,11 +179,15 @@ class Robot:
             if int(m.jnt_type[i]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
                 raise input_error(spec.source, f"joint '{j}' is not a hinge or slide joint")
         n = len(ids) + len(held)
-        if m.nq != 7 + n or m.nv != 6 + n:
-            names = {m.joint(i).name for i in range(1, m.njnt)} - {*spec.joints, *spec.held_names}
+        passive = check_closed_chains(m, spec)
+        nq = 7 + n + sum(QPOS_SIZE.get(int(m.jnt_type[j]), 1) for j in passive)
+        nv = 6 + n + sum(DOF_SIZE.get(int(m.jnt_type[j]), 1) for j in passive)
+        if m.nq != nq or m.nv != nv:
+            names = {m.joint(i).name for i in range(1, m.njnt)} - {*spec.joints, *spec.held_names, *spec.passive}
             raise input_error(spec.source, f"the model has {m.njnt - 1} joints besides the base but the spec plans "
                               f"{len(ids)} and holds {len(held)}: every non-base joint must be in joints.names or "
                               f"joints.held (missing: {', '.join(sorted(names)) or 'none'})")
+        self.passive_ids: tuple[int, ...] = passive
         self.qpos_idx: NDArray[np.int64] = np.array([m.jnt_qposadr[i] for i in ids], dtype=np.int64)
         self.dof_idx: NDArray[np.int64] = np.array([m.jnt_dofadr[i] for i in ids], dtype=np.int64)
         self.held_qpos_idx: NDArray[np.int64] = np.array([m.jnt_qposadr[i] for i in held], dtype=np.int64)
@@ -204,10 +209,6 @@ class Robot:
         self.servo_kd = np.concatenate([self.kd, [servo_damping(x.kp, x.kd, dt, spec.stable_pd) for x in spec.held]])
         self.servo_limit = np.concatenate([self.torque_limit, [h.torque_limit for h in spec.held]])
         self.joint_range = np.array([m.jnt_range[i] if m.jnt_limited[i] else (-np.inf, np.inf) for i in ids])
-        for side, joints in self.leg_joints.items():
-            loop = closed_chain(m, int(m.jnt_bodyid[joints[0]])) if joints else None
-            if loop is not None:
-                raise input_error(spec.source, closed_chain_problem(side, loop))
 
     @cached_property
     def planned(self) -> Robot:
@@ -276,10 +277,11 @@ class Robot:
 
     @cached_property
     def leg_joints(self) -> dict[str, tuple[int, ...]]:
-        """Each side's leg joints (model joint ids), hip to foot: the joints between the base and the sole's body."""
+        """Each side's leg joints (model joint ids), hip to foot: the planned or held joints between the base and the
+        sole's body (a closed chain's passive joints are not the leg's)."""
         m = self.model
-        return {side: foot_chain(m, int(m.geom_bodyid[self.sole_geom_id[side]]), self.base_body_id)
-                for side in SIDES}
+        return {side: tuple(j for j in foot_chain(m, int(m.geom_bodyid[self.sole_geom_id[side]]), self.base_body_id)
+                            if j not in self.passive_ids) for side in SIDES}
 
     @cached_property
     def ankle_rolls(self) -> dict[str, int | None]:
@@ -322,7 +324,8 @@ class Robot:
         without file paths — two robots with one digest simulate alike, wherever their files lie."""
         buf = np.empty(mujoco.mj_sizeModel(self.model), dtype=np.uint8)
         mujoco.mj_saveModel(self.model, None, buf)
-        spec = {k: v for k, v in dataclasses.asdict(self.spec).items() if not isinstance(v, PurePath)}
+        spec = {k: v for k, v in dataclasses.asdict(self.spec).items() if not isinstance(v, PurePath)
+                and not (k in CLOSED_CHAIN_FIELDS and not v)}  # empty closed-chain fields leave a serial digest alone
         return hashlib.sha256(buf.tobytes() + repr(spec).encode()).hexdigest()
 
     def mjspec(self) -> mujoco.MjSpec:

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.errors import input_error
-from robustgait.robots.soles import GEOM_TYPES, article
+from robustgait.robots.soles import GEOM_TYPES, LINE_HALF_WIDTH, article
 
 FloatArray = NDArray[np.float64]
 
@@ -89,6 +89,11 @@ def sole_box(model: mujoco.MjModel, geom: int, source: str | Path | None = None)
     mujoco.mj_kinematics(model, d)
     rot = d.geom_xmat[geom].reshape(3, 3)  # the geom's axes in the world (columns)
     size = np.asarray(model.geom_size[geom], dtype=float)
+    if float(size[1]) <= LINE_HALF_WIDTH < float(size[0]):
+        # a line foot's virtual sole (robots.soles.resolve_sole): read as built — x the line toward the toe, y its
+        # no width, z up — whatever the zero posture does to the foot (a capsule is round about its line)
+        return SoleBox(geom=int(geom), normal=2, up=1.0, long=0, forward=1.0, half_length=float(size[0]),
+                       half_width=float(size[1]), half_thickness=float(size[2]))
     normal, up = box_up(rot)
     long = max((k for k in range(3) if k != normal), key=lambda k: float(size[k]))
     wide = 3 - normal - long

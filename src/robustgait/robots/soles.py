@@ -42,6 +42,8 @@ SOLE_TYPES = {t: name for t, name in GEOM_TYPES.items()
 # points on the rim of a cylinder standing on its end: its bottom disk as a polygon (its bounding rectangle is the
 # disk's to within 1 − cos(π/8) ≈ 8 % of the radius when the foot's axes are at 22.5° to the disk's)
 RIM_POINTS = 8
+# half width of a line foot's sole box [m] (one capsule along the foot: no support width; MuJoCo's box needs a size)
+LINE_HALF_WIDTH = 1e-4
 # thickness of a virtual sole box [m]: only its bottom face matters (it takes part in no contact)
 VIRTUAL_SOLE_THICKNESS = 0.002
 # points within this height of a foot's lowest point are on its sole [m] (a box's bottom face, sphere bottoms
@@ -264,9 +266,45 @@ def sole_up(points_along: Callable[[FloatArray], FloatArray], body_up: FloatArra
     vectors."""
     body_up, vertical = np.asarray(body_up, dtype=float), np.asarray(vertical, dtype=float)
     if np.allclose(body_up, vertical):
-        return body_up
+        return line_up(points_along, body_up)
     along_body = tread_spread(points_along(body_up), body_up)
+    if along_body == 0.0 and tread_spread(points_along(vertical), vertical) == 0.0:
+        return line_up(points_along, body_up)
     return vertical if tread_spread(points_along(vertical), vertical) > 1.01 * along_body else body_up
+
+
+def tread_length(points: FloatArray, up: FloatArray) -> float:
+    """The largest distance [m] between two of the ground points (k, 3) on the sole along ``up`` (:func:`on_sole`)."""
+    on = np.asarray(points, dtype=float)[on_sole(points, up)]
+    if len(on) < 2:
+        return 0.0
+    return float(np.max(np.linalg.norm(on[:, None, :] - on[None, :, :], axis=-1)))
+
+
+def line_up(points_along: Callable[[FloatArray], FloatArray], body_up: FloatArray) -> FloatArray:
+    """The up (3,) of a sole that spans no area (a capsule, a row of spheres: a line foot): ``body_up`` turned
+    perpendicular to the line of its ground points u' = (u − (u·d) d) / ‖·‖ (d the unit direction between the two
+    farthest points read along u), so that the whole line lies on the sole — a capsule is round about its axis, and
+    along a foot axis tilted from its sole only one end of it is on the sole. ``body_up`` itself when the points
+    are on a line along it already, or are not on one (turned, other points reach the sole: a heel raised above a
+    toe line)."""
+    pts = np.asarray(points_along(body_up), dtype=float)
+    if len(pts) < 2:
+        return body_up
+    dist = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=-1)
+    i, k = np.unravel_index(int(np.argmax(dist)), dist.shape)
+    if dist[i, k] <= 0.0:
+        return body_up
+    d = (pts[k] - pts[i]) / dist[i, k]
+    up = body_up - float(body_up @ d) * d
+    norm = float(np.linalg.norm(up))
+    if norm < 1e-6:
+        return body_up
+    up = up / norm
+    turned = points_along(up)
+    if tread_spread(turned, up) > 0.0:  # turned, other points reach the sole (a raised heel): not a line foot
+        return body_up
+    return up if tread_length(turned, up) > 1.01 * tread_length(pts, body_up) else body_up
 
 
 def sole_slopes(along: FloatArray, across: FloatArray, height: FloatArray) -> tuple[float, float]:
@@ -282,6 +320,23 @@ def sole_slopes(along: FloatArray, across: FloatArray, height: FloatArray) -> tu
         for i, c in zip(spanned, coef[1:], strict=True):
             slopes[i] = float(c)
     return slopes[0], slopes[1]
+
+
+def along_line(points: FloatArray, up: FloatArray, forward: FloatArray) -> FloatArray:
+    """The toe direction (3,) of a sole: for ground points (k, 3) that lie on one line across ``up`` (a line foot, no
+    area: :func:`tread_spread` 0), the line's unit direction perpendicular to ``up``, pointing the way of ``forward``;
+    ``forward`` (3,) itself otherwise."""
+    if len(points) < 2 or tread_spread(points, up) > 0.0:
+        return forward
+    dist = np.linalg.norm(points[:, None, :] - points[None, :, :], axis=-1)
+    i, k = np.unravel_index(int(np.argmax(dist)), dist.shape)
+    d = points[k] - points[i]
+    d = d - float(d @ up) * up
+    norm = float(np.linalg.norm(d))
+    if norm < 1e-6:
+        return forward
+    d = d / norm
+    return d if float(d @ forward) >= 0.0 else -d
 
 
 class SoleRectangle(NamedTuple):
@@ -325,8 +380,8 @@ def tread_problem(side: str, what: str, points: FloatArray) -> str | None:
             f"(legs.{side}.sole_geom)")
 
 
-def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int], forward: FloatArray
-                   ) -> SoleRectangle:
+def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int], forward: FloatArray,
+                   line: bool = False) -> SoleRectangle:
     """The sole of a foot's geoms as a box in the foot body's frame (:class:`SoleRectangle`), at the posture of
     ``data``.
 
@@ -335,7 +390,8 @@ def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int],
     geoms' ground points (:func:`geom_sole_points`) that are on the sole (:func:`on_sole`) across the geoms; when
     their plane (:func:`sole_slopes`) is tilted from the body's axes (a foot plate's geoms rotated 90.5°), the box is
     turned onto it, so that the box lies flat where the geoms do. The rectangle spans the points; the box is
-    :data:`VIRTUAL_SOLE_THICKNESS` thick above the lowest.
+    :data:`VIRTUAL_SOLE_THICKNESS` thick above the lowest. ``line``: a line foot's sole, its toe axis along the line
+    (:func:`along_line`).
     """
     body = int(model.geom_bodyid[geoms[0]])
     rb = data.xmat[body].reshape(3, 3)  # body axes in the world (columns)
@@ -353,9 +409,11 @@ def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int],
     else:  # the vertical: forward within the plane normal to it
         fwd = rb.T @ forward - float((rb.T @ forward) @ up) * up
         fwd /= float(np.linalg.norm(fwd))
-    left = np.cross(up, fwd)
     points = points_along(up)
     on = on_sole(points, up)
+    if line:
+        fwd = along_line(points[on], up, fwd)
+    left = np.cross(up, fwd)
     height = points @ up
     bottom = float(height[on].min())
     a, b = sole_slopes(points[on] @ fwd, points[on] @ left, height[on])
@@ -399,10 +457,17 @@ def resolve_sole(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel, sid
     mujoco.mj_kinematics(model, data)
     base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, spec.base_body)
     forward = data.xmat[base].reshape(3, 3)[:, 0]
-    centre, rot, half, tread = sole_rectangle(model, data, ids, forward)
-    if min(half[0], half[1]) <= 1e-4:
+    line = spec.feet.get(side) == "line"
+    centre, rot, half, tread = sole_rectangle(model, data, ids, forward, line)
+    if line and half[0] > LINE_HALF_WIDTH and half[1] <= LINE_HALF_WIDTH:  # a line foot: its box as wide as nothing
+        half[1] = LINE_HALF_WIDTH
+    elif min(half[0], half[1]) <= LINE_HALF_WIDTH:
         raise input_error(src, f"the {side} sole ({leg.describe()}) spans no area ({2 * half[0]:.3g} × "
-                          f"{2 * half[1]:.3g} m): name geoms that cover the foot's support")
+                          f"{2 * half[1]:.3g} m): name geoms that cover the foot's support"
+                          + ("" if line else ", or say that it is a line foot (foot = \"line\")"))
+    elif line:
+        raise input_error(src, f"legs.{side}.foot: the sole ({leg.describe()}) spans {2 * half[0]:.3g} × "
+                          f"{2 * half[1]:.3g} m, an area, not a line along the foot")
     problem = tread_problem(side, leg.describe(), tread)
     if problem is not None:
         raise input_error(src, problem)

@@ -128,7 +128,11 @@ class RobotSpec:
     ``floor_geom`` None: the world's only plane geom; ``add_floor``: the MJCF has none and a plane
     (:data:`ADDED_FLOOR`) is added at load. ``held``: joints held at an angle (:class:`HeldJoint`).
     ``generation``, ``gait``: the robot's own defaults of gait-generation options and gait parameters (the spec's
-    ``[generation]`` and ``[gait]`` tables; what is not there resolves as in :mod:`robustgait.config`)."""
+    ``[generation]`` and ``[gait]`` tables; what is not there resolves as in :mod:`robustgait.config`).
+    ``passive``: the joints of closed chains that are neither planned nor held (``joints.passive``; solved from the
+    loops, :mod:`robustgait.robots.loops`); ``loops``: the model's loop equalities, key → (kind, end, end)
+    (``[loops]``); ``springs``: joint → (stiffness, springref) (``[springs]``); ``feet``: side → ``line`` or
+    ``point`` for a sole without support width (``legs.<side>.foot``; a side not in it is ``flat``)."""
 
     name: str
     mjcf: Path
@@ -157,6 +161,10 @@ class RobotSpec:
     held: tuple[HeldJoint, ...] = ()
     generation: dict[str, float] = field(default_factory=dict)
     gait: dict[str, float] = field(default_factory=dict)
+    passive: tuple[str, ...] = ()
+    loops: dict[str, tuple[str, str, str]] = field(default_factory=dict)
+    springs: dict[str, tuple[float, float]] = field(default_factory=dict)
+    feet: dict[str, str] = field(default_factory=dict)
 
     @property
     def n_joints(self) -> int:
@@ -166,6 +174,12 @@ class RobotSpec:
     def held_names(self) -> tuple[str, ...]:
         return tuple(h.name for h in self.held)
 
+
+CLOSED_CHAIN_FIELDS = ("passive", "loops", "springs", "feet")
+"""The spec's fields of closed chains, springs and line feet: empty for a serial robot with flat soles."""
+
+FOOT_KINDS = ("flat", "line", "point")
+"""A sole's kind by its support: an area (flat), a line of contact (one capsule: no width), a point."""
 
 ADDED_FLOOR = "robustgait_floor"
 """Name of the floor plane added at load (``add_floor = true``) or given to the MJCF's unnamed plane."""

@@ -164,7 +164,9 @@ class StepEngine:
         self.graph = domain_graph(gait.domain_graph)
         self.horizons = step_horizons([dom.duration for dom in gait.domains], gait.domain_graph, robot.dt,
                                       self.config)
-        self.gaits = {gait.stance: gait, ("left" if gait.stance == "right" else "right"): gait.mirrored(robot)}
+        # in the model's size: a closed-chain robot's gait file holds no passive joints (Gait.closed closes its loops)
+        self.gaits = {gait.stance: gait.closed(robot),
+                      ("left" if gait.stance == "right" else "right"): gait.mirrored(robot).closed(robot)}
         m = robot.model
         # per domain: physics steps per unit of phase, and the most a domain may last before it is a fall
         self.domain_steps = [dom.duration / robot.dt for dom in gait.domains]

@@ -192,8 +192,10 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     eng = engine or make_engine(robot, gait, config)
     stats = TrackingStats()
     try:
-        start = gait.initial_state.qpos.copy()
-        run = _Run(start[None].copy(), gait.initial_state.qvel[None].copy(), min_z=float(start[2]), last=start)
+        first = eng.gaits[gait.stance].initial_state  # in the model's size (Gait.closed)
+        assert first is not None
+        start = first.qpos.copy()
+        run = _Run(start[None].copy(), first.qvel[None].copy(), min_z=float(start[2]), last=start)
         heading = _heading(start)
         stance = gait.stance
         events: list[SwitchEvent] = []
