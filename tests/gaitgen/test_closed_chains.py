@@ -22,7 +22,7 @@ from robustgait.gaitgen.solve import GaitGenerator, kinematic_states, pack, unpa
 from robustgait.gaitgen.states import to_mujoco_state
 from robustgait.robots import Robot
 from robustgait.robots.loops import closed_chains, loop_residuals
-from tests.inspection.test_inspection import SERVO_RULE, write
+from tests.inspection.biped import SERVO_RULE, write
 from tests.robots.test_loops import chain_xml
 
 TARSUS = '<joint name="{s}_tarsus" axis="0 1 0" range="-1.5 1.5"/>'

@@ -16,7 +16,7 @@ from robustgait.inspection.scale import Balance, scale
 from robustgait.robotinit import init as robotinit
 from robustgait.robotinit.draft import draft_spec
 from robustgait.robotinit.writer import render
-from tests.inspection.test_inspection import biped_xml, write
+from tests.inspection.biped import biped_xml, write
 
 
 def regulated() -> Config:

@@ -15,7 +15,7 @@ from robustgait.inspection.discover import find_legs
 from robustgait.inspection.mirror import find_mirror
 from robustgait.inspection.model import open_model
 from robustgait.robotinit.posture import centre_over_soles, com_over_soles
-from tests.inspection.test_inspection import SERVO_RULE, biped_xml, run, write
+from tests.inspection.biped import SERVO_RULE, biped_xml, run, write
 
 
 def heel_heavy_xml() -> str:

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from robustgait import load_robot
+from robustgait.certificate.orbit import Status
 from robustgait.cli import main
 from robustgait.config import CertifyConfig, Config, RobotConfig
 from robustgait.config.base import ConfigError
@@ -23,8 +24,8 @@ from robustgait.robotinit import init as robotinit
 from robustgait.robotinit import timestep
 from robustgait.robotinit.timestep import (
     TimestepChoice,
+    TimestepWalk,
     Trial,
-    Walked,
     band_difference,
     candidate_timesteps,
     check_timestep,
@@ -32,7 +33,7 @@ from robustgait.robotinit.timestep import (
     select_timestep,
     trial_error,
 )
-from tests.inspection.test_inspection import EXO_XML, biped_xml, write
+from tests.inspection.biped import EXO_XML, biped_xml, write
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -43,10 +44,10 @@ CANDIDATES = RobotConfig().timestep_candidates
 
 
 def walked(h: float, centres: list[list[float]] | None, status: str = "ok", steps: int = 96,
-           sides_differ: bool = False) -> Walked:
+           sides_differ: bool = False) -> TimestepWalk:
     c = None if centres is None else np.array(centres, dtype=float)
-    return Walked(h, status, "" if status == "ok" else "why", steps, 1 if c is None else len(c), c, sides_differ,
-                  1000, 0.1)
+    return TimestepWalk(h, Status(status), "" if status == "ok" else "why", steps, 1 if c is None else len(c), c,
+                        sides_differ, 1000, 0.1)
 
 
 def trial(h: float, error: float | None, *, fell: bool = False) -> Trial:
@@ -119,7 +120,7 @@ def fake_walks(monkeypatch: pytest.MonkeyPatch, slope: float = 30.0) -> list[flo
     walked, in order."""
     made: list[float] = []
 
-    def settled_walk(robot: Any, gait: Any, config: Config) -> Walked:
+    def settled_walk(robot: Any, gait: Any, config: Config) -> TimestepWalk:
         made.append(robot.dt)
         return walked(robot.dt, [[slope * robot.dt]])
 

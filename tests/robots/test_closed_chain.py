@@ -13,7 +13,7 @@ import pytest
 from robustgait import load_robot
 from robustgait.robots.legs import subtree
 from robustgait.robots.loops import find_loops
-from tests.inspection.test_inspection import SERVO_RULE, biped_xml, run, write
+from tests.inspection.biped import SERVO_RULE, biped_xml, run, write
 
 
 def with_equality(xml: str, equality: str, bodies: str = "") -> str:

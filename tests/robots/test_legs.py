@@ -1,5 +1,5 @@
 """Legs without an ankle roll (robustgait.robots.legs, docs/robots.md "Legs without an ankle roll"): an H1-like biped
-— the biped of tests/inspection/test_inspection.py with 5-joint legs (hip yaw, roll, pitch, knee, ankle pitch) — is
+— the biped of tests/inspection/biped.py with 5-joint legs (hip yaw, roll, pitch, knee, ankle pitch) — is
 read as such: robot init writes the gait its legs allow (the step width of parallel legs, the hips'
 roll), generation refuses what they do not, and the default gait walks 300 steps and is certified."""
 
@@ -14,7 +14,7 @@ from robustgait import load_robot
 from robustgait.config import RobotConfig, ScaleRules
 from robustgait.inspection.scale import RobotSize, hip_roll_angle, scale
 from robustgait.robots.legs import ankle_roll_joint
-from tests.inspection.test_inspection import EXO_XML, SERVO_RULE, biped_xml, run, write
+from tests.inspection.biped import EXO_XML, SERVO_RULE, biped_xml, run, write
 
 
 def h1_like_xml() -> str:

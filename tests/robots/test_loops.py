@@ -28,7 +28,7 @@ from robustgait.robots.loops import (
     reduced_state,
     undriven_motion,
 )
-from tests.inspection.test_inspection import SERVO_RULE, run, write
+from tests.inspection.biped import SERVO_RULE, run, write
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -1,7 +1,7 @@
 """Mesh soles: MuJoCo collides a mesh through its convex hull, so a mesh foot stands on the hull's vertices at its
 bottom (its tread), which the loader's virtual sole box and ``robot init`` span (``docs/robots.md``, "Soles, floor,
 URDF"). Feet of inline meshes in the shapes real feet have, on the 20 kg biped of
-``tests/inspection/test_inspection.py``, its box soles (x −0.07…0.13, y ±0.05, bottom z −0.06 in the foot's frame)
+``tests/inspection/biped.py``, its box soles (x −0.07…0.13, y ±0.05, bottom z −0.06 in the foot's frame)
 replaced by meshes with that same tread."""
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from robustgait.inspection.discover import find_legs
 from robustgait.inspection.model import open_model
 from robustgait.robotinit.draft import draft_spec
 from robustgait.robots.soles import hull_vertices, sole_points, sole_rectangle
-from tests.inspection.test_inspection import SERVO_RULE, biped_xml, write
+from tests.inspection.biped import SERVO_RULE, biped_xml, write
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -70,7 +70,7 @@ def mesh_asset(name: str, vertices: list[tuple[float, float, float]]) -> str:
 
 
 def mesh_biped(meshes: dict[str, list[tuple[float, float, float]]], box: bool = False, named: bool = False) -> str:
-    """The biped of ``tests/inspection/test_inspection.py`` with ``meshes`` as each foot's collision geoms (``named``:
+    """The biped of ``tests/inspection/biped.py`` with ``meshes`` as each foot's collision geoms (``named``:
     geoms ``{side}_{mesh}``), beside its box sole (``box``) or instead of it."""
     xml = biped_xml(foot="box")
     for s in ("left", "right"):
@@ -193,7 +193,7 @@ def test_init_on_mesh_feet_writes_a_spec_whose_soles_check(tmp_path: Path, capsy
 
 
 def test_a_mesh_sole_its_model_tilts_is_levelled(tmp_path: Path) -> None:
-    """The chamfered mesh pitched 0.01 rad in its foot's frame (as tests/inspection/test_inspection.py's tilted box):
+    """The chamfered mesh pitched 0.01 rad in its foot's frame (as tests/inspection/biped.py's tilted box):
     robot init turns each ankle pitch by 0.01 rad, as for a box, and the loaded soles are level in the posture."""
     xml = mesh_biped(SHAPES["chamfered"]).replace('mesh="chamfer"/>', 'mesh="chamfer" euler="0 0.01 0"/>')
     assert xml.count('euler="0 0.01 0"') == 2

@@ -22,7 +22,7 @@ from robustgait.sim.walk import walk
 from robustgait.validate import Draws, Validator
 from robustgait.validate import disturbances as dist
 from tests.conftest import EXO_GAIT
-from tests.inspection.test_inspection import EXO_XML, SERVO_RULE, biped_xml, run, write
+from tests.inspection.biped import EXO_XML, SERVO_RULE, biped_xml, run, write
 
 # one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
 pytestmark = pytest.mark.xdist_group("pair_contacts_module")
@@ -170,7 +170,7 @@ PAIRS = '<contact><pair geom1="left_sole" geom2="{floor}"/><pair geom1="right_so
 
 
 def pair_biped(floor: str = "ground") -> str:
-    """The biped of tests/inspection/test_inspection.py whose geoms all have contype = conaffinity = 0, its soles
+    """The biped of tests/inspection/biped.py whose geoms all have contype = conaffinity = 0, its soles
     paired with ``floor`` (the other sole: pairs that do not reach the floor)."""
     pairs = PAIRS.format(floor=floor) if floor != "other sole" else (
         '<contact><pair geom1="left_sole" geom2="right_sole"/></contact>')

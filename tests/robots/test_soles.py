@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from robustgait import load_robot
-from tests.inspection.test_inspection import SERVO_RULE, biped_xml, run, write
+from tests.inspection.biped import SERVO_RULE, biped_xml, run, write
 
 TILT = 0.17  # [rad] the foot body's frame pitched from its sole, about Berkeley Humanoid's 10°
 

@@ -14,7 +14,7 @@ import pytest
 from robustgait import load_robot
 from robustgait.errors import RobustGaitError
 from robustgait.robots.soles import MIN_TREAD_FILL, tread_fill, tread_problem
-from tests.inspection.test_inspection import FEET, SERVO_RULE, biped_xml, run, write
+from tests.inspection.biped import FEET, SERVO_RULE, biped_xml, run, write
 
 # Unitree H1's foot in small: a short heel capsule on the foot's centre line and a toe bar across it
 TRIANGLE = ('<geom class="foot" type="capsule" size="0.01" fromto="-0.06 0 -0.05 -0.02 0 -0.05"/>'
