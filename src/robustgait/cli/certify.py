@@ -91,9 +91,14 @@ def _certify(args: argparse.Namespace) -> int:
             print("largest ‖P^j(z) − z*‖ over the samples inside, j = 1 … k: "
                   + " ".join(f"{v:.4g}" for v in gc.excursion))
         if cfg.method == "sequential":
-            print(f"{name[0]}̂ after each round: " + " ".join(_round_text(r) for r in c.rounds)
+            # a push certificate's rounds end at its nearest fall; its estimate Ĵ is the fall curve's, not that
+            what = "nearest fall" if cfg.disturbance == "push" else f"{name[0]}̂"
+            print(f"{what} after each round: " + " ".join(_round_text(r) for r in c.rounds)
                   + "  (u = uniform, e = explore, v = verify at the radius @, ✓ passed, ✗ failed; samples used: "
-                  "estimate)")
+                  f"{what})")
+            if cfg.disturbance == "push" and c.estimate is not None:
+                print(f"Ĵ = {c.estimate:.4g} N s: the push size whose disk the fall curve fitted to the exploration "
+                      f"predicts to fail in {100 * cfg.estimator.epsilon:g} % of its pushes (what a study ranks by)")
         print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside; controller {gc.controller}"
               + (f" ({gc.controller_note})" if gc.controller_note else ""))
         print(gc.statement())
