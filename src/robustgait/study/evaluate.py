@@ -51,7 +51,7 @@ class Evaluation:
     :meth:`GaitGenResult.summary`. The certificate's figure (``config.study_certify``: J* in N s for a push
     certificate, r* in the state's unit for a state certificate; :func:`robustgait.config.radius_name` names it):
     value, the verified figure (None unless verified: :attr:`verified`); estimate, the exploration's (None before the
-    certificate). The study ranks by one of them (:func:`robustgait.study.ranking.ranked_figure`). certificate:
+    certificate). The study ranks by one of them (:func:`robustgait.study.outcome.ranked_figure`). certificate:
     :meth:`GaitCertificate.to_dict` with the samples (None unless certified or estimated). comfort: what a passenger
     feels on the walk (:meth:`robustgait.sim.comfort.Comfort.to_dict`, ``config.comfort``; None when the walk completed
     no measured step or the gait was not generated). seconds: per stage (generate, walk, certify; build when

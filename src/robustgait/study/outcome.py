@@ -30,7 +30,6 @@ class EvaluationStatus(TextEnum):
     NOT_CERTIFIED = "not_certified"  # walked the cap, refused by the certificate (its refusal: an orbit status)
 
 
-STATUSES: tuple[EvaluationStatus, ...] = tuple(EvaluationStatus)
 RANKED: tuple[EvaluationStatus, ...] = (EvaluationStatus.CERTIFIED, EvaluationStatus.ESTIMATED)
 """The statuses of a gait with a certificate figure the study ranks by: verified, or estimated by exploration."""
 
