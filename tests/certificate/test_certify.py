@@ -161,8 +161,6 @@ def test_figures(tmp_path, small_cert, seq_cert):
     ({"r_max": 0.0}, "r_max"), ({"r_max": -1.0}, "r_max"), ({"alpha": 0.0}, "alpha"), ({"alpha": 1.0}, "alpha"),
     ({"n_samples": 0}, "samples"), ({"seed": -1}, "seed"), ({"method": "grid"}, "method"),
     ({"barrier": "hat"}, "barrier"),
-    ({"method": "sequential", "disturbance": "state", "sequential": SequentialConfig(budget=300)},
-     "budget: 300 samples cannot hold"),
     ({"state": "velocity"}, "CertifyConfig.disturbance: a push certificate .J\\*. has no reduced state"),
 ])
 def test_bad_config(kwargs, message):

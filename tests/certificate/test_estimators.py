@@ -12,15 +12,9 @@ import numpy as np
 import pytest
 
 from robustgait.certificate.barrier import certify_map, distances, sample_ball, solve_radius
-from robustgait.certificate.estimators import (
-    Replay,
-    certify_map_sequential,
-    propose_round,
-    verification_beta,
-    verification_bound,
-    verification_size,
-)
+from robustgait.certificate.estimators import Replay, certify_map_sequential, propose_round
 from robustgait.certificate.synthetic import BandMap, ConeMap, PushThresholdMap
+from robustgait.certificate.verification import verification_bound, verification_size
 from robustgait.config import CertifyConfig, SequentialConfig
 from robustgait.errors import RobustGaitError
 
@@ -35,31 +29,6 @@ def seq(seed: int = 0, beta: float = 0.05, **sequential: object) -> CertifyConfi
 
 def uniform(**kw: object) -> CertifyConfig:
     return CertifyConfig(method="uniform", **{"disturbance": "state", **kw})  # type: ignore[arg-type]
-
-
-def test_verification_sizes_spend_beta() -> None:
-    assert sum(verification_beta(0.05, a) for a in range(1, 60)) == pytest.approx(0.05)
-    for eps, beta in ((0.02, 0.05), (0.1, 0.05), (0.05, 0.01)):
-        for a in (1, 2, 5):
-            n = verification_size(eps, beta, a)
-            assert (1 - eps) ** n <= verification_beta(beta, a) < (1 - eps) ** (n - 1)
-            assert verification_bound(n, beta, a) <= eps
-            assert (1 - verification_bound(n, beta, a)) ** n == pytest.approx(verification_beta(beta, a))
-    assert verification_size(0.02, 0.05, 1) == 183  # ln(0.025) / ln(0.98) = 182.6
-    with pytest.raises(ValueError, match="count from 1"):
-        verification_size(0.02, 0.05, 0)
-
-
-def test_a_first_share_spends_beta_and_shrinks_the_first_batch() -> None:
-    """β_1 = s β and β_a = (1 − s) β / 2^(a−1) after: Σ β_a = β for any share; s = 0.9 draws 154 pushes first (ε 2 %,
-    β 5 %) where s = 0.5 draws 183, and a second batch of 297."""
-    for share in (0.5, 0.7, 0.9):
-        assert sum(verification_beta(0.05, a, share) for a in range(1, 60)) == pytest.approx(0.05)
-        assert verification_beta(0.05, 1, share) == pytest.approx(0.05 * share)
-    assert [verification_size(0.02, 0.05, a, 0.9) for a in (1, 2)] == [154, 297]
-    assert verification_size(0.02, 0.05, 1, 0.5) == 183
-    n = verification_size(0.02, 0.05, 1, 0.9)
-    assert verification_bound(n, 0.05, 1, 0.9) <= 0.02
 
 
 def test_exploration_on_a_cheaper_map_verification_on_the_certified_one() -> None:
@@ -165,13 +134,6 @@ def test_a_replayed_exploration_gives_the_same_certificate_without_evaluating_it
 def test_bad_sequential_config(kwargs: dict) -> None:
     with pytest.raises(RobustGaitError):
         SequentialConfig(**kwargs)
-
-
-def test_budget_must_hold_a_verification() -> None:
-    with pytest.raises(RobustGaitError, match=r"CertifyConfig.sequential.budget: 300 samples cannot hold the first "
-                       r"round \(200\) and one verification batch \(183 for epsilon = 0.02, beta = 0.05\)"):
-        seq(budget=300)
-    CertifyConfig(method="uniform", sequential=SequentialConfig(budget=300))  # the budget is the sequential's
 
 
 # ----------------------------------------------------------------------------------- known answers

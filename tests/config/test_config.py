@@ -61,11 +61,6 @@ def test_errors_name_the_field_and_the_limit():
         (lambda: CertifyConfig(sequential={"budget": 0}), "CertifyConfig.sequential.budget: must satisfy 1 ≤ x ≤ "
                                                           "10000 (got 0)"),
         (lambda: SimConfig(chunk=3), "SimConfig.chunk: unknown key (known: switching, min_switch_tau"),
-        (lambda: CertifyConfig(disturbance="state", sequential=SequentialConfig(budget=300)),
-         "CertifyConfig.sequential.budget: 300 samples cannot hold the first round (200) and one verification batch "
-         "(183 for epsilon = 0.02, beta = 0.05)"),
-        (lambda: CertifyConfig(sequential=SequentialConfig(budget=200)),  # J*: the push certificate's first round
-         "CertifyConfig.sequential.budget: 200 samples cannot hold the first round (50) and one verification batch"),
         (lambda: CertifyConfig(horizon=2), "CertifyConfig.disturbance: a push certificate (J*) has no reduced state, "
                                            "set or horizon (got state omega, set ball, horizon 2)"),
     ]

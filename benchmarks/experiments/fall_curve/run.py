@@ -63,8 +63,8 @@ def measure(job: dict[str, Any]) -> dict[str, Any]:
     """One gait's row (module docstring, ``run``)."""
     from robustgait import SimConfig, load_gait, load_robot
     from robustgait.certificate.certify import certify_gait
+    from robustgait.certificate.verification import verification_size
     from robustgait.config import CertifyConfig, GaitParams, GenerationConfig
-    from robustgait.config.certify import verification_size
     from robustgait.gaitgen import generate_gait
 
     if not _YARDSTICK:
@@ -113,7 +113,7 @@ def explore_row(robot: Any, gait: Any, cfg: Any, sim: Any) -> dict[str, Any]:
     probability of :data:`LEVELS` for the first batch; the exploration's pushes (sizes, falls) and physics steps."""
     from robustgait.certificate.certify import certify_gait
     from robustgait.certificate.fallcurve import fit_fall_curve
-    from robustgait.config import verification_size
+    from robustgait.certificate.verification import verification_size
 
     t0 = time.process_time()
     est = certify_gait(robot, gait, cfg, sim, verify=False)

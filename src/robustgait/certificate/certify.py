@@ -29,6 +29,7 @@ from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
 from robustgait.certificate.search import Walking, find_orbit, probe_impulse
 from robustgait.certificate.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
+from robustgait.certificate.verification import attempt_beta, check_budget
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
 from robustgait.config.certify import R_MAX_LIMIT
 from robustgait.config.work import Work, check_work
@@ -48,7 +49,7 @@ def push_basis(c: Certificate, config: CertifyConfig) -> str:
     if c.method == "sequential":
         verify = [r for r in c.rounds if r.kind == "verify"]
         n_a, attempt = verify[-1].n_samples, len(verify)
-        beta_a = config.estimator.beta_of(config.beta, attempt)
+        beta_a = attempt_beta(config, attempt)
         n_explore = c.n_samples - sum(r.n_samples for r in verify)
         estimate = "" if c.estimate is None else f"; the estimate Ĵ = {c.estimate:.4g} N s"
         earlier = c.n_samples - n_a
@@ -391,9 +392,11 @@ def certify_steps(config: CertifyConfig, graph: str, dim: int) -> int:
 
 
 def check_certify_work(robot: Robot, gait: Gait, config: CertifyConfig, sim: SimConfig) -> int:
-    """Bound a certificate's simulation before it starts (:mod:`robustgait.config.work`): :func:`certify_steps`,
+    """Bound a certificate's simulation before it starts (:mod:`robustgait.config.work`; and its budget,
+    :func:`~.verification.check_budget`): :func:`certify_steps`,
     each of up to the gait's :func:`~robustgait.sim.engine.step_horizons`, against what the default certificate
     needs on this robot and gait."""
+    check_budget(config)
     graph, samples = gait.domain_graph, "sequential.budget" if config.method == "sequential" else "n_samples"
     dim = section_dimension(robot)
     return check_work(Work(certify_steps(config, graph, dim), step_physics_steps(gait, robot.dt, sim)),

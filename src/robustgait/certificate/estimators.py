@@ -49,7 +49,6 @@ for local proposals, around their own elites) and the same verification directio
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -70,7 +69,8 @@ from robustgait.certificate.barrier import (
     violation_end,
 )
 from robustgait.certificate.fallcurve import FallCurve, fit_fall_curve
-from robustgait.config import Barrier, CertifyConfig, verification_beta, verification_size
+from robustgait.certificate.verification import attempt_size, check_budget, verification_bound
+from robustgait.config import Barrier, CertifyConfig
 from robustgait.config.certify import Estimator
 from robustgait.errors import RobustGaitError
 
@@ -78,21 +78,9 @@ __all__ = [
     "Replay",
     "certify_map_sequential",
     "propose_round",
-    "verification_beta",
-    "verification_bound",
-    "verification_size",
 ]
 
 FloatArray = NDArray[np.float64]
-
-
-# ------------------------------------------------------------------------------------ verification
-def verification_bound(n: int, beta: float, attempt: int, first_share: float = 0.5) -> float:
-    """ε_a = 1 − β_a^{1/n}: the bound certified by n fresh uniform samples that all satisfy (attempt a; β_a of
-    :func:`~robustgait.config.verification_beta` with ``first_share``)."""
-    if n < 1:
-        raise RobustGaitError(f"a verification batch has at least one sample, got {n}")
-    return float(-math.expm1(math.log(verification_beta(beta, attempt, first_share)) / n))
 
 
 # ------------------------------------------------------------------------------------- exploration
@@ -255,11 +243,13 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
     rounds are evaluated on (default P). Returns a :class:`~.barrier.Certificate` with ``method="sequential"``, every
     round (``rounds``: kind, radius, samples, samples used, r̂ after it), ``estimate`` (r̂ after the exploration
     before the first verification) and, if a verification batch passed, r* = its radius and ``violation_bound`` = ε_a
-    ≤ ε (:func:`verification_bound`) at confidence 1 − β; otherwise ``budget_exhausted`` (bound 1) or, if r̂ reached
-    0, a vacuous certificate. ``verify=False``: the exploration alone, r* = the estimate r̂, with no statement
-    (``verified`` false); a callable decides from the estimate r̂ whether to go on to verification.
+    ≤ ε (:func:`~.verification.verification_bound`) at confidence 1 − β; otherwise ``budget_exhausted`` (bound 1)
+    or, if r̂ reached 0, a vacuous certificate. A budget that cannot hold one batch is refused before any sample
+    (:func:`~.verification.check_budget`). ``verify=False``: the exploration alone, r* = the estimate r̂, with no
+    statement (``verified`` false); a callable decides from the estimate r̂ whether to go on to verification.
     """
     full = config or CertifyConfig()
+    check_budget(full)
     cfg = full.estimator
     xs = _check_point("x_star", x_star)
     r, a, b, seed, barrier = full.radius, full.alpha, full.beta, full.seed, full.barrier
@@ -274,7 +264,7 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
     curve: FallCurve | None = None
     verifying = verify is not False
     while pool.r_hat > 0.0:
-        room = cfg.budget - pool.used - (cfg.batch_size(b, attempt + 1) if verifying else 0)
+        room = cfg.budget - pool.used - (attempt_size(full, attempt + 1) if verifying else 0)
         while explore_left > 0 and room > 0 and pool.r_hat > 0.0:
             m = min(cfg.round_size, explore_left, room)
             pool.add("explore", pool.r_hat, propose_round(explore_rng, m, xs, pool.r_hat, pool.elites(cfg.elites), cfg))
@@ -288,7 +278,7 @@ def certify_map_sequential(P: BatchedMap, x_star: ArrayLike, config: CertifyConf
         if pool.r_hat == 0.0 or not verifying:
             break
         attempt += 1
-        n_a = cfg.batch_size(b, attempt)
+        n_a = attempt_size(full, attempt)
         if pool.used + n_a > cfg.budget:
             break
         if level is None:

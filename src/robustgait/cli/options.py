@@ -225,8 +225,16 @@ def config_from(args: argparse.Namespace, base: Config | None = None) -> Config:
 def _check_applies(config: Config, set_by: Mapping[str, str], certificate: str) -> None:
     """Refuse a certificate option set on the command line that does nothing to the command's certificate
     (``certificate``: ``study``, a study's :attr:`~robustgait.config.Config.study_certify`; else ``certify``):
-    one line naming what set it and why (:meth:`~robustgait.config.CertifyConfig.inapplicable`)."""
+    one line naming what set it and why (:meth:`~robustgait.config.CertifyConfig.inapplicable`); and a sequential
+    budget that cannot hold one verification (:func:`~robustgait.certificate.verification.check_budget`)."""
+    from robustgait.certificate.verification import check_budget
+
     cert = config.study_certify if certificate == "study" else config.certify
+    try:
+        check_budget(cert)
+    except RobustGaitError as exc:
+        field, _, problem = str(exc).partition(": ")
+        raise RobustGaitError(f"{set_by[field]}: {problem}" if field in set_by else str(exc)) from None
     for path, source in set_by.items():
         head, _, rest = path.partition(".")
         why = cert.inapplicable(rest) if head == "certify" else None

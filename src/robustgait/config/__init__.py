@@ -64,8 +64,6 @@ from robustgait.config.certify import (
     State,
     radius_name,
     study_disturbance,
-    verification_beta,
-    verification_size,
 )
 from robustgait.config.comfort import ComfortConfig
 from robustgait.config.gait import (
@@ -289,8 +287,6 @@ __all__ = [
     "to_dict",
     "to_markdown",
     "to_toml",
-    "verification_beta",
-    "verification_size",
     "with_implied_choices",
     "with_overrides",
 ]

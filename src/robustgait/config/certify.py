@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import Annotated, Any, Literal
 
 from robustgait.config.base import Bool, Doc, FieldProblem, Float, Int, config
@@ -90,22 +89,6 @@ def radius_name(space: str) -> str:
 SEED_LIMIT = 2**63 - 1  # a seed fits a signed 64-bit integer (study storage)
 
 
-def verification_beta(beta: float, attempt: int, first_share: float = 0.5) -> float:
-    """β_a: the part of β spent on verification attempt a ≥ 1 of the sequential estimator, β_1 = s β and
-    β_a = (1 − s) β / 2^(a−1) for a ≥ 2, s = ``first_share`` ∈ (0, 1) (Σ_a β_a = β; s = ½ gives β / 2^a)."""
-    if attempt < 1:
-        raise ValueError(f"verification attempts count from 1, got {attempt}")
-    if attempt == 1:
-        return beta * first_share
-    return beta * (1.0 - first_share) * 0.5 ** (attempt - 1)
-
-
-def verification_size(epsilon: float, beta: float, attempt: int, first_share: float = 0.5) -> int:
-    """n_a = ⌈ln β_a / ln(1 − ε)⌉: the least batch with (1 − ε)^{n_a} ≤ β_a (:func:`verification_beta`)."""
-    n = math.log(verification_beta(beta, attempt, first_share)) / math.log1p(-epsilon)
-    return max(1, math.ceil(n - 1e-9))  # the slack absorbs rounding when n is an integer
-
-
 @config
 class SequentialConfig:
     """Options of the sequential estimator (:mod:`robustgait.certificate.estimators`; defaults measured in
@@ -167,14 +150,6 @@ class Estimator:
     verify_chunk: int
     verify_margin: float
     first_share: float
-
-    def beta_of(self, beta: float, attempt: int) -> float:
-        """β_a of verification attempt a (:func:`verification_beta` with this estimator's ``first_share``)."""
-        return verification_beta(beta, attempt, self.first_share)
-
-    def batch_size(self, beta: float, attempt: int) -> int:
-        """n_a of verification attempt a (:func:`verification_size` with ``epsilon`` and ``first_share``)."""
-        return verification_size(self.epsilon, beta, attempt, self.first_share)
 
 
 @config
@@ -379,12 +354,6 @@ class CertifyConfig:
         if self.r_max is not None and self.r_max > R_MAX_LIMIT[self.space]:
             raise FieldProblem("r_max", f"must satisfy 0 < x ≤ {R_MAX_LIMIT[self.space]:g} {R_MAX_UNIT[self.space]} "
                                f"when certifying {self.space} (got {self.r_max:g})")
-        seq = self.estimator
-        need = seq.first_round + seq.batch_size(self.beta, 1)
-        if self.method == "sequential" and seq.budget < need:
-            raise FieldProblem("sequential.budget", f"{seq.budget} samples cannot hold the first round "
-                               f"({seq.first_round}) and one verification batch ({need - seq.first_round} for "
-                               f"epsilon = {seq.epsilon:g}, beta = {self.beta:g})")
 
     def state_choice(self) -> tuple[str, str, int]:
         """(state, set, horizon): what a state certificate certifies."""
