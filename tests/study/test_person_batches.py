@@ -1,6 +1,6 @@
 """A person study's batches (docs/person.md): candidates over-drawn so that each batch shown is full, evaluations made
 ahead while the person answers — on a tiny exo study run by the real runner and workers, answered by a person who
-takes their time (:class:`Patient`, the runner's :class:`~robustgait.study.run.Asker`); and a study written before
+takes their time (:class:`Patient`, the runner's :class:`~robustgait.study.policies.Asker`); and a study written before
 over-drawn batches keeps its rule."""
 
 from __future__ import annotations

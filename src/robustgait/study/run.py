@@ -19,7 +19,8 @@ A study that asks a person (docs/person.md) proposes ``batch + person.overdraw``
 order, and records each trial only when it is dispatched: the next candidate is evaluated while fewer than
 ``batch`` of the iteration's evaluated or running candidates may be shown, so its trials are slots 0 … n − 1 with
 n between ``batch`` and ``batch + overdraw``. While a person answers, idle workers evaluate ahead
-(:mod:`robustgait.study.ahead`).
+(:mod:`robustgait.study.ahead`). The runner keeps the loop; what a person study adds to it — the floor, the
+over-draw, the evaluations ahead — are policies it calls (:mod:`robustgait.study.policies`).
 """
 
 from __future__ import annotations
@@ -33,10 +34,9 @@ import uuid
 from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
 from tqdm import tqdm
 
 from robustgait.certificate.certify import check_certify_work
@@ -47,26 +47,17 @@ from robustgait.gait import BEZIER_DEGREE, Domain, Gait
 from robustgait.io.output import write_json
 from robustgait.io.robotfile import load_robot
 from robustgait.io.studyfile import StudySetup, environment_changes, load_config, save_config
-from robustgait.learn.floor import predicted_to_clear
 from robustgait.learn.history import History, iteration_seed
 from robustgait.learn.oracle import batch_comparisons
 from robustgait.learn.space import ActionSpace
 from robustgait.robots import Robot
 from robustgait.robots.spec import SHIPPED_DIR
 from robustgait.sim.walk import check_walk_work
-from robustgait.study.ahead import Ahead
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.executors import Executor, WorkerSpec, make_executor
-from robustgait.study.outcome import EvaluationStatus, known_figure, status_of, verified_value
-from robustgait.study.person import (
-    FLOOR_ATTR,
-    Floor,
-    automatic_answer,
-    pending_record,
-    predicted_answer,
-    shown_flags,
-    simulated_answer,
-)
+from robustgait.study.outcome import EvaluationStatus, status_of
+from robustgait.study.person import automatic_answer, pending_record, shown_flags, simulated_answer
+from robustgait.study.policies import REFERENCE_KEY, AheadPolicy, Asker, FloorPolicy, Overdraw, StudyContext
 from robustgait.study.ranking import (  # history_before, study_score: re-exported by robustgait.study.run
     Requirement,
     batch_scores,
@@ -75,7 +66,7 @@ from robustgait.study.ranking import (  # history_before, study_score: re-export
     shown,
     study_score,
 )
-from robustgait.study.storage import StudyStore, TrialRecord, completed_batches, current_evaluation, default_url
+from robustgait.study.storage import StudyStore, TrialRecord, completed_batches, default_url
 from robustgait.study.trials import outcome_line
 from robustgait.study.verify import CERTIFICATE_FILE, ESTIMATE_FILE, GAITS_DIR, Verifier, gait_label
 
@@ -83,22 +74,6 @@ if TYPE_CHECKING:
     from robustgait.learn.learners import Learner
 
 
-class Asker(Protocol):
-    """How a person study asks (:class:`robustgait.web.server.PersonPage` serves the page that stores the answers)."""
-
-    def show(self, k: int) -> None:
-        """Show iteration k's pending batch to the person (its videos rendered)."""
-
-    def answered(self, k: int, timeout: float) -> bool:
-        """Whether iteration k's answer is stored, waiting up to ``timeout`` s for one."""
-        ...
-
-    def render_ahead(self, index: int, result: dict[str, Any]) -> None:
-        """Prepare what showing grid point ``index`` needs (its video): it was evaluated ahead of an answer
-        (``result``, as stored) and may be shown in the next batch."""
-
-
-REFERENCE_KEY = -1  # the executor key of a person study's reference evaluation (the default gait, for its floor)
 POLL = 0.5  # s: how often a study waiting for a person looks for the answer and its evaluations ahead
 
 LOCK_FILE = ".lock"
@@ -232,8 +207,11 @@ class StudyRunner:
         self._own_executor = executor is None
         self.reqs: list[Requirement] = requirements(self.config, self.space.names)
         self.asker = asker
-        self.floor = Floor(self.setup.config, self.space)  # a person study's floor
-        self.ahead: Ahead | None = None  # evaluations ahead of a person's answer
+        ctx = StudyContext(self.directory, self.setup, self.space, self.reqs, self.executor, lambda: self.learner,
+                           asker)
+        self.floor = FloorPolicy(ctx)  # a person study's floor
+        self.overdraw = Overdraw(ctx, self.floor)  # its candidates beyond the batch
+        self.ahead = AheadPolicy(ctx, self.floor, self.overdraw)  # its evaluations ahead of a person's answer
         self.verifier = Verifier(self.directory, self.space, self.executor)
 
     @property
@@ -282,8 +260,7 @@ class StudyRunner:
         done = sum(len(b) for b in completed_batches(store.records()).values())
         with tqdm(total=cfg.trials_planned, initial=done, desc="study", unit="gait", file=sys.stderr,
                   disable=not self.progress, dynamic_ncols=True) as bar:
-            if cfg.asks_a_person:
-                self._start_floor(store)
+            self.floor.start(store)
             self.verifier.submit(store, self.verifier.needed(store))  # what a killed run had not verified yet
             for k in range(cfg.iterations):
                 batches = completed_batches(store.records())
@@ -305,26 +282,6 @@ class StudyRunner:
                                     " left")
                 self.verifier.take(store, *self.executor().next_result())
                 self.verifier.submit_front(store, self.config, self.setup.config.report.pareto_figure)
-
-    def _start_floor(self, store: StudyStore) -> None:
-        """The robustness floor of a person study (:class:`~robustgait.study.person.Floor`): stored once; not
-        configured, its reference is the first batch's first gait, or for a study created before, the default gait
-        evaluated on the workers beside the first batch's candidates (:meth:`_floor_set` when it ends)."""
-        if self.floor.start(store):
-            self.executor().submit(REFERENCE_KEY, self.setup.config.params.to_dict(), verify_above=0.0)
-
-    def _floor_set(self, store: StudyStore, result: dict[str, Any], bar: tqdm) -> None:
-        """The reference evaluation ended: store the floor, say it, and render the videos of the first batch's gaits
-        that may now be shown."""
-        self.floor.set(store, result)
-        bar.set_postfix_str(f"floor {self.floor.value:.4g} {self.setup.config.study_certify.unit} "
-                            f"({self.setup.config.person.floor_fraction:g} × the reference gait's)"
-                            if self.floor.value > 0 else "floor 0: the reference gait was not certified")
-        if self.asker is not None:
-            for r in store.records():
-                if r.state == "COMPLETE" and r.iteration == 0 and r.result is not None \
-                        and self._qualifies(r.index, r.result):
-                    self.asker.render_ahead(r.index, r.result)
 
     def _ask(self, store: StudyStore, k: int) -> None:
         """Iteration k's answer: stored already (a resumed study), none needed (no gait above the floor), a simulated
@@ -348,92 +305,30 @@ class StudyRunner:
             if self.asker is None:
                 raise RobustGaitError(f"{self.directory}: iteration {k + 1} waits for a person's answers: "
                                       f"robustgait study serve {self.directory}")
-            if self.setup.config.person.ahead and k + 1 < self.config.iterations:
-                self._plan_ahead(store, k, batch, show)
+            if self.ahead.wanted(k):
+                self.ahead.plan(store, k, batch, show)
             self.asker.show(k)
-            while not self.asker.answered(k, 0.0 if self.ahead is not None and self.ahead.busy else POLL):
-                if self.ahead is not None and self.ahead.busy:
+            while not self.asker.answered(k, 0.0 if self.ahead.busy else POLL):
+                if self.ahead.busy:
                     got = self.executor().poll(POLL)
                     if got is not None and self.verifier.take(store, *got):
                         continue
                     if got is not None:
                         index, written = self._finish_ahead(*got)
                         self.ahead.fill()
-                        if self._qualifies(index, written):
+                        if self.floor.qualifies(index, written):
                             self.asker.render_ahead(index, written)
             return
         store.set_iteration(k, rec)
-
-    def _plan_ahead(self, store: StudyStore, k: int, batch: list[TrialRecord], show: list[bool]) -> None:
-        """Start evaluating iteration k + 1's candidates as the learner would propose them if the person answered as
-        its model predicts (:func:`~robustgait.study.person.predicted_answer`); recorded in iteration k's record."""
-        cfg = self.config
-        records = store.records()
-        batches, iterations = completed_batches(records), store.iterations()
-        history = history_before(k, batches, cfg, iterations, self.reqs)
-        utilities = self.learner.predicted_utility(history, [r.index for r in batch], k)
-        fallback = [study_score(cfg, r, self.reqs) for r in batch]
-        guess = {**iterations[k], "answer": predicted_answer(list(utilities), fallback, show)}
-        t0 = time.perf_counter()
-        candidates = self.learner.propose(history_before(k + 1, batches, cfg, {**iterations, k: guess}, self.reqs),
-                                          k + 1, self._candidates(k + 1), self._region(store, k + 1))
-        if self.ahead is None:
-            self.ahead = Ahead(self.executor(), cfg.batch, self.space.value, self._qualifies, self._verify_above())
-        known = {r.index: r.result for r in records if r.state == "COMPLETE" and r.result is not None}
-        self.ahead.plan(candidates, known)
-        self.ahead.fill()
-        rec = dict(store.iterations()[k])
-        rec["ahead"] = {"candidates": candidates, "propose_seconds": time.perf_counter() - t0}
-        store.set_iteration(k, rec)
-
-    def _qualifies(self, index: int, result: dict[str, Any], any_floor: bool = False) -> bool:
-        """Whether a person may be shown the evaluated gait ``index`` (:func:`~robustgait.study.ranking.shown`; with
-        ``any_floor``, under a floor of 0)."""
-        return shown(TrialRecord(-1, "COMPLETE", -1, -1, index, self.space.value(index), None, result, None, None, {}),
-                     0.0 if any_floor else self.floor.value, self.reqs)
-
-    def _region(self, store: StudyStore, k: int, within: bool = False) -> NDArray[np.bool_] | None:
-        """A person study's proposals for iteration k are made among the grid points predicted to clear its floor
-        (:func:`~robustgait.learn.floor.predicted_to_clear`, ``person.region``): from the floor's reference evaluation
-        and the evaluations of iterations before k (``within``: of k too). None: not a person study, or no floor
-        (0) to clear.
-
-        With the reference alone (the first iteration's proposals, made while the reference is still evaluated) the
-        region does not depend on the reference's value when the floor is ``floor_fraction`` of it
-        (:mod:`robustgait.learn.floor`): it is computed with the value 1 and the floor ``floor_fraction``, so that the
-        proposals are the same whether the floor is known yet or not."""
-        person = self.setup.config.person
-        if not self.config.asks_a_person or not person.region:
-            return None
-        verifications = store.verifications()
-        observed = [(r.params, known_figure(r.result, verifications.get(r.index)) or 0.0) for r in store.records()
-                    if r.state == "COMPLETE" and r.result is not None
-                    and (r.iteration < k or (within and r.iteration == k))]
-        if not observed and person.floor is None:
-            default = self.setup.config.params.to_dict()
-            return predicted_to_clear(self.space, [(default, 1.0)], person.floor_fraction, person.region_lengthscale,
-                                      person.region_prior)
-        if self.floor.value <= 0.0 or self.floor.pending:
-            return None
-        reference = (store.user_attrs().get(FLOOR_ATTR) or {}).get("reference")
-        if reference and reference.get("params") and self.floor.index is None:  # in the batch: among the records
-            value = verified_value(current_evaluation(reference))
-            observed.insert(0, ({**self.setup.config.params.to_dict(), **reference["params"]}, value or 0.0))
-        return predicted_to_clear(self.space, observed, self.floor.value, person.region_lengthscale,
-                                  person.region_prior)
-
-    def _candidates(self, k: int) -> int:
-        """Candidates iteration k proposes: its batch, and for a study that asks a person its over-draw."""
-        return self.config.batch_size(k) + (self.setup.config.person.overdraw if self.config.asks_a_person else 0)
 
     def _propose(self, store: StudyStore, k: int, history: History) -> None:
         """Reproduce the proposals of iteration k and enqueue the slots not recorded yet (a study that asks a person:
         none, :meth:`_fill` records each when it dispatches it); a stored slot that differs from the reproduction is
         an error (another version or config wrote this study)."""
         cfg = self.config
-        size = self._candidates(k)
+        size = self.overdraw.candidates(k)
         t0 = time.perf_counter()
-        proposal = self.learner.propose(history, k, size, self._region(store, k))
+        proposal = self.learner.propose(history, k, size, self.floor.region(store, k))
         if k == 0 and self.floor.index is not None:  # the floor's reference first
             proposal = [self.floor.index, *[i for i in proposal if i != self.floor.index]][:size]
         seconds = time.perf_counter() - t0
@@ -490,7 +385,7 @@ class StudyRunner:
             ready = sum(1 for r in mine if r.state == "COMPLETE" and shown(r, floor, self.reqs))
             slots = len({r.slot for r in mine})
             if ready + len(started) < size and slots == len(proposals) and not started and not self.floor.pending:
-                proposals = self._more_candidates(store, k, proposals, ready)
+                proposals = self.overdraw.more(store, k, proposals, ready)
             if ready + len(started) < size and slots < len(proposals):
                 store.enqueue(k, slots, proposals[slots], self._trial_attrs())
                 if slots >= size:
@@ -500,29 +395,7 @@ class StudyRunner:
             if not started and not self.floor.pending:
                 break
             self._collect(store, started, bar)
-        before = store.iterations().get(k - 1, {})
-        if self.ahead is not None and "ahead" in before:  # what the evaluations ahead of this iteration gave
-            store.set_iteration(k - 1, {**before, "ahead": {**before["ahead"], "evaluated": len(self.ahead.submitted),
-                                                            "used": self.ahead.used}})
-
-    def _more_candidates(self, store: StudyStore, k: int, proposals: list[int], ready: int) -> list[int]:
-        """A person study's iteration k has evaluated every candidate and fewer than ``person.min_shown`` of them may
-        be shown: the learner proposes ``person.overdraw`` more (new ones, within the region predicted to clear the
-        floor given this iteration's evaluations too), recorded in the iteration's proposals before they are
-        dispatched. Unchanged when enough may be shown, or when the action space holds no other gait."""
-        need = min(self.setup.config.person.min_shown, self.config.batch_size(k))
-        if ready >= need or len(proposals) >= self.space.size:
-            return proposals
-        batches, iterations = completed_batches(store.records()), store.iterations()
-        history = history_before(k, batches, self.config, iterations, self.reqs)
-        size = min(self.space.size, len(proposals) + max(1, self.setup.config.person.overdraw))
-        region = self._region(store, k, within=True)
-        if region is not None:
-            region[proposals] = False  # evaluated already: the new candidates come from the rest of the region
-        more = [i for i in self.learner.propose(history, k, size, region) if i not in set(proposals)]
-        out = proposals + more[:size - len(proposals)]
-        store.set_iteration(k, {**iterations.get(k, {}), "proposals": out})
-        return out
+        self.ahead.record_use(store, k)
 
     def _dispatch(self, store: StudyStore, trial: TrialRecord, cache: dict[int, TrialRecord],
                   started: dict[int, TrialRecord], bar: tqdm) -> None:
@@ -532,35 +405,27 @@ class StudyRunner:
         if earlier is not None and earlier.result is not None:
             self._complete(store, trial, earlier.result, bar, reused_from=earlier.number)
             return
-        made = self.ahead.take(trial.index) if self.ahead is not None else None
+        made = self.ahead.take(trial.index)
         if made is not None:
             self._complete(store, trial, made, bar, extra={"evaluated_ahead": True})
             return
-        key = self.ahead.key_of(trial.index) if self.ahead is not None else None
+        key = self.ahead.key_of(trial.index)
         if key is not None:
             started[key] = trial
             return
         started[trial.number] = trial
-        self.executor().submit(trial.number, trial.params, self._verify_above())
-
-    def _verify_above(self) -> float | None:
-        """Evaluations verify their certificate when its estimate is at least this (a person study's floor: the gaits
-        it may show; every estimate while the floor is not known yet), else only when the study verifies every gait
-        (None)."""
-        if not self.config.asks_a_person:
-            return None
-        return 0.0 if self.floor.pending else self.floor.value
+        self.executor().submit(trial.number, trial.params, self.floor.verify_above())
 
     def _collect(self, store: StudyStore, started: dict[int, TrialRecord], bar: tqdm) -> None:
         """Wait for the next finished evaluation: a trial's, one made ahead (kept; completing the trial that
         adopted it) or a verification (stored)."""
         key, result = self.executor().next_result()
         if key == REFERENCE_KEY:
-            self._floor_set(store, result, bar)
+            bar.set_postfix_str(self.floor.set(store, result))
             return
         if self.verifier.take(store, key, result):
             return
-        if self.ahead is not None and self.ahead.owns(key):
+        if self.ahead.owns(key):
             index, _ = self._finish_ahead(key, result)
             trial = started.pop(key, None)
             if trial is not None:
@@ -572,12 +437,11 @@ class StudyRunner:
         written = self._write_files(trial.index, result)
         self._complete(store, trial, written, bar)
         if self.floor.is_reference(trial):
-            self._floor_set(store, {**written, "params": trial.params}, bar)
+            bar.set_postfix_str(self.floor.set(store, {**written, "params": trial.params}))
 
     def _finish_ahead(self, key: int, result: dict[str, Any]) -> tuple[int, dict[str, Any]]:
         """Write the files of the evaluation made ahead under executor ``key`` and keep it (:meth:`Ahead.finish`):
         its grid index and the result as the study stores it."""
-        assert self.ahead is not None
         written = self._write_files(self.ahead.index_of(key), result)
         return self.ahead.finish(key, written), written
 
@@ -607,7 +471,7 @@ class StudyRunner:
         bar.update(1)
         bar.set_postfix_str(f"iteration {trial.iteration + 1}/{self.config.iterations}, last: "
                             f"{outcome_line(result, self.name)}")
-        if self.asker is not None and self._qualifies(trial.index, result, self.floor.pending):
+        if self.asker is not None and self.floor.qualifies(trial.index, result, self.floor.pending):
             # its video now, while the workers evaluate the batch's other candidates: the batch is shown sooner (while
             # the floor is pending, a gait that may be shown under some floor: the floor's reference is still running)
             self.asker.render_ahead(trial.index, result)

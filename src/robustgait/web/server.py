@@ -44,7 +44,7 @@ LOG = logging.getLogger("robustgait.web")
 
 class PersonPage:
     """The state behind the page of one study directory, and the study's asker
-    (:class:`robustgait.study.run.Asker`): :meth:`show` renders the pending batch's videos and shows it,
+    (:class:`robustgait.study.policies.Asker`): :meth:`show` renders the pending batch's videos and shows it,
     :meth:`answered` says whether the page has stored its answer. A coordinator: the videos are
     :class:`~robustgait.web.media.GaitVideos`', the state it shows is :func:`~robustgait.web.view.page_state`'s, the
     answers are stored by :func:`~robustgait.web.answers.store_answer`, the routes are
