@@ -22,12 +22,12 @@ from numpy.typing import NDArray
 from robustgait.certificate.orbit import Orbit, SettlingWatch, Status
 from robustgait.certificate.search import Walked, find_orbit
 from robustgait.config import Config, GaitParams
-from robustgait.config.regulator import placement_share, regulator_rule
 from robustgait.gait import Gait
 from robustgait.gaitgen.check import PhysicsCheck
 from robustgait.gaitgen.solve import GaitGenerator, GaitGenResult
 from robustgait.robots import Robot
 from robustgait.sim.controller import desired_outputs
+from robustgait.sim.regulator_rules import placement_share, regulator_rule
 from robustgait.sim.walk import SwitchEvent, WalkResult, walk
 
 # a stance sole tilted more than this [rad] while the other foot is off the floor is tipping over an edge

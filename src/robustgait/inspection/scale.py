@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 from robustgait.config import GaitParams, RobotScale, ScaleRules, field_at, relative_generation_defaults
 from robustgait.config.gait import least_step_width
-from robustgait.config.regulator import RegulatorConfig, regulator_rule
+from robustgait.config.regulator import RegulatorConfig
+from robustgait.sim.regulator_rules import regulator_rule
 
 # the [generation] keys a written spec carries (the landing-velocity bounds are left to the loader's rules, which
 # use its own leg length)
@@ -149,7 +150,7 @@ def generation(size: RobotSize, rules: ScaleRules) -> dict[str, float]:
 
 def balance(size: RobotSize) -> tuple[bool, str]:
     """Whether the step regulator runs for the robot's flat-foot gaits, and why: its rule
-    (:func:`~robustgait.config.regulator.regulator_rule`) with the default ``sim.regulator``."""
+    (:func:`~robustgait.sim.regulator_rules.regulator_rule`) with the default ``sim.regulator``."""
     return regulator_rule(RegulatorConfig(), size.sole_width, size.leg_length, 1)
 
 

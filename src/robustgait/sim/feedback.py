@@ -52,13 +52,13 @@ from numpy.typing import NDArray
 
 from robustgait.bezier import bezier_derivative
 from robustgait.config import SimConfig
-from robustgait.config.regulator import regulator_rule
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.robots.model import actuated_model
 from robustgait.sim.controller import TrackingStats, desired_outputs, feedforward_torque, step_controls
 from robustgait.sim.engine import StepBatch, StepEngine, StepInputs
+from robustgait.sim.regulator_rules import regulator_rule
 
 Array = NDArray[np.float64]
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS.value

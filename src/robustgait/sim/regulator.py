@@ -12,7 +12,7 @@ does, at the next foothold:
 2. It sets the landing change Δu = κ K (x − x*) (:func:`~robustgait.sim.hlip.step_correction` with no time left:
    the error measured now is the estimate of the error at touchdown; with ``predict`` the H-LIP's prediction
    e^{A_S (T_S − t)} (x − x*) instead), κ the share of the H-LIP gain the sole's width leaves to the foot
-   (:func:`~robustgait.config.regulator.placement_share`), clipped per axis to ``max_step_change`` leg lengths and,
+   (:func:`~robustgait.sim.regulator_rules.placement_share`), clipped per axis to ``max_step_change`` leg lengths and,
    inward, to keep ``foot_gap`` between the soles.
 3. The landing change becomes a swing-leg joint offset g = G Δu, G the least-squares inverse of the swing sole's
    5 × n Jacobian (horizontal position and orientation, stance sole frame, base fixed) at the gait's pre-impact
@@ -20,7 +20,7 @@ does, at the next foothold:
    in with a quintic in phase, reaching its target at ``land_tau``; it is continuous across updates.
 4. At the step start the joints differ from the references by e0 (the previous landing correction, now in the
    stance leg, and any tracking error); e0 is blended out of the references by τ_c = ``carry_tau`` + ``carry_share`` κ
-   (:func:`~robustgait.config.regulator.carry_phase`) instead of being a
+   (:func:`~robustgait.sim.regulator_rules.carry_phase`) instead of being a
    step in the servos' error (Morris & Grizzle, IEEE TAC 54(8), 2009: hybrid-invariant deformation of the outputs).
 
 The servos then track y_d + o with controls c = y_d + o + (kd (ẏ_d + ȯ) + u_ff) / kp; each sample gets its own
@@ -40,11 +40,12 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config.regulator import RegulatorConfig, carry_phase, placement_share, regulator_rule
+from robustgait.config.regulator import RegulatorConfig
 from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.sim import hlip
 from robustgait.sim.controller import desired_outputs
+from robustgait.sim.regulator_rules import carry_phase, placement_share, regulator_rule
 
 Array = NDArray[np.float64]
 
@@ -250,7 +251,7 @@ class StepRegulator:
     @property
     def carry_tau(self) -> float:
         """τ_c, the phase by which the step-start error is blended out under the current share κ
-        (:func:`~robustgait.config.regulator.carry_phase`)."""
+        (:func:`~robustgait.sim.regulator_rules.carry_phase`)."""
         return carry_phase(self.config, self.share)
 
     def set_share(self, share: float) -> None:
@@ -365,7 +366,7 @@ class StepRegulator:
 
 def regulator_for(robot: Robot, gaits: dict[str, Gait], config: RegulatorConfig, chunk: int, horizon: int
                   ) -> StepRegulator | None:
-    """The regulator a gait's engine runs (:func:`~robustgait.config.regulator.regulator_rule`), or None."""
+    """The regulator a gait's engine runs (:func:`~robustgait.sim.regulator_rules.regulator_rule`), or None."""
     gait = next(iter(gaits.values()))
     on, reason = regulator_rule(config, 2.0 * robot.scale.sole_half_width, robot.leg_length, len(gait.domains))
     if not on:
