@@ -17,7 +17,7 @@ from robustgait.config.regulator import RegulatorConfig
 from robustgait.errors import RobustGaitError
 from robustgait.sim.engine import StepEngine
 from robustgait.sim.factory import make_engine
-from robustgait.sim.regulator import com_state, landing_map, nominal_com, swing_dofs
+from robustgait.sim.regulator import com_state, landing_map, nominal_com, sole_frame, swing_dofs
 from robustgait.sim.regulator_rules import carry_phase, placement_share, regulator_rule
 from robustgait.sim.walk import walk
 
@@ -265,3 +265,26 @@ def test_the_step_start_blend_lengthens_with_the_share_of_the_gain(exo, exo_gait
     reg.set_share(1.0)
     assert reg.carry_tau == pytest.approx(carry_phase(ON.regulator, 1.0)) and reg.carry_tau > carry_phase(
         ON.regulator, 0.25)
+
+
+@pytest.mark.parametrize("name", ["exo", "atalante"])
+def test_the_regulator_reads_the_sole_box_whichever_geom_axis_is_its_normal(name, request):  # type: ignore[no-untyped-def]
+    """The sole's heading frame and the CoM over it are the foot frame's (x heel to toe, y left, z up) of its
+    SoleBox: Atalante's sole boxes have their normal along the geom's x axis and the toe along −z, exo's are the foot
+    frame. Its heading points forward (Atalante's zero posture turns the feet by 8°) and turns with the base's yaw;
+    the gait's CoM stands above the sole, about a leg high."""
+    robot = request.getfixturevalue(name)
+    gait = request.getfixturevalue(f"{name}_gait")
+    data = mujoco.MjData(robot.model)
+    heading = []
+    for yaw in (0.0, 0.7):
+        data.qpos[:] = robot.model.qpos0
+        data.qpos[3:7] = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
+        mujoco.mj_kinematics(robot.model, data)
+        _, rot = sole_frame(data, robot.sole_boxes[gait.stance])
+        assert rot @ rot.T == pytest.approx(np.eye(2))
+        heading.append(np.arctan2(rot[0, 1], rot[0, 0]))  # rot = R_z(ψ)ᵀ
+    assert abs(heading[0]) < 0.2 and heading[1] - heading[0] == pytest.approx(0.7)
+    x, z0 = nominal_com(robot, gait, np.linspace(0.0, 1.0, 5))
+    assert 0.5 * robot.leg_length < z0 < 1.2 * robot.leg_length
+    assert np.all(np.abs(x[:, :, 0]) < 0.5 * robot.leg_length)  # the CoM's horizontal offset from the sole

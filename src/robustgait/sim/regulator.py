@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 from robustgait.config.regulator import RegulatorConfig
 from robustgait.gait import Gait
 from robustgait.robots import Robot
+from robustgait.robots.solebox import SoleBox
 from robustgait.sim import hlip
 from robustgait.sim.controller import desired_outputs
 from robustgait.sim.regulator_rules import carry_phase, placement_share, regulator_rule
@@ -57,13 +58,15 @@ def quintic_blend(s: Array) -> tuple[Array, Array]:
     return s**3 * (10.0 - 15.0 * s + 6.0 * s**2), 30.0 * s**2 * (1.0 - s) ** 2
 
 
-def sole_frame(data: mujoco.MjData, geom: int) -> tuple[Array, Array]:
-    """Centre (3,) and heading rotation R_z(ψ)ᵀ (2, 2) of a sole geom: world horizontal vectors into the sole's
-    heading frame (x forward along the sole, y to its left), ψ the yaw of the sole's x axis."""
-    r = data.geom_xmat[geom]
-    psi = math.atan2(r[3], r[0])
+def sole_frame(data: mujoco.MjData, sole: SoleBox) -> tuple[Array, Array]:
+    """Centre (3,) and heading rotation R_z(ψ)ᵀ (2, 2) of a sole box: world horizontal vectors into the sole's
+    heading frame (x heel to toe, y to its left), ψ the yaw of its heel-to-toe axis (:meth:`SoleBox.heading`,
+    whichever of the geom's axes that is). The centre is the box's, on the sole's normal through its bottom face's
+    centre: the same point for the gait's x* (:func:`nominal_com`) and the walk's x, so a flat sole's horizontal
+    offset is the bottom face's."""
+    psi = sole.heading(data)
     c, s = math.cos(psi), math.sin(psi)
-    return data.geom_xpos[geom].copy(), np.array([[c, s], [-s, c]])
+    return data.geom_xpos[sole.geom].copy(), np.array([[c, s], [-s, c]])
 
 
 def com_state(robot: Robot, data: mujoco.MjData, states: Array, stance: str) -> Array:
@@ -71,7 +74,7 @@ def com_state(robot: Robot, data: mujoco.MjData, states: Array, stance: str) -> 
     in its heading frame [m, m/s], from full-physics states (K, nstate)."""
     m = robot.model
     nq, nv = m.nq, m.nv
-    geom = robot.sole_geom_id[stance]
+    sole = robot.sole_boxes[stance]
     out = np.empty((states.shape[0], 2, 2))
     for i, st in enumerate(states):
         data.qpos[:] = st[1:1 + nq]
@@ -80,7 +83,7 @@ def com_state(robot: Robot, data: mujoco.MjData, states: Array, stance: str) -> 
         mujoco.mj_comPos(m, data)
         mujoco.mj_comVel(m, data)
         mujoco.mj_subtreeVel(m, data)
-        centre, rot = sole_frame(data, geom)
+        centre, rot = sole_frame(data, sole)
         out[i, :, 0] = rot @ (data.subtree_com[0, :2] - centre[:2])
         out[i, :, 1] = rot @ data.subtree_linvel[0, :2]
     return out
@@ -95,12 +98,13 @@ def _posture(robot: Robot, gait: Gait, tau: Array) -> Array:
     return q
 
 
-def _com_in_sole(robot: Robot, data: mujoco.MjData, qpos: Array, geom: int) -> Array:
-    """The CoM relative to sole geom ``geom``'s centre, in the sole's frame (3,) [m], at configuration ``qpos``."""
+def _com_in_sole(robot: Robot, data: mujoco.MjData, qpos: Array, sole: SoleBox) -> Array:
+    """The CoM relative to a sole box's centre, in its foot frame (3,) [m] (x heel to toe, y left, z up:
+    :meth:`SoleBox.world_frame`), at configuration ``qpos``."""
     data.qpos[:] = qpos
     mujoco.mj_kinematics(robot.model, data)
     mujoco.mj_comPos(robot.model, data)
-    return np.asarray(data.geom_xmat[geom].reshape(3, 3).T @ (data.subtree_com[0] - data.geom_xpos[geom]))
+    return np.asarray(sole.world_frame(data).T @ (data.subtree_com[0] - data.geom_xpos[sole.geom]))
 
 
 def nominal_com(robot: Robot, gait: Gait, tau: Array, dtau: float = 1e-4) -> tuple[Array, float]:
@@ -110,10 +114,10 @@ def nominal_com(robot: Robot, gait: Gait, tau: Array, dtau: float = 1e-4) -> tup
     for): p* is the CoM relative to the sole's centre in the sole frame — the same for any base pose — and
     v* = dp*/dτ / T by central differences in τ."""
     data = mujoco.MjData(robot.model)
-    geom = robot.sole_geom_id[gait.stance]
+    sole = robot.sole_boxes[gait.stance]
 
     def rel(t: Array) -> Array:
-        return np.array([_com_in_sole(robot, data, q, geom) for q in _posture(robot, gait, t)])
+        return np.array([_com_in_sole(robot, data, q, sole) for q in _posture(robot, gait, t)])
 
     p = rel(tau)
     lo, hi = np.maximum(tau - dtau, 0.0), tau + dtau   # one-sided at τ = 0 (the outputs start there)
@@ -126,7 +130,7 @@ def com_jacobian(robot: Robot, gait: Gait, tau: Array, joints: NDArray[np.int64]
     """∂p*/∂q_j (K, 2, n): how the CoM's horizontal position relative to the stance sole (sole frame) moves with the
     planned joints ``joints`` (n,) at the gait's postures y_d(τ) (K,), by central differences."""
     data = mujoco.MjData(robot.model)
-    geom = robot.sole_geom_id[gait.stance]
+    sole = robot.sole_boxes[gait.stance]
     out = np.empty((tau.size, 2, joints.size))
     for i, q in enumerate(_posture(robot, gait, tau)):
         for c, j in enumerate(joints):
@@ -134,7 +138,7 @@ def com_jacobian(robot: Robot, gait: Gait, tau: Array, joints: NDArray[np.int64]
             for sign in (1.0, -1.0):
                 moved = q.copy()
                 moved[robot.qpos_idx[j]] += sign * dq
-                side.append(_com_in_sole(robot, data, moved, geom))
+                side.append(_com_in_sole(robot, data, moved, sole))
             out[i, :, c] = (side[0] - side[1])[:2] / (2.0 * dq)
     return out
 
@@ -164,7 +168,7 @@ def landing_map(robot: Robot, gait: Gait) -> tuple[Array, Array]:
     mujoco.mj_comPos(m, data)
     stance = gait.stance
     swing = "left" if stance == "right" else "right"
-    rot = data.geom_xmat[robot.sole_geom_id[stance]].reshape(3, 3).T
+    rot = robot.sole_boxes[stance].world_frame(data).T  # world vectors into the stance sole's foot frame
     jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
     mujoco.mj_jacGeom(m, data, jacp, jacr, robot.sole_geom_id[swing])
     dofs = swing_dofs(robot, swing)
