@@ -462,6 +462,16 @@ def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int],
     return SoleRectangle(centre, np.column_stack([fwd, left, up]), half, np.column_stack([along, across]))
 
 
+def loader_rectangle(model: mujoco.MjModel, geoms: Sequence[int], base: int, line: bool = False) -> SoleRectangle:
+    """The rectangle a foot's virtual sole box is built on (:func:`resolve_sole`): :func:`sole_rectangle` of its
+    ``geoms`` in ``model``'s zero posture (qpos0), toe the way of body ``base``'s x axis there; ``line``: a line
+    foot's. ``robot init`` reads a sole of several geoms through it (:func:`robustgait.inspection.discover.find_sole`),
+    so the sole size it scales a spec's values with is the size of the sole the spec loads with."""
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    return sole_rectangle(model, data, list(geoms), data.xmat[base].reshape(3, 3)[:, 0], line)
+
+
 def resolve_soles(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel) -> dict[str, ResolvedSole]:
     """Both soles (:func:`resolve_sole`); the geoms are found before ``mjs`` is edited (an edit renumbers it)."""
     src = spec.source or spec.mjcf
@@ -484,12 +494,9 @@ def resolve_sole(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel, sid
             name = virtual_sole_name(side)
             geoms[ids[0]].name = name
         return ResolvedSole(name, (mujoco.mjtObj.mjOBJ_GEOM, name), tuple(ids), virtual=False)
-    data = mujoco.MjData(model)
-    mujoco.mj_kinematics(model, data)
     base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, spec.base_body)
-    forward = data.xmat[base].reshape(3, 3)[:, 0]
     line = spec.feet.get(side) == "line"
-    centre, rot, half, tread = sole_rectangle(model, data, ids, forward, line)
+    centre, rot, half, tread = loader_rectangle(model, ids, base, line)
     if line and half[0] > LINE_HALF_WIDTH and half[1] <= LINE_HALF_WIDTH:  # a line foot: its box as wide as nothing
         half[1] = LINE_HALF_WIDTH
     elif min(half[0], half[1]) <= LINE_HALF_WIDTH:
