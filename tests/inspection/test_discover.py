@@ -67,8 +67,11 @@ def test_soles_of_sets_and_unnamed_geoms_load_as_virtual_soles(tmp_path: Path, f
     assert main(["robot", "init", str(path), "-o", str(spec), *SERVO_RULE]) == 0
     robot = load_robot(spec)
     g = robot.sole_geom_id["left"]
-    # the loader's sole box spans the same footprint
+    # the loader's sole box spans the same footprint, and the one size type carries it alike: the draft's sizes and
+    # the loaded robot's scale (the regulator's rule and the generation defaults read the latter)
     assert sorted(2 * robot.model.geom_size[g][:2]) == pytest.approx(sorted([sole.length, sole.width]), abs=1e-9)
+    assert robot.sole_width == robot.scale.sole_width == pytest.approx(d.size.sole_width, abs=1e-9)
+    assert robot.scale.sole_half_width == robot.sole_boxes["right"].half_width
 
 
 def test_a_sole_of_several_geoms_is_measured_on_the_loaders_rectangle(tmp_path: Path) -> None:

@@ -148,9 +148,9 @@ def test_the_feedback_engine_refuses_it_in_one_line(exo, exo_gait):  # type: ign
 
 @pytest.mark.slow  # its T1 specs: robot init walks the default gait to choose the timestep (tens of seconds)
 def test_robot_init_says_whether_it_is_on(t1_narrow, t1):  # type: ignore[no-untyped-def]
-    assert t1_narrow.scale.sole_half_width * 2 == pytest.approx(0.03)
-    assert regulator_rule(RegulatorConfig(), 0.03, t1_narrow.leg_length, 1)[0]
-    assert not regulator_rule(RegulatorConfig(), 2 * t1.scale.sole_half_width, t1.leg_length, 1)[0]
+    assert t1_narrow.sole_width == t1_narrow.scale.sole_width == pytest.approx(0.03)
+    assert regulator_rule(RegulatorConfig(), t1_narrow.sole_width, t1_narrow.leg_length, 1)[0]
+    assert not regulator_rule(RegulatorConfig(), t1.sole_width, t1.leg_length, 1)[0]
 
 
 @pytest.mark.slow  # its T1 specs: robot init walks the default gait to choose the timestep (tens of seconds)

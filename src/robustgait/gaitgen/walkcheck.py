@@ -166,7 +166,7 @@ def probable_cause(robot: Robot, gait: Gait, result: WalkResult, check: PhysicsC
                     "(the tracking and the step corrections have no room left there)"), name
         if tip is not None:
             side, tilt, edge, _ = tip
-            width = 2.0 * robot.scale.sole_half_width
+            width = robot.sole_width
             return (f"the {side} stance sole tipped over its {edge} edge ({math.degrees(tilt):.0f}°; the sole is "
                     f"{width * 100:.1f} cm wide)"), None
     if check is not None and check.on_cop_bound:
@@ -190,7 +190,7 @@ def advice(robot: Robot, gait: Gait, config: Config, cause: str, share: float | 
         out.append(f"a gait planned further inside the joint ranges (--override generate.joint_margin={more:g}; "
                    f"now {margin:g} rad)")
     reg = config.sim.regulator
-    width = 2.0 * robot.scale.sole_half_width
+    width = robot.sole_width
     flat = len(gait.domains) == 1
     on = flat and regulator_rule(reg, width, robot.leg_length, 1)[0]
     if flat and not on:

@@ -305,14 +305,20 @@ class Robot:
         left, right = (self.sole_boxes[s].bottom_centre(d) for s in SIDES)
         return float(abs(left[1] - right[1]))
 
+    @property
+    def sole_width(self) -> float:
+        """The sole's width [m], the one the step regulator's rule, its foot gap and the robot-relative defaults read:
+        the right sole box's (:class:`~robustgait.robots.solebox.SoleBox`; a line foot's is 2 × its nominal half
+        width, :data:`robustgait.robots.soles.LINE_HALF_WIDTH`)."""
+        return 2.0 * self.sole_boxes["right"].half_width
+
     @cached_property
     def scale(self) -> RobotScale:
-        """What robot-relative defaults scale with (:class:`robustgait.config.RobotScale`); the sole's size is the
-        right sole box's."""
+        """What robot-relative defaults scale with (:class:`robustgait.config.RobotScale`): mass, |g|, the leg length
+        and the right sole box's size (:attr:`sole_width`); ``robot init``'s other measurements at their defaults."""
         sole = self.sole_boxes["right"]
         return RobotScale(mass=self.mass, gravity=float(np.linalg.norm(self.model.opt.gravity)),
-                          leg_length=self.leg_length, sole_half_length=sole.half_length,
-                          sole_half_width=sole.half_width)
+                          leg_length=self.leg_length, sole_length=2.0 * sole.half_length, sole_width=self.sole_width)
 
     @property
     def name(self) -> str:

@@ -336,7 +336,7 @@ class FeedbackEngine(StepEngine):
             raise RobustGaitError("the feedback engine needs MuJoCo ≥ 4.0 (mujoco.batch)") from None
         self._mjbatch = mjbatch
         cfg = config or SimConfig()
-        on, reason = regulator_rule(cfg.regulator, 2.0 * robot.scale.sole_half_width, robot.leg_length,
+        on, reason = regulator_rule(cfg.regulator, robot.sole_width, robot.leg_length,
                                     len(gait.domains))
         if on:  # before the engine is built: the regulator would measure its walk on this engine's laws
             raise RobustGaitError(f"the H-LIP step regulator runs with the pd controller, not the feedback engine's "

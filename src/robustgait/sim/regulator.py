@@ -214,7 +214,7 @@ class StepRegulator:
         self.stances: dict[str, _Stance] = {}
         heights = []
         leg = robot.leg_length
-        half_width = robot.scale.sole_half_width
+        half_width = robot.sole_width / 2.0
         for stance, g in gaits.items():
             nominal, z0 = nominal_com(robot, g, bounds / self.steps_per_period)
             heights.append(z0)
@@ -230,7 +230,7 @@ class StepRegulator:
         self.hlip_gain = (hlip.deadbeat_gain(self.lam, self.period, 0.0) if config.gain == "deadbeat"
                           else hlip.lqr_gain(a, b, self.z0, self.lam))
         self.rho = hlip.closed_loop_radius(a, b, self.hlip_gain)
-        self.share = placement_share(config, 2.0 * robot.scale.sole_half_width, robot.leg_length)
+        self.share = placement_share(config, robot.sole_width, robot.leg_length)
         self.gain = self.share * self.hlip_gain
         self.growth: float | None = None        # the walk's lateral growth per step under the rule's κ, if measured
         self.growth_whole: float | None = None  # and under κ = 1, when the first was above the limit
@@ -372,7 +372,7 @@ def regulator_for(robot: Robot, gaits: dict[str, Gait], config: RegulatorConfig,
                   ) -> StepRegulator | None:
     """The regulator a gait's engine runs (:func:`~robustgait.sim.regulator_rules.regulator_rule`), or None."""
     gait = next(iter(gaits.values()))
-    on, reason = regulator_rule(config, 2.0 * robot.scale.sole_half_width, robot.leg_length, len(gait.domains))
+    on, reason = regulator_rule(config, robot.sole_width, robot.leg_length, len(gait.domains))
     if not on:
         return None
     return StepRegulator(robot, gaits, config, chunk, horizon, reason)
