@@ -100,7 +100,7 @@ def test_data_modules_read_no_files_and_the_config_imports_no_pipeline():
 
 # the packages of docs/design.md's table, bottom to top ("__init__": the package robustgait itself)
 LAYERS = ("errors", "_lazy", "config", "bezier", "rotations", "robots", "gait", "domains", "closure", "dynamics",
-          "learn", "io", "inspection", "sim", "certificate", "gaitgen", "robotinit", "validate", "study", "report",
+          "learn", "io", "sim", "inspection", "certificate", "gaitgen", "robotinit", "validate", "study", "report",
           "web", "cli", "__init__")
 
 

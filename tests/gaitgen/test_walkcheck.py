@@ -18,6 +18,7 @@ from robustgait.gaitgen.walkcheck import (
     planned_envelope,
     probable_cause,
     retry_margin,
+    sole_tipping,
     walk_check,
     walk_plan,
 )
@@ -133,3 +134,23 @@ def test_a_gait_felled_at_a_joint_limit_is_solved_again_with_room_there(exo, mon
     lo, hi = exo.joint_range[:, 0], exo.joint_range[:, 1]
     plan = planned_envelope(exo, done.result.gait)
     assert np.all(plan[:, 0] >= lo + 0.1 - 1e-3) and np.all(plan[:, 1] <= hi - 0.1 + 1e-3)
+
+
+@pytest.mark.parametrize("name", ["exo", "atalante"])
+def test_a_tipping_sole_is_read_in_its_foot_frame(name, request):  # type: ignore[no-untyped-def]
+    """sole_tipping reads the sole's SoleBox, not its geom's axes: Atalante's sole boxes have their normal along the
+    geom's x axis (exo's along z), and each robot rolled about the forward axis tips its stance sole by the roll over a
+    side edge, and stands on it level below TIP_ANGLE."""
+    robot = request.getfixturevalue(name)
+    nq = robot.model.nq
+    for roll, tipped in ((0.03, False), (0.3, True)):
+        state = np.zeros(1 + nq + robot.model.nv)
+        state[1 + 2] = 1.0
+        state[1 + 3:1 + 7] = [np.cos(roll / 2), np.sin(roll / 2), 0.0, 0.0]  # left side up: the right foot stands
+        found = sole_tipping(robot, state[None])
+        if not tipped:
+            assert found is None
+            continue
+        assert found is not None
+        side, tilt, edge, _ = found
+        assert side == "right" and tilt == pytest.approx(roll, abs=0.02) and edge in ("inner", "outer")

@@ -67,8 +67,33 @@ def test_soles_of_sets_and_unnamed_geoms_load_as_virtual_soles(tmp_path: Path, f
     assert main(["robot", "init", str(path), "-o", str(spec), *SERVO_RULE]) == 0
     robot = load_robot(spec)
     g = robot.sole_geom_id["left"]
-    # the loader's sole box spans the same footprint
+    # the loader's sole box spans the same footprint, and the one size type carries it alike: the draft's sizes and
+    # the loaded robot's scale (the regulator's rule and the generation defaults read the latter)
     assert sorted(2 * robot.model.geom_size[g][:2]) == pytest.approx(sorted([sole.length, sole.width]), abs=1e-9)
+    assert robot.sole_width == robot.scale.sole_width == pytest.approx(d.size.sole_width, abs=1e-9)
+    assert robot.scale.sole_half_width == robot.sole_boxes["right"].half_width
+
+
+def test_a_sole_of_several_geoms_is_measured_on_the_loaders_rectangle(tmp_path: Path) -> None:
+    """Four sphere soles (0.18 × 0.08 m) under a foot body whose frame is pitched 0.17 rad from them (Berkeley
+    Humanoid's 10°): robot init measures the rectangle the loader spans its virtual sole on (read along the vertical),
+    not the points' extent along the pitched foot axes (0.18 cos 0.17 = 0.177 m); the loaded sole box is the same."""
+    tilt, c, s = 0.17, np.cos(0.17), np.sin(0.17)
+    xml = biped_xml(foot="spheres")
+    for side in ("left", "right"):
+        xml = xml.replace(f'<body name="{side}_foot" pos="0 0 0">', f'<body name="{side}_foot" pos="0 0 0" '
+                          f'euler="0 {tilt} 0">')
+    for x in (-0.06, 0.12):  # each sphere where it was in the world: R_y(tilt)ᵀ (x, y, z) in the pitched frame
+        for y in (-0.04, 0.04):
+            xml = xml.replace(f'pos="{x} {y} -0.05"', f'pos="{c * x + s * 0.05:.9f} {y} {s * x - c * 0.05:.9f}"')
+    assert xml.count(f'euler="0 {tilt} 0"') == 2 and 'pos="0.12 0.04 -0.05"' not in xml
+    path = write(tmp_path, xml)
+    sole = find_legs(open_model(path), 0.1, 0.005).left.sole
+    assert (sole.length, sole.width) == (pytest.approx(0.18, abs=1e-6), pytest.approx(0.08, abs=1e-6))
+    spec = tmp_path / "spec.toml"
+    assert main(["robot", "init", str(path), "-o", str(spec), *SERVO_RULE]) == 0
+    box = load_robot(spec).sole_boxes["left"]
+    assert (2 * box.half_length, 2 * box.half_width) == (pytest.approx(sole.length), pytest.approx(sole.width))
 
 
 def test_a_sole_its_model_tilts_is_levelled_by_the_ankle_in_the_posture(tmp_path: Path) -> None:

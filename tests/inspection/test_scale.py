@@ -7,8 +7,8 @@ import sys
 
 import pytest
 
-from robustgait.config import ScaleRules
-from robustgait.inspection.scale import RobotSize, axis_range, nice_step, scale
+from robustgait.config import RobotScale, ScaleRules
+from robustgait.inspection.scale import axis_range, nice_step, scale
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -20,7 +20,7 @@ from tests.inspection.biped import REPO
 
 # ----------------------------------------------------------------------------------------------- scaling
 def test_the_rules_give_back_exos_spec() -> None:
-    size = RobotSize(leg_length=0.93, standing_height=0.921, mass=126.0, gravity=9.81, hip_spacing=0.25,
+    size = RobotScale(leg_length=0.93, standing_height=0.921, mass=126.0, gravity=9.81, hip_spacing=0.25,
                      sole_length=0.27, sole_width=0.12)
     s = scale(size, ScaleRules())
     spec = tomllib.loads((REPO / "src" / "robustgait" / "robots" / "exo" / "spec.toml").read_text())
@@ -48,7 +48,7 @@ def test_narrow_soles_get_shorter_default_steps_and_a_shorter_grid() -> None:
     same robot with 0.12 m soles gets 2.3 √(l/g); the narrow grid ends at 3.0 √(l/g)."""
     import math
 
-    narrow = RobotSize(leg_length=0.896, standing_height=0.929, mass=58.2, gravity=9.81, hip_spacing=0.234,
+    narrow = RobotScale(leg_length=0.896, standing_height=0.929, mass=58.2, gravity=9.81, hip_spacing=0.234,
                        sole_length=0.22, sole_width=0.05)
     wide = dataclasses.replace(narrow, sole_width=0.12)
     t = math.sqrt(0.896 / 9.81)
@@ -66,7 +66,7 @@ def test_a_point_foot_walker_steps_end_at_its_lambda_t() -> None:
 
     from robustgait.inspection.scale import Balance
 
-    size = RobotSize(leg_length=0.896, standing_height=0.929, mass=58.2, gravity=9.81, hip_spacing=0.234,
+    size = RobotScale(leg_length=0.896, standing_height=0.929, mass=58.2, gravity=9.81, hip_spacing=0.234,
                      sole_length=0.22, sole_width=0.05)
     rules = ScaleRules()
     plain = scale(size, rules)
@@ -93,7 +93,7 @@ def test_a_point_foot_walker_whose_tried_end_fails_stops_that_axis_at_its_defaul
     axis moves."""
     from robustgait.inspection.scale import Balance
 
-    size = RobotSize(leg_length=0.896, standing_height=0.929, mass=58.2, gravity=9.81, hip_spacing=0.192,
+    size = RobotScale(leg_length=0.896, standing_height=0.929, mass=58.2, gravity=9.81, hip_spacing=0.192,
                      sole_length=0.22, sole_width=0.05)
     rules = ScaleRules()
     walks = scale(size, rules, Balance(share=1.0, rate=3.3))
@@ -116,7 +116,7 @@ def test_the_width_axis_starts_where_the_feet_do_not_touch() -> None:
     flat-foot and the multi-contact grids, and nothing else moves."""
     from robustgait.inspection.scale import above_least, least_width
 
-    size = RobotSize(leg_length=0.279, standing_height=0.3, mass=3.15, gravity=9.81, hip_spacing=0.104,
+    size = RobotScale(leg_length=0.279, standing_height=0.3, mass=3.15, gravity=9.81, hip_spacing=0.104,
                      sole_length=0.12, sole_width=0.078)
     out = scale(size, ScaleRules())
     least = least_width(size)

@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from robustgait import load_robot
-from robustgait.config import RobotConfig, ScaleRules
-from robustgait.inspection.scale import RobotSize, hip_roll_angle, scale
+from robustgait.config import RobotConfig, RobotScale, ScaleRules
+from robustgait.inspection.scale import hip_roll_angle, scale
 from robustgait.robots.legs import ankle_roll_joint
 from tests.inspection.biped import EXO_XML, SERVO_RULE, biped_xml, run, write
 
@@ -89,8 +89,8 @@ def test_the_scale_rules_of_legs_without_an_ankle_roll():
     ankle roll keep exo's rules."""
     base: dict[str, float] = dict(leg_length=0.66, standing_height=0.73, mass=29.2, gravity=9.81, hip_spacing=0.18,
                                   sole_length=0.2, sole_width=0.1)
-    with_roll = scale(RobotSize(**base), ScaleRules())
-    size = RobotSize(**base, ankle_roll=False, sole_spacing=0.1834, upper_body_height=0.22)
+    with_roll = scale(RobotScale(**base), ScaleRules())
+    size = RobotScale(**base, ankle_roll=False, sole_spacing=0.1834, upper_body_height=0.22)
     s = scale(size, ScaleRules())
     assert s.gait["step_width"] == 0.1834 and s.action_space["step_width"][:2] == (0.1834, 0.1834)
     assert s.multicontact_action_space is None and with_roll.multicontact_action_space is not None

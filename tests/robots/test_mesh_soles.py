@@ -22,7 +22,7 @@ from robustgait.inspection.check import check_mirror, check_soles
 from robustgait.inspection.discover import find_legs
 from robustgait.inspection.model import open_model
 from robustgait.robotinit.draft import draft_spec
-from robustgait.robots.soles import hull_vertices, sole_points, sole_rectangle
+from robustgait.robots.soles import ground_face, hull_vertices, sole_points, sole_rectangle
 from tests.inspection.biped import SERVO_RULE, biped_xml, write
 
 if sys.version_info >= (3, 11):
@@ -205,3 +205,28 @@ def test_a_mesh_sole_its_model_tilts_is_levelled(tmp_path: Path) -> None:
     assert main(["robot", "init", str(model), "-o", str(spec), *SERVO_RULE]) == 0
     soles = check_soles(load_robot(spec), RobotConfig().check)
     assert soles.passed and soles.values["tilt"] < 1e-5
+
+
+# a narrow humanoid's mesh foot: a ground face 0.034 m wide along the tread's length, with 4 mm chamfers (45°) all round
+FACE_HALF_WIDTH, CHAMFER = 0.017, 0.004
+NARROW_CHAMFERED = {"narrow": [*[(x, y, BOTTOM) for x in (X0, X1) for y in (-FACE_HALF_WIDTH, FACE_HALF_WIDTH)],
+                               *block(X0 - CHAMFER, X1 + CHAMFER, FACE_HALF_WIDTH + CHAMFER, BOTTOM + CHAMFER, -0.02)]}
+
+
+def test_a_mesh_tread_is_its_ground_face_not_the_chamfers_above_it(tmp_path: Path) -> None:
+    """The chamfers' lower edges, 4 mm above the 0.034 m face, are not on the sole however far they lie from the
+    lowest vertex (on_sole's band of 2 mm + 1.75 % of that distance took them: 0.042 m): the loader's sole box and
+    robot init both measure the face, 0.034 ± 1 mm wide, and the face pitched 0.01 rad in its foot keeps its 4
+    corners."""
+    m, d = foot_model(NARROW_CHAMFERED)
+    _, _, half, _ = sole_rectangle(m, d, [0], np.array([1.0, 0.0, 0.0]))
+    assert 2 * half[1] == pytest.approx(2 * FACE_HALF_WIDTH, abs=MM) and 2 * half[0] == pytest.approx(X1 - X0, abs=MM)
+    verts = d.geom_xpos[0] + hull_vertices(m, 0) @ d.geom_xmat[0].reshape(3, 3).T
+    pitch = np.array([[np.cos(0.01), 0.0, np.sin(0.01)], [0.0, 1.0, 0.0], [-np.sin(0.01), 0.0, np.cos(0.01)]])
+    for rot in (np.eye(3), pitch):
+        assert ground_face(verts @ rot.T, np.array([0.0, 0.0, 1.0])).sum() == 4
+    r = open_model(write(tmp_path, mesh_biped(NARROW_CHAMFERED)))
+    for side in ("left", "right"):
+        sole = find_legs(r, 0.1, 0.005)[side].sole
+        assert sole.width == pytest.approx(2 * FACE_HALF_WIDTH, abs=MM)
+        assert sole.length == pytest.approx(X1 - X0, abs=MM)

@@ -13,37 +13,15 @@ import pytest
 
 from robustgait.cli import main
 from robustgait.config import Config, SimConfig
-from robustgait.config.regulator import RegulatorConfig, carry_phase, placement_share, regulator_rule
+from robustgait.config.regulator import RegulatorConfig
 from robustgait.errors import RobustGaitError
 from robustgait.sim.engine import StepEngine
 from robustgait.sim.factory import make_engine
-from robustgait.sim.regulator import com_state, landing_map, nominal_com, swing_dofs
+from robustgait.sim.regulator import com_state, landing_map, nominal_com, sole_frame, swing_dofs
+from robustgait.sim.regulator_rules import carry_phase, placement_share, regulator_rule
 from robustgait.sim.walk import walk
 
 ON = SimConfig(regulator=RegulatorConfig(mode="on", gain_scale=0.25))
-
-
-def test_the_rule_turns_the_regulator_on_for_narrow_soles_only() -> None:
-    cfg = RegulatorConfig()
-    assert regulator_rule(cfg, 0.12, 0.921, 1)[0] is False          # exo: 0.130
-    assert regulator_rule(cfg, 0.10, 0.553, 1)[0] is False          # T1: 0.181
-    on, why = regulator_rule(cfg, 0.03, 0.567, 1)                   # narrow T1: 0.053
-    assert on and "0.053 < 0.1: narrow soles" in why
-    assert regulator_rule(replace(cfg, mode="on"), 0.12, 0.921, 1)[0] is True
-    assert regulator_rule(replace(cfg, mode="off"), 0.03, 0.567, 1)[0] is False
-    assert regulator_rule(cfg, 0.03, 0.567, 2) == (False, "multi-contact gait: H-LIP step regulator off")
-    with pytest.raises(ValueError, match="flat-foot gaits"):
-        regulator_rule(replace(cfg, mode="on"), 0.03, 0.567, 2)
-
-
-def test_the_share_of_the_hlip_gain_fades_as_the_sole_widens() -> None:
-    cfg = RegulatorConfig()
-    assert placement_share(cfg, 0.0, 0.5) == 1.0                                  # a point foot: the H-LIP's gain
-    assert placement_share(cfg, 0.03, 0.567) == pytest.approx(1 - (0.03 / 0.567 / 0.06) ** 2)
-    assert placement_share(cfg, 0.12, 0.921) == 0.0                                # exo forced on: the blend only
-    assert placement_share(replace(cfg, gain_scale=0.5), 0.12, 0.921) == 0.5
-    shares = [placement_share(cfg, w, 0.5) for w in np.linspace(0.0, 0.05, 11)]
-    assert np.all(np.diff(shares) <= 0)
 
 
 def test_the_whole_gain_is_taken_only_where_the_error_grows_and_it_helps(exo, exo_gait) -> None:  # type: ignore[no-untyped-def]
@@ -170,9 +148,9 @@ def test_the_feedback_engine_refuses_it_in_one_line(exo, exo_gait):  # type: ign
 
 @pytest.mark.slow  # its T1 specs: robot init walks the default gait to choose the timestep (tens of seconds)
 def test_robot_init_says_whether_it_is_on(t1_narrow, t1):  # type: ignore[no-untyped-def]
-    assert t1_narrow.scale.sole_half_width * 2 == pytest.approx(0.03)
-    assert regulator_rule(RegulatorConfig(), 0.03, t1_narrow.leg_length, 1)[0]
-    assert not regulator_rule(RegulatorConfig(), 2 * t1.scale.sole_half_width, t1.leg_length, 1)[0]
+    assert t1_narrow.sole_width == t1_narrow.scale.sole_width == pytest.approx(0.03)
+    assert regulator_rule(RegulatorConfig(), t1_narrow.sole_width, t1_narrow.leg_length, 1)[0]
+    assert not regulator_rule(RegulatorConfig(), t1.sole_width, t1.leg_length, 1)[0]
 
 
 @pytest.mark.slow  # its T1 specs: robot init walks the default gait to choose the timestep (tens of seconds)
@@ -280,15 +258,33 @@ def test_a_line_footed_humanoid_walks_with_the_hlip_gain_its_sole_leaves_to_the_
 
 
 def test_the_step_start_blend_lengthens_with_the_share_of_the_gain(exo, exo_gait):  # type: ignore[no-untyped-def]
-    """τ_c = carry_tau + carry_share κ: a point-foot walker's larger landing corrections are blended out of the next
-    stance leg more slowly; no blend stays no blend."""
-    cfg = RegulatorConfig()
-    assert carry_phase(cfg, 0.0) == pytest.approx(cfg.carry_tau)
-    assert carry_phase(cfg, 1.0) == pytest.approx(cfg.carry_tau + cfg.carry_share)
-    assert carry_phase(replace(cfg, carry_tau=0.0), 1.0) == 0.0
-    assert carry_phase(replace(cfg, carry_tau=0.9, carry_share=0.5), 1.0) == 1.0
+    """The regulator's τ_c follows its share κ (:func:`carry_phase`): a point-foot walker's larger landing corrections
+    are blended out of the next stance leg more slowly."""
     reg = StepEngine(exo, exo_gait, ON).regulator
     assert reg is not None and reg.carry_tau == pytest.approx(carry_phase(ON.regulator, 0.25))
     reg.set_share(1.0)
     assert reg.carry_tau == pytest.approx(carry_phase(ON.regulator, 1.0)) and reg.carry_tau > carry_phase(
         ON.regulator, 0.25)
+
+
+@pytest.mark.parametrize("name", ["exo", "atalante"])
+def test_the_regulator_reads_the_sole_box_whichever_geom_axis_is_its_normal(name, request):  # type: ignore[no-untyped-def]
+    """The sole's heading frame and the CoM over it are the foot frame's (x heel to toe, y left, z up) of its
+    SoleBox: Atalante's sole boxes have their normal along the geom's x axis and the toe along −z, exo's are the foot
+    frame. Its heading points forward (Atalante's zero posture turns the feet by 8°) and turns with the base's yaw;
+    the gait's CoM stands above the sole, about a leg high."""
+    robot = request.getfixturevalue(name)
+    gait = request.getfixturevalue(f"{name}_gait")
+    data = mujoco.MjData(robot.model)
+    heading = []
+    for yaw in (0.0, 0.7):
+        data.qpos[:] = robot.model.qpos0
+        data.qpos[3:7] = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
+        mujoco.mj_kinematics(robot.model, data)
+        _, rot = sole_frame(data, robot.sole_boxes[gait.stance])
+        assert rot @ rot.T == pytest.approx(np.eye(2))
+        heading.append(np.arctan2(rot[0, 1], rot[0, 0]))  # rot = R_z(ψ)ᵀ
+    assert abs(heading[0]) < 0.2 and heading[1] - heading[0] == pytest.approx(0.7)
+    x, z0 = nominal_com(robot, gait, np.linspace(0.0, 1.0, 5))
+    assert 0.5 * robot.leg_length < z0 < 1.2 * robot.leg_length
+    assert np.all(np.abs(x[:, :, 0]) < 0.5 * robot.leg_length)  # the CoM's horizontal offset from the sole

@@ -76,17 +76,17 @@ def scale_rules(name: str, ref: str, spec_path: Path) -> None:
     import tomllib
 
     from robustgait import load_robot
-    from robustgait.config import GaitParams, RobotConfig
+    from robustgait.config import GaitParams, RobotConfig, RobotScale
     from robustgait.inspection.check import inspected, standing_qpos
     from robustgait.inspection.discover import find_legs
-    from robustgait.inspection.scale import RobotSize, scale
+    from robustgait.inspection.scale import scale
 
     robot = load_robot(ref)
     rm = inspected(robot)
     c = RobotConfig()
     legs = find_legs(rm, c.foot_level, c.sole_tolerance)
     q = standing_qpos(robot, rm)
-    size = RobotSize(leg_length=legs.leg_length, standing_height=float(q[2]), mass=robot.mass, gravity=9.81,
+    size = RobotScale(leg_length=legs.leg_length, standing_height=float(q[2]), mass=robot.mass, gravity=9.81,
                      hip_spacing=legs.hip_spacing, sole_length=legs.left.sole.length, sole_width=legs.left.sole.width)
     s = scale(size, c.scale)
     raw = tomllib.loads(spec_path.read_text())

@@ -23,7 +23,6 @@ orbit search's (:mod:`.search`); this module is arithmetic on a sequence, used b
 from __future__ import annotations
 
 import dataclasses
-import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -38,7 +37,6 @@ from robustgait.config.base import TextEnum
 from robustgait.config.certify import Frame, MapKind, OrbitConfig
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
-from robustgait.inspection.check import sides_differ
 from robustgait.robots import Robot
 from robustgait.sim.walk import SwitchEvent, WalkResult
 
@@ -547,18 +545,13 @@ def classify(z: FloatArray, cfg: OrbitConfig, *, min_period: int, radius: float,
     return watch.orbit(None if done and len(watch.z) < z.shape[0] else fell)
 
 
-_SIDES: weakref.WeakKeyDictionary[Robot, bool] = weakref.WeakKeyDictionary()
-
-
 def min_period(robot: Robot, map_kind: MapKind) -> int:
     """The shortest period the orbit is searched with: 1 for the step map, 2 for the stride map; ``auto``: 2 when the
-    robot's left and right differ (:func:`robustgait.inspection.check.sides_differ`, computed once per robot), else
-    1."""
+    robot's left and right differ (:attr:`robustgait.robots.model.Robot.sides_differ`, computed once per robot),
+    else 1."""
     if map_kind != "auto":
         return 1 if map_kind == "step" else 2
-    if robot not in _SIDES:
-        _SIDES[robot] = sides_differ(robot)
-    return 2 if _SIDES[robot] else 1
+    return 2 if robot.sides_differ else 1
 
 
 def classify_walk(robot: Robot, qpos: FloatArray, qvel: FloatArray, config: CertifyConfig,

@@ -207,14 +207,34 @@ ROBOT_SCALED = ("min_normal_force", "min_line_force", "cop_margin", "foot_gap", 
 
 @dataclasses.dataclass(frozen=True)
 class RobotScale:
-    """What robot-relative defaults scale with: mass [kg], |g| [m/s²], leg length l [m] (hip joint to sole centre in
-    the zero posture), and the sole's half-length and half-width [m]."""
+    """A robot's sizes, the one type of them: what robot-relative defaults (:func:`relative_generation_defaults`) and
+    ``robot init``'s rules (:mod:`robustgait.inspection.scale`) scale with. ``mass`` [kg], ``gravity`` |g| [m/s²],
+    ``leg_length`` l [m] and the sole's ``sole_length`` and ``sole_width`` [m] (its sole box's: a loaded robot's
+    :attr:`robustgait.robots.model.Robot.scale`); and what ``robot init`` measures of a model besides
+    (:class:`robustgait.inspection.discover.Legs`), which a loaded robot's scale leaves at these defaults (no loader
+    rule reads them): ``standing_height`` h [m] (base above the soles in the posture), ``hip_spacing`` [m] (lateral
+    distance of the legs' first joints), ``ankle_roll`` (both legs have one), ``sole_spacing`` [m] (lateral distance
+    of the soles' centres in the posture) and ``upper_body_height`` [m] (the centre of mass of all but the legs above
+    the legs' first joints)."""
 
     mass: float
     gravity: float
     leg_length: float
-    sole_half_length: float
-    sole_half_width: float
+    sole_length: float
+    sole_width: float
+    standing_height: float = 0.0
+    hip_spacing: float = 0.0
+    ankle_roll: bool = True
+    sole_spacing: float = 0.0
+    upper_body_height: float = 0.0
+
+    @property
+    def sole_half_length(self) -> float:
+        return self.sole_length / 2
+
+    @property
+    def sole_half_width(self) -> float:
+        return self.sole_width / 2
 
     @property
     def weight(self) -> float:

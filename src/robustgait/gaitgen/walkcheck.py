@@ -22,12 +22,12 @@ from numpy.typing import NDArray
 from robustgait.certificate.orbit import Orbit, SettlingWatch, Status
 from robustgait.certificate.search import Walked, find_orbit
 from robustgait.config import Config, GaitParams
-from robustgait.config.regulator import placement_share, regulator_rule
 from robustgait.gait import Gait
 from robustgait.gaitgen.check import PhysicsCheck
 from robustgait.gaitgen.solve import GaitGenerator, GaitGenResult
 from robustgait.robots import Robot
 from robustgait.sim.controller import desired_outputs
+from robustgait.sim.regulator_rules import placement_share, regulator_rule
 from robustgait.sim.walk import SwitchEvent, WalkResult, walk
 
 # a stance sole tilted more than this [rad] while the other foot is off the floor is tipping over an edge
@@ -89,7 +89,8 @@ def sole_tipping(robot: Robot, trajectory: NDArray[np.float64], every: int = 5
                  ) -> tuple[str, float, str, int] | None:
     """The first stance sole that tipped over an edge in a recorded walk (n, nstate): (side, tilt [rad], which edge:
     outer, inner, toe or heel, the trajectory's row), or None. A sole is the stance sole while the other is ≥ 1 cm
-    higher; it tips when its tilt from the floor plane exceeds :data:`TIP_ANGLE`."""
+    higher; it tips when its tilt from the floor plane exceeds :data:`TIP_ANGLE`. The sole's axes are its
+    :class:`~robustgait.robots.solebox.SoleBox`'s foot frame (a box whose x axis is its normal reads right)."""
     m = robot.model
     data = mujoco.MjData(m)
     nq = m.nq
@@ -101,12 +102,13 @@ def sole_tipping(robot: Robot, trajectory: NDArray[np.float64], every: int = 5
         for side, other in (("left", "right"), ("right", "left")):
             if z[other] - z[side] < 0.01:
                 continue
-            r = data.geom_xmat[robot.sole_geom_id[side]].reshape(3, 3)
+            # the foot frame's axes (x heel to toe, y left, z up) whichever of the sole geom's axes they are
+            r = robot.sole_boxes[side].world_frame(data)
             tilt = math.acos(min(max(r[2, 2], -1.0), 1.0))
             if tilt > TIP_ANGLE:
-                roll, pitch = r[2, 1], r[2, 0]  # the world z axis in the sole frame: the sole's roll and pitch
+                roll, pitch = r[2, 1], r[2, 0]  # the world z axis in the foot frame: the sole's roll and pitch
                 if abs(roll) >= abs(pitch):
-                    # the sole's y axis points to the robot's left: a left sole rolling onto its +y edge is inward
+                    # the foot frame's y axis points to the robot's left: a left sole rolling onto its +y edge is inward
                     down_left = roll < 0
                     edge = "inner" if down_left == (side == "left") else "outer"
                 else:
@@ -164,7 +166,7 @@ def probable_cause(robot: Robot, gait: Gait, result: WalkResult, check: PhysicsC
                     "(the tracking and the step corrections have no room left there)"), name
         if tip is not None:
             side, tilt, edge, _ = tip
-            width = 2.0 * robot.scale.sole_half_width
+            width = robot.sole_width
             return (f"the {side} stance sole tipped over its {edge} edge ({math.degrees(tilt):.0f}°; the sole is "
                     f"{width * 100:.1f} cm wide)"), None
     if check is not None and check.on_cop_bound:
@@ -188,7 +190,7 @@ def advice(robot: Robot, gait: Gait, config: Config, cause: str, share: float | 
         out.append(f"a gait planned further inside the joint ranges (--override generate.joint_margin={more:g}; "
                    f"now {margin:g} rad)")
     reg = config.sim.regulator
-    width = 2.0 * robot.scale.sole_half_width
+    width = robot.sole_width
     flat = len(gait.domains) == 1
     on = flat and regulator_rule(reg, width, robot.leg_length, 1)[0]
     if flat and not on:

@@ -14,8 +14,8 @@ its thresholds in :class:`robustgait.config.RobotCheckConfig` (``docs/robots.md`
   each joint's error RMS and its time at the torque limit.
 
 The ``timestep`` check, which walks the default gait, is :func:`robustgait.robotinit.timestep.check_timestep`
-(the certificate's orbit rule it walks with reads :func:`sides_differ` of this module); ``robot check`` runs it after
-these.
+(the certificate's orbit rule it walks with reads :attr:`robustgait.robots.model.Robot.sides_differ`); ``robot
+check`` runs it after these.
 """
 
 from __future__ import annotations
@@ -29,9 +29,10 @@ from numpy.typing import NDArray
 
 from robustgait.config import RobotCheckConfig, RobotConfig
 from robustgait.inspection.gains import static_torques, tipping_stiffness
-from robustgait.inspection.mirror import Mirror, fk_residual, mass_asymmetry, mirror_from_names
+from robustgait.inspection.mirror import Mirror, fk_residual, mirror_from_names
 from robustgait.inspection.model import RobotModel, geom_bottom, with_closed_chains
 from robustgait.robots import Robot
+from robustgait.robots.sides import mass_asymmetry
 from robustgait.robots.spec import SIDES
 
 
@@ -73,17 +74,6 @@ def spec_mirror(robot: Robot, config: RobotConfig) -> tuple[RobotModel, Mirror]:
     return rm, mirror_from_names(rm, pairs, config.mirror_tolerance)
 
 
-def sides_differ(robot: Robot, config: RobotConfig | None = None) -> bool:
-    """Whether the robot's left and right differ in mass or inertia beyond ``config``'s tolerances
-    (:meth:`~robustgait.inspection.mirror.MassAsymmetry.differs`): then its walk is certified on the stride map."""
-    c = config or RobotConfig()
-    try:
-        rm, mirror = spec_mirror(robot, c)
-    except ValueError:  # a relabeling that does not match the model: robot check says so; no mirrored map is trusted
-        return True
-    return mass_asymmetry(rm, mirror).differs(c.side_mass_tolerance, c.side_inertia_tolerance)
-
-
 def check_mirror(robot: Robot, config: RobotConfig) -> CheckResult:
     """The spec's mirror reflects the model (:func:`robustgait.inspection.mirror.fk_residual`)."""
     try:
@@ -91,14 +81,14 @@ def check_mirror(robot: Robot, config: RobotConfig) -> CheckResult:
     except ValueError as exc:
         return CheckResult("mirror", False, f"mirror: FAIL: {exc}")
     res = fk_residual(rm, mirror, config.mirror_samples, config.seed)
-    asym = mass_asymmetry(rm, mirror)
+    asym = mass_asymmetry(rm.model, rm.base, mirror.body_partner)
     ok = res.position <= config.mirror_tolerance and res.angle <= config.mirror_angle_tolerance
     where = "" if ok else f" (worst body '{rm.body_name(res.body)}')"
     return CheckResult("mirror", bool(ok), f"mirror: {'ok' if ok else 'FAIL'}: forward kinematics of the relabeled "
                        f"configuration vs the reflected one over {res.samples} random configurations: largest residual "
                        f"{res.position:.2g} m, {res.angle:.2g} rad (tolerance {config.mirror_tolerance:g} m, "
                        f"{config.mirror_angle_tolerance:g} rad){where}; "
-                       f"{asym.describe(rm, config.side_mass_tolerance, config.side_inertia_tolerance)}",
+                       f"{asym.describe(rm.model, config.side_mass_tolerance, config.side_inertia_tolerance)}",
                        {"position": res.position, "angle": res.angle, "mass_asymmetry": asym.mass,
                         "inertia_asymmetry": asym.inertia,
                         "sides_differ": asym.differs(config.side_mass_tolerance, config.side_inertia_tolerance)})

@@ -37,6 +37,7 @@ from robustgait.robots.soles import (
     article,
     foot_up,
     geom_sole_points,
+    loader_rectangle,
     on_sole,
     one_box,
     sole_up,
@@ -284,7 +285,10 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
         read = sole_box(m, geoms[0], src)
         length, width = 2.0 * read.half_length, 2.0 * read.half_width
     else:
-        length, width = float(np.ptp(local[:, fwd])), float(np.ptp(local[:, lft]))
+        # several geoms: the rectangle the loader spans its virtual sole on (turned onto the tread's plane, read
+        # along the vertical where the foot's frame is tilted from its sole), not the points' extent here
+        half = loader_rectangle(m, geoms, robot.base).half
+        length, width = 2.0 * float(half[0]), 2.0 * float(half[1])
     foot_kind = sole_kind(pts, length, width)
     if foot_kind == "point":
         raise input_error(src, f"no sole found for the {side} leg: the lowest geometry of body '{name}' spans "

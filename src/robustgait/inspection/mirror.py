@@ -31,8 +31,8 @@ from numpy.typing import NDArray
 
 from robustgait.errors import input_error
 from robustgait.inspection.model import HINGE, RobotModel, joint_range
+from robustgait.robots.sides import S, body_partners
 
-S = np.diag([1.0, -1.0, 1.0])
 # Side markers in names, longest first; a name's partner swaps one occurrence for the other side's marker.
 SIDE_TOKENS = (("left", "right"), ("Left", "Right"), ("LEFT", "RIGHT"), ("l", "r"), ("L", "R"))
 AXIS_TOLERANCE = 1e-3  # |1 − |a' · S a|| below which two unit axes are parallel (numerical round-off of the model)
@@ -134,35 +134,7 @@ def find_mirror(robot: RobotModel, tolerance: float) -> Mirror:
         if partner[k] != j or sign[k] != sign[j]:
             raise input_error(src, f"the mirror does not reflect the model: joints '{robot.joint_name(j)}' and "
                               f"'{robot.joint_name(k)}' do not pair up")
-    return Mirror(partner, sign, body_partners(robot, partner, d, tolerance))
-
-
-def body_partners(robot: RobotModel, partner: Mapping[int, int], d: mujoco.MjData, tolerance: float
-                  ) -> dict[int, int]:
-    """Each robot body's partner: the body of its first joint's partner; a body without a joint, or whose joints are
-    passive (a closed chain's: not in ``partner``): the child of its parent's partner at its reflected position
-    (``d``: every joint at 0)."""
-    m, src = robot.model, robot.path
-    out = {robot.base: robot.base}
-
-    def driven(body: int) -> list[int]:
-        return [j for j in robot.body_joints(body) if j in partner]
-
-    for b in robot.subtree(robot.base):
-        if b == robot.base:
-            continue
-        joints = driven(b)
-        if joints:
-            out[b] = int(m.jnt_bodyid[partner[joints[0]]])
-            continue
-        parent = out.get(int(m.body_parentid[b]))
-        found = [c for c in range(m.nbody) if parent is not None and int(m.body_parentid[c]) == parent
-                 and not driven(c) and float(np.linalg.norm(d.xpos[c] - S @ d.xpos[b])) <= tolerance]
-        if len(found) != 1:
-            raise input_error(src, f"the mirror does not reflect the model: body '{robot.body_name(b)}' has "
-                              f"{len(found) or 'no'} mirror image{'s' if len(found) > 1 else ''}")
-        out[b] = found[0]
-    return out
+    return Mirror(partner, sign, body_partners(robot.model, robot.base, partner, d, tolerance, robot.path))
 
 
 def mirrored_angles(mirror: Mirror, angles: Mapping[int, float]) -> dict[int, float]:
@@ -207,59 +179,6 @@ def fk_residual(robot: RobotModel, mirror: Mirror, samples: int, seed: int) -> R
     return Residual(position, angle, body, samples)
 
 
-# a mass difference at or below this is a model file's rounding, whatever the body's mass [kg]
-ROUNDING_MASS = 1e-3
-
-
-@dataclass(frozen=True)
-class MassAsymmetry:
-    """The largest difference of mass [kg] between a body and its mirror image (``body`` the lighter), relative to
-    the heavier (``relative``), and the largest relative difference of their principal inertias, over every pair of
-    :attr:`Mirror.body_partner`."""
-
-    mass: float
-    relative: float
-    body: int
-    partner: int
-    inertia: float
-
-    def differs(self, mass_tolerance: float, inertia_tolerance: float) -> bool:
-        """Whether left and right differ: a mass difference above ``mass_tolerance`` of the heavier body and above
-        :data:`ROUNDING_MASS`, or a principal inertia more than ``inertia_tolerance`` apart."""
-        return (self.mass > ROUNDING_MASS and self.relative > mass_tolerance) or self.inertia > inertia_tolerance
-
-    def describe(self, robot: RobotModel, mass_tolerance: float, inertia_tolerance: float) -> str:
-        """One clause: how much the two sides differ, and what it means for the certificate."""
-        amount = (f"'{robot.body_name(self.body)}' is {1000 * self.mass:.3g} g lighter than "
-                  f"'{robot.body_name(self.partner)}', principal inertias up to {100 * self.inertia:.2g} % apart")
-        if self.differs(mass_tolerance, inertia_tolerance):
-            return (f"left and right differ: {amount} — certified on the stride map, two steps (certify.map auto)")
-        if self.mass <= 0.0 and self.inertia <= 0.0:
-            return "left and right have the same masses and inertias"
-        return (f"left and right are the same within the tolerance ({amount}; a difference counts above "
-                f"{100 * mass_tolerance:g} % of a body's mass and {1000 * ROUNDING_MASS:g} g, or "
-                f"{100 * inertia_tolerance:g} % of an inertia) — certified on the step map")
-
-
-def mass_asymmetry(robot: RobotModel, mirror: Mirror) -> MassAsymmetry:
-    """max |m_b − m_b'| over body pairs (b, b') of the mirror (with |m_b − m_b'| / max(m_b, m_b') of that pair), and
-    max_i |I_b,i − I_b',i| / max(I_b,i, I_b',i) of their sorted principal inertias: a model whose kinematics reflect
-    exactly may still not be its own mirror image in its dynamics (a link's mass may differ between the sides), so
-    that the mirrored step map is not the walk's map (``docs/certificate.md``, "The orbit the gait walks")."""
-    m = robot.model
-    mass, relative, body, partner, inertia = 0.0, 0.0, robot.base, robot.base, 0.0
-    for b, c in mirror.body_partner.items():
-        dm = abs(float(m.body_mass[b] - m.body_mass[c]))
-        if dm > mass:
-            light, heavy = (b, c) if m.body_mass[b] < m.body_mass[c] else (c, b)
-            mass, body, partner = dm, light, heavy
-            relative = dm / max(float(m.body_mass[heavy]), 1e-12)
-        ib, ic = np.sort(m.body_inertia[b]), np.sort(m.body_inertia[c])
-        scale = np.maximum(np.maximum(ib, ic), 1e-12)
-        inertia = max(inertia, float(np.max(np.abs(ib - ic) / scale)))
-    return MassAsymmetry(mass, relative, body, partner, inertia)
-
-
 def mirror_from_names(robot: RobotModel, pairs: Mapping[str, tuple[str, float]], tolerance: float) -> Mirror:
     """A spec's relabeling (joint name → (partner name, sign)) as a :class:`Mirror` of ``robot``'s joints, with
     the body partners it implies (for :func:`fk_residual`)."""
@@ -267,4 +186,4 @@ def mirror_from_names(robot: RobotModel, pairs: Mapping[str, tuple[str, float]],
     partner = {ids[a]: ids[b] for a, (b, _) in pairs.items()}
     sign = {ids[a]: float(s) for a, (_, s) in pairs.items()}
     d, _, _ = _axes(robot)
-    return Mirror(partner, sign, body_partners(robot, partner, d, tolerance))
+    return Mirror(partner, sign, body_partners(robot.model, robot.base, partner, d, tolerance, robot.path))

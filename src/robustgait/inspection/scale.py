@@ -6,7 +6,8 @@ Lengths scale with the leg length l (dynamic similarity of walking: Alexander, *
 rates with √(g/l), heights with the standing height h. The constants are :class:`robustgait.config.ScaleRules`
 (calibrated on exo). The generation options that scale with the robot (normal forces ∝ m g, the centre-of-pressure
 margin and the feet's clearance ∝ the sole's width) are the loader's rules,
-:func:`robustgait.config.relative_generation_defaults`, written out.
+:func:`robustgait.config.relative_generation_defaults`, written out. The sizes are a
+:class:`robustgait.config.RobotScale` (the loader's type, with what ``robot init`` measures besides).
 """
 
 from __future__ import annotations
@@ -16,7 +17,8 @@ from dataclasses import dataclass
 
 from robustgait.config import GaitParams, RobotScale, ScaleRules, field_at, relative_generation_defaults
 from robustgait.config.gait import least_step_width
-from robustgait.config.regulator import RegulatorConfig, regulator_rule
+from robustgait.config.regulator import RegulatorConfig
+from robustgait.sim.regulator_rules import regulator_rule
 
 # the [generation] keys a written spec carries (the landing-velocity bounds are left to the loader's rules, which
 # use its own leg length)
@@ -24,39 +26,12 @@ GENERATION_KEYS = ("min_normal_force", "min_line_force", "cop_margin", "foot_gap
 GAIT_AXES = ("step_length", "step_duration", "step_width", "step_height")
 
 
-@dataclass(frozen=True)
-class RobotSize:
-    """What the rules scale with: ``leg_length`` l [m] (first leg joint above the sole, straight legs),
-    ``standing_height`` h [m] (base above the soles in the posture), ``mass`` [kg], ``gravity`` |g| [m/s²],
-    ``hip_spacing`` [m] (lateral distance of the legs' first joints), ``sole_length`` and ``sole_width`` [m];
-    ``ankle_roll``: both legs have one; ``sole_spacing`` [m] (lateral distance of the soles' centres in the posture)
-    and ``upper_body_height`` [m] (the centre of mass of all but the legs above the legs' first joints), which set
-    the gait of legs without an ankle roll (:func:`hip_roll_angle`)."""
-
-    leg_length: float
-    standing_height: float
-    mass: float
-    gravity: float
-    hip_spacing: float
-    sole_length: float
-    sole_width: float
-    ankle_roll: bool = True
-    sole_spacing: float = 0.0
-    upper_body_height: float = 0.0
-
-    @property
-    def robot_scale(self) -> RobotScale:
-        """The loader's :class:`robustgait.config.RobotScale` of this size."""
-        return RobotScale(mass=self.mass, gravity=self.gravity, leg_length=self.leg_length,
-                          sole_half_length=self.sole_length / 2, sole_half_width=self.sole_width / 2)
-
-
-def step_length(size: RobotSize, rules: ScaleRules) -> float:
+def step_length(size: RobotScale, rules: ScaleRules) -> float:
     """Default step length = c · l [m]."""
     return rules.step_length * size.leg_length
 
 
-def duration_constant(size: RobotSize, rules: ScaleRules, multicontact: bool = False) -> float:
+def duration_constant(size: RobotScale, rules: ScaleRules, multicontact: bool = False) -> float:
     """c of the default step duration c · √(l/g): ``step_duration_multicontact``; flat-foot, ``step_duration_narrow``
     when the soles are narrow (:func:`narrow_soles`), else ``step_duration``."""
     if multicontact:
@@ -64,25 +39,25 @@ def duration_constant(size: RobotSize, rules: ScaleRules, multicontact: bool = F
     return rules.step_duration_narrow if narrow_soles(size) else rules.step_duration
 
 
-def step_duration(size: RobotSize, rules: ScaleRules, multicontact: bool = False) -> float:
+def step_duration(size: RobotScale, rules: ScaleRules, multicontact: bool = False) -> float:
     """Default step duration = c · √(l/g) [s] (:func:`duration_constant`)."""
     return duration_constant(size, rules, multicontact) * math.sqrt(size.leg_length / size.gravity)
 
 
-def step_width(size: RobotSize, rules: ScaleRules) -> float:
+def step_width(size: RobotScale, rules: ScaleRules) -> float:
     """Default step width = the hip spacing (feet under the hips), at least sole width + c · the feet's clearance
     (``generate.foot_gap``'s robot-relative rule) [m]; legs without an ankle roll: the soles' spacing in the posture,
     the only width at which both feet land flat under a level pelvis (:mod:`robustgait.robots.legs`)."""
     if not size.ankle_roll:
         return size.sole_spacing
-    gap = float(relative_generation_defaults(size.robot_scale)["foot_gap"])
+    gap = float(relative_generation_defaults(size)["foot_gap"])
     return max(size.hip_spacing, size.sole_width + rules.step_width_gap * gap)
 
 
-def least_width(size: RobotSize) -> float:
+def least_width(size: RobotScale) -> float:
     """The narrowest step width gait generation takes [m]: the sole's width + ``generate.foot_gap`` as the spec writes
     it (the robot-relative rule, 3 significant digits), its pre-check that the soles do not touch."""
-    return least_step_width(size.sole_width, sig(float(relative_generation_defaults(size.robot_scale)["foot_gap"])))
+    return least_step_width(size.sole_width, sig(float(relative_generation_defaults(size)["foot_gap"])))
 
 
 def above_least(axis: tuple[float, float, float], least: float) -> tuple[float, float, float]:
@@ -94,25 +69,25 @@ def above_least(axis: tuple[float, float, float], least: float) -> tuple[float, 
     return min(round(math.ceil(least / step - 1e-9) * step, 9), high), high, step
 
 
-def hip_roll_angle(size: RobotSize) -> float:
+def hip_roll_angle(size: RobotScale) -> float:
     """φ = atan((w/2) / h_u) [rad] (w the soles' spacing, h_u the upper body's height over the hips): the pelvis roll
     that carries the upper body's centre of mass over the stance foot. Legs without an ankle roll move their centre
     of pressure sideways only so (the hip strategy): their gait-quality bound on the pelvis roll."""
     return math.atan2(size.sole_spacing / 2.0, max(size.upper_body_height, 1e-9))
 
 
-def pelvis_roll_bound(size: RobotSize, rules: ScaleRules) -> float:
+def pelvis_roll_bound(size: RobotScale, rules: ScaleRules) -> float:
     """The gait-quality bound on the pelvis roll [rad]: exo's (``robot.scale.pelvis_roll``), or for legs without an
     ankle roll :func:`hip_roll_angle`, if larger."""
     return rules.pelvis_roll if size.ankle_roll else max(rules.pelvis_roll, hip_roll_angle(size))
 
 
-def step_height(size: RobotSize, rules: ScaleRules) -> float:
+def step_height(size: RobotScale, rules: ScaleRules) -> float:
     """Default swing-sole clearance = c · l [m]."""
     return rules.step_height * size.leg_length
 
 
-def angular_velocity_bound(size: RobotSize, rules: ScaleRules) -> float:
+def angular_velocity_bound(size: RobotScale, rules: ScaleRules) -> float:
     """Bound on each component of the pelvis angular velocity = c · √(g/l) [rad/s]; for legs without an ankle roll at
     least 2π φ / T (φ the :func:`pelvis_roll_bound`, T the default step duration): the pelvis rolls over each stance
     foot and back within a step."""
@@ -122,38 +97,38 @@ def angular_velocity_bound(size: RobotSize, rules: ScaleRules) -> float:
     return max(rate, 2.0 * math.pi * pelvis_roll_bound(size, rules) / step_duration(size, rules))
 
 
-def joint_velocity_bound(size: RobotSize, rules: ScaleRules) -> float:
+def joint_velocity_bound(size: RobotScale, rules: ScaleRules) -> float:
     """Bound on each joint's speed = c · √(g/l) [rad/s]."""
     return rules.joint_velocity * math.sqrt(size.gravity / size.leg_length)
 
 
-def pelvis_height_band(size: RobotSize, rules: ScaleRules) -> tuple[float, float]:
+def pelvis_height_band(size: RobotScale, rules: ScaleRules) -> tuple[float, float]:
     """Band of the pelvis origin above the stance sole = (c_low, c_high) · h [m]."""
     return rules.pelvis_height[0] * size.standing_height, rules.pelvis_height[1] * size.standing_height
 
 
-def fall_height(size: RobotSize, rules: ScaleRules) -> float:
+def fall_height(size: RobotScale, rules: ScaleRules) -> float:
     """Fall criterion: the base lower than c · h [m] (above the floor)."""
     return rules.fall_height * size.standing_height
 
 
-def generation(size: RobotSize, rules: ScaleRules) -> dict[str, float]:
+def generation(size: RobotScale, rules: ScaleRules) -> dict[str, float]:
     """The spec's ``[generation]`` values (:data:`GENERATION_KEYS`): the loader's robot-relative rules, and for
     narrow soles (:func:`narrow_soles`) a joint margin of ``joint_margin_narrow`` when it is above 0."""
-    loader = relative_generation_defaults(size.robot_scale)
+    loader = relative_generation_defaults(size)
     out = {k: float(loader[k]) for k in GENERATION_KEYS}
     if narrow_soles(size) and rules.joint_margin_narrow > 0:
         out["joint_margin"] = rules.joint_margin_narrow
     return out
 
 
-def balance(size: RobotSize) -> tuple[bool, str]:
+def balance(size: RobotScale) -> tuple[bool, str]:
     """Whether the step regulator runs for the robot's flat-foot gaits, and why: its rule
-    (:func:`~robustgait.config.regulator.regulator_rule`) with the default ``sim.regulator``."""
+    (:func:`~robustgait.sim.regulator_rules.regulator_rule`) with the default ``sim.regulator``."""
     return regulator_rule(RegulatorConfig(), size.sole_width, size.leg_length, 1)
 
 
-def narrow_soles(size: RobotSize) -> bool:
+def narrow_soles(size: RobotScale) -> bool:
     """The soles are narrow for the robot: :func:`balance` turns the step regulator on."""
     return balance(size)[0]
 
@@ -177,7 +152,7 @@ class Balance:
         return self.share >= rules.point_foot_share
 
 
-def duration_rule(size: RobotSize, rules: ScaleRules, balance: Balance | None = None) -> tuple[float, float, int]:
+def duration_rule(size: RobotScale, rules: ScaleRules, balance: Balance | None = None) -> tuple[float, float, int]:
     """The flat-foot action space's duration axis rule: ``action_step_duration``, its high end capped at
     ``narrow_step_duration`` · √(l/g) when the soles are narrow (:func:`narrow_soles`), and for a point-foot walker
     (:meth:`Balance.point_foot`) at λT = ``point_foot_step``, T ≤ ``point_foot_step`` / λ — never below the default
@@ -258,7 +233,7 @@ def sig(x: float, digits: int = 3) -> float:
     return round(x, digits - 1 - math.floor(math.log10(abs(x))))
 
 
-def scale(size: RobotSize, rules: ScaleRules, balance: Balance | None = None) -> Scaled:
+def scale(size: RobotScale, rules: ScaleRules, balance: Balance | None = None) -> Scaled:
     """All the rules applied to a robot (values rounded to 3 significant digits); ``balance``: the default gait's
     measured balance, which bounds a point-foot walker's step durations, widths and lengths (:func:`duration_rule`,
     :func:`tried_rule`)."""

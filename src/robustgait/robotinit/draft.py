@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config import RobotConfig
+from robustgait.config import RobotConfig, RobotScale
 from robustgait.errors import input_error
 from robustgait.inspection.discover import (
     SIDES,
@@ -45,7 +45,7 @@ from robustgait.inspection.gains import (
 )
 from robustgait.inspection.mirror import Mirror, Residual, find_mirror, fk_residual, name_partner
 from robustgait.inspection.model import RobotModel, open_model
-from robustgait.inspection.scale import Balance, RobotSize, Scaled, hip_roll_angle, scale
+from robustgait.inspection.scale import Balance, Scaled, hip_roll_angle, scale
 from robustgait.robotinit.posture import centre_over_soles, level_soles, symmetric_angles
 from robustgait.robots.model import mass_matrix
 from robustgait.robots.soles import GEOM_TYPES, can_touch
@@ -89,7 +89,7 @@ class Draft:
     torque: dict[int, TorqueLimit]
     loads: dict[int, JointLoad]
     gains: dict[int, PDGains]
-    size: RobotSize
+    size: RobotScale
     scaled: Scaled
     timestep: float
     servo_frequency: float
@@ -284,10 +284,10 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     if levelled > 0.0:
         notes.append(f"the soles were not level in the posture: each ankle turned by up to {levelled:.3g} rad to "
                      "level them")
-    size = RobotSize(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,
-                     gravity=gravity, hip_spacing=legs.hip_spacing,
-                     sole_length=legs.left.sole.length, sole_width=legs.left.sole.width, ankle_roll=legs.ankle_roll,
-                     sole_spacing=legs.sole_spacing, upper_body_height=legs.upper_body_height)
+    size = RobotScale(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,
+                      gravity=gravity, hip_spacing=legs.hip_spacing,
+                      sole_length=legs.left.sole.length, sole_width=legs.left.sole.width, ankle_roll=legs.ankle_roll,
+                      sole_spacing=legs.sole_spacing, upper_body_height=legs.upper_body_height)
     if not legs.ankle_roll:
         last = robot.joint_name(legs.left.joints[-1])
         notes.append(f"the legs have no ankle roll (the left leg ends at {last}): a flat stance foot cannot move the "

@@ -23,7 +23,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 from robustgait.config import Config
-from robustgait.config.regulator import regulator_rule
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.gaitgen import GaitGenerator
@@ -35,6 +34,7 @@ from robustgait.robotinit.timestep import candidate_timesteps, default_gait, ms,
 from robustgait.robotinit.writer import render
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine
+from robustgait.sim.regulator_rules import regulator_rule
 
 if sys.version_info >= (3, 11):
     import tomllib

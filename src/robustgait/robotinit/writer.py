@@ -11,12 +11,12 @@ import mujoco
 import numpy as np
 
 from robustgait.inspection.discover import SIDES, FoundSole
-from robustgait.inspection.mirror import mass_asymmetry
 from robustgait.inspection.scale import GAIT_AXES, balance, duration_constant, narrow_soles, sig
 from robustgait.robotinit.chains import loop_lines, passive_lines
 from robustgait.robotinit.draft import INTEGRATOR_NAMES, Draft
 from robustgait.robotinit.timestep import TimestepChoice, ms
 from robustgait.robotinit.tomltext import angle, key, num, text
+from robustgait.robots.sides import mass_asymmetry
 from robustgait.robots.soles import GEOM_TYPES, SOLE_PLANE_TOLERANCE, SOLE_TILT_SLOPE
 from robustgait.robots.spec import FallCriteria
 
@@ -396,9 +396,9 @@ def summary(draft: Draft, spec_path: str | Path) -> list[str]:
     floor = ("added (add_floor)" if draft.floor.add else f"'{draft.floor.name}'" if draft.floor.name
              else "the world's unnamed plane")
     out.append(f"floor: {floor}; planned {len(draft.planned)} joints, held {len(draft.held)}")
+    sides = mass_asymmetry(r.model, r.base, draft.mirror.body_partner)
     out.append(f"mirror: verified on {res.samples} random configurations, largest residual {res.position:.2g} m, "
-               f"{res.angle:.2g} rad; "
-               f"{mass_asymmetry(r, draft.mirror).describe(r, c.side_mass_tolerance, c.side_inertia_tolerance)}")
+               f"{res.angle:.2g} rad; {sides.describe(r.model, c.side_mass_tolerance, c.side_inertia_tolerance)}")
     kp = np.array([draft.gains[j].kp for j in draft.planned])
     bounds = [draft.gains[j].bound for j in draft.planned]
     out.append(f"gains ({draft.config.bandwidth:g} Hz, ζ {draft.config.damping_ratio:g}, cap τ_max / "

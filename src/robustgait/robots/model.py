@@ -27,11 +27,12 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config import GaitParams, RobotScale
+from robustgait.config import GaitParams, RobotConfig, RobotScale
 from robustgait.errors import RobustGaitError, input_error
 from robustgait.robots.held import weld_joints
 from robustgait.robots.legs import ankle_roll_joint, foot_chain
 from robustgait.robots.loops import DOF_SIZE, QPOS_SIZE, check_closed_chains
+from robustgait.robots.sides import body_partners, mass_asymmetry
 from robustgait.robots.solebox import SoleBox, sole_box
 from robustgait.robots.soles import ResolvedSole, resolve_floor, resolve_soles
 from robustgait.robots.spec import CLOSED_CHAIN_FIELDS, SIDES, RobotSpec
@@ -306,13 +307,49 @@ class Robot:
         return float(abs(left[1] - right[1]))
 
     @cached_property
+    def sides_differ(self) -> bool:
+        """Whether the robot's left and right differ, so that its walk is certified on the stride map (two steps,
+        ``certify.map`` auto): the body pairs the spec's relabeling implies (:func:`~robustgait.robots.sides.
+        body_partners`) differ in mass or inertia beyond ``robot.side_mass_tolerance`` and
+        ``robot.side_inertia_tolerance`` (:meth:`~robustgait.robots.sides.MassAsymmetry.differs`), or the two sole
+        boxes' half sizes by more than ``robot.mirror_tolerance`` [m] (the defaults read one sole for both,
+        :attr:`sole_width`). A relabeling whose bodies have no mirror image counts as differing: no mirrored map is
+        trusted. The configuration's defaults (:class:`~robustgait.config.RobotConfig`)."""
+        config = RobotConfig()
+        m, spec = self.model, self.spec
+        partner = {m.joint(j).id: m.joint(spec.joints[p]).id
+                   for j, p in zip(spec.joints, spec.mirror_perm, strict=True)}
+        partner |= {m.joint(h.name).id: m.joint(h.mirror).id for h in spec.held}
+        d = mujoco.MjData(m)  # the model's reference with the base at the origin and every joint at 0
+        d.qpos[:] = m.qpos0
+        d.qpos[:7] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+        d.qpos[np.concatenate([self.qpos_idx, self.held_qpos_idx])] = 0.0
+        mujoco.mj_kinematics(m, d)
+        try:
+            pairs = body_partners(m, self.base_body_id, partner, d, config.mirror_tolerance, spec.source or spec.mjcf)
+        except ValueError:
+            return True
+        left, right = self.sole_boxes["left"], self.sole_boxes["right"]
+        soles = max(abs(left.half_length - right.half_length), abs(left.half_width - right.half_width),
+                    abs(left.half_thickness - right.half_thickness))
+        return (mass_asymmetry(m, self.base_body_id, pairs).differs(config.side_mass_tolerance,
+                                                                    config.side_inertia_tolerance)
+                or soles > config.mirror_tolerance)
+
+    @property
+    def sole_width(self) -> float:
+        """The sole's width [m], the one the step regulator's rule, its foot gap and the robot-relative defaults read:
+        the right sole box's (:class:`~robustgait.robots.solebox.SoleBox`; a line foot's is 2 × its nominal half
+        width, :data:`robustgait.robots.soles.LINE_HALF_WIDTH`)."""
+        return 2.0 * self.sole_boxes["right"].half_width
+
+    @cached_property
     def scale(self) -> RobotScale:
-        """What robot-relative defaults scale with (:class:`robustgait.config.RobotScale`); the sole's size is the
-        right sole box's."""
+        """What robot-relative defaults scale with (:class:`robustgait.config.RobotScale`): mass, |g|, the leg length
+        and the right sole box's size (:attr:`sole_width`); ``robot init``'s other measurements at their defaults."""
         sole = self.sole_boxes["right"]
         return RobotScale(mass=self.mass, gravity=float(np.linalg.norm(self.model.opt.gravity)),
-                          leg_length=self.leg_length, sole_half_length=sole.half_length,
-                          sole_half_width=sole.half_width)
+                          leg_length=self.leg_length, sole_length=2.0 * sole.half_length, sole_width=self.sole_width)
 
     @property
     def name(self) -> str:

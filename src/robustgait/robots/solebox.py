@@ -4,12 +4,15 @@ Every resolved sole is one box geom (:mod:`robustgait.robots.soles`: a named box
 foot's geoms). :class:`SoleBox` is the one reading of that box: which of its axes is the sole's normal, which runs
 heel to toe, its half-sizes, and the points the pipeline places: the bottom face's centre, toe and heel (the gait
 generator's foot frames). The gait problem's centre-of-pressure bounds, the
-dynamics' foot frames, ``robot check``'s sole checks, the step regulator's and the defaults' sole width
-(:attr:`robustgait.robots.model.Robot.scale`) all read it from :attr:`robustgait.robots.model.Robot.sole_boxes`.
+dynamics' foot frames, ``robot check``'s sole checks, the step regulator's sole frame and heading
+(:mod:`robustgait.sim.regulator`), the walk check's tipping sole (:mod:`robustgait.gaitgen.walkcheck`) and the
+defaults' sole width (:attr:`robustgait.robots.model.Robot.sole_width`) all read it from
+:attr:`robustgait.robots.model.Robot.sole_boxes`: none of them assumes which of the geom's axes is which.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -58,6 +61,19 @@ class SoleBox:
         e = np.eye(3)
         x_axis, z_axis = self.forward * e[self.long], self.up * e[self.normal]
         return np.column_stack([x_axis, np.cross(z_axis, x_axis), z_axis])
+
+    def world_frame(self, data: mujoco.MjData) -> FloatArray:
+        """The foot frame's axes in the world (3, 3; columns: x heel to toe, y the foot's left, z the sole's normal
+        into the foot) at the kinematics of ``data``: the geom's rotation times :meth:`frame_rotation`. A vector's
+        components in the foot frame are ``world_frame(data).T @ v``."""
+        return np.asarray(data.geom_xmat[self.geom].reshape(3, 3) @ self.frame_rotation())
+
+    def heading(self, data: mujoco.MjData) -> float:
+        """ψ [rad], the yaw of the sole's heel-to-toe axis at the kinematics of ``data``: atan2 of that axis's world y
+        and x components. Meaningless (whatever atan2 gives) for a sole standing on its toe or heel, whose axis is
+        vertical."""
+        toe = data.geom_xmat[self.geom].reshape(3, 3)[:, self.long] * self.forward
+        return math.atan2(float(toe[1]), float(toe[0]))
 
     def bottom_centre(self, data: mujoco.MjData) -> FloatArray:
         """The bottom face's centre (3,) in the world [m], at the kinematics of ``data``."""

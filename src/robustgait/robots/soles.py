@@ -52,6 +52,10 @@ SOLE_PLANE_TOLERANCE = 0.002
 # ... plus this slope times their horizontal distance from it: a sole a model tilts by up to atan(slope) ≈ 1° in its
 # foot's frame (a foot plate's geoms rotated 90.5° rather than 90°) spans its whole length
 SOLE_TILT_SLOPE = 0.0175
+# a mesh's tread: its hull's vertices within this distance [m] of the plane of its ground face (:func:`ground_face`).
+# A flat face's vertices lie on it to float32 precision (MuJoCo stores mesh vertices so: ~1e-8 m), and a chamfer's or
+# a rounded edge's a few millimetres above it (a 4 mm chamfer widened a 0.034 m face to 0.042 m under on_sole's band)
+MESH_FACE_TOLERANCE = 0.001
 # a tread whose contact polygon covers less than this share of the rectangle around it is refused: the planner keeps
 # the centre of pressure inside that rectangle, where a triangle (a heel point and a toe bar: 0.5) has no contact at
 # the heel's corners; a disk (π/4 ≈ 0.79, its 8 rim points 0.71–0.83) or a trapezoid whose heel is a quarter as wide
@@ -168,6 +172,33 @@ def on_sole(points: FloatArray, up: FloatArray) -> NDArray[np.bool_]:
     return np.asarray(height <= height[lowest] + SOLE_PLANE_TOLERANCE + SOLE_TILT_SLOPE * reach)
 
 
+def ground_face(points: FloatArray, up: FloatArray) -> NDArray[np.bool_]:
+    """Which of a mesh's convex-hull vertices (k, 3) lie on its ground face, (k,) booleans: those within
+    :data:`MESH_FACE_TOLERANCE` [m] of the plane of the face it rests on with ``up`` (3,), a unit vector) up.
+
+    That plane is the hull's facet whose outward normal is closest to −``up`` (a face the model tilts within its foot
+    by a degree is still that facet), then fitted by least squares through the vertices within the tolerance of it
+    (a face triangulated with sub-millimetre noise). So a chamfer's or a rounded edge's vertices a few millimetres
+    above the face are not on the sole, however far they lie from the lowest vertex — :func:`on_sole`'s band widens
+    by 1.75 % of that distance, which took a 4 mm chamfer into a 0.034 m face. Points that span no volume (a flat
+    mesh, fewer than 4 points): the band of :data:`MESH_FACE_TOLERANCE` above the lowest along ``up``."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    points, up = np.asarray(points, dtype=float), np.asarray(up, dtype=float)
+    height = points @ up
+    if len(points) < 4:
+        return np.asarray(height <= height.min() + MESH_FACE_TOLERANCE)
+    try:
+        facets = ConvexHull(points).equations  # rows (n, d): n · x + d ≤ 0 inside, n the outward unit normal
+    except QhullError:  # coplanar or collinear: the mesh is its own face
+        return np.asarray(height <= height.min() + MESH_FACE_TOLERANCE)
+    lowest = facets[int(np.argmax(facets[:, :3] @ -up))]
+    on = np.abs(points @ lowest[:3] + lowest[3]) <= MESH_FACE_TOLERANCE  # the facet's own vertices at least
+    centre = points[on].mean(axis=0)
+    normal = np.linalg.svd(points[on] - centre)[2][-1]  # the direction the face's vertices spread least along
+    return np.asarray(np.abs((points - centre) @ normal) <= MESH_FACE_TOLERANCE)
+
+
 def hull_vertices(model: mujoco.MjModel, g: int) -> FloatArray:
     """The vertices (n, 3) of mesh geom ``g``'s convex hull, in the geom's frame [m] (MuJoCo stores a mesh's vertices
     in its compiled mesh frame, recentred and scaled, and folds that frame's offset into geom_pos/geom_quat).
@@ -195,14 +226,14 @@ def sole_points(kind: str, pos: FloatArray, rot: FloatArray, size: FloatArray, u
     MuJoCo's geom size [m]. A box: the four corners of its face that looks down; a sphere: its bottom; a capsule:
     the bottoms of its two end spheres; a cylinder lying on its side: the two ends of its lowest line; a cylinder
     standing on an end: :data:`RIM_POINTS` points of that end's rim (tilted: the lowest point of each end's rim); a
-    mesh: its convex hull's ``vertices`` (n, 3, in the geom's frame: :func:`hull_vertices`) that are on the sole
-    (:func:`on_sole`), its tread. A mesh without ``vertices`` is a ValueError."""
+    mesh: its convex hull's ``vertices`` (n, 3, in the geom's frame: :func:`hull_vertices`) on its ground face
+    (:func:`ground_face`), its tread. A mesh without ``vertices`` is a ValueError."""
     pos, rot, size, up = (np.asarray(a, dtype=float) for a in (pos, rot, size, up))
     if kind == "mesh":
         if vertices is None:
             raise ValueError("sole_points: a mesh's points need its hull's vertices")
         points = pos + np.asarray(vertices, dtype=float) @ rot.T
-        return np.asarray(points[on_sole(points, up)])
+        return np.asarray(points[ground_face(points, up)])
     if kind == "box":
         axis = int(np.argmax(np.abs(up @ rot)))  # the box axis closest to up: its bottom face's normal
         others = [k for k in range(3) if k != axis]
@@ -431,6 +462,16 @@ def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int],
     return SoleRectangle(centre, np.column_stack([fwd, left, up]), half, np.column_stack([along, across]))
 
 
+def loader_rectangle(model: mujoco.MjModel, geoms: Sequence[int], base: int, line: bool = False) -> SoleRectangle:
+    """The rectangle a foot's virtual sole box is built on (:func:`resolve_sole`): :func:`sole_rectangle` of its
+    ``geoms`` in ``model``'s zero posture (qpos0), toe the way of body ``base``'s x axis there; ``line``: a line
+    foot's. ``robot init`` reads a sole of several geoms through it (:func:`robustgait.inspection.discover.find_sole`),
+    so the sole size it scales a spec's values with is the size of the sole the spec loads with."""
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    return sole_rectangle(model, data, list(geoms), data.xmat[base].reshape(3, 3)[:, 0], line)
+
+
 def resolve_soles(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel) -> dict[str, ResolvedSole]:
     """Both soles (:func:`resolve_sole`); the geoms are found before ``mjs`` is edited (an edit renumbers it)."""
     src = spec.source or spec.mjcf
@@ -453,12 +494,9 @@ def resolve_sole(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel, sid
             name = virtual_sole_name(side)
             geoms[ids[0]].name = name
         return ResolvedSole(name, (mujoco.mjtObj.mjOBJ_GEOM, name), tuple(ids), virtual=False)
-    data = mujoco.MjData(model)
-    mujoco.mj_kinematics(model, data)
     base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, spec.base_body)
-    forward = data.xmat[base].reshape(3, 3)[:, 0]
     line = spec.feet.get(side) == "line"
-    centre, rot, half, tread = sole_rectangle(model, data, ids, forward, line)
+    centre, rot, half, tread = loader_rectangle(model, ids, base, line)
     if line and half[0] > LINE_HALF_WIDTH and half[1] <= LINE_HALF_WIDTH:  # a line foot: its box as wide as nothing
         half[1] = LINE_HALF_WIDTH
     elif min(half[0], half[1]) <= LINE_HALF_WIDTH:

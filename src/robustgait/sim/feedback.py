@@ -52,13 +52,13 @@ from numpy.typing import NDArray
 
 from robustgait.bezier import bezier_derivative
 from robustgait.config import SimConfig
-from robustgait.config.regulator import regulator_rule
 from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.robots.model import actuated_model
 from robustgait.sim.controller import TrackingStats, desired_outputs, feedforward_torque, step_controls
 from robustgait.sim.engine import StepBatch, StepEngine, StepInputs
+from robustgait.sim.regulator_rules import regulator_rule
 
 Array = NDArray[np.float64]
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
@@ -336,7 +336,7 @@ class FeedbackEngine(StepEngine):
             raise RobustGaitError("the feedback engine needs MuJoCo ≥ 4.0 (mujoco.batch)") from None
         self._mjbatch = mjbatch
         cfg = config or SimConfig()
-        on, reason = regulator_rule(cfg.regulator, 2.0 * robot.scale.sole_half_width, robot.leg_length,
+        on, reason = regulator_rule(cfg.regulator, robot.sole_width, robot.leg_length,
                                     len(gait.domains))
         if on:  # before the engine is built: the regulator would measure its walk on this engine's laws
             raise RobustGaitError(f"the H-LIP step regulator runs with the pd controller, not the feedback engine's "

@@ -12,7 +12,7 @@ does, at the next foothold:
 2. It sets the landing change Δu = κ K (x − x*) (:func:`~robustgait.sim.hlip.step_correction` with no time left:
    the error measured now is the estimate of the error at touchdown; with ``predict`` the H-LIP's prediction
    e^{A_S (T_S − t)} (x − x*) instead), κ the share of the H-LIP gain the sole's width leaves to the foot
-   (:func:`~robustgait.config.regulator.placement_share`), clipped per axis to ``max_step_change`` leg lengths and,
+   (:func:`~robustgait.sim.regulator_rules.placement_share`), clipped per axis to ``max_step_change`` leg lengths and,
    inward, to keep ``foot_gap`` between the soles.
 3. The landing change becomes a swing-leg joint offset g = G Δu, G the least-squares inverse of the swing sole's
    5 × n Jacobian (horizontal position and orientation, stance sole frame, base fixed) at the gait's pre-impact
@@ -20,7 +20,7 @@ does, at the next foothold:
    in with a quintic in phase, reaching its target at ``land_tau``; it is continuous across updates.
 4. At the step start the joints differ from the references by e0 (the previous landing correction, now in the
    stance leg, and any tracking error); e0 is blended out of the references by τ_c = ``carry_tau`` + ``carry_share`` κ
-   (:func:`~robustgait.config.regulator.carry_phase`) instead of being a
+   (:func:`~robustgait.sim.regulator_rules.carry_phase`) instead of being a
    step in the servos' error (Morris & Grizzle, IEEE TAC 54(8), 2009: hybrid-invariant deformation of the outputs).
 
 The servos then track y_d + o with controls c = y_d + o + (kd (ẏ_d + ȯ) + u_ff) / kp; each sample gets its own
@@ -40,11 +40,13 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.config.regulator import RegulatorConfig, carry_phase, placement_share, regulator_rule
+from robustgait.config.regulator import RegulatorConfig
 from robustgait.gait import Gait
 from robustgait.robots import Robot
+from robustgait.robots.solebox import SoleBox
 from robustgait.sim import hlip
 from robustgait.sim.controller import desired_outputs
+from robustgait.sim.regulator_rules import carry_phase, placement_share, regulator_rule
 
 Array = NDArray[np.float64]
 
@@ -56,13 +58,15 @@ def quintic_blend(s: Array) -> tuple[Array, Array]:
     return s**3 * (10.0 - 15.0 * s + 6.0 * s**2), 30.0 * s**2 * (1.0 - s) ** 2
 
 
-def sole_frame(data: mujoco.MjData, geom: int) -> tuple[Array, Array]:
-    """Centre (3,) and heading rotation R_z(ψ)ᵀ (2, 2) of a sole geom: world horizontal vectors into the sole's
-    heading frame (x forward along the sole, y to its left), ψ the yaw of the sole's x axis."""
-    r = data.geom_xmat[geom]
-    psi = math.atan2(r[3], r[0])
+def sole_frame(data: mujoco.MjData, sole: SoleBox) -> tuple[Array, Array]:
+    """Centre (3,) and heading rotation R_z(ψ)ᵀ (2, 2) of a sole box: world horizontal vectors into the sole's
+    heading frame (x heel to toe, y to its left), ψ the yaw of its heel-to-toe axis (:meth:`SoleBox.heading`,
+    whichever of the geom's axes that is). The centre is the box's, on the sole's normal through its bottom face's
+    centre: the same point for the gait's x* (:func:`nominal_com`) and the walk's x, so a flat sole's horizontal
+    offset is the bottom face's."""
+    psi = sole.heading(data)
     c, s = math.cos(psi), math.sin(psi)
-    return data.geom_xpos[geom].copy(), np.array([[c, s], [-s, c]])
+    return data.geom_xpos[sole.geom].copy(), np.array([[c, s], [-s, c]])
 
 
 def com_state(robot: Robot, data: mujoco.MjData, states: Array, stance: str) -> Array:
@@ -70,7 +74,7 @@ def com_state(robot: Robot, data: mujoco.MjData, states: Array, stance: str) -> 
     in its heading frame [m, m/s], from full-physics states (K, nstate)."""
     m = robot.model
     nq, nv = m.nq, m.nv
-    geom = robot.sole_geom_id[stance]
+    sole = robot.sole_boxes[stance]
     out = np.empty((states.shape[0], 2, 2))
     for i, st in enumerate(states):
         data.qpos[:] = st[1:1 + nq]
@@ -79,7 +83,7 @@ def com_state(robot: Robot, data: mujoco.MjData, states: Array, stance: str) -> 
         mujoco.mj_comPos(m, data)
         mujoco.mj_comVel(m, data)
         mujoco.mj_subtreeVel(m, data)
-        centre, rot = sole_frame(data, geom)
+        centre, rot = sole_frame(data, sole)
         out[i, :, 0] = rot @ (data.subtree_com[0, :2] - centre[:2])
         out[i, :, 1] = rot @ data.subtree_linvel[0, :2]
     return out
@@ -94,12 +98,13 @@ def _posture(robot: Robot, gait: Gait, tau: Array) -> Array:
     return q
 
 
-def _com_in_sole(robot: Robot, data: mujoco.MjData, qpos: Array, geom: int) -> Array:
-    """The CoM relative to sole geom ``geom``'s centre, in the sole's frame (3,) [m], at configuration ``qpos``."""
+def _com_in_sole(robot: Robot, data: mujoco.MjData, qpos: Array, sole: SoleBox) -> Array:
+    """The CoM relative to a sole box's centre, in its foot frame (3,) [m] (x heel to toe, y left, z up:
+    :meth:`SoleBox.world_frame`), at configuration ``qpos``."""
     data.qpos[:] = qpos
     mujoco.mj_kinematics(robot.model, data)
     mujoco.mj_comPos(robot.model, data)
-    return np.asarray(data.geom_xmat[geom].reshape(3, 3).T @ (data.subtree_com[0] - data.geom_xpos[geom]))
+    return np.asarray(sole.world_frame(data).T @ (data.subtree_com[0] - data.geom_xpos[sole.geom]))
 
 
 def nominal_com(robot: Robot, gait: Gait, tau: Array, dtau: float = 1e-4) -> tuple[Array, float]:
@@ -109,10 +114,10 @@ def nominal_com(robot: Robot, gait: Gait, tau: Array, dtau: float = 1e-4) -> tup
     for): p* is the CoM relative to the sole's centre in the sole frame — the same for any base pose — and
     v* = dp*/dτ / T by central differences in τ."""
     data = mujoco.MjData(robot.model)
-    geom = robot.sole_geom_id[gait.stance]
+    sole = robot.sole_boxes[gait.stance]
 
     def rel(t: Array) -> Array:
-        return np.array([_com_in_sole(robot, data, q, geom) for q in _posture(robot, gait, t)])
+        return np.array([_com_in_sole(robot, data, q, sole) for q in _posture(robot, gait, t)])
 
     p = rel(tau)
     lo, hi = np.maximum(tau - dtau, 0.0), tau + dtau   # one-sided at τ = 0 (the outputs start there)
@@ -125,7 +130,7 @@ def com_jacobian(robot: Robot, gait: Gait, tau: Array, joints: NDArray[np.int64]
     """∂p*/∂q_j (K, 2, n): how the CoM's horizontal position relative to the stance sole (sole frame) moves with the
     planned joints ``joints`` (n,) at the gait's postures y_d(τ) (K,), by central differences."""
     data = mujoco.MjData(robot.model)
-    geom = robot.sole_geom_id[gait.stance]
+    sole = robot.sole_boxes[gait.stance]
     out = np.empty((tau.size, 2, joints.size))
     for i, q in enumerate(_posture(robot, gait, tau)):
         for c, j in enumerate(joints):
@@ -133,7 +138,7 @@ def com_jacobian(robot: Robot, gait: Gait, tau: Array, joints: NDArray[np.int64]
             for sign in (1.0, -1.0):
                 moved = q.copy()
                 moved[robot.qpos_idx[j]] += sign * dq
-                side.append(_com_in_sole(robot, data, moved, geom))
+                side.append(_com_in_sole(robot, data, moved, sole))
             out[i, :, c] = (side[0] - side[1])[:2] / (2.0 * dq)
     return out
 
@@ -163,7 +168,7 @@ def landing_map(robot: Robot, gait: Gait) -> tuple[Array, Array]:
     mujoco.mj_comPos(m, data)
     stance = gait.stance
     swing = "left" if stance == "right" else "right"
-    rot = data.geom_xmat[robot.sole_geom_id[stance]].reshape(3, 3).T
+    rot = robot.sole_boxes[stance].world_frame(data).T  # world vectors into the stance sole's foot frame
     jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
     mujoco.mj_jacGeom(m, data, jacp, jacr, robot.sole_geom_id[swing])
     dofs = swing_dofs(robot, swing)
@@ -209,7 +214,7 @@ class StepRegulator:
         self.stances: dict[str, _Stance] = {}
         heights = []
         leg = robot.leg_length
-        half_width = robot.scale.sole_half_width
+        half_width = robot.sole_width / 2.0
         for stance, g in gaits.items():
             nominal, z0 = nominal_com(robot, g, bounds / self.steps_per_period)
             heights.append(z0)
@@ -225,7 +230,7 @@ class StepRegulator:
         self.hlip_gain = (hlip.deadbeat_gain(self.lam, self.period, 0.0) if config.gain == "deadbeat"
                           else hlip.lqr_gain(a, b, self.z0, self.lam))
         self.rho = hlip.closed_loop_radius(a, b, self.hlip_gain)
-        self.share = placement_share(config, 2.0 * robot.scale.sole_half_width, robot.leg_length)
+        self.share = placement_share(config, robot.sole_width, robot.leg_length)
         self.gain = self.share * self.hlip_gain
         self.growth: float | None = None        # the walk's lateral growth per step under the rule's κ, if measured
         self.growth_whole: float | None = None  # and under κ = 1, when the first was above the limit
@@ -250,7 +255,7 @@ class StepRegulator:
     @property
     def carry_tau(self) -> float:
         """τ_c, the phase by which the step-start error is blended out under the current share κ
-        (:func:`~robustgait.config.regulator.carry_phase`)."""
+        (:func:`~robustgait.sim.regulator_rules.carry_phase`)."""
         return carry_phase(self.config, self.share)
 
     def set_share(self, share: float) -> None:
@@ -365,9 +370,9 @@ class StepRegulator:
 
 def regulator_for(robot: Robot, gaits: dict[str, Gait], config: RegulatorConfig, chunk: int, horizon: int
                   ) -> StepRegulator | None:
-    """The regulator a gait's engine runs (:func:`~robustgait.config.regulator.regulator_rule`), or None."""
+    """The regulator a gait's engine runs (:func:`~robustgait.sim.regulator_rules.regulator_rule`), or None."""
     gait = next(iter(gaits.values()))
-    on, reason = regulator_rule(config, 2.0 * robot.scale.sole_half_width, robot.leg_length, len(gait.domains))
+    on, reason = regulator_rule(config, robot.sole_width, robot.leg_length, len(gait.domains))
     if not on:
         return None
     return StepRegulator(robot, gaits, config, chunk, horizon, reason)
