@@ -140,7 +140,8 @@ def test_a_gait_felled_at_a_joint_limit_is_solved_again_with_room_there(exo, mon
 def test_a_tipping_sole_is_read_in_its_foot_frame(name, request):  # type: ignore[no-untyped-def]
     """sole_tipping reads the sole's SoleBox, not its geom's axes: Atalante's sole boxes have their normal along the
     geom's x axis (exo's along z), and each robot rolled about the forward axis tips its stance sole by the roll over a
-    side edge, and stands on it level below TIP_ANGLE."""
+    side edge — rolled left side up, the right sole stands on its right edge, its outer one — and stands on it level
+    below TIP_ANGLE; mirrored, the left sole stands on its left (outer) edge."""
     robot = request.getfixturevalue(name)
     nq = robot.model.nq
     for roll, tipped in ((0.03, False), (0.3, True)):
@@ -153,4 +154,7 @@ def test_a_tipping_sole_is_read_in_its_foot_frame(name, request):  # type: ignor
             continue
         assert found is not None
         side, tilt, edge, _ = found
-        assert side == "right" and tilt == pytest.approx(roll, abs=0.02) and edge in ("inner", "outer")
+        assert side == "right" and tilt == pytest.approx(roll, abs=0.02) and edge == "outer"
+        state[1 + 3:1 + 7] = [np.cos(roll / 2), -np.sin(roll / 2), 0.0, 0.0]  # right side up: the left foot stands
+        found = sole_tipping(robot, state[None])
+        assert found is not None and found[0] == "left" and found[2] == "outer"

@@ -108,9 +108,10 @@ def sole_tipping(robot: Robot, trajectory: NDArray[np.float64], every: int = 5
             if tilt > TIP_ANGLE:
                 roll, pitch = r[2, 1], r[2, 0]  # the world z axis in the foot frame: the sole's roll and pitch
                 if abs(roll) >= abs(pitch):
-                    # the foot frame's y axis points to the robot's left: a left sole rolling onto its +y edge is inward
+                    # the foot frame's y axis points to the robot's left, so a sole whose +y edge is down (roll < 0)
+                    # rests on its left edge: the outer edge of a left sole, the inner edge of a right one
                     down_left = roll < 0
-                    edge = "inner" if down_left == (side == "left") else "outer"
+                    edge = "outer" if down_left == (side == "left") else "inner"
                 else:
                     edge = "toe" if pitch > 0 else "heel"
                 return side, tilt, edge, row
