@@ -140,6 +140,24 @@ def tiny_study(tmp_path_factory):  # type: ignore[no-untyped-def]
 
 
 @pytest.fixture(scope="session")
+def interrupted_study(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """The tiny study run on Ray and interrupted — a Ray actor SIGKILLed mid-task, then the study process SIGKILLed in
+    its second iteration — and resumed (:func:`tests.study.test_executors.run_interrupted_ray_study`), once per test
+    run: ``{"killed": the study as the kill left it, "study": the resumed study, "facts": what was seen}``, checked by
+    test_study.py (the killed actor's task run again; resume equals the uninterrupted run) and test_executors.py (no
+    Ray process left). Read in place; copy before writing."""
+    import json
+
+    from tests.study.test_executors import run_interrupted_ray_study
+
+    pytest.importorskip("ray")
+    if not sys.platform.startswith("linux"):
+        pytest.skip("reads /proc")
+    d = shared_dir(tmp_path_factory, "interrupted_study", run_interrupted_ray_study)
+    return {"killed": d / "killed", "study": d / "study", "facts": json.loads((d / "facts.json").read_text())}
+
+
+@pytest.fixture(scope="session")
 def t1_spec(tmp_path_factory):  # type: ignore[no-untyped-def]
     """The spec ``robot init`` writes for Booster T1 (../shared/robots, MuJoCo Menagerie, meshes removed), as a user
     brings it (skipped with the reason when absent)."""
