@@ -569,9 +569,11 @@ def test_report_video_is_what_the_configuration_says(tmp_path, exo, exo_gait):
 
 
 @pytest.mark.slow
-def test_status_report_and_compare(tmp_path, tiny_study):
-    study = tmp_path / "study"  # the report is written into the study: a copy of the shared one
-    shutil.copytree(tiny_study, study)
+def test_status_report_and_compare(tmp_path, reported_study):
+    """The tiny study's status, its report (conftest's ``reported_study``: written by ``study report --no-video``) and
+    ``study compare`` of the study with itself."""
+    study = tmp_path / "study"  # a copy of the shared one: nothing here may write into it
+    shutil.copytree(reported_study["study"], study)
     res = cli("study", "status", str(study), "--json")
     st = json.loads(res.stdout)
     assert st["trials_done"] == st["trials_planned"] == 6 and st["state"] == "complete"
@@ -599,9 +601,10 @@ def test_status_report_and_compare(tmp_path, tiny_study):
     again = cli("study", "run", str(study), *CLI_TINY)
     assert again.returncode == 2 and "study resume" in again.stderr
 
-    rep = cli("study", "report", str(study), "--no-video")
-    html = Path(rep.stdout.strip())
-    assert rep.returncode == 0, rep.stderr
+    rep = reported_study["report"]
+    assert rep["returncode"] == 0, rep["stderr"]
+    assert rep["stdout"].splitlines()[0].endswith("/report/index.html")  # made elsewhere: the copy's page
+    html = study / "report" / "index.html"
     page = html.read_text()
     assert page.count("data:image/png;base64,") >= 3 and "<img src=\"report/" not in page
     assert "What the passenger feels" in page and "cost of transport" in page
@@ -639,22 +642,17 @@ def stored_and_refitted_posterior(directory: Path) -> tuple[int, np.ndarray, np.
 
 
 @pytest.mark.slow
-def test_the_report_draws_the_posterior_the_study_stored_without_torch(tmp_path, tiny_study):
+def test_the_report_draws_the_posterior_the_study_stored_without_torch(tiny_study, reported_study):
     """The study stores the learner's posterior over the grid when it closes an iteration (the tiny study's gaits tie:
     the prior's zeros; a map with comparisons: tests/study/test_person_batches.py), and the report draws it without
-    importing torch."""
+    importing torch (conftest's ``reported_study``: ``study report`` in a fresh interpreter)."""
     k, stored, refit = stored_and_refitted_posterior(tiny_study)
     assert k == load_config(tiny_study).config.study.iterations - 1
     np.testing.assert_allclose(stored, refit, rtol=1e-6, atol=1e-12)
-    study = tmp_path / "study"
-    shutil.copytree(tiny_study, study)
-    code = ("import sys; from robustgait.config import ReportConfig; from robustgait.report.study import "
-            "write_study_report; write_study_report(sys.argv[1], ReportConfig(video=False)); "
-            "print('torch' in sys.modules)")
-    res = subprocess.run([sys.executable, "-c", code, str(study)], capture_output=True, text=True, check=False)
-    assert res.returncode == 0, res.stderr
-    assert res.stdout.strip().splitlines()[-1] == "False"
-    assert (study / "report" / "posterior.png").stat().st_size > 10_000
+    res = reported_study["report"]
+    assert res["returncode"] == 0, res["stderr"]
+    assert res["stdout"].strip().splitlines()[-1] == "False"
+    assert (reported_study["study"] / "report" / "posterior.png").stat().st_size > 10_000
 
 
 @pytest.mark.slow
