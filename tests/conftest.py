@@ -140,6 +140,59 @@ def tiny_study(tmp_path_factory):  # type: ignore[no-untyped-def]
 
 
 @pytest.fixture(scope="session")
+def reported_study(tmp_path_factory, tiny_study):  # type: ignore[no-untyped-def]
+    """A copy of :func:`tiny_study` validated and reported once per test run, for the tests that check its validation
+    (tests/study/test_validate.py), report and status (tests/study/test_study.py): ``study validate --trials 8
+    --steps-after 3 --json`` with 2 worker processes, again with 1 after its stored results were removed, then ``study
+    report --no-video`` run by the CLI's ``main`` in a fresh interpreter that says whether torch was imported.
+    ``{"study": the directory, "validate": [the 2-worker run, the 1-worker run], "report": the report's run}``, each run
+    ``{"returncode", "stdout", "stderr"}`` (the report's stdout: the page's path, then ``True``/``False``: torch
+    imported). Read in place; copy before writing."""
+    import json
+    import subprocess
+
+    from robustgait.study.validate import RUNS_DIR, VALIDATION_DIR
+    from tests.study.test_study import cli
+
+    def run(res: subprocess.CompletedProcess) -> dict:  # type: ignore[type-arg]
+        return {"returncode": res.returncode, "stdout": res.stdout, "stderr": res.stderr}
+
+    def make(d: Path) -> None:
+        study = shutil.copytree(tiny_study, d / "study")
+        args = ("study", "validate", str(study), "--trials", "8", "--steps-after", "3", "--json", "--quiet")
+        runs = [run(cli(*args, "--workers", "2"))]
+        shutil.rmtree(study / VALIDATION_DIR / RUNS_DIR, ignore_errors=True)
+        runs.append(run(cli(*args, "--workers", "1")))
+        code = ("import sys; from robustgait.cli import main; code = main(['study', 'report', sys.argv[1], "
+                "'--no-video']); print('torch' in sys.modules); sys.exit(code)")
+        env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
+        report = subprocess.run([sys.executable, "-c", code, str(study)], env=env, capture_output=True, text=True,
+                                check=False)
+        (d / "runs.json").write_text(json.dumps({"validate": runs, "report": run(report)}))
+
+    d = shared_dir(tmp_path_factory, "reported_study", make)
+    return {"study": d / "study", **json.loads((d / "runs.json").read_text())}
+
+
+@pytest.fixture(scope="session")
+def interrupted_study(tmp_path_factory):  # type: ignore[no-untyped-def]
+    """The tiny study run on Ray and interrupted — a Ray actor SIGKILLed mid-task, then the study process SIGKILLed in
+    its second iteration — and resumed (:func:`tests.study.test_executors.run_interrupted_ray_study`), once per test
+    run: ``{"killed": the study as the kill left it, "study": the resumed study, "facts": what was seen}``, checked by
+    test_study.py (the killed actor's task run again; resume equals the uninterrupted run) and test_executors.py (no
+    Ray process left). Read in place; copy before writing."""
+    import json
+
+    from tests.study.test_executors import run_interrupted_ray_study
+
+    pytest.importorskip("ray")
+    if not sys.platform.startswith("linux"):
+        pytest.skip("reads /proc")
+    d = shared_dir(tmp_path_factory, "interrupted_study", run_interrupted_ray_study)
+    return {"killed": d / "killed", "study": d / "study", "facts": json.loads((d / "facts.json").read_text())}
+
+
+@pytest.fixture(scope="session")
 def t1_spec(tmp_path_factory):  # type: ignore[no-untyped-def]
     """The spec ``robot init`` writes for Booster T1 (../shared/robots, MuJoCo Menagerie, meshes removed), as a user
     brings it (skipped with the reason when absent)."""

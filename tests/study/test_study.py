@@ -7,12 +7,8 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import signal
-import sqlite3
 import subprocess
 import sys
-import threading
-import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -39,7 +35,7 @@ from robustgait.io.studyfile import StudySetup, environment_changes, load_config
 from robustgait.learn import ActionSpace
 from robustgait.robots import FallCriteria
 from robustgait.study.evaluate import evaluate
-from robustgait.study.run import create_study, run_study
+from robustgait.study.run import create_study
 from robustgait.study.status import study_status
 from robustgait.study.storage import StudyStore, default_url
 
@@ -482,9 +478,10 @@ def test_evaluate_never_raises_and_records_stages(exo_generator):
 
 
 # ---- whole studies (slow) --------------------------------------------------------------------------------
-def comparable(directory: Path) -> dict:  # type: ignore[type-arg]
+def comparable(directory: Path, finished_only: bool = False) -> dict:  # type: ignore[type-arg]
     """What must not depend on crashes or worker counts: per (iteration, slot) the gait and its outcome,
-    per iteration the proposals, comparisons (as slots) and recommendation, and the best gait."""
+    per iteration the proposals, comparisons (as slots) and recommendation, and the best gait (``finished_only``: of
+    the iterations finished so far, without the best: a study that was stopped)."""
     st = study_status(directory)
     done = [t for t in st["trials"] if t["state"] == "COMPLETE"]
     by_number = {t["number"]: t for t in done}
@@ -493,19 +490,12 @@ def comparable(directory: Path) -> dict:  # type: ignore[type-arg]
     return {
         "trials": sorted(((t["iteration"], t["slot"]), {k: t[k] for k in keys}) for t in done),
         "iterations": [(it["proposals"], sorted((slot[w], slot[lo]) for w, lo in it["comparisons"]),
-                        it["best"]["grid_index"]) for it in st["iterations"]],
+                        it["best"]["grid_index"]) for it in st["iterations"] if it["done"] or not finished_only],
         "reused": sorted((slot[t["number"]], slot[t["reused_from"]]) for t in done if t["reused_from"] is not None
                          and t["reused_from"] in by_number),
-        "best": (st["best"]["params"], st["best"]["value"], st["best"]["estimate"], st["best"]["steps_taken"]),
+        "best": None if finished_only else (st["best"]["params"], st["best"]["value"], st["best"]["estimate"],
+                                            st["best"]["steps_taken"]),
     }
-
-
-def _completed(db: Path) -> int:
-    try:
-        with sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=5) as con:
-            return int(con.execute("select count(*) from trials where state = 'COMPLETE'").fetchone()[0])
-    except sqlite3.Error:
-        return 0
 
 
 @pytest.mark.slow
@@ -527,36 +517,26 @@ def test_status_reports_the_machine_use_of_a_run(tiny_study):
 
 
 @pytest.mark.slow
-def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path, tiny_study):
-    """kill -9 of `study run` (1 worker) after its first completed trial; `study resume` finishes it: every
-    trial exactly once, and the same gaits, outcomes, comparisons and best as the 2-worker reference."""
-    d = tmp_path / "study"
-    env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
-    proc = subprocess.Popen([sys.executable, "-m", "robustgait.cli", "study", "run", str(d), *CLI_TINY,
-                             "--workers", "1", "--quiet"], env=env, start_new_session=True,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        t0 = time.monotonic()
-        while _completed(d / "study.db") < 1:
-            assert proc.poll() is None, "the study ended before it could be killed"
-            assert time.monotonic() - t0 < 600
-            time.sleep(0.2)
-    finally:
-        os.killpg(proc.pid, signal.SIGKILL)  # the driver and its worker process
-        proc.wait()
-    st = study_status(d)
+def test_kill_9_then_resume_equals_an_uninterrupted_run(tmp_path, interrupted_study, tiny_study):
+    """kill -9 of `study run` in its second iteration (conftest's ``interrupted_study``: on Ray, 2 actors);
+    `study resume` (1 worker) finishes it: every trial exactly once, and the same gaits, outcomes, comparisons and best
+    as the uninterrupted 2-worker reference."""
+    st = study_status(interrupted_study["killed"])
     assert st["state"] == "stopped" and 1 <= st["trials_done"] < st["trials_planned"]
-    res = cli("study", "resume", str(d), "--workers", "1", "--quiet")
-    assert res.returncode == 0, res.stderr
+    interrupted = {t["number"] for t in st["trials"] if t["state"] == "RUNNING"}
+    resume = interrupted_study["facts"]["resume"]
+    assert resume["returncode"] == 0, resume["stderr"]
+    d = interrupted_study["study"]
     st = study_status(d)
     assert st["state"] == "complete" and st["trials_done"] == 6
     done = [(t["iteration"], t["slot"]) for t in st["trials"] if t["state"] == "COMPLETE"]
     assert sorted(done) == [(k, s) for k in range(2) for s in range(3)]  # each exactly once
     failed = [t for t in st["trials"] if t["state"] == "FAIL"]
     retried = {t["retry_of"] for t in st["trials"] if t["retry_of"] is not None}
-    assert {t["number"] for t in failed} == retried  # every interrupted trial was re-run
+    assert {t["number"] for t in failed} == retried == interrupted  # every interrupted trial was re-run
     assert comparable(d) == comparable(tiny_study)
-    again = cli("study", "resume", str(d), "--quiet")  # a finished study: nothing to do, nothing changes
+    d = shutil.copytree(d, tmp_path / "study")  # a finished study: nothing to do, nothing changes
+    again = cli("study", "resume", str(d), "--quiet")
     assert again.returncode == 0 and comparable(d) == comparable(tiny_study)
 
 
@@ -589,9 +569,11 @@ def test_report_video_is_what_the_configuration_says(tmp_path, exo, exo_gait):
 
 
 @pytest.mark.slow
-def test_status_report_and_compare(tmp_path, tiny_study):
-    study = tmp_path / "study"  # the report is written into the study: a copy of the shared one
-    shutil.copytree(tiny_study, study)
+def test_status_report_and_compare(tmp_path, reported_study):
+    """The tiny study's status, its report (conftest's ``reported_study``: written by ``study report --no-video``) and
+    ``study compare`` of the study with itself."""
+    study = tmp_path / "study"  # a copy of the shared one: nothing here may write into it
+    shutil.copytree(reported_study["study"], study)
     res = cli("study", "status", str(study), "--json")
     st = json.loads(res.stdout)
     assert st["trials_done"] == st["trials_planned"] == 6 and st["state"] == "complete"
@@ -619,9 +601,10 @@ def test_status_report_and_compare(tmp_path, tiny_study):
     again = cli("study", "run", str(study), *CLI_TINY)
     assert again.returncode == 2 and "study resume" in again.stderr
 
-    rep = cli("study", "report", str(study), "--no-video")
-    html = Path(rep.stdout.strip())
-    assert rep.returncode == 0, rep.stderr
+    rep = reported_study["report"]
+    assert rep["returncode"] == 0, rep["stderr"]
+    assert rep["stdout"].splitlines()[0].endswith("/report/index.html")  # made elsewhere: the copy's page
+    html = study / "report" / "index.html"
     page = html.read_text()
     assert page.count("data:image/png;base64,") >= 3 and "<img src=\"report/" not in page
     assert "What the passenger feels" in page and "cost of transport" in page
@@ -659,63 +642,49 @@ def stored_and_refitted_posterior(directory: Path) -> tuple[int, np.ndarray, np.
 
 
 @pytest.mark.slow
-def test_the_report_draws_the_posterior_the_study_stored_without_torch(tmp_path, tiny_study):
+def test_the_report_draws_the_posterior_the_study_stored_without_torch(tiny_study, reported_study):
     """The study stores the learner's posterior over the grid when it closes an iteration (the tiny study's gaits tie:
     the prior's zeros; a map with comparisons: tests/study/test_person_batches.py), and the report draws it without
-    importing torch."""
+    importing torch (conftest's ``reported_study``: ``study report`` in a fresh interpreter)."""
     k, stored, refit = stored_and_refitted_posterior(tiny_study)
     assert k == load_config(tiny_study).config.study.iterations - 1
     np.testing.assert_allclose(stored, refit, rtol=1e-6, atol=1e-12)
-    study = tmp_path / "study"
-    shutil.copytree(tiny_study, study)
-    code = ("import sys; from robustgait.config import ReportConfig; from robustgait.report.study import "
-            "write_study_report; write_study_report(sys.argv[1], ReportConfig(video=False)); "
-            "print('torch' in sys.modules)")
-    res = subprocess.run([sys.executable, "-c", code, str(study)], capture_output=True, text=True, check=False)
-    assert res.returncode == 0, res.stderr
-    assert res.stdout.strip().splitlines()[-1] == "False"
-    assert (study / "report" / "posterior.png").stat().st_size > 10_000
+    res = reported_study["report"]
+    assert res["returncode"] == 0, res["stderr"]
+    assert res["stdout"].strip().splitlines()[-1] == "False"
+    assert (reported_study["study"] / "report" / "posterior.png").stat().st_size > 10_000
 
 
 @pytest.mark.slow
-def test_ray_worker_killed_mid_task_is_retried(tmp_path, tiny_study):
-    """A Ray actor killed while it evaluates a gait: Ray restarts it and re-runs the task; the study
-    completes with the reference results."""
-    ray = pytest.importorskip("ray")
-    from robustgait.study.executors import RayExecutor, WorkerSpec
+def test_ray_worker_killed_mid_task_is_retried(interrupted_study, tiny_study):
+    """A Ray actor killed while it evaluates a gait (conftest's ``interrupted_study``): Ray restarts it and runs the
+    task again — the first iteration completes on Ray with no failed trial, none of its gaits from the killed actor
+    and one from the actor in its place, each the reference's; the study resumed on Ray completes with the reference
+    results (tests/study/test_study.py's kill -9 test checks the resume)."""
+    from robustgait.study.run import open_store
 
-    d = tmp_path / "study"
-    create_study(d, "exo", TINY)
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
+    facts = interrupted_study["facts"]
+    assert len(facts["actors"]) == 2 and facts["killed_actor"] in facts["actors"]
+    assert facts["restarted"] and not set(facts["restarted"]) & set(facts["actors"])  # the actor was restarted
+    killed = interrupted_study["killed"]
+    setup = load_config(killed)
+    store = open_store(killed, setup, setup.action_space())
     try:
-        ex = RayExecutor(WorkerSpec("exo", to_dict(TINY)), workers=2)
-        pids = ex.pids()
-        killed: list[int] = []
-
-        def killer() -> None:  # once a trial is RUNNING, kill the actor that holds it
-            t0 = time.monotonic()
-            while time.monotonic() - t0 < 300:
-                with sqlite3.connect(f"file:{d / 'study.db'}?mode=ro", uri=True, timeout=5) as con:
-                    running = con.execute("select count(*) from trials where state = 'RUNNING'").fetchone()[0]
-                if running:
-                    time.sleep(1.0)  # mid-task: generation takes ≈ 1–2 s
-                    os.kill(pids[0], signal.SIGKILL)
-                    killed.append(pids[0])
-                    return
-                time.sleep(0.1)
-
-        th = threading.Thread(target=killer)
-        th.start()
-        run_study(d, progress=False, executor=ex)
-        th.join()
-        assert killed, "no actor was killed"
-        assert pids[0] not in ex.pids()  # the actor was restarted
-        ex.close()
+        records = store.records()
     finally:
-        ray.shutdown()
-    st = study_status(d)
+        store.close()
+    assert not [r for r in records if r.state == "FAIL"]  # Ray ran the task again: the study saw no failure
+    first = [r for r in records if r.state == "COMPLETE" and r.iteration == 0]
+    assert sorted(r.slot for r in first) == [0, 1, 2]
+    pids = {(r.result or {})["worker"]["pid"] for r in records if r.state == "COMPLETE"}
+    assert facts["killed_actor"] not in pids and pids & set(facts["restarted"])
+    ref = comparable(tiny_study)
+    ray = comparable(killed, finished_only=True)
+    assert ray["trials"] and all(t in ref["trials"] for t in ray["trials"])
+    assert ray["iterations"] == ref["iterations"][:1]
+    st = study_status(interrupted_study["study"])
     assert st["state"] == "complete" and st["trials_done"] == 6
-    assert comparable(d) == comparable(tiny_study)
+    assert comparable(interrupted_study["study"]) == ref
 
 
 def test_the_progress_bar_and_status_say_a_refused_gait_is_refused():

@@ -14,7 +14,6 @@ import math
 import shutil
 import time
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,10 +26,11 @@ from robustgait.config import GaitParams, OrbitConfig, StudyConfig, ValidateConf
 from robustgait.sim import walk
 from robustgait.study.evaluate import Evaluation
 from robustgait.study.run import StudyRunner, create_study, open_store
+from robustgait.study.status import study_status
 from robustgait.study.validate import RUNS_DIR, VALIDATION_DIR, config_key, validate_study
 from robustgait.validate import spearman
 from tests.conftest import EXO_GAIT, EXO_MC_GAIT
-from tests.study.test_study import TINY, cli
+from tests.study.test_study import TINY
 
 SMALL = ValidateConfig(trials=8, steps_after=3)
 CAP = TINY.sim.step_cap
@@ -273,17 +273,15 @@ def test_a_changed_gait_file_is_validated_again(small_study, first_run):
 
 
 @pytest.mark.slow
-def test_study_validate_on_a_study_run_end_to_end(tmp_path, tiny_study):
-    """A study made by ``study run`` (conftest's ``tiny_study``: 2 × 3 gaits, generated, walked and certified,
-    copied), then ``study validate`` with 2 worker processes; again with 1 process after removing the stored results:
-    identical (the rollout's thread count does not change results); the report shows the scatter."""
-    d = tmp_path / "study"
-    shutil.copytree(tiny_study, d)
-    args = ("study", "validate", str(d), "--trials", "8", "--steps-after", "3", "--json", "--quiet")
-    two = cli(*args, "--workers", "2")
-    assert two.returncode == 0, two.stderr
-    a = json.loads(two.stdout)["push"]
-    st = json.loads(cli("study", "status", str(d), "--json").stdout)
+def test_study_validate_on_a_study_run_end_to_end(reported_study):
+    """A study made by ``study run`` (conftest's ``tiny_study``: 2 × 3 gaits, generated, walked and certified), then
+    ``study validate`` with 2 worker processes; again with 1 process after removing the stored results: identical (the
+    rollout's thread count does not change results); the report shows the scatter (conftest's ``reported_study``)."""
+    d = reported_study["study"]
+    two, one = reported_study["validate"]
+    assert two["returncode"] == 0, two["stderr"]
+    a = json.loads(two["stdout"])["push"]
+    st = study_status(d)
     assert a["n_validated"] + len(a["skipped"]) == st["unique_gaits"] and a["n_validated"] >= 1
     for key, c in a["correlations"].items():
         # J* against the success rate of every validated gait; value_critical against s₅₀ of the gaits
@@ -300,14 +298,14 @@ def test_study_validate_on_a_study_run_end_to_end(tmp_path, tiny_study):
             assert math.isclose(c["rho"], ref.statistic) and math.isclose(c["p"], ref.pvalue)
         else:
             assert c["rho"] is None and c["reason"]
-    shutil.rmtree(d / VALIDATION_DIR / RUNS_DIR)
-    one = cli(*args, "--workers", "1")
-    b = json.loads(one.stdout)["push"]
+    assert one["returncode"] == 0, one["stderr"]
+    b = json.loads(one["stdout"])["push"]
     assert b["n_from_earlier_runs"] == 0
     strip = ("from_earlier_run", "seconds")
     assert [{k: v for k, v in r.items() if k not in strip} for r in a["gaits"]] == \
         [{k: v for k, v in r.items() if k not in strip} for r in b["gaits"]]
-    rep = cli("study", "report", str(d), "--no-video")
-    assert rep.returncode == 0, rep.stderr
-    page = Path(rep.stdout.strip()).read_text()
+    rep = reported_study["report"]
+    assert rep["returncode"] == 0, rep["stderr"]
+    assert rep["stdout"].splitlines()[0].endswith("/report/index.html")  # made elsewhere (renamed into place)
+    page = (d / "report" / "index.html").read_text()
     assert "Validation: push" in page and (d / "report" / "validation_push.png").stat().st_size > 10_000
