@@ -7,12 +7,15 @@ the video's render settings cost. Three measurements in one run, on one study di
    after / before. Both write ``DIR/report/``.
 2. **Phase by phase**, this checkout in process, with the configuration's defaults
    (:class:`robustgait.config.ReportConfig`), then with the video settings before them (:data:`OLD_VIDEO`: 8 steps,
-   480 × 360, 30 fps, shadows and reflections, the model's multisampling): the study's status, the recommended
-   gaits' verification, each figure, the comfort, Pareto and validation parts, the walk for the video, its frames
-   (ms each: ``robustgait.sim.walk.video_frames``), their encoding (``write_video`` less the frames drawn inside
-   it); the rest of ``write_study_report`` is "other". The report's functions are wrapped with timers; nothing is
-   copied from the package. Both come after a warm-up (the report without its video: the imports made inside the
-   report's functions, which ``robustgait demo`` has made by its report), timed too.
+   480 × 360, 30 fps, shadows and reflections, the model's multisampling): the public functions the report is made
+   of, each called alone in the report's order — the study's status, the recommended gaits' verification
+   (``verify_recommended``), the three figures (``plot_history``, ``plot_explored``, ``plot_posterior``), the walk
+   for the video, its frames (ms each: ``robustgait.sim.walk.video_frames``) and their encoding (``write_video``) —
+   then ``write_study_report`` without its video; its seconds less the status's and the three figures' are "the
+   rest" (the certificate figure, the person, comfort, Pareto and validation parts, the page; the verification is
+   done by then), and the report's total is its seconds without the video plus the video's parts. Nothing in the
+   package is wrapped or replaced. Both come after a warm-up (the report without its video: the imports made
+   inside the report's functions, which ``robustgait demo`` has made by its report), timed too.
 3. **The video's frames alone** (``video_frames``) on the walks the report renders (the best gait), with
    :data:`OLD_VIDEO` and the configuration's settings, interleaved ``--repeat`` times: frames, median ms a frame,
    and the ratio of the two's seconds per video; and their encoding (this checkout's encoder for both).
@@ -27,8 +30,6 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import functools
-import importlib
 import os
 import statistics
 import subprocess
@@ -36,7 +37,7 @@ import sys
 import tempfile
 import time
 from collections import defaultdict
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -86,94 +87,67 @@ def commands(directory: Path, before: Path | None, repeat: int) -> None:
         print(f"  after / before: {statistics.median(times['after']) / statistics.median(times['before']):.2f}")
 
 
-class Phases:
-    """Timers wrapped around module attributes: seconds and calls per phase, nested phases subtracted from the
-    phase that called them (``exclusive``)."""
-
-    def __init__(self) -> None:
-        self.seconds: dict[str, float] = defaultdict(float)
-        self.calls: dict[str, int] = defaultdict(int)
-        self._stack: list[float] = []  # the time spent in nested phases, per open phase
-        self._undo: list[tuple[object, str, object]] = []
-
-    def wrap(self, module: object, name: str, phase: str | None = None) -> None:
-        """Time ``module.name`` as ``phase`` (default: ``name``); a missing attribute is skipped."""
-        fn = getattr(module, name, None)
-        if fn is None:
-            return
-        self._undo.append((module, name, fn))
-        setattr(module, name, self._timed(fn, phase or name))
-
-    def _timed(self, fn: Callable[..., Any], phase: str) -> Callable[..., Any]:
-        @functools.wraps(fn)
-        def timed(*args: Any, **kwargs: Any) -> Any:
-            self._stack.append(0.0)
-            t0 = time.perf_counter()
-            try:
-                return fn(*args, **kwargs)
-            finally:
-                self.add(phase, time.perf_counter() - t0)
-        return timed
-
-    def add(self, phase: str, total: float) -> None:
-        """Book ``total`` seconds (its nested phases' included) to ``phase``, exclusive of them."""
-        nested = self._stack.pop()
-        self.seconds[phase] += total - nested
-        self.calls[phase] += 1
-        if self._stack:
-            self._stack[-1] += total
-
-    def frames(self, gen: Iterator[Any]) -> Iterator[Any]:
-        """``gen`` with each frame's drawing booked to the phase ``frames``."""
-        while True:
-            self._stack.append(0.0)
-            t0 = time.perf_counter()
-            try:
-                frame = next(gen)
-            except StopIteration:
-                self.add("frames", time.perf_counter() - t0)
-                self.calls["frames"] -= 1
-                return
-            self.add("frames", time.perf_counter() - t0)
-            yield frame
-
-    def undo(self) -> None:
-        for module, name, fn in reversed(self._undo):
-            setattr(module, name, fn)
+def timed(seconds: dict[str, float], phase: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+    """``fn(*args, **kwargs)``, its wall seconds added to ``seconds[phase]``."""
+    t0 = time.perf_counter()
+    try:
+        return fn(*args, **kwargs)
+    finally:
+        seconds[phase] += time.perf_counter() - t0
 
 
 def phases(directory: Path, config: ReportConfig, label: str) -> None:
-    """Measurement 2: this checkout's report, phase by phase, with ``config``."""
-    import robustgait.report.study as rs
-    import robustgait.sim as sim
-    import robustgait.study.status as st
+    """Measurement 2: this checkout's report, phase by phase, with ``config``: each public function the report is
+    made of, called alone in the report's order, then the report without its video; its seconds less the status's
+    and the figures' are "the rest" (the verification is done by then). Nothing in the package is wrapped or
+    replaced."""
+    from robustgait.report.study import (
+        plot_explored,
+        plot_history,
+        plot_posterior,
+        verify_recommended,
+        write_study_report,
+    )
+    from robustgait.study.status import study_status
 
-    sw: Any = importlib.import_module("robustgait.sim.walk")  # the module (robustgait.sim's ``walk`` is a function)
+    seconds: dict[str, float] = defaultdict(float)
+    frames = 0
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp)
+        status = timed(seconds, "status", study_status, directory)
+        if timed(seconds, "verification", verify_recommended, directory, status, config.pareto_figure):
+            status = timed(seconds, "status", study_status, directory)
+        timed(seconds, "plot_history", plot_history, status, out / "history.png")
+        timed(seconds, "plot_explored", plot_explored, status, out / "explored.png")
+        if status["best"] is not None:
+            timed(seconds, "plot_posterior", plot_posterior, directory, status, config.axes, out / "posterior.png")
+        if config.video and status["best"] is not None and status["best"].get("gait_file"):
+            from robustgait.io.gaitfile import load_gait
+            from robustgait.io.robotfile import load_robot
+            from robustgait.sim.walk import video_frames, walk, write_video
 
-    ph = Phases()
-    for name in ("plot_history", "plot_explored", "plot_posterior", "plot_certificate", "person_parts",
-                 "_comfort_parts", "pareto_parts", "_validation_parts", "verify_recommended", "_page"):
-        ph.wrap(rs, name)
-    ph.wrap(st, "study_status")
-    ph.wrap(sim, "walk", "walk for the video")
-    ph.wrap(sw, "write_video", "encoding")
-    frames = sw.video_frames
-    sw.video_frames = lambda *a, **k: ph.frames(frames(*a, **k))
-    ph.wrap(rs, "write_study_report", "other")
-    try:
-        t0 = time.perf_counter()
-        rs.write_study_report(directory, config)
-        total = time.perf_counter() - t0
-    finally:
-        sw.video_frames = frames
-        ph.undo()
+            robot = load_robot(status["robot"])
+            gait = load_gait(directory / status["best"]["gait_file"], robot)
+            w = timed(seconds, "walk for the video", walk, robot, gait, steps=config.video_steps,
+                      keep_trajectory=True)
+            images = timed(seconds, "frames", lambda: list(video_frames(
+                robot, w.trajectory, fps=config.video_fps, width=config.video_width, height=config.video_height,
+                shadows=config.video_shadows, antialias=config.video_antialias)))
+            frames = timed(seconds, "encoding", write_video, images, out / "best.mp4", config.video_fps)
+    t0 = time.perf_counter()
+    write_study_report(directory, replace(config, video=False))
+    without = time.perf_counter() - t0
+    video = sum(seconds[k] for k in ("walk for the video", "frames", "encoding"))
+    rest = without - sum(v for k, v in seconds.items() if k in ("status", "plot_history", "plot_explored",
+                                                                "plot_posterior"))
     c = config
-    print(f"2. write_study_report in process, phase by phase, {label} (video {c.video_steps} steps, {c.video_width} "
-          f"× {c.video_height}, {c.video_fps} fps, shadows {c.video_shadows}, antialias {c.video_antialias}): "
-          f"{total:.2f} s")
-    for name, s in sorted(ph.seconds.items(), key=lambda kv: -kv[1]):
-        each = f", {1e3 * s / ph.calls[name]:.1f} ms each" if name == "frames" else ""
-        print(f"  {name:<22} {s:6.2f} s  ({ph.calls[name]} calls{each})")
+    print(f"2. write_study_report in process, {label} (video {c.video_steps} steps, {c.video_width} × "
+          f"{c.video_height}, {c.video_fps} fps, shadows {c.video_shadows}, antialias {c.video_antialias}): "
+          f"{without + video:.2f} s = the report without its video {without:.2f} s + the video's parts "
+          f"{video:.2f} s; its public parts alone, in its order:")
+    for name, v in [*seconds.items(), ("the rest", rest)]:
+        each = f", {1e3 * v / frames:.1f} ms each ({frames} frames)" if name == "frames" and frames else ""
+        print(f"  {name:<22} {v:6.2f} s{each}")
 
 
 def frames_alone(directory: Path, repeat: int) -> None:

@@ -519,6 +519,21 @@ def test_walk_reports_its_controller_tracking_and_saturation(exo, exo_gait):
     assert 0 < a["rms"] < a["max"] < 0.05
 
 
+
+def test_walk_fills_the_tracking_totals_it_is_given(exo, exo_gait):
+    """``walk(..., tracking=stats)`` adds the walk's tracking to ``stats`` (its per-joint totals, for a caller such as
+    benchmarks/experiments/robot_grid) and changes nothing in the result."""
+    from robustgait.config import SimConfig
+    from robustgait.sim.controller import TrackingStats
+
+    stats = TrackingStats()
+    given = walk(exo, exo_gait, SimConfig(), steps=3, tracking=stats)
+    plain = walk(exo, exo_gait, SimConfig(), steps=3)
+    assert given.tracking == plain.tracking == stats.summary()
+    assert stats.saturation is not None and stats.saturation.shape == (len(exo.spec.joints),)
+    assert given.steps_taken == plain.steps_taken == 3
+    assert [(e.qpos, e.qvel) for e in given.events] == [(e.qpos, e.qvel) for e in plain.events]
+
 def test_cli_controller_errors_are_one_line(exo, tmp_path, capsys):
     from robustgait.cli import main
     from tests.conftest import EXO_GAIT

@@ -16,9 +16,9 @@ exploration alone, with the verification radius its curve gives at each pass pro
 ties (pairs of different gaits whose Ĵ agree to 1e-9), the cost ratio and CPU yardsticks (median, max), J*'s
 coefficient of variation over seeds; with ``--s50`` the Spearman ρ of Ĵ and of J* with each gait's push s₅₀
 (``validate``) and of Ĵ with J*; with ``--before`` (rows with a ``full`` certificate of the same gaits, e.g.
-``verify_margin/data/exo77.jsonl`` at 55d9b54, the nearest fall's estimator) the same for it and J* / J*_before per
-gait (median and quartiles). ``calibrate``: the verification radii of ``--explore-only`` rows against dense fresh
-pushes of the same gaits (``verify_margin`` rows).
+``data/before_exo77.jsonl``: the deleted ``verify_margin`` experiment's rows at 55d9b54, the nearest fall's
+estimator) the same for it and J* / J*_before per gait (median and quartiles). ``calibrate``: the verification radii
+of ``--explore-only`` rows against dense fresh pushes of the same gaits (``data/before_*.jsonl`` rows).
 
     python benchmarks/experiments/fall_curve/run.py run --robot exo \\
         --from-jsonl benchmarks/experiments/predictors/data/exo.jsonl --out data/exo77.jsonl
@@ -26,7 +26,7 @@ pushes of the same gaits (``verify_margin`` rows).
     python benchmarks/experiments/fall_curve/run.py run --robot exo --gait tests/data/exo_gait.json --seeds 5 \\
         --out data/seeds.jsonl
     python benchmarks/experiments/fall_curve/run.py report data/exo77.jsonl \\
-        --before ../verify_margin/data/exo77.jsonl --s50 ../predictors/data/exo.jsonl
+        --before data/before_exo77.jsonl --s50 ../predictors/data/exo.jsonl
 """
 
 from __future__ import annotations
@@ -230,7 +230,7 @@ def cmd_report(args: argparse.Namespace) -> None:
 def cmd_calibrate(args: argparse.Namespace) -> None:
     """Per pass probability of :data:`LEVELS`: the verification radius of each gait's fitted curve (``--explore-only``
     rows) against fresh pushes at the statement's settings uniform in a disk around it (``--dense``: rows with
-    ``size``/``fell``, e.g. ``verify_margin/data/exo77.jsonl``): the gaits with a dense push that fell inside their
+    ``size``/``fell``, e.g. ``data/before_exo77.jsonl``): the gaits with a dense push that fell inside their
     radius (such a gait's batch of 154 would fail with probability at least 1 − (1 − 1/k)^154), the pooled falling share
     inside the radii and the first-batch pass rate it implies, (1 − V̄)^154 averaged over gaits by their own V̂ and
     pooled; and J*(level) / J*_before (``full`` of the dense rows)."""

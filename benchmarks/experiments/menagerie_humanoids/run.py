@@ -31,6 +31,10 @@ push drawn below J* (``validate.push_dv_max`` = J* / m, so the impulses are unif
 default Δv_max, where few land below J* on a robot whose J* is small against its mass): pushes, falls within 20 steps,
 and the falls' upper 95 % bound, as one JSON line.
 
+``report [--data DIR]``: the current table, one line per robot, from ``DIR/pipeline.jsonl``, ``DIR/checkgrid.jsonl``
+and ``DIR/promise.jsonl`` (default: this experiment's ``data/``): each robot's latest ``run``, ``checkgrid`` and
+``promise`` rows, each with the commit it was measured at. A new measurement replaces that robot's rows there.
+
 ``growth SPEC GAIT``: the regulator's own growth probe (:func:`robustgait.sim.regulator.lateral_growth`) under
 each share κ of ``--shares``: how much a lateral CoM error grows per step (``fell``: a probe walk fell) — does the
 ankle hold it, or does it grow as on a point foot (e^{λT} per step)?
@@ -258,6 +262,39 @@ def growth(spec: Path, gait_path: Path, shares: list[float]) -> list[dict[str, A
     return rows
 
 
+def _commits(rows: list[dict[str, Any]]) -> str:
+    return ", ".join(sorted({str(r.get("commit")) for r in rows}))
+
+
+def report(data: Path) -> None:
+    """The current table (module docstring, ``report``)."""
+    def read(name: str) -> dict[str, list[dict[str, Any]]]:
+        out: dict[str, list[dict[str, Any]]] = {}
+        for line in (data / name).read_text().splitlines():
+            if line.strip():
+                row = json.loads(line)
+                out.setdefault(row["robot"], []).append(row)
+        return out
+
+    pipeline, grid, promised = read("pipeline.jsonl"), read("checkgrid.jsonl"), read("promise.jsonl")
+    print("| robot | check failed | walk 300 | J* [N s] | validate: below J* fell | run at | 200 drawn below J* "
+          "fell (upper 95 %) | at | grid: walk 300 steps | at |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for robot, (p, *_) in pipeline.items():
+        check, walked, cert, val = (p.get(k) or {} for k in ("check", "walk", "certify", "validate"))
+        j = cert.get("j_star")
+        inside = f"{val['inside_fell']} of {val['inside']}" if val.get("inside") is not None else "—"
+        pr = promised.get(robot, [])
+        drawn = (f"{sum(r['below_j_star_fell'] for r in pr)} of {sum(r['below_j_star'] for r in pr)} "
+                 f"({max(r['fell_upper_95'] for r in pr):.2%})") if pr else "not measured"
+        g = grid.get(robot, [])
+        ok = sum(1 for r in g if (r.get("walk") or {}).get("steps_taken", 0) >= 300)
+        print(f"| {p['name']} | {', '.join(check.get('failed') or []) or 'none'} | "
+              f"{walked.get('steps_taken', '—')} | {'refused' if j is None else f'{j:.3f}'} | {inside} | "
+              f"{p.get('commit')} | {drawn} | {_commits(pr) if pr else '—'} | "
+              f"{f'{ok} of {len(g)}' if g else 'not measured'} | {_commits(g) if g else '—'} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -288,6 +325,8 @@ def main() -> None:
     pr.add_argument("cert", type=Path)
     pr.add_argument("--trials", type=int, default=200)
     pr.add_argument("--label", default="")
+    rp = sub.add_parser("report")
+    rp.add_argument("--data", type=Path, default=Path(__file__).resolve().parent / "data")
     g = sub.add_parser("growth")
     g.add_argument("spec", type=Path)
     g.add_argument("gait", type=Path)
@@ -305,6 +344,8 @@ def main() -> None:
         study_evaluate(args.spec, args.params)
     elif args.cmd == "sweep":
         sweep(args.spec, args.durations, args.widths, args.shares, args.steps)
+    elif args.cmd == "report":
+        report(args.data)
     elif args.cmd == "promise":
         print(json.dumps(promise(args.spec, args.gait, args.cert, args.trials, args.label or str(args.spec))))
     else:

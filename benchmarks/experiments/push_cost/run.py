@@ -217,7 +217,7 @@ def cmd_push_sweep(args: argparse.Namespace) -> None:
         pm = PushMap(engine, orbit.qpos, orbit.qvel, orbit.band, vcfg, cfg.push)
         t0 = time.perf_counter()
         cert = certify_map_sequential(pm, np.zeros(2), cfg)
-        j_star = cert.value
+        j_star = cert.radius
         d = np.linalg.norm(cert.samples, axis=1)
         near = np.flatnonzero(cert.fell & (d < args.near * j_star))
         attempts = sum(r.kind == "verify" for r in cert.rounds)

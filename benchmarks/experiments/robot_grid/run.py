@@ -33,7 +33,6 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import argparse
 import dataclasses
 import json
-import sys
 import tempfile
 import time
 from collections import Counter
@@ -86,27 +85,13 @@ def _init(spec: str) -> None:
     _STATE.update(robot=robot, gen=GaitGenerator(robot))
 
 
-def per_joint_stats() -> Any:
-    """A :class:`TrackingStats` whose summary also gives each joint's saturation fraction and largest error (the
-    benchmark puts it in the walk's place: which servo saturates is what a failing point needs said)."""
-    from robustgait.sim.controller import TrackingStats
-
-    class PerJoint(TrackingStats):
-        def summary(self) -> dict[str, Any]:
-            out: dict[str, Any] = dict(super().summary())
-            if self.saturation is not None and self.error_max is not None:
-                out["joint_saturation"] = (self.saturation / max(self.steps, 1)).tolist()
-                out["joint_max"] = self.error_max.tolist()
-            return out
-
-    return PerJoint
-
-
-def worst_joints(robot: Any, tracking: dict[str, Any]) -> dict[str, Any]:
-    """The joint with the most saturation and the one with the largest error (names, fraction, rad)."""
-    if "joint_saturation" not in tracking:
+def worst_joints(robot: Any, stats: Any) -> dict[str, Any]:
+    """The joint with the most saturation and the one with the largest error (names, fraction, rad), from the walk's
+    per-joint totals (a :class:`robustgait.sim.controller.TrackingStats` passed to ``walk``): which servo saturates
+    is what a failing point needs said."""
+    if stats.saturation is None or stats.error_max is None:
         return {}
-    sat, err = np.asarray(tracking["joint_saturation"]), np.asarray(tracking["joint_max"])
+    sat, err = stats.saturation / max(stats.steps, 1), stats.error_max
     names = robot.spec.joints
     i, k = int(np.argmax(sat)), int(np.argmax(err))
     return {"sat_joint": names[i], "sat_joint_fraction": float(sat[i]), "max_joint": names[k]}
@@ -118,6 +103,7 @@ def point(index: int, steps: int) -> dict[str, Any]:
     from robustgait.certificate import Walked, find_orbit
     from robustgait.config import CertifyConfig, SimConfig
     from robustgait.learn.space import ActionSpace
+    from robustgait.sim.controller import TrackingStats
 
     robot, gen = _STATE["robot"], _STATE["gen"]
     params = ActionSpace.from_robot(robot, "flat").params(index)
@@ -130,13 +116,12 @@ def point(index: int, steps: int) -> dict[str, Any]:
         out.update(outcome="nosolve", reason=res.reason[:200])
         return out
     t1 = time.perf_counter()
-    # the module (robustgait.sim.walk the attribute is the function): the benchmark's per-joint counts
-    setattr(sys.modules[walk.__module__], "TrackingStats", per_joint_stats())  # noqa: B010
-    w = walk(robot, res.gait, SimConfig(step_cap=steps))
+    stats = TrackingStats()  # the walk's per-joint totals, for worst_joints
+    w = walk(robot, res.gait, SimConfig(step_cap=steps), tracking=stats)
     out.update(steps=w.steps_taken, fall=w.fall_reason, walk_seconds=round(time.perf_counter() - t1, 2),
                rms=w.tracking.get("rms"), max=w.tracking.get("max"),
                saturation=w.tracking.get("saturation_fraction"), speed=w.mean_speed,
-               **worst_joints(robot, w.tracking))
+               **worst_joints(robot, stats))
     if w.steps_taken < steps:
         out["outcome"] = "fell"
         return out

@@ -25,14 +25,14 @@ from pathlib import Path
 
 from robustgait import load_gait, load_robot
 from robustgait.config import Config, RobotConfig
-from robustgait.robotinit.timestep import Walked, default_gait, ms, select_timestep
+from robustgait.robotinit.timestep import TimestepWalk, default_gait, ms, select_timestep
 from robustgait.robots import Robot
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # benchmarks/common.py
 from common import git_commit
 
 
-def walk_text(w: Walked) -> str:
+def walk_text(w: TimestepWalk) -> str:
     return w.describe() + f", {w.steps} steps"
 
 

@@ -1,9 +1,11 @@
 """Where a certificate's and a study evaluation's time goes, as seconds and physics steps, in one run.
 
 ``certify``: the default certificate of ``--gait`` on ``--robot`` — the engine's construction, the orbit search (its
-walk and the stability probe), each round of pushes (exploration or verification; pushes, physics steps, seconds,
-steps per push), the recovery band's share (the stop rule's seconds), the certificate's JSON, and the simulated
-steps/s against MuJoCo's raw single-thread speed on the same model (``mj_step`` under the step's controls).
+walk and the stability probe), the pushes (seconds, physics steps — the verification batches' among them — and
+steps per push; each round's kind, size and verdict), the certificate's JSON, and the simulated steps/s against
+MuJoCo's raw single-thread speed on the same model (``mj_step`` under the step's controls). Every figure is the
+certificate's own (``GaitCertificate.seconds``, its physics-step counts, its rounds) or timed around a public call:
+nothing in the package is wrapped or replaced.
 
 ``evaluate``: one study evaluation of ``--params`` (L T W h) with a generator built once (as a study worker):
 generation, the walk to the step cap, the certificate (``Evaluation.seconds``).
@@ -26,7 +28,6 @@ import mujoco
 import numpy as np
 
 from robustgait import CertifyConfig, Config, GaitParams, SimConfig, certify_gait, load_gait, load_robot
-from robustgait.certificate import push as push_module
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine
 
@@ -52,37 +53,11 @@ def raw_speed(robot: Robot, gait: Any, qpos: np.ndarray, qvel: np.ndarray) -> fl
 
 
 def profile_certify(robot: Robot, gait: Any) -> dict[str, Any]:
-    calls: list[dict[str, Any]] = []
-    stop_seconds = [0.0]
-    orig_call, orig_stop = push_module.PushMap.__call__, push_module.recovery_stop
-
-    def call(self: Any, impulse: np.ndarray, progress: Any = None) -> Any:
-        t0, p0 = time.perf_counter(), self.physics_steps
-        out = orig_call(self, impulse, progress)
-        calls.append({"pushes": int(np.atleast_2d(impulse).shape[0]), "physics": self.physics_steps - p0,
-                      "seconds": time.perf_counter() - t0, "fell": int((self.fall_step[-1] > 0).sum()),
-                      "recovered": int((self.recovered[-1] > 0).sum())})
-        return out
-
-    def stop_rule(*a: Any, **k: Any) -> Any:
-        inner = orig_stop(*a, **k)
-
-        def timed(*b: Any) -> Any:
-            t0 = time.perf_counter()
-            out = inner(*b)
-            stop_seconds[0] += time.perf_counter() - t0
-            return out
-        return timed
-
-    push_module.PushMap.__call__ = call  # type: ignore[method-assign]
-    push_module.recovery_stop = stop_rule  # type: ignore[assignment]
-    try:
-        t0 = time.perf_counter()
-        cert = certify_gait(robot, gait, CertifyConfig(), SimConfig())
-        total = time.perf_counter() - t0
-    finally:
-        push_module.PushMap.__call__ = orig_call  # type: ignore[method-assign]
-        push_module.recovery_stop = orig_stop
+    """The default certificate of ``gait``, timed from outside, split by what the certificate itself reports
+    (``GaitCertificate.seconds``, its physics-step counts and its rounds): nothing in the package is wrapped."""
+    t0 = time.perf_counter()
+    cert = certify_gait(robot, gait, CertifyConfig(), SimConfig())
+    total = time.perf_counter() - t0
     t0 = time.perf_counter()
     text = json.dumps(cert.to_dict())
     io_seconds = time.perf_counter() - t0
@@ -90,8 +65,8 @@ def profile_certify(robot: Robot, gait: Any) -> dict[str, Any]:
     rounds = [] if c is None else [(r.kind, r.n_samples, r.passed) for r in c.rounds]
     out = {"status": cert.status.value, "j_star": cert.value, "total_s": total, "orbit_s": cert.seconds["orbit"],
            "orbit_physics": cert.orbit_physics_steps, "sampling_s": cert.seconds["sampling"],
-           "sampling_physics": cert.physics_steps, "pushes": sum(x["pushes"] for x in calls), "calls": calls,
-           "stop_s": stop_seconds[0], "json_s": io_seconds, "json_bytes": len(text), "rounds": rounds,
+           "sampling_physics": cert.physics_steps, "verify_physics": cert.verify_physics_steps,
+           "pushes": sum(n for _, n, _ in rounds), "json_s": io_seconds, "json_bytes": len(text), "rounds": rounds,
            "period": cert.orbit.period if cert.orbit else None}
     if cert.orbit is not None and cert.orbit.qpos is not None:
         out["raw_steps_per_s_1thread"] = raw_speed(robot, gait, cert.orbit.qpos, cert.orbit.qvel)
@@ -137,12 +112,11 @@ def main() -> None:
     print(f"certificate: {c['status']}, J* {c['j_star']:.3f} N s, {c['total_s']:.1f} s, {steps / 1e6:.2f} M physics "
           f"steps ({steps / c['total_s']:.0f} steps/s; MuJoCo alone, 1 thread: {raw:.0f})")
     print(f"  orbit search: {c['orbit_s']:.1f} s, {c['orbit_physics'] / 1e6:.3f} M steps (period {c['period']})")
-    print(f"  pushes: {c['pushes']} in {len(c['calls'])} calls, {c['sampling_s']:.1f} s, "
-          f"{c['sampling_physics'] / 1e6:.2f} M steps, {c['sampling_physics'] / max(c['pushes'], 1):.0f} steps/push; "
-          f"recovery rule {c['stop_s']:.2f} s; certificate JSON {c['json_s'] * 1e3:.0f} ms")
-    for x in c["calls"]:
-        print(f"    {x['pushes']:4d} pushes  {x['physics'] / 1e3:7.1f} k steps  {x['seconds']:5.2f} s  fell "
-              f"{x['fell']:3d}  recovered {x['recovered']:3d}")
+    print(f"  pushes: {c['pushes']} in {len(c['rounds'])} rounds, {c['sampling_s']:.1f} s, "
+          f"{c['sampling_physics'] / 1e6:.2f} M steps ({c['verify_physics'] / 1e6:.2f} M of them verification), "
+          f"{c['sampling_physics'] / max(c['pushes'], 1):.0f} steps/push; certificate JSON {c['json_s'] * 1e3:.0f} ms")
+    for kind, n, passed in c["rounds"]:
+        print(f"    {kind:<8} {n:4d} pushes" + ("" if passed is None else f"  passed {passed}"))
     if args.params:
         row["evaluate"] = profile_evaluate(args.robot, args.params)
         print(f"evaluation {args.params}: generator build {row['evaluate']['build_s']:.1f} s, then "

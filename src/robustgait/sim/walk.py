@@ -159,7 +159,8 @@ def _take_step(eng: StepEngine, run: _Run, i: int, stance: str, stats: TrackingS
 def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: int | None = None,
          keep_trajectory: bool = False, video: str | Path | None = None,
          engine: StepEngine | None = None, comfort: ComfortConfig | None = None,
-         until: Callable[[list[SwitchEvent]], bool] | None = None) -> WalkResult:
+         until: Callable[[list[SwitchEvent]], bool] | None = None,
+         tracking: TrackingStats | None = None) -> WalkResult:
     """Walk ``gait`` from its initial state for up to ``steps`` steps (default ``config.step_cap``), switching
     stance at each event.
 
@@ -177,6 +178,10 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
 
     ``comfort``: measure what a passenger feels over the steps it names (:mod:`robustgait.sim.comfort`,
     ``WalkResult.comfort``); None: not measured.
+
+    ``tracking``: the :class:`TrackingStats` this walk's tracking is added to (None: a fresh one). Passing one
+    changes nothing in the walk or its result (``WalkResult.tracking`` is its ``summary()`` either way, so pass an
+    empty one); it lets the caller read the per-joint totals (``saturation``, ``error_max``, ``rms``) afterwards.
     """
     config = config or SimConfig()
     steps = config.step_cap if steps is None else steps
@@ -190,7 +195,7 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
     recorder = ComfortRecorder(comfort, robot.dt) if comfort is not None else None
     own = engine is None
     eng = engine or make_engine(robot, gait, config)
-    stats = TrackingStats()
+    stats = TrackingStats() if tracking is None else tracking
     try:
         first = eng.gaits[gait.stance].initial_state  # in the model's size (Gait.closed)
         assert first is not None
