@@ -63,7 +63,7 @@ def measure(job: dict[str, Any]) -> dict[str, Any]:
     """One gait's row (module docstring, ``run``)."""
     from robustgait import SimConfig, load_gait, load_robot
     from robustgait.certificate.certify import certify_gait
-    from robustgait.certificate.verification import verification_size
+    from robustgait.certificate.verification import attempt_size
     from robustgait.config import CertifyConfig, GaitParams, GenerationConfig
     from robustgait.gaitgen import generate_gait
 
@@ -94,7 +94,7 @@ def measure(job: dict[str, Any]) -> dict[str, Any]:
     verify_physics = getattr(gc, "verify_physics_steps", 0)  # 0: a checkout from before it was counted
     per_push = verify_physics / max(1, sum(r.n_samples for r in verify))
     total = gc.physics_steps + gc.orbit_physics_steps
-    first_n = verification_size(cfg.sequential.epsilon, cfg.beta, 1, cfg.push.first_share)
+    first_n = attempt_size(cfg, 1)
     row.update(j_star=gc.value, estimate=c.estimate, verified=c.violation_bound < 1.0,
                first_passed=bool(verify and verify[0].passed), attempts=len(verify), pushes=c.n_samples,
                physics=total, verify_physics=verify_physics, orbit_physics=gc.orbit_physics_steps,
@@ -113,7 +113,7 @@ def explore_row(robot: Any, gait: Any, cfg: Any, sim: Any) -> dict[str, Any]:
     probability of :data:`LEVELS` for the first batch; the exploration's pushes (sizes, falls) and physics steps."""
     from robustgait.certificate.certify import certify_gait
     from robustgait.certificate.fallcurve import fit_fall_curve
-    from robustgait.certificate.verification import verification_size
+    from robustgait.certificate.verification import attempt_size
 
     t0 = time.process_time()
     est = certify_gait(robot, gait, cfg, sim, verify=False)
@@ -126,7 +126,7 @@ def explore_row(robot: Any, gait: Any, cfg: Any, sim: Any) -> dict[str, Any]:
         return out
     sizes = np.linalg.norm(c.samples, axis=1)
     curve = fit_fall_curve(sizes, c.fell, c.r_max)  # the exploration's pushes, as the certificate fits them
-    n1 = verification_size(cfg.sequential.epsilon, cfg.beta, 1, cfg.push.first_share)
+    n1 = attempt_size(cfg, 1)
     out.update(estimate=c.estimate, curve=c.curve, sizes=[float(x) for x in sizes], fell=[bool(x) for x in c.fell],
                radius={f"{lv:g}": curve.verification_radius(n1, lv) for lv in LEVELS})
     return out

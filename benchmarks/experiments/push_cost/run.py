@@ -86,8 +86,8 @@ def cmd_push(args: argparse.Namespace) -> None:
 
 
 def _variants(spec: str) -> list[tuple[str, int, int, int | None]]:
-    """``name:chunk/horizon[/after],…`` → [(name, push.verify_chunk, push.horizon, push.explore_after_failure or None
-    for the default)]."""
+    """``name:chunk/horizon[/after],…`` → [(name, sequential.verify_chunk, push.horizon,
+    sequential.explore_after_failure or None for the default)]."""
     out = []
     for item in spec.split(","):
         name, _, rest = item.partition(":")
