@@ -274,8 +274,8 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
                      "of them springs, held at their posture angle) solved from the loops in the posture, largest "
                      f"residual {max(robot.opened.values()) * 1e3:.3g} mm at the keyframe, "
                      f"{max(robot.loop_residuals().values()) * 1e3:.2g} mm in the posture; gait generation holds them "
-                     "as holonomic constraints but does not converge on closed chains and line feet yet "
-                     "(docs/robots.md, \"Closed chains, springs and line feet\")")
+                     "as holonomic constraints, springs rigid (docs/robots.md, \"Closed chains, springs and line "
+                     "feet\")")
     if asymmetry > 0.0:
         notes.append(f"the posture was not left/right symmetric: made symmetric (largest change {asymmetry:.3g} rad)")
     if centred > 0.0:
