@@ -19,7 +19,7 @@ from robustgait.cli import main
 from robustgait.config import GenerationConfig
 from robustgait.dynamics import Dynamics, base_transform
 from robustgait.gait import BEZIER_DEGREE
-from robustgait.gaitgen.check import CheckModel, check_solution, node_residual
+from robustgait.gaitgen.check import CheckModel, check_solution, node_residual, spring_problem
 from robustgait.gaitgen.problem import ROW_SCALE, GaitProblem
 from robustgait.gaitgen.solve import GaitGenerator, kinematic_states, pack, unpack
 from robustgait.gaitgen.states import to_mujoco_state
@@ -136,6 +136,26 @@ def test_the_physics_check_holds_a_closed_chain_to_its_planning_model_with_the_l
     worst = max(float(np.linalg.norm(node_residual(ev, contacts, stance, dropped, i)[0]
                                      - node_residual(ev, contacts, stance, states, i)[0])) for i in range(len(rows)))
     assert worst > 1.0
+
+
+def test_a_spring_whose_deflection_leaves_its_range_is_one_line_naming_it_and_the_figures(chain: Robot,
+                                                                                       dyn: Dynamics) -> None:
+    # the biped's shin springs: 800 N m/rad, range ±0.3 rad. A solution's spring row force λ is the torque the spring
+    # must hold, so it deflects by −λ / k: 160 N m is 0.2 rad (in range), 320 N m is 0.4 rad (out)
+    prob = GaitProblem(dyn, GenerationConfig(nodes=5))
+    posture = np.asarray(chain.spec.posture)
+    beta = np.repeat(posture[:, None], BEZIER_DEGREE + 1, axis=1)
+    params = GaitParams(0.1, 0.6, chain.sole_spacing, 0.05)
+    states = kinematic_states(dyn, prob, beta, params.step_duration, params=params)
+    col = [lp.joint for lp in dyn.loops].index("right_shin_spring")
+    for torque, out in ((160.0, False), (-320.0, True)):
+        lamh = states.lamh.copy()
+        lamh[:, col] = 0.0
+        lamh[2, col] = torque
+        line = spring_problem(dyn, [replace(states, lamh=lamh)])
+        assert (line is not None) == out
+    assert line is not None and "\n" not in line
+    assert "'right_shin_spring'" in line and "0.4 rad" in line and "[-0.3, 0.3]" in line
 
 
 @pytest.mark.slow  # one IPOPT solve, about 15 s

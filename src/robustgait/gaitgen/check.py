@@ -306,3 +306,30 @@ def _target(c: Contact, prob: GaitProblem, params: GaitParams) -> FloatArray:
     if c.leg == "stance":
         return np.array([a if c.kind == "toe" else -a if c.kind == "heel" else 0.0, 0.0, 0.0])
     return np.array([params.step_length - (a if c.kind == "heel" else 0.0), side * params.step_width, 0.0])
+
+
+def spring_problem(dyn: Dynamics, states: list[NodeStates]) -> str | None:
+    """The first spring of a closed chain whose deflection leaves its range in a solution, as one line naming the
+    joint and the figures; None when every spring stays in range (or has none, or the robot has no springs).
+
+    The gait problem holds a spring rigid (s_j − springref = 0, :mod:`robustgait.closure`); its row's force λ [N m]
+    is the torque the spring must hold, and the model's spring holds it at the deflection δ = s_j − springref = −λ / k
+    (k its stiffness [N m/rad]): the deflection the simulation's spring takes under the planned load (its static part;
+    a spring also rings after each impact). A limited spring whose δ over the nodes leaves its range is refused."""
+    m = dyn.robot.model
+    rows = 0 if not dyn.loops else int(dyn.loop_fun.size1_out(0))
+    springs = [lp for lp in dyn.loops if lp.kind == "spring"]
+    for k, lp in enumerate(springs):  # the springs' rows are the last, one each, in this order (closure.plan_loops)
+        j = m.joint(lp.joint).id
+        if not m.jnt_limited[j] or not m.jnt_stiffness[j] > 0:
+            continue
+        col = rows - len(springs) + k
+        delta = np.concatenate([-ns.lamh[:, col] for ns in states]) / float(m.jnt_stiffness[j])
+        lo, hi = float(m.jnt_range[j][0]) - lp.ref, float(m.jnt_range[j][1]) - lp.ref
+        worst = float(delta[np.argmax(np.maximum(lo - delta, delta - hi))])
+        if worst < lo or worst > hi:
+            torque = -worst * float(m.jnt_stiffness[j])
+            return (f"the spring '{lp.joint}' would deflect {worst:.3g} rad under the gait's load ({torque:.4g} N m "
+                    f"over its {m.jnt_stiffness[j]:.4g} N m/rad), outside its range [{lo:.3g}, {hi:.3g}] rad from "
+                    f"its rest angle: a slower or shorter step loads it less")
+    return None
