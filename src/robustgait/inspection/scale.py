@@ -31,7 +31,8 @@ class RobotSize:
     ``hip_spacing`` [m] (lateral distance of the legs' first joints), ``sole_length`` and ``sole_width`` [m];
     ``ankle_roll``: both legs have one; ``sole_spacing`` [m] (lateral distance of the soles' centres in the posture)
     and ``upper_body_height`` [m] (the centre of mass of all but the legs above the legs' first joints), which set
-    the gait of legs without an ankle roll (:func:`hip_roll_angle`)."""
+    the gait of legs without an ankle roll (:func:`hip_roll_angle`); ``line_feet``: both soles are lines (no support
+    width, :func:`robustgait.inspection.discover.sole_kind`)."""
 
     leg_length: float
     standing_height: float
@@ -43,6 +44,7 @@ class RobotSize:
     ankle_roll: bool = True
     sole_spacing: float = 0.0
     upper_body_height: float = 0.0
+    line_feet: bool = False
 
     @property
     def robot_scale(self) -> RobotScale:
@@ -57,10 +59,14 @@ def step_length(size: RobotSize, rules: ScaleRules) -> float:
 
 
 def duration_constant(size: RobotSize, rules: ScaleRules, multicontact: bool = False) -> float:
-    """c of the default step duration c · √(l/g): ``step_duration_multicontact``; flat-foot, ``step_duration_narrow``
-    when the soles are narrow (:func:`narrow_soles`), else ``step_duration``."""
+    """c of the default step duration c · √(l/g): ``step_duration_multicontact``; flat-foot, ``step_duration_line``
+    on line feet, ``step_duration_narrow`` when the soles are narrow (:func:`narrow_soles`), else ``step_duration``.
+    Cassie's line feet (λ = √(g/z0) = 3.29/s): its default gait at ``step_duration_narrow`` (T = 0.645 s, λT = 2.1)
+    fell in step 6 under the step regulator; at T = 0.4 s (λT = 1.3) it walks 300 steps (docs/robots.md)."""
     if multicontact:
         return rules.step_duration_multicontact
+    if size.line_feet:
+        return rules.step_duration_line
     return rules.step_duration_narrow if narrow_soles(size) else rules.step_duration
 
 

@@ -287,7 +287,8 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     size = RobotSize(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,
                      gravity=gravity, hip_spacing=legs.hip_spacing,
                      sole_length=legs.left.sole.length, sole_width=legs.left.sole.width, ankle_roll=legs.ankle_roll,
-                     sole_spacing=legs.sole_spacing, upper_body_height=legs.upper_body_height)
+                     sole_spacing=legs.sole_spacing, upper_body_height=legs.upper_body_height,
+                     line_feet=legs.left.sole.foot == legs.right.sole.foot == "line")
     if not legs.ankle_roll:
         last = robot.joint_name(legs.left.joints[-1])
         notes.append(f"the legs have no ankle roll (the left leg ends at {last}): a flat stance foot cannot move the "
