@@ -7,7 +7,7 @@ in every domain of its graph and at every transition:
   planning model as MuJoCo compiles it (``Dynamics.plan_model``: rods lumped, springs rigid; :mod:`robustgait.closure`)
   with the loops' forces the solution carries: r = M q̈ + c − B u − J_cᵀ λ − J_hᵀ λ_h (J_h = [0, ∂φ/∂s], the
   loops' rows; impacts likewise with the loops' rows under the landing sole's). MuJoCo's full model, rods and all, is
-  not what the problem plans: lumping the rods alone leaves a residual of order 10⁻³ there (docs/gaitgen.md).
+  not what the problem plans: lumping the rods leaves a residual there (docs/gaitgen.md, "Closed chains").
 * Contacts: each contact frame's position and held orientation, and J_c q̇ — no contact may move.
 * Impacts: the rigid impact map onto the next domain's contacts (:func:`robustgait.dynamics.impact_map`
   with MuJoCo's M and J) reproduces the solution's post-impact velocity; the next domain starts from it; and

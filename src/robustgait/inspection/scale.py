@@ -60,9 +60,9 @@ def step_length(size: RobotSize, rules: ScaleRules) -> float:
 
 def duration_constant(size: RobotSize, rules: ScaleRules, multicontact: bool = False) -> float:
     """c of the default step duration c · √(l/g): ``step_duration_multicontact``; flat-foot, ``step_duration_line``
-    on line feet, ``step_duration_narrow`` when the soles are narrow (:func:`narrow_soles`), else ``step_duration``.
-    Cassie's line feet (λ = √(g/z0) = 3.29/s): its default gait at ``step_duration_narrow`` (T = 0.645 s, λT = 2.1)
-    fell in step 6 under the step regulator; at T = 0.4 s (λT = 1.3) it walks 300 steps (docs/robots.md)."""
+    on line feet (their lateral error grows as a point foot's, e^(λT) over a single support, until the next foothold:
+    docs/robots.md, "Closed chains, springs and line feet"), ``step_duration_narrow`` when the soles are narrow
+    (:func:`narrow_soles`), else ``step_duration``."""
     if multicontact:
         return rules.step_duration_multicontact
     if size.line_feet:

@@ -164,9 +164,9 @@ def landing_map(robot: Robot, gait: Gait) -> tuple[Array, Array]:
     the swing sole's horizontal position and orientation, base fixed: near a straight landing leg, holding the
     height too would take large knee motions for a millimetre of height); and the swing sole's position relative to
     the stance sole there (2,) [m]. A line foot keeps its pitch and yaw only (4 × n): it lands on its line at any
-    roll, and a leg without an ankle roll cannot move its foot sideways at a fixed roll (Cassie: hip-pitch and knee
-    offsets of hundreds of radians per metre). A closed chain's passive joints move with the planned ones through
-    its loops (:func:`robustgait.robots.loops.closed_velocity`)."""
+    roll, and a leg without an ankle roll cannot move its foot sideways at a fixed roll (the least-squares inverse
+    then asks near-singular hip-pitch and knee offsets). A closed chain's passive joints move with the planned ones
+    through its loops (:func:`robustgait.robots.loops.closed_velocity`)."""
     m = robot.model
     data = mujoco.MjData(m)
     data.qpos[:] = _posture(robot, gait, np.array([1.0]))[0]
