@@ -217,6 +217,8 @@ class Dynamics:
             warnings.filterwarnings("ignore", message="Gimbal lock")
             try:
                 model, self.loops, hinges = _adam_model(self.robot)
+                # the planning model as MuJoCo compiles it: the physics check's model of a closed chain's solution
+                self.plan_model: mujoco.MjModel = model
                 self.passive: tuple[str, ...] = tuple(str(m.joint(j).name) for j in hinges)
                 self.kindyn = KinDynComputations.from_mujoco_model(
                     model, joints_name_list=[*self.robot.spec.joints, *self.passive],

@@ -93,3 +93,21 @@ def test_recovery_refuses_the_late_falls_a_fall_only_certificate_certifies():
     assert recovery.radius < model.critical and recovery.violation_bound <= 0.02
     j = np.column_stack([np.linspace(0, recovery.radius * 0.999, 400), np.zeros(400)])
     assert (model.walk(j, 19)[0] == 0).all()
+
+
+def test_band_coordinates_of_a_closed_chain_count_a_ball_joints_four_coordinates_and_three_rates(tmp_path):
+    # the inline biped of tests/robots/test_loops.py: a rod on a ball joint per leg (nq − 7 = nv − 6 + 2)
+    from robustgait import load_robot
+    from robustgait.cli import main
+    from tests.inspection.biped import SERVO_RULE, write
+    from tests.robots.test_loops import chain_xml
+
+    model, spec = write(tmp_path, chain_xml(), "chain.xml"), tmp_path / "chain.toml"
+    assert main(["robot", "init", str(model), "-o", str(spec), *SERVO_RULE]) == 0
+    robot = load_robot(spec)
+    m = robot.model
+    assert m.nq - 7 == m.nv - 6 + 2
+    z = band_coordinates(robot, m.qpos0, np.ones(m.nv))
+    assert z.shape == (1, m.nq + m.nv - 4) and np.all(np.isfinite(z))
+    rate = math.sqrt(robot.scale.gravity / robot.leg_length)
+    assert np.allclose(z[0, -(m.nv - 3):], 1.0 / rate)  # every rate (base angular and joints) over √(g/l)

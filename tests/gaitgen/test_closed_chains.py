@@ -7,6 +7,8 @@ held at every node."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as cs
 import mujoco
 import numpy as np
@@ -17,7 +19,8 @@ from robustgait.cli import main
 from robustgait.config import GenerationConfig
 from robustgait.dynamics import Dynamics, base_transform
 from robustgait.gait import BEZIER_DEGREE
-from robustgait.gaitgen.problem import GaitProblem
+from robustgait.gaitgen.check import CheckModel, check_solution, node_residual, spring_problem
+from robustgait.gaitgen.problem import ROW_SCALE, GaitProblem
 from robustgait.gaitgen.solve import GaitGenerator, kinematic_states, pack, unpack
 from robustgait.gaitgen.states import to_mujoco_state
 from robustgait.robots import Robot
@@ -106,6 +109,55 @@ def test_the_initial_guess_holds_the_loops_and_the_dynamics(chain: Robot, dyn: D
     assert np.abs(g[forces]).max() < 1e-8
 
 
+def test_the_physics_check_holds_a_closed_chain_to_its_planning_model_with_the_loop_forces(chain: Robot,
+                                                                                         dyn: Dynamics) -> None:
+    # the initial guess's nodes violate the dynamics' moment rows (a flat stance foot on a line): the check's residual
+    # in MuJoCo's compiled planning model, loop forces included, is the NLP's own row residual at every node
+    prob = GaitProblem(dyn, GenerationConfig(nodes=5))
+    posture = np.asarray(chain.spec.posture)
+    beta = np.repeat(posture[:, None], BEZIER_DEGREE + 1, axis=1)
+    beta[[chain.spec.joints.index(f"{x}_hip_pitch") for x in ("left", "right")], -1] += 0.1
+    params = GaitParams(0.1, 0.6, chain.sole_spacing, 0.05)
+    states = kinematic_states(dyn, prob, beta, params.step_duration, params=params)
+    x0 = pack(prob, [beta], [states])
+    p = [params.step_length, params.step_duration, params.step_width, params.step_height, 0.0]
+    g = np.asarray(cs.Function("g", [prob.x, prob.p], [prob.g])(x0, p)).ravel()
+    rows = np.asarray(prob.rows["dynamics"]).reshape(-1, 6 + dyn.n_joints)
+    ev = CheckModel(dyn)
+    contacts = prob.graph.domains[0].contacts
+    for i, node_rows in enumerate(rows):
+        r, _, _, _ = node_residual(ev, contacts, prob.stance, states, i)
+        assert np.linalg.norm(r) == pytest.approx(ROW_SCALE * np.linalg.norm(g[node_rows]), rel=1e-8, abs=1e-8)
+        assert np.linalg.norm(r[:3]) < 1e-8  # the base's forces hold (the flat foot's extra moment is a moment)
+    # without the loops' forces the same nodes fail by the forces the loops carry
+    dropped = replace(states, lamh=np.zeros_like(states.lamh))
+    assert np.abs(states.lamh).max() > 1.0
+    stance = prob.stance
+    worst = max(float(np.linalg.norm(node_residual(ev, contacts, stance, dropped, i)[0]
+                                     - node_residual(ev, contacts, stance, states, i)[0])) for i in range(len(rows)))
+    assert worst > 1.0
+
+
+def test_a_spring_whose_deflection_leaves_its_range_is_one_line_naming_it_and_the_figures(chain: Robot,
+                                                                                       dyn: Dynamics) -> None:
+    # the biped's shin springs: 800 N m/rad, range ±0.3 rad. A solution's spring row force λ is the torque the spring
+    # must hold, so it deflects by −λ / k: 160 N m is 0.2 rad (in range), 320 N m is 0.4 rad (out)
+    prob = GaitProblem(dyn, GenerationConfig(nodes=5))
+    posture = np.asarray(chain.spec.posture)
+    beta = np.repeat(posture[:, None], BEZIER_DEGREE + 1, axis=1)
+    params = GaitParams(0.1, 0.6, chain.sole_spacing, 0.05)
+    states = kinematic_states(dyn, prob, beta, params.step_duration, params=params)
+    col = [lp.joint for lp in dyn.loops].index("right_shin_spring")
+    for torque, out in ((160.0, False), (-320.0, True)):
+        lamh = states.lamh.copy()
+        lamh[:, col] = 0.0
+        lamh[2, col] = torque
+        line = spring_problem(dyn, [replace(states, lamh=lamh)])
+        assert (line is not None) == out
+    assert line is not None and "\n" not in line
+    assert "'right_shin_spring'" in line and "0.4 rad" in line and "[-0.3, 0.3]" in line
+
+
 @pytest.mark.slow  # one IPOPT solve, about 15 s
 def test_the_default_gait_solves_with_the_loops_closed(chain: Robot) -> None:
     gen = GaitGenerator(chain)
@@ -128,3 +180,8 @@ def test_the_default_gait_solves_with_the_loops_closed(chain: Robot) -> None:
     # the stance foot rolls on its line (the degree of freedom a flat sole would lock), periodic after relabeling
     roll = np.array([x[node["roll"]] for node in prob.layout.nodes])
     assert np.abs(roll[:, 0]).max() > 0.01
+    # the physics check passes it: MuJoCo's planning model with the loops' forces, periodic with the passive joints
+    # mirrored (gait generate refused it before the loops' forces were in the check)
+    check = check_solution(gen.dyn, prob, params, states, [params.step_duration])
+    assert check.passed, check.failures
+    assert check.dynamics_residual < 1e-8 and check.periodicity < 1e-6

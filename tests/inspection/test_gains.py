@@ -116,3 +116,44 @@ def test_static_torques_balance_gravity(tmp_path: Path) -> None:
     both = static_torques(r, q, [legs.left.foot, legs.right.foot])
     knee = m.jnt_dofadr[next(j for j in r.joints if r.joint_name(j) == "left_knee")]
     assert abs(both[knee]) < abs(one[knee])  # two feet share the weight
+
+
+def test_static_torques_of_a_closed_chain_are_the_gradient_of_its_weight_through_the_loops(tmp_path: Path) -> None:
+    # the inline biped of tests/robots/test_loops.py: its knee holds the leg through a rod on a ball joint and a passive
+    # tarsus. Standing on its left foot, each planned joint's static torque is ∂V/∂q of the weight's potential with the
+    # foot fixed, the loops closed (the passive joints solved, the springs held): virtual work, by finite differences
+    from robustgait.robots.loops import close_loops
+    from tests.robots.test_loops import chain_xml
+
+    r = open_model(write(tmp_path, chain_xml(), "chain.xml"))
+    m = r.model
+    foot = m.body("left_foot").id
+    q0 = r.qpos(height=0.9)
+    for s in ("left", "right"):
+        q0[m.jnt_qposadr[m.joint(f"{s}_knee").id]] = 0.4
+        q0[m.jnt_qposadr[m.joint(f"{s}_hip_pitch").id]] = -0.2
+    q0 = close_loops(m, q0, r.loops, r.solved, 1e-12)
+    d0 = r.kinematics(q0)
+    p_f0, r_f0 = d0.xpos[foot].copy(), d0.xmat[foot].reshape(3, 3).copy()
+
+    def potential(q: np.ndarray) -> float:
+        q = close_loops(m, q, r.loops, r.solved, 1e-12)
+        q[:7] = [0, 0, 0, 1, 0, 0, 0]
+        d = r.kinematics(q)
+        rot = r_f0 @ d.xmat[foot].reshape(3, 3).T  # the base turned and moved so that the foot stays where it was
+        q[:3] = p_f0 - rot @ d.xpos[foot]
+        mujoco.mju_mat2Quat(q[3:7], rot.ravel())
+        d = r.kinematics(q)
+        return float(-m.opt.gravity[2] * sum(m.body_mass) * d.subtree_com[0][2])
+
+    tau = static_torques(r, q0, [foot])
+    h = 1e-6
+    for name in ("left_hip_roll", "left_hip_pitch", "left_knee", "right_knee", "left_foot"):
+        adr, dof = m.jnt_qposadr[m.joint(name).id], m.jnt_dofadr[m.joint(name).id]
+        up, down = q0.copy(), q0.copy()
+        up[adr] += h
+        down[adr] -= h
+        assert tau[dof] == pytest.approx((potential(up) - potential(down)) / (2 * h), abs=1e-4 * sum(m.body_mass))
+    tarsus = m.jnt_dofadr[m.joint("left_tarsus").id]
+    assert abs(tau[tarsus]) < 1e-8  # a passive joint holds nothing; the loop does
+    assert abs(tau[m.jnt_dofadr[m.joint("left_knee").id]]) > 1.0  # and the knee holds the leg through it

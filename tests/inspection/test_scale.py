@@ -58,6 +58,24 @@ def test_narrow_soles_get_shorter_default_steps_and_a_shorter_grid() -> None:
     assert scale(narrow, ScaleRules()).multicontact_action_space == scale(wide, ScaleRules()).multicontact_action_space
 
 
+def test_line_feet_get_quicker_default_steps_than_narrow_soles() -> None:
+    """Cassie's size (line feet 0.16 m long, no ankle roll, a 1.021 m leg): the default step is 1.24 √(l/g) = 0.40 s
+    (λT = 1.3 at its CoM height), not the narrow soles' 2.0 √(l/g) = 0.645 s at which its default gait fell in step
+    6 (docs/robots.md); the grid still ends at 3.0 √(l/g)."""
+    import math
+
+    cassie = RobotScale(leg_length=1.021, standing_height=1.01, mass=33.3, gravity=9.81, hip_spacing=0.27,
+                        sole_length=0.16, sole_width=0.0002, ankle_roll=False, sole_spacing=0.2701,
+                        upper_body_height=0.0284, line_feet=True)
+    t = math.sqrt(1.021 / 9.81)
+    rules = ScaleRules()
+    assert scale(cassie, rules).gait["step_duration"] == pytest.approx(rules.step_duration_line * t, rel=1e-2)
+    assert scale(cassie, rules).gait["step_duration"] == pytest.approx(0.40, abs=0.005)
+    flat = dataclasses.replace(cassie, line_feet=False)
+    assert scale(flat, rules).gait["step_duration"] == pytest.approx(2.0 * t, rel=1e-2)
+    assert scale(cassie, rules).action_space["step_duration"][1] <= 3.0 * t + 1e-9
+
+
 def test_a_point_foot_walker_steps_end_at_its_lambda_t() -> None:
     """Adam Lite's size: a walk that balances by foot placement (κ ≥ ``point_foot_share``) ends its step durations at
     λT = ``point_foot_step`` — never below the default step, which walked; an ankle that holds the centre of mass

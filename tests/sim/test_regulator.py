@@ -120,6 +120,44 @@ def test_landing_map_moves_the_swing_sole_flat_by_the_asked_amount(exo, exo_gait
         assert np.abs(r - r0).max() < 1e-3                        # the sole keeps its orientation
 
 
+def test_landing_map_of_a_closed_chain_line_foot_moves_it_through_the_loops_at_any_roll(tmp_path):  # type: ignore[no-untyped-def]
+    # the inline biped of tests/robots/test_loops.py: no ankle roll, the knee drives the tarsus through a rod, line feet
+    from robustgait import load_robot
+    from robustgait.robots.loops import closed_posture
+    from robustgait.sim.regulator import _posture
+    from tests.conftest import standing_gait
+    from tests.inspection.biped import SERVO_RULE, write
+    from tests.robots.test_loops import chain_xml
+
+    model, spec = write(tmp_path, chain_xml(), "chain.xml"), tmp_path / "chain.toml"
+    assert main(["robot", "init", str(model), "-o", str(spec), *SERVO_RULE]) == 0
+    robot = load_robot(spec)
+    gait = standing_gait(robot)
+    g, _ = landing_map(robot, gait)
+    # the foot moves sideways by the hip roll, not by a near-singular mix that keeps a line's roll (hundreds of rad/m)
+    assert np.abs(g).max() < 5.0
+    roll = robot.spec.joints.index("left_hip_roll")
+    assert abs(g[roll, 1]) > 0.9  # ≈ 1 / the leg length (a roll-holding least-squares compromise: 0.50)
+    m, d = robot.model, mujoco.MjData(robot.model)
+
+    def sole(q):  # type: ignore[no-untyped-def]
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        st = robot.sole_geom_id["right"]
+        r = d.geom_xmat[st].reshape(3, 3).T
+        return r @ (d.geom_xpos[robot.sole_geom_id["left"]] - d.geom_xpos[st]), r @ d.geom_xmat[
+            robot.sole_geom_id["left"]].reshape(3, 3)
+
+    q0 = _posture(robot, gait, np.array([1.0]))[0]
+    p0, r0 = sole(q0)
+    for du in (np.array([0.002, 0.0]), np.array([0.0, -0.002])):
+        q = q0.copy()
+        q[robot.qpos_idx] += g @ du
+        p, r = sole(closed_posture(m, robot.passive_ids, q))  # the tarsus follows the knee through its rod
+        np.testing.assert_allclose((p - p0)[:2], du, atol=1e-4)
+        assert np.abs(r[:, 0] - r0[:, 0]).max() < 1e-3  # the line keeps its direction (pitch, yaw); its roll is free
+
+
 def test_on_the_orbit_it_commands_nothing_and_a_batch_is_its_samples_one_by_one(exo, exo_gait):  # type: ignore[no-untyped-def]
     eng = StepEngine(exo, exo_gait, ON)
     reg = eng.regulator

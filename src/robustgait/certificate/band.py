@@ -31,14 +31,14 @@ FloatArray = NDArray[np.float64]
 
 
 def band_scales(robot: Robot) -> FloatArray:
-    """The divisors (d,) that make section coordinates dimensionless: [l, 1, 1, 1 × n_j, √(g l) × 3, √(g/l) × 3,
-    √(g/l) × n_j] for the base height, roll, pitch, joint angles, base linear velocity, base angular velocity and
-    joint velocities (l the leg length [m], g gravity [m/s²]); n_j = nq − 7 joints."""
+    """The divisors (d,) that make section coordinates dimensionless: [l, 1, 1, 1 × n_q, √(g l) × 3, √(g/l) × 3,
+    √(g/l) × n_v] for the base height, roll, pitch, joint coordinates, base linear velocity, base angular velocity and
+    joint velocities (l the leg length [m], g gravity [m/s²]); n_q = nq − 7 joint coordinates, n_v = nv − 6 joint
+    velocities (they differ by one per ball joint of a closed chain: its quaternion's four against three rates)."""
     s = robot.scale
-    n_joints = robot.model.nq - 7
     rate = math.sqrt(s.gravity / s.leg_length)
-    return np.concatenate([[s.leg_length, 1.0, 1.0], np.ones(n_joints), np.full(3, s.speed),
-                           np.full(3 + n_joints, rate)])
+    return np.concatenate([[s.leg_length, 1.0, 1.0], np.ones(robot.model.nq - 7), np.full(3, s.speed),
+                           np.full(3 + robot.model.nv - 6, rate)])
 
 
 def band_coordinates(robot: Robot, qpos: FloatArray, qvel: FloatArray) -> FloatArray:

@@ -214,8 +214,9 @@ class RobotScale:
     (:class:`robustgait.inspection.discover.Legs`), which a loaded robot's scale leaves at these defaults (no loader
     rule reads them): ``standing_height`` h [m] (base above the soles in the posture), ``hip_spacing`` [m] (lateral
     distance of the legs' first joints), ``ankle_roll`` (both legs have one), ``sole_spacing`` [m] (lateral distance
-    of the soles' centres in the posture) and ``upper_body_height`` [m] (the centre of mass of all but the legs above
-    the legs' first joints)."""
+    of the soles' centres in the posture), ``upper_body_height`` [m] (the centre of mass of all but the legs above
+    the legs' first joints) and ``line_feet`` (both soles are lines: no support width,
+    :func:`robustgait.inspection.discover.sole_kind`)."""
 
     mass: float
     gravity: float
@@ -227,6 +228,7 @@ class RobotScale:
     ankle_roll: bool = True
     sole_spacing: float = 0.0
     upper_body_height: float = 0.0
+    line_feet: bool = False
 
     @property
     def sole_half_length(self) -> float:

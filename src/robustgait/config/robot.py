@@ -43,6 +43,10 @@ class ScaleRules:
         "default flat-foot step duration ÷ √(l/g) when the soles are narrow (sole width / leg length < "
         "sim.regulator.narrow_ratio): the step regulator corrects once a step, and over a long single support the "
         "error grows past what a narrow sole holds", gt=0.0, le=20.0)] = 2.0
+    step_duration_line: Annotated[Float, Doc(
+        "default flat-foot step duration ÷ √(l/g) when the feet are lines (no support width: Cassie's): the lateral "
+        "CoM error of a line foot grows as a point foot's, e^(λT) over a single support, until the next foothold "
+        "corrects it", gt=0.0, le=20.0)] = 1.24
     narrow_step_duration: Annotated[Float, Doc(
         "longest flat-foot step of the action space ÷ √(l/g) when the soles are narrow (sole width / leg length < "
         "sim.regulator.narrow_ratio): a long single support on a narrow sole falls whatever the next foothold",

@@ -3,7 +3,11 @@ in every domain of its graph and at every transition:
 
 * Dynamics residual at every node: r = M q̈ + c − B u − J_cᵀ λ in MuJoCo's coordinates, with M from
   ``mj_fullM``, c = ``qfrc_bias``, J_c the domain's contact rows of ``mj_jac`` at each contact frame (flat
-  sole: 6 rows; toe or heel line: 5); relative to ‖M q̈‖ + ‖c‖.
+  sole: 6 rows; toe or heel line: 5); relative to ‖M q̈‖ + ‖c‖. A robot with closed chains is checked in its
+  planning model as MuJoCo compiles it (``Dynamics.plan_model``: rods lumped, springs rigid; :mod:`robustgait.closure`)
+  with the loops' forces the solution carries: r = M q̈ + c − B u − J_cᵀ λ − J_hᵀ λ_h (J_h = [0, ∂φ/∂s], the
+  loops' rows; impacts likewise with the loops' rows under the landing sole's). MuJoCo's full model, rods and all, is
+  not what the problem plans: lumping the rods leaves a residual there (docs/gaitgen.md, "Closed chains").
 * Contacts: each contact frame's position and held orientation, and J_c q̇ — no contact may move.
 * Impacts: the rigid impact map onto the next domain's contacts (:func:`robustgait.dynamics.impact_map`
   with MuJoCo's M and J) reproduces the solution's post-impact velocity; the next domain starts from it; and
@@ -23,7 +27,7 @@ from numpy.typing import NDArray
 
 from robustgait.config import GaitParams
 from robustgait.domains import Contact
-from robustgait.dynamics import Dynamics, foot_frame, impact_map
+from robustgait.dynamics import Dynamics, foot_frame, impact_map, quat_to_rotation
 from robustgait.gaitgen.problem import GaitProblem
 from robustgait.gaitgen.states import NodeStates, to_mujoco_state
 from robustgait.robots.model import full_inertia
@@ -75,21 +79,71 @@ class PhysicsCheck:
         return text + ("): on its bound" if self.on_cop_bound else f", slack {self.cop_margin * 1e3:.1f} mm)")
 
 
-def _sole_jacobian(m: mujoco.MjModel, d: mujoco.MjData, geom: int, point: FloatArray) -> FloatArray:
+def _sole_jacobian(m: mujoco.MjModel, d: mujoco.MjData, body: int, point: FloatArray) -> FloatArray:
     jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
-    mujoco.mj_jac(m, d, jp, jr, point, int(m.geom_bodyid[geom]))
+    mujoco.mj_jac(m, d, jp, jr, point, body)
     return np.vstack([jp, jr])
 
 
-def _contact_jacobian(dyn: Dynamics, m: mujoco.MjModel, d: mujoco.MjData, contacts: tuple[Contact, ...],
-                      stance: str, qpos: FloatArray) -> FloatArray:
+class CheckModel:
+    """The MuJoCo model a solution is checked in (module docstring): the robot's own, or for closed chains the
+    planning model (``Dynamics.plan_model``, joints at their adam addresses, angles from 0), and its data."""
+
+    def __init__(self, dyn: Dynamics):
+        self.dyn, self.closed = dyn, bool(dyn.loops)
+        self.m = dyn.plan_model if self.closed else dyn.robot.model
+        self.d = mujoco.MjData(self.m)
+        names = [*dyn.robot.spec.joints, *dyn.passive]
+        self.qadr = np.array([self.m.joint(n).qposadr[0] for n in names], dtype=np.int64)
+        self.vadr = np.array([self.m.joint(n).dofadr[0] for n in names], dtype=np.int64)
+
+    def state(self, H: FloatArray, s: FloatArray, vb: FloatArray, sd: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(qpos, qvel) of an adam state in this model (:func:`robustgait.gaitgen.states.to_mujoco_state`)."""
+        if not self.closed:
+            return to_mujoco_state(self.dyn.robot, H, s, vb, sd)
+        qpos, qvel = np.zeros(self.m.nq), np.zeros(self.m.nv)
+        qpos[:3], qvel[:3], qvel[3:6] = H[:3, 3], vb[:3], H[:3, :3].T @ vb[3:6]
+        mujoco.mju_mat2Quat(qpos[3:7], H[:3, :3].ravel())
+        qpos[self.qadr], qvel[self.vadr] = s, sd
+        return qpos, qvel
+
+    def velocity(self, qpos: FloatArray, nu: FloatArray) -> FloatArray:
+        """MuJoCo's qvel (or q̈) of adam's mixed ν (or ν̇): the base's angular part into the base frame (the map is
+        linear in ν̇ too, because Ṙᵀ ω = −Rᵀ ω × ω = 0)."""
+        if not self.closed:
+            return self.dyn.velocity_map(qpos).T @ nu
+        out = np.zeros(self.m.nv)
+        out[:3], out[3:6] = nu[:3], quat_to_rotation(qpos[3:7]).T @ nu[3:6]
+        out[self.vadr] = nu[6:]
+        return out
+
+    def frame(self, side: str, kind: str, qpos: FloatArray) -> tuple[FloatArray, FloatArray, int]:
+        """(position, rotation, body id) of a foot frame at ``qpos`` (after :meth:`forward`): adam's on the robot's
+        model (the sole's body), MuJoCo's own on the planning model (its frame body)."""
+        if not self.closed:
+            point, rot = self.dyn.frame_pose(foot_frame(side, kind), qpos)
+            return point, rot, int(self.m.geom_bodyid[self.dyn.robot.sole_geom_id[side]])
+        b = self.m.body(foot_frame(side, kind)).id
+        return self.d.xpos[b].copy(), self.d.xmat[b].reshape(3, 3).copy(), int(b)
+
+    def forward(self, qpos: FloatArray, qvel: FloatArray) -> None:
+        self.d.qpos[:], self.d.qvel[:] = qpos, qvel
+        mujoco.mj_forward(self.m, self.d)
+
+    def loop_jacobian(self, s: FloatArray) -> FloatArray:
+        """The loops' rows in this model's velocities (k, nv): [0, ∂φ/∂s] at the adam joints (none without loops)."""
+        J = np.zeros((self.dyn.loop_fun.size1_out(0) if self.closed else 0, self.m.nv))
+        if self.closed:
+            J[:, self.vadr] = np.asarray(self.dyn.loop_fun(s, s, s)[3], dtype=float)
+        return J
+
+
+def _contact_jacobian(ev: CheckModel, contacts: tuple[Contact, ...], stance: str, qpos: FloatArray) -> FloatArray:
     """MuJoCo's stacked contact Jacobian (mj_jac at each contact frame's point; its fixed rows)."""
-    robot = dyn.robot
     rows = []
     for c in contacts:
-        side = c.side(stance)
-        point, _ = dyn.frame_pose(foot_frame(side, c.frame_kind()), qpos)
-        rows.append(_sole_jacobian(m, d, robot.sole_geom_id[side], point)[list(c.rows)])
+        point, _, body = ev.frame(c.side(stance), c.frame_kind(), qpos)
+        rows.append(_sole_jacobian(ev.m, ev.d, body, point)[list(c.rows)])
     return np.vstack(rows)
 
 
@@ -123,25 +177,35 @@ class _Worst:
     continuity: float = 0.0
 
 
-def _check_node(dyn: Dynamics, prob: GaitProblem, params: GaitParams, d: mujoco.MjData, contacts: tuple[Contact, ...],
-                ns: NodeStates, i: int, worst: _Worst) -> None:
-    """One node's equations of motion, contacts and wrenches against MuJoCo's (``worst`` updated in place)."""
-    robot, m, stance, cfg = dyn.robot, dyn.robot.model, prob.stance, prob.config
-    qpos, qvel = to_mujoco_state(robot, ns.H[i], ns.s[i], ns.vb[i], ns.sd[i])
-    qacc = dyn.velocity_map(qpos).T @ np.concatenate([ns.ab[i], ns.sdd[i]])
-    d.qpos[:], d.qvel[:] = qpos, qvel
-    mujoco.mj_forward(m, d)
+def node_residual(ev: CheckModel, contacts: tuple[Contact, ...], stance: str, ns: NodeStates, i: int
+                  ) -> tuple[FloatArray, float, FloatArray, FloatArray]:
+    """Node ``i``'s residual of the equations of motion in ``ev``'s model (module docstring), r (nv,) [N, N m], and
+    ‖M q̈‖ + ‖c‖, what it is measured against; and the node's (qpos, qvel) there (``ev`` left at that state)."""
+    m, d = ev.m, ev.d
+    qpos, qvel = ev.state(ns.H[i], ns.s[i], ns.vb[i], ns.sd[i])
+    qacc = ev.velocity(qpos, np.concatenate([ns.ab[i], ns.sdd[i]]))
+    ev.forward(qpos, qvel)
     M = full_inertia(m, d)
-    J = _contact_jacobian(dyn, m, d, contacts, stance, qpos)
+    J = _contact_jacobian(ev, contacts, stance, qpos)
     tau = np.zeros(m.nv)
-    tau[robot.dof_idx] = ns.u[i]
+    tau[ev.vadr[:ev.dyn.robot.n_joints]] = ns.u[i]
     r = M @ qacc + d.qfrc_bias - tau - J.T @ ns.lam[i]
-    worst.dynamics = max(worst.dynamics, float(np.linalg.norm(r) / max(np.linalg.norm(M @ qacc)
-                                                                       + np.linalg.norm(d.qfrc_bias), 1.0)))
+    if ev.closed:
+        r -= ev.loop_jacobian(ns.s[i]).T @ ns.lamh[i]
+    return r, float(np.linalg.norm(M @ qacc) + np.linalg.norm(d.qfrc_bias)), qpos, qvel
+
+
+def _check_node(ev: CheckModel, prob: GaitProblem, params: GaitParams, contacts: tuple[Contact, ...], ns: NodeStates,
+                i: int, worst: _Worst) -> None:
+    """One node's equations of motion, contacts and wrenches against MuJoCo's (``worst`` updated in place)."""
+    stance, cfg = prob.stance, prob.config
+    r, scale, qpos, qvel = node_residual(ev, contacts, stance, ns, i)
+    worst.dynamics = max(worst.dynamics, float(np.linalg.norm(r) / max(scale, 1.0)))
+    J = _contact_jacobian(ev, contacts, stance, qpos)
     worst.drift = max(worst.drift, float(np.linalg.norm(J @ qvel)))
     j = 0
     for c in contacts:
-        point, rot = dyn.frame_pose(foot_frame(c.side(stance), c.frame_kind()), qpos)
+        point, rot, _ = ev.frame(c.side(stance), c.frame_kind(), qpos)
         orient = ((rot[1, 0], rot[2, 0], rot[2, 1]) if c.kind == "flat" else (rot[1, 0], rot[2, 0]) if c.kind == "line"
                   else (rot[0, 1], rot[2, 1]))
         worst.drift = max(worst.drift, float(np.linalg.norm(point - _target(c, prob, params))),
@@ -153,23 +217,26 @@ def _check_node(dyn: Dynamics, prob: GaitProblem, params: GaitParams, d: mujoco.
         j += c.n_rows
 
 
-def _check_impact(dyn: Dynamics, prob: GaitProblem, d: mujoco.MjData, states: list[NodeStates], k: int,
-                  worst: _Worst) -> tuple[FloatArray, FloatArray]:
-    """The impact that ends domain ``k``, with MuJoCo's M and Jacobian, against the solution's ν⁺, and the next
-    domain's start against the post-impact state (same labels); returns (qpos, post-impact qvel)."""
-    robot, m, ns = dyn.robot, dyn.robot.model, states[k]
-    qpos, qvel = to_mujoco_state(robot, ns.H[-1], ns.s[-1], ns.vb[-1], ns.sd[-1])
-    d.qpos[:], d.qvel[:] = qpos, qvel
-    mujoco.mj_forward(m, d)
-    Jt = _contact_jacobian(dyn, m, d, prob.graph.target_contacts(k), prob.stance, qpos)
-    qvel_plus, _ = impact_map(full_inertia(m, d), Jt, qvel)
+def _check_impact(ev: CheckModel, prob: GaitProblem, states: list[NodeStates], k: int, worst: _Worst
+                  ) -> tuple[FloatArray, FloatArray]:
+    """The impact that ends domain ``k``, with MuJoCo's M and Jacobian (and a closed chain's loop rows under the
+    landing sole's), against the solution's ν⁺, and the next domain's start against the post-impact state (same
+    labels); returns the robot's (qpos, post-impact qvel) (a closed chain's rods solved from the loops)."""
+    robot, ns = ev.dyn.robot, states[k]
+    qpos, qvel = ev.state(ns.H[-1], ns.s[-1], ns.vb[-1], ns.sd[-1])
+    ev.forward(qpos, qvel)
+    Jt = np.vstack([_contact_jacobian(ev, prob.graph.target_contacts(k), prob.stance, qpos),
+                    ev.loop_jacobian(ns.s[-1])])
+    qvel_plus, _ = impact_map(full_inertia(ev.m, ev.d), Jt, qvel)
     worst.impact = max(worst.impact, float(np.linalg.norm(Jt @ qvel_plus)),
-                       float(np.abs(dyn.to_mujoco(qpos, ns.nu_plus) - qvel_plus).max()))
+                       float(np.abs(ev.velocity(qpos, ns.nu_plus) - qvel_plus).max()))
     if k + 1 < len(states):
         nxt = states[k + 1]
-        q1, v1 = to_mujoco_state(robot, nxt.H[0], nxt.s[0], nxt.vb[0], nxt.sd[0])
+        q1, v1 = ev.state(nxt.H[0], nxt.s[0], nxt.vb[0], nxt.sd[0])
         worst.continuity = max(worst.continuity, float(np.abs(q1 - qpos).max()),
                                float(np.abs(v1 - qvel_plus).max()))
+    if ev.closed:  # the robot's own state, for the periodicity and the step's figures
+        return to_mujoco_state(robot, ns.H[-1], ns.s[-1], ns.nu_plus[:6], ns.nu_plus[6:])
     return qpos, qvel_plus
 
 
@@ -196,15 +263,15 @@ def check_solution(dyn: Dynamics, prob: GaitProblem, params: GaitParams, states:
                    durations: list[float]) -> PhysicsCheck:
     """Re-evaluate a solution's physics with MuJoCo (module docstring), every domain and transition."""
     robot = dyn.robot
-    d = mujoco.MjData(robot.model)
+    ev = CheckModel(dyn)
     cfg = prob.config
     sw_frame = foot_frame(prob.swing, "sole")
     side = 1.0 if prob.swing == "left" else -1.0
     worst = _Worst()
     for k, (dom, ns) in enumerate(zip(prob.graph.domains, states, strict=True)):
         for i in range(len(ns.s)):
-            _check_node(dyn, prob, params, d, dom.contacts, ns, i, worst)
-        qpos, qvel_plus = _check_impact(dyn, prob, d, states, k, worst)
+            _check_node(ev, prob, params, dom.contacts, ns, i, worst)
+        qpos, qvel_plus = _check_impact(ev, prob, states, k, worst)
     # periodicity: the last post-impact state, shifted so the new stance sole sits at the origin and mirrored,
     # is the first state
     p_sw, _ = dyn.frame_pose(sw_frame, qpos)
@@ -239,3 +306,30 @@ def _target(c: Contact, prob: GaitProblem, params: GaitParams) -> FloatArray:
     if c.leg == "stance":
         return np.array([a if c.kind == "toe" else -a if c.kind == "heel" else 0.0, 0.0, 0.0])
     return np.array([params.step_length - (a if c.kind == "heel" else 0.0), side * params.step_width, 0.0])
+
+
+def spring_problem(dyn: Dynamics, states: list[NodeStates]) -> str | None:
+    """The first spring of a closed chain whose deflection leaves its range in a solution, as one line naming the
+    joint and the figures; None when every spring stays in range (or has none, or the robot has no springs).
+
+    The gait problem holds a spring rigid (s_j − springref = 0, :mod:`robustgait.closure`); its row's force λ [N m]
+    is the torque the spring must hold, and the model's spring holds it at the deflection δ = s_j − springref = −λ / k
+    (k its stiffness [N m/rad]): the deflection the simulation's spring takes under the planned load (its static part;
+    a spring also rings after each impact). A limited spring whose δ over the nodes leaves its range is refused."""
+    m = dyn.robot.model
+    rows = 0 if not dyn.loops else int(dyn.loop_fun.size1_out(0))
+    springs = [lp for lp in dyn.loops if lp.kind == "spring"]
+    for k, lp in enumerate(springs):  # the springs' rows are the last, one each, in this order (closure.plan_loops)
+        j = m.joint(lp.joint).id
+        if not m.jnt_limited[j] or not m.jnt_stiffness[j] > 0:
+            continue
+        col = rows - len(springs) + k
+        delta = np.concatenate([-ns.lamh[:, col] for ns in states]) / float(m.jnt_stiffness[j])
+        lo, hi = float(m.jnt_range[j][0]) - lp.ref, float(m.jnt_range[j][1]) - lp.ref
+        worst = float(delta[np.argmax(np.maximum(lo - delta, delta - hi))])
+        if worst < lo or worst > hi:
+            torque = -worst * float(m.jnt_stiffness[j])
+            return (f"the spring '{lp.joint}' would deflect {worst:.3g} rad under the gait's load ({torque:.4g} N m "
+                    f"over its {m.jnt_stiffness[j]:.4g} N m/rad), outside its range [{lo:.3g}, {hi:.3g}] rad from "
+                    f"its rest angle: a slower or shorter step loads it less")
+    return None

@@ -17,7 +17,7 @@ from robustgait.config.gait import PARALLEL_LEGS_WIDTH_TOLERANCE, least_step_wid
 from robustgait.domains import Contact
 from robustgait.dynamics import Dynamics, foot_frame, impact_map
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait, State
-from robustgait.gaitgen.check import PhysicsCheck, check_solution
+from robustgait.gaitgen.check import PhysicsCheck, check_solution, spring_problem
 from robustgait.gaitgen.derivatives import derivative_functions
 from robustgait.gaitgen.problem import (
     F_SCALE,
@@ -445,8 +445,11 @@ class GaitGenerator:
                             continued=continued)
         if ok:
             res.check = check = check_solution(self.dyn, prob, params, states, durations)
-            if check.passed:
+            springs = spring_problem(self.dyn, states) if check.passed else None
+            if check.passed and springs is None:
                 res.gait = self._gait(params, betas, states, durations, res)
+            elif springs is not None:
+                res.success, res.status, res.reason = False, "Spring_Out_Of_Range", springs
             else:
                 res.success, res.status = False, "Physics_Check_Failed"
                 res.reason = "physics check failed: " + "; ".join(check.failures)

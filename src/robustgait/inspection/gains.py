@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.inspection.model import RobotModel
+from robustgait.robots.loops import joint_dofs, loop_rows
 from robustgait.robots.model import mass_matrix
 
 # the largest spectral radius accepted as a contracting servo (a slow servo's is 1 − ζ ω h, just below 1: the bound
@@ -188,9 +189,17 @@ def static_torques(robot: RobotModel, qpos: NDArray[np.float64], feet: list[int]
     """The joint torques that hold the robot still at ``qpos`` standing on the ``feet`` bodies (welded), (nv,) with
     the base's six entries 0: gravity g(q) = Jᵀ w + (0, τ) with the feet's wrenches w chosen to minimise
     Σ (τ_i / weight_i)² (the split of the weight between two feet is otherwise undetermined; one foot: exact).
-    ``weight``: per-dof scales of the non-base dofs (torque limits), or ones."""
+    ``weight``: per-dof scales of the non-base dofs (torque limits), or ones.
+
+    A robot with closed chains (``robot.loops``) also takes its loops' forces μ (MuJoCo's equality rows J_h, free
+    like the feet's wrenches): g(q) = Jᵀ w + J_hᵀ μ + (0, τ), with no torque on a passive joint that is not a
+    spring (a rod's ball joint, Cassie's tarsus) and the springs' torques free and not minimised (a spring deflects
+    until it holds what it must; statically it is a rigid joint): without the loops' forces the knee seemed to hold
+    the whole leg through its rod. The springs' entries are the torques they hold."""
     m = robot.model
     d = robot.kinematics(qpos)
+    if robot.loops:
+        return _static_torques_closed(robot, d, feet, weight)
     bias = d.qfrc_bias.copy()  # gravity at zero velocity
     b0 = int(m.jnt_dofadr[int(m.body_jntadr[robot.base])])
     base = np.arange(b0, b0 + 6)
@@ -205,6 +214,34 @@ def static_torques(robot: RobotModel, qpos: NDArray[np.float64], feet: list[int]
     sol = np.linalg.lstsq(kkt, np.concatenate([a.T @ r, bias[base]]), rcond=None)[0]
     out = np.zeros(m.nv)
     out[rest] = bias[rest] - jac[:, rest].T @ sol[: jac.shape[0]]
+    return out
+
+
+def _static_torques_closed(robot: RobotModel, d: mujoco.MjData, feet: list[int],
+                           weight: NDArray[np.float64] | None) -> NDArray[np.float64]:
+    """:func:`static_torques` of a robot with closed chains (its docstring): minimise Σ (τ_i / weight_i)² over the
+    planned and held dofs R, subject to g_C = A_Cᵀ f on the base's dofs and the passive non-spring ones C, the
+    unknowns f = (w, μ), A = [J (6k × nv); J_h (r × nv)]; the springs' dofs are neither."""
+    m = robot.model
+    b0 = int(m.jnt_dofadr[int(m.body_jntadr[robot.base])])
+    base = np.arange(b0, b0 + 6)
+    rest = np.setdiff1d(np.arange(m.nv), base)
+    scale = np.ones(m.nv)
+    scale[rest] = 1.0 if weight is None else np.asarray(weight, dtype=float)
+    springs = joint_dofs(m, tuple(j for j in robot.passive if m.jnt_stiffness[j] > 0))
+    zero = joint_dofs(m, tuple(j for j in robot.passive if m.jnt_stiffness[j] == 0))
+    held = np.concatenate([base, np.asarray(zero, dtype=np.int64)])
+    free = np.setdiff1d(rest, [*zero, *springs])
+    bias = d.qfrc_bias.copy()  # gravity at zero velocity
+    _, jh = loop_rows(m, d, robot.loops)
+    jac = np.vstack([*(body_jacobian(m, d, f) for f in feet), jh])
+    a = jac[:, free].T / scale[free, None]
+    r = bias[free] / scale[free]
+    cb = jac[:, held].T
+    kkt = np.block([[a.T @ a, cb.T], [cb, np.zeros((held.size, held.size))]])
+    sol = np.linalg.lstsq(kkt, np.concatenate([a.T @ r, bias[held]]), rcond=None)[0]
+    out = bias - jac.T @ sol[: jac.shape[0]]
+    out[base] = 0.0
     return out
 
 

@@ -32,10 +32,14 @@ def step_length(size: RobotScale, rules: ScaleRules) -> float:
 
 
 def duration_constant(size: RobotScale, rules: ScaleRules, multicontact: bool = False) -> float:
-    """c of the default step duration c · √(l/g): ``step_duration_multicontact``; flat-foot, ``step_duration_narrow``
-    when the soles are narrow (:func:`narrow_soles`), else ``step_duration``."""
+    """c of the default step duration c · √(l/g): ``step_duration_multicontact``; flat-foot, ``step_duration_line``
+    on line feet (their lateral error grows as a point foot's, e^(λT) over a single support, until the next foothold:
+    docs/robots.md, "Closed chains, springs and line feet"), ``step_duration_narrow`` when the soles are narrow
+    (:func:`narrow_soles`), else ``step_duration``."""
     if multicontact:
         return rules.step_duration_multicontact
+    if size.line_feet:
+        return rules.step_duration_line
     return rules.step_duration_narrow if narrow_soles(size) else rules.step_duration
 
 

@@ -274,8 +274,8 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
                      "of them springs, held at their posture angle) solved from the loops in the posture, largest "
                      f"residual {max(robot.opened.values()) * 1e3:.3g} mm at the keyframe, "
                      f"{max(robot.loop_residuals().values()) * 1e3:.2g} mm in the posture; gait generation holds them "
-                     "as holonomic constraints but does not converge on closed chains and line feet yet "
-                     "(docs/robots.md, \"Closed chains, springs and line feet\")")
+                     "as holonomic constraints, springs rigid (docs/robots.md, \"Closed chains, springs and line "
+                     "feet\")")
     if asymmetry > 0.0:
         notes.append(f"the posture was not left/right symmetric: made symmetric (largest change {asymmetry:.3g} rad)")
     if centred > 0.0:
@@ -287,7 +287,8 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     size = RobotScale(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,
                       gravity=gravity, hip_spacing=legs.hip_spacing,
                       sole_length=legs.left.sole.length, sole_width=legs.left.sole.width, ankle_roll=legs.ankle_roll,
-                      sole_spacing=legs.sole_spacing, upper_body_height=legs.upper_body_height)
+                      sole_spacing=legs.sole_spacing, upper_body_height=legs.upper_body_height,
+                      line_feet=legs.left.sole.foot == legs.right.sole.foot == "line")
     if not legs.ankle_roll:
         last = robot.joint_name(legs.left.joints[-1])
         notes.append(f"the legs have no ankle roll (the left leg ends at {last}): a flat stance foot cannot move the "

@@ -351,7 +351,8 @@ def _gait(draft: Draft) -> list[str]:
         "# the robot's default gait (what `gait generate` uses without flags), scaled with the leg length l",
         f"step_length = {num(s.gait['step_length'], 3)}  # {rules.step_length:g} × l",
         f"step_duration = {num(s.gait['step_duration'], 3)}  # {c:g} × √(l/g) = {c:g} × {t:.3g} s (flat-foot"
-        + ("; narrow soles: robot.scale.step_duration_narrow" if narrow_soles(size) else "")
+        + ("; line feet: robot.scale.step_duration_line" if size.line_feet
+           else "; narrow soles: robot.scale.step_duration_narrow" if narrow_soles(size) else "")
         + f"; multi-contact: {rules.step_duration_multicontact:g} × √(l/g))",
         f"step_width = {num(s.gait['step_width'], 3 if size.ankle_roll else 4)}  # {width_rule}",
         f"step_height = {num(s.gait['step_height'], 3)}  # {rules.step_height:g} × l",

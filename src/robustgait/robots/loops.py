@@ -354,15 +354,39 @@ def closed_state(model: mujoco.MjModel, passive: tuple[int, ...], qpos: FloatArr
     at rest, every other passive joint solved from the loops — positions by :func:`close_loops` from the model's
     ``qpos0``, velocities the least-norm v_p with J_p v_p = −J_rest v_rest on the loops' rows (:func:`loop_rows`)."""
     q, v = padded_state(model, passive, qpos, qvel)
+    q = closed_posture(model, passive, q)
+    return q, closed_velocity(model, passive, q, v)
+
+
+def closed_posture(model: mujoco.MjModel, passive: tuple[int, ...], qpos: FloatArray) -> FloatArray:
+    """``qpos`` (nq,) with each passive spring at its springref and every other passive joint solved from the loops
+    (:func:`close_loops`, from the passive values given: a closed posture nearby stays on its branch); the planned,
+    held and base coordinates as given. A model without passive joints gets ``qpos`` as it is."""
+    if not passive:
+        return np.asarray(qpos, dtype=float)
+    q = np.array(qpos, dtype=float)
     springs = {sp.joint: sp.springref for sp in find_springs(model, passive)}
     for j, ref in springs.items():
         q[int(model.jnt_qposadr[j])] = ref
-    solved = tuple(j for j in passive if j not in springs)
     loops, _ = closed_chains(model)
-    q = close_loops(model, q, loops, solved, LOOP_CLOSE_TOLERANCE)
+    return close_loops(model, q, loops, tuple(j for j in passive if j not in springs), LOOP_CLOSE_TOLERANCE)
+
+
+def closed_velocity(model: mujoco.MjModel, passive: tuple[int, ...], qpos: FloatArray, qvel: FloatArray
+                    ) -> FloatArray:
+    """``qvel`` (nv,) (or (nv, c): columns of velocities) with the passive joints other than springs moving as the
+    loops at the closed configuration ``qpos`` require: the least-norm v_p with J_p v_p = −J_rest v_rest on the loops'
+    rows (:func:`loop_rows`; a rod's spin 0), the springs at rest (rigid). Without passive joints: ``qvel``."""
+    v = np.array(qvel, dtype=float)
+    if not passive:
+        return v
+    springs = {sp.joint for sp in find_springs(model, passive)}
+    loops, _ = closed_chains(model)
     data = mujoco.MjData(model)
-    data.qpos[:] = q
+    data.qpos[:] = qpos
     _, jac = loop_rows(model, data, loops)
-    dofs = list(joint_dofs(model, solved))
+    v[list(joint_dofs(model, tuple(springs)))] = 0.0
+    dofs = list(joint_dofs(model, tuple(j for j in passive if j not in springs)))
+    v[dofs] = 0.0
     v[dofs] = -np.linalg.lstsq(jac[:, dofs], jac @ v, rcond=None)[0]
-    return q, v
+    return v

@@ -32,6 +32,7 @@ from robustgait.errors import RobustGaitError, input_error
 from robustgait.robots.held import weld_joints
 from robustgait.robots.legs import ankle_roll_joint, foot_chain
 from robustgait.robots.loops import DOF_SIZE, QPOS_SIZE, check_closed_chains
+from robustgait.robots.passivemirror import passive_mirror
 from robustgait.robots.sides import body_partners, mass_asymmetry
 from robustgait.robots.solebox import SoleBox, sole_box
 from robustgait.robots.soles import ResolvedSole, resolve_floor, resolve_soles
@@ -189,6 +190,8 @@ class Robot:
                               f"{len(ids)} and holds {len(held)}: every non-base joint must be in joints.names or "
                               f"joints.held (missing: {', '.join(sorted(names)) or 'none'})")
         self.passive_ids: tuple[int, ...] = passive
+        self._passive_mirror = (passive_mirror(m, passive, int(base.id), spec.base_mirror_sign, spec.source)
+                                if passive else None)
         self.qpos_idx: NDArray[np.int64] = np.array([m.jnt_qposadr[i] for i in ids], dtype=np.int64)
         self.dof_idx: NDArray[np.int64] = np.array([m.jnt_dofadr[i] for i in ids], dtype=np.int64)
         self.held_qpos_idx: NDArray[np.int64] = np.array([m.jnt_qposadr[i] for i in held], dtype=np.int64)
@@ -394,7 +397,8 @@ class Robot:
         """The state relabeled for the other stance: a reflection S of the base about the sagittal plane.
 
         Base position p → S p, orientation R → S R S, linear velocity v → S v, angular velocity (world or
-        body frame alike) ω → det(S) S ω; planned and held joints permuted and signed. qpos (..., nq), qvel (..., nv).
+        body frame alike) ω → det(S) S ω; planned and held joints permuted and signed; a closed chain's passive
+        joints onto their partners' (:mod:`robustgait.robots.passivemirror`). qpos (..., nq), qvel (..., nv).
         """
         s = np.asarray(self.spec.base_mirror_sign[:3])
         qp = np.array(qpos, dtype=float)
@@ -409,6 +413,8 @@ class Robot:
         if self.spec.held:
             qp[..., self.held_qpos_idx] = np.asarray(qpos)[..., self.held_qpos_idx[self._held_perm]] * self._held_sign
             qv[..., self.held_dof_idx] = np.asarray(qvel)[..., self.held_dof_idx[self._held_perm]] * self._held_sign
+        if self._passive_mirror is not None:
+            self._passive_mirror.apply(np.asarray(qpos, dtype=float), np.asarray(qvel, dtype=float), qp, qv)
         return qp, qv
 
     def __repr__(self) -> str:

@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 from robustgait.config.regulator import RegulatorConfig
 from robustgait.gait import Gait
 from robustgait.robots import Robot
+from robustgait.robots.loops import closed_posture, closed_velocity, passive_addresses
 from robustgait.robots.solebox import SoleBox
 from robustgait.sim import hlip
 from robustgait.sim.controller import desired_outputs
@@ -90,11 +91,17 @@ def com_state(robot: Robot, data: mujoco.MjData, states: Array, stance: str) -> 
 
 
 def _posture(robot: Robot, gait: Gait, tau: Array) -> Array:
-    """qpos (K, nq) with the base at the origin, the planned joints at y_d(τ) and the held ones at their angles."""
+    """qpos (K, nq) with the base at the origin, the planned joints at y_d(τ) and the held ones at their angles; a
+    closed chain's passive joints solved from its loops, springs at rest (:func:`robustgait.robots.loops.
+    closed_posture`: where the knee puts Cassie's tarsus, and with it the foot)."""
     q = np.zeros((tau.size, robot.model.nq))
     q[:, 3] = 1.0
     q[:, robot.qpos_idx] = desired_outputs(gait, tau)[0]
     q[:, robot.held_qpos_idx] = robot.held_angle
+    if robot.passive_ids:
+        qadr, _ = passive_addresses(robot.model, robot.passive_ids)
+        q[:, qadr] = robot.model.qpos0[qadr]
+        q = np.array([closed_posture(robot.model, robot.passive_ids, row) for row in q])
     return q
 
 
@@ -138,6 +145,7 @@ def com_jacobian(robot: Robot, gait: Gait, tau: Array, joints: NDArray[np.int64]
             for sign in (1.0, -1.0):
                 moved = q.copy()
                 moved[robot.qpos_idx[j]] += sign * dq
+                moved = closed_posture(robot.model, robot.passive_ids, moved)  # the loops move with the joint
                 side.append(_com_in_sole(robot, data, moved, sole))
             out[i, :, c] = (side[0] - side[1])[:2] / (2.0 * dq)
     return out
@@ -160,7 +168,10 @@ def landing_map(robot: Robot, gait: Gait) -> tuple[Array, Array]:
     the gait's pre-impact posture (τ = 1), keeping its orientation (minimum-norm solution on the 5 × n Jacobian of
     the swing sole's horizontal position and orientation, base fixed: near a straight landing leg, holding the
     height too would take large knee motions for a millimetre of height); and the swing sole's position relative to
-    the stance sole there (2,) [m]."""
+    the stance sole there (2,) [m]. A line foot keeps its pitch and yaw only (4 × n): it lands on its line at any
+    roll, and a leg without an ankle roll cannot move its foot sideways at a fixed roll (the least-squares inverse
+    then asks near-singular hip-pitch and knee offsets). A closed chain's passive joints move with the planned ones
+    through its loops (:func:`robustgait.robots.loops.closed_velocity`)."""
     m = robot.model
     data = mujoco.MjData(m)
     data.qpos[:] = _posture(robot, gait, np.array([1.0]))[0]
@@ -172,8 +183,14 @@ def landing_map(robot: Robot, gait: Gait) -> tuple[Array, Array]:
     jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
     mujoco.mj_jacGeom(m, data, jacp, jacr, robot.sole_geom_id[swing])
     dofs = swing_dofs(robot, swing)
-    cols = robot.dof_idx[dofs]
-    jac = np.vstack([(rot @ jacp[:, cols])[:2], rot @ jacr[:, cols]])  # (5, n)
+    # unit rates of the swing leg's planned joints, with a closed chain's passive joints moving as its loops require
+    rates = np.zeros((m.nv, dofs.size))
+    rates[robot.dof_idx[dofs], np.arange(dofs.size)] = 1.0
+    rates = closed_velocity(m, robot.passive_ids, data.qpos, rates)
+    turn = rot @ jacr @ rates
+    if robot.spec.feet.get(swing) == "line":  # a line lands on its line at any roll: the sole's pitch and yaw held
+        turn = turn[1:]
+    jac = np.vstack([(rot @ jacp @ rates)[:2], turn])  # (5 or 4, n)
     g = np.zeros((robot.n_joints, 2))
     g[dofs] = np.linalg.pinv(jac)[:, :2]
     rel = rot @ (data.geom_xpos[robot.sole_geom_id[swing]] - data.geom_xpos[robot.sole_geom_id[stance]])
