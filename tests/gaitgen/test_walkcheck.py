@@ -19,6 +19,7 @@ from robustgait.gaitgen.walkcheck import (
     probable_cause,
     retry_margin,
     sole_tipping,
+    tipping_text,
     walk_check,
     walk_plan,
 )
@@ -158,3 +159,42 @@ def test_a_tipping_sole_is_read_in_its_foot_frame(name, request):  # type: ignor
         state[1 + 3:1 + 7] = [np.cos(roll / 2), -np.sin(roll / 2), 0.0, 0.0]  # right side up: the left foot stands
         found = sole_tipping(robot, state[None])
         assert found is not None and found[0] == "left" and found[2] == "outer"
+
+
+def test_a_line_foot_rolls_freely_and_tips_over_its_toe_or_heel(tmp_path):  # type: ignore[no-untyped-def]
+    """A line foot (the inline closed-chain biped of tests/robots/test_loops.py) is free to roll about its line: rolled
+    0.3 rad about the forward axis (the left foot lifted) its stance foot has not tipped; pitched 0.3 rad as well, it
+    tipped over its toe, and the walk check says so in the line foot's terms (its length, not a width of 0 cm)."""
+    import mujoco
+
+    from robustgait import load_robot
+    from robustgait.cli import main
+    from tests.inspection.biped import SERVO_RULE, write
+    from tests.robots.test_loops import chain_xml
+
+    model, spec = write(tmp_path, chain_xml(), "chain.xml"), tmp_path / "chain.toml"
+    assert main(["robot", "init", str(model), "-o", str(spec), *SERVO_RULE]) == 0
+    robot = load_robot(spec)
+    assert robot.spec.feet == {"left": "line", "right": "line"}
+    nq = robot.model.nq
+    state = np.zeros(1 + nq + robot.model.nv)
+    state[1:1 + nq] = robot.model.qpos0
+    state[1 + 2] = 1.0
+
+    def tilted(roll: float, pitch: float) -> np.ndarray:
+        q = np.zeros(4)
+        mujoco.mju_mulQuat(q, np.array([np.cos(roll / 2), np.sin(roll / 2), 0.0, 0.0]),
+                           np.array([np.cos(pitch / 2), 0.0, np.sin(pitch / 2), 0.0]))
+        out = state.copy()
+        out[1 + 3:1 + 7] = q
+        return out[None]
+
+    assert sole_tipping(robot, tilted(0.3, 0.0)) is None  # the right foot stands, rolled on its line: not tipped
+    found = sole_tipping(robot, tilted(0.1, 0.3))
+    assert found is not None
+    side, tilt, edge, _ = found
+    assert side == "right" and edge == "toe" and tilt == pytest.approx(0.3, abs=0.01)
+    found = sole_tipping(robot, tilted(0.1, -0.3))  # leaning back: on its heel
+    assert found is not None and found[2] == "heel"
+    text = "the right stance foot tipped over its heel (17°; the line foot is 16.0 cm long)"
+    assert tipping_text(robot, found) == text

@@ -89,7 +89,8 @@ def sole_tipping(robot: Robot, trajectory: NDArray[np.float64], every: int = 5
                  ) -> tuple[str, float, str, int] | None:
     """The first stance sole that tipped over an edge in a recorded walk (n, nstate): (side, tilt [rad], which edge:
     outer, inner, toe or heel, the trajectory's row), or None. A sole is the stance sole while the other is ≥ 1 cm
-    higher; it tips when its tilt from the floor plane exceeds :data:`TIP_ANGLE`. The sole's axes are its
+    higher; it tips when its tilt from the floor plane exceeds :data:`TIP_ANGLE` — a line foot (``feet``: line) when
+    its pitch does, since it is free to roll about its line. The sole's axes are its
     :class:`~robustgait.robots.solebox.SoleBox`'s foot frame (a box whose x axis is its normal reads right)."""
     m = robot.model
     data = mujoco.MjData(m)
@@ -104,18 +105,33 @@ def sole_tipping(robot: Robot, trajectory: NDArray[np.float64], every: int = 5
                 continue
             # the foot frame's axes (x heel to toe, y left, z up) whichever of the sole geom's axes they are
             r = robot.sole_boxes[side].world_frame(data)
-            tilt = math.acos(min(max(r[2, 2], -1.0), 1.0))
+            roll, pitch = r[2, 1], r[2, 0]  # the world z axis in the foot frame: the sole's roll and pitch
+            line = robot.spec.feet.get(side) == "line"
+            # a line foot is free to roll about its line: only its pitch over the toe or the heel tips it
+            tilt = math.asin(min(abs(pitch), 1.0)) if line else math.acos(min(max(r[2, 2], -1.0), 1.0))
             if tilt > TIP_ANGLE:
-                roll, pitch = r[2, 1], r[2, 0]  # the world z axis in the foot frame: the sole's roll and pitch
-                if abs(roll) >= abs(pitch):
+                if abs(roll) >= abs(pitch) and not line:
                     # the foot frame's y axis points to the robot's left, so a sole whose +y edge is down (roll < 0)
                     # rests on its left edge: the outer edge of a left sole, the inner edge of a right one
                     down_left = roll < 0
                     edge = "outer" if down_left == (side == "left") else "inner"
                 else:
-                    edge = "toe" if pitch > 0 else "heel"
+                    # pitch is the world z component of the heel-to-toe axis: below 0 the toes are down, the heel up
+                    edge = "toe" if pitch < 0 else "heel"
                 return side, tilt, edge, row
     return None
+
+
+def tipping_text(robot: Robot, tip: tuple[str, float, str, int]) -> str:
+    """What :func:`sole_tipping` found, in one phrase: the side, the edge (a line foot's toe or heel), the tilt [°] and
+    the sole's width (a line foot's length)."""
+    side, tilt, edge, _ = tip
+    if robot.spec.feet.get(side) == "line":
+        length = 2.0 * robot.sole_boxes[side].half_length
+        return (f"the {side} stance foot tipped over its {edge} ({math.degrees(tilt):.0f}°; the line foot is "
+                f"{length * 100:.1f} cm long)")
+    return (f"the {side} stance sole tipped over its {edge} edge ({math.degrees(tilt):.0f}°; the sole is "
+            f"{robot.sole_width * 100:.1f} cm wide)")
 
 
 def planned_envelope(robot: Robot, gait: Gait, samples: int = 101) -> NDArray[np.float64]:
@@ -166,10 +182,7 @@ def probable_cause(robot: Robot, gait: Gait, result: WalkResult, check: PhysicsC
             return (f"{name} reached the {end} end of its range in step {step_of(result, float(tr[row, 0]))} "
                     "(the tracking and the step corrections have no room left there)"), name
         if tip is not None:
-            side, tilt, edge, _ = tip
-            width = robot.sole_width
-            return (f"the {side} stance sole tipped over its {edge} edge ({math.degrees(tilt):.0f}°; the sole is "
-                    f"{width * 100:.1f} cm wide)"), None
+            return tipping_text(robot, tip), None
     if check is not None and check.on_cop_bound:
         return f"the gait's centre of pressure sits on its bound ({check.cop_text()})", None
     sat = result.tracking.get("saturation_fraction", 0.0)
