@@ -20,6 +20,7 @@ in every domain of its graph and at every transition:
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -177,10 +178,22 @@ class _Worst:
     continuity: float = 0.0
 
 
+class NodeResidual(NamedTuple):
+    """A node's residual of the equations of motion (:func:`node_residual`): ``r`` (nv,) [N, N m], ``scale``
+    ‖M q̈‖ + ‖c‖ it is measured against, the node's ``qpos`` and ``qvel`` in the check's model, and the contact
+    Jacobian ``J`` (rows, nv) there."""
+
+    r: FloatArray
+    scale: float
+    qpos: FloatArray
+    qvel: FloatArray
+    J: FloatArray
+
+
 def node_residual(ev: CheckModel, contacts: tuple[Contact, ...], stance: str, ns: NodeStates, i: int
-                  ) -> tuple[FloatArray, float, FloatArray, FloatArray]:
-    """Node ``i``'s residual of the equations of motion in ``ev``'s model (module docstring), r (nv,) [N, N m], and
-    ‖M q̈‖ + ‖c‖, what it is measured against; and the node's (qpos, qvel) there (``ev`` left at that state)."""
+                  ) -> NodeResidual:
+    """Node ``i``'s residual of the equations of motion in ``ev``'s model (module docstring), measured against
+    ‖M q̈‖ + ‖c‖, with the node's state and contact Jacobian there (``ev`` left at that state)."""
     m, d = ev.m, ev.d
     qpos, qvel = ev.state(ns.H[i], ns.s[i], ns.vb[i], ns.sd[i])
     qacc = ev.velocity(qpos, np.concatenate([ns.ab[i], ns.sdd[i]]))
@@ -192,16 +205,15 @@ def node_residual(ev: CheckModel, contacts: tuple[Contact, ...], stance: str, ns
     r = M @ qacc + d.qfrc_bias - tau - J.T @ ns.lam[i]
     if ev.closed:
         r -= ev.loop_jacobian(ns.s[i]).T @ ns.lamh[i]
-    return r, float(np.linalg.norm(M @ qacc) + np.linalg.norm(d.qfrc_bias)), qpos, qvel
+    return NodeResidual(r, float(np.linalg.norm(M @ qacc) + np.linalg.norm(d.qfrc_bias)), qpos, qvel, J)
 
 
 def _check_node(ev: CheckModel, prob: GaitProblem, params: GaitParams, contacts: tuple[Contact, ...], ns: NodeStates,
                 i: int, worst: _Worst) -> None:
     """One node's equations of motion, contacts and wrenches against MuJoCo's (``worst`` updated in place)."""
     stance, cfg = prob.stance, prob.config
-    r, scale, qpos, qvel = node_residual(ev, contacts, stance, ns, i)
+    r, scale, qpos, qvel, J = node_residual(ev, contacts, stance, ns, i)
     worst.dynamics = max(worst.dynamics, float(np.linalg.norm(r) / max(scale, 1.0)))
-    J = _contact_jacobian(ev, contacts, stance, qpos)
     worst.drift = max(worst.drift, float(np.linalg.norm(J @ qvel)))
     j = 0
     for c in contacts:
