@@ -33,15 +33,17 @@ from robustgait.robots.legs import ankle_roll_joint
 from robustgait.robots.solebox import box_up, sole_box
 from robustgait.robots.soles import (
     GEOM_TYPES,
+    MIN_TREAD_FILL,
     SOLE_TYPES,
     article,
     foot_up,
     geom_sole_points,
+    line_chord,
     loader_rectangle,
     on_sole,
     one_box,
     sole_up,
-    tread_problem,
+    tread_fill,
 )
 
 SIDES = ("left", "right")
@@ -56,7 +58,9 @@ class FoundSole:
     closest to left, [m]) and the foot's bottom height at the posture (``bottom``, base at height 0). What a model
     offers, before any spec exists; how a spec's sole is built into the robot's model is
     :class:`robustgait.robots.soles.ResolvedSole`. ``tread``: how many of each mesh geom's convex-hull vertices are
-    on the sole (what ``robot init``'s comment says); ``foot``: ``flat`` or ``line`` (:func:`sole_kind`)."""
+    on the sole (what ``robot init``'s comment says); ``foot``: ``flat`` or ``line`` (:func:`sole_kind`; a tread whose
+    contact polygon covers less than :data:`~robustgait.robots.soles.MIN_TREAD_FILL` of its rectangle, ``fill``, is
+    a line foot on its longest chord along the foot, :func:`~robustgait.robots.soles.line_chord`)."""
 
     body: int
     geoms: tuple[int, ...]
@@ -67,6 +71,7 @@ class FoundSole:
     bottom: float
     tread: tuple[tuple[int, int], ...] = ()  # (mesh geom, its hull vertices on the sole) for each mesh geom
     foot: str = "flat"  # flat, or line: no support width (:func:`sole_kind`)
+    fill: float | None = None  # a tread with an area planned as a line foot: the share of its rectangle it covers
 
 
 @dataclass(frozen=True)
@@ -272,12 +277,8 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
             sole_class = classes.pop()
     up = tread_up(m, d, geoms)
     per_geom = [footprint_points(m, d, g, up) for g in geoms]
-    rf = d.xmat[foot].reshape(3, 3)
     on = on_sole(np.vstack(per_geom), up)  # across the geoms, as the loader's sole box
     pts = np.vstack(per_geom)[on]
-    local = (pts - d.xpos[foot]) @ rf
-    fwd = int(np.argmax(np.abs(rf[0, :])))  # the foot axes closest to forward and to left
-    lft = int(np.argmax(np.abs(rf[1, :])))
     box = one_box(m, geoms)
     if box:
         # one box is the sole itself, as the loader reads it: its own sizes and a rectangle, not its extent along the
@@ -287,19 +288,20 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
     else:
         # several geoms: the rectangle the loader spans its virtual sole on (turned onto the tread's plane, read
         # along the vertical where the foot's frame is tilted from its sole), not the points' extent here
-        half = loader_rectangle(m, geoms, robot.base).half
-        length, width = 2.0 * float(half[0]), 2.0 * float(half[1])
+        rect = loader_rectangle(m, geoms, robot.base)
+        length, width = 2.0 * float(rect.half[0]), 2.0 * float(rect.half[1])
     foot_kind = sole_kind(pts, length, width)
+    fill = None if box or foot_kind != "flat" else tread_fill(rect.tread)
+    if fill is not None and 0.0 < fill < MIN_TREAD_FILL:  # no flat sole (a heel point and a toe bar): a line on it
+        foot_kind, length, width = "line", line_chord(rect.tread).length, 0.0
+        return FoundSole(foot, geoms, kind, sole_class, length, width, bottom, _tread(m, geoms, per_geom, on),
+                         foot_kind, fill)
     if foot_kind == "point":
         raise input_error(src, f"no sole found for the {side} leg: the lowest geometry of body '{name}' spans "
                           f"{length:.3g} × {width:.3g} m, no area to stand on (a point foot, which robustgait does not "
                           "plan yet: add a box geom under the foot, or a capsule along it: a line foot)")
     if foot_kind == "line":
         length, width = float(np.max(np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=-1))), 0.0
-    problem = None if box or foot_kind == "line" else tread_problem(
-        side, f"{len(geoms)} {'geom' if len(geoms) == 1 else 'geoms'} of body '{name}'", local[:, [fwd, lft]])
-    if problem is not None:
-        raise input_error(src, problem)
     return FoundSole(foot, geoms, kind, sole_class, length, width, bottom, _tread(m, geoms, per_geom, on), foot_kind)
 
 

@@ -17,7 +17,7 @@ from robustgait.robotinit.draft import INTEGRATOR_NAMES, Draft
 from robustgait.robotinit.timestep import TimestepChoice, ms
 from robustgait.robotinit.tomltext import angle, key, num, text
 from robustgait.robots.sides import mass_asymmetry
-from robustgait.robots.soles import GEOM_TYPES, SOLE_PLANE_TOLERANCE, SOLE_TILT_SLOPE
+from robustgait.robots.soles import GEOM_TYPES, MIN_TREAD_FILL, SOLE_PLANE_TOLERANCE, SOLE_TILT_SLOPE
 from robustgait.robots.spec import FallCriteria
 
 
@@ -55,7 +55,13 @@ def _sole_lines(draft: Draft, side: str, sole: FoundSole) -> list[str]:
         if sole.sole_class is not None:
             lines.append(f"sole_class = {text(sole.sole_class)}  # just the sole's geoms: the body's other "
                          "collision geoms are of other classes")
-    if sole.foot != "flat":
+    if sole.foot != "flat" and sole.fill is not None:
+        lines.append(f"foot = {text(sole.foot)}  # its contact polygon covers {100 * sole.fill:.0f} % of the "
+                     "rectangle around it (a heel point and a toe bar cover 50 %; a flat sole at least "
+                     f"{100 * MIN_TREAD_FILL:.0f} %): planned on its longest chord along the foot, "
+                     f"{sole.length:.3g} m (the centre of pressure moves along the line only; lateral balance by "
+                     "foot placement)")
+    elif sole.foot != "flat":
         lines.append(f"foot = {text(sole.foot)}  # its ground points lie on a line {sole.length:.3g} m long: no "
                      "support width (the centre of pressure moves along the line only; lateral balance by foot "
                      "placement)")

@@ -56,10 +56,10 @@ SOLE_TILT_SLOPE = 0.0175
 # A flat face's vertices lie on it to float32 precision (MuJoCo stores mesh vertices so: ~1e-8 m), and a chamfer's or
 # a rounded edge's a few millimetres above it (a 4 mm chamfer widened a 0.034 m face to 0.042 m under on_sole's band)
 MESH_FACE_TOLERANCE = 0.001
-# a tread whose contact polygon covers less than this share of the rectangle around it is refused: the planner keeps
-# the centre of pressure inside that rectangle, where a triangle (a heel point and a toe bar: 0.5) has no contact at
-# the heel's corners; a disk (π/4 ≈ 0.79, its 8 rim points 0.71–0.83) or a trapezoid whose heel is a quarter as wide
-# (0.63) is kept
+# a tread whose contact polygon covers less than this share of the rectangle around it is no flat sole: the planner
+# keeps a flat sole's centre of pressure inside that rectangle, where a triangle (a heel point and a toe bar: 0.5) has
+# no contact at the heel's corners, so it is planned as a line foot on its longest chord (:func:`line_chord`); a disk
+# (π/4 ≈ 0.79, its 8 rim points 0.71–0.83) or a trapezoid whose heel is a quarter as wide (0.63) is a flat sole
 MIN_TREAD_FILL = 0.6
 
 
@@ -396,6 +396,46 @@ def tread_fill(points: FloatArray) -> float:
         return 0.0
 
 
+class Chord(NamedTuple):
+    """A segment along the toe axis in a sole's (toe, left) plane [m]: from ``start`` to ``end`` along the toe axis,
+    at ``across`` to the left."""
+
+    start: float
+    end: float
+    across: float
+
+    @property
+    def length(self) -> float:
+        return self.end - self.start
+
+
+def line_chord(points: FloatArray, samples: int = 201) -> Chord:
+    """The line a tread (its ground points (k, 2), (toe, left) [m]) is planned as a line foot on: the longest chord
+    of its convex hull along the toe axis, at the lateral offset y* = argmax_y L(y), L(y) the length of the hull's
+    section {(x, y)} (``samples`` offsets across its width; of equally long ones, the nearest the middle). It lies
+    inside the contact polygon over its whole length, so a centre of pressure on it is one the foot supports: for
+    Unitree H1's heel point and toe bar (a triangle), the line from the heel to the toe bar's middle. Points that
+    span no area (a capsule along the foot) give their own extent along the toe axis."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    pts = np.asarray(points, dtype=float)
+    mid = float(pts[:, 1].min() + pts[:, 1].max()) / 2.0
+    try:
+        hull = ConvexHull(pts)
+    except QhullError:  # collinear points: the line itself
+        return Chord(float(pts[:, 0].min()), float(pts[:, 0].max()), mid)
+    a, b, c = hull.equations[:, 0], hull.equations[:, 1], hull.equations[:, 2]  # a x + b y + c <= 0 inside
+    best = Chord(0.0, 0.0, mid)
+    offsets = np.linspace(pts[:, 1].min(), pts[:, 1].max(), samples)
+    for y in sorted(offsets, key=lambda v: abs(v - mid)):  # the middle first: it keeps ties
+        rhs = -(b * y + c)
+        lo = max((float(r / q) for q, r in zip(a, rhs, strict=True) if q < -1e-12), default=-np.inf)
+        hi = min((float(r / q) for q, r in zip(a, rhs, strict=True) if q > 1e-12), default=np.inf)
+        if np.all(rhs[np.abs(a) <= 1e-12] >= -1e-12) and hi - lo > best.length + 1e-9:
+            best = Chord(lo, hi, float(y))
+    return best
+
+
 def tread_problem(side: str, what: str, points: FloatArray) -> str | None:
     """The one-line refusal of a sole whose tread (its ground points (k, 2) [m]) covers less than
     :data:`MIN_TREAD_FILL` of the rectangle around it (:func:`tread_fill`), naming the sole (``what``) and what to
@@ -408,7 +448,8 @@ def tread_problem(side: str, what: str, points: FloatArray) -> str | None:
             f"{size[0]:.3g} × {size[1]:.3g} m rectangle around it (a triangle of a heel point and a toe bar covers "
             f"50 %), and robustgait keeps the centre of pressure inside that rectangle: add a box geom under the foot "
             f"spanning its tread, or a sphere at each of its four corners, and name it as the sole "
-            f"(legs.{side}.sole_geom)")
+            f"(legs.{side}.sole_geom); or plan it as a line foot on its longest chord along the foot "
+            f"(legs.{side}.foot = \"line\")")
 
 
 def sole_rectangle(model: mujoco.MjModel, data: mujoco.MjData, geoms: list[int], forward: FloatArray,
@@ -503,11 +544,13 @@ def resolve_sole(spec: RobotSpec, mjs: mujoco.MjSpec, model: mujoco.MjModel, sid
         raise input_error(src, f"the {side} sole ({leg.describe()}) spans no area ({2 * half[0]:.3g} × "
                           f"{2 * half[1]:.3g} m): name geoms that cover the foot's support"
                           + ("" if line else ", or say that it is a line foot (foot = \"line\")"))
-    elif line:
-        raise input_error(src, f"legs.{side}.foot: the sole ({leg.describe()}) spans {2 * half[0]:.3g} × "
-                          f"{2 * half[1]:.3g} m, an area, not a line along the foot")
-    problem = tread_problem(side, leg.describe(), tread)
-    if problem is not None:
+    elif line:  # a tread with an area planned as a line foot: its box on the longest chord inside it
+        chord = line_chord(tread)
+        shift = np.array([(chord.start + chord.end) / 2 - (tread[:, 0].min() + tread[:, 0].max()) / 2,
+                          chord.across - (tread[:, 1].min() + tread[:, 1].max()) / 2, 0.0])
+        centre = centre + rot @ shift
+        half[0], half[1] = chord.length / 2, LINE_HALF_WIDTH
+    if not line and (problem := tread_problem(side, leg.describe(), tread)) is not None:
         raise input_error(src, problem)
     body = bodies[int(model.geom_bodyid[ids[0]])]
     if not body.name:
