@@ -299,7 +299,16 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
                       sole_length=legs.left.sole.length, sole_width=legs.left.sole.width, ankle_roll=legs.ankle_roll,
                       sole_spacing=legs.sole_spacing, upper_body_height=legs.upper_body_height,
                       line_feet=legs.left.sole.foot == legs.right.sole.foot == "line")
-    if not legs.ankle_roll:
+    if not legs.ankle_roll and size.line_feet:
+        last = robot.joint_name(legs.left.joints[-1])
+        notes.append(f"the legs have no ankle roll (the left leg ends at {last}) and stand on line feet: a line foot "
+                     "takes no roll moment, so neither an ankle nor the hips move the centre of pressure sideways; "
+                     "the robot balances sideways by foot placement, as a point foot does (the H-LIP's stepping, "
+                     "Xiong & Ames, IEEE T-RO 38(4), 2022: the step regulator, sim.regulator), its pelvis roll "
+                     "bounded as exo's; step width = the soles' spacing "
+                     f"{legs.sole_spacing:.4g} m (gait generate plans legs without an ankle roll parallel), not "
+                     "searched, and gaits are flat-foot (multi-contact rolls the heel with an ankle roll)")
+    elif not legs.ankle_roll:
         last = robot.joint_name(legs.left.joints[-1])
         notes.append(f"the legs have no ankle roll (the left leg ends at {last}): a flat stance foot cannot move the "
                      "centre of pressure sideways by itself, so the hips balance sideways (the pelvis may roll "
