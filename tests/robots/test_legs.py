@@ -100,6 +100,20 @@ def test_the_scale_rules_of_legs_without_an_ankle_roll():
     assert s.angular_velocity == pytest.approx(2 * math.pi * s.pelvis_roll / s.gait["step_duration"], rel=2e-2)
 
 
+def test_line_feet_balance_by_foot_placement_not_by_the_hips():
+    """Legs without an ankle roll on line feet: a line foot takes no roll moment, so the hip rule (the pelvis rolled
+    over the stance foot) does not apply: exo's pelvis roll and its rate; the step width stays the soles' spacing."""
+    base: dict[str, float] = dict(leg_length=1.02, standing_height=1.01, mass=33.3, gravity=9.81, hip_spacing=0.27,
+                                  sole_length=0.16, sole_width=0.0, ankle_roll=False, sole_spacing=0.2701,
+                                  upper_body_height=0.0284)
+    hips = scale(RobotScale(**base), ScaleRules())  # flat soles as narrow: the hips balance sideways
+    line = scale(RobotScale(**base, line_feet=True), ScaleRules())
+    assert hips.pelvis_roll > 1.0 and line.pelvis_roll == ScaleRules().pelvis_roll
+    rate = ScaleRules().angular_velocity * math.sqrt(9.81 / 1.02)
+    assert hips.angular_velocity > 2 * rate and line.angular_velocity == pytest.approx(rate, rel=1e-2)
+    assert line.gait["step_width"] == 0.2701 and line.action_space["step_width"][:2] == (0.2701, 0.2701)
+
+
 @pytest.mark.slow
 def test_the_h1_like_biped_walks_300_steps_and_is_certified(tmp_path: Path, capsys: pytest.CaptureFixture[str]):
     """robot init with its defaults (the timestep by accuracy: the default gait generated and walked at each step),

@@ -148,6 +148,9 @@ def test_robot_init_writes_loops_springs_and_a_line_foot_that_load(tmp_path: Pat
     assert raw["joints"]["names"] == [f"{s}_{j}" for s in ("left", "right") for j in ("hip_roll", "hip_pitch",
                                                                                        "knee", "foot")]
     assert "residual" in spec.read_text() and "4 closed chain" not in out and "2 closed chains" in out
+    # line feet balance sideways by foot placement: exo's pelvis roll, not the hips' rule
+    assert raw["gait_quality"]["pelvis_roll"] == 0.05 and "the robot balances sideways by foot placement" in out
+    assert "the hips balance sideways" not in spec.read_text()
     robot = load_robot(spec)
     box = robot.sole_boxes["left"]
     assert box.half_length == pytest.approx(0.08, abs=1e-3) and box.half_width <= 1e-4

@@ -2,12 +2,14 @@
 its thresholds in :class:`robustgait.config.RobotCheckConfig` (``docs/robots.md``, "Your robot").
 
 * :func:`check_mirror` — the spec's relabeling reflects the model (forward kinematics, :mod:`.mirror`);
-* :func:`check_soles` — in the posture both soles are flat (normal vs vertical) and at one height;
+* :func:`check_soles` — in the posture (its springs deflected by the weight, :func:`loaded`) both soles are flat
+  (normal vs vertical) and at one height;
 * :func:`check_torques` — the torque limits hold the posture: the static torques of double support (the weight
   split to need the least of each limit) within a margin of the limits;
 * :func:`check_stiffness` — on one foot, each servo of the stance chain is stiffer than gravity's tipping stiffness
   about its joint (an inverted pendulum about the ankle: m g h) by a margin;
-* :func:`check_stand` — the posture stands under the servos: free base on the floor for a while; the base's
+* :func:`check_stand` — the posture stands under the servos: free base on the floor for a while, from the posture as
+  it stands (:func:`loaded`: a robot whose springs start undeflected drops onto them); the base's
   drop, tilt and the soles' slide, no fall (the spec's fall criteria), both soles in contact at the end;
 * :func:`check_tracking` — the gains track: the robot hanging (base fixed, contacts off), every planned joint
   follows a sinusoid about the posture with the walker's servo law (c = q_d + kd q̇_d / kp, no feedforward);
@@ -28,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.config import RobotCheckConfig, RobotConfig
-from robustgait.inspection.gains import static_torques, tipping_stiffness
+from robustgait.inspection.gains import settle_springs, static_torques, tipping_stiffness
 from robustgait.inspection.mirror import Mirror, fk_residual, mirror_from_names
 from robustgait.inspection.model import RobotModel, geom_bottom, with_closed_chains
 from robustgait.robots import Robot
@@ -54,6 +56,16 @@ def inspected(robot: Robot) -> RobotModel:
     angles |= {m.joint(h.name).id: h.angle for h in robot.spec.held}
     return with_closed_chains(RobotModel(robot.spec.source or Path(robot.spec.mjcf), "mjcf", robot.mjspec(), m,
                                          robot.base_body_id, None, angles))
+
+
+def loaded(robot: Robot) -> RobotModel:
+    """The inspected robot (:func:`inspected`) as it stands on both feet: its springs at their static deflection under
+    its weight (:func:`robustgait.inspection.gains.settle_springs`; the spec's posture holds them rigid), so that the
+    soles, torques, stiffness and stand checks see the posture the robot stands in; :func:`inspected` for a robot
+    without springs."""
+    rm = inspected(robot)
+    settle_springs(rm, [int(robot.model.geom_bodyid[robot.sole_geom_id[s]]) for s in SIDES])
+    return rm
 
 
 def standing_qpos(robot: Robot, rm: RobotModel) -> NDArray[np.float64]:
@@ -96,7 +108,7 @@ def check_mirror(robot: Robot, config: RobotConfig) -> CheckResult:
 
 def check_soles(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     """Both soles flat and level with each other in the posture."""
-    rm = inspected(robot)
+    rm = loaded(robot)
     d = rm.kinematics(standing_qpos(robot, rm))
     soles = robot.sole_boxes
     tilt = {s: soles[s].tilt(d) for s in SIDES}
@@ -110,7 +122,7 @@ def check_soles(robot: Robot, config: RobotCheckConfig) -> CheckResult:
 
 def check_torques(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     """The torque limits hold the posture in double support, with a margin."""
-    rm = inspected(robot)
+    rm = loaded(robot)
     m = robot.model
     q = standing_qpos(robot, rm)
     feet = [int(m.geom_bodyid[robot.sole_geom_id[s]]) for s in SIDES]
@@ -135,7 +147,7 @@ def check_stiffness(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     """On either foot alone, every servo of the stance chain (the joints from the base down to that foot, planned or
     held) is stiffer than gravity's tipping stiffness about its joint by ``stance_stiffness``
     (:func:`robustgait.inspection.gains.tipping_stiffness`): else single support yields and tips over."""
-    rm = inspected(robot)
+    rm = loaded(robot)
     m = robot.model
     q = standing_qpos(robot, rm)
     kp = dict(zip([*robot.spec.joints, *robot.spec.held_names], robot.servo_kp, strict=True))
@@ -158,7 +170,7 @@ def check_stiffness(robot: Robot, config: RobotCheckConfig) -> CheckResult:
 
 def check_stand(robot: Robot, config: RobotCheckConfig) -> CheckResult:
     """The posture stands for ``stand_time`` under its servos on the floor."""
-    rm = inspected(robot)
+    rm = loaded(robot)
     m = robot.model
     d = mujoco.MjData(m)
     d.qpos[:] = standing_qpos(robot, rm)

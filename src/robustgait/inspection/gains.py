@@ -29,7 +29,8 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from robustgait.inspection.model import RobotModel
+from robustgait.errors import input_error
+from robustgait.inspection.model import RobotModel, joint_range
 from robustgait.robots.loops import joint_dofs, loop_rows
 from robustgait.robots.model import mass_matrix
 
@@ -243,6 +244,71 @@ def _static_torques_closed(robot: RobotModel, d: mujoco.MjData, feet: list[int],
     out = bias - jac.T @ sol[: jac.shape[0]]
     out[base] = 0.0
     return out
+
+
+def standing_loads(robot: RobotModel, qpos: NDArray[np.float64], feet: list[int]) -> NDArray[np.float64]:
+    """The joint torques that hold the robot still at ``qpos`` standing on the ``feet`` bodies (welded), (nv,) with
+    the base's six entries 0, its weight split **without internal forces**: the feet's wrenches w are the least-norm
+    solution of the equilibrium of the base's dofs and of the passive joints that are not springs, g_C = A_Cᵀ f with
+    f = (w, μ) (μ the loops' forces, not minimised), and every other dof holds τ = g − Jᵀ w − J_hᵀ μ.
+
+    What each foot carries is then what the weight puts on it, neither foot pushing against the other. This is the
+    split a compliant stance settles into when the stance is left/right symmetric (its two legs equally stiff, the
+    weight's share and its centre of pressure the same on each foot): unlike :func:`static_torques`, which minimises
+    the servos' torques over the internal forces and lets them unload the springs, it is the load the springs
+    deflect under (:func:`settle_springs`)."""
+    m = robot.model
+    d = robot.kinematics(qpos)
+    b0 = int(m.jnt_dofadr[int(m.body_jntadr[robot.base])])
+    base = np.arange(b0, b0 + 6)
+    zero = joint_dofs(m, tuple(j for j in robot.passive if m.jnt_stiffness[j] == 0))
+    held = np.concatenate([base, np.asarray(zero, dtype=np.int64)])
+    jac = np.vstack([body_jacobian(m, d, f) for f in feet])
+    if robot.loops:
+        jac = np.vstack([jac, loop_rows(m, d, robot.loops)[1]])
+    bias = d.qfrc_bias.copy()  # gravity at zero velocity
+    a = jac[:, held].T
+    cost = np.zeros(jac.shape[0])
+    cost[: 6 * len(feet)] = 1.0  # the feet's wrenches minimised, the loops' forces free
+    kkt = np.block([[np.diag(cost), a.T], [a, np.zeros((held.size, held.size))]])
+    sol = np.linalg.lstsq(kkt, np.concatenate([np.zeros(jac.shape[0]), bias[held]]), rcond=None)[0]
+    out = bias - jac.T @ sol[: jac.shape[0]]
+    out[base] = 0.0
+    return out
+
+
+# iterations of :func:`settle_springs` and the change of a deflection [rad or m] it stops at
+SETTLE_ITERATIONS, SETTLE_TOLERANCE = 20, 1e-9
+
+
+def settle_springs(robot: RobotModel, feet: list[int]) -> dict[int, float]:
+    """The posture (``robot.angles``, edited) with its springs at their static deflection under the robot's weight
+    standing on the ``feet`` bodies: each spring at springref − τ/k, τ its :func:`standing_loads` torque, the loops
+    closed again (:meth:`RobotModel.close`), repeated until no deflection changes by more than
+    :data:`SETTLE_TOLERANCE` (the load moves with the posture). A posture whose springs are rigid (as gait generation
+    holds them) is not the posture the robot stands in: its weight turns every joint below a spring. Returns each
+    spring's angle (joint id → rad or m); {} for a robot without springs. Raises RobustGaitError (one line naming
+    the spring, its deflection and its range) when a spring would leave its range."""
+    m = robot.model
+    if not robot.springs:
+        return {}
+    angles: dict[int, float] = {}
+    for _ in range(SETTLE_ITERATIONS):
+        tau = standing_loads(robot, robot.qpos(), feet)
+        angles = {s.joint: s.springref - float(tau[int(m.jnt_dofadr[s.joint])]) / s.stiffness for s in robot.springs}
+        for s in robot.springs:
+            limits = joint_range(m, s.joint)
+            if limits is not None and not limits[0] <= angles[s.joint] <= limits[1]:
+                raise input_error(robot.path, f"spring '{robot.joint_name(s.joint)}' ({s.stiffness:g} N m/rad) "
+                                  f"would deflect to {angles[s.joint]:.4g} under the robot's weight standing in the "
+                                  f"posture ({tau[int(m.jnt_dofadr[s.joint])]:.4g} N m), outside its range "
+                                  f"[{limits[0]:.4g}, {limits[1]:.4g}]")
+        change = max(abs(a - robot.angles[j]) for j, a in angles.items())
+        robot.angles.update(angles)
+        robot.close()
+        if change <= SETTLE_TOLERANCE:
+            break
+    return angles
 
 
 def estimated_torque_limits(robot: RobotModel, qpos: NDArray[np.float64], soles: dict[int, NDArray[np.float64]],

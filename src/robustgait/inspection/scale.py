@@ -80,10 +80,19 @@ def hip_roll_angle(size: RobotScale) -> float:
     return math.atan2(size.sole_spacing / 2.0, max(size.upper_body_height, 1e-9))
 
 
+def hips_balance(size: RobotScale) -> bool:
+    """The robot balances sideways with its hips (:func:`hip_roll_angle`): legs without an ankle roll on flat soles.
+    Not line feet: a line foot takes no roll moment, so no posture of the upper body over it moves its centre of
+    pressure sideways; a line-footed robot balances sideways by where it puts its next foot (the H-LIP's stepping:
+    Xiong & Ames, "3-D underactuated bipedal walking via H-LIP based gait synthesis and stepping stabilization",
+    IEEE T-RO 38(4), 2022; the step regulator, :mod:`robustgait.sim.regulator`), as a point foot does."""
+    return not size.ankle_roll and not size.line_feet
+
+
 def pelvis_roll_bound(size: RobotScale, rules: ScaleRules) -> float:
-    """The gait-quality bound on the pelvis roll [rad]: exo's (``robot.scale.pelvis_roll``), or for legs without an
-    ankle roll :func:`hip_roll_angle`, if larger."""
-    return rules.pelvis_roll if size.ankle_roll else max(rules.pelvis_roll, hip_roll_angle(size))
+    """The gait-quality bound on the pelvis roll [rad]: exo's (``robot.scale.pelvis_roll``), or for a robot whose hips
+    balance it sideways (:func:`hips_balance`) :func:`hip_roll_angle`, if larger."""
+    return max(rules.pelvis_roll, hip_roll_angle(size)) if hips_balance(size) else rules.pelvis_roll
 
 
 def step_height(size: RobotScale, rules: ScaleRules) -> float:
@@ -92,11 +101,11 @@ def step_height(size: RobotScale, rules: ScaleRules) -> float:
 
 
 def angular_velocity_bound(size: RobotScale, rules: ScaleRules) -> float:
-    """Bound on each component of the pelvis angular velocity = c · √(g/l) [rad/s]; for legs without an ankle roll at
-    least 2π φ / T (φ the :func:`pelvis_roll_bound`, T the default step duration): the pelvis rolls over each stance
-    foot and back within a step."""
+    """Bound on each component of the pelvis angular velocity = c · √(g/l) [rad/s]; when the hips balance the robot
+    sideways (:func:`hips_balance`) at least 2π φ / T (φ the :func:`pelvis_roll_bound`, T the default step duration):
+    the pelvis rolls over each stance foot and back within a step."""
     rate = rules.angular_velocity * math.sqrt(size.gravity / size.leg_length)
-    if size.ankle_roll:
+    if not hips_balance(size):
         return rate
     return max(rate, 2.0 * math.pi * pelvis_roll_bound(size, rules) / step_duration(size, rules))
 

@@ -46,7 +46,7 @@ from robustgait.inspection.gains import (
 from robustgait.inspection.mirror import Mirror, Residual, find_mirror, fk_residual, name_partner
 from robustgait.inspection.model import RobotModel, open_model
 from robustgait.inspection.scale import Balance, Scaled, hip_roll_angle, scale
-from robustgait.robotinit.posture import centre_over_soles, level_soles, symmetric_angles
+from robustgait.robotinit.posture import centre_over_soles, level_soles, level_under_load, symmetric_angles
 from robustgait.robots.model import mass_matrix
 from robustgait.robots.soles import GEOM_TYPES, can_touch
 
@@ -220,6 +220,9 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     if centred > 0.0:
         robot.close()
         legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the leaned posture
+    loaded, under_load = level_under_load(robot, legs, mirror)
+    if under_load > 0.0:
+        legs = find_legs(robot, config.foot_level, config.sole_tolerance)  # in the posture levelled under load
     angles = robot.angles
     floor = find_floor(robot)
     _floor_collides(robot, floor, legs)
@@ -284,12 +287,28 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
     if levelled > 0.0:
         notes.append(f"the soles were not level in the posture: each ankle turned by up to {levelled:.3g} rad to "
                      "level them")
+    if under_load > 0.0:
+        bent = ", ".join(f"{robot.joint_name(j)} {a:.3g}" for j, a in loaded.items())
+        notes.append(f"the springs deflect under the robot's weight standing on both feet ({bent} rad; the weight "
+                     "split without internal forces): each ankle turned by up to "
+                     f"{under_load:.3g} rad to level the soles as it stands (robot check settles the springs so before "
+                     "it checks the soles and stands the posture; the posture's springs stay rigid, as gait generation "
+                     "holds them)")
     size = RobotScale(leg_length=legs.leg_length, standing_height=legs.standing_height, mass=robot.mass,
                       gravity=gravity, hip_spacing=legs.hip_spacing,
                       sole_length=legs.left.sole.length, sole_width=legs.left.sole.width, ankle_roll=legs.ankle_roll,
                       sole_spacing=legs.sole_spacing, upper_body_height=legs.upper_body_height,
                       line_feet=legs.left.sole.foot == legs.right.sole.foot == "line")
-    if not legs.ankle_roll:
+    if not legs.ankle_roll and size.line_feet:
+        last = robot.joint_name(legs.left.joints[-1])
+        notes.append(f"the legs have no ankle roll (the left leg ends at {last}) and stand on line feet: a line foot "
+                     "takes no roll moment, so neither an ankle nor the hips move the centre of pressure sideways; "
+                     "the robot balances sideways by foot placement, as a point foot does (the H-LIP's stepping, "
+                     "Xiong & Ames, IEEE T-RO 38(4), 2022: the step regulator, sim.regulator), its pelvis roll "
+                     "bounded as exo's; step width = the soles' spacing "
+                     f"{legs.sole_spacing:.4g} m (gait generate plans legs without an ankle roll parallel), not "
+                     "searched, and gaits are flat-foot (multi-contact rolls the heel with an ankle roll)")
+    elif not legs.ankle_roll:
         last = robot.joint_name(legs.left.joints[-1])
         notes.append(f"the legs have no ankle roll (the left leg ends at {last}): a flat stance foot cannot move the "
                      "centre of pressure sideways by itself, so the hips balance sideways (the pelvis may roll "

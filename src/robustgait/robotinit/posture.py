@@ -1,7 +1,8 @@
 """The posture ``robot init`` writes (``docs/robots.md``, "Your robot"): the model's keyframe (or every joint at 0)
 made left/right symmetric (:func:`symmetric_angles`), its soles levelled by the ankles (:func:`level_soles`: a foot
 plate's geoms rotated 90.5°), and its centre of mass brought over the soles when it stood near their edge
-(:func:`centre_over_soles`: a model without a keyframe stands with straight legs wherever its mass happens to lie).
+(:func:`centre_over_soles`: a model without a keyframe stands with straight legs wherever its mass happens to lie),
+and, for legs with springs, its soles levelled as it stands under its weight (:func:`level_under_load`).
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from robustgait.inspection.discover import SIDES, Legs, tread_points
+from robustgait.inspection.gains import settle_springs
 from robustgait.inspection.mirror import Mirror
 from robustgait.inspection.model import RobotModel, clip_to_range
 from robustgait.robots.legs import ankle_joints, axis_kinds, zero_axes
@@ -121,3 +123,31 @@ def centre_over_soles(robot: RobotModel, legs: Legs, mirror: Mirror, stand_fract
         lean -= e / slope
     robot.angles = leaned(lean)
     return abs(lean)
+
+
+LOAD_ROUNDS = 4  # rounds of settling the springs and levelling the soles (the load moves with the ankles a little)
+
+
+def level_under_load(robot: RobotModel, legs: Legs, mirror: Mirror) -> tuple[dict[int, float], float]:
+    """Level the soles as the posture stands under the robot's weight: the springs settled at their static deflection
+    standing on both feet (:func:`robustgait.inspection.gains.settle_springs`), the soles levelled there by the
+    ankles (:func:`level_soles`), repeated while the ankles still turn; then the springs back at their posture angles
+    and the loops closed again (the spec's posture holds the springs rigid, as gait generation does; ``robot check``
+    settles them again before it stands the posture). A leg whose spring turns its foot under load would otherwise
+    stand on one end of its sole: a line foot then balances on a point and tips over. Edits ``robot.angles``; returns
+    the springs' loaded angles (joint id → rad or m) and the ankles' largest change [rad] ({} and 0 for a robot
+    without springs)."""
+    if not robot.springs:
+        return {}, 0.0
+    rest = {s.joint: robot.angles[s.joint] for s in robot.springs}
+    before = dict(robot.angles)
+    feet = [legs[side].foot for side in SIDES]
+    loaded: dict[int, float] = {}
+    for _ in range(LOAD_ROUNDS):
+        loaded = settle_springs(robot, feet)
+        if level_soles(robot, legs, mirror) == 0.0:
+            break
+    robot.angles.update(rest)
+    robot.close()
+    ankles = ankle_joints(robot.model, legs.left.joints) + ankle_joints(robot.model, legs.right.joints)
+    return loaded, max((abs(robot.angles[j] - before[j]) for j in ankles), default=0.0)

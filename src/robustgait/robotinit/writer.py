@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from robustgait.inspection.discover import SIDES, FoundSole
-from robustgait.inspection.scale import GAIT_AXES, balance, duration_constant, narrow_soles, sig
+from robustgait.inspection.scale import GAIT_AXES, balance, duration_constant, hips_balance, narrow_soles, sig
 from robustgait.robotinit.chains import loop_lines, passive_lines
 from robustgait.robotinit.draft import INTEGRATOR_NAMES, Draft
 from robustgait.robotinit.timestep import TimestepChoice, ms
@@ -273,16 +273,20 @@ def _scaled(draft: Draft) -> list[str]:
         f"pelvis_roll = {num(s.pelvis_roll, 3)}  # "
         + ("exo's (robot.scale.pelvis_roll)" if size.ankle_roll else
            f"no ankle roll: atan((w/2) / h_u) = atan({size.sole_spacing / 2:.3g} / {size.upper_body_height:.3g}), the "
-           "roll that carries the upper body's centre of mass over the stance foot (the hips balance sideways)"),
+           "roll that carries the upper body's centre of mass over the stance foot (the hips balance sideways)"
+           if hips_balance(size) else
+           "exo's (robot.scale.pelvis_roll): line feet take no roll moment, so the upper body carried over the "
+           "stance foot does not balance the robot sideways; the next foothold does (H-LIP stepping: Xiong & Ames, "
+           "IEEE T-RO 38(4), 2022; sim.regulator)"),
         f"pelvis_yaw = {num(rules.pelvis_yaw)}  # exo's (robot.scale.pelvis_yaw)",
         f"pelvis_pitch = [{num(rules.pelvis_pitch[0])}, {num(rules.pelvis_pitch[1])}]  # exo's "
         "(robot.scale.pelvis_pitch)",
         f"pelvis_height = [{num(s.pelvis_height[0], 3)}, {num(s.pelvis_height[1], 3)}]  # "
         f"[{rules.pelvis_height[0]:g}, {rules.pelvis_height[1]:g}] × h",
         f"pelvis_angular_velocity = {num(s.angular_velocity, 3)}  # "
-        + (f"{rules.angular_velocity:g} × {rate}" if size.ankle_roll else
-           "no ankle roll: 2π × pelvis_roll / the default step duration (the pelvis rolls over each stance foot "
-           f"and back within a step), at least {rules.angular_velocity:g} × {rate}"),
+        + ("no ankle roll: 2π × pelvis_roll / the default step duration (the pelvis rolls over each stance foot "
+           f"and back within a step), at least {rules.angular_velocity:g} × {rate}" if hips_balance(size) else
+           f"{rules.angular_velocity:g} × {rate}"),
         f"swing_tilt = {num(rules.swing_tilt)}  # exo's (robot.scale.swing_tilt)",
         f"swing_yaw = {num(rules.swing_yaw)}  # exo's (robot.scale.swing_yaw)",
         f"joint_velocity = {num(s.joint_velocity, 3)}  # {rules.joint_velocity:g} × {rate}",
