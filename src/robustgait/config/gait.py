@@ -215,8 +215,9 @@ class RobotScale:
     rule reads them): ``standing_height`` h [m] (base above the soles in the posture), ``hip_spacing`` [m] (lateral
     distance of the legs' first joints), ``ankle_roll`` (both legs have one), ``sole_spacing`` [m] (lateral distance
     of the soles' centres in the posture), ``upper_body_height`` [m] (the centre of mass of all but the legs above
-    the legs' first joints) and ``line_feet`` (both soles are lines: no support width,
-    :func:`robustgait.inspection.discover.sole_kind`)."""
+    the legs' first joints), ``line_feet`` (both soles are planned as lines: no support width,
+    :func:`robustgait.inspection.discover.sole_kind`) and ``roll_support`` (the real treads take a roll moment: flat
+    soles, and treads with an area planned as lines — a heel point and a toe bar; not a capsule's line)."""
 
     mass: float
     gravity: float
@@ -229,6 +230,7 @@ class RobotScale:
     sole_spacing: float = 0.0
     upper_body_height: float = 0.0
     line_feet: bool = False
+    roll_support: bool = True
 
     @property
     def sole_half_length(self) -> float:

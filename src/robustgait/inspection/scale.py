@@ -81,12 +81,13 @@ def hip_roll_angle(size: RobotScale) -> float:
 
 
 def hips_balance(size: RobotScale) -> bool:
-    """The robot balances sideways with its hips (:func:`hip_roll_angle`): legs without an ankle roll on flat soles.
-    Not line feet: a line foot takes no roll moment, so no posture of the upper body over it moves its centre of
-    pressure sideways; a line-footed robot balances sideways by where it puts its next foot (the H-LIP's stepping:
-    Xiong & Ames, "3-D underactuated bipedal walking via H-LIP based gait synthesis and stepping stabilization",
-    IEEE T-RO 38(4), 2022; the step regulator, :mod:`robustgait.sim.regulator`), as a point foot does."""
-    return not size.ankle_roll and not size.line_feet
+    """The robot balances sideways with its hips (:func:`hip_roll_angle`): legs without an ankle roll on treads that
+    take a roll moment (``size.roll_support``: flat soles, and a heel point and toe bar planned as a line). Not on a
+    true line foot (one capsule): it takes no roll moment, so no posture of the upper body over it moves its centre of
+    pressure sideways; such a robot balances sideways by where it puts its next foot (the H-LIP's stepping: Xiong &
+    Ames, "3-D underactuated bipedal walking via H-LIP based gait synthesis and stepping stabilization", IEEE T-RO
+    38(4), 2022; the step regulator, :mod:`robustgait.sim.regulator`), as a point foot does."""
+    return not size.ankle_roll and size.roll_support
 
 
 def pelvis_roll_bound(size: RobotScale, rules: ScaleRules) -> float:

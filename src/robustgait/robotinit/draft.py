@@ -298,8 +298,9 @@ def draft_spec(path: str | Path, config: RobotConfig) -> Draft:
                       gravity=gravity, hip_spacing=legs.hip_spacing,
                       sole_length=legs.left.sole.length, sole_width=legs.left.sole.width, ankle_roll=legs.ankle_roll,
                       sole_spacing=legs.sole_spacing, upper_body_height=legs.upper_body_height,
-                      line_feet=legs.left.sole.foot == legs.right.sole.foot == "line")
-    if not legs.ankle_roll and size.line_feet:
+                      line_feet=legs.left.sole.foot == legs.right.sole.foot == "line",
+                      roll_support=not any(legs[s].sole.foot == "line" and legs[s].sole.fill is None for s in SIDES))
+    if not legs.ankle_roll and not size.roll_support:
         last = robot.joint_name(legs.left.joints[-1])
         notes.append(f"the legs have no ankle roll (the left leg ends at {last}) and stand on line feet: a line foot "
                      "takes no roll moment, so neither an ankle nor the hips move the centre of pressure sideways; "
