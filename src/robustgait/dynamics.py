@@ -233,6 +233,8 @@ class Dynamics:
         self._perm = np.zeros((self.n_joints, self.nv - 6))
         self._perm[np.arange(self.n_joints), self.dof_idx - 6] = 1.0
         self._fk: dict[str, cs.Function] = {}
+        self._jac: dict[str, cs.Function] = {}
+        self._jdot: dict[str, cs.Function] = {}
 
     @property
     def total_mass(self) -> float:
@@ -344,6 +346,20 @@ class Dynamics:
             self._fk[frame] = self.kindyn.forward_kinematics_fun(frame)
         return self._fk[frame]
 
+    def jacobian_fun(self, frame: str) -> cs.Function:
+        """CasADi function ``(H, s) -> J`` (6, 6 + n): adam's mixed Jacobian of a frame, built once per frame (adam
+        builds a new function at every call: a node loop that asked it again spent most of its time there)."""
+        if frame not in self._jac:
+            self._jac[frame] = self.kindyn.jacobian_fun(frame)
+        return self._jac[frame]
+
+    def jacobian_dot_fun(self, frame: str) -> cs.Function:
+        """CasADi function ``(H, s, v_base, ṡ) -> J̇`` (6, 6 + n) of a frame, built once per frame
+        (:meth:`jacobian_fun`)."""
+        if frame not in self._jdot:
+            self._jdot[frame] = self.kindyn.jacobian_dot_fun(frame)
+        return self._jdot[frame]
+
     def joint_positions(self, qpos: ArrayLike) -> Array:
         """Joint angles ``s`` (n,) in adam's order (spec order, then passive hinges) from MuJoCo's ``qpos``."""
         return np.asarray(qpos, dtype=float)[self.qpos_idx]
@@ -392,13 +408,13 @@ class Dynamics:
         """Jacobian (6, nv) of a frame's (linear; angular) world velocity w.r.t. MuJoCo's ``qvel``:
         J_mj = J_adam T (adam's mixed Jacobian times the velocity map), comparable to ``mj_jac``."""
         H, s = base_transform(qpos), self.joint_positions(qpos)
-        return np.asarray(self.kindyn.jacobian_fun(frame)(H, s), dtype=float) @ self.velocity_map(qpos)
+        return np.asarray(self.jacobian_fun(frame)(H, s), dtype=float) @ self.velocity_map(qpos)
 
     def frame_jacobian_dot_qvel(self, frame: str, qpos: ArrayLike, qvel: ArrayLike) -> Array:
         """J̇ q̇ (6,) of a frame, the velocity-product term of its acceleration: J̇_mj q̇ = J̇_adam ν, because
         Ṫ q̇ = (0, Ṙ ω_B, 0) = (0, R (ω_B × ω_B), 0) = 0."""
         nu = self.to_mixed(qpos, qvel)
-        jd = self.kindyn.jacobian_dot_fun(frame)(base_transform(qpos), self.joint_positions(qpos), nu[:6], nu[6:])
+        jd = self.jacobian_dot_fun(frame)(base_transform(qpos), self.joint_positions(qpos), nu[:6], nu[6:])
         return np.asarray(jd, dtype=float) @ nu
 
     def contact_jacobian(self, qpos: ArrayLike, contacts: Sequence[Contact], stance: str) -> Array:

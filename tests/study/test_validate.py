@@ -275,8 +275,9 @@ def test_a_changed_gait_file_is_validated_again(small_study, first_run):
 @pytest.mark.slow
 def test_study_validate_on_a_study_run_end_to_end(reported_study):
     """A study made by ``study run`` (conftest's ``tiny_study``: 2 × 3 gaits, generated, walked and certified), then
-    ``study validate`` with 2 worker processes; again with 1 process after removing the stored results: identical (the
-    rollout's thread count does not change results); the report shows the scatter (conftest's ``reported_study``)."""
+    ``study validate`` with 2 worker processes; again with 1 process after removing the stored results of half the
+    gaits: identical, those validated again (the rollout's thread count does not change results) and those read back;
+    the report shows the scatter (conftest's ``reported_study``)."""
     d = reported_study["study"]
     two, one = reported_study["validate"]
     assert two["returncode"] == 0, two["stderr"]
@@ -300,7 +301,9 @@ def test_study_validate_on_a_study_run_end_to_end(reported_study):
             assert c["rho"] is None and c["reason"]
     assert one["returncode"] == 0, one["stderr"]
     b = json.loads(one["stdout"])["push"]
-    assert b["n_from_earlier_runs"] == 0
+    removed = reported_study["removed"]
+    assert 1 <= len(removed) < a["n_validated"] and b["n_from_earlier_runs"] == a["n_validated"] - len(removed)
+    assert sorted(r["label"] for r in b["gaits"] if not r["from_earlier_run"]) == sorted(removed)
     strip = ("from_earlier_run", "seconds")
     assert [{k: v for k, v in r.items() if k not in strip} for r in a["gaits"]] == \
         [{k: v for k, v in r.items() if k not in strip} for r in b["gaits"]]

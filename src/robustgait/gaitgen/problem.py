@@ -223,11 +223,11 @@ class GaitProblem:
         """CasADi functions of the model, each of (H, s) and, for J̇ and the bias, (ν_b, ṡ): the pose (4 × 4),
         Jacobian (6 × (6 + m)) and its time derivative of the sole, toe and heel frames of both feet; the mass
         matrix with armature (:meth:`~robustgait.dynamics.Dynamics.inertia`) and bias forces."""
-        dyn, st, sw, kd = self.dyn, self.stance, self.swing, self.dyn.kindyn
+        dyn, st, sw = self.dyn, self.stance, self.swing
         frames = {(side, kind): foot_frame(side, kind) for side in (st, sw) for kind in ("sole", "toe", "heel")}
         self._fk: dict[tuple[str, str], Any] = {key: dyn.frame_fun(f) for key, f in frames.items()}
-        self._jac: dict[tuple[str, str], Any] = {key: kd.jacobian_fun(f) for key, f in frames.items()}
-        self._jdot: dict[tuple[str, str], Any] = {key: kd.jacobian_dot_fun(f) for key, f in frames.items()}
+        self._jac: dict[tuple[str, str], Any] = {key: dyn.jacobian_fun(f) for key, f in frames.items()}
+        self._jdot: dict[tuple[str, str], Any] = {key: dyn.jacobian_dot_fun(f) for key, f in frames.items()}
         self._mass, self._bias = dyn.inertia, dyn.bias_force_fun
 
     def _declare_variables(self) -> None:

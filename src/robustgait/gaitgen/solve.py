@@ -133,7 +133,6 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
     square velocity and acceleration systems. Its wrench is not determined by the motion (two contacts share
     the load): λ is the one that gives the node ``torques`` (n, m) when they are known (a warm start's
     stored torques: then x₀ is that gait's solution), else the least-norm wrench."""
-    kd = dyn.kindyn
     m = prob.m
     taus = prob.domain_taus[domain]
     dom = prob.graph.domains[domain]
@@ -160,14 +159,14 @@ def kinematic_states(dyn: Dynamics, prob: GaitProblem, beta: FloatArray, duratio
             assert targets is not None
             H, s[i] = _closure_pose(dyn, prob, targets, s[i], free, prev)
         Hs[i], prev = H, H
-        J = np.vstack([np.asarray(kd.jacobian_fun(k)(H, s[i]))[r] for k, r in zip(keys, rows, strict=True)])
+        J = np.vstack([np.asarray(dyn.jacobian_fun(k)(H, s[i]))[r] for k, r in zip(keys, rows, strict=True)])
         if single:
             vb = -np.linalg.solve(J[:, :6], J[:, 6:] @ sd[i])
         else:
             v = -np.linalg.lstsq(J[:, cols], J[:, known] @ sd[i][prob.outputs[domain]], rcond=None)[0]
             vb, sd[i][free] = v[:6], v[6:]
         nu = np.concatenate([vb, sd[i]])
-        jd = np.vstack([np.asarray(kd.jacobian_dot_fun(k)(H, s[i], vb, sd[i]))[r]
+        jd = np.vstack([np.asarray(dyn.jacobian_dot_fun(k)(H, s[i], vb, sd[i]))[r]
                         for k, r in zip(keys, rows, strict=True)])
         if single:
             ab = -np.linalg.solve(J[:, :6], J[:, 6:] @ sdd[i] + jd @ nu)
@@ -222,7 +221,7 @@ def closed_chain_states(dyn: Dynamics, prob: GaitProblem, s: FloatArray, sd: Flo
     of motion — square in (λ, u, λ_h) — the stance wrench λ (base rows), the loop forces λ_h (passive rows: the
     passive joints have no torque) and the torques u; the rigid impact onto the swing sole with the loops held
     (:func:`robustgait.dynamics.impact_map` on [J_sw; 0, J_h], adam's mixed coordinates)."""
-    kd, m = dyn.kindyn, prob.m
+    m = prob.m
     s, sd, sdd = passive_motion(dyn, s, sd, sdd)
     n = len(s)
     key = foot_frame(prob.stance, "sole")
@@ -230,10 +229,10 @@ def closed_chain_states(dyn: Dynamics, prob: GaitProblem, s: FloatArray, sd: Flo
     vb, ab, lam, u, lamh = np.zeros((n, 6)), np.zeros((n, 6)), np.zeros((n, 6)), np.zeros((n, m)), []
     for i in range(n):
         H = Hs[i] = np.linalg.inv(np.asarray(dyn.frame_fun(key)(np.eye(4), s[i])))
-        J = np.asarray(kd.jacobian_fun(key)(H, s[i]))
+        J = np.asarray(dyn.jacobian_fun(key)(H, s[i]))
         vb[i] = -np.linalg.solve(J[:, :6], J[:, 6:] @ sd[i])
         nu = np.concatenate([vb[i], sd[i]])
-        jd = np.asarray(kd.jacobian_dot_fun(key)(H, s[i], vb[i], sd[i]))
+        jd = np.asarray(dyn.jacobian_dot_fun(key)(H, s[i], vb[i], sd[i]))
         ab[i] = -np.linalg.solve(J[:, :6], J[:, 6:] @ sdd[i] + jd @ nu)
         M = np.asarray(dyn.inertia(H, s[i]))
         rhs = M @ np.concatenate([ab[i], sdd[i]]) + np.asarray(dyn.bias_force_fun(H, s[i], vb[i], sd[i])).ravel()
@@ -243,7 +242,7 @@ def closed_chain_states(dyn: Dynamics, prob: GaitProblem, s: FloatArray, sd: Flo
         u[i] = rhs[6:6 + m] - J[:, 6:6 + m].T @ lam[i] - Jh[:, :m].T @ lamh[-1]
     H, nu = Hs[-1], np.concatenate([vb[-1], sd[-1]])
     target = list(prob.graph.target_contacts(0)[0].rows)  # the swing sole's rows: flat, or its line
-    Jt = np.asarray(kd.jacobian_fun(foot_frame(prob.swing, "sole"))(H, s[-1]))[target]
+    Jt = np.asarray(dyn.jacobian_fun(foot_frame(prob.swing, "sole"))(H, s[-1]))[target]
     Jh = np.asarray(dyn.loop_fun(s[-1], sd[-1], sdd[-1])[3], dtype=float)
     Jall = np.vstack([Jt, np.hstack([np.zeros((len(Jh), 6)), Jh])])
     nu_plus, impulse = impact_map(np.asarray(dyn.inertia(H, s[-1])), Jall, nu)
