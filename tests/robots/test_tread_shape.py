@@ -45,7 +45,7 @@ def test_the_longest_chord_lies_inside_the_tread() -> None:
     chord = line_chord(triangle)
     assert (chord.start, chord.end, chord.across) == pytest.approx((-0.06, 0.12, 0.0), abs=1e-9)
     # off the heel's line the chord is shorter: it starts where the polygon is that wide
-    assert line_chord(triangle + [0.0, 0.01]).across == pytest.approx(0.01, abs=1e-9)
+    assert line_chord(triangle + np.array([0.0, 0.01])).across == pytest.approx(0.01, abs=1e-9)
     rectangle = np.array([[0, 0], [0.2, 0], [0, 0.1], [0.2, 0.1]])
     assert tuple(line_chord(rectangle)) == pytest.approx((0.0, 0.2, 0.05), abs=1e-9)  # every chord as long: the middle
     skewed = np.array([[0.0, 0.0], [0.1, 0.0], [0.2, 0.1], [0.0, 0.1]])  # a trapezoid: its long side is the chord
