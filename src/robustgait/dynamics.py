@@ -14,7 +14,8 @@ the joint dofs) ``ν = T q̇`` and ``q̇ = Tᵀ ν`` (``T`` is orthogonal). The 
 
 (power balance; ``Ṫ q̇ = 0`` because ``d/dt(R) ω_B = R (ω_B × ω_B) = 0``), so ``M_mj q̈ + h_mj = τ``
 is MuJoCo's ``mj_fullM`` / ``qfrc_bias`` form. Passive forces (joint damping, springs, friction loss)
-are not in ``qfrc_bias`` and are not modelled here; the shipped robots have none.
+are not in ``qfrc_bias`` and are not modelled here (the shipped robots have none), except a closed chain's springs
+when they are planned compliant (``Dynamics(robot, springs="compliant")``: :meth:`Dynamics.spring_torque`).
 
 Pitfalls of adam 0.5 ``from_mujoco_model`` (found with MuJoCo 4.0; handled here on a private copy of
 the model, compiled from the robot's MjSpec, that only adam sees):
@@ -41,6 +42,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, overload
 
@@ -199,6 +201,18 @@ def _zero_reference(m: mujoco.MjModel, j: int) -> None:
     m.qpos0[adr] = 0.0
 
 
+@dataclass(frozen=True)
+class CompliantSpring:
+    """A closed chain's spring planned compliant: its ``index`` among adam's joints, ``joint`` name, ``stiffness`` k
+    [N m/rad], ``ref`` springref [rad] and its joint's ``damping`` d [N m s/rad] (the model's)."""
+
+    index: int
+    joint: str
+    stiffness: float
+    ref: float
+    damping: float
+
+
 class Dynamics:
     """Rigid-body dynamics and foot kinematics of a robot, symbolic (CasADi SX) and numeric.
 
@@ -207,7 +221,7 @@ class Dynamics:
     ``qvel`` (nv,) and return arrays in MuJoCo's coordinates (see the module docstring).
     """
 
-    def __init__(self, robot: Robot):
+    def __init__(self, robot: Robot, springs: str = "rigid"):
         self.robot = robot
         m = self.robot.model
         self.nv: int = int(m.nv)
@@ -230,6 +244,20 @@ class Dynamics:
         self.qpos_idx = np.concatenate([robot.qpos_idx, [m.jnt_qposadr[j] for j in hinges]]).astype(np.int64)
         self.dof_idx = np.concatenate([robot.dof_idx, [m.jnt_dofadr[j] for j in hinges]]).astype(np.int64)
         self.n_joints = int(self.dof_idx.size)
+        # compliant springs (docs/gaitgen.md, "Springs"): no rigid row; free coordinates under their torque
+        names = [*robot.spec.joints, *self.passive]
+        self.springs: tuple[CompliantSpring, ...] = ()
+        if springs == "compliant":
+            rigid = [lp for lp in self.loops if lp.kind == "spring"]
+            self.loops = [lp for lp in self.loops if lp.kind != "spring"]
+            self.springs = tuple(CompliantSpring(
+                names.index(lp.joint), lp.joint, float(m.jnt_stiffness[m.joint(lp.joint).id]), lp.ref,
+                float(m.dof_damping[m.jnt_dofadr[m.joint(lp.joint).id]])) for lp in rigid)
+        elif springs != "rigid":
+            raise ValueError(f"springs must be 'rigid' or 'compliant', got {springs!r}")
+        spring_cols = {sp.index for sp in self.springs}
+        # the passive joints the loops solve (all of them unless the springs are compliant), adam indices
+        self.solved: tuple[int, ...] = tuple(j for j in range(robot.n_joints, self.n_joints) if j not in spring_cols)
         self._perm = np.zeros((self.n_joints, self.nv - 6))
         self._perm[np.arange(self.n_joints), self.dof_idx - 6] = 1.0
         self._fk: dict[str, cs.Function] = {}
@@ -306,8 +334,9 @@ class Dynamics:
         singular vectors of its Jacobian at :attr:`closed_posture` whose singular values exceed
         :data:`robustgait.robots.loops.NULL_FRACTION` of the largest), J_h = ∂φ/∂s (k, n). The rows do not depend on
         the base: in adam's mixed coordinates their Jacobian is [0 (k × 6), J_h]. Raises RobustGaitError when the rows
-        do not fix the passive joints (J_h's passive columns not square and regular at the posture)."""
-        n, m = self.n_joints, self.robot.n_joints
+        do not fix the passive joints they solve (J_h's columns of :attr:`solved` — every passive joint but compliant
+        springs — not square and regular at the posture)."""
+        n = self.n_joints
         s, sd, sdd = (cs.SX.sym(k, n) for k in ("s", "sd", "sdd"))
         s0 = self.closed_posture
         blocks = []
@@ -321,7 +350,7 @@ class Dynamics:
         vel = cs.mtimes(J, sd)
         fun = cs.Function("loops", [s, sd, sdd], [phi, vel, cs.mtimes(J, sdd) + cs.mtimes(cs.jacobian(vel, s), sd), J],
                           ["s", "sd", "sdd"], ["phi", "vel", "acc", "J"])
-        Jp = np.asarray(fun(s0, np.zeros(n), np.zeros(n))[3])[:, m:]
+        Jp = np.asarray(fun(s0, np.zeros(n), np.zeros(n))[3])[:, list(self.solved)]
         if Jp.shape[0] != Jp.shape[1] or np.linalg.matrix_rank(Jp) < Jp.shape[1]:
             raise input_error(self.robot.spec.source or self.robot.spec.mjcf,
                               f"the closed chains' {Jp.shape[0]} independent rows (rank {np.linalg.matrix_rank(Jp)}) "
@@ -329,16 +358,27 @@ class Dynamics:
         return fun
 
     def close_passive(self, s: ArrayLike, iterations: int = 50, tol: float = 1e-12) -> Array:
-        """Joints s (n,) with the passive ones (the last n − m) moved so that φ(s) = 0: Newton steps
-        Δs_p = −J_p⁻¹ φ (:attr:`loop_fun`) from the passive values given, until ‖φ‖∞ ≤ ``tol``."""
-        q, m = np.array(s, dtype=float), self.robot.n_joints
+        """Joints s (n,) with the passive ones the loops solve (:attr:`solved`: the last n − m, but compliant springs)
+        moved so that φ(s) = 0: Newton steps Δs_p = −J_p⁻¹ φ (:attr:`loop_fun`) from the values given, until
+        ‖φ‖∞ ≤ ``tol``."""
+        q, cols = np.array(s, dtype=float), list(self.solved)
         zero = np.zeros(self.n_joints)
         for _ in range(iterations):
             phi, _, _, J = (np.asarray(v, dtype=float) for v in self.loop_fun(q, zero, zero))
             if phi.size == 0 or np.abs(phi).max() <= tol:
                 break
-            q[m:] -= np.linalg.solve(J[:, m:], phi.ravel())
+            q[cols] -= np.linalg.solve(J[:, cols], phi.ravel())
         return q
+
+    def spring_torque(self, s: Any, sd: Any) -> Any:
+        """The compliant springs' torque on the joints (n,) at joints s and rates ṡ (n,): −k (s_j − springref) − d ṡ_j
+        on each spring j (:attr:`springs`; MuJoCo's ``qfrc_spring`` + ``qfrc_damper`` there), 0 elsewhere; CasADi SX
+        for symbols, else a NumPy array. All zeros when the springs are rigid."""
+        symbolic = isinstance(s, cs.SX) or isinstance(sd, cs.SX)
+        out: Any = cs.SX.zeros(self.n_joints) if symbolic else np.zeros(self.n_joints)
+        for sp in self.springs:
+            out[sp.index] = -sp.stiffness * (s[sp.index] - sp.ref) - sp.damping * sd[sp.index]
+        return out
 
     def frame_fun(self, frame: str) -> cs.Function:
         """CasADi function ``(H, s) -> H_frame`` (4, 4): world pose of an adam frame or link."""

@@ -185,3 +185,60 @@ def test_the_default_gait_solves_with_the_loops_closed(chain: Robot) -> None:
     check = check_solution(gen.dyn, prob, params, states, [params.step_duration])
     assert check.passed, check.failures
     assert check.dynamics_residual < 1e-8 and check.periodicity < 1e-6
+
+
+def test_compliant_springs_lose_their_rows_and_carry_the_models_torque(chain: Robot) -> None:
+    """``generate.springs = "compliant"``: the springs' rigid rows go, the loops solve the other passive joints, and
+    the springs' torque is MuJoCo's own (qfrc_spring + qfrc_damper) at any state."""
+    dyn = Dynamics(chain, "compliant")
+    assert [lp.kind for lp in dyn.loops] == ["distance", "distance"]
+    names = [*chain.spec.joints, *dyn.passive]
+    assert sorted(names[sp.index] for sp in dyn.springs) == ["left_shin_spring", "right_shin_spring"]
+    assert sorted(names[j] for j in dyn.solved) == ["left_tarsus", "right_tarsus"]
+    assert all(sp.stiffness == 800.0 and sp.ref == 0.0 for sp in dyn.springs)
+    m, d = chain.model, mujoco.MjData(chain.model)
+    rng = np.random.default_rng(3)
+    s, sd = dyn.closed_posture + 0.05 * rng.standard_normal(dyn.n_joints), rng.standard_normal(dyn.n_joints)
+    d.qpos[dyn.qpos_idx], d.qvel[dyn.dof_idx] = s, sd
+    mujoco.mj_forward(m, d)
+    want = (d.qfrc_spring + d.qfrc_damper)[dyn.dof_idx]
+    got = dyn.spring_torque(s, sd)
+    springs = [sp.index for sp in dyn.springs]
+    assert np.abs(got[springs]).min() > 1.0 and got == pytest.approx(np.where(np.isin(np.arange(dyn.n_joints),
+                                                                                        springs), want, 0.0))
+    # the closed posture's springs at their springref; closing the loops moves the tarsus only
+    q = dyn.close_passive(s)
+    assert q[springs] == pytest.approx(s[springs]) and np.abs(np.asarray(dyn.loop_fun(q, q, q)[0])).max() < 1e-10
+    prob = GaitProblem(dyn, GenerationConfig(springs="compliant"))
+    assert prob.n_loop == 2 and {"spring_collocation", "spring_position_periodicity",
+                                 "spring_velocity_periodicity"} <= set(prob.rows)
+    assert sorted((names[j], names[k], sign) for j, k, sign in prob.spring_mirror) == [
+        ("left_shin_spring", "right_shin_spring", 1.0), ("right_shin_spring", "left_shin_spring", 1.0)]
+
+
+@pytest.mark.slow  # robot init and one IPOPT solve, about two minutes
+def test_the_compliant_default_gait_passes_the_physics_check_with_its_springs_moving(
+        tmp_path_factory: pytest.TempPathFactory) -> None:
+    """The springs as free coordinates of the gait problem (FROST's compliant Cassie): the solution passes the physics
+    check, whose dynamics carry MuJoCo's own spring torque, and its springs deflect over the step, periodic after
+    relabeling. On the biped as tests/robots/test_loops.py writes it (no reference angles): IPOPT needs about 270
+    iterations there (the fixture's biped, tarsi at a reference angle, did not converge in 300), hence the limit."""
+    tmp = tmp_path_factory.mktemp("chain_compliant")
+    spec = tmp / "chain.toml"
+    assert main(["robot", "init", str(write(tmp, chain_xml(), "chain.xml")), "-o", str(spec), *SERVO_RULE]) == 0
+    chain = load_robot(spec)
+    gen = GaitGenerator(chain, GenerationConfig(springs="compliant", max_iter=600))
+    res = gen.solve(chain.default_params)
+    assert res.success and res.check is not None and res.nodes is not None, res.reason
+    assert res.check.passed and res.check.dynamics_residual < 1e-6 and res.check.periodicity < 1e-6
+    ns, prob = res.nodes[0], gen.problem
+    springs = [sp.index for sp in gen.dyn.springs]
+    assert np.ptp(ns.s[:, springs], axis=0).min() > 0.005  # each spring moves [rad]
+    for j, k, sign in prob.spring_mirror:
+        assert ns.s[0, j] == pytest.approx(sign * ns.s[-1, k], abs=1e-8)
+    # the planned dynamics hold with MuJoCo's spring torque, which is not small: without it they would not
+    ev = CheckModel(gen.dyn)
+    res_node = node_residual(ev, prob.graph.domains[0].contacts, prob.stance, ns, 8)
+    spring_force = (ev.d.qfrc_spring + ev.d.qfrc_damper)[ev.vadr[springs]]
+    assert np.linalg.norm(res_node.r) < 1e-6 * res_node.scale
+    assert np.abs(spring_force).max() > 1e-3 * res_node.scale

@@ -20,7 +20,8 @@ outcome (or its one-line error), as one JSON line.
 ``checkgrid SPEC DIR``: does the walk check's verdict hold at 300 steps? For ``--grid`` points of the robot's
 action space (the studies' grid, ``benchmarks/common.grid_params``; 0: the default gait), with the CLI: ``gait
 generate`` (the walk check, and its one retry with a joint margin), then, for a gait it wrote, ``walk --steps`` (300):
-the check's outcome, whether it solved again and why, and the steps the written gait walks, one JSON line per point.
+the check's outcome, whether it solved again and why, and the steps the written gait walks, one JSON line per point;
+``--override KEY=VALUE`` (repeatable) is passed to ``gait generate`` (e.g. ``generate.springs=compliant``).
 
 ``evaluate SPEC --params L T W H [L T W H ...]``: a study's evaluation of each point
 (:func:`robustgait.study.evaluate.evaluate`, the defaults: generate, walk to the cap, certify, and the one retry with a
@@ -166,7 +167,7 @@ def sweep(spec: Path, durations: list[float], widths: list[float], shares: list[
 LETTER = {"step_length": "L", "step_duration": "T", "step_width": "W", "step_height": "H"}
 
 
-def checkgrid(spec: Path, d: Path, n: int, steps: int) -> list[dict[str, Any]]:
+def checkgrid(spec: Path, d: Path, n: int, steps: int, overrides: tuple[str, ...] = ()) -> list[dict[str, Any]]:
     spec = spec.resolve() if spec.suffix else spec  # the CLI runs in the repository; a name (exo) stays one
     d = d.resolve()
     d.mkdir(parents=True, exist_ok=True)
@@ -178,6 +179,7 @@ def checkgrid(spec: Path, d: Path, n: int, steps: int) -> list[dict[str, Any]]:
         label = "default" if p is None else "_".join(f"{LETTER[k]}{v:g}" for k, v in p.items() if k in flags)
         gait = d / f"{label}.json"
         args = [f for k, v in (p or {}).items() if k in flags for f in (flags[k], f"{v:g}")]
+        args += [f for o in overrides for f in ("--override", o)]
         code, text, sec = cli("gait", "generate", "--robot", str(spec), "-o", str(gait), *args, "--json")
         lines = reversed(text.strip().splitlines())
         summary: dict[str, Any] = next((json.loads(ln) for ln in lines if ln.startswith("{")), {})
@@ -185,6 +187,7 @@ def checkgrid(spec: Path, d: Path, n: int, steps: int) -> list[dict[str, Any]]:
         retried = summary.get("retried")
         row: dict[str, Any] = {
             "commit": git_commit(), "robot": spec.stem, "label": label, "params": p, "exit": code,
+            **({"overrides": list(overrides)} if overrides else {}),
             "seconds": round(sec, 1), "error": _last(text) if code else None,
             "check": {k: check.get(k) for k in ("taken", "fell", "orbit", "limit_joint", "cause")},
             "retried": None if retried is None else {
@@ -316,6 +319,7 @@ def main() -> None:
     c.add_argument("dir", type=Path)
     c.add_argument("--grid", type=int, default=12)
     c.add_argument("--steps", type=int, default=300)
+    c.add_argument("--override", action="append", default=[], help="KEY=VALUE for gait generate (repeatable)")
     e = sub.add_parser("evaluate")
     e.add_argument("spec", type=Path)
     e.add_argument("--params", type=float, nargs="+", required=True, help="L T W H per point")
@@ -337,7 +341,7 @@ def main() -> None:
     elif args.cmd == "run":
         print(json.dumps(run(args.model, args.dir, args.steps)))
     elif args.cmd == "checkgrid":
-        checkgrid(args.spec, args.dir, args.grid, args.steps)
+        checkgrid(args.spec, args.dir, args.grid, args.steps, tuple(args.override))
     elif args.cmd == "evaluate":
         if len(args.params) % 4:
             ap.error("--params takes L T W H per point")

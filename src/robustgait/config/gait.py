@@ -11,6 +11,7 @@ from typing import Annotated, Any, Literal
 from robustgait.config.base import Doc, FieldProblem, Float, Int, Str, config
 
 DomainGraph = Literal["flat", "multicontact"]
+SpringModel = Literal["rigid", "compliant"]
 Stance = Literal["left", "right"]
 # The file formats a gait is written in (``gait convert --to``): robustgait's JSON, a FROST/ambersim YAML.
 GaitFormat = Literal["json", "frost"]
@@ -119,6 +120,11 @@ class GenerationConfig:
     ds_free_joints: Annotated[tuple[Str, ...] | None, Doc(
         "multi-contact: the 4 swing-leg joints that are not outputs in double support; not set: picked from the "
         "joint axes")] = None
+    springs: Annotated[SpringModel, Doc(
+        "a closed chain's springs (passive joints with a stiffness) in the gait problem: rigid (held at their "
+        "springref by a holonomic row; the simulation's springs deflect under the load) or compliant (free "
+        "coordinates of the problem under the model's spring and damping torque, their deflection planned); "
+        "robots without springs are unaffected")] = "rigid"
     max_step_length: Annotated[Float, Doc("longest step a robot is asked for, in leg lengths (checked before any "
                                           "solve)", gt=0.0, le=2.0)] = 0.8
     max_froude: Annotated[Float, Doc("fastest walk a robot is asked for, as a Froude number (L/T)² / (g l): walking "

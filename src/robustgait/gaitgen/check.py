@@ -7,7 +7,9 @@ in every domain of its graph and at every transition:
   planning model as MuJoCo compiles it (``Dynamics.plan_model``: rods lumped, springs rigid; :mod:`robustgait.closure`)
   with the loops' forces the solution carries: r = M q̈ + c − B u − J_cᵀ λ − J_hᵀ λ_h (J_h = [0, ∂φ/∂s], the
   loops' rows; impacts likewise with the loops' rows under the landing sole's). MuJoCo's full model, rods and all, is
-  not what the problem plans: lumping the rods leaves a residual there (docs/gaitgen.md, "Closed chains").
+  not what the problem plans: lumping the rods leaves a residual there (docs/gaitgen.md, "Closed chains"). Springs
+  planned compliant (``generate.springs``) have no loop row: their torque is MuJoCo's own, ``qfrc_spring`` +
+  ``qfrc_damper`` on their degrees of freedom, subtracted from r.
 * Contacts: each contact frame's position and held orientation, and J_c q̇ — no contact may move.
 * Impacts: the rigid impact map onto the next domain's contacts (:func:`robustgait.dynamics.impact_map`
   with MuJoCo's M and J) reproduces the solution's post-impact velocity; the next domain starts from it; and
@@ -203,6 +205,9 @@ def node_residual(ev: CheckModel, contacts: tuple[Contact, ...], stance: str, ns
     tau = np.zeros(m.nv)
     tau[ev.vadr[:ev.dyn.robot.n_joints]] = ns.u[i]
     r = M @ qacc + d.qfrc_bias - tau - J.T @ ns.lam[i]
+    if ev.dyn.springs:  # compliant springs: MuJoCo's own spring and damper forces on their degrees of freedom
+        dofs = ev.vadr[[sp.index for sp in ev.dyn.springs]]
+        r[dofs] -= d.qfrc_spring[dofs] + d.qfrc_damper[dofs]
     if ev.closed:
         r -= ev.loop_jacobian(ns.s[i]).T @ ns.lamh[i]
     return NodeResidual(r, float(np.linalg.norm(M @ qacc) + np.linalg.norm(d.qfrc_bias)), qpos, qvel, J)

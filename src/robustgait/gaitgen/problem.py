@@ -116,6 +116,26 @@ def gait_quality(robot: Robot) -> GaitQuality:
     return q
 
 
+def spring_mirror(dyn: Dynamics) -> list[tuple[int, int, float]]:
+    """For each compliant spring j (:attr:`~robustgait.dynamics.Dynamics.springs`, adam indices), its partner k on the
+    other leg and the sign σ of the mirror (``Robot.mirror_state``: s_j of the mirrored state = σ s_k): (j, k, σ)."""
+    robot, names = dyn.robot, [*dyn.robot.spec.joints, *dyn.passive]
+    q0, v0 = robot.model.qpos0.copy(), np.zeros(robot.model.nv)
+    base, _ = robot.mirror_state(q0, v0)
+    out = []
+    for sp in dyn.springs:
+        q = q0.copy()
+        q[dyn.qpos_idx[sp.index]] += 1.0
+        diff = robot.mirror_state(q, v0)[0] - base
+        adr = int(np.argmax(np.abs(diff)))
+        partner = [i for i in (s.index for s in dyn.springs) if int(dyn.qpos_idx[i]) == adr]
+        if not partner or abs(abs(diff[adr]) - 1.0) > 1e-9:
+            raise RobustGaitError(f"{robot.name}: the mirror does not map the spring '{names[sp.index]}' onto "
+                                  f"another spring")
+        out.append((sp.index, partner[0], float(np.sign(diff[adr]))))
+    return out
+
+
 @dataclass(frozen=True)
 class NodeSymbols:
     """One node's NLP symbols, unscaled: joints s, ṡ, s̈ (n,) [rad, rad/s, rad/s²] — the m planned ones, then a closed
@@ -175,6 +195,8 @@ class GaitProblem:
         self._add_position_periodicity()
         if self.line_feet:
             self._add_roll_collocation()
+        if self.springs:
+            self._add_spring_collocation()
         self.g = cs.vertcat(*self._g)
         self.lbg, self.ubg = np.array(self._lbg), np.array(self._ubg)
         self.cost = self._cost()
@@ -203,6 +225,9 @@ class GaitProblem:
             raise RobustGaitError(f"{robot.name}: gait generation plans a robot with closed chains on flat feet only "
                                   f"(domains flat), not {graph.name}")
         self.n_loop = int(dyn.loop_fun.size1_out(0)) if dyn.loops else 0
+        # compliant springs (dyn.springs): their indices among the joints and the mirror's partner and sign of each
+        self.springs = [sp.index for sp in dyn.springs]
+        self.spring_mirror = spring_mirror(dyn) if dyn.springs else []
         self.layout = make_layout(
             m, counts, [sum(c.n_rows for c in dom.contacts) for dom in graph.domains],
             [sum(c.n_rows for c in graph.target_contacts(d)) for d in range(len(graph))], self.n_passive, self.n_loop,
@@ -414,6 +439,19 @@ class GaitProblem:
             self._add("roll_collocation", roll_collocation(self.x[nodes[k]["roll"]], self.x[nodes[k + 1]["roll"]], h),
                       0.0, 0.0)
 
+    def _add_spring_collocation(self) -> None:
+        """Compliant springs integrated node to node (2 (N − 1) rows per spring [rad, rad/s], ``spring_collocation``):
+        the linear-acceleration rule of the stance roll (:func:`~robustgait.gaitgen.linefoot.roll_collocation`) on
+        each spring's (s_j, ṡ_j, s̈_j), h = T / (N − 1)."""
+        nodes, h, m = self.layout.nodes, self._durations[0] / (self.n - 1), self.m
+        for k in range(self.n - 1):
+            for j in self.springs:
+                a, b = nodes[k], nodes[k + 1]
+                pick = [a[key].start + j - m for key in ("sp", "spd", "spdd")]
+                nxt = [b[key].start + j - m for key in ("sp", "spd", "spdd")]
+                self._add("spring_collocation", roll_collocation(cs.vertcat(*(self.x[c] for c in pick)),
+                                                                 cs.vertcat(*(self.x[c] for c in nxt)), h), 0.0, 0.0)
+
     def _loop_jacobian(self, s: cs.SX) -> cs.SX:
         """The loops' Jacobian in adam's mixed velocities, [0, J_h(s)] (k × (6 + n)): the rows do not move with the
         base."""
@@ -425,6 +463,8 @@ class GaitProblem:
         the mass matrix with armature ((6 + n) × (6 + n)) for the impact."""
         M = self._mass(v.H, v.s)
         tau = cs.vertcat(cs.SX.zeros(6), v.u, cs.SX.zeros(self.n_passive))
+        if self.springs:  # compliant springs: their torque −k (s − springref) − d ṡ on their joints
+            tau = tau + cs.vertcat(cs.SX.zeros(6), self.dyn.spring_torque(v.s, v.sd))
         dyn_res = M @ cs.vertcat(v.ab, v.sdd) + self._bias(v.H, v.s, v.vb, v.sd) - tau - Jc.T @ v.lam
         if self.n_loop:
             dyn_res = dyn_res - self._loop_jacobian(v.s).T @ v.lamh
@@ -536,6 +576,10 @@ class GaitProblem:
         with ṡ⁺ the last domain's post-impact joint velocities."""
         sd0 = self.x[self.layout.domains[0].nodes[0]["sd"]]
         self._add("velocity_periodicity", sd0 - cs.mtimes(cs.DM(self.mirror), nup[6:6 + self.m]), 0.0, 0.0)
+        if self.springs:  # compliant springs: ṡ_j(0) = σ ṡ⁺ of its partner
+            spd0, m = self.x[self.layout.domains[0].nodes[0]["spd"]], self.m
+            self._add("spring_velocity_periodicity",
+                      cs.vertcat(*(spd0[j - m] - sign * nup[6 + k] for j, k, sign in self.spring_mirror)), 0.0, 0.0)
 
     def _add_position_periodicity(self) -> None:
         """Joint positions periodic after relabeling (m rows [rad], ``position_periodicity``): β_0[:, 0] =
@@ -548,6 +592,10 @@ class GaitProblem:
         else:
             self._add("position_periodicity", self.x[lay.domains[0].nodes[0]["s"]]
                       - cs.mtimes(R, self.x[lay.domains[-1].nodes[-1]["s"]]), 0.0, 0.0)
+        if self.springs:  # compliant springs: s_j(0) = σ s_k(1) of its partner k
+            first, last, m = self.x[lay.domains[0].nodes[0]["sp"]], self.x[lay.domains[-1].nodes[-1]["sp"]], self.m
+            self._add("spring_position_periodicity",
+                      cs.vertcat(*(first[j - m] - sign * last[k - m] for j, k, sign in self.spring_mirror)), 0.0, 0.0)
 
     def _cost(self) -> Any:
         """The cost Σ_d T_d Σ_i w_i ‖u_i / 100‖² (scaled torques; trapezoid weights w on the nodes of domain d)."""

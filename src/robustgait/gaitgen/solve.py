@@ -198,7 +198,7 @@ def passive_motion(dyn: Dynamics, s: FloatArray, sd: FloatArray, sdd: FloatArray
     joints solved from φ(s) = 0 (:meth:`Dynamics.close_passive`, from the previous node's, the first from the closed
     posture's), ṡ_p = −J_p⁻¹ J_a ṡ_a and s̈_p = −J_p⁻¹ (J_a s̈_a + J̇_h ṡ) (J_h = [J_a, J_p],
     :attr:`Dynamics.loop_fun`)."""
-    m, n_all = s.shape[1], dyn.n_joints
+    m, n_all, cols = s.shape[1], dyn.n_joints, list(dyn.solved)  # compliant springs: at springref, at rest
     out = [np.zeros((len(s), n_all)) for _ in range(3)]
     guess = dyn.closed_posture[m:]
     for i in range(len(s)):
@@ -206,10 +206,10 @@ def passive_motion(dyn: Dynamics, s: FloatArray, sd: FloatArray, sdd: FloatArray
         guess = q[m:]
         v = np.concatenate([sd[i], np.zeros(n_all - m)])
         _, _, _, J = (np.asarray(x, dtype=float) for x in dyn.loop_fun(q, v, v))
-        v[m:] = -np.linalg.solve(J[:, m:], J[:, :m] @ sd[i])
+        v[cols] = -np.linalg.solve(J[:, cols], J[:, :m] @ sd[i])
         a = np.concatenate([sdd[i], np.zeros(n_all - m)])
         acc = np.asarray(dyn.loop_fun(q, v, a)[2], dtype=float).ravel()
-        a[m:] = -np.linalg.solve(J[:, m:], acc)
+        a[cols] = -np.linalg.solve(J[:, cols], acc)
         out[0][i], out[1][i], out[2][i] = q, v, a
     return out[0], out[1], out[2]
 
@@ -238,7 +238,8 @@ def closed_chain_states(dyn: Dynamics, prob: GaitProblem, s: FloatArray, sd: Flo
         rhs = M @ np.concatenate([ab[i], sdd[i]]) + np.asarray(dyn.bias_force_fun(H, s[i], vb[i], sd[i])).ravel()
         Jh = np.asarray(dyn.loop_fun(s[i], sd[i], sdd[i])[3], dtype=float)
         lam[i] = np.linalg.solve(J[:, :6].T, rhs[:6])
-        lamh.append(np.linalg.solve(Jh[:, m:].T, rhs[6 + m:] - J[:, 6 + m:].T @ lam[i]))
+        # least squares when compliant springs leave their rows over (the guess's springs carry no torque)
+        lamh.append(np.linalg.lstsq(Jh[:, m:].T, rhs[6 + m:] - J[:, 6 + m:].T @ lam[i], rcond=None)[0])
         u[i] = rhs[6:6 + m] - J[:, 6:6 + m].T @ lam[i] - Jh[:, :m].T @ lamh[-1]
     H, nu = Hs[-1], np.concatenate([vb[-1], sd[-1]])
     target = list(prob.graph.target_contacts(0)[0].rows)  # the swing sole's rows: flat, or its line
@@ -318,7 +319,7 @@ class GaitGenerator:
         self.config = cfg = (config or GenerationConfig()).for_robot(robot.scale, robot.spec.generation)
         t0 = time.perf_counter()
         # the NLP plans the planned joints only: held joints are welded at their angles (Robot.planned)
-        self.dyn = Dynamics(robot.planned)
+        self.dyn = Dynamics(robot.planned, cfg.springs)
         self.problem = prob = GaitProblem(self.dyn, cfg)
         nlp = {"x": prob.x, "p": prob.p, "f": prob.cost, "g": prob.g}
         opts: dict[str, Any] = {"ipopt.max_iter": cfg.max_iter, "ipopt.tol": cfg.tol, "ipopt.constr_viol_tol": 1e-9,
