@@ -67,6 +67,7 @@ from robustgait.gaitgen.layout import (  # noqa: F401 (re-exported: the problem'
     wrench_rows,
 )
 from robustgait.gaitgen.linefoot import roll_collocation, roll_periodicity, roll_rows
+from robustgait.gaitgen.springs import spring_collocation, spring_mirror
 from robustgait.robots import GaitQuality, Robot
 
 FloatArray = NDArray[np.float64]
@@ -114,26 +115,6 @@ def gait_quality(robot: Robot) -> GaitQuality:
         s = robot.scale
         q = replace(q, pelvis_angular_velocity=PELVIS_RATE_FROUDE * math.sqrt(s.gravity / s.leg_length))
     return q
-
-
-def spring_mirror(dyn: Dynamics) -> list[tuple[int, int, float]]:
-    """For each compliant spring j (:attr:`~robustgait.dynamics.Dynamics.springs`, adam indices), its partner k on the
-    other leg and the sign σ of the mirror (``Robot.mirror_state``: s_j of the mirrored state = σ s_k): (j, k, σ)."""
-    robot, names = dyn.robot, [*dyn.robot.spec.joints, *dyn.passive]
-    q0, v0 = robot.model.qpos0.copy(), np.zeros(robot.model.nv)
-    base, _ = robot.mirror_state(q0, v0)
-    out = []
-    for sp in dyn.springs:
-        q = q0.copy()
-        q[dyn.qpos_idx[sp.index]] += 1.0
-        diff = robot.mirror_state(q, v0)[0] - base
-        adr = int(np.argmax(np.abs(diff)))
-        partner = [i for i in (s.index for s in dyn.springs) if int(dyn.qpos_idx[i]) == adr]
-        if not partner or abs(abs(diff[adr]) - 1.0) > 1e-9:
-            raise RobustGaitError(f"{robot.name}: the mirror does not map the spring '{names[sp.index]}' onto "
-                                  f"another spring")
-        out.append((sp.index, partner[0], float(np.sign(diff[adr]))))
-    return out
 
 
 @dataclass(frozen=True)
@@ -440,17 +421,11 @@ class GaitProblem:
                       0.0, 0.0)
 
     def _add_spring_collocation(self) -> None:
-        """Compliant springs integrated node to node (2 (N − 1) rows per spring [rad, rad/s], ``spring_collocation``):
-        the linear-acceleration rule of the stance roll (:func:`~robustgait.gaitgen.linefoot.roll_collocation`) on
-        each spring's (s_j, ṡ_j, s̈_j), h = T / (N − 1)."""
-        nodes, h, m = self.layout.nodes, self._durations[0] / (self.n - 1), self.m
-        for k in range(self.n - 1):
-            for j in self.springs:
-                a, b = nodes[k], nodes[k + 1]
-                pick = [a[key].start + j - m for key in ("sp", "spd", "spdd")]
-                nxt = [b[key].start + j - m for key in ("sp", "spd", "spdd")]
-                self._add("spring_collocation", roll_collocation(cs.vertcat(*(self.x[c] for c in pick)),
-                                                                 cs.vertcat(*(self.x[c] for c in nxt)), h), 0.0, 0.0)
+        """Compliant springs integrated node to node (2 (N − 1) rows per spring [rad, rad/s], ``spring_collocation``,
+        :func:`~robustgait.gaitgen.springs.spring_collocation`), h = T / (N − 1)."""
+        h = self._durations[0] / (self.n - 1)
+        rows = spring_collocation(self.x, self.layout.nodes[:self.n], self.springs, self.m, h)
+        self._add("spring_collocation", rows, 0.0, 0.0)
 
     def _loop_jacobian(self, s: cs.SX) -> cs.SX:
         """The loops' Jacobian in adam's mixed velocities, [0, J_h(s)] (k × (6 + n)): the rows do not move with the
