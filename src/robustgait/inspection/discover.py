@@ -279,8 +279,8 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
     per_geom = [footprint_points(m, d, g, up) for g in geoms]
     on = on_sole(np.vstack(per_geom), up)  # across the geoms, as the loader's sole box
     pts = np.vstack(per_geom)[on]
-    box = one_box(m, geoms)
-    if box:
+    tread: NDArray[np.float64] | None = None  # the loader's ground points of a sole that is not one box
+    if one_box(m, geoms):
         # one box is the sole itself, as the loader reads it: its own sizes and a rectangle, not its extent along the
         # foot body's axes, which a box turned in the foot would widen
         read = sole_box(m, geoms[0], src)
@@ -289,20 +289,19 @@ def find_sole(robot: RobotModel, d: mujoco.MjData, foot: int, side: str, tol: fl
         # several geoms: the rectangle the loader spans its virtual sole on (turned onto the tread's plane, read
         # along the vertical where the foot's frame is tilted from its sole), not the points' extent here
         rect = loader_rectangle(m, geoms, robot.base)
-        length, width = 2.0 * float(rect.half[0]), 2.0 * float(rect.half[1])
+        length, width, tread = 2.0 * float(rect.half[0]), 2.0 * float(rect.half[1]), rect.tread
     foot_kind = sole_kind(pts, length, width)
-    fill = None if box or foot_kind != "flat" else tread_fill(rect.tread)
-    if fill is not None and 0.0 < fill < MIN_TREAD_FILL:  # no flat sole (a heel point and a toe bar): a line on it
-        foot_kind, length, width = "line", line_chord(rect.tread).length, 0.0
-        return FoundSole(foot, geoms, kind, sole_class, length, width, bottom, _tread(m, geoms, per_geom, on),
-                         foot_kind, fill)
+    fill = None  # no flat sole (a heel point and a toe bar): a line on its longest chord
+    if tread is not None and foot_kind == "flat" and 0.0 < (share := tread_fill(tread)) < MIN_TREAD_FILL:
+        foot_kind, length, width, fill = "line", line_chord(tread).length, 0.0, share
     if foot_kind == "point":
         raise input_error(src, f"no sole found for the {side} leg: the lowest geometry of body '{name}' spans "
                           f"{length:.3g} × {width:.3g} m, no area to stand on (a point foot, which robustgait does not "
                           "plan yet: add a box geom under the foot, or a capsule along it: a line foot)")
-    if foot_kind == "line":
+    if foot_kind == "line" and fill is None:  # a capsule's line: its points' extent
         length, width = float(np.max(np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=-1))), 0.0
-    return FoundSole(foot, geoms, kind, sole_class, length, width, bottom, _tread(m, geoms, per_geom, on), foot_kind)
+    return FoundSole(foot, geoms, kind, sole_class, length, width, bottom, _tread(m, geoms, per_geom, on), foot_kind,
+                     fill)
 
 
 def sole_kind(points: NDArray[np.float64], length: float, width: float) -> str:
