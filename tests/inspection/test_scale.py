@@ -153,3 +153,35 @@ def test_a_grid_stops_at_the_grid_point_nearest_its_high_multiple() -> None:
     assert axis_range("step_duration", 0.548, (0.86, 1.57, 5)) == (0.5, 0.9, 0.1)
     assert axis_range("step_duration", 0.708, (0.86, 1.57, 5)) == (0.6, 1.1, 0.1)  # exo's: all five steps
     assert axis_range("step_length", 0.1, (1.0, 1.05, 4))[1] > 0.1  # at least one step
+
+
+def test_capsule_line_feet_end_their_steps_sooner_and_swing_higher() -> None:
+    """Cassie's size: on capsule line feet (no roll support) the step durations end at λT = ``line_foot_step``, below a
+    point foot's ``point_foot_step``, never below the default step, and the swing clearances start at
+    ``line_foot_height`` × the default; a heel point and toe bar planned as a line (H1's: roll support) keeps a point
+    foot's window, and nothing but those two axes moves (and the pelvis roll the tread's hips take)."""
+    from robustgait.inspection.scale import Balance
+
+    capsule = RobotScale(leg_length=1.021, standing_height=1.01, mass=33.3, gravity=9.81, hip_spacing=0.27,
+                         sole_length=0.16, sole_width=0.0002, ankle_roll=False, sole_spacing=0.2701,
+                         upper_body_height=0.0284, line_feet=True, roll_support=False)
+    tread = dataclasses.replace(capsule, roll_support=True)
+    rules = ScaleRules()
+    rate = 3.28
+    line, point = scale(capsule, rules, Balance(share=1.0, rate=rate)), scale(tread, rules, Balance(share=1.0,
+                                                                                                    rate=rate))
+    default = line.gait["step_duration"]
+    assert line.gait == point.gait
+    t_line, t_point = line.action_space["step_duration"], point.action_space["step_duration"]
+    assert t_line[1] < t_point[1]
+    step = t_line[2]
+    assert t_line[1] >= min(rules.line_foot_step / rate, default) - step - 1e-9  # the end nearest λT or the default
+    assert t_line[1] <= max(rules.line_foot_step / rate, default) + step / 2 + 1e-9
+    h_line, h_point = line.action_space["step_height"], point.action_space["step_height"]
+    assert h_line[0] >= rules.line_foot_height * line.gait["step_height"] - h_line[2] / 2 - 1e-9
+    assert h_point[0] < h_line[0] and h_line[1] >= h_line[0]
+    same = {k for k in line.action_space if k not in ("step_duration", "step_height")}
+    assert {k: line.action_space[k] for k in same} == {k: point.action_space[k] for k in same}
+    # the tread's roll support also gives it the hips' pelvis roll (hips_balance); everything else is the same
+    assert dataclasses.replace(line, action_space=point.action_space, pelvis_roll=point.pelvis_roll,
+                               angular_velocity=point.angular_velocity) == point

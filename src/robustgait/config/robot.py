@@ -61,6 +61,17 @@ class ScaleRules:
         "H-LIP's rate at the default gait's CoM height z0): a CoM error grows as e^(λT) over a single support before "
         "the next foothold corrects it; never below the default gait's own step, which walked", gt=0.0,
         le=20.0)] = 2.0
+    line_foot_step: Annotated[Float, Doc(
+        "longest flat-foot step of a capsule line foot's action space (no roll support: Cassie's) as λT, tighter "
+        "than point_foot_step: the rigid plan's springs deflect in simulation and the stance foot rolls onto its "
+        "heel, so the centre of pressure is not where the plan puts it and the error a foothold must correct grows "
+        "faster; never below the default gait's own step, which walked (docs/robots.md, \"Closed chains, springs "
+        "and line feet\")",
+        gt=0.0, le=20.0)] = 1.3
+    line_foot_height: Annotated[Float, Doc(
+        "lowest swing clearance of a capsule line foot's action space, as a multiple of the default: the pelvis of a "
+        "sprung leg on a line pitches forward by degrees over a step, turning the swing sole's toe down with it, and a "
+        "lower swing scuffs (docs/robots.md, \"Closed chains, springs and line feet\")", gt=0.0, le=2.0)] = 1.0
     joint_margin_narrow: Annotated[Float, Doc(
         "generate.joint_margin written when the soles are narrow (sole width / leg length < "
         "sim.regulator.narrow_ratio), if above 0: the step regulator moves the swing foot by joint offsets, which a "

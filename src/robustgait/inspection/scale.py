@@ -169,14 +169,30 @@ class Balance:
 def duration_rule(size: RobotScale, rules: ScaleRules, balance: Balance | None = None) -> tuple[float, float, int]:
     """The flat-foot action space's duration axis rule: ``action_step_duration``, its high end capped at
     ``narrow_step_duration`` · √(l/g) when the soles are narrow (:func:`narrow_soles`), and for a point-foot walker
-    (:meth:`Balance.point_foot`) at λT = ``point_foot_step``, T ≤ ``point_foot_step`` / λ — never below the default
-    step, which walked."""
+    (:meth:`Balance.point_foot`) at λT = ``point_foot_step`` (``line_foot_step`` on capsule line feet,
+    :func:`capsule_line_feet`), T ≤ that λT / λ — never below the default step, which walked."""
     low, high, points = rules.action_step_duration
     if narrow_soles(size):
         high = min(high, rules.narrow_step_duration / duration_constant(size, rules))
     if balance is not None and balance.point_foot(rules):
-        high = min(high, max(1.0, rules.point_foot_step / (balance.rate * step_duration(size, rules))))
+        step = rules.line_foot_step if capsule_line_feet(size) else rules.point_foot_step
+        high = min(high, max(1.0, step / (balance.rate * step_duration(size, rules))))
     return low, high, points
+
+
+def capsule_line_feet(size: RobotScale) -> bool:
+    """The feet are true lines (a capsule each, Cassie's): planned as lines and without roll support, unlike a heel
+    point and toe bar planned as a line (``size.roll_support``)."""
+    return size.line_feet and not size.roll_support
+
+
+def height_rule(size: RobotScale, rules: ScaleRules) -> tuple[float, float, int]:
+    """The flat-foot action space's swing-clearance axis rule: ``action_step_height``, its low end raised to
+    ``line_foot_height`` × the default on capsule line feet (:func:`capsule_line_feet`)."""
+    low, high, points = rules.action_step_height
+    if capsule_line_feet(size):
+        low = max(low, rules.line_foot_height)
+    return low, max(high, low), points
 
 
 # the end of each axis that robot init tries for a point-foot walker, with the other parameters at the default: the
@@ -255,8 +271,8 @@ def scale(size: RobotScale, rules: ScaleRules, balance: Balance | None = None) -
     gait = {"step_length": sig(step_length(size, rules)), "step_duration": sig(step_duration(size, rules)),
             "step_width": width, "step_height": sig(step_height(size, rules))}
     mc_gait = {**gait, "step_duration": sig(step_duration(size, rules, multicontact=True))}
-    rule = {"step_duration": duration_rule(size, rules, balance)} | {a: tried_rule(a, rules, balance)
-                                                                      for a in TRIED_ENDS}
+    rule = ({"step_duration": duration_rule(size, rules, balance), "step_height": height_rule(size, rules)}
+            | {a: tried_rule(a, rules, balance) for a in TRIED_ENDS})
     flat = {a: axis_range(a, gait[a], rule.get(a, getattr(rules, f"action_{a}"))) for a in GAIT_AXES}
     mc: dict[str, tuple[float, float, float]] | None = None
     if size.ankle_roll:  # multi-contact gaits roll the heel's edge flat with the ankle roll

@@ -9,9 +9,9 @@ step do not enter the gait's optimisation) and walked at each candidate (:func:`
 default gait cannot be generated, no candidate is below the stability bound, or none is accurate enough, the timestep
 is the servo rule's (:func:`.gains.servo_timestep`, without stable PD), with a note saying why. When the step
 regulator runs for the robot's soles, the default gait's walk also says whether its ankle holds the centre of mass
-(:func:`measured_balance`): a point-foot walker's step durations end at λT = ``robot.scale.point_foot_step``, and
-its window's narrowest and longest steps are tried: one that does not pass ``gait generate`` moves that end of the
-window to the default (:func:`window_end`, :func:`with_balance`).
+(:func:`measured_balance`): a point-foot walker's step durations end at λT = ``robot.scale.point_foot_step``
+(``line_foot_step`` on capsule line feet), and its window's narrowest and longest steps are tried: one that does not
+pass ``gait generate`` moves that end of the window to the default (:func:`window_end`, :func:`with_balance`).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from robustgait.errors import RobustGaitError
 from robustgait.gait import Gait
 from robustgait.gaitgen import GaitGenerator
 from robustgait.gaitgen.walkcheck import generate_walking
-from robustgait.inspection.scale import TRIED_ENDS, Balance, scale
+from robustgait.inspection.scale import TRIED_ENDS, Balance, capsule_line_feet, scale
 from robustgait.io.robotfile import read_mjcf, spec_from_raw
 from robustgait.robotinit.draft import Draft, draft_at_timestep, draft_spec, lowered
 from robustgait.robotinit.timestep import candidate_timesteps, default_gait, ms, select_timestep
@@ -167,9 +167,11 @@ def with_balance(draft: Draft, robot: Callable[[], Robot], gait: Gait, config: C
     if scaled == draft.scaled:
         return draft
     low, high, _ = scaled.action_space["step_duration"]
+    step, name = ((rules.line_foot_step, "line_foot_step: capsule line feet") if capsule_line_feet(draft.size)
+                  else (rules.point_foot_step, "point_foot_step"))
     notes.insert(len(draft.notes), f"the default gait balances by foot placement (the step regulator applies κ = "
                  f"{balance.share:.2g} of the H-LIP's stepping gain, at least robot.scale.point_foot_share "
                  f"{rules.point_foot_share:g}: the ankle does not hold the centre of mass): its step durations end "
-                 f"at λT = {rules.point_foot_step:g} (λ = √(g/z0) = {balance.rate:.3g} 1/s), {low:g}–{high:g} s "
-                 "(robot.scale.point_foot_step)")
+                 f"at λT = {step:g} (λ = √(g/z0) = {balance.rate:.3g} 1/s), {low:g}–{high:g} s "
+                 f"(robot.scale.{name})")
     return dataclasses.replace(draft, scaled=scaled, balance=balance, notes=notes)

@@ -11,7 +11,15 @@ import mujoco
 import numpy as np
 
 from robustgait.inspection.discover import SIDES, FoundSole
-from robustgait.inspection.scale import GAIT_AXES, balance, duration_constant, hips_balance, narrow_soles, sig
+from robustgait.inspection.scale import (
+    GAIT_AXES,
+    balance,
+    capsule_line_feet,
+    duration_constant,
+    hips_balance,
+    narrow_soles,
+    sig,
+)
 from robustgait.robotinit.chains import loop_lines, passive_lines
 from robustgait.robotinit.draft import INTEGRATOR_NAMES, Draft
 from robustgait.robotinit.timestep import TimestepChoice, ms
@@ -295,8 +303,11 @@ def _scaled(draft: Draft) -> list[str]:
         "(robot.scale.action_*)" + ("; narrow soles: steps end by robot.scale.narrow_step_duration × √(l/g)"
                                     if narrow_soles(draft.size) else "")
         + ("; the default gait balances by foot placement (robot.scale.point_foot_share: its ankle does not hold "
-           f"the centre of mass): steps end by λT = robot.scale.point_foot_step, λ = √(g/z0) = "
-           f"{draft.balance.rate:.3g} 1/s" if draft.balance is not None else "")
+           "the centre of mass): steps end by λT = robot.scale."
+           + ("line_foot_step (capsule line feet)" if capsule_line_feet(draft.size) else "point_foot_step")
+           + f", λ = √(g/z0) = {draft.balance.rate:.3g} 1/s" if draft.balance is not None else "")
+        + ("; capsule line feet: swing clearances from robot.scale.line_foot_height × the default"
+           if capsule_line_feet(draft.size) else "")
         + (f"; the default gait at the window's end of {' and '.join(draft.balance.ends_fail)} did not pass gait "
            "generate: that end is the default" if draft.balance is not None and draft.balance.ends_fail else ""),
         *(f"{a} = {axis(s.action_space[a])}" for a in GAIT_AXES),
