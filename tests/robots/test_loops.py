@@ -36,9 +36,26 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 
-def leg(s: str, y: float) -> str:
+def leg(s: str, y: float, damped: bool = False) -> str:
     """One leg: hip roll, hip pitch (motors), a knee (motor) carrying a shin spring and a passive tarsus, a rod on a
-    ball joint from the thigh connected to a heel point of the tarsus, a foot (motor) with one capsule along it."""
+    ball joint from the thigh connected to a heel point of the tarsus, a foot (motor) with one capsule along it.
+    ``damped``: joint damping and motor armature as Cassie's model has them (:data:`DAMPING`)."""
+    text = _leg(s, y)
+    if damped:
+        for joint, extra in DAMPING.items():
+            text = text.replace(f'<joint name="{s}_{joint}"', f'<joint name="{s}_{joint}" {extra}')
+    return text
+
+
+# what Menagerie's Cassie puts on its joints: damping 1 N m s/rad and a rotor's armature on the motors, 0.01 on the
+# rod's ball (its spin about its own axis is free) and 0.1 on the spring and the tarsus; without them the undamped
+# spring and the rod's spin leave the walk's switching states unconverged in the timestep (robot check's timestep)
+DAMPING = {"hip_roll": 'damping="1" armature="0.05"', "hip_pitch": 'damping="1" armature="0.05"',
+           "knee": 'damping="1" armature="0.05"', "foot": 'damping="1" armature="0.05"',
+           "rod_ball": 'damping="0.01"', "shin_spring": 'damping="0.1"', "tarsus": 'damping="0.1"'}
+
+
+def _leg(s: str, y: float) -> str:
     return f"""
       <body name="{s}_hip" pos="0 {y} 0">
         <joint name="{s}_hip_roll" axis="1 0 0" range="-0.5 0.5"/>
@@ -73,10 +90,19 @@ def leg(s: str, y: float) -> str:
       </body>"""
 
 
-def chain_xml(keyframe: str = "0 0 0.95 1 0 0 0  0 0 1 0 0 0 0 0 0 0  0 0 1 0 0 0 0 0 0 0") -> str:
+# a keyframe with the knees bent: the straight leg of the default keyframe puts the rod parallel to the shin, where the
+# loop holds the tarsus only to second order; standing there, the tarsi turn and the robot tips (robot check's stand)
+BENT = "0 0 0.95 1 0 0 0  0 -0.3 1 0 0 0 0.6 0 0 0  0 -0.3 1 0 0 0 0.6 0 0 0"
+
+
+STRAIGHT = "0 0 0.95 1 0 0 0  0 0 1 0 0 0 0 0 0 0  0 0 1 0 0 0 0 0 0 0"
+
+
+def chain_xml(keyframe: str = STRAIGHT, damped: bool = False) -> str:
     """The biped (legs of :func:`leg`; qpos per leg: hip roll, hip pitch, rod quaternion, knee, spring, tarsus, foot)
     with a connect of each rod's end (0.35 m down the rod) to its tarsus, and a keyframe ``home``. At every joint 0 the
-    rod's end sits 0.05 m behind and 0.05 m above the tarsus's heel point: the keyframe's loop is open until solved."""
+    rod's end sits 0.05 m behind and 0.05 m above the tarsus's heel point: the keyframe's loop is open until solved.
+    ``damped``: Cassie's joint damping and armature (:data:`DAMPING`)."""
     connects = "".join(f'<connect name="{s}_achilles" body1="{s}_rod" body2="{s}_tarsus" anchor="0 0 -0.35"/>'
                        for s in ("left", "right"))
     motors = "".join(f'<motor joint="{s}_{j}" ctrlrange="-50 50"/>' for s in ("left", "right")
@@ -90,7 +116,7 @@ def chain_xml(keyframe: str = "0 0 0.95 1 0 0 0  0 0 1 0 0 0 0 0 0 0  0 0 1 0 0 
           <freejoint/>
           <inertial pos="0 0 0.05" mass="8" diaginertia="0.1 0.08 0.08"/>
           <geom type="box" size="0.08 0.14 0.06" pos="0 0 0.06"/>
-          {leg("left", 0.1)}{leg("right", -0.1)}
+          {leg("left", 0.1, damped)}{leg("right", -0.1, damped)}
         </body>
       </worldbody>
       <equality>{connects}</equality>
