@@ -215,3 +215,16 @@ class RobotConfig:
 LOOP_TOLERANCE = 1e-4
 """[m] the largest gap robot init leaves in a closed chain of its posture (MuJoCo's equality residual, after solving
 the passive joints): a loop that stays further open cannot close at the keyframe (``robots.loops.close_loops``)."""
+
+
+SETTLE_ITERATIONS = 20
+"""Most rounds of settling a posture's springs at their static deflection under the robot's weight
+(``inspection.gains.settle_springs``: the load moves with the posture, so the deflection is found again from it)."""
+
+SETTLE_TOLERANCE = 1e-9
+"""[rad or m] the change of every spring's deflection below which ``inspection.gains.settle_springs`` stops."""
+
+LOAD_ROUNDS = 4
+"""Most rounds of settling the springs and levelling the soles in robot init's loaded posture
+(``robotinit.posture.level_under_load``: the load moves with the ankles a little)."""
+

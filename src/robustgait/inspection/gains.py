@@ -29,6 +29,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.config.robot import SETTLE_ITERATIONS, SETTLE_TOLERANCE
 from robustgait.errors import input_error
 from robustgait.inspection.model import RobotModel, joint_range
 from robustgait.robots.loops import joint_dofs, loop_rows
@@ -277,18 +278,14 @@ def standing_loads(robot: RobotModel, qpos: NDArray[np.float64], feet: list[int]
     return out
 
 
-# iterations of :func:`settle_springs` and the change of a deflection [rad or m] it stops at
-SETTLE_ITERATIONS, SETTLE_TOLERANCE = 20, 1e-9
-
-
 def settle_springs(robot: RobotModel, feet: list[int]) -> dict[int, float]:
     """The posture (``robot.angles``, edited) with its springs at their static deflection under the robot's weight
     standing on the ``feet`` bodies: each spring at springref − τ/k, τ its :func:`standing_loads` torque, the loops
     closed again (:meth:`RobotModel.close`), repeated until no deflection changes by more than
-    :data:`SETTLE_TOLERANCE` (the load moves with the posture). A posture whose springs are rigid (as gait generation
-    holds them) is not the posture the robot stands in: its weight turns every joint below a spring. Returns each
-    spring's angle (joint id → rad or m); {} for a robot without springs. Raises RobustGaitError (one line naming
-    the spring, its deflection and its range) when a spring would leave its range."""
+    :data:`robustgait.config.robot.SETTLE_TOLERANCE` (the load moves with the posture). A posture whose springs are
+    rigid (as gait generation holds them) is not the posture the robot stands in: its weight turns every joint below a
+    spring. Returns each spring's angle (joint id → rad or m); {} for a robot without springs. Raises RobustGaitError
+    (one line naming the spring, its deflection and its range) when a spring would leave its range."""
     m = robot.model
     if not robot.springs:
         return {}

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from robustgait.config.robot import LOAD_ROUNDS
 from robustgait.inspection.discover import SIDES, Legs, tread_points
 from robustgait.inspection.gains import settle_springs
 from robustgait.inspection.mirror import Mirror
@@ -123,9 +124,6 @@ def centre_over_soles(robot: RobotModel, legs: Legs, mirror: Mirror, stand_fract
         lean -= e / slope
     robot.angles = leaned(lean)
     return abs(lean)
-
-
-LOAD_ROUNDS = 4  # rounds of settling the springs and levelling the soles (the load moves with the ankles a little)
 
 
 def level_under_load(robot: RobotModel, legs: Legs, mirror: Mirror) -> tuple[dict[int, float], float]:
