@@ -44,6 +44,15 @@ def test_walk_json(capsys, gait_robot):
     assert (0.08 < res["mean_speed"] < 0.2 if name == "atalante" else abs(res["mean_speed"] - 0.15 / 0.7) < 0.01)
     assert len(res["events"]) == 5
     assert res["orbit"]["status"] == "undecided" and res["orbit"]["steps"] == 5  # 5 events: too few to tell
+    if name == "atalante":  # a FROST gait carries no parameters: no planned speed, no note
+        assert res["planned_speed"] is None
+    else:
+        assert res["planned_speed"] == pytest.approx(0.15 / 0.7, rel=1e-9)
+        code, out, _ = run(capsys, "walk", gait, "--robot", robot, "--steps", "5")
+        assert code == 0 and "(planned 0.214)" in out and "note: the walk advances" not in out
+        code, out, _ = run(capsys, "walk", gait, "--robot", robot, "--steps", "5", "--override",
+                           "sim.speed_agreement=0")  # any difference at all is noted
+        assert code == 0 and "of the gait's planned 0.214 m/s" in out and "backwards" not in out
     assert res["comfort"] is None  # 5 steps end before the first measured one (comfort.skip_steps = 5)
     code, out, _ = run(capsys, "walk", gait, "--robot", robot, "--steps", "5", "--json", "--override",
                        "comfort.skip_steps=2")

@@ -29,8 +29,9 @@ def _walk(args: argparse.Namespace) -> int:
         print(json.dumps({**result.to_dict(), "orbit": orbit.to_dict()}, allow_nan=False))
     else:
         end = f"fell ({result.fall_reason}) at t = {result.time:.2f} s" if result.fell else "no fall"
+        plan = "" if result.planned_speed is None else f" (planned {result.planned_speed:.3f})"
         print(f"{gait.robot} gait on {robot.name}: {result.steps_taken}/{result.max_steps} steps, {end}; "
-              f"mean forward speed {result.mean_speed:.3f} m/s; lowest base height "
+              f"mean forward speed {result.mean_speed:.3f} m/s{plan}; lowest base height "
               f"{result.min_base_height:.3f} m; {result.switching} switching")
         tr = result.tracking
         print(f"controller {result.controller}: joint tracking error RMS {1e3 * tr['rms']:.3g} mrad, max "
@@ -50,6 +51,9 @@ def _walk(args: argparse.Namespace) -> int:
                   f"{reg['updates']} corrections, largest landing change {100 * reg['largest_step_change']:.3g} cm, "
                   f"{reg['clipped']} clipped (tracking errors include its corrections)")
         print(f"orbit of the switching events: {orbit.describe()} (stability: robustgait certify)")
+        note = result.speed_note(config.sim.speed_agreement)
+        if note:
+            print(f"note: {note}")
         if result.comfort is not None:
             print("\n".join(result.comfort.text()))
         else:

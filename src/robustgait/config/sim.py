@@ -37,6 +37,9 @@ class SimConfig:
     n_threads: Annotated[Int, Doc("MuJoCo rollout threads (0: one per core)", ge=0, le=256)] = 0
     max_speed: Annotated[Float, Doc("a joint or base speed above this counts as diverged", unit="rad/s or m/s",
                                     gt=0.0, le=1e4)] = 100.0
+    speed_agreement: Annotated[Float, Doc(
+        "a walk's summary notes a mean forward speed that differs from the gait's planned one (step length / step "
+        "duration) by more than this fraction of it, or goes backwards", ge=0.0, le=10.0)] = 0.5
     regulator: RegulatorConfig = field(default_factory=RegulatorConfig)
 
     @property

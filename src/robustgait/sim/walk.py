@@ -55,7 +55,8 @@ class WalkResult:
     torque exceeded the limit, and their fraction; :class:`~robustgait.sim.controller.TrackingStats`); ``comfort``:
     what a passenger feels (:class:`~robustgait.sim.comfort.Comfort`) when the walk was asked for it and completed a
     measured step, else None; ``physics_steps`` simulated; ``regulator``: what the step regulator did
-    (:meth:`~robustgait.sim.regulator.StepRegulator.summary`), None when it did not run."""
+    (:meth:`~robustgait.sim.regulator.StepRegulator.summary`), None when it did not run; ``planned_speed`` [m/s] the
+    gait's own step length / step duration (None for a gait without its parameters, a FROST import)."""
 
     steps_taken: int
     fell: bool
@@ -73,6 +74,23 @@ class WalkResult:
     trajectory: NDArray[np.float64] | None = field(default=None, repr=False)
     physics_steps: int = 0
     regulator: dict[str, Any] | None = None
+    planned_speed: float | None = None
+
+    def speed_note(self, tolerance: float) -> str:
+        """A one-line note when the walk does not go where the gait was planned to: its ``mean_speed`` differs from
+        ``planned_speed`` by more than ``tolerance`` × the planned speed (``sim.speed_agreement``), or has the other
+        sign; "" otherwise, and for a walk that fell (its speed is the fall's) or a gait without a planned speed. A
+        walk can settle on an orbit and survive pushes while marching in place or backwards: the orbit and the
+        certificate do not see it."""
+        plan = self.planned_speed
+        if self.fell or plan is None or plan <= 0.0:
+            return ""
+        if abs(self.mean_speed - plan) <= tolerance * plan:
+            return ""
+        way = "backwards, " if self.mean_speed < 0.0 else ""
+        return (f"the walk advances {way}{self.mean_speed:.3f} m/s, {100 * self.mean_speed / plan:.0f} % of the gait's "
+                f"planned {plan:.3f} m/s (step length / step duration; sim.speed_agreement {tolerance:g}): it does not "
+                "walk the gait as planned")
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
@@ -81,6 +99,14 @@ class WalkResult:
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), allow_nan=False)
+
+
+def planned_speed(gait: Gait) -> float | None:
+    """v = L / T [m/s], the gait's step length over its step duration (all its domains), None when the gait does not
+    carry its parameters (a FROST import)."""
+    if gait.params is None:
+        return None
+    return float(gait.params.step_length) / float(sum(d.duration for d in gait.domains))
 
 
 def _heading(qpos: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -223,7 +249,8 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
             trajectory=np.concatenate(run.chunks) if keep_trajectory and run.chunks else None,
             controller=eng.controller_name, controller_note=eng.controller_note, tracking=stats.summary(),
             comfort=measure(robot, eng.physics_model, recorder, heading) if recorder is not None else None,
-            physics_steps=run.physics, regulator=eng.regulator.summary() if eng.regulator is not None else None)
+            physics_steps=run.physics, regulator=eng.regulator.summary() if eng.regulator is not None else None,
+            planned_speed=planned_speed(gait))
     finally:
         if own:
             eng.close()
