@@ -198,3 +198,12 @@ def test_a_line_foot_rolls_freely_and_tips_over_its_toe_or_heel(tmp_path):  # ty
     assert found is not None and found[2] == "heel"
     text = "the right stance foot tipped over its heel (17°; the line foot is 16.0 cm long)"
     assert tipping_text(robot, found) == text
+
+
+def test_a_walk_check_that_passed_says_when_the_walk_is_not_the_gaits_speed() -> None:
+    """The check passes a walk that marches in place or backwards (it walks), and its line and JSON say so."""
+    note = "the walk advances backwards, -0.072 m/s, -19 % of the gait's planned 0.377 m/s"
+    check = WalkCheck(20, 107, False, None, "pd+hlip", orbit="ok", orbit_text="its switching states settled",
+                      speed_note=note)
+    assert check.passed and check.text().endswith(f"settled; note: {note}") and check.to_dict()["speed_note"] == note
+    assert "note:" not in WalkCheck(20, 107, False, None, "pd").text()

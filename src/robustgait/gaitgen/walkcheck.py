@@ -43,7 +43,9 @@ class WalkCheck:
     """Outcome of the walk check: ``steps`` asked at least, ``taken``, ``fell`` with ``fall_reason`` (engine codes),
     ``controller`` that ran; ``orbit``: the orbit rule's status and ``orbit_text`` its summary (empty when the walk
     was not watched); when it fell, ``cause`` (one clause), ``limit_joint`` (the joint whose range end it reached
-    first, if that came before any tipping sole) and ``advice`` (what to try)."""
+    first, if that came before any tipping sole) and ``advice`` (what to try); ``speed_note``: when it did not fall
+    but its speed is not the gait's planned one (:meth:`robustgait.sim.walk.WalkResult.speed_note`), that note —
+    the check still passes: a march in place is a walk, and the user is told."""
 
     steps: int
     taken: int
@@ -55,6 +57,7 @@ class WalkCheck:
     cause: str = ""
     limit_joint: str | None = None
     advice: list[str] = field(default_factory=list)
+    speed_note: str = ""
 
     @property
     def passed(self) -> bool:
@@ -63,13 +66,15 @@ class WalkCheck:
     def to_dict(self) -> dict[str, object]:
         return {"steps": self.steps, "taken": self.taken, "fell": self.fell, "fall_reason": self.fall_reason,
                 "controller": self.controller, "orbit": self.orbit, "orbit_text": self.orbit_text,
-                "cause": self.cause, "limit_joint": self.limit_joint, "advice": self.advice}
+                "cause": self.cause, "limit_joint": self.limit_joint, "advice": self.advice,
+                "speed_note": self.speed_note}
 
     def text(self) -> str:
         """One line: what the walk did, and when it fell why and what to try."""
         if not self.fell:
-            return f"walked {self.taken} steps under {self.controller}" + (f"; {self.orbit_text}"
-                                                                            if self.orbit_text else "")
+            return (f"walked {self.taken} steps under {self.controller}" + (f"; {self.orbit_text}"
+                                                                             if self.orbit_text else "")
+                    + (f"; note: {self.speed_note}" if self.speed_note else ""))
         tries = "; ".join(self.advice)
         return (f"the gait fell in step {self.taken + 1} under {self.controller} ({self.fall_reason}): "
                 f"{self.cause}" + (f"; try: {tries}" if tries else ""))
@@ -257,7 +262,8 @@ def walk_check(robot: Robot, gait: Gait, config: Config, check: PhysicsCheck | N
     on = config.generate.walk_unsettled
     if orbit is not None and orbit.status == Status.UNSETTLED and not result.fell and on > result.steps_taken:
         result = walk(robot, gait, config.sim, steps=on)  # the walk is deterministic: the same steps, then on
-    out = WalkCheck(least, result.steps_taken, result.fell, result.fall_reason, result.controller)
+    out = WalkCheck(least, result.steps_taken, result.fell, result.fall_reason, result.controller,
+                    speed_note=result.speed_note(config.sim.speed_agreement))
     if orbit is not None:
         out.orbit = orbit.status.value
         out.orbit_text = orbit_summary(orbit) if not result.fell else orbit.reason
