@@ -227,4 +227,3 @@ SETTLE_TOLERANCE = 1e-9
 LOAD_ROUNDS = 4
 """Most rounds of settling the springs and levelling the soles in robot init's loaded posture
 (``robotinit.posture.level_under_load``: the load moves with the ankles a little)."""
-

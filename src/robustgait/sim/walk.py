@@ -106,7 +106,7 @@ def planned_speed(gait: Gait) -> float | None:
     carry its parameters (a FROST import)."""
     if gait.params is None:
         return None
-    return float(gait.params.step_length) / float(sum(d.duration for d in gait.domains))
+    return float(gait.params.step_length) / gait.step_duration
 
 
 def _heading(qpos: NDArray[np.float64]) -> NDArray[np.float64]:
