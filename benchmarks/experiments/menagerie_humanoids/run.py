@@ -40,6 +40,17 @@ and ``DIR/promise.jsonl`` (default: this experiment's ``data/``): each robot's l
 each share κ of ``--shares``: how much a lateral CoM error grows per step (``fell``: a probe walk fell) — does the
 ankle hold it, or does it grow as on a point foot (e^{λT} per step)?
 
+``soletilt SPEC``: how far the stance sole turns on the model's own contacts under the default gait. The gait is
+solved again (:class:`robustgait.gaitgen.solve.GaitGenerator`, for its planned contact wrenches), and its first step
+is walked open loop from its initial state with the walker's servo controls (:func:`robustgait.sim.controller.
+step_controls`, no regulator). Every ``--every`` seconds it prints the stance sole's tilt (toe up > 0), the simulated
+and planned centre of pressure along the sole (from the sole box's centre), and each sole contact's position,
+penetration [mm] and normal force [N]. The last line is a JSON summary: a contact's stiffness (the median of force /
+penetration), the sole's neutral point (the mean position of its loaded contacts at mid-step: all equally stiff, the
+centre of pressure that leaves the sole flat) and its rotational stiffness about that point, k_rot = k sum (x_i -
+x_bar)^2, beside the servo stiffness of the stance leg's last pitch joint; the planned centre of pressure's range.
+``--timeconst S`` sets every geom's solref time constant to S first (in memory): the same step on stiffer contacts.
+
     python benchmarks/experiments/menagerie_humanoids/run.py strip ~/mujoco_menagerie/unitree_g1/g1.xml /tmp/g1.xml
     python benchmarks/experiments/menagerie_humanoids/run.py run /tmp/g1.xml /tmp/g1 >> \\
         benchmarks/experiments/menagerie_humanoids/data/pipeline.jsonl
@@ -265,6 +276,104 @@ def growth(spec: Path, gait_path: Path, shares: list[float]) -> list[dict[str, A
     return rows
 
 
+def soletilt(spec: Path, every: float, timeconst: float | None) -> dict[str, Any]:
+    """The stance sole's tilt and contacts over the default gait's first step (module docstring, ``soletilt``)."""
+    import mujoco
+
+    from robustgait import Config, load_robot
+    from robustgait.gaitgen.solve import GaitGenerator
+    from robustgait.robots.legs import axis_kinds
+    from robustgait.sim.controller import step_controls
+
+    robot = load_robot(spec)
+    m = robot.model
+    if timeconst is not None:
+        m.geom_solref[:, 0] = timeconst
+    res = GaitGenerator(robot, Config().generate).solve(robot.default_params)
+    if res.gait is None or res.nodes is None:
+        raise SystemExit(f"the default gait does not solve: {res.reason}")
+    gait, nodes = res.gait.closed(robot), res.nodes[0]  # a closed chain: its passive joints solved from its loops
+    stance = gait.stance
+    sole = robot.sole_boxes[stance]
+    body = int(m.geom_bodyid[robot.sole_geom_id[stance]])
+    lam = np.asarray(nodes.lam)
+    torque_row = 3 if lam.shape[1] == 5 else 4  # n_y: a line foot's (f, n_y, n_z), a flat foot's (f, n)
+    planned_cop = -lam[:, torque_row] / lam[:, 2]
+    node_tau = np.linspace(0.0, 1.0, lam.shape[0])
+    data = mujoco.MjData(m)
+    start = gait.initial_state
+    assert start is not None  # a solved gait has its initial state
+    data.qpos[:], data.qvel[:] = start.qpos, start.qvel
+    n = round(gait.step_duration / m.opt.timestep)
+    controls = step_controls(robot, gait, n)
+    stride = max(1, round(every / m.opt.timestep))
+    samples: list[dict[str, Any]] = []
+    stiffness: list[tuple[float, float]] = []
+    contacts: list[tuple[float, float, float]]
+    for k in range(n):
+        data.ctrl[:] = controls[k]
+        mujoco.mj_step(m, data)
+        if (k + 1) % stride:
+            continue
+        frame = sole.world_frame(data)
+        centre = data.geom_xpos[sole.geom]
+        contacts, fz, moment = [], 0.0, 0.0
+        for i in range(data.ncon):
+            c = data.contact[i]
+            if body not in (int(m.geom_bodyid[c.geom1]), int(m.geom_bodyid[c.geom2])):
+                continue
+            f6 = np.zeros(6)
+            mujoco.mj_contactForce(m, data, i, f6)
+            normal = float(f6[0])
+            x = float(frame[:, 0] @ (c.pos - centre))
+            depth = -float(c.dist)
+            contacts.append((round(x, 4), round(depth * 1e3, 2), round(normal, 1)))
+            fz, moment = fz + normal, moment + normal * x
+            if depth > 2e-5 and normal > 1.0:
+                stiffness.append((x, normal / depth))
+        tau = (k + 1) / n
+        samples.append({"tau": round(tau, 3), "tilt_deg": round(float(np.degrees(np.arcsin(frame[2, 0]))), 3),
+                        "cop": round(moment / fz, 4) if fz > 1.0 else None,
+                        "planned_cop": round(float(np.interp(tau, node_tau, planned_cop)), 4),
+                        "contacts": contacts})
+        print(json.dumps(samples[-1]), flush=True)
+    xs = np.array([x for x, _ in stiffness])
+    ks = np.array([k for _, k in stiffness])
+    x_bar = float(np.sum(ks * xs) / np.sum(ks)) if ks.size else float("nan")
+    k_each = float(np.median(ks)) if ks.size else float("nan")
+    # the sole as it stands at mid-step: its loaded contacts, equally stiff (the same solref), and their mean
+    mid: list[tuple[float, float, float]] = next((s["contacts"] for s in samples if s["tau"] >= 0.5), [])
+    at_mid = [x for x, _, normal in mid if normal > 1.0]
+    x_mid = float(np.mean(at_mid)) if at_mid else float("nan")
+    k_rot = k_each * float(sum((x - x_mid) ** 2 for x in at_mid))
+    # the servo that turns the sole about its lateral axis: the stance chain's last pitch joint
+    chain = [int(robot.dof_idx[j]) for j in range(robot.n_joints)
+             if int(m.jnt_bodyid[m.dof_jntid[robot.dof_idx[j]]]) in _ancestors(m, body)]
+    joints = tuple(int(m.dof_jntid[d]) for d in chain)
+    pitches = [i for i, kind in enumerate(axis_kinds(m, joints)) if kind == "y"]
+    servo = next((j for j in range(robot.n_joints) if int(robot.dof_idx[j]) == chain[pitches[-1]]), None) \
+        if pitches else None
+    kp = float(robot.kp[servo]) if servo is not None else float("nan")
+    summary = {"commit": git_commit(), "date": str(date.today()), "robot": robot.name,
+               "timeconst": timeconst, "timestep": m.opt.timestep, "contact_stiffness_n_per_mm": round(k_each / 1e3, 1),
+               "contacts_at_mid_step": len(at_mid), "neutral_point": round(x_mid, 4),
+               "stiffness_weighted_point": round(x_bar, 4), "k_rot_nm_per_rad": round(k_rot, 0),
+               "servo_kp_nm_per_rad": round(kp, 0),
+               "servo_joint": m.joint(int(m.dof_jntid[robot.dof_idx[servo]])).name if servo is not None else None,
+               "tilt_end_deg": samples[-1]["tilt_deg"] if samples else None,
+               "planned_cop_range": [round(float(planned_cop.min()), 4), round(float(planned_cop.max()), 4)]}
+    print(json.dumps(summary))
+    return summary
+
+
+def _ancestors(m: Any, body: int) -> set[int]:
+    out: set[int] = set()
+    while body > 0:
+        out.add(body)
+        body = int(m.body_parentid[body])
+    return out
+
+
 def _commits(rows: list[dict[str, Any]]) -> str:
     return ", ".join(sorted({str(r.get("commit")) for r in rows}))
 
@@ -335,6 +444,10 @@ def main() -> None:
     g.add_argument("spec", type=Path)
     g.add_argument("gait", type=Path)
     g.add_argument("--shares", type=float, nargs="+", default=[0.0, 1.0])
+    t = sub.add_parser("soletilt")
+    t.add_argument("spec", type=Path)
+    t.add_argument("--every", type=float, default=0.02)
+    t.add_argument("--timeconst", type=float, default=None)
     args = ap.parse_args()
     if args.cmd == "strip":
         print(json.dumps(strip(args.src, args.out)))
@@ -352,6 +465,8 @@ def main() -> None:
         report(args.data)
     elif args.cmd == "promise":
         print(json.dumps(promise(args.spec, args.gait, args.cert, args.trials, args.label or str(args.spec))))
+    elif args.cmd == "soletilt":
+        soletilt(args.spec, args.every, args.timeconst)
     else:
         growth(args.spec, args.gait, args.shares)
 
