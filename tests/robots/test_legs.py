@@ -74,8 +74,10 @@ def test_a_width_of_four_digits_is_the_one_value_its_axis_holds(tmp_path: Path) 
     assert space is not None and list(space["step_width"].grid()) == [robot.default_params.step_width]
 
 
-def test_generation_refuses_what_the_legs_cannot_do(h1_spec: Path, capsys: pytest.CaptureFixture[str]):
-    """Another step width, or a multi-contact gait: one line naming the legs' reason, exit 2, nothing written."""
+def test_generation_refuses_what_the_legs_cannot_do(h1_spec: Path, capsys: pytest.CaptureFixture[str],
+                                                   no_work: None):
+    """Another step width, or a multi-contact gait: one line naming the legs' reason, exit 2, nothing written, before
+    any gait problem is built (no_work)."""
     out = h1_spec.parent / "g.json"
     code, _, err = run(capsys, "gait", "generate", "--robot", h1_spec, "--step-width", "0.17", "-o", out)
     assert code == 2 and "no ankle roll" in err and "0.18 m apart" in err and len(err.strip().splitlines()) == 1

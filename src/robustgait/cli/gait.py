@@ -32,8 +32,8 @@ def _convert(args: argparse.Namespace) -> int:
 
 
 def _generate(args: argparse.Namespace) -> int:
-    from robustgait.config.gait import reach_problem
     from robustgait.gaitgen import GaitGenerator
+    from robustgait.gaitgen.solve import params_problem
     from robustgait.gaitgen.walkcheck import generate_walking
     from robustgait.io.gaitfile import load_gait, save_gait
     from robustgait.io.robotfile import load_robot
@@ -41,7 +41,7 @@ def _generate(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     config = config_from(args, Config(gait=robot.default_params))  # the spec's [gait] under file and flags
     params = config.params.resolved(config.generate.domains)
-    problem = reach_problem(params, robot.scale, config.generate)
+    problem = params_problem(robot, params, config.generate.for_robot(robot.scale, robot.spec.generation))
     if problem is not None:  # before the problem is built: no solve can walk it
         raise RobustGaitError(f"{robot.name}: {problem}")
     warm = load_gait(args.warm_start, robot) if args.warm_start else None

@@ -144,6 +144,16 @@ def inner_range(joint_range: FloatArray, margin: float) -> FloatArray:
     return np.stack([lo + mu, hi - mu], axis=1)
 
 
+def ankle_roll_problem(robot: Robot, side: str) -> str | None:
+    """Why the ``side`` leg cannot walk a multi-contact gait, in one clause, or None: it has no ankle roll, which rolls
+    the heel's edge flat (:func:`double_support_free_joints` picks it as a free joint of double support)."""
+    if robot.ankle_rolls[side] is not None:
+        return None
+    names = ", ".join(robot.model.joint(j).name for j in robot.leg_joints[side])
+    return (f"the {side} leg ({names}) has no ankle roll: multi-contact gaits roll the heel's edge flat with it; "
+            "generate flat-foot gaits (domains flat)")
+
+
 def double_support_free_joints(robot: Robot, side: str, names: tuple[str, ...] | None = None) -> list[int]:
     """Joints (spec order) of the ``side`` leg that are *not* Bézier outputs in double support.
 
@@ -160,10 +170,9 @@ def double_support_free_joints(robot: Robot, side: str, names: tuple[str, ...] |
             raise RobustGaitError(f"ds_free_joints must name 4 actuated joints, got {list(names)}")
         return [spec.joints.index(n) for n in names]
     chain = list(robot.leg_joints[side])
-    if robot.ankle_rolls[side] is None:
-        raise RobustGaitError(f"the {side} leg ({', '.join(m.joint(j).name for j in chain)}) has no ankle roll: "
-                              "multi-contact gaits roll the heel's edge flat with it; generate flat-foot gaits "
-                              "(domains flat)")
+    no_roll = ankle_roll_problem(robot, side)
+    if no_roll is not None:
+        raise RobustGaitError(no_roll)
     kinds = list(axis_kinds(m, tuple(chain)))
     rolls = [j for j, k in zip(chain, kinds, strict=True) if k == "x"]
     yaws = [j for j, k in zip(chain, kinds, strict=True) if k == "z"]

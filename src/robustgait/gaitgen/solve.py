@@ -19,6 +19,7 @@ from robustgait.dynamics import Dynamics, foot_frame, impact_map
 from robustgait.gait import BEZIER_DEGREE, Domain, Gait, State
 from robustgait.gaitgen.check import PhysicsCheck, check_solution, spring_problem
 from robustgait.gaitgen.derivatives import derivative_functions
+from robustgait.gaitgen.layout import ankle_roll_problem
 from robustgait.gaitgen.problem import (
     F_SCALE,
     U_SCALE,
@@ -309,6 +310,29 @@ def unpack(prob: GaitProblem, x: FloatArray, durations: list[float]) -> tuple[li
     return betas, states
 
 
+def params_problem(robot: Robot, params: GaitParams, config: GenerationConfig) -> str | None:
+    """Why ``robot`` cannot be asked for resolved ``params`` under ``config``, in one clause, or None (IPOPT decides the
+    rest). ``config`` is a generator's own, its robot-scaled options set (:meth:`GenerationConfig.for_robot`). In turn:
+    a step width that makes the soles collide (narrower than :func:`~robustgait.config.gait.least_step_width`), legs
+    without an ankle roll asked for another width than the soles' spacing (both feet are flat only under parallel legs)
+    or for a multi-contact gait (:func:`~robustgait.gaitgen.layout.ankle_roll_problem`), a step beyond the leg's reach
+    (:func:`~robustgait.config.gait.reach_problem`). Needs no gait problem, so a refusal costs no build."""
+    sole_width = 2 * robot.sole_boxes[config.stance].half_width
+    min_width = least_step_width(sole_width, config.scaled("foot_gap"))
+    if params.step_width < min_width:
+        return (f"step width {params.step_width:g} m makes the feet collide: the soles are {sole_width:.3f} m wide and "
+                f"need a {config.scaled('foot_gap'):g} m gap (width ≥ {min_width:.3f} m)")
+    if not robot.has_ankle_roll and abs(params.step_width - robot.sole_spacing) > PARALLEL_LEGS_WIDTH_TOLERANCE:
+        return (f"step width {params.step_width:g} m: the legs have no ankle roll, so both feet are flat only under "
+                f"parallel legs, {robot.sole_spacing:.4g} m apart (the posture's sole spacing): set step_width to it")
+    if config.domains == "multicontact":
+        for side in ("left", "right"):
+            missing = ankle_roll_problem(robot, side)
+            if missing is not None:
+                return missing
+    return reach_problem(params, robot.scale, config)
+
+
 class GaitGenerator:
     """Builds the NLP of a domain graph once for a robot — its derivatives node kind by node kind
     (:mod:`.derivatives`) — and solves it for any :class:`GaitParams`."""
@@ -376,19 +400,9 @@ class GaitGenerator:
         return np.clip(q, np.where(np.isfinite(lo), lo, -1e9), np.where(np.isfinite(hi), hi, 1e9))
 
     def precheck(self, params: GaitParams) -> str | None:
-        """A readable reason why ``params`` cannot be walked by this robot, or None (IPOPT decides the rest)."""
-        prob, cfg = self.problem, self.config
-        min_width = least_step_width(2 * prob.half_width, cfg.scaled("foot_gap"))
-        if params.step_width < min_width:
-            return (f"step width {params.step_width:g} m makes the feet collide: the soles are "
-                    f"{2 * prob.half_width:.3f} m wide and need a {cfg.scaled('foot_gap'):g} m gap (width ≥ "
-                    f"{min_width:.3f} m)")
-        robot = self.robot
-        if not robot.has_ankle_roll and abs(params.step_width - robot.sole_spacing) > PARALLEL_LEGS_WIDTH_TOLERANCE:
-            return (f"step width {params.step_width:g} m: the legs have no ankle roll, so both feet are flat only "
-                    f"under parallel legs, {robot.sole_spacing:.4g} m apart (the posture's sole spacing): set "
-                    f"step_width to it")
-        return reach_problem(params, robot.scale, cfg)
+        """A readable reason why ``params`` cannot be walked by this robot, or None (IPOPT decides the rest):
+        :func:`params_problem` under this generator's options."""
+        return params_problem(self.robot, params, self.config)
 
     def solve(self, params: GaitParams, warm_start: Gait | None = None) -> GaitGenResult:
         """Solve for one set of essential constraints; never raises on infeasible input or solver failure:
