@@ -253,6 +253,25 @@ def write_frost_yaml(gait, path, *, inputparams=None):  # type: ignore[no-untype
     return path
 
 
+# the orbit searches of one gait in several test modules, made once per worker: those modules share the xdist group
+# ORBITS, so that one worker runs them all
+ORBITS = "orbits"
+_ORBITS: dict[tuple[str, ...], object] = {}
+
+
+def walked_orbit(robot, gait, config=None):  # type: ignore[no-untyped-def]
+    """``find_orbit(Walking(robot, gait), config)``, searched once per worker for a robot, a gait and the options the
+    search reads (``orbit``, ``map``, ``push``); the orbit is a frozen result, shared as it is."""
+    from robustgait import CertifyConfig
+    from robustgait.certificate import Walking, find_orbit
+
+    cfg = config or CertifyConfig()
+    key = (robot.digest, gait.digest(), repr(cfg.orbit), repr(cfg.map), repr(cfg.push))
+    if key not in _ORBITS:
+        _ORBITS[key] = find_orbit(Walking(robot, gait), cfg)
+    return _ORBITS[key]
+
+
 @pytest.fixture(scope="session", params=["exo", "exo-multicontact", "atalante"])
 def robot_gait(request):  # type: ignore[no-untyped-def]
     """(robot, gait) for the shipped exo with its stored flat-foot and multi-contact gaits, and for Atalante with

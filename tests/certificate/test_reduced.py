@@ -8,7 +8,6 @@ import pytest
 from scipy import stats
 
 from robustgait import CertifyConfig
-from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.barrier import sample_ball
 from robustgait.certificate.reduced import (
     Coordinates,
@@ -22,9 +21,11 @@ from robustgait.certificate.reduced import (
 from robustgait.certificate.shape import Shape
 from robustgait.robots.model import mass_matrix
 from robustgait.rotations import quat_to_mat
+from tests.conftest import ORBITS, walked_orbit
 
-# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
-pytestmark = pytest.mark.xdist_group("reduced_module")
+# one worker runs the modules of the group, so their module fixtures are made once and the orbit searches of one gait
+# shared (tests.conftest.walked_orbit)
+pytestmark = pytest.mark.xdist_group(ORBITS)
 
 STATES = ("omega", "centroidal", "velocity")
 
@@ -67,7 +68,7 @@ def test_reduced_state_of_mirror_is_reflected(robot_gait):
 
 @pytest.fixture(scope="module")
 def fixed_point(exo, exo_gait):
-    return find_orbit(Walking(exo, exo_gait)).fixed_point("heading")
+    return walked_orbit(exo, exo_gait).fixed_point("heading")
 
 
 def _state(name, exo, exo_gait, fp, **kw):

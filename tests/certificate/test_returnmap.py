@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from robustgait import CertifyConfig, RobustGaitError
-from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.reduced import (
     ReducedState,
     reduce_state,
@@ -17,9 +16,11 @@ from robustgait.certificate.reduced import (
 from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
 from robustgait.certificate.search import initial_section
+from tests.conftest import ORBITS, walked_orbit
 
-# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
-pytestmark = pytest.mark.xdist_group("returnmap_module")
+# one worker runs the modules of the group, so their module fixtures are made once and the orbit searches of one gait
+# shared (tests.conftest.walked_orbit)
+pytestmark = pytest.mark.xdist_group(ORBITS)
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +28,7 @@ def step_map(robot_gait):  # type: ignore[no-untyped-def]
     """The reduced map (omega, holonomic) at the orbit's x* of each flat-foot gait, and the orbit."""
     robot, gait = robot_gait
     cfg = CertifyConfig(disturbance="state")
-    orbit = find_orbit(Walking(robot, gait), cfg)
+    orbit = walked_orbit(robot, gait, cfg)
     assert orbit.ok, orbit.describe()
     with FullStateMap(robot, gait, orbit.period) as fmap:
         yield ReducedMap(fmap, ReducedState.at("omega", robot, orbit.qpos, orbit.qvel, gait.stance, cfg), 1), orbit
@@ -86,7 +87,7 @@ def test_angular_only_changes_only_the_angular_velocity(step_map):
 def test_a_two_step_map_is_two_steps_unmirrored_and_a_one_step_map_mirrors(exo, exo_gait):
     """The stride map (k = 2) of a symmetric robot is the step map applied twice (each mirrored: the mirrors cancel),
     to rounding; a map of no steps is refused."""
-    orbit = find_orbit(Walking(exo, exo_gait))
+    orbit = walked_orbit(exo, exo_gait)
     q, v = orbit.qpos[None], orbit.qvel[None]
     with FullStateMap(exo, exo_gait, 1) as step, FullStateMap(exo, exo_gait, 2) as stride:
         q1, v1, _ = step(*step(q, v)[:2])

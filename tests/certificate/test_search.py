@@ -16,15 +16,16 @@ from robustgait.certificate.orbit import Status, canonical_event_states, classif
 from robustgait.certificate.search import probe_impulse
 from robustgait.config import SimConfig
 from robustgait.gait import State
-from tests.conftest import EXO_GAIT
+from tests.conftest import EXO_GAIT, ORBITS, walked_orbit
 
-# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
-pytestmark = pytest.mark.xdist_group("search_module")
+# one worker runs the modules of the group, so their module fixtures are made once and the orbit searches of one gait
+# shared (tests.conftest.walked_orbit)
+pytestmark = pytest.mark.xdist_group(ORBITS)
 
 
 @pytest.fixture(scope="module")
 def exo_orbit(exo, exo_gait):  # type: ignore[no-untyped-def]
-    return find_orbit(Walking(exo, exo_gait))
+    return walked_orbit(exo, exo_gait)
 
 
 def test_the_exo_gait_settles_on_a_stable_period_one_orbit(exo, exo_gait, exo_orbit):
