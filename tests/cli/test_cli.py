@@ -1,4 +1,5 @@
 import json
+import math
 import shutil
 import subprocess
 import sys
@@ -44,6 +45,7 @@ def test_walk_json(capsys, gait_robot):
     assert (0.08 < res["mean_speed"] < 0.2 if name == "atalante" else abs(res["mean_speed"] - 0.15 / 0.7) < 0.01)
     assert len(res["events"]) == 5
     assert res["orbit"]["status"] == "undecided" and res["orbit"]["steps"] == 5  # 5 events: too few to tell
+    assert abs(math.degrees(res["sole_turn"])) < 0.5  # a flat sole on the floor ends single support as the plan: flat
     if name == "atalante":  # a FROST gait carries no parameters: no planned speed, no note
         assert res["planned_speed"] is None
     else:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import copy
 import json
+import math
 from collections.abc import Callable, Generator, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -56,7 +57,10 @@ class WalkResult:
     what a passenger feels (:class:`~robustgait.sim.comfort.Comfort`) when the walk was asked for it and completed a
     measured step, else None; ``physics_steps`` simulated; ``regulator``: what the step regulator did
     (:meth:`~robustgait.sim.regulator.StepRegulator.summary`), None when it did not run; ``planned_speed`` [m/s] the
-    gait's own step length / step duration (None for a gait without its parameters, a FROST import)."""
+    gait's own step length / step duration (None for a gait without its parameters, a FROST import); ``sole_turn``
+    [rad] the stance sole's turn about its lateral axis at the end of single support, toe up > 0
+    (:func:`stance_sole_turn`), averaged over the steps (None without a completed step): the plan holds the stance
+    sole flat, and a model's soft contacts can turn it under the plan's centre of pressure."""
 
     steps_taken: int
     fell: bool
@@ -75,22 +79,28 @@ class WalkResult:
     physics_steps: int = 0
     regulator: dict[str, Any] | None = None
     planned_speed: float | None = None
+    sole_turn: float | None = None
 
     def speed_note(self, tolerance: float) -> str:
         """A one-line note when the walk does not go where the gait was planned to: its ``mean_speed`` differs from
         ``planned_speed`` by more than ``tolerance`` × the planned speed (``sim.speed_agreement``), or has the other
         sign; "" otherwise, and for a walk that fell (its speed is the fall's) or a gait without a planned speed. A
         walk can settle on an orbit and survive pushes while marching in place or backwards: the orbit and the
-        certificate do not see it."""
+        certificate do not see it. The note gives the stance sole's mean turn at the end of single support
+        (``sole_turn``) when it is known: a sole the contacts turn leans the whole robot with it."""
         plan = self.planned_speed
         if self.fell or plan is None or plan <= 0.0:
             return ""
         if abs(self.mean_speed - plan) <= tolerance * plan:
             return ""
         way = "backwards, " if self.mean_speed < 0.0 else ""
+        turn = "" if self.sole_turn is None else (
+            f"; its stance sole ends single support turned {math.degrees(abs(self.sole_turn)):.2f}° "
+            f"{'toe up' if self.sole_turn >= 0.0 else 'toe down'} on average, where the plan holds it flat "
+            "(docs/robots.md: soft contacts turn a sole)")
         return (f"the walk advances {way}{self.mean_speed:.3f} m/s, {100 * self.mean_speed / plan:.0f} % of the gait's "
                 f"planned {plan:.3f} m/s (step length / step duration; sim.speed_agreement {tolerance:g}): it does not "
-                "walk the gait as planned")
+                f"walk the gait as planned{turn}")
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
@@ -107,6 +117,24 @@ def planned_speed(gait: Gait) -> float | None:
     if gait.params is None:
         return None
     return float(gait.params.step_length) / gait.step_duration
+
+
+def stance_sole_turn(robot: Robot, data: mujoco.MjData, qpos: NDArray[np.float64], side: str) -> float:
+    """θ = asin(x_s · e_z) [rad]: how far ``side``'s sole is turned about its lateral axis at configuration ``qpos``
+    (nq,), x_s the sole's heel-to-toe axis in the world (:meth:`~robustgait.robots.solebox.SoleBox.world_frame`), toe
+    up > 0. ``data`` is scratch (its kinematics are overwritten)."""
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(robot.model, data)
+    return math.asin(float(np.clip(robot.sole_boxes[side].world_frame(data)[2, 0], -1.0, 1.0)))
+
+
+def mean_sole_turn(robot: Robot, events: list[SwitchEvent]) -> float | None:
+    """The mean of :func:`stance_sole_turn` [rad] of each step's stance sole at its switching event (the end of its
+    single support), None without events."""
+    if not events:
+        return None
+    data = mujoco.MjData(robot.model)
+    return float(np.mean([stance_sole_turn(robot, data, np.asarray(e.qpos), e.stance) for e in events]))
 
 
 def _heading(qpos: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -250,7 +278,7 @@ def walk(robot: Robot, gait: Gait, config: SimConfig | None = None, *, steps: in
             controller=eng.controller_name, controller_note=eng.controller_note, tracking=stats.summary(),
             comfort=measure(robot, eng.physics_model, recorder, heading) if recorder is not None else None,
             physics_steps=run.physics, regulator=eng.regulator.summary() if eng.regulator is not None else None,
-            planned_speed=planned_speed(gait))
+            planned_speed=planned_speed(gait), sole_turn=mean_sole_turn(robot, events))
     finally:
         if own:
             eng.close()
