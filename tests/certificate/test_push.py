@@ -8,7 +8,6 @@ import math
 import numpy as np
 import pytest
 
-from robustgait.certificate import Walking, find_orbit
 from robustgait.certificate.certify import certify_gait
 from robustgait.certificate.push import PushMap, push_phase, recovered_steps
 from robustgait.config import CertifyConfig, PushConfig, SimConfig, ValidateConfig
@@ -19,15 +18,17 @@ from robustgait.sim.factory import make_engine
 from robustgait.sim.trials import pushed_first_step, simulate_trials
 from robustgait.validate import Validator
 from robustgait.validate.disturbances import Draws
+from tests.conftest import ORBITS, walked_orbit
 
-# one worker runs the whole module, so its module fixtures (orbits, certificates, validators) are made once
-pytestmark = pytest.mark.xdist_group("push_module")
+# one worker runs the modules of the group, so their module fixtures are made once and the orbit searches of one gait
+# shared (tests.conftest.walked_orbit: the engines here run the default simulation options, as the search's own does)
+pytestmark = pytest.mark.xdist_group(ORBITS)
 
 
 @pytest.fixture(scope="module")
 def mc_pushes(exo, exo_mc_gait):  # type: ignore[no-untyped-def]
     engine = make_engine(exo, exo_mc_gait, SimConfig())
-    orbit = find_orbit(Walking(exo, exo_mc_gait, engine=engine))
+    orbit = walked_orbit(exo, exo_mc_gait)
     assert orbit.ok, orbit.describe()
     # falls only, the pushed step and 3 more: the map is then the validation's walk to the letter (recovery: its own
     # test)
@@ -39,7 +40,7 @@ def mc_pushes(exo, exo_mc_gait):  # type: ignore[no-untyped-def]
 @pytest.fixture(scope="module")
 def exo_pushes(exo, exo_gait):  # type: ignore[no-untyped-def]
     engine = make_engine(exo, exo_gait, SimConfig())
-    orbit = find_orbit(Walking(exo, exo_gait, engine=engine))
+    orbit = walked_orbit(exo, exo_gait)
     yield engine, orbit
     engine.close()
 
