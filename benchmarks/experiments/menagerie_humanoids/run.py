@@ -63,6 +63,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
 from datetime import date
 from pathlib import Path
@@ -284,6 +285,7 @@ def soletilt(spec: Path, every: float, timeconst: float | None) -> dict[str, Any
     from robustgait.gaitgen.solve import GaitGenerator
     from robustgait.robots.legs import axis_kinds
     from robustgait.sim.controller import step_controls
+    from robustgait.sim.walk import stance_sole_turn
 
     robot = load_robot(spec)
     m = robot.model
@@ -300,7 +302,7 @@ def soletilt(spec: Path, every: float, timeconst: float | None) -> dict[str, Any
     torque_row = 3 if lam.shape[1] == 5 else 4  # n_y: a line foot's (f, n_y, n_z), a flat foot's (f, n)
     planned_cop = -lam[:, torque_row] / lam[:, 2]
     node_tau = np.linspace(0.0, 1.0, lam.shape[0])
-    data = mujoco.MjData(m)
+    data, scratch = mujoco.MjData(m), mujoco.MjData(m)
     start = gait.initial_state
     assert start is not None  # a solved gait has its initial state
     data.qpos[:], data.qvel[:] = start.qpos, start.qvel
@@ -332,7 +334,8 @@ def soletilt(spec: Path, every: float, timeconst: float | None) -> dict[str, Any
             if depth > 2e-5 and normal > 1.0:
                 stiffness.append((x, normal / depth))
         tau = (k + 1) / n
-        samples.append({"tau": round(tau, 3), "tilt_deg": round(float(np.degrees(np.arcsin(frame[2, 0]))), 3),
+        tilt = stance_sole_turn(robot, scratch, data.qpos, stance)  # the walk's own measure, toe up > 0
+        samples.append({"tau": round(tau, 3), "tilt_deg": round(math.degrees(tilt), 3),
                         "cop": round(moment / fz, 4) if fz > 1.0 else None,
                         "planned_cop": round(float(np.interp(tau, node_tau, planned_cop)), 4),
                         "contacts": contacts})

@@ -30,6 +30,7 @@ from robustgait.gaitgen.problem import (
 from robustgait.gaitgen.states import NodeStates, to_mujoco_state
 from robustgait.robots import Robot
 from robustgait.robots.loops import reduced_state
+from robustgait.robots.spec import SIDES
 
 FloatArray = NDArray[np.float64]
 
@@ -326,7 +327,7 @@ def params_problem(robot: Robot, params: GaitParams, config: GenerationConfig) -
         return (f"step width {params.step_width:g} m: the legs have no ankle roll, so both feet are flat only under "
                 f"parallel legs, {robot.sole_spacing:.4g} m apart (the posture's sole spacing): set step_width to it")
     if config.domains == "multicontact":
-        for side in ("left", "right"):
+        for side in SIDES:
             missing = ankle_roll_problem(robot, side)
             if missing is not None:
                 return missing
