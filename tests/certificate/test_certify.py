@@ -54,6 +54,9 @@ def test_certificate_is_consistent(small_cert):
     assert np.all(d <= 1.0 + 1e-12)
     assert small_cert.map_residual < 0.05 and small_cert.sigma is not None and small_cert.sigma < 0.05
     assert small_cert.physics_steps > 24 * 500 and small_cert.orbit_physics_steps > 0
+    # each of these gaits walks at its planned speed (Atalante's FROST gait has none): no note
+    assert small_cert.speed_note == "" and small_cert.to_dict()["speed_note"] == ""
+    assert small_cert.orbit.walk_speed is not None and small_cert.orbit.walk_speed > 0.0
 
 
 @pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it
@@ -232,6 +235,7 @@ def test_cli_certify_reports_the_orbit(capsys):
     assert code == 0 and o["status"] == "ok" and o["period"] == 1 and o["settled_at_step"] < o["steps"]
     assert res["fixed_point_step"] == o["x_star_step"] and o["probe"]["recovered"] == [True] * 8
     assert o["linearization"] is None and res["orbit_physics_steps"] > 30 * 600
+    assert o["walk_speed"] > 0.0 and res["speed_note"] == "" and "note:" not in out
     code, out, err = _cli(capsys, "certify", str(EXO_MC_GAIT), "--robot", "exo", "--method", "uniform", "--samples",
                           "4")
     assert code == 0 and err == "" and "orbit: settled at step" in out and "period-1 orbit" in out

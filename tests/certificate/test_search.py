@@ -13,7 +13,7 @@ import pytest
 from robustgait import CertifyConfig, walk
 from robustgait.certificate import Walked, Walking, find_orbit
 from robustgait.certificate.orbit import Status, canonical_event_states, classify_walk, min_period
-from robustgait.certificate.search import probe_impulse
+from robustgait.certificate.search import orbit_speed_note, probe_impulse
 from robustgait.config import SimConfig
 from robustgait.gait import State
 from tests.conftest import EXO_GAIT, ORBITS, walked_orbit
@@ -44,6 +44,25 @@ def test_the_exo_gait_settles_on_a_stable_period_one_orbit(exo, exo_gait, exo_or
     assert o.probe is not None and o.probe.ok and any(o.probe.left) and not any(o.probe.fell)
     assert o.probe.impulse == pytest.approx(probe_impulse(exo, CertifyConfig().orbit.probe_impulse) * 2 ** 0, rel=1.01)
     assert o.physics_steps > 0 and o.states is not None and len(o.states) == o.window + o.held
+    # the search's walk is that walk: its speed and sole turn are the orbit's
+    assert o.walk_speed == pytest.approx(res.mean_speed, rel=1e-12) and o.sole_turn == pytest.approx(res.sole_turn)
+
+
+def test_the_certificate_notes_a_walk_that_does_not_go_at_its_gaits_speed(exo, exo_gait, exo_orbit):
+    """orbit_speed_note: the orbit search's walk against the gait's L / T with sim.speed_agreement — no note for the
+    stored gait, which walks at its speed; a note naming both speeds and the sole's turn when the same walk is read
+    against a plan three times as fast; none when the walk fell or its speed was not recorded."""
+    sim = SimConfig()
+    plan = exo_gait.params.step_length / exo_gait.step_duration
+    assert abs(exo_orbit.walk_speed - plan) < 0.1 * plan and orbit_speed_note(exo_orbit, exo_gait, sim) == ""
+    fast = dataclasses.replace(exo_gait, params=dataclasses.replace(exo_gait.params,
+                                                                    step_length=3 * exo_gait.params.step_length))
+    note = orbit_speed_note(exo_orbit, fast, sim)
+    assert note.startswith(f"the walk advances {exo_orbit.walk_speed:.3f} m/s, ") and "backwards" not in note
+    assert f"planned {3 * plan:.3f} m/s" in note and "stance sole ends single support turned" in note
+    assert orbit_speed_note(exo_orbit, fast, dataclasses.replace(sim, speed_agreement=2.5)) == ""  # within 250 %
+    assert orbit_speed_note(dataclasses.replace(exo_orbit, walk_speed=None), fast, sim) == ""
+    assert orbit_speed_note(dataclasses.replace(exo_orbit, status=Status.FELL), fast, sim) == ""
 
 
 @pytest.mark.slow  # seconds of its own: plain pytest stays ≤ 60 s; CI runs it

@@ -27,7 +27,7 @@ from robustgait.certificate.push import PushMap
 from robustgait.certificate.reduced import Coordinates, ReducedState, section_dimension
 from robustgait.certificate.reducedmap import ReducedMap
 from robustgait.certificate.returnmap import FullStateMap
-from robustgait.certificate.search import Walking, find_orbit, probe_impulse
+from robustgait.certificate.search import Walking, find_orbit, orbit_speed_note, probe_impulse
 from robustgait.certificate.shape import Shape, fit_linearization, shape_from_fit, volume_ratio
 from robustgait.certificate.verification import attempt_beta, check_budget
 from robustgait.config import CertifyConfig, SimConfig, ValidateConfig, radius_name, to_dict
@@ -78,7 +78,8 @@ class GaitCertificate:
     coordinates (the last window's switching states of x*'s phase): an r* not above it certifies nothing the walk
     does not already do. ball: for an ellipsoid certified with ``ellipsoid.compare_ball``, the ball certified beside
     it (its volume ratio: :attr:`volume_ratio`). excursion: horizon k ≥ 2, per j = 1 … k the largest ‖P^j(z) − z*‖
-    over the samples in the certified set.
+    over the samples in the certified set. speed_note: when the orbit search's walk did not go at the gait's planned
+    speed (:func:`robustgait.sim.walk.speed_note`), that note: the figure certifies that walk, not the planned one.
     """
 
     status: Status
@@ -106,6 +107,7 @@ class GaitCertificate:
     replayed_orbit: bool = False  # the orbit was the earlier run's, not searched again
     gait_digest: str = ""  # Gait.digest() of the gait certified
     robot_digest: str = ""  # Robot.digest of the robot it was certified on
+    speed_note: str = ""
 
     @property
     def ok(self) -> bool:
@@ -258,6 +260,7 @@ class GaitCertificate:
             "energy": self.energy,
             "controller": self.controller,
             "controller_note": self.controller_note,
+            "speed_note": self.speed_note,
             "statement": self.statement(),
         }
         if self.certificate is not None:
@@ -570,6 +573,7 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
                 orbit = find_orbit(Walking(robot, gait, sim, validate=vcfg, engine=engine,
                                            progress=lambda k: bar.update(k - bar.n)), cfg)
         t1 = time.perf_counter()
+        note = orbit_speed_note(orbit, gait, sim)
 
         def result(status: Status, reason: str, **kw: Any) -> GaitCertificate:
             t = time.perf_counter()
@@ -579,7 +583,7 @@ def certify_gait(robot: Robot, gait: Gait, config: CertifyConfig | None = None, 
                                    replayed_orbit=replayed_orbit, gait_digest=gait.digest(),
                                    robot_digest=robot.digest,
                                    controller=engine.controller_name, controller_note=engine.controller_note,
-                                   orbit=orbit, orbit_physics_steps=orbit.physics_steps, **kw)
+                                   orbit=orbit, orbit_physics_steps=orbit.physics_steps, speed_note=note, **kw)
 
         if not orbit.ok:
             return result(orbit.status, orbit.reason, certificate=None, fixed_point=None, map_residual=None,

@@ -302,7 +302,9 @@ class Orbit:
     ``held``: steps the band was watched after it was found; ``band_steps``: the first and last step whose states make
     the band (the settling window and the hold);
     ``physics_steps``: simulated by the search (its walk, the probe, the linearization); ``states``: the band's
-    switching states (n, nq + nv), canonical, the first of them after ``states_step`` steps."""
+    switching states (n, nq + nv), canonical, the first of them after ``states_step`` steps; ``walk_speed`` [m/s] and
+    ``sole_turn`` [rad]: the search's walk's mean forward speed and its stance soles' mean turn
+    (:class:`~robustgait.sim.walk.WalkResult`'s), None for an orbit not found by walking."""
 
     status: Status
     reason: str
@@ -326,6 +328,8 @@ class Orbit:
     physics_steps: int = 0
     states: FloatArray | None = field(default=None, repr=False)
     states_step: int = 0
+    walk_speed: float | None = None
+    sole_turn: float | None = None
 
     @property
     def ok(self) -> bool:
@@ -387,7 +391,8 @@ class Orbit:
                 "moved": self.moved, "period_scatter": {str(k): v for k, v in self.period_scatter.items()},
                 "probe": None if self.probe is None else self.probe.to_dict(),
                 "linearization": None if self.linearization is None else self.linearization.to_dict(),
-                "sides_differ": self.sides_differ, "held": self.held, "physics_steps": self.physics_steps}
+                "sides_differ": self.sides_differ, "held": self.held, "physics_steps": self.physics_steps,
+                "walk_speed": self.walk_speed, "sole_turn": self.sole_turn}
 
 
 def orbit_from_dict(d: dict[str, Any], state: dict[str, Any]) -> Orbit:
@@ -408,7 +413,8 @@ def orbit_from_dict(d: dict[str, Any], state: dict[str, Any]) -> Orbit:
                  x_star_step=d["x_star_step"], sigma_a=d["sigma_a"], sigma_b=d["sigma_b"], moved=d["moved"],
                  period_scatter={int(k): float(v) for k, v in d["period_scatter"].items()},
                  probe=None if d["probe"] is None else Probe.from_dict(d["probe"]),
-                 sides_differ=bool(d["sides_differ"]), held=int(d["held"]), physics_steps=int(d["physics_steps"]))
+                 sides_differ=bool(d["sides_differ"]), held=int(d["held"]), physics_steps=int(d["physics_steps"]),
+                 walk_speed=d.get("walk_speed"), sole_turn=d.get("sole_turn"))  # absent from older records
 
 
 def orbit_state(orbit: Orbit) -> dict[str, Any] | None:
@@ -590,7 +596,8 @@ def walk_orbit(robot: Robot, gait: Gait, walked: WalkResult, config: CertifyConf
     — no simulation, and the same orbit the certificate's search finds on the same gait (it walks the same steps and
     stops where they settle), without its stability probe (``robustgait.certificate.search.find_orbit``)."""
     qpos, qvel = canonical_event_states(robot, gait, walked.events)
-    return classify_walk(robot, qpos, qvel, config, walked.fall_reason if walked.fell else None)
+    orbit = classify_walk(robot, qpos, qvel, config, walked.fall_reason if walked.fell else None)
+    return dataclasses.replace(orbit, walk_speed=walked.mean_speed, sole_turn=walked.sole_turn)
 
 
 class SettlingWatch:

@@ -47,7 +47,7 @@ from robustgait.gait import Gait
 from robustgait.robots import Robot
 from robustgait.sim.engine import StepEngine
 from robustgait.sim.factory import make_engine
-from robustgait.sim.walk import SwitchEvent, WalkResult, walk
+from robustgait.sim.walk import SwitchEvent, WalkResult, planned_speed, speed_note, walk
 
 FloatArray = NDArray[np.float64]
 
@@ -168,6 +168,16 @@ def _walk_and_probe(source: Walking, cfg: CertifyConfig) -> Orbit:
     finally:
         if own:
             eng.close()
+
+
+def orbit_speed_note(orbit: Orbit, gait: Gait, sim: SimConfig) -> str:
+    """:func:`robustgait.sim.walk.speed_note` of the orbit search's walk (its ``walk_speed`` and ``sole_turn``)
+    against the gait's planned speed with ``sim.speed_agreement``: "" when that walk fell, was not recorded (an orbit
+    from an older record) or the gait has no planned speed (a FROST import)."""
+    plan = planned_speed(gait)
+    if orbit.status == Status.FELL or orbit.walk_speed is None or plan is None:
+        return ""
+    return speed_note(orbit.walk_speed, plan, sim.speed_agreement, orbit.sole_turn)
 
 
 def initial_section(robot: Robot, gait: Gait, engine: StepEngine) -> tuple[FloatArray, FloatArray]:

@@ -65,6 +65,8 @@ def _certify(args: argparse.Namespace) -> int:
         print(f"{gc.status}: {name} = 0 ({gc.reason}; {gc.steps_walked} steps walked)")
         if gc.orbit is not None and gc.orbit.band is not None:
             print(f"orbit: {gc.orbit.describe()}")
+        if gc.speed_note:
+            print(f"note: {gc.speed_note}")
     else:
         assert fp is not None and co is not None and gc.orbit is not None
         energy = "" if gc.energy is None else f", E* = {gc.energy:.4g} J"
@@ -102,6 +104,8 @@ def _certify(args: argparse.Namespace) -> int:
         print(f"{int(c.fell.sum())} of {c.n_samples} samples fell; {c.n_inside} inside; controller {gc.controller}"
               + (f" ({gc.controller_note})" if gc.controller_note else ""))
         print(gc.statement())
+        if gc.speed_note:
+            print(f"note: {gc.speed_note}")
         print(f"time: orbit {gc.seconds['orbit']:.2f} s, sampling {gc.seconds['sampling']:.2f} s "
               f"({gc.seconds['sim_steps_per_s']:.0f} simulated steps/s)")
     return 0 if gc.ok else 1

@@ -82,25 +82,11 @@ class WalkResult:
     sole_turn: float | None = None
 
     def speed_note(self, tolerance: float) -> str:
-        """A one-line note when the walk does not go where the gait was planned to: its ``mean_speed`` differs from
-        ``planned_speed`` by more than ``tolerance`` × the planned speed (``sim.speed_agreement``), or has the other
-        sign; "" otherwise, and for a walk that fell (its speed is the fall's) or a gait without a planned speed. A
-        walk can settle on an orbit and survive pushes while marching in place or backwards: the orbit and the
-        certificate do not see it. The note gives the stance sole's mean turn at the end of single support
-        (``sole_turn``) when it is known: a sole the contacts turn leans the whole robot with it."""
-        plan = self.planned_speed
-        if self.fell or plan is None or plan <= 0.0:
+        """:func:`speed_note` of this walk: "" for a walk that fell (its speed is the fall's) or a gait without a
+        planned speed."""
+        if self.fell or self.planned_speed is None:
             return ""
-        if abs(self.mean_speed - plan) <= tolerance * plan:
-            return ""
-        way = "backwards, " if self.mean_speed < 0.0 else ""
-        turn = "" if self.sole_turn is None else (
-            f"; its stance sole ends single support turned {math.degrees(abs(self.sole_turn)):.2f}° "
-            f"{'toe up' if self.sole_turn >= 0.0 else 'toe down'} on average, where the plan holds it flat "
-            "(docs/robots.md: soft contacts turn a sole)")
-        return (f"the walk advances {way}{self.mean_speed:.3f} m/s, {100 * self.mean_speed / plan:.0f} % of the gait's "
-                f"planned {plan:.3f} m/s (step length / step duration; sim.speed_agreement {tolerance:g}): it does not "
-                f"walk the gait as planned{turn}")
+        return speed_note(self.mean_speed, self.planned_speed, tolerance, self.sole_turn)
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
@@ -109,6 +95,26 @@ class WalkResult:
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), allow_nan=False)
+
+
+def speed_note(speed: float, plan: float, tolerance: float, sole_turn: float | None = None) -> str:
+    """A one-line note when a walk does not go where its gait was planned to: its mean forward ``speed`` [m/s]
+    differs from the ``plan`` (L / T, :func:`planned_speed`) by more than ``tolerance`` × the plan
+    (``sim.speed_agreement``), or has the other sign; "" otherwise and for a plan ≤ 0. A walk can settle on an orbit
+    and survive pushes while marching in place or backwards: the orbit rule and the certified figure do not see it,
+    so ``gait generate``, ``walk`` and ``certify`` each say it. The note
+    gives the stance sole's mean turn at the end of single support (``sole_turn`` [rad], :func:`mean_sole_turn`)
+    when it is known: a sole the contacts turn leans the whole robot with it."""
+    if plan <= 0.0 or abs(speed - plan) <= tolerance * plan:
+        return ""
+    way = "backwards, " if speed < 0.0 else ""
+    turn = "" if sole_turn is None else (
+        f"; its stance sole ends single support turned {math.degrees(abs(sole_turn)):.2f}° "
+        f"{'toe up' if sole_turn >= 0.0 else 'toe down'} on average, where the plan holds it flat "
+        "(docs/robots.md: soft contacts turn a sole)")
+    return (f"the walk advances {way}{speed:.3f} m/s, {100 * speed / plan:.0f} % of the gait's planned {plan:.3f} m/s "
+            f"(step length / step duration; sim.speed_agreement {tolerance:g}): it does not walk the gait as "
+            f"planned{turn}")
 
 
 def planned_speed(gait: Gait) -> float | None:
