@@ -594,7 +594,8 @@ def walk_orbit(robot: Robot, gait: Gait, walked: WalkResult, config: CertifyConf
     """The orbit of a walk's switching states (:func:`robustgait.sim.walk.walk`), written for the gait's stance
     (:func:`canonical_event_states`), by :func:`classify_walk` with the options of ``config.orbit`` and ``config.map``
     — no simulation, and the same orbit the certificate's search finds on the same gait (it walks the same steps and
-    stops where they settle), without its stability probe (``robustgait.certificate.search.find_orbit``)."""
+    stops where they settle), without its stability probe (``robustgait.certificate.search.find_orbit``); with the
+    walk's mean forward speed and mean stance-sole turn (``walk_speed``, ``sole_turn``)."""
     qpos, qvel = canonical_event_states(robot, gait, walked.events)
     orbit = classify_walk(robot, qpos, qvel, config, walked.fall_reason if walked.fell else None)
     return dataclasses.replace(orbit, walk_speed=walked.mean_speed, sole_turn=walked.sole_turn)
