@@ -285,6 +285,7 @@ def soletilt(spec: Path, every: float, timeconst: float | None) -> dict[str, Any
     from robustgait.gaitgen.solve import GaitGenerator
     from robustgait.robots.legs import axis_kinds
     from robustgait.sim.controller import step_controls
+    from robustgait.sim.regulator import swing_dofs
     from robustgait.sim.walk import stance_sole_turn
 
     robot = load_robot(spec)
@@ -350,12 +351,10 @@ def soletilt(spec: Path, every: float, timeconst: float | None) -> dict[str, Any
     x_mid = float(np.mean(at_mid)) if at_mid else float("nan")
     k_rot = k_each * float(sum((x - x_mid) ** 2 for x in at_mid))
     # the servo that turns the sole about its lateral axis: the stance chain's last pitch joint
-    chain = [int(robot.dof_idx[j]) for j in range(robot.n_joints)
-             if int(m.jnt_bodyid[m.dof_jntid[robot.dof_idx[j]]]) in _ancestors(m, body)]
-    joints = tuple(int(m.dof_jntid[d]) for d in chain)
-    pitches = [i for i, kind in enumerate(axis_kinds(m, joints)) if kind == "y"]
-    servo = next((j for j in range(robot.n_joints) if int(robot.dof_idx[j]) == chain[pitches[-1]]), None) \
-        if pitches else None
+    leg = swing_dofs(robot, stance)  # the planned joints from the base to the stance sole (either leg's)
+    kinds = axis_kinds(m, tuple(int(m.dof_jntid[robot.dof_idx[j]]) for j in leg))
+    pitches = [int(j) for j, kind in zip(leg, kinds, strict=True) if kind == "y"]
+    servo = pitches[-1] if pitches else None
     kp = float(robot.kp[servo]) if servo is not None else float("nan")
     summary = {"commit": git_commit(), "date": str(date.today()), "robot": robot.name,
                "timeconst": timeconst, "timestep": m.opt.timestep, "contact_stiffness_n_per_mm": round(k_each / 1e3, 1),
@@ -367,14 +366,6 @@ def soletilt(spec: Path, every: float, timeconst: float | None) -> dict[str, Any
                "planned_cop_range": [round(float(planned_cop.min()), 4), round(float(planned_cop.max()), 4)]}
     print(json.dumps(summary))
     return summary
-
-
-def _ancestors(m: Any, body: int) -> set[int]:
-    out: set[int] = set()
-    while body > 0:
-        out.add(body)
-        body = int(m.body_parentid[body])
-    return out
 
 
 def _commits(rows: list[dict[str, Any]]) -> str:
